@@ -1,0 +1,100 @@
+"""`lbr check`: joint trajectory against the position, velocity, acceleration and jerk limits."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
+
+
+def run_check(traj, lim, margin: float, jerk: bool, t1: bool, robot=None):
+    """The check behind `lbr check` (also used by `lbr execute` and the planners' reports)."""
+    from trajectories.check import check_trajectory
+    from trajectories.robot import FLANGE_FRAME
+
+    cart = None
+    if t1:
+        import pinocchio as pin
+        import numpy as np
+
+        fid = robot.model.getFrameId(FLANGE_FRAME)
+        cart = np.empty((len(traj), 3))
+        for k in range(len(traj)):
+            pin.framesForwardKinematics(robot.model, robot.data, traj.q[k])
+            cart[k] = robot.data.oMf[fid].translation
+    return check_trajectory(traj, lim, margin, jerk=jerk, cartesian_positions=cart)
+
+
+def print_report(rep, report, name: str) -> None:
+    """Per-joint table of peak/limit ratios [%] and the violations."""
+    from rich.table import Table
+
+    table = Table(title=f"{name}: peak / limit [%] (limits × {1 - report.margin:.2f})")
+    table.add_column("joint")
+    for qname in ("position", "velocity", "acceleration", "jerk"):
+        table.add_column(qname, justify="right")
+    ratios = report.ratios()
+    for j in range(7):
+        cells = []
+        for qname in ("position", "velocity", "acceleration", "jerk"):
+            r = ratios[qname][j] * 100
+            style = "red" if r > 100 and (qname != "jerk" or report.jerk_enforced) else ("yellow" if r > 100 else "")
+            cells.append(f"[{style}]{r:.1f}[/{style}]" if style else f"{r:.1f}")
+        table.add_row(f"A{j + 1}", *cells)
+    rep.print(table)
+    if report.cartesian_speed_peak is not None:
+        rep.print(
+            f"T1 flange speed peak {report.cartesian_speed_peak * 1e3:.1f} mm/s "
+            f"(limit {report.cartesian_speed_limit * 1e3:.0f} mm/s)"
+        )
+    for v in report.violations:
+        fails = v.quantity != "jerk" or report.jerk_enforced
+        tag = "[red]violation[/red]" if fails else "[yellow]note (jerk not enforced)[/yellow]"
+        rep.print(f"{tag}: {v.describe()}")
+    rep.print("[green]OK[/green]: within limits" if report.ok else f"[red]FAILED[/red]: {len(report.failing)} violations")
+
+
+def check(
+    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 [s, rad].")],
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of joint velocity and acceleration with the limits.")] = None,
+    margin: Annotated[float, typer.Option("--margin", help="Check against the limits scaled by (1 − margin), 0 ≤ margin < 1.")] = 0.0,
+    jerk: Annotated[bool, typer.Option("--jerk", help="Fail on jerk violations too (jerk is always reported).")] = False,
+    t1: Annotated[bool, typer.Option("--t1", help="Also check the Cartesian flange speed against T1's 250 mm/s.")] = False,
+    flange: FlangeOpt = DEFAULT_FLANGE,
+    tool: ToolOpt = None,
+    limits: LimitsOpt = None,
+    dt: DtOpt = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Check a joint trajectory against the limits; exit 1 on any violation.
+
+    Derivatives by central differences (thesis eq. 5.7) applied repeatedly. Jerk fails only with --jerk:
+    in position mode the controller's interpolator smooths jerk.
+    """
+    from trajectories.csvio import read_joint_csv
+
+    from ..console import Reporter
+    from ..options import check_margin, limits_from, make_robot
+
+    rep = Reporter(json_out)
+    check_margin(margin)
+    lim = limits_from(limits)
+    robot = make_robot(flange, tool) if t1 else None
+    traj = read_joint_csv(joint_csv, dt)
+    report = run_check(traj, lim, margin, jerk, t1, robot)
+    print_report(rep, report, str(joint_csv))
+    if plot is not None:
+        from ..plots.check import plot_check
+
+        plot_check(report, plot, title=joint_csv.name)
+        rep.print(f"plot: {plot}")
+    rep.emit({"file": str(joint_csv), "samples": len(traj), "duration_s": traj.duration, **report.to_dict()})
+    if not report.ok:
+        raise typer.Exit(1)
+
+
+def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
+    app.command("check")(check)

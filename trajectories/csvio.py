@@ -1,0 +1,232 @@
+"""Strict CSV reading and writing for every lbr file, in one place.
+
+Every malformed input raises :class:`CsvFormatError` naming file, row (1-based line number) and column.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal, Sequence, TextIO
+
+import numpy as np
+
+from .errors import CsvFormatError
+from .trajectory import N_JOINTS, JointTrajectory, TaskTrajectory
+
+JOINT_COLUMNS = ("t",) + tuple(f"q{i}" for i in range(1, N_JOINTS + 1))
+TASK_COLUMNS = ("t", "x", "y", "z", "qw", "qx", "qy", "qz")
+PREDICTION_COLUMNS = ("t", "theta")
+
+TimeRule = Literal["uniform", "increasing", "none"]
+
+# A uniform grid written with a few decimals (e.g. 0.005) reads back exactly; allow float noise only.
+_UNIFORM_ABS_TOL = 1e-6  # [s]
+_UNIFORM_REL_TOL = 1e-4
+
+
+@dataclass(frozen=True)
+class Table:
+    """A parsed numeric CSV: column names and an (n, m) float array."""
+
+    path: str
+    names: tuple[str, ...]
+    data: np.ndarray
+
+    def column(self, name: str) -> np.ndarray:
+        return self.data[:, self.names.index(name)]
+
+    def has(self, name: str) -> bool:
+        return name in self.names
+
+
+def _parse_float(cell: str, *, path: str, row: int, col: int, name: str, allow_nan: bool) -> float:
+    text = cell.strip()
+    if text == "":
+        if allow_nan:
+            return math.nan
+        raise CsvFormatError("empty cell", file=path, row=row, column=col, column_name=name)
+    try:
+        value = float(text)
+    except ValueError:
+        raise CsvFormatError(f"not a number: {text!r}", file=path, row=row, column=col, column_name=name) from None
+    if not math.isfinite(value) and not (allow_nan and math.isnan(value)):
+        raise CsvFormatError(f"not a finite number: {text!r}", file=path, row=row, column=col, column_name=name)
+    return value
+
+
+def _looks_numeric(cells: Sequence[str]) -> bool:
+    try:
+        [float(c) for c in cells]
+    except ValueError:
+        return False
+    return True
+
+
+def _check_time(t: np.ndarray, path: str, rule: TimeRule, first_row: int) -> None:
+    if rule == "none" or len(t) == 0:
+        return
+    if abs(t[0]) > _UNIFORM_ABS_TOL:
+        raise CsvFormatError(f"time must start at 0, got {t[0]:g} s", file=path, row=first_row, column=1, column_name="t")
+    if len(t) < 2:
+        return
+    dt = np.diff(t)
+    bad = np.flatnonzero(dt <= 0.0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        raise CsvFormatError(
+            f"time not increasing ({t[k - 1]:g} s then {t[k]:g} s)", file=path, row=first_row + k, column=1, column_name="t"
+        )
+    if rule == "uniform":
+        h = (t[-1] - t[0]) / (len(t) - 1)
+        tol = _UNIFORM_ABS_TOL + _UNIFORM_REL_TOL * h
+        off = np.abs(dt - h)
+        bad = np.flatnonzero(off > tol)
+        if bad.size:
+            k = int(bad[0]) + 1
+            raise CsvFormatError(
+                f"time step not uniform: {dt[k - 1]:g} s here, {h:g} s on average",
+                file=path,
+                row=first_row + k,
+                column=1,
+                column_name="t",
+            )
+
+
+def read_table(
+    path: str | Path,
+    columns: Sequence[str],
+    *,
+    time: TimeRule = "uniform",
+    nan_columns: Sequence[str] = (),
+    headerless_dt: float | None = None,
+    headerless_width: int | None = None,
+) -> Table:
+    """Read a numeric CSV whose header starts with ``columns`` (extra named columns may follow).
+
+    A headerless file of exactly ``headerless_width`` numeric columns is accepted when ``headerless_dt`` [s]
+    is given; it gets the column names ``columns[1:]`` and a time column t = k·dt.
+    Cells of ``nan_columns`` may be empty or 'nan' (e.g. the ball position of a frame where it was not found).
+    """
+    spath = str(path)
+    try:
+        fh: TextIO = open(path, newline="")
+    except FileNotFoundError:
+        raise CsvFormatError("file not found", file=spath) from None
+    except IsADirectoryError:
+        raise CsvFormatError("is a directory, not a CSV file", file=spath) from None
+    except OSError as exc:
+        raise CsvFormatError(f"cannot open: {exc.strerror}", file=spath) from None
+    with fh:
+        try:
+            rows = list(csv.reader(fh))
+        except (csv.Error, UnicodeDecodeError) as exc:
+            raise CsvFormatError(f"not a readable CSV file ({exc})", file=spath) from None
+
+    # Skip fully blank lines but remember line numbers (1-based).
+    numbered = [(i + 1, r) for i, r in enumerate(rows) if any(c.strip() for c in r)]
+    if not numbered:
+        raise CsvFormatError("empty file", file=spath)
+
+    first_line, first = numbered[0]
+    headerless = False
+    if _looks_numeric(first):
+        if headerless_width is None or len(first) != headerless_width:
+            expected = ",".join(columns)
+            raise CsvFormatError(f"missing header; expected '{expected}'", file=spath, row=first_line)
+        if headerless_dt is None:
+            raise CsvFormatError(
+                f"headerless {headerless_width}-column file: give the sample step with --dt", file=spath, row=first_line
+            )
+        if not headerless_dt > 0:
+            raise CsvFormatError(f"--dt must be positive, got {headerless_dt:g}", file=spath)
+        names = tuple(columns[1:])
+        body = numbered
+        headerless = True
+    else:
+        names = tuple(c.strip() for c in first)
+        for j, want in enumerate(columns):
+            if j >= len(names):
+                raise CsvFormatError(f"missing column '{want}'", file=spath, row=first_line, column=j + 1)
+            if names[j] != want:
+                raise CsvFormatError(
+                    f"wrong header: expected '{want}', found '{names[j]}'",
+                    file=spath,
+                    row=first_line,
+                    column=j + 1,
+                )
+        for j, name in enumerate(names):
+            if name == "":
+                raise CsvFormatError("empty column name", file=spath, row=first_line, column=j + 1)
+        if len(set(names)) != len(names):
+            dup = next(n for n in names if names.count(n) > 1)
+            raise CsvFormatError(f"duplicate column '{dup}'", file=spath, row=first_line, column=names.index(dup) + 1)
+        body = numbered[1:]
+        if not body:
+            raise CsvFormatError("no data rows after the header", file=spath, row=first_line)
+
+    width = len(names)
+    nan_ok = {names.index(c) for c in nan_columns if c in names}
+    data = np.empty((len(body), width), dtype=float)
+    for i, (line, cells) in enumerate(body):
+        if len(cells) != width:
+            what = "missing" if len(cells) < width else "extra"
+            col = min(len(cells), width) + 1 if len(cells) < width else width + 1
+            raise CsvFormatError(
+                f"{what} columns: {len(cells)} cells, expected {width}", file=spath, row=line, column=col
+            )
+        for j, cell in enumerate(cells):
+            data[i, j] = _parse_float(cell, path=spath, row=line, col=j + 1, name=names[j], allow_nan=j in nan_ok)
+
+    if headerless:
+        t = np.arange(len(body)) * float(headerless_dt)
+        data = np.column_stack([t, data])
+        names = tuple(columns[:1]) + names
+    else:
+        _check_time(data[:, 0], spath, time, body[0][0])
+    return Table(path=spath, names=names, data=data)
+
+
+def write_table(path: str | Path, names: Sequence[str], data: np.ndarray, fmt: str | Sequence[str] = "%.10g") -> None:
+    """Write an (n, m) array with a header line."""
+    np.savetxt(path, np.asarray(data, dtype=float), delimiter=",", header=",".join(names), comments="", fmt=fmt)
+
+
+def read_joint_csv(path: str | Path, dt: float | None = None) -> JointTrajectory:
+    """Read a joint trajectory (``t,q1..q7`` [s, rad]); a headerless 7-column file needs ``dt`` [s]."""
+    table = read_table(path, JOINT_COLUMNS, headerless_dt=dt, headerless_width=N_JOINTS)
+    if len(table.data) < 1:
+        raise CsvFormatError("no samples", file=table.path)
+    return JointTrajectory(t=table.data[:, 0].copy(), q=np.ascontiguousarray(table.data[:, 1 : 1 + N_JOINTS]))
+
+
+def write_joint_csv(path: str | Path, traj: JointTrajectory) -> None:
+    """Write ``t,q1..q7`` with 1e-9 s and 1e-12 rad resolution."""
+    write_table(path, JOINT_COLUMNS, np.column_stack([traj.t, traj.q]), fmt=["%.9f"] + ["%.12f"] * N_JOINTS)
+
+
+def read_task_csv(path: str | Path) -> TaskTrajectory:
+    """Read a task trajectory (``t,x,y,z,qw,qx,qy,qz`` [s, m]); quaternions must be unit (within 1e-3)."""
+    table = read_table(path, TASK_COLUMNS)
+    quat = table.data[:, 4:8]
+    norms = np.linalg.norm(quat, axis=1)
+    bad = np.flatnonzero(np.abs(norms - 1.0) > 1e-3)
+    if bad.size:
+        k = int(bad[0])
+        raise CsvFormatError(
+            f"quaternion not unit (norm {norms[k]:.6g})", file=table.path, row=k + 2, column=5, column_name="qw"
+        )
+    return TaskTrajectory(
+        t=table.data[:, 0].copy(),
+        position=np.ascontiguousarray(table.data[:, 1:4]),
+        quaternion=np.ascontiguousarray(quat / norms[:, None]),
+    )
+
+
+def write_task_csv(path: str | Path, traj: TaskTrajectory) -> None:
+    """Write ``t,x,y,z,qw,qx,qy,qz`` with 1e-12 m resolution."""
+    write_table(
+        path, TASK_COLUMNS, np.column_stack([traj.t, traj.position, traj.quaternion]), fmt=["%.9f"] + ["%.12f"] * 7
+    )

@@ -1,0 +1,83 @@
+"""Typed exceptions of lbr, in one place.
+
+Every exception carries the process exit code the CLI uses: 2 for bad input (a file, a row, a column or an
+option the user must fix), 1 for a check that failed (limits violated, target not reached, robot refused).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class LbrError(Exception):
+    """Base of all lbr errors."""
+
+    exit_code = 1
+
+
+class InputError(LbrError):
+    """Bad input: a malformed file or option. Exit code 2."""
+
+    exit_code = 2
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        file: str | Path | None = None,
+        row: int | None = None,
+        column: int | None = None,
+        column_name: str | None = None,
+    ) -> None:
+        self.message = message
+        self.file = str(file) if file is not None else None
+        self.row = row  # 1-based line number in the file
+        self.column = column  # 1-based column number
+        self.column_name = column_name
+        super().__init__(self.__str__())
+
+    def __str__(self) -> str:
+        where = []
+        if self.file is not None:
+            where.append(self.file)
+        if self.row is not None:
+            where.append(f"row {self.row}")
+        if self.column is not None:
+            name = f" ({self.column_name})" if self.column_name else ""
+            where.append(f"column {self.column}{name}")
+        return (", ".join(where) + ": " if where else "") + self.message
+
+
+class CsvFormatError(InputError):
+    """A CSV file does not follow the lbr file contract."""
+
+
+class OptionError(InputError):
+    """A command-line option value is malformed or out of range."""
+
+
+class CheckFailed(LbrError):
+    """A check found violations (limits, start distance, ...). Exit code 1."""
+
+
+class IkError(LbrError):
+    """Inverse kinematics did not reach a pose within tolerance. Exit code 1."""
+
+    def __init__(self, message: str, *, index: int, t: float, position_error: float, rotation_error: float):
+        self.index = index
+        self.t = t
+        self.position_error = position_error  # [m]
+        self.rotation_error = rotation_error  # [rad]
+        super().__init__(message)
+
+
+class PlanningError(LbrError):
+    """A planner cannot produce the requested plan (e.g. a_max does not fit the limits). Exit code 1."""
+
+
+class FriError(LbrError):
+    """An FRI session could not be run or ended abnormally. Exit code 1."""
+
+
+class FriDecodeError(LbrError):
+    """A datagram is not a valid FRI message of the expected version."""

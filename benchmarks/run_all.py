@@ -1,0 +1,45 @@
+"""Run every benchmark in this folder and print its figures: `python benchmarks/run_all.py [--quick] [--json]`.
+
+Each ``bench_*.py`` module exposes ``run(quick: bool) -> list[tuple[str, float, str]]`` (name, value, unit).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import sys
+import time
+from pathlib import Path
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--quick", action="store_true", help="shorter runs (smoke test)")
+    parser.add_argument("--json", action="store_true", help="print all figures as one JSON object")
+    parser.add_argument("only", nargs="*", help="names of benchmarks to run (e.g. ik fri)")
+    args = parser.parse_args()
+    here = Path(__file__).parent
+    figures: dict[str, dict[str, object]] = {}
+    for path in sorted(here.glob("bench_*.py")):
+        name = path.stem.removeprefix("bench_")
+        if args.only and name not in args.only:
+            continue
+        spec = importlib.util.spec_from_file_location(path.stem, path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)  # type: ignore[union-attr]
+        t0 = time.perf_counter()
+        rows = module.run(quick=args.quick)
+        figures[name] = {k: {"value": v, "unit": u} for k, v, u in rows}
+        if not args.json:
+            print(f"== {name} ({time.perf_counter() - t0:.1f} s)")
+            for k, v, u in rows:
+                print(f"  {k:<55} {v:>12.4g} {u}")
+            sys.stdout.flush()
+    if args.json:
+        print(json.dumps(figures))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""KUKA Fast Robot Interface: wire format (protobuf), client session, controller simulator."""

@@ -1,0 +1,85 @@
+"""Encoding and decoding of FRI datagrams for both wire formats.
+
+FRI 1.x: the datagram is the bare protobuf encoding. FRI 2.7: [uint32 LE length][protobuf][uint32 LE CRC-32].
+Decoders check the framing, the CRC, the required fields and the message identifier, and raise
+FriDecodeError on anything else; standard protobuf parsing accepts both packed and unpacked repeated doubles.
+"""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from typing import Any
+
+from google.protobuf.message import DecodeError
+
+from trajectories.errors import FriDecodeError
+
+from .constants import COMMAND_MESSAGE_ID, MAX_DATAGRAM, MONITORING_MESSAGE_ID
+from .messages import FriMessages, FriVersion, messages
+
+_U32 = struct.Struct("<I")
+
+
+class FriCodec:
+    """Encoder/decoder of one FRI version. Decoding can reuse a message object (no allocation per cycle)."""
+
+    def __init__(self, version: FriVersion | str = FriVersion.V1_15) -> None:
+        self.version = FriVersion(version)
+        self.msgs: FriMessages = messages(self.version)
+        self.framed = self.version is FriVersion.V2_7
+
+    # -- framing ---------------------------------------------------------------------------------------------
+    def frame(self, payload: bytes) -> bytes:
+        """Wrap a protobuf payload for the wire (2.7: length + payload + CRC-32)."""
+        if not self.framed:
+            return payload
+        return _U32.pack(len(payload)) + payload + _U32.pack(zlib.crc32(payload) & 0xFFFFFFFF)
+
+    def unframe(self, data: bytes) -> bytes:
+        """The protobuf payload of a datagram; FriDecodeError on bad length or CRC."""
+        if len(data) > MAX_DATAGRAM:
+            raise FriDecodeError(f"datagram of {len(data)} bytes exceeds {MAX_DATAGRAM}")
+        if not self.framed:
+            return data
+        if len(data) < 8:
+            raise FriDecodeError(f"FRI 2.7 datagram too short ({len(data)} bytes)")
+        (length,) = _U32.unpack_from(data, 0)
+        if length != len(data) - 8:
+            raise FriDecodeError(f"FRI 2.7 length field {length} does not match datagram ({len(data) - 8} bytes)")
+        payload = data[4 : 4 + length]
+        (crc,) = _U32.unpack_from(data, 4 + length)
+        if crc != (zlib.crc32(payload) & 0xFFFFFFFF):
+            raise FriDecodeError("FRI 2.7 CRC-32 mismatch")
+        return payload
+
+    # -- messages --------------------------------------------------------------------------------------------
+    def new_monitoring(self) -> Any:
+        return self.msgs.Monitoring()
+
+    def new_command(self) -> Any:
+        return self.msgs.Command()
+
+    def encode(self, message: Any) -> bytes:
+        """Serialise a monitoring or command message (required fields must be set) and frame it."""
+        return self.frame(message.SerializeToString())
+
+    def _decode(self, data: bytes, into: Any, expected_id: int, kind: str) -> Any:
+        payload = self.unframe(data)
+        into.Clear()
+        try:
+            into.ParseFromString(payload)
+        except DecodeError as exc:
+            raise FriDecodeError(f"not an FRI {self.version.value} {kind} message ({exc})") from None
+        ident = into.header.messageIdentifier
+        if ident != expected_id:
+            raise FriDecodeError(f"{kind} message identifier 0x{ident:x}, expected 0x{expected_id:x}")
+        return into
+
+    def decode_monitoring(self, data: bytes, into: Any | None = None) -> Any:
+        """Parse a monitoring message (controller → client) into ``into`` (or a new message)."""
+        return self._decode(data, into if into is not None else self.msgs.Monitoring(), MONITORING_MESSAGE_ID, "monitoring")
+
+    def decode_command(self, data: bytes, into: Any | None = None) -> Any:
+        """Parse a command message (client → controller) into ``into`` (or a new message)."""
+        return self._decode(data, into if into is not None else self.msgs.Command(), COMMAND_MESSAGE_ID, "command")

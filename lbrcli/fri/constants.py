@@ -1,0 +1,66 @@
+"""FRI protocol constants shared by the client and the simulator (values from shared/facts/fri.md)."""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+MONITORING_MESSAGE_ID = 0x245142
+COMMAND_MESSAGE_ID = 0x34001
+DEFAULT_PORT = 30200
+MAX_DATAGRAM = 1500  # [bytes], each way
+N_JOINTS = 7
+
+
+class SessionState(IntEnum):
+    IDLE = 0
+    MONITORING_WAIT = 1
+    MONITORING_READY = 2
+    COMMANDING_WAIT = 3
+    COMMANDING_ACTIVE = 4
+
+
+class ConnectionQuality(IntEnum):
+    POOR = 0
+    FAIR = 1
+    GOOD = 2
+    EXCELLENT = 3
+
+
+class SafetyState(IntEnum):
+    NORMAL_OPERATION = 0
+    SAFETY_STOP_LEVEL_0 = 1
+    SAFETY_STOP_LEVEL_1 = 2
+    SAFETY_STOP_LEVEL_2 = 3
+
+
+class OperationMode(IntEnum):
+    TEST_MODE_1 = 0
+    TEST_MODE_2 = 1
+    AUTOMATIC_MODE = 2
+
+
+class DriveState(IntEnum):
+    OFF = 0
+    TRANSITIONING = 1
+    ACTIVE = 2
+
+
+class ControlMode(IntEnum):
+    POSITION_CONTROLMODE = 0
+    CARTESIAN_IMPEDANCE_CONTROLMODE = 1
+    JOINT_IMPEDANCE_CONTROLMODE = 2
+    NO_CONTROLMODE = 3
+
+
+class ClientCommandMode(IntEnum):
+    NO_COMMAND_MODE = 0
+    POSITION = 1  # JOINT_POSITION in 2.x
+    WRENCH = 2
+    TORQUE = 3
+    CARTESIAN_POSE = 4  # 2.x only
+
+
+class OverlayType(IntEnum):
+    NO_OVERLAY = 0
+    JOINT = 1
+    CARTESIAN = 2

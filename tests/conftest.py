@@ -1,0 +1,42 @@
+"""Shared fixtures: the thesis start pose, a robot, the default limits, CLI runner."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+Q_START = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # [rad], thesis §5.3.2
+
+
+@pytest.fixture
+def q_start() -> np.ndarray:
+    return Q_START.copy()
+
+
+@pytest.fixture(scope="session")
+def robot():
+    from trajectories.robot import Robot
+
+    return Robot()
+
+
+@pytest.fixture(scope="session")
+def limits():
+    from trajectories.limits import default_limits
+
+    return default_limits()
+
+
+def run_lbr(*args: str, timeout: float = 120, **kwargs) -> subprocess.CompletedProcess:
+    """Run the real `lbr` entry point in a subprocess (as a user would)."""
+    return subprocess.run(
+        [sys.executable, "-m", "lbrcli", *map(str, args)], capture_output=True, text=True, timeout=timeout, **kwargs
+    )
+
+
+@pytest.fixture
+def lbr():
+    return run_lbr

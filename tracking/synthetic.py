@@ -1,0 +1,257 @@
+"""Synthetic pendulum videos with known ground truth: a red ball on a string hanging from a (moving) pivot.
+
+Used to measure the tracker (tests, benchmarks) and to render a simulated run as a video (the demo).
+The ball is an anti-aliased, shaded disc with motion blur over the exposure; the frame gets defocus blur,
+sensor noise and lossy compression (mp4v by default), and optionally red distractors (a box and a cable)
+that a tracker must not take for the ball. θ is measured from the downward vertical, positive toward +u
+(image x to the right): ball = pivot + L·(sin θ, cos θ) with image v pointing down.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Literal, Sequence
+
+import numpy as np
+
+from trajectories.errors import InputError
+
+BALL_BGR = (35, 30, 205)  # a saturated red (OpenCV hue ≈ 178)
+MARKER_BGR = {"green": (60, 170, 40), "blue": (200, 90, 30), "yellow": (30, 200, 220), "red": BALL_BGR}
+
+
+@dataclass(frozen=True)
+class Distractor:
+    """A red object that is not the ball: ``box`` (points = two opposite corners) or ``cable`` (polyline) [px]."""
+
+    kind: Literal["box", "cable"]
+    points: np.ndarray
+    thickness_px: int = 5  # cable width [px]
+
+
+@dataclass(frozen=True)
+class GroundTruth:
+    """What was drawn in every frame: time [s], ball and pivot centres [px], θ [rad]."""
+
+    t: np.ndarray  # (n,) frame times [s]
+    ball_uv: np.ndarray  # (n, 2) ball centre at the frame time [px]
+    pivot_uv: np.ndarray  # (n, 2) pivot [px]
+    theta: np.ndarray  # (n,) string angle from the downward vertical, + toward +u [rad]
+    ball_radius_px: float
+    string_px: float
+    size: tuple[int, int]  # (width, height) [px]
+    fps: float  # [1/s]
+    distractors: tuple[Distractor, ...] = field(default=())
+
+    @property
+    def in_frame(self) -> np.ndarray:
+        """(n,) bool: the whole ball lies inside the image."""
+        w, h = self.size
+        r = self.ball_radius_px
+        u, v = self.ball_uv[:, 0], self.ball_uv[:, 1]
+        return (u - r >= 0) & (u + r <= w - 1) & (v - r >= 0) & (v + r <= h - 1)
+
+
+def _background(size: tuple[int, int], rng: np.random.Generator) -> np.ndarray:
+    """A lab-like backdrop: a light wall with a vertical gradient, low-frequency texture and a darker table."""
+    import cv2
+
+    w, h = size
+    yy = np.linspace(0.0, 1.0, h, dtype=np.float32)[:, None]
+    base = 175.0 - 40.0 * yy  # brighter at the top
+    tex = cv2.resize(rng.normal(0.0, 10.0, (h // 40 + 2, w // 40 + 2)).astype(np.float32), (w, h), interpolation=cv2.INTER_CUBIC)
+    gray = np.clip(base + tex, 0, 255)
+    bg = np.stack([gray * 0.97, gray * 0.99, gray], axis=2)  # slightly warm white
+    table = int(h * 0.9)
+    bg[table:] = (70, 80, 95)  # brownish-grey table edge
+    return bg.astype(np.uint8)
+
+
+def _auto_distractors(size, ball_uv, pivot_uv, r) -> tuple[Distractor, ...]:
+    """A red box and a red cable placed clear of the ball's and the string's path (when there is room)."""
+    w, h = size
+    pts = np.vstack([ball_uv, pivot_uv])
+    lo = pts.min(axis=0) - 4 * r - 20
+    hi = pts.max(axis=0) + 4 * r + 20
+    bw, bh = 6 * r + 30, 4 * r + 20  # a box clearly larger than the ball
+    out: list[Distractor] = []
+    for x0 in (lo[0] - bw, hi[0]):  # left of the path, else right of it
+        if 10 <= x0 and x0 + bw <= w - 10:
+            y0 = min(max(hi[1] - bh, 10), h - bh - 10)
+            out.append(Distractor("box", np.array([[x0, y0], [x0 + bw, y0 + bh]])))
+            break
+    # A cable hanging down the side of the frame opposite to the box, or along the bottom.
+    side = w - 40.0 if not out or out[0].points[0, 0] < w / 2 else 40.0
+    if side < lo[0] or side > hi[0]:
+        y = np.linspace(0.1 * h, 0.85 * h, 40)
+        x = side + 12.0 * np.sin(y / 37.0)
+        out.append(Distractor("cable", np.column_stack([x, y])))
+    return tuple(out)
+
+
+def _draw_distractors(frame: np.ndarray, distractors: Sequence[Distractor]) -> None:
+    import cv2
+
+    for d in distractors:
+        p = np.round(np.asarray(d.points) * 16).astype(np.int32)
+        if d.kind == "box":
+            cv2.rectangle(frame, tuple(p[0]), tuple(p[1]), BALL_BGR, -1, cv2.LINE_AA, 4)
+        else:
+            cv2.polylines(frame, [p.reshape(-1, 1, 2)], False, BALL_BGR, d.thickness_px, cv2.LINE_AA, 4)
+
+
+def _disc_alpha(centres: np.ndarray, r: float, x0: int, y0: int, pw: int, ph: int) -> np.ndarray:
+    """Coverage (0..1) of a disc of radius r [px] averaged over sub-exposure centres, on a patch at (x0, y0)."""
+    xs = np.arange(x0, x0 + pw, dtype=np.float32)[None, :]
+    ys = np.arange(y0, y0 + ph, dtype=np.float32)[:, None]
+    acc = np.zeros((ph, pw), np.float32)
+    for cx, cy in centres:
+        d = np.sqrt((xs - cx) ** 2 + (ys - cy) ** 2)
+        acc += np.clip(r + 0.5 - d, 0.0, 1.0)
+    return acc / len(centres)
+
+
+def _draw_ball(frame: np.ndarray, centres: np.ndarray, r: float, color: tuple[int, int, int]) -> None:
+    """Alpha-blend a shaded, motion-blurred ball (centres: (m, 2) positions over the exposure)."""
+    h, w = frame.shape[:2]
+    x0 = int(math.floor(centres[:, 0].min() - r - 2))
+    y0 = int(math.floor(centres[:, 1].min() - r - 2))
+    x1 = int(math.ceil(centres[:, 0].max() + r + 3))
+    y1 = int(math.ceil(centres[:, 1].max() + r + 3))
+    cx0, cy0, cx1, cy1 = max(x0, 0), max(y0, 0), min(x1, w), min(y1, h)
+    if cx1 <= cx0 or cy1 <= cy0:
+        return
+    alpha = _disc_alpha(centres, r, cx0, cy0, cx1 - cx0, cy1 - cy0)
+    mid = centres.mean(axis=0)
+    xs = np.arange(cx0, cx1, dtype=np.float32)[None, :] - mid[0]
+    ys = np.arange(cy0, cy1, dtype=np.float32)[:, None] - mid[1]
+    shade = 1.0 - 0.22 * np.clip((xs**2 + ys**2) / (r * r), 0.0, 1.0)  # darker toward the rim
+    ball = shade[:, :, None] * np.asarray(color, np.float32)[None, None, :]
+    patch = frame[cy0:cy1, cx0:cx1].astype(np.float32)
+    a = alpha[:, :, None]
+    frame[cy0:cy1, cx0:cx1] = np.clip(patch * (1.0 - a) + ball * a + 0.5, 0, 255).astype(np.uint8)
+
+
+def render_pendulum_video(
+    path: str | Path,
+    t: np.ndarray,
+    theta: np.ndarray,
+    pivot_uv: Sequence[float] | np.ndarray,
+    string_px: float,
+    ball_radius_px: float,
+    size: tuple[int, int] = (1280, 720),
+    fps: float = 60.0,
+    *,
+    exposure: float = 0.5,
+    defocus_px: float = 0.6,
+    noise_std: float = 2.5,
+    codec: str = "mp4v",
+    distractors: Sequence[Distractor] | Literal["auto"] | None = "auto",
+    pivot_marker: str | None = None,
+    pivot_marker_radius_px: float = 9.0,
+    ball_bgr: tuple[int, int, int] = BALL_BGR,
+    seed: int = 0,
+    progress: Callable[[int], None] | None = None,
+) -> GroundTruth:
+    """Render a pendulum video from θ(t) and return what was drawn.
+
+    t: (n,) increasing times [s] of the θ [rad] samples (θ from the downward vertical, + toward image +u);
+    pivot_uv: fixed pivot (2,) or per-sample pivot track (n, 2) [px]; string_px: string length [px];
+    ball_radius_px: ball radius [px]. Frames are rendered at k/fps for t[0] ≤ k/fps ≤ t[-1] (time starts at
+    t[0]). exposure: shutter-open fraction of a frame (motion blur); defocus_px: Gaussian blur σ [px];
+    noise_std: sensor noise σ [grey levels]; codec: FourCC for cv2.VideoWriter ('mp4v' lossy, 'MJPG', ...);
+    distractors: 'auto' (a red box and a red cable clear of the ball's path), None or explicit ones;
+    pivot_marker: colour name of a disc drawn on the pivot (for --pivot-color tracking), or None.
+    """
+    import cv2
+
+    t = np.asarray(t, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    if t.ndim != 1 or theta.shape != t.shape or len(t) < 2 or np.any(np.diff(t) <= 0):
+        raise ValueError("t and theta must be (n,) arrays with n ≥ 2 and t increasing")
+    piv = np.asarray(pivot_uv, dtype=float)
+    if piv.shape == (2,):
+        piv = np.tile(piv, (len(t), 1))
+    if piv.shape != (len(t), 2):
+        raise ValueError(f"pivot_uv must be (2,) or ({len(t)}, 2), got {piv.shape}")
+    w, h = int(size[0]), int(size[1])
+    r = float(ball_radius_px)
+    L = float(string_px)
+
+    n_frames = int(math.floor((t[-1] - t[0]) * fps + 1e-9)) + 1
+    tf = t[0] + np.arange(n_frames) / fps
+
+    def state(times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        th = np.interp(times, t, theta)
+        pv = np.column_stack([np.interp(times, t, piv[:, 0]), np.interp(times, t, piv[:, 1])])
+        return th, pv, pv + L * np.column_stack([np.sin(th), np.cos(th)])
+
+    th_f, piv_f, ball_f = state(tf)
+    if isinstance(distractors, str):
+        dis = _auto_distractors((w, h), ball_f, piv_f, r)
+    else:
+        dis = tuple(distractors or ())
+
+    rng = np.random.default_rng(seed)
+    bg = _background((w, h), rng)
+    _draw_distractors(bg, dis)
+    cv2.setRNGSeed(seed)
+
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*codec), float(fps), (w, h))
+    if not writer.isOpened():
+        raise InputError(f"cannot write a {codec!r} video here", file=str(path))
+    noise = np.empty((h, w, 3), np.int16)
+    frame16 = np.empty((h, w, 3), np.int16)
+    try:
+        for k in range(n_frames):
+            frame = bg.copy()
+            p = piv_f[k]
+            # the robot's flange above the pivot, and the pivot marker
+            fx, fy = int(round(p[0])), int(round(p[1]))
+            cv2.rectangle(frame, (fx - 28, fy - 70), (fx + 28, fy - 8), (90, 90, 95), -1, cv2.LINE_AA)
+            if pivot_marker is not None:
+                col = MARKER_BGR.get(pivot_marker, MARKER_BGR["green"])
+                _draw_ball(frame, p[None, :], pivot_marker_radius_px, col)
+            # motion blur: sub-frame positions over the exposure, centred on the frame time
+            half = 0.5 * exposure / fps
+            m = 1
+            if exposure > 0:
+                _, _, ends = state(np.array([tf[k] - half, tf[k] + half]))
+                m = int(min(24, max(1, math.ceil(np.linalg.norm(ends[1] - ends[0]) / 0.5))))
+            times = tf[k] + (np.linspace(-half, half, m) if m > 1 else np.zeros(1))
+            _, _, centres = state(times)
+            b = ball_f[k]
+            cv2.line(frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1, cv2.LINE_AA, 4)
+            _draw_ball(frame, centres, r, ball_bgr)
+            if defocus_px > 0:
+                frame = cv2.GaussianBlur(frame, (0, 0), defocus_px)
+            if noise_std > 0:
+                cv2.randn(noise, 0, noise_std)
+                np.add(frame, noise, out=frame16, dtype=np.int16)
+                frame = np.clip(frame16, 0, 255).astype(np.uint8)
+            writer.write(frame)
+            if progress is not None:
+                progress(k + 1)
+    finally:
+        writer.release()
+    return GroundTruth(
+        t=tf - t[0],
+        ball_uv=ball_f,
+        pivot_uv=piv_f,
+        theta=th_f,
+        ball_radius_px=r,
+        string_px=L,
+        size=(w, h),
+        fps=float(fps),
+        distractors=dis,
+    )
+
+
+def damped_swing(duration_s: float, amplitude_rad: float, string_m: float = 0.25, damping: float = 0.05,
+                 rate_hz: float = 1000.0) -> tuple[np.ndarray, np.ndarray]:
+    """A test signal: θ(t) [rad] of a lightly damped small-angle pendulum of length string_m [m], sampled at rate_hz."""
+    t = np.arange(int(round(duration_s * rate_hz)) + 1) / rate_hz
+    omega = math.sqrt(9.81 / string_m)
+    return t, amplitude_rad * np.exp(-damping * omega * t) * np.cos(omega * t)

@@ -1,0 +1,110 @@
+"""Video reading: frames with their decoder timestamps [s] (OpenCV VideoCapture).
+
+Timestamps come from CAP_PROP_POS_MSEC after each read (presentation time of the frame just decoded), so
+variable-frame-rate videos keep their real timing; CAP_PROP_FPS is nominal only. Times start at 0 at the
+first frame and strictly increase (a backend that repeats or lacks a timestamp falls back to the nominal
+frame interval for that frame).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+from trajectories.errors import InputError
+
+_DEFAULT_FPS = 30.0  # [1/s] when the container does not state a frame rate
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """What the container says about a video: size [px], nominal frame rate [1/s], frame count (may be 0)."""
+
+    path: str
+    width: int
+    height: int
+    fps: float
+    frame_count: int
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return (self.width, self.height)
+
+
+def _open(path: str | Path):
+    import cv2
+
+    spath = str(path)
+    if not os.path.exists(spath):
+        raise InputError("file not found", file=spath)
+    if os.path.isdir(spath):
+        raise InputError("is a directory, not a video file", file=spath)
+    cap = cv2.VideoCapture(spath)
+    if not cap.isOpened():
+        cap.release()
+        raise InputError("not a readable video (OpenCV could not open it)", file=spath)
+    return cap
+
+
+def _info(cap, spath: str) -> VideoInfo:
+    import cv2
+
+    fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+    if not (math.isfinite(fps) and fps > 0):
+        fps = _DEFAULT_FPS
+    count = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+    return VideoInfo(
+        path=spath,
+        width=int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)),
+        height=int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)),
+        fps=fps,
+        frame_count=max(count, 0),
+    )
+
+
+def probe_video(path: str | Path) -> VideoInfo:
+    """Size, nominal fps and frame count of a video; InputError if OpenCV cannot open it."""
+    cap = _open(path)
+    try:
+        return _info(cap, str(path))
+    finally:
+        cap.release()
+
+
+def iter_frames(path: str | Path) -> Iterator[tuple[int, float, np.ndarray]]:
+    """Yield (frame index, time [s] from the first frame, BGR frame (h, w, 3) uint8) for every frame.
+
+    Raises InputError when the file cannot be opened or yields no frame at all.
+    """
+    import cv2
+
+    spath = str(path)
+    cap = _open(spath)
+    try:
+        nominal = 1.0 / _info(cap, spath).fps
+        t0: float | None = None
+        last = -math.inf
+        k = 0
+        while True:
+            ok, frame = cap.read()
+            if not ok or frame is None:
+                break
+            ms = cap.get(cv2.CAP_PROP_POS_MSEC)
+            t = ms / 1000.0 if ms is not None and math.isfinite(ms) else math.nan
+            if t0 is None:
+                t0 = t if math.isfinite(t) else 0.0
+            t = t - t0
+            if not math.isfinite(t) or t <= last:
+                t = (last + nominal) if k else 0.0
+            last = t
+            yield k, t, frame
+            k += 1
+        if k == 0:
+            raise InputError("video has no decodable frames", file=spath)
+    finally:
+        cap.release()

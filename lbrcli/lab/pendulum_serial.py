@@ -1,0 +1,162 @@
+"""The thesis's pendulum module (ch. 6) over USB serial: an AS5600 encoder read through an nRF24 radio link.
+
+The receiving Arduino writes one reading per line: the raw 12-bit encoder count x (θ = 2π·x/4096, eq. 6.1)
+and the angular velocity [rad/s], separated by a comma, semicolon, tab or space. A background thread reads
+the port (pyserial) and publishes the latest reading by swapping one tuple, so the FRI loop only ever reads an
+attribute and is never blocked by the serial port. Malformed lines are counted, never fatal.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import threading
+import time
+from dataclasses import dataclass
+
+COUNTS_PER_TURN = 4096  # AS5600, 12 bit
+_SPLIT = re.compile(r"[,;\t ]+")
+
+
+@dataclass(frozen=True)
+class PendulumReading:
+    """One encoder reading: host time [s] (time.monotonic), angle [rad] wrapped to (−π, π], velocity [rad/s]."""
+
+    host_time: float
+    theta: float
+    omega: float
+
+
+def parse_line(line: bytes | str, zero_count: int = 0) -> tuple[float, float]:
+    """Parse 'x,omega' → (θ [rad] relative to ``zero_count`` wrapped to (−π, π], ω [rad/s]); ValueError if malformed."""
+    text = line.decode("ascii", errors="strict") if isinstance(line, bytes) else line
+    parts = [p for p in _SPLIT.split(text.strip()) if p]
+    if len(parts) != 2:
+        raise ValueError(f"expected 2 values, got {len(parts)}")
+    count = int(parts[0])
+    if not 0 <= count < COUNTS_PER_TURN:
+        raise ValueError(f"encoder count {count} outside 0..{COUNTS_PER_TURN - 1}")
+    omega = float(parts[1])
+    if not math.isfinite(omega):
+        raise ValueError("velocity not finite")
+    theta = 2.0 * math.pi * ((count - zero_count) % COUNTS_PER_TURN) / COUNTS_PER_TURN
+    if theta > math.pi:
+        theta -= 2.0 * math.pi
+    return theta, omega
+
+
+def format_line(theta: float, omega: float, zero_count: int = 0) -> bytes:
+    """The line the module's Arduino sends for angle θ [rad] and velocity ω [rad/s] (inverse of parse_line)."""
+    count = (int(round(theta / (2.0 * math.pi) * COUNTS_PER_TURN)) + zero_count) % COUNTS_PER_TURN
+    return f"{count},{omega:.4f}\n".encode("ascii")
+
+
+class PendulumReader:
+    """Reads the pendulum module's serial port in a daemon thread; ``latest`` is the newest reading (or None)."""
+
+    def __init__(self, port: str, baud: int = 115200, zero_count: int = 0) -> None:
+        self.port = port
+        self.baud = baud
+        self.zero_count = zero_count
+        self.latest: PendulumReading | None = None
+        self.lines = 0
+        self.malformed = 0
+        self.error: str | None = None
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._serial = None
+
+    def start(self) -> "PendulumReader":
+        """Open the port (raises OptionError if it cannot be opened) and start reading."""
+        import serial
+
+        from trajectories.errors import OptionError
+
+        try:
+            self._serial = serial.serial_for_url(self.port, baudrate=self.baud, timeout=0.05)
+        except (serial.SerialException, OSError, ValueError) as exc:
+            raise OptionError(f"--pendulum: cannot open serial port {self.port}: {exc}") from None
+        self._thread = threading.Thread(target=self._run, name="pendulum-serial", daemon=True)
+        self._thread.start()
+        return self
+
+    def _run(self) -> None:
+        ser = self._serial
+        while not self._stop.is_set():
+            try:
+                line = ser.readline()
+            except Exception as exc:  # the device went away: keep the session running, report it at the end
+                self.error = str(exc)
+                return
+            if not line:
+                continue
+            if not line.endswith(b"\n"):
+                self.malformed += 1  # a partial line (timeout mid-line or garbage)
+                continue
+            self.lines += 1
+            try:
+                theta, omega = parse_line(line, self.zero_count)
+            except (ValueError, UnicodeDecodeError):
+                self.malformed += 1
+                continue
+            self.latest = PendulumReading(time.monotonic(), theta, omega)
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=1.0)
+        if self._serial is not None:
+            self._serial.close()
+
+    def __enter__(self) -> "PendulumReader":
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+
+class PendulumEmulator:
+    """The module's radio receiver emulated on a pseudo-terminal: ``path`` is the device a reader opens.
+
+    ``feed(t, θ, ω)`` writes a line at most every 1/rate_hz seconds, non-blocking (a full buffer drops lines,
+    as a radio link would).
+    """
+
+    def __init__(self, rate_hz: float = 200.0, zero_count: int = 0) -> None:
+        import os
+        import tty
+
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        os.set_blocking(self.master, False)
+        self.path = os.ttyname(self.slave)
+        self.period = 1.0 / rate_hz
+        self.zero_count = zero_count
+        self._next = -math.inf
+        self.sent = 0
+
+    def feed(self, t: float, theta: float, omega: float) -> None:
+        if t < self._next:
+            return
+        self._next = t + self.period
+        import os
+
+        try:
+            os.write(self.master, format_line(theta, omega, self.zero_count))
+            self.sent += 1
+        except (BlockingIOError, OSError):
+            pass
+
+    def write_raw(self, data: bytes) -> None:
+        import os
+
+        os.write(self.master, data)
+
+    def close(self) -> None:
+        import os
+
+        for fd in (self.master, self.slave):
+            try:
+                os.close(fd)
+            except OSError:
+                pass

@@ -1,0 +1,168 @@
+"""Pendulum module over a real pseudo-terminal, telemetry through a real Mosquitto broker on loopback."""
+
+import json
+import math
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+import time
+
+import pytest
+
+from lbrcli.lab.pendulum_serial import PendulumEmulator, PendulumReader, format_line, parse_line
+from lbrcli.lab.telemetry import MqttTarget, TelemetryListener, TelemetryPublisher, parse_mqtt_url
+from trajectories.errors import OptionError
+
+
+def wait_for(predicate, timeout=5.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(0.01)
+    return False
+
+
+def test_parse_line_thesis_eq_6_1():
+    theta, omega = parse_line(b"1024,0.5\n")
+    assert theta == pytest.approx(math.pi / 2) and omega == 0.5
+    assert parse_line("3072;-1.25")[0] == pytest.approx(-math.pi / 2)  # wrapped to (−π, π]
+    assert parse_line("2048 0", zero_count=2048)[0] == 0.0
+    for bad in ("", "12", "4096,0", "-1,0", "abc,1", "1,2,3", "5,nan"):
+        with pytest.raises(ValueError):
+            parse_line(bad)
+
+
+def test_format_parse_round_trip():
+    for theta in (-3.0, -0.7, 0.0, 0.01, 1.2, 3.1):
+        t2, w2 = parse_line(format_line(theta, -2.5, zero_count=1000), zero_count=1000)
+        assert t2 == pytest.approx(theta, abs=2 * math.pi / 4096) and w2 == -2.5
+
+
+def test_reader_on_a_pty_counts_malformed_lines_and_keeps_going():
+    emu = PendulumEmulator(rate_hz=1000)
+    try:
+        with PendulumReader(emu.path) as reader:
+            emu.write_raw(b"garbage\n12\n")
+            for k in range(20):
+                emu.feed(k * 0.01, 0.3, -1.5)
+                time.sleep(0.002)
+            assert wait_for(lambda: reader.latest is not None and reader.lines >= 22)
+            assert reader.malformed == 2
+            assert reader.latest.theta == pytest.approx(0.3, abs=2e-3)
+            assert reader.latest.omega == -1.5
+    finally:
+        emu.close()
+
+
+def test_reader_bad_port_is_an_option_error():
+    with pytest.raises(OptionError, match="cannot open serial port"):
+        PendulumReader("/dev/does-not-exist").start()
+
+
+def test_parse_mqtt_url():
+    assert parse_mqtt_url("mqtt://localhost:1884/lbr/state") == MqttTarget("localhost", 1884, "lbr/state")
+    assert parse_mqtt_url("mqtt://h/t").port == 1883
+    for bad in ("http://h/t", "mqtt://h:1/", "mqtt://h:1/a/#"):
+        with pytest.raises(OptionError):
+            parse_mqtt_url(bad)
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture
+def broker(tmp_path):
+    exe = shutil.which("mosquitto") or ("/usr/sbin/mosquitto" if shutil.os.path.exists("/usr/sbin/mosquitto") else None)
+    if exe is None:
+        pytest.skip("mosquitto broker binary not installed (apt-get install mosquitto)")
+    port = _free_port()
+    conf = tmp_path / "mosquitto.conf"
+    conf.write_text(f"listener {port} 127.0.0.1\nallow_anonymous true\npersistence false\n")
+    proc = subprocess.Popen([exe, "-c", str(conf)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+    def up():
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
+            return True
+        except OSError:
+            return False
+
+    assert wait_for(up), "broker did not start"
+    yield MqttTarget("127.0.0.1", port, "lbr/test/state")
+    proc.terminate()
+    proc.wait(5)
+
+
+def test_publisher_decimates_and_listener_receives(broker):
+    got = []
+    listener = TelemetryListener(broker, got.append).start()
+    assert listener.connected.wait(5)
+    time.sleep(0.2)  # subscription acknowledged
+    pub = TelemetryPublisher(broker, rate_hz=50).start()
+    assert wait_for(pub._client.is_connected)
+    t0 = time.monotonic()
+    cycles = 0
+    while time.monotonic() - t0 < 1.0:  # a 1 kHz loop offering every cycle
+        t = time.monotonic() - t0
+        pub.offer(t, {"state": "COMMANDING_ACTIVE", "msr_q": [0.1] * 7, "k": cycles})
+        cycles += 1
+        time.sleep(0.001)
+    pub.stop()
+    assert wait_for(lambda: len(got) >= pub.published, 3)
+    listener.stop()
+    assert cycles > 300
+    # decimated to ≈ 50 Hz, not one message per cycle
+    assert 35 <= len(got) <= 55
+    assert got[0]["state"] == "COMMANDING_ACTIVE" and got[0]["msr_q"] == [0.1] * 7
+    ts = [m["t"] for m in got]
+    assert all(b - a >= 0.019 for a, b in zip(ts, ts[1:]))
+
+
+def test_publisher_reconnects_after_broker_restart(broker, tmp_path):
+    pub = TelemetryPublisher(broker, rate_hz=100).start()
+    assert wait_for(pub._client.is_connected)
+    # a listener that joins late still gets fresh messages: the publisher keeps going without blocking
+    got = []
+    listener = TelemetryListener(broker, got.append).start()
+    assert listener.connected.wait(5)
+    time.sleep(0.2)
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 0.5:
+        pub.offer(time.monotonic() - t0, {"x": 1})
+        time.sleep(0.002)
+    assert wait_for(lambda: len(got) > 10, 3)
+    pub.stop()
+    listener.stop()
+
+
+def test_listen_cli_records(broker, tmp_path, lbr):
+    url = f"mqtt://{broker.host}:{broker.port}/{broker.topic}"
+    out = tmp_path / "rec.jsonl"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "lbrcli", "listen", url, "--count", "5", "-o", str(out), "--json"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    time.sleep(1.5)  # let it subscribe
+    pub = TelemetryPublisher(broker, rate_hz=100).start()
+    assert wait_for(pub._client.is_connected)
+    t0 = time.monotonic()
+    while proc.poll() is None and time.monotonic() - t0 < 10:
+        pub.offer(time.monotonic() - t0, {"state": "MONITORING_READY", "msr_q": [0.0] * 7})
+        time.sleep(0.005)
+    pub.stop()
+    stdout, stderr = proc.communicate(timeout=10)
+    assert proc.returncode == 0, stderr
+    assert json.loads(stdout)["received"] >= 5
+    lines = out.read_text().splitlines()
+    assert len(lines) >= 5 and json.loads(lines[0])["state"] == "MONITORING_READY"
+
+
+def test_listen_bad_url_exit_2(lbr):
+    res = lbr("listen", "http://nowhere/x")
+    assert res.returncode == 2 and "expected mqtt://" in res.stderr and "Traceback" not in res.stderr

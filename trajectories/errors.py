@@ -81,3 +81,7 @@ class FriError(LbrError):
 
 class FriDecodeError(LbrError):
     """A datagram is not a valid FRI message of the expected version."""
+
+
+class FriForeignMessage(FriDecodeError):
+    """A well-formed FRI datagram of another message type (foreign message identifier)."""

@@ -1,8 +1,9 @@
 """Encoding and decoding of FRI datagrams for both wire formats.
 
 FRI 1.x: the datagram is the bare protobuf encoding. FRI 2.7: [uint32 LE length][protobuf][uint32 LE CRC-32].
-Decoders check the framing, the CRC, the required fields and the message identifier, and raise
-FriDecodeError on anything else; standard protobuf parsing accepts both packed and unpacked repeated doubles.
+Decoders check the framing, the CRC, the header, the message identifier and the required fields, and raise
+FriDecodeError on anything else (its subclass FriForeignMessage for a valid message with another identifier);
+standard protobuf parsing accepts both packed and unpacked repeated doubles.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from typing import Any
 
 from google.protobuf.message import DecodeError
 
-from trajectories.errors import FriDecodeError
+from trajectories.errors import FriDecodeError, FriForeignMessage
 
 from .constants import COMMAND_MESSAGE_ID, MAX_DATAGRAM, MONITORING_MESSAGE_ID
 from .messages import FriMessages, FriVersion, messages
@@ -71,9 +72,14 @@ class FriCodec:
             into.ParseFromString(payload)
         except DecodeError as exc:
             raise FriDecodeError(f"not an FRI {self.version.value} {kind} message ({exc})") from None
+        if not into.HasField("header"):
+            raise FriDecodeError(f"FRI {self.version.value} {kind} message without a header")
         ident = into.header.messageIdentifier
         if ident != expected_id:
-            raise FriDecodeError(f"{kind} message identifier 0x{ident:x}, expected 0x{expected_id:x}")
+            raise FriForeignMessage(f"{kind} message identifier 0x{ident:x}, expected 0x{expected_id:x}")
+        if not into.IsInitialized():
+            missing = ", ".join(into.FindInitializationErrors())
+            raise FriDecodeError(f"FRI {self.version.value} {kind} message lacks required fields: {missing}")
         return into
 
     def decode_monitoring(self, data: bytes, into: Any | None = None) -> Any:

@@ -1,0 +1,90 @@
+"""`lbr compare`: the tracked string angle against the model's prediction — lag, RMS and max error, overlay plot."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from ..options import JsonOpt
+
+
+def compare(
+    prediction: Annotated[Path, typer.Argument(help="Prediction t,theta \\[s, rad] (`lbr plan ... --prediction`), or a simulated execution log with --column.")],
+    track: Annotated[Path, typer.Argument(help="Track CSV from `lbr track video` with a theta column.")],
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG overlaying model and experiment θ \\[deg] over time, and their difference.")] = None,
+    lag: Annotated[Optional[float], typer.Option("--lag", help="Track time − prediction time \\[s]; estimated by cross-correlation when omitted.")] = None,
+    max_lag: Annotated[Optional[float], typer.Option("--max-lag", help="Search the lag only within ± this \\[s].")] = None,
+    flip: Annotated[bool, typer.Option("--flip", help="Negate the track's θ (camera looking at the plane of motion from the other side).")] = False,
+    column: Annotated[str, typer.Option("--column", help="Angle column \\[rad] of the prediction file (e.g. ball_theta in an execution log).")] = "theta",
+    json_out: JsonOpt = False,
+) -> None:
+    """Compare the model's θ with the tracked θ: align in time, report RMS and max error over the overlap.
+
+    Lag convention: track time = prediction time + lag. Frames where the ball (or pivot) was not found are
+    skipped. Exit 1 when prediction and track do not overlap.
+    """
+    import numpy as np
+
+    from trajectories.csvio import PREDICTION_COLUMNS, read_table
+    from trajectories.errors import CsvFormatError, OptionError
+    from tracking.compare import compare_angles
+    from tracking.trackfile import read_track_csv
+
+    from ..console import Reporter
+
+    rep = Reporter(json_out)
+    if max_lag is not None and not max_lag > 0:
+        raise OptionError(f"--max-lag must be positive [s], got {max_lag:g}")
+    for p, name in ((plot, "--plot"),):
+        if p is not None and not p.resolve().parent.is_dir():
+            raise OptionError(f"{name}: folder does not exist: {p.parent}")
+    if column == "theta":
+        pred = read_table(prediction, PREDICTION_COLUMNS, time="increasing")
+    else:
+        pred = read_table(prediction, ("t",), time="increasing")
+        if not pred.has(column):
+            raise CsvFormatError(f"no column '{column}' (columns: {', '.join(pred.names)})", file=pred.path, row=1)
+    if len(pred.data) < 2:
+        raise CsvFormatError("need at least 2 samples", file=pred.path)
+    t_model, theta_model = pred.column("t"), pred.column(column)
+    tr = read_track_csv(track)
+    if tr.theta is None:
+        raise CsvFormatError("no 'theta' column: track the video with --pivot or --pivot-color", file=tr.path, row=1)
+
+    cmp = compare_angles(t_model, theta_model, tr.t, tr.theta, lag_s=lag, flip=flip, max_lag_s=max_lag)
+    how = "estimated" if cmp.lag_estimated else "given"
+    rep.print(f"lag {cmp.lag_s:+.4f} s ({how}; track time = prediction time + lag)")
+    rep.print(
+        f"over {cmp.overlap_s:.3f} s ({cmp.samples} frames): RMS error {cmp.rms_deg:.3f}°, max {cmp.max_deg:.3f}°"
+    )
+    if cmp.mirrored:
+        rep.warn("the track's θ matches the prediction much better negated: the camera sees the motion mirrored — try --flip")
+    if plot is not None:
+        from ..plots.compare import plot_compare
+
+        theta_meas = -tr.theta if flip else tr.theta
+        plot_compare(cmp, t_model, theta_model, plot, f"{prediction.name} vs {track.name}", tr.t, theta_meas)
+        rep.print(f"plot: {plot}")
+    rep.emit(
+        {
+            "prediction": str(prediction),
+            "track": str(track),
+            "lag_s": cmp.lag_s,
+            "lag_estimated": cmp.lag_estimated,
+            "rms_deg": cmp.rms_deg,
+            "max_deg": cmp.max_deg,
+            "overlap_s": cmp.overlap_s,
+            "samples": cmp.samples,
+            "score": cmp.correlation,
+            "mirrored": cmp.mirrored,
+            "flipped": flip,
+            "track_frames": int(len(tr.t)),
+            "track_theta_frames": int(np.isfinite(tr.theta).sum()),
+        }
+    )
+
+
+def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
+    app.command("compare")(compare)

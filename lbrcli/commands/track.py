@@ -1,0 +1,274 @@
+"""`lbr track video` (ball centre and string angle per frame) and `lbr track calibrate` (checkerboard camera calibration)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from ..options import JsonOpt
+
+
+def _check_out(path: Path | None, option: str) -> None:
+    from trajectories.errors import OptionError
+
+    if path is not None and not path.resolve().parent.is_dir():
+        raise OptionError(f"{option}: folder does not exist: {path.parent}")
+
+
+def parse_board(text: str) -> tuple[int, int]:
+    """'9x6' → (9, 6) inner corners (columns, rows)."""
+    from trajectories.errors import OptionError
+
+    parts = str(text).lower().replace("×", "x").split("x")
+    try:
+        cols, rows = (int(p) for p in parts)
+    except ValueError:
+        raise OptionError(f"--board: expected inner corners as COLSxROWS (e.g. 9x6), got {text!r}") from None
+    if cols < 2 or rows < 2:
+        raise OptionError(f"--board: need at least 2x2 inner corners, got {text!r}")
+    return cols, rows
+
+
+def video(
+    video_path: Annotated[Path, typer.Argument(metavar="VIDEO", help="Experiment video (any format OpenCV/FFmpeg reads).")],
+    out: Annotated[Path, typer.Option("-o", "--out", help="Track CSV to write: t,frame,u,v,found\\[,theta,...] \\[s, -, px, px, 0/1, rad].")],
+    pivot: Annotated[Optional[str], typer.Option("--pivot", help="Fixed pivot (string attachment) U,V \\[px] in the video image.")] = None,
+    pivot_color: Annotated[Optional[str], typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame (e.g. green).")] = None,
+    color: Annotated[str, typer.Option("--color", help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or an OpenCV hue range H1-H2 (0–179).")] = "red",
+    radius: Annotated[Optional[float], typer.Option("--radius", help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: 2–62 px radius).")] = None,
+    min_circularity: Annotated[float, typer.Option("--min-circularity", help="Minimum 4π·area/perimeter² of the ball blob (disc ≈ 0.9, square 0.785).")] = 0.8,
+    calibration: Annotated[Optional[Path], typer.Option("--calibration", help="Camera JSON from `lbr track calibrate`: undistort points; with a plane also x_m,y_m \\[m].")] = None,
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of θ \\[deg] and u, v \\[px] over time with lost frames marked.")] = None,
+    preview: Annotated[Optional[Path], typer.Option("--preview", help="Video (mp4) with the detection drawn over it: ball circle, pivot, string, θ.")] = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Track a coloured ball in every frame of a video; θ from the pivot when one is known.
+
+    Detection in HSV (red uses two hue bands), morphology, blobs gated by area and circularity; the search
+    runs in a window around a constant-velocity prediction with a full-frame fallback. Frames where the ball
+    is not found are written with found = 0 and empty (nan) positions — never invented. Times are the
+    decoder timestamps \\[s] (variable frame rates kept). θ = atan2(u_ball − u_pivot, v_ball − v_pivot) \\[rad]:
+    0 hanging straight down, positive toward the right of the image. Exit 1 if the ball is never found.
+    """
+    import math
+    import time
+
+    import numpy as np
+
+    from trajectories.errors import OptionError
+    from tracking.calibration import load_calibration
+    from tracking.color import color_spec
+    from tracking.detect import BlobGates
+    from tracking.pipeline import track_video
+    from tracking.tracker import TrackerOptions
+    from tracking.trackfile import write_track_csv
+    from tracking.video import probe_video
+
+    from ..console import Reporter
+    from ..parsing import parse_floats
+
+    rep = Reporter(json_out)
+    if pivot is not None and pivot_color is not None:
+        raise OptionError("give either --pivot or --pivot-color, not both")
+    ball_spec = color_spec(color, "--color")
+    piv_spec = color_spec(pivot_color, "--pivot-color") if pivot_color is not None else None
+    if piv_spec is not None and piv_spec.bands == ball_spec.bands:
+        raise OptionError("--pivot-color must differ from the ball's --color")
+    piv_uv = tuple(parse_floats(pivot, "--pivot", 2)) if pivot is not None else None
+    if radius is not None and not radius > 0:
+        raise OptionError(f"--radius must be positive, got {radius:g}")
+    if not 0.0 <= min_circularity <= 1.0:
+        raise OptionError(f"--min-circularity must be in [0, 1], got {min_circularity:g}")
+    for p, name in ((out, "--out"), (plot, "--plot"), (preview, "--preview")):
+        _check_out(p, name)
+    gates = BlobGates.for_radius(radius, min_circularity) if radius else BlobGates(min_circularity=min_circularity)
+    options = TrackerOptions(gates=gates)
+    pivot_options = TrackerOptions(gates=BlobGates(min_circularity=min_circularity))
+    cal = load_calibration(calibration) if calibration is not None else None
+    info = probe_video(video_path)
+
+    writer = None
+    on_frame = None
+    if preview is not None:
+        import cv2
+
+        from tracking.overlay import draw_overlay
+
+        writer = cv2.VideoWriter(str(preview), cv2.VideoWriter_fourcc(*"mp4v"), info.fps, info.size)
+        if not writer.isOpened():
+            raise OptionError(f"--preview: cannot write a video to {preview}")
+
+        def on_frame(frame, res):  # noqa: ANN001
+            b = res.ball
+            draw_overlay(frame, res.t, (b.u, b.v) if b else None, b.radius_px if b else None, res.pivot_uv, res.theta)
+            writer.write(frame)
+
+    t0 = time.perf_counter()
+    try:
+        with rep.progress(f"tracking {video_path.name}", info.frame_count or None) as update:
+            track = track_video(
+                video_path,
+                ball_spec,
+                options=options,
+                pivot_uv=piv_uv,
+                pivot_color=piv_spec,
+                pivot_options=pivot_options,
+                calibration=cal,
+                progress=update,
+                on_frame=on_frame,
+            )
+    finally:
+        if writer is not None:
+            writer.release()
+    elapsed = time.perf_counter() - t0
+    write_track_csv(out, track)
+
+    n = len(track.t)
+    found = int(track.found.sum())
+    duration = float(track.t[-1]) if n else 0.0
+    figures: dict = {
+        "video": str(video_path),
+        "out": str(out),
+        "frames": n,
+        "found": found,
+        "found_percent": 100.0 * found / n if n else 0.0,
+        "duration_s": duration,
+        "fps_nominal": info.fps,
+        "fps_measured": (n - 1) / duration if duration > 0 else math.nan,
+        "width": info.width,
+        "height": info.height,
+        "ball_radius_px": float(np.nanmedian(track.radius_px)) if found else math.nan,
+        "full_frame_searches": track.full_frame_searches,
+        "processing_fps": n / elapsed if elapsed > 0 else math.nan,
+    }
+    rep.print(
+        f"{video_path}: {n} frames over {duration:.3f} s ({info.width}x{info.height}, {figures['fps_measured']:.2f} fps); "
+        f"ball found in {found} ({figures['found_percent']:.1f} %), radius ≈ {figures['ball_radius_px']:.1f} px; "
+        f"tracked at {figures['processing_fps']:.0f} frames/s"
+    )
+    if track.theta is not None:
+        th = track.theta[np.isfinite(track.theta)]
+        figures["theta_frames"] = int(len(th))
+        figures["theta_min_deg"] = float(np.degrees(th.min())) if len(th) else math.nan
+        figures["theta_max_deg"] = float(np.degrees(th.max())) if len(th) else math.nan
+        rep.print(f"θ in {len(th)} frames, from {figures['theta_min_deg']:.2f}° to {figures['theta_max_deg']:.2f}°")
+    if track.pivot_uv is not None:
+        figures["pivot_found"] = int(np.all(np.isfinite(track.pivot_uv), axis=1).sum())
+        rep.print(f"pivot marker found in {figures['pivot_found']} frames")
+    if cal is not None and cal.plane is not None:
+        figures["metres_per_px"] = cal.plane.metres_per_px
+    rep.print(f"wrote {out}")
+    if plot is not None:
+        from ..plots.track import plot_track
+
+        plot_track(track, plot, title=video_path.name)
+        rep.print(f"plot: {plot}")
+    if preview is not None:
+        figures["preview"] = str(preview)
+        rep.print(f"preview: {preview}")
+    rep.emit(figures)
+    if found == 0:
+        rep.warn(f"the {color} ball was not found in any frame (try --color, --radius or --min-circularity)")
+        raise typer.Exit(1)
+
+
+def calibrate(
+    inputs: Annotated[list[Path], typer.Argument(metavar="IMAGES_OR_VIDEO...", help="Checkerboard images, folders of images, or videos.")],
+    out: Annotated[Path, typer.Option("-o", "--out", help="Camera calibration JSON to write.")],
+    board: Annotated[str, typer.Option("--board", help="Inner corners COLSxROWS of the checkerboard (a 10x7-square board is 9x6).")] = "9x6",
+    square: Annotated[float, typer.Option("--square", help="Side of one square \\[m].")] = 0.025,
+    plane: Annotated[Optional[Path], typer.Option("--plane", help="Image (or video: first frame with the board) of the board lying in the plane of motion: metres per pixel.")] = None,
+    stride: Annotated[int, typer.Option("--stride", help="Use every N-th frame of videos.")] = 15,
+    max_views: Annotated[int, typer.Option("--max-views", help="At most this many views (evenly chosen) go into the calibration.")] = 40,
+    json_out: JsonOpt = False,
+) -> None:
+    """Camera calibration from checkerboard views (OpenCV findChessboardCorners, cornerSubPix, calibrateCamera).
+
+    Reports the RMS reprojection error \\[px]. `lbr track video --calibration` then undistorts the tracked
+    points; with --plane it also reports positions in metres in that plane.
+    """
+    import numpy as np
+
+    from trajectories.errors import InputError, OptionError
+    from tracking.calibration import calibrate_camera, find_board, iter_images, plane_from_corners, save_calibration
+
+    from ..console import Reporter
+
+    rep = Reporter(json_out)
+    cols_rows = parse_board(board)
+    if not square > 0:
+        raise OptionError(f"--square must be positive [m], got {square:g}")
+    if stride < 1 or max_views < 3:
+        raise OptionError("--stride must be ≥ 1 and --max-views ≥ 3")
+    _check_out(out, "--out")
+    views: list[np.ndarray] = []
+    names: list[str] = []
+    rejected = 0
+    size: tuple[int, int] | None = None
+    with rep.progress("finding the board", None) as update:
+        for name, img in iter_images(inputs, stride):
+            h, w = img.shape[:2]
+            if size is None:
+                size = (w, h)
+            elif size != (w, h):
+                raise InputError(f"image is {w}x{h}, the first one was {size[0]}x{size[1]}", file=name)
+            corners = find_board(img, cols_rows)
+            if corners is None:
+                rejected += 1
+            else:
+                views.append(corners)
+                names.append(name)
+            update(len(views) + rejected)
+    if len(views) < 3:
+        raise InputError(f"the {board} board was found in {len(views)} of {len(views) + rejected} views; need at least 3")
+    if len(views) > max_views:
+        keep = np.round(np.linspace(0, len(views) - 1, max_views)).astype(int)
+        views = [views[k] for k in keep]
+    cal = calibrate_camera(views, size, cols_rows, square)
+    if plane is not None:
+        pl = None
+        for name, img in iter_images([plane], 1):
+            if img.shape[1::-1] != tuple(cal.image_size):
+                raise InputError(f"image is {img.shape[1]}x{img.shape[0]}, the calibration is for {size[0]}x{size[1]}", file=name)
+            c = find_board(img, cols_rows)
+            if c is not None:
+                pl = plane_from_corners(cal, c)
+                break
+        if pl is None:
+            raise InputError(f"the {board} board was not found", file=str(plane))
+        cal = cal.with_plane(pl)
+    save_calibration(out, cal)
+    K = cal.camera_matrix
+    rep.print(
+        f"board {board} found in {len(names)} of {len(names) + rejected} views; {cal.views} used; "
+        f"RMS reprojection error {cal.rms_px:.3f} px"
+    )
+    rep.print(f"fx {K[0, 0]:.1f} px, fy {K[1, 1]:.1f} px, cx {K[0, 2]:.1f} px, cy {K[1, 2]:.1f} px; "
+              f"distortion {np.array2string(cal.dist_coeffs, precision=4)}")
+    if cal.rms_px > 1.0:
+        rep.warn(f"reprojection error {cal.rms_px:.2f} px is high: check --board and the images")
+    figures = {
+        "out": str(out),
+        "views_found": len(names),
+        "views_rejected": rejected,
+        "views_used": cal.views,
+        "image_size": list(cal.image_size),
+        "rms_px": cal.rms_px,
+        "fx_px": K[0, 0],
+        "fy_px": K[1, 1],
+        "cx_px": K[0, 2],
+        "cy_px": K[1, 2],
+        "dist_coeffs": cal.dist_coeffs,
+    }
+    if cal.plane is not None:
+        figures["metres_per_px"] = cal.plane.metres_per_px
+        rep.print(f"plane of motion: {cal.plane.metres_per_px * 1e3:.4f} mm/px at the board centre")
+    rep.print(f"wrote {out}")
+    rep.emit(figures)
+
+
+def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
+    groups["track"].command("video")(video)
+    groups["track"].command("calibrate")(calibrate)

@@ -1,0 +1,46 @@
+"""Model vs experiment: θ over time overlaid (as the thesis's Figs. 4.5 and 5.6) and the error."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def plot_compare(
+    cmp,
+    t_model: np.ndarray,
+    theta_model: np.ndarray,
+    path: str | Path,
+    title: str = "",
+    t_meas: np.ndarray | None = None,
+    theta_meas: np.ndarray | None = None,
+) -> None:
+    """Overlay on the model's time axis: the prediction (blue) and the measurement shifted by the lag (orange).
+
+    t_meas, theta_meas [s, rad]: the whole track (as compared, i.e. already negated with --flip), drawn
+    faintly outside the overlap.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax, ax_err) = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
+    ax.plot(t_model, np.degrees(theta_model), color="tab:blue", lw=1.5, label="model (prediction)")
+    if t_meas is not None and theta_meas is not None:
+        ax.plot(np.asarray(t_meas) - cmp.lag_s, np.degrees(theta_meas), color="tab:orange", lw=0.8, alpha=0.35)
+    ax.plot(cmp.t - cmp.lag_s, np.degrees(cmp.measured), color="tab:orange", lw=1.2, label="experiment (track)")
+    ax.set_ylabel("θ [deg]")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper right", fontsize=9)
+    ax_err.plot(cmp.t - cmp.lag_s, np.degrees(cmp.measured - cmp.model), color="tab:red", lw=1.0)
+    ax_err.axhline(0.0, color="k", lw=0.6)
+    ax_err.set_ylabel("exp. − model [deg]")
+    ax_err.set_xlabel("t [s] (model time; track shifted by the lag)")
+    ax_err.grid(alpha=0.3)
+    figures = f"lag {cmp.lag_s:.3f} s, RMS {cmp.rms_deg:.2f}°, max {cmp.max_deg:.2f}° over {cmp.overlap_s:.2f} s"
+    fig.suptitle(f"{title}\n{figures}" if title else figures, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -32,10 +32,23 @@ def direction_from_angles(theta_x: float = 0.0, theta_y: float = 0.0) -> np.ndar
     return s / np.linalg.norm(s)
 
 
-def rhs(s: np.ndarray, sdot: np.ndarray, pivot_acc: np.ndarray, length: float, damping: float = 0.0) -> np.ndarray:
-    """s̈ for string direction s, its rate ṡ [1/s] and pivot acceleration p̈ [m/s²]; ``damping`` [1/s] on ṡ."""
+def rhs(
+    s: np.ndarray, sdot: np.ndarray, pivot_acc: np.ndarray, length: float, damping: float = 0.0,
+    constraint_rate: float = 0.0,
+) -> np.ndarray:
+    """s̈ for string direction s, its rate ṡ [1/s] and pivot acceleration p̈ [m/s²]; ``damping`` [1/s] on ṡ.
+
+    ``constraint_rate`` α [1/s] > 0 adds Baumgarte stabilisation of |s| = 1 (c = (|s|² − 1)/2 then obeys
+    c̈ = −2αċ − α²c; identical on the sphere). Without it the drift of |s| grows exponentially whenever the
+    tension is negative (slack string, rigid-rod model), which long runs past 90° need.
+    """
     f = (G_VEC - pivot_acc) / length
-    return f - np.dot(s, f) * s - np.dot(sdot, sdot) * s - damping * sdot
+    if constraint_rate == 0.0:
+        return f - np.dot(s, f) * s - np.dot(sdot, sdot) * s - damping * sdot
+    ss = np.dot(s, s)
+    c, cdot = 0.5 * (ss - 1.0), np.dot(s, sdot)
+    lam = (np.dot(s, f) + np.dot(sdot, sdot) + 2.0 * constraint_rate * cdot + constraint_rate**2 * c) / ss
+    return f - lam * s - damping * sdot
 
 
 def tension_per_mass(s: np.ndarray, sdot: np.ndarray, pivot_acc: np.ndarray, length: float) -> np.ndarray:
@@ -113,11 +126,13 @@ def simulate(
     rtol: float = 1e-9,
     atol: float = 1e-11,
     max_step: float = np.inf,
+    constraint_rate: float = 0.0,
 ) -> PendulumRun:
     """Integrate the driven spherical pendulum (scipy solve_ivp, DOP853) and sample it at ``times`` [s].
 
     ``pivot_acc(t)`` returns the pivot acceleration [m/s²]; give ``max_step`` no larger than the shortest
     feature of the input (e.g. the sample step of a sampled path) so that no input change is stepped over.
+    ``constraint_rate`` [1/s]: see ``rhs`` (use e.g. 20 for runs where the string may go slack).
     """
     from scipy.integrate import solve_ivp
 
@@ -126,7 +141,7 @@ def simulate(
 
     def f(t: float, y: np.ndarray) -> np.ndarray:
         s, v = y[:3], y[3:]
-        return np.concatenate([v, rhs(s, v, pivot_acc(t), length, damping)])
+        return np.concatenate([v, rhs(s, v, pivot_acc(t), length, damping, constraint_rate)])
 
     times = np.asarray(times, dtype=float)
     sol = solve_ivp(

@@ -1,0 +1,227 @@
+"""Swing-up on the arm: plan the pivot (energy shaping or fast pumping), IK, limit check, verification.
+
+``plan_swing_up`` is what `lbr plan swing-up` and the demo call. It derives the pivot's speed, acceleration
+and jerk bounds along base y from the joint limits (``swingup_robot.axis_bounds``), plans, solves IK per
+sample, checks the joint path and drives the nonlinear ball simulation with it. For the fast method a joint
+path that still breaks a limit makes the bounds tighter by the observed ratio and the plan is redone.
+With ``taut`` the string must stay taut: the plan then aims at the highest angle reachable that way.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from trajectories.check import CheckReport, check_trajectory
+from trajectories.errors import PlanningError
+from trajectories.limits import JointLimits
+from trajectories.robot import Robot
+from trajectories.trajectory import JointTrajectory
+
+from .swingup_energy import EnergyParams, plan_energy
+from .swingup_fast import FastProblem, SearchSettings, optimise, simulate_fast
+from .swingup_plan import PivotPlan, TaskBounds, first_reach
+from .swingup_robot import ArmSetup, Verification, axis_bounds, joint_path, verify
+from .tension import slack_report
+
+THESIS_Q_START = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)  # [rad], thesis §5.3.2
+METHODS = ("energy", "fast")
+
+
+@dataclass(frozen=True)
+class SwingUpRequest:
+    """Everything a swing-up plan depends on (SI units, angles in rad)."""
+
+    length: float  # [m]
+    mass: float  # [kg]
+    theta_d: float  # [rad]
+    method: str = "energy"
+    q_start: tuple[float, ...] = THESIS_Q_START
+    orientation: str | None = None  # "fixed" | "follow"; None: fixed for energy (thesis), follow for fast
+    travel: float = 0.3  # [m] band |y − y_start| for the pivot (fast; the bounds are derived over it)
+    dt: float = 0.005  # [s] FRI period
+    duration: float | None = None  # [s] pumping horizon; None: 60 (energy), 10 (fast)
+    tolerance: float = math.radians(1.0)  # [rad]
+    theta0: float = 0.0  # [rad]
+    push: float = 0.0  # [m/s²] energy: start push
+    k_e: float = 1.7
+    k_p: float = 0.05
+    k_d: float = 0.05
+    taut: bool = False
+    min_tension: float = 0.5  # [m/s²] margin required when ``taut``
+    limit_margin: float = 0.1  # the bounds keep joints within (1 − margin)·limits
+    search: SearchSettings = SearchSettings()
+
+    @property
+    def pivot_orientation(self) -> str:
+        return self.orientation or ("fixed" if self.method == "energy" else "follow")
+
+
+@dataclass(frozen=True)
+class SwingUpResult:
+    """Plan, joint path, limit report, verification and the figures the command reports."""
+
+    request: SwingUpRequest
+    plan: PivotPlan
+    trajectory: JointTrajectory
+    check: CheckReport
+    verification: Verification
+    bounds: TaskBounds
+    max_ik_error: float  # [m]
+    planning_time: float  # [s]
+    highest_taut_theta: float | None = None  # [rad], with ``taut`` when θ_d is not reachable taut
+    attempts: int = 1
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def t_reach(self) -> float | None:
+        """First time the verified |θ| reaches θ_d − tolerance [s]."""
+        return first_reach(self.verification.t, self.verification.theta, self.request.theta_d - self.request.tolerance)
+
+    @property
+    def reached(self) -> bool:
+        return self.t_reach is not None
+
+    def figures(self) -> dict:
+        """JSON figures: those of the verification simulation, the plan's own claim under ``claimed``."""
+        r, ver, plan = self.request, self.verification, self.plan
+        slack = slack_report(ver.t, ver.tension)
+        claimed_slack = slack_report(plan.t, plan.tension)
+        n = min(len(plan.theta), len(ver.theta))
+        diff = np.abs(plan.theta[:n] - ver.theta[:n])
+        figures = {
+            "method": plan.method,
+            "orientation": r.pivot_orientation,
+            "length_m": r.length,
+            "mass_kg": r.mass,
+            "theta_d_deg": math.degrees(r.theta_d),
+            "max_theta_deg": math.degrees(ver.max_theta),
+            "t_reach_s": self.t_reach,
+            "reached": self.reached,
+            "taut": slack.taut,
+            "min_tension_margin": slack.min_margin,  # [m/s²] tension / ball mass
+            "min_tension_n": slack.min_margin * r.mass,
+            "first_slack_s": slack.t_first_slack,
+            "limits_ok": self.check.ok,
+            "max_ratio": {k: float(v.max()) for k, v in self.check.ratios().items()},
+            "violations": [v.describe() for v in self.check.failing],
+            "duration_s": float(self.trajectory.duration),
+            "samples": len(self.trajectory),
+            "dt_s": float(self.trajectory.dt),
+            "t_rest_s": plan.t_rest,
+            "max_travel_m": float(np.max(np.abs(plan.x))),
+            "bounds": {"v_max_m_s": self.bounds.v_max, "a_max_m_s2": self.bounds.a_max,
+                       "j_max_m_s3": self.bounds.j_max},
+            "max_ik_error_m": self.max_ik_error,
+            "planning_time_s": self.planning_time,
+            "claimed": {
+                "max_theta_deg": math.degrees(plan.max_theta),
+                "t_reach_s": plan.t_reach,
+                "min_tension_margin": claimed_slack.min_margin,
+                "taut": claimed_slack.taut,
+                "max_theta_difference_deg": float(np.degrees(diff.max())),
+                "rms_theta_difference_deg": float(np.degrees(np.sqrt(np.mean(diff**2)))),
+            },
+        }
+        if r.taut:
+            figures["highest_taut_theta_deg"] = (
+                math.degrees(self.highest_taut_theta) if self.highest_taut_theta is not None else None
+            )
+        if plan.method == "fast":
+            p = plan.info["params"]
+            figures["fast_params"] = {"speed": p.speed, "first_speed": p.first_speed, "centring": p.centring,
+                                      "apex_offset_deg": math.degrees(p.apex_offset)}
+            figures["attempts"] = self.attempts
+        if self.notes:
+            figures["notes"] = list(self.notes)
+        return figures
+
+    def failure(self) -> str | None:
+        """Why the plan fails (θ_d not reached, limits violated, slack with ``taut``), None if it does not."""
+        reasons = []
+        if not self.reached:
+            reasons.append(
+                f"θ_d = {math.degrees(self.request.theta_d):.1f}° not reached (max {math.degrees(self.verification.max_theta):.1f}°"
+                + (f", highest taut {math.degrees(self.highest_taut_theta):.1f}°" if self.highest_taut_theta else "")
+                + ")"
+            )
+        if not self.check.ok:
+            reasons.append("joint limits violated: " + "; ".join(v.describe() for v in self.check.failing[:3]))
+        if self.request.taut and not slack_report(self.verification.t, self.verification.tension).taut:
+            reasons.append("the string goes slack")
+        return "; ".join(reasons) or None
+
+
+def _energy_params(r: SwingUpRequest, theta_d: float) -> EnergyParams:
+    return EnergyParams(length=r.length, mass=r.mass, theta_d=theta_d, k_e=r.k_e, k_p=r.k_p, k_d=r.k_d,
+                        theta0=r.theta0, push=r.push, duration=r.duration or 60.0, dt=r.dt, tolerance=r.tolerance)
+
+
+def _fast_problem(r: SwingUpRequest, bounds: TaskBounds) -> FastProblem:
+    return FastProblem(length=r.length, theta_d=r.theta_d, bounds=bounds, travel=r.travel, dt=r.dt,
+                       horizon=r.duration or 10.0, tolerance=r.tolerance, theta0=r.theta0, taut=r.taut,
+                       min_tension=r.min_tension)
+
+
+def _highest_taut_energy(r: SwingUpRequest, bounds: TaskBounds) -> tuple[PivotPlan, float | None]:
+    """Energy plan for θ_d if it stays taut, else for the highest θ_d' that does (bisection, 0.5°)."""
+    plan = plan_energy(_energy_params(r, r.theta_d), bounds)
+    if plan.tension.min() >= r.min_tension:
+        return plan, None
+    lo, hi, best = max(r.tolerance * 2, abs(r.theta0)), r.theta_d, None
+    while hi - lo > math.radians(0.5):
+        mid = 0.5 * (lo + hi)
+        cand = plan_energy(_energy_params(r, mid), bounds)
+        if cand.tension.min() >= r.min_tension:
+            lo, best = mid, cand
+        else:
+            hi = mid
+    if best is None:
+        raise PlanningError("no energy-shaping plan keeps the string taut; lower --theta-d")
+    return best, best.max_theta
+
+
+def plan_swing_up(r: SwingUpRequest, robot: Robot, limits: JointLimits, progress=None) -> SwingUpResult:
+    """Plan, map onto the arm, check and verify a swing-up. Raises PlanningError if no plan can be made."""
+    start = time.perf_counter()
+    if r.method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}")
+    setup = ArmSetup(q_start=tuple(float(v) for v in r.q_start), orientation=r.pivot_orientation)
+    try:
+        bounds = axis_bounds(robot, setup, limits, r.travel, r.limit_margin)
+    except ValueError as exc:
+        raise PlanningError(str(exc)) from None
+    notes: list[str] = []
+    highest = None
+    attempts = 1
+    if r.method == "energy":
+        if r.taut:
+            plan, highest = _highest_taut_energy(r, bounds)
+        else:
+            plan = plan_energy(_energy_params(r, r.theta_d), bounds)
+        traj, ik_err = joint_path(robot, setup, plan.t, plan.x, limits, progress)
+        report = check_trajectory(traj, limits)
+    else:
+        for attempts in range(1, 5):
+            problem = _fast_problem(r, bounds)
+            params, _ = optimise(problem, r.search)
+            plan = simulate_fast(problem, params)
+            traj, ik_err = joint_path(robot, setup, plan.t, plan.x, limits, progress)
+            report = check_trajectory(traj, limits, jerk=True)
+            if report.ok:
+                break
+            ratios = report.ratios()
+            factor = {q: min(1.0, 0.97 / float(ratios[q].max())) for q in ("velocity", "acceleration", "jerk")}
+            notes.append(f"attempt {attempts}: limits exceeded, bounds scaled by "
+                         + ", ".join(f"{q} {f:.2f}" for q, f in factor.items()))
+            bounds = TaskBounds(bounds.v_max * factor["velocity"], bounds.a_max * factor["acceleration"],
+                                bounds.j_max * factor["jerk"])
+        if r.taut and plan.t_reach is None:
+            highest = plan.max_theta
+    ver = verify(robot, traj, r.length, r.theta0)
+    return SwingUpResult(request=r, plan=plan, trajectory=traj, check=report, verification=ver, bounds=bounds,
+                         max_ik_error=ik_err, planning_time=time.perf_counter() - start, highest_taut_theta=highest,
+                         attempts=attempts, notes=tuple(notes))

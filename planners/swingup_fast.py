@@ -1,0 +1,220 @@
+"""Fast swing-up: Åström–Furuta energy pumping at the pivot's speed, acceleration and jerk bounds.
+
+From the ball at rest the pivot pumps energy bang-bang: its velocity target flips to −V·sign(θ̇·cos θ)
+(minus a centring term −k·x, inside ±v_max) whenever the swing's power sign changes, so the pivot accelerates
+as hard as the bounds allow in the direction that feeds the swing (Ė = −u·m·l·θ̇·cos θ). Transitions are
+time-optimal and jerk-limited (ruckig, velocity interface, run online at the sample period). The first
+half-swing uses a smaller target V₁ so that the pivot oscillates about its start, a band governor brakes
+before |x| would leave the travel band, and once the free-swing apex of the ball's energy reaches θ_d + δ
+the pivot is brought to rest. (V, V₁, k, δ) are tuned by differential evolution (scipy) to reach θ_d
+soonest, candidates evaluated in parallel processes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from trajectories.errors import PlanningError
+
+from .pendulum import G, natural_period
+from .swingup_plan import PivotPlan, StopProfile, TaskBounds, first_reach
+from .tension import tension_margin
+
+
+@dataclass(frozen=True)
+class FastProblem:
+    """What the fast swing-up must do: string, target, bounds of the pivot, band and sampling."""
+
+    length: float  # [m]
+    theta_d: float  # [rad]
+    bounds: TaskBounds
+    travel: float = 0.3  # [m] half-width of the band the pivot must stay in
+    dt: float = 0.005  # [s] sample step
+    horizon: float = 10.0  # [s] longest pumping time
+    tolerance: float = math.radians(1.0)  # [rad] θ_d counts as reached at θ_d − tolerance
+    overshoot: float = math.radians(5.0)  # [rad] largest accepted apex above θ_d
+    theta0: float = 0.0  # [rad]
+    theta_dot0: float = 0.0  # [rad/s]
+    taut: bool = False  # require positive tension (claimed) along the plan
+    min_tension: float = 0.5  # [m/s²] tension margin required with ``taut``
+
+
+@dataclass(frozen=True)
+class FastParams:
+    """Tuning of the pumping: pumping speed V and first-swing speed V₁ as fractions of v_max, centring gain
+    k [1/s], and the energy at which pumping stops, as its free-swing apex offset δ from θ_d [rad]."""
+
+    speed: float = 0.8
+    first_speed: float = 0.5
+    centring: float = 1.0
+    apex_offset: float = 0.0
+
+    @classmethod
+    def from_vector(cls, v) -> "FastParams":
+        return cls(*(float(a) for a in v))
+
+
+PARAM_RANGES = ((0.3, 1.0), (0.1, 1.0), (0.0, 6.0), (-0.4, 0.4))
+
+
+@dataclass(frozen=True)
+class FastOutcome:
+    """Score of one candidate: claimed reach time [s] (None if not reached), peak |θ| [rad], peak |x| [m],
+    min claimed tension margin [m/s²], and the scalar cost minimised by the search."""
+
+    t_reach: float | None
+    max_theta: float
+    max_travel: float
+    min_tension: float
+    cost: float
+
+
+def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
+    """Run the pumping policy with the planar model (RK4, pivot acceleration linear within a step)."""
+    from ruckig import ControlInterface, InputParameter, OutputParameter, Result, Ruckig
+
+    pb, l, h = problem.bounds, problem.length, problem.dt
+    t0 = natural_period(l)
+    apex_stop = problem.theta_d + params.apex_offset
+    e_stop = -G * l * math.cos(min(apex_stop, math.pi))  # per unit mass [J/kg]
+    v_pump = params.speed * pb.v_max
+    v_first = params.first_speed * pb.v_max
+    otg = Ruckig(1, h)
+    inp, out = InputParameter(1), OutputParameter(1)
+    inp.control_interface = ControlInterface.Velocity
+    inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [0.0], [0.0]
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = [pb.v_max], [pb.a_max], [pb.j_max]
+    inp.target_acceleration = [0.0]
+
+    def accel(th, om, a):
+        return -(a / l) * math.cos(th) - (G / l) * math.sin(th)
+
+    th, om = problem.theta0, problem.theta_dot0
+    x = v = a = 0.0
+    ts, xs, vs, us, ths, oms = [0.0], [0.0], [0.0], [0.0], [th], [om]
+    phase = "first"  # first half-swing, then "pump", "stop", "rest"
+    t = 0.0
+    t_rest = None
+    n_max = int((problem.horizon + 3.0 * t0) / h) + 2
+    power_sign = 0.0
+    for _ in range(n_max):
+        e = 0.5 * l * l * om * om - G * l * math.cos(th)
+        if phase in ("first", "pump") and (e >= e_stop or t >= problem.horizon):
+            phase = "stop"
+        s = om * math.cos(th)
+        if phase == "first":
+            target = v_first
+            if t > 0.1 * t0 and s * (1.0 if problem.theta0 == 0 else 1.0) > 0.0:
+                phase = "pump"
+        if phase == "pump":
+            if s != 0.0:
+                power_sign = math.copysign(1.0, s)
+            target = -power_sign * v_pump - params.centring * x
+            target = max(-pb.v_max, min(pb.v_max, target))
+            # band governor: brake if a stop started now would leave the band
+            if abs(x) > problem.travel - (v * v / pb.a_max + abs(v) * pb.a_max / pb.j_max + 0.02):
+                if StopProfile(v, a, pb).distance + x > problem.travel and v > 0 or \
+                        StopProfile(v, a, pb).distance + x < -problem.travel and v < 0:
+                    target = 0.0
+        if phase in ("stop", "rest"):
+            target = 0.0
+        inp.target_velocity = [target]
+        res = otg.update(inp, out)
+        if res not in (Result.Working, Result.Finished):
+            raise PlanningError(f"ruckig failed during the fast swing-up: {res}")
+        x1, v1, a1 = out.new_position[0], out.new_velocity[0], out.new_acceleration[0]
+        out.pass_to_input(inp)
+        # RK4 of the pendulum with the pivot acceleration linear from a to a1 over the step
+        am = 0.5 * (a + a1)
+        k1t, k1o = om, accel(th, om, a)
+        k2t, k2o = om + 0.5 * h * k1o, accel(th + 0.5 * h * k1t, om + 0.5 * h * k1o, am)
+        k3t, k3o = om + 0.5 * h * k2o, accel(th + 0.5 * h * k2t, om + 0.5 * h * k2o, am)
+        k4t, k4o = om + h * k3o, accel(th + h * k3t, om + h * k3o, a1)
+        th += h / 6.0 * (k1t + 2 * k2t + 2 * k3t + k4t)
+        om += h / 6.0 * (k1o + 2 * k2o + 2 * k3o + k4o)
+        x, v, a = x1, v1, a1
+        t += h
+        ts.append(t), xs.append(x), vs.append(v), us.append(a), ths.append(th), oms.append(om)
+        if phase == "stop" and res == Result.Finished and abs(v) < 1e-12 and abs(a) < 1e-12:
+            phase, t_rest = "rest", t
+        if phase == "rest" and t >= t_rest + 0.5 * t0:
+            break
+    if t_rest is None:
+        t_rest = t
+    tt, theta, theta_dot, u = np.array(ts), np.array(ths), np.array(oms), np.array(us)
+    reach_angle = problem.theta_d - problem.tolerance
+    return PivotPlan(
+        method="fast",
+        t=tt,
+        x=np.array(xs),
+        v=np.array(vs),
+        u=u,
+        theta=theta,
+        theta_dot=theta_dot,
+        tension=tension_margin(theta, theta_dot, u, 0.0, l),
+        theta_d=problem.theta_d,
+        reach_angle=reach_angle,
+        t_reach=first_reach(tt, theta, reach_angle),
+        t_rest=float(t_rest),
+        info={"params": params, "bounds": pb, "travel_m": problem.travel},
+    )
+
+
+def score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
+    """Cost: the reach time if θ_d is reached inside the band (and taut if asked), else a penalty > 100."""
+    max_theta = plan.max_theta
+    max_travel = float(np.max(np.abs(plan.x)))
+    min_tension = float(np.min(plan.tension))
+    penalty = 0.0
+    if plan.t_reach is None:
+        penalty += 100.0 + 10.0 * (problem.theta_d - max_theta)
+    over = max_theta - (problem.theta_d + problem.overshoot)
+    if over > 0:
+        penalty += 100.0 + 10.0 * over
+    if max_travel > problem.travel:
+        penalty += 100.0 + 100.0 * (max_travel - problem.travel)
+    if problem.taut and min_tension < problem.min_tension:
+        penalty += 100.0 + (problem.min_tension - min_tension)
+    cost = penalty + (plan.t_reach if plan.t_reach is not None else problem.horizon)
+    return FastOutcome(plan.t_reach, max_theta, max_travel, min_tension, cost)
+
+
+def evaluate(problem: FastProblem, params: FastParams) -> FastOutcome:
+    """Simulate and score one candidate (picklable: runs in worker processes)."""
+    return score(problem, simulate_fast(problem, params))
+
+
+def _cost(vector: np.ndarray, problem: FastProblem) -> float:
+    return evaluate(problem, FastParams.from_vector(vector)).cost
+
+
+@dataclass(frozen=True)
+class SearchSettings:
+    """Differential evolution settings: population multiplier, generations, seed, worker processes."""
+
+    popsize: int = 8
+    maxiter: int = 25
+    seed: int = 1
+    workers: int = 2
+    coarse_dt: float = 0.005  # [s] step used while searching (the final plan uses the problem's dt)
+
+
+def optimise(problem: FastProblem, settings: SearchSettings = SearchSettings()) -> tuple[FastParams, FastOutcome]:
+    """Tune FastParams for the soonest reach (scipy differential evolution, parallel candidates)."""
+    from scipy.optimize import differential_evolution
+
+    coarse = replace(problem, dt=max(problem.dt, settings.coarse_dt))
+    kwargs = dict(args=(coarse,), popsize=settings.popsize, maxiter=settings.maxiter, seed=settings.seed,
+                  polish=False, tol=1e-3, init="sobol", updating="deferred")
+    if settings.workers > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=settings.workers) as pool:
+            res = differential_evolution(_cost, PARAM_RANGES, workers=pool.map, **kwargs)
+    else:
+        res = differential_evolution(_cost, PARAM_RANGES, **kwargs)
+    best = FastParams.from_vector(res.x)
+    return best, evaluate(problem, best)

@@ -1,0 +1,307 @@
+"""Anti-sway crane moves: a layout of turning points → the pivot path p(t), stopping at every turning point.
+
+Each segment is a rest-to-rest move along a straight line, written as a box profile (``profiles.BoxProfile``):
+
+* ``accel`` — the thesis baseline (``accel_shaping``, Fig. 4.4), unchanged.
+* ``box`` — the baseline made jerk-limited and exact: velocity = s·B(T_a) ⊗ B(τ) ⊗ B(a/j). The box of one
+  (effective) period T_a cancels the swing, B(τ) with τ = s/(a·T_a) uses the full a_max also on short segments
+  (the baseline slows to s/T² there), and the jerk box bounds the jerk. Never slower than the baseline + a/j.
+* ``zv``, ``zvd``, ``zvdd``, ``mzv``, ``ei``, ``ei2`` — the time-optimal jerk-limited move (= ruckig's) convolved
+  with that input shaper; ``box-zv``, ``box-zvd``, ``box-ei`` — the ``box`` move convolved with a shaper
+  (robust to string-length errors at ≤ one added period).
+* ``auto`` (default) — per segment the quicker of ``box`` and ``zv``; with a length tolerance, per segment the
+  quickest design whose worst residual over the tolerance band (linear model) stays within the budget.
+
+Nonlinear correction: while the pivot accelerates with a the pendulum hangs in the effective gravity
+√(g² + a²) and swings about a tilted equilibrium with amplitude atan(a/g), so the design period starts from
+the exact large-amplitude period in that field. Designs with a simple zero (box, zv, mzv) are then tuned per
+segment on the nonlinear planar pendulum: all profiles are antisymmetric in acceleration about mid-move, so the
+pendulum ends at rest exactly when its angle is zero at mid-move (time-reversal symmetry) — a scalar root.
+All shapers have non-negative impulses, so velocity, acceleration and jerk limits hold by construction.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from .accel_shaping import BaselineSegment, baseline_segment, segment_lengths
+from .pendulum import G, natural_period
+from .profiles import BoxProfile, time_optimal_boxes
+from .shapers import SHAPER_NAMES, Shaper, frequency_ratio_band, identity_shaper, make_shaper
+
+SHAPERS = ("auto", "accel", "box", *SHAPER_NAMES, "box-zv", "box-zvd", "box-ei")
+TUNABLE = ("box", "zv", "mzv")  # designs with a simple zero at the design frequency
+ROBUST_CANDIDATES = ("box", "zv", "mzv", "box-zv", "zvd", "ei", "box-zvd", "box-ei", "zvdd", "ei2")
+
+# Thesis-like obstacle course (thesis Fig. 4.6: 90° turns on the table beside the robot), base frame [m].
+DEFAULT_LAYOUT = ((0.40, -0.30), (0.62, -0.30), (0.62, 0.05), (0.45, 0.05), (0.45, 0.30))
+DEFAULT_Z = 0.45  # flange height [m]
+DEFAULT_JERK = 20.0  # task-space jerk limit of the pivot [m/s³] (keeps the joints within their jerk limits)
+ROBUST_BUDGET_RAD = math.radians(0.3)  # linear worst-case residual allowed per layout with a length tolerance
+
+
+@dataclass(frozen=True)
+class AntiSwayOptions:
+    """Planner settings: shaper name, pivot jerk/velocity limits, string-length tolerance, tuning."""
+
+    shaper: str = "auto"
+    j_max: float = DEFAULT_JERK  # [m/s³]
+    v_max: float = math.inf  # [m/s]
+    length_tolerance: float = 0.0  # relative, e.g. 0.2 for ±20 %
+    tune: bool = True
+    robust_budget: float = ROBUST_BUDGET_RAD  # [rad]
+
+
+@dataclass(frozen=True)
+class SegmentPlan:
+    """One rest-to-rest segment: end points (2,) [m], the design used and its profile along the segment."""
+
+    index: int  # 1-based
+    start: np.ndarray
+    end: np.ndarray
+    design: str
+    profile: BoxProfile | BaselineSegment
+    period: float  # design period after correction and tuning [s]
+    accel: float  # peak pivot acceleration of the design [m/s²]
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(self.end - self.start))
+
+    @property
+    def duration(self) -> float:
+        return float(self.profile.duration)
+
+    @property
+    def direction(self) -> np.ndarray:
+        return (self.end - self.start) / max(self.length, 1e-300)
+
+
+@dataclass(frozen=True)
+class AntiSwayPlan:
+    """Pivot path sampled every dt: t (n,) [s], position (n, 3) [m]; segments and their first sample index."""
+
+    t: np.ndarray
+    position: np.ndarray
+    segments: tuple[SegmentPlan, ...]
+    segment_start: np.ndarray
+    string_length: float  # [m]
+    a_max: float  # [m/s²]
+    shaper: str
+    options: AntiSwayOptions = field(default_factory=AntiSwayOptions)
+
+    @property
+    def dt(self) -> float:
+        return float(self.t[1] - self.t[0])
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1])
+
+    @property
+    def stop_time(self) -> float:
+        """Time of the last stop [s] (end of the last segment's motion)."""
+        return float(self.t[self.segment_start[-1]] + self.segments[-1].duration)
+
+    def acceleration(self) -> np.ndarray:
+        """(n, 3) pivot acceleration realised by the samples (second differences, rest outside) [m/s²]."""
+        p = np.vstack([self.position[:1], self.position, self.position[-1:]])
+        return (p[2:] - 2 * p[1:-1] + p[:-2]) / self.dt**2
+
+    def segment_of(self, time: float) -> int:
+        """1-based index of the segment running at ``time`` [s]."""
+        k = int(np.searchsorted(self.t[self.segment_start], time, side="right"))
+        return max(1, min(k, len(self.segments)))
+
+
+def effective_period(length: float, accel: float) -> float:
+    """Exact period [s] of the pendulum released at rest while the pivot accelerates with ``accel`` [m/s²].
+
+    Effective gravity g' = √(g² + a²), amplitude θ0 = atan(a/g) about the tilted equilibrium:
+    T = 4·√(l/g')·K(sin²(θ0/2)) (complete elliptic integral); a = 0 gives 2π√(l/g).
+    """
+    from scipy.special import ellipk
+
+    g_eff = math.hypot(G, accel)
+    theta0 = math.atan2(abs(accel), G)
+    return 4.0 * math.sqrt(length / g_eff) * float(ellipk(math.sin(theta0 / 2) ** 2))
+
+
+def _box_boxes(s: float, period: float, a_max: float, j_max: float, v_max: float) -> tuple[float, ...]:
+    """B(T_a) ⊗ B(τ) ⊗ B(a/j) with τ = s/(a·T_a), kept ≥ T_a + a/j or ≤ T_a − a/j so the jerk bound holds."""
+    tau = max(s / (a_max * period), s / v_max)
+    if math.isinf(j_max):
+        return (period, tau)
+    tj = a_max / j_max
+    if period - tj < tau < period + tj:
+        tau = period + tj
+    return (period, tau, min(tj, tau))
+
+
+def design_profile(design: str, s: float, period: float, a_max: float, j_max: float, v_max: float) -> BoxProfile:
+    """Box profile of ``design`` for a segment of length s [m] with the design period [s]."""
+    if design.startswith("box"):
+        boxes = _box_boxes(s, period, a_max, j_max, v_max)
+        shaper = make_shaper(design[4:], period) if design != "box" else identity_shaper()
+    else:
+        boxes = time_optimal_boxes(s, v_max, a_max, j_max)
+        shaper = make_shaper(design, period)
+    return BoxProfile(s, boxes, shaper)
+
+
+def planar_midpoint_angle(profile: BoxProfile, length: float, step: float = 0.002) -> float:
+    """Angle [rad] at mid-move of the nonlinear planar pendulum l·θ̈ + ẍ·cos θ + g·sin θ = 0 (RK4).
+
+    Zero means the pendulum ends the (antisymmetric) move at rest.
+    """
+    half = 0.5 * profile.duration
+    n = max(8, int(math.ceil(half / step)))
+    h = half / n
+    tk = np.arange(n) * h
+    a0 = profile.acceleration(tk).tolist()
+    am = profile.acceleration(tk + 0.5 * h).tolist()
+    a1 = profile.acceleration(tk + h).tolist()
+    th, w = 0.0, 0.0
+    sin, cos = math.sin, math.cos
+    gl, il = G / length, 1.0 / length
+    for k in range(n):
+        x0, xm, x1 = a0[k], am[k], a1[k]
+        k1t, k1w = w, -(x0 * cos(th) * il + gl * sin(th))
+        t2, w2 = th + 0.5 * h * k1t, w + 0.5 * h * k1w
+        k2t, k2w = w2, -(xm * cos(t2) * il + gl * sin(t2))
+        t3, w3 = th + 0.5 * h * k2t, w + 0.5 * h * k2w
+        k3t, k3w = w3, -(xm * cos(t3) * il + gl * sin(t3))
+        t4, w4 = th + h * k3t, w + h * k3w
+        k4t, k4w = w4, -(x1 * cos(t4) * il + gl * sin(t4))
+        th += h / 6.0 * (k1t + 2 * k2t + 2 * k3t + k4t)
+        w += h / 6.0 * (k1w + 2 * k2w + 2 * k3w + k4w)
+    return th
+
+
+def _tune(design: str, s: float, period0: float, a_max: float, j_max: float, v_max: float, length: float) -> float:
+    """Design period [s] near ``period0`` for which the nonlinear pendulum ends at rest."""
+    from scipy.optimize import brentq, minimize_scalar
+
+    def f(period: float) -> float:
+        return planar_midpoint_angle(design_profile(design, s, period, a_max, j_max, v_max), length)
+
+    f0 = f(period0)
+    for width in (0.01, 0.03, 0.08):
+        for other in (period0 * (1 - width), period0 * (1 + width)):
+            f1 = f(other)
+            if f0 == 0.0:
+                return period0
+            if f0 * f1 < 0:
+                lo, hi = sorted((period0, other))
+                return float(brentq(f, lo, hi, xtol=1e-9 * period0))
+    res = minimize_scalar(lambda p: abs(f(p)), bounds=(0.92 * period0, 1.08 * period0), method="bounded")
+    return float(res.x)
+
+
+def linear_residual(profile: BoxProfile, omega: np.ndarray) -> np.ndarray:
+    """Residual swing amplitude [rad] of the linear pendulum ω [rad/s] after the move (from rest).
+
+    θ̈ + ω²θ = −(ω²/g)·ẍ ⇒ |θ_res| = (ω²·s/g)·Π|sinc(ωτ_i/2)|·|Σ A_i e^{iωt_i}|.
+    """
+    w = np.asarray(omega, dtype=float)
+    out = w**2 * abs(profile.distance) / G * profile.shaper.residual(w)
+    for b in profile.boxes:
+        out = out * np.abs(np.sinc(w * b / (2 * np.pi)))
+    return out
+
+
+def _worst_residual(profile: BoxProfile, period: float, tolerance: float) -> float:
+    lo, hi = frequency_ratio_band(tolerance)
+    w = 2 * np.pi / period * np.linspace(lo, hi, 61)
+    return float(linear_residual(profile, w).max())
+
+
+def design_segment(
+    index: int, start: np.ndarray, end: np.ndarray, length: float, a_max: float, options: AntiSwayOptions,
+    budget: float,
+) -> SegmentPlan:
+    """Choose (``auto``), correct and tune the design of one segment."""
+    s = float(np.linalg.norm(end - start))
+    if options.shaper == "accel":
+        seg = baseline_segment(s, a_max, natural_period(length))
+        return SegmentPlan(index, start, end, "accel", seg, seg.period, seg.accel)
+    period0 = effective_period(length, a_max)
+    args = (a_max, options.j_max, options.v_max)
+    if options.shaper != "auto":
+        design = options.shaper
+    elif options.length_tolerance > 0:
+        cands = [(design_profile(d, s, period0, *args), d) for d in ROBUST_CANDIDATES]
+        ok = [(p.duration, d) for p, d in cands if _worst_residual(p, period0, options.length_tolerance) <= budget]
+        if ok:
+            design = min(ok)[1]
+        else:
+            design = min(cands, key=lambda c: _worst_residual(c[0], period0, options.length_tolerance))[1]
+    else:
+        design = min(("box", "zv"), key=lambda d: design_profile(d, s, period0, *args).duration)
+    period = period0
+    if options.tune and design in TUNABLE:
+        period = _tune(design, s, period0, *args, length)
+    prof = design_profile(design, s, period, *args)
+    return SegmentPlan(index, start, end, design, prof, period, prof.peaks()[1])
+
+
+def plan_layout(
+    points: np.ndarray,
+    length: float,
+    a_max: float | Sequence[float],
+    z: float,
+    dt: float,
+    options: AntiSwayOptions = AntiSwayOptions(),
+) -> AntiSwayPlan:
+    """Pivot path through the start point and turning points (n, 2) [m] at height z [m], sampled every dt [s].
+
+    ``a_max`` [m/s²] is one value or one per segment. Every segment starts and ends at rest; each is sampled at
+    k·dt from its own start (the pivot rests one sample at each turning point, as in the thesis's
+    concatenation).
+    """
+    pts = np.asarray(points, dtype=float)
+    if options.shaper not in SHAPERS:
+        raise ValueError(f"unknown shaper {options.shaper!r}; known: {', '.join(SHAPERS)}")
+    nseg = len(pts) - 1
+    accels = np.broadcast_to(np.asarray(a_max, dtype=float), (nseg,))
+    budget = options.robust_budget / max(1, nseg)
+    segments = tuple(
+        design_segment(i + 1, pts[i], pts[i + 1], length, float(accels[i]), options, budget) for i in range(nseg)
+    )
+    return sample_plan(segments, length, float(accels.max()), z, dt, options)
+
+
+def sample_plan(
+    segments: tuple[SegmentPlan, ...], length: float, a_max: float, z: float, dt: float, options: AntiSwayOptions
+) -> AntiSwayPlan:
+    """Sample designed segments every dt [s] and concatenate them at height z [m]."""
+    chunks, starts, count = [], [], 0
+    for seg in segments:
+        n = int(math.ceil(seg.duration / dt - 1e-9)) + 1
+        d = seg.profile.position(np.arange(n) * dt)
+        chunk = seg.start + d[:, None] * seg.direction
+        chunk[-1] = seg.end
+        chunks.append(chunk)
+        starts.append(count)
+        count += n
+    xy = np.vstack(chunks)
+    pos = np.column_stack([xy, np.full(len(xy), z)])
+    return AntiSwayPlan(
+        np.arange(len(xy)) * dt, pos, segments, np.array(starts), length, a_max, options.shaper, options
+    )
+
+
+def baseline_duration(points: np.ndarray, length: float, a_max: float) -> float:
+    """Total moving time [s] of the thesis baseline on a layout (sum of 2T + t_max)."""
+    T = natural_period(length)
+    return float(sum(baseline_segment(float(s), a_max, T).duration for s in segment_lengths(points)))
+
+
+__all__ = [
+    "AntiSwayOptions", "AntiSwayPlan", "SegmentPlan", "SHAPERS", "DEFAULT_LAYOUT", "DEFAULT_Z", "plan_layout",
+    "effective_period", "linear_residual", "planar_midpoint_angle", "design_profile", "baseline_duration", "Shaper",
+]

@@ -44,7 +44,7 @@ class SwingUpRequest:
     travel: float = 0.3  # [m] band |y − y_start| for the pivot (fast; the bounds are derived over it)
     dt: float = 0.005  # [s] FRI period
     duration: float | None = None  # [s] pumping horizon; None: 60 (energy), 10 (fast)
-    tolerance: float = math.radians(1.0)  # [rad]
+    tolerance: float = math.radians(2.0)  # [rad]
     theta0: float = 0.0  # [rad]
     push: float = 0.0  # [m/s²] energy: start push
     k_e: float = 1.7
@@ -100,7 +100,9 @@ class SwingUpResult:
             "theta_d_deg": math.degrees(r.theta_d),
             "max_theta_deg": math.degrees(ver.max_theta),
             "t_reach_s": self.t_reach,
+            "t_theta_d_s": first_reach(ver.t, ver.theta, r.theta_d),
             "reached": self.reached,
+            "tolerance_deg": math.degrees(r.tolerance),
             "taut": slack.taut,
             "min_tension_margin": slack.min_margin,  # [m/s²] tension / ball mass
             "min_tension_n": slack.min_margin * r.mass,

@@ -3,7 +3,8 @@
 E is in joules exactly as the thesis writes it (E = ½ m l² θ̇² − m g l cos θ, so k_E acts on m). The closed
 loop is integrated with scipy's solve_ivp (events: |θ| reaching θ_d − tolerance, terminal; the string going
 slack, recorded), the pivot is then brought to rest by a jerk-limited stop, and everything is sampled at the
-FRI period. Energy shaping approaches θ_d asymptotically, hence the tolerance.
+FRI period. Energy shaping approaches θ_d asymptotically, hence the tolerance: pumping ends when |θ| first
+reaches θ_d − tolerance/2; θ_d counts as reached from θ_d − tolerance.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from trajectories.errors import PlanningError
 
 from .cartpole import desired_energy, energy, rhs
 from .pendulum import G, natural_period
-from .swingup_plan import PivotPlan, StopProfile, TaskBounds, time_grid
+from .swingup_plan import PivotPlan, StopProfile, TaskBounds, first_reach, time_grid
 from .tension import tension_margin
 
 
@@ -36,7 +37,8 @@ class EnergyParams:
     push: float = 0.0  # [m/s²] peak of one sin² start push of half a natural period (0: none)
     duration: float = 60.0  # [s] longest pumping time before giving up
     dt: float = 0.005  # [s] output sample step (FRI period)
-    tolerance: float = math.radians(1.0)  # [rad] θ_d counts as reached at θ_d − tolerance
+    tolerance: float = math.radians(2.0)  # [rad] θ_d counts as reached at θ_d − tolerance; the plan aims at
+    # θ_d − tolerance/2 so that the robot's realisation lands inside the band
     rtol: float = 1e-9
     atol: float = 1e-11
 
@@ -69,13 +71,14 @@ def plan_energy(p: EnergyParams, bounds: TaskBounds) -> PivotPlan:
         )
     e_d = desired_energy(p.theta_d, p.length, p.mass)
     reach_angle = p.theta_d - p.tolerance
+    aim = p.theta_d - 0.5 * p.tolerance
     l = p.length
 
     def f(t, y):
         return rhs(y, control(p, t, y, e_d), l)
 
     def reach(t, y):
-        return abs(y[2]) - reach_angle
+        return abs(y[2]) - aim
 
     reach.terminal, reach.direction = True, 1.0
 
@@ -129,7 +132,7 @@ def plan_energy(p: EnergyParams, bounds: TaskBounds) -> PivotPlan:
         tension=tension_margin(theta, theta_dot, u, 0.0, l),
         theta_d=p.theta_d,
         reach_angle=reach_angle,
-        t_reach=t_sw if pump.status == 1 else None,
+        t_reach=first_reach(t, theta, reach_angle),
         t_rest=t_sw + stop.duration,
         info={
             "t_switch_s": t_sw,

@@ -1,0 +1,220 @@
+"""`lbr plan swing-up`: swing the ball on its string up to θ_d (cup-and-ball), as a joint CSV for the robot.
+
+Thin wrapper over ``planners.swingup.plan_swing_up``; ``plan_swing_up_files`` is the in-process entry point
+(the demo calls it). Exit 1 (after writing every output) when θ_d is not reached, a joint limit is violated, or
+the string goes slack with --taut; exit 2 on bad options.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any, Optional
+
+import typer
+
+from ..options import DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
+
+PREDICTION_COLUMNS = ("t", "theta", "theta_planned")
+
+
+def _validate(length, mass, theta_d, method, theta0, dt, duration, travel, k_e, k_p, k_d, tolerance, margin,
+              orientation, push) -> None:
+    from trajectories.errors import OptionError
+
+    checks = (
+        (length > 0 and math.isfinite(length), f"--length must be > 0 m, got {length:g}"),
+        (mass > 0 and math.isfinite(mass), f"--mass must be > 0 kg, got {mass:g}"),
+        (0 < theta_d < math.pi, f"--theta-d must be in (0, 180°), got {math.degrees(theta_d):g}°"),
+        (method in ("energy", "fast"), f"--method must be energy or fast, got {method!r}"),
+        (abs(theta0) < math.pi / 2, f"--theta0 must be within ±90°, got {math.degrees(theta0):g}°"),
+        (0 < dt <= 0.02, f"--dt must be in (0, 0.02] s, got {dt:g}"),
+        (duration is None or duration > 0, f"--duration must be > 0 s, got {duration}"),
+        (0 < travel <= 1.0, f"--max-travel must be in (0, 1] m, got {travel:g}"),
+        (k_e > 0 and k_p >= 0 and k_d >= 0, "--ke must be > 0, --kp and --kd ≥ 0"),
+        (0 <= tolerance < theta_d, f"--tolerance must be in [0, θ_d), got {math.degrees(tolerance):g}°"),
+        (0 <= margin < 1, f"--margin must be in [0, 1), got {margin:g}"),
+        (orientation in ("auto", "fixed", "follow"), f"--orientation must be auto, fixed or follow, got {orientation!r}"),
+        (math.isfinite(push), "--push must be finite"),
+    )
+    for ok, message in checks:
+        if not ok:
+            raise OptionError(message)
+
+
+def plan_swing_up_files(
+    length: float,
+    mass: float,
+    theta_d: float,
+    method: str = "energy",
+    *,
+    out: Path,
+    prediction: Path | None = None,
+    plot: Path | None = None,
+    task_out: Path | None = None,
+    theta0: float = 0.0,
+    push: float = 0.0,
+    duration: float | None = None,
+    dt: float = 0.005,
+    q_start: str = THESIS_Q_START,
+    k_e: float = 1.7,
+    k_p: float = 0.05,
+    k_d: float = 0.05,
+    travel: float = 0.3,
+    taut: bool = False,
+    tolerance: float = math.radians(2.0),
+    margin: float = 0.1,
+    orientation: str = "auto",
+    flange: str = DEFAULT_FLANGE,
+    tool: str | None = None,
+    limits: Path | None = None,
+    workers: int = 2,
+    strict: bool = False,
+    progress=None,
+) -> dict[str, Any]:
+    """Plan a swing-up and write the joint CSV (+ prediction, task CSV, plot); return the JSON figures.
+
+    Angles in rad, lengths in m, mass in kg, times in s. The figures carry ``ok`` and ``failure`` (the reason
+    θ_d is not reached / limits are violated / the string goes slack with ``taut``); with ``strict`` a failure
+    raises PlanningError after the files are written.
+    """
+    import numpy as np
+
+    from planners.swingup import SwingUpRequest, plan_swing_up
+    from planners.swingup_fast import SearchSettings
+    from trajectories.csvio import write_joint_csv, write_table, write_task_csv
+    from trajectories.errors import PlanningError
+    from trajectories.poses import quaternions_from_matrices
+    from trajectories.trajectory import TaskTrajectory
+
+    from ..options import limits_from, make_robot
+    from ..parsing import parse_joint_vector
+
+    _validate(length, mass, theta_d, method, theta0, dt, duration, travel, k_e, k_p, k_d, tolerance, margin,
+              orientation, push)
+    q0 = parse_joint_vector(q_start, "--q-start")
+    robot = make_robot(flange, tool)
+    lim = limits_from(limits)
+    request = SwingUpRequest(
+        length=length, mass=mass, theta_d=theta_d, method=method, q_start=tuple(float(v) for v in q0),
+        orientation=None if orientation == "auto" else orientation, travel=travel, dt=dt, duration=duration,
+        tolerance=tolerance, theta0=theta0, push=push, k_e=k_e, k_p=k_p, k_d=k_d, taut=taut, limit_margin=margin,
+        search=SearchSettings(workers=max(1, int(workers))),
+    )
+    result = plan_swing_up(request, robot, lim, progress=progress)
+    write_joint_csv(out, result.trajectory)
+    figures = {"out": str(out), **result.figures()}
+    if prediction is not None:
+        ver = result.verification
+        planned = np.interp(ver.t, result.plan.t, result.plan.theta)
+        write_table(prediction, PREDICTION_COLUMNS, np.column_stack([ver.t, ver.theta, planned]),
+                    fmt=["%.6f", "%.9f", "%.9f"])
+        figures["prediction"] = str(prediction)
+    if task_out is not None:
+        pos, rot = robot.fk_path(result.trajectory.q)
+        write_task_csv(task_out, TaskTrajectory(t=result.trajectory.t, position=pos,
+                                                quaternion=quaternions_from_matrices(rot)))
+        figures["task_out"] = str(task_out)
+    if plot is not None:
+        from ..plots.swingup import plot_swingup
+
+        plot_swingup(result, plot)
+        figures["plot"] = str(plot)
+    failure = result.failure()
+    figures["ok"] = failure is None
+    figures["failure"] = failure
+    if strict and failure:
+        raise PlanningError(failure)
+    return figures
+
+
+def _summary(rep, f: dict) -> None:
+    def deg(v):
+        return "—" if v is None else f"{v:.1f}°"
+
+    def sec(v):
+        return "never" if v is None else f"{v:.3f} s"
+
+    c = f["claimed"]
+    rep.print(
+        f"swing-up ({f['method']}, pivot orientation {f['orientation']}): l = {f['length_m']:g} m, "
+        f"m = {f['mass_kg']:g} kg, θ_d = {f['theta_d_deg']:.1f}°"
+    )
+    rep.print(
+        f"  verified (ball simulated under the joint path): max |θ| {deg(f['max_theta_deg'])}, reached at "
+        f"{sec(f['t_reach_s'])}; planned: {deg(c['max_theta_deg'])} at {sec(c['t_reach_s'])} "
+        f"(|Δθ| ≤ {c['max_theta_difference_deg']:.2f}°)"
+    )
+    b = f["bounds"]
+    rep.print(
+        f"  pivot: travel ±{f['max_travel_m']:.3f} m, at rest from {f['t_rest_s']:.3f} s; bounds "
+        f"{b['v_max_m_s']:.2f} m/s, {b['a_max_m_s2']:.2f} m/s², {b['j_max_m_s3']:.0f} m/s³"
+    )
+    slack = "" if f["taut"] else f", slack from {f['first_slack_s']:.3f} s"
+    rep.print(f"  string: min tension/mass {f['min_tension_margin']:.2f} m/s² ({'taut' if f['taut'] else 'NOT taut'}{slack})")
+    if f.get("highest_taut_theta_deg") is not None:
+        rep.print(f"  highest angle reachable taut: {f['highest_taut_theta_deg']:.1f}°")
+    ratios = ", ".join(f"{k} {100 * v:.0f}%" for k, v in f["max_ratio"].items())
+    rep.print(f"  joints: peak/limit {ratios} — {'within limits' if f['limits_ok'] else 'LIMITS VIOLATED'}")
+    for note in f.get("notes", []):
+        rep.print(f"  note: {note}")
+    rep.print(f"  wrote {f['out']} ({f['samples']} samples, {f['duration_s']:.3f} s) in {f['planning_time_s']:.2f} s")
+
+
+def swing_up(
+    out: Annotated[Path, typer.Option("-o", "--out", help="Joint trajectory to write: t,q1..q7 [s, rad].")],
+    length: Annotated[float, typer.Option("--length", help="String length l [m] (pivot to ball centre).")],
+    mass: Annotated[float, typer.Option("--mass", help="Ball mass m [kg] (E is in joules, as in the thesis).")],
+    theta_d: Annotated[str, typer.Option("--theta-d", help="Target apex angle from the hanging vertical, (0, 180°) (e.g. 115deg).")],
+    method: Annotated[str, typer.Option("--method", help="energy: thesis energy shaping; fast: limit-aware bang-bang pumping.")] = "energy",
+    theta0: Annotated[str, typer.Option("--theta0", help="Initial ball angle toward +y (e.g. 0.1 or 5deg); the energy law needs ≠ 0 or --push.")] = "0",
+    push: Annotated[float, typer.Option("--push", help="energy: peak [m/s²] of a sin² start push lasting half a period.")] = 0.0,
+    ke: Annotated[float, typer.Option("--ke", help="energy: gain k_E on θ̇·cos θ·(E − E_d) [E in J].")] = 1.7,
+    kp: Annotated[float, typer.Option("--kp", help="energy: position gain k_p [1/s²].")] = 0.05,
+    kd: Annotated[float, typer.Option("--kd", help="energy: velocity gain k_d [1/s].")] = 0.05,
+    duration: Annotated[Optional[float], typer.Option("--duration", help="Longest pumping time [s] (default 60 energy, 10 fast); then the pivot stops.")] = None,
+    dt: Annotated[float, typer.Option("--dt", help="Sample step [s] (FRI period; 0.005 as in the thesis, or 0.001).")] = 0.005,
+    q_start: Annotated[str, typer.Option("--q-start", help="Start configuration (7 angles, deg/rad suffixes); thesis pose by default.")] = THESIS_Q_START,
+    max_travel: Annotated[float, typer.Option("--max-travel", help="fast: the pivot stays within ±this along base y [m].")] = 0.3,
+    taut: Annotated[bool, typer.Option("--taut", help="Keep the string taut (tension/mass ≥ 0.5 m/s²); report the highest such angle.")] = False,
+    tolerance: Annotated[str, typer.Option("--tolerance", help="θ_d counts as reached at θ_d − tolerance (energy shaping is asymptotic; it aims at θ_d − tolerance/2).")] = "2deg",
+    margin: Annotated[float, typer.Option("--margin", help="Pivot bounds keep joints within (1 − margin)·limits.")] = 0.1,
+    orientation: Annotated[str, typer.Option("--orientation", help="Pivot orientation: fixed (thesis T_start), follow (turns with y about the vertical, well conditioned), auto (fixed for energy, follow for fast).")] = "auto",
+    prediction: Annotated[Optional[Path], typer.Option("--prediction", help="Write t,theta[,theta_planned] [s, rad] of the verification simulation.")] = None,
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: θ(t), pivot x(t) and u(t), tension margin, joint rates vs limits.")] = None,
+    task_out: Annotated[Optional[Path], typer.Option("--task-out", help="Write the TCP path t,x,y,z,qw,qx,qy,qz [s, m].")] = None,
+    workers: Annotated[int, typer.Option("--workers", help="fast: processes evaluating candidates in parallel.")] = 2,
+    flange: FlangeOpt = DEFAULT_FLANGE,
+    tool: ToolOpt = None,
+    limits: LimitsOpt = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Plan a swing-up of the ball to θ_d along base y from the thesis start pose (θ positive toward +y).
+
+    Every plan ends with the pivot at rest. The figures are those of a nonlinear ball simulation driven by
+    the TCP path the written joints produce (the plan's own claim under "claimed"). Exit 1 when θ_d is not
+    reached, a joint limit (position, velocity, acceleration; jerk too for --method fast) is violated, or the
+    string goes slack with --taut.
+    """
+    from trajectories.errors import PlanningError
+
+    from ..console import Reporter
+    from ..parsing import parse_angle
+
+    rep = Reporter(json_out)
+    with rep.progress("swing-up: plan, IK, verify", None) as update:
+        figures = plan_swing_up_files(
+            length, mass, parse_angle(theta_d, "--theta-d"), method, out=out, prediction=prediction, plot=plot,
+            task_out=task_out, theta0=parse_angle(theta0, "--theta0"), push=push, duration=duration, dt=dt,
+            q_start=q_start, k_e=ke, k_p=kp, k_d=kd, travel=max_travel, taut=taut,
+            tolerance=parse_angle(tolerance, "--tolerance"), margin=margin, orientation=orientation, flange=flange,
+            tool=tool, limits=limits, workers=workers, progress=update,
+        )
+    _summary(rep, figures)
+    rep.emit(figures)
+    if figures["failure"]:
+        raise PlanningError(figures["failure"])
+
+
+def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
+    groups["plan"].command("swing-up")(swing_up)

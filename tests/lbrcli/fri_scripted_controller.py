@@ -1,0 +1,181 @@
+"""A scripted FRI controller for client tests: exact states per cycle, in lock-step with the client.
+
+Unlike the simulator (real time, its own session logic), this controller sends the monitoring message of each
+scripted cycle, waits for the reply the FRI rules require (receiveMultiplier counted as KUKA's client does) and
+records it. It can inject what the simulator doesn't produce on demand: safety stops, drives off, POOR quality,
+jumps in the sequence counter, malformed datagrams and datagrams from another address (127.0.0.2).
+The simulated robot is ideal: in COMMANDING_ACTIVE the ipo and measured positions become the last command.
+"""
+
+from __future__ import annotations
+
+import socket
+import threading
+import time
+from dataclasses import dataclass, field
+
+from lbrcli.fri.codec import FriCodec
+from lbrcli.fri.constants import MONITORING_MESSAGE_ID
+from trajectories.errors import FriDecodeError
+
+MW, MR, CW, CA, IDLE = 1, 2, 3, 4, 0
+
+
+@dataclass(frozen=True)
+class Cycle:
+    """One scripted controller cycle."""
+
+    state: int = MR
+    quality: int = 3
+    safety: int = 0
+    drive: int = 2
+    receive_multiplier: int = 1
+    send_period: int = 1  # [ms]
+    seq_jump: int = 0  # extra increment of the controller's sequence counter before this message (a gap)
+    raw: bytes | None = None  # send these bytes instead of a message (malformed)
+    foreign: bool = False  # send the message from 127.0.0.2 instead (must be ignored)
+    repeat_seq: bool = False  # reuse the previous sequence counter (stale duplicate, must be ignored)
+    ball: float | None = 0.01  # analog IO 'ball_theta' [rad] (None: no IO values)
+
+
+@dataclass
+class Reply:
+    cycle: int  # index in the script
+    state: int
+    seq: int  # of the monitoring message answered (expected)
+    header: tuple[int, int]  # (sequenceCounter, reflectedSequenceCounter) of the reply
+    position: tuple[float, ...] | None  # commandData.jointPosition (None: header only)
+
+
+@dataclass
+class ScriptedController:
+    client_port: int
+    script: list[Cycle]
+    q0: tuple[float, ...]
+    version: str = "1.15"
+    reply_timeout: float = 3.0  # [s] per expected reply
+    pace_s: float = 0.0005  # [s] pause between cycles
+    replies: list[Reply] = field(default_factory=list)
+    unanswered: list[int] = field(default_factory=list)  # cycles whose expected reply did not come
+    unexpected: list[int] = field(default_factory=list)  # replies reflecting a message that must not be answered
+    sent_seqs: list[int] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.codec = FriCodec(self.version)
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.foreign_sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.foreign_sock.bind(("127.0.0.2", 0))
+        self.client_done = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.q = list(self.q0)
+
+    def start(self) -> "ScriptedController":
+        self.thread.start()
+        return self
+
+    def join(self, timeout: float = 30.0) -> None:
+        self.thread.join(timeout)
+        self.sock.close()
+        self.foreign_sock.close()
+
+    def _message(self, c: Cycle, seq: int, reflected: int) -> bytes:
+        m = self.codec.new_monitoring()
+        m.header.messageIdentifier = MONITORING_MESSAGE_ID
+        m.header.sequenceCounter = seq
+        m.header.reflectedSequenceCounter = reflected
+        m.connectionInfo.sessionState = c.state
+        m.connectionInfo.quality = c.quality
+        m.connectionInfo.sendPeriod = c.send_period
+        m.connectionInfo.receiveMultiplier = c.receive_multiplier
+        m.robotInfo.numberOfJoints = 7
+        m.robotInfo.safetyState = c.safety
+        m.robotInfo.driveState.extend([c.drive] * 7)
+        m.robotInfo.operationMode = 0
+        m.robotInfo.controlMode = 0
+        md = m.monitorData
+        md.measuredJointPosition.value.extend(self.q)
+        md.measuredTorque.value.extend([1.0 + j for j in range(7)])
+        md.externalTorque.value.extend([0.1 * j for j in range(7)])
+        md.commandedTorque.value.extend([0.0] * 7)
+        if self.version == "1.15":
+            md.commandedJointPosition.value.extend(self.q)
+        md.timestamp.sec = 1_700_000_000 + seq // 1000
+        md.timestamp.nanosec = (seq % 1000) * 1_000_000
+        if c.ball is not None:
+            io = md.readIORequest.add()
+            io.name, io.type, io.direction, io.analogValue = "ball_theta", 2, 0, c.ball
+            io = md.readIORequest.add()
+            io.name, io.type, io.direction, io.digitalValue = "gripper", 1, 0, 1
+        m.ipoData.jointPosition.value.extend(self.q)
+        m.ipoData.clientCommandMode = 1
+        m.ipoData.overlayType = 1
+        m.ipoData.trackingPerformance = 1.0 if c.state == CA else 0.0
+        return self.codec.encode(m)
+
+    def _await_reply(self, deadline: float):
+        cmd = self.codec.new_command()
+        while time.monotonic() < deadline:
+            if self.client_done.is_set():
+                self.sock.settimeout(0.05)
+            else:
+                self.sock.settimeout(max(0.001, min(0.2, deadline - time.monotonic())))
+            try:
+                data, _ = self.sock.recvfrom(4096)
+            except (TimeoutError, socket.timeout):
+                if self.client_done.is_set():
+                    return None
+                continue
+            try:
+                return self.codec.decode_command(data, cmd)
+            except FriDecodeError:
+                continue
+        return None
+
+    def _run(self) -> None:
+        seq = -1
+        reflected = 0
+        send_counter = 0
+        dest = ("127.0.0.1", self.client_port)
+        for i, c in enumerate(self.script):
+            if c.raw is not None:
+                self.sock.sendto(c.raw, dest)
+                time.sleep(self.pace_s)
+                continue
+            if not c.repeat_seq:
+                seq += 1 + c.seq_jump
+            data = self._message(c, max(seq, 0), reflected)
+            if c.foreign:
+                self.foreign_sock.sendto(data, dest)
+                time.sleep(self.pace_s)
+                continue
+            self.sock.sendto(data, dest)
+            self.sent_seqs.append(seq)
+            if c.repeat_seq:
+                time.sleep(self.pace_s)
+                continue
+            expect = False
+            if c.state != IDLE:
+                send_counter += 1
+                if send_counter >= c.receive_multiplier:
+                    send_counter = 0
+                    expect = True
+            if not expect:
+                time.sleep(self.pace_s)
+                continue
+            cmd = self._await_reply(time.monotonic() + self.reply_timeout)
+            if cmd is None:
+                self.unanswered.append(i)
+                return  # the client ended; so does the script
+            if cmd.header.reflectedSequenceCounter != seq:
+                self.unexpected.append(i)
+            reflected = cmd.header.sequenceCounter
+            pos = tuple(cmd.commandData.jointPosition.value) if cmd.HasField("commandData") else None
+            if pos is not None and len(pos) == 0:
+                pos = None
+            self.replies.append(
+                Reply(i, c.state, seq, (cmd.header.sequenceCounter, cmd.header.reflectedSequenceCounter), pos)
+            )
+            if c.state == CA and pos is not None:
+                self.q = list(pos)
+            time.sleep(self.pace_s)

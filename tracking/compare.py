@@ -64,8 +64,8 @@ def resample(t: np.ndarray, x: np.ndarray, grid: np.ndarray, max_gap_s: float = 
     out[inside] = np.interp(grid[inside], t, x)
     if math.isfinite(max_gap_s):
         j = np.clip(np.searchsorted(t, grid, side="right"), 1, len(t) - 1)
-        gap = t[j] - t[j - 1]
-        out[inside & (gap > max_gap_s)] = np.nan
+        left, right = t[j - 1], t[j]
+        out[inside & (right - left > max_gap_s) & (grid > left) & (grid < right)] = np.nan
     return out
 
 

@@ -1,8 +1,15 @@
-"""Coloured-blob detection: HSV threshold, morphology, contours gated by area and circularity.
+"""Coloured-blob detection: HSV threshold, morphology, contours gated by area and shape.
 
 The centre is the image-moment centroid of the blob's outer contour (sub-pixel; holes such as a
-specular highlight do not bias it). Circularity is 4π·area/perimeter²: a pixelated disc scores ≈ 0.85–0.9,
-a square 0.785, an elongated box or a cable far less, so a red object that is not a ball is not taken.
+specular highlight do not bias it). Two shape gates keep red objects that are not a ball out:
+- circularity 4π·area/perimeter² (disc ≈ 0.85–0.95 after pixelation, a cable ≈ 0.1) rejects thin and
+  strongly elongated blobs;
+- ellipse fit, the intersection over union of the blob with the ellipse of the same second moments: a disc
+  (and a motion-blurred ball, a stadium) ≥ 0.9, any box or rectangle ≈ 0.83 whatever its size, aspect or
+  rotation — circularity alone cannot tell a square (0.785, ≈ 0.81 once morphology rounds its corners)
+  from a pixelated disc.
+Below ≈ 64 px² (a disc of radius ≈ 4.5 px) pixelation distorts both measures, so the gates are relaxed
+there (a blob that small cannot be told from a tiny box anyway).
 """
 
 from __future__ import annotations
@@ -15,31 +22,36 @@ import numpy as np
 from .color import ColorSpec, color_mask
 
 _KERNEL_SIZE = 3  # [px] morphology structuring element (removes single-pixel noise, fills pinholes)
+# Below this area [px²] the shape gates are relaxed by _SMALL_RELAX (pixelation, see the module docstring).
+_SMALL_AREA_PX = 64.0
+_SMALL_RELAX = 0.15
 
 
 @dataclass(frozen=True)
 class BlobGates:
-    """Which blobs can be the ball: area [px²] range and minimum circularity (4π·A/P², 1 for a disc)."""
+    """Which blobs can be the ball: area [px²] range, minimum circularity (4π·A/P²) and ellipse fit (IoU)."""
 
     min_area_px: float = 12.0  # a disc of radius ≈ 2 px
     max_area_px: float = 12000.0  # a disc of radius ≈ 62 px
-    min_circularity: float = 0.8
+    min_circularity: float = 0.6
+    min_ellipse_fit: float = 0.88
 
     @classmethod
-    def for_radius(cls, radius_px: float, min_circularity: float = 0.8) -> "BlobGates":
+    def for_radius(cls, radius_px: float, min_circularity: float = 0.6, min_ellipse_fit: float = 0.88) -> "BlobGates":
         """Gates for a ball of about radius_px [px]: area from 0.3× to 3× that of the disc."""
         area = math.pi * radius_px**2
-        return cls(min_area_px=0.3 * area, max_area_px=3.0 * area, min_circularity=min_circularity)
+        return cls(0.3 * area, 3.0 * area, min_circularity, min_ellipse_fit)
 
 
 @dataclass(frozen=True)
 class Blob:
-    """A detected blob: centre (u, v) [px] in full-frame coordinates, area [px²], circularity, clipped flag."""
+    """A detected blob: centre (u, v) [px] in full-frame coordinates, area [px²], shape measures, clipped flag."""
 
     u: float
     v: float
     area_px: float
-    circularity: float
+    circularity: float  # 4π·area/perimeter²
+    ellipse_fit: float  # IoU of the blob with its second-moment ellipse
     clipped: bool  # the blob touches an edge of the searched window that is not an edge of the frame
 
     @property
@@ -63,6 +75,29 @@ def blob_mask(bgr: np.ndarray, spec: ColorSpec) -> np.ndarray:
     k = _kernel()
     mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, k)
     return cv2.morphologyEx(mask, cv2.MORPH_CLOSE, k)
+
+
+def ellipse_fit(contour: np.ndarray) -> float:
+    """IoU of the filled contour with the ellipse of equal second moments (1 for an ellipse, ≈ 0.83 for a box)."""
+    import cv2
+
+    x, y, w, h = cv2.boundingRect(contour)
+    pad = max(w, h) // 2 + 2
+    fill = np.zeros((h + 2 * pad, w + 2 * pad), np.uint8)
+    cv2.drawContours(fill, [contour - (x - pad, y - pad)], -1, 1, -1)
+    m = cv2.moments(fill, True)
+    if m["m00"] <= 0:
+        return 0.0
+    cov = np.array([[m["mu20"], m["mu11"]], [m["mu11"], m["mu02"]]]) / m["m00"]
+    det = cov[0, 0] * cov[1, 1] - cov[0, 1] ** 2
+    if det <= 1e-9:
+        return 0.0
+    inv = np.array([[cov[1, 1], -cov[0, 1]], [-cov[0, 1], cov[0, 0]]]) / det
+    ys, xs = np.mgrid[0 : fill.shape[0], 0 : fill.shape[1]]
+    dx, dy = xs - m["m10"] / m["m00"], ys - m["m01"] / m["m00"]
+    inside = inv[0, 0] * dx * dx + 2 * inv[0, 1] * dx * dy + inv[1, 1] * dy * dy <= 4.0  # uniform ellipse: Σ = diag(a², b²)/4
+    blob = fill > 0
+    return float(np.count_nonzero(blob & inside) / np.count_nonzero(blob | inside))
 
 
 def find_blobs(
@@ -93,9 +128,13 @@ def find_blobs(
         area = m["m00"]
         if not gates.min_area_px <= area <= gates.max_area_px:
             continue
+        relax = _SMALL_RELAX if area < _SMALL_AREA_PX else 0.0
         perimeter = cv2.arcLength(c, True)
         circ = 4.0 * math.pi * area / (perimeter * perimeter)
-        if circ < gates.min_circularity:
+        if circ < gates.min_circularity - relax:
+            continue
+        fit = ellipse_fit(c)
+        if fit < gates.min_ellipse_fit - relax:
             continue
         bx, by, bw, bh = cv2.boundingRect(c)
         clipped = (
@@ -104,5 +143,5 @@ def find_blobs(
             or (inner_right and bx + bw >= w)
             or (inner_bottom and by + bh >= h)
         )
-        out.append(Blob(m["m10"] / area + x0, m["m01"] / area + y0, area, circ, clipped))
+        out.append(Blob(m["m10"] / area + x0, m["m01"] / area + y0, area, circ, fit, clipped))
     return out

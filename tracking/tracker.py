@@ -70,8 +70,8 @@ class BallTracker:
         if near is not None:
             return min(cands, key=lambda b: math.hypot(b.u - near[0], b.v - near[1]))
         if self._area is not None:
-            return max(cands, key=lambda b: b.circularity - abs(math.log(b.area_px / self._area)))
-        return max(cands, key=lambda b: b.circularity)
+            return max(cands, key=lambda b: b.ellipse_fit - abs(math.log(b.area_px / self._area)))
+        return max(cands, key=lambda b: b.ellipse_fit)
 
     def _radius(self) -> float:
         if self._area is not None:

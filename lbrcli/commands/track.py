@@ -38,7 +38,8 @@ def video(
     pivot_color: Annotated[Optional[str], typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame (e.g. green).")] = None,
     color: Annotated[str, typer.Option("--color", help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or an OpenCV hue range H1-H2 (0–179).")] = "red",
     radius: Annotated[Optional[float], typer.Option("--radius", help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: 2–62 px radius).")] = None,
-    min_circularity: Annotated[float, typer.Option("--min-circularity", help="Minimum 4π·area/perimeter² of the ball blob (disc ≈ 0.9, square 0.785).")] = 0.8,
+    min_circularity: Annotated[float, typer.Option("--min-circularity", help="Minimum 4π·area/perimeter² of the ball blob (disc ≈ 0.9, cable ≈ 0.1).")] = 0.6,
+    min_fit: Annotated[float, typer.Option("--min-fit", help="Minimum overlap (IoU) of the blob with its moment ellipse (disc ≥ 0.9, any box ≈ 0.83).")] = 0.88,
     calibration: Annotated[Optional[Path], typer.Option("--calibration", help="Camera JSON from `lbr track calibrate`: undistort points; with a plane also x_m,y_m \\[m].")] = None,
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of θ \\[deg] and u, v \\[px] over time with lost frames marked.")] = None,
     preview: Annotated[Optional[Path], typer.Option("--preview", help="Video (mp4) with the detection drawn over it: ball circle, pivot, string, θ.")] = None,
@@ -46,7 +47,7 @@ def video(
 ) -> None:
     """Track a coloured ball in every frame of a video; θ from the pivot when one is known.
 
-    Detection in HSV (red uses two hue bands), morphology, blobs gated by area and circularity; the search
+    Detection in HSV (red uses two hue bands), morphology, blobs gated by area, circularity and ellipse fit; the search
     runs in a window around a constant-velocity prediction with a full-frame fallback. Frames where the ball
     is not found are written with found = 0 and empty (nan) positions — never invented. Times are the
     decoder timestamps \\[s] (variable frame rates kept). θ = atan2(u_ball − u_pivot, v_ball − v_pivot) \\[rad]:
@@ -79,13 +80,15 @@ def video(
     piv_uv = tuple(parse_floats(pivot, "--pivot", 2)) if pivot is not None else None
     if radius is not None and not radius > 0:
         raise OptionError(f"--radius must be positive, got {radius:g}")
-    if not 0.0 <= min_circularity <= 1.0:
-        raise OptionError(f"--min-circularity must be in [0, 1], got {min_circularity:g}")
+    for value, name in ((min_circularity, "--min-circularity"), (min_fit, "--min-fit")):
+        if not 0.0 <= value <= 1.0:
+            raise OptionError(f"{name} must be in [0, 1], got {value:g}")
     for p, name in ((out, "--out"), (plot, "--plot"), (preview, "--preview")):
         _check_out(p, name)
-    gates = BlobGates.for_radius(radius, min_circularity) if radius else BlobGates(min_circularity=min_circularity)
+    shape = {"min_circularity": min_circularity, "min_ellipse_fit": min_fit}
+    gates = BlobGates.for_radius(radius, **shape) if radius else BlobGates(**shape)
     options = TrackerOptions(gates=gates)
-    pivot_options = TrackerOptions(gates=BlobGates(min_circularity=min_circularity))
+    pivot_options = TrackerOptions(gates=BlobGates(**shape))
     cal = load_calibration(calibration) if calibration is not None else None
     info = probe_video(video_path)
 
@@ -170,7 +173,7 @@ def video(
         rep.print(f"preview: {preview}")
     rep.emit(figures)
     if found == 0:
-        rep.warn(f"the {color} ball was not found in any frame (try --color, --radius or --min-circularity)")
+        rep.warn(f"the {color} ball was not found in any frame (try --color, --radius, --min-circularity or --min-fit)")
         raise typer.Exit(1)
 
 

@@ -29,7 +29,7 @@ from typing import Sequence
 import numpy as np
 
 from .accel_shaping import BaselineSegment, baseline_segment, segment_lengths
-from .pendulum import G, natural_period
+from .pendulum import G, PendulumRun, SampledAcceleration, natural_period, simulate
 from .profiles import BoxProfile, time_optimal_boxes
 from .shapers import SHAPER_NAMES, Shaper, frequency_ratio_band, identity_shaper, make_shaper
 
@@ -40,7 +40,7 @@ ROBUST_CANDIDATES = ("box", "zv", "mzv", "box-zv", "zvd", "ei", "box-zvd", "box-
 # Thesis-like obstacle course (thesis Fig. 4.6: 90° turns on the table beside the robot), base frame [m].
 DEFAULT_LAYOUT = ((0.40, -0.30), (0.62, -0.30), (0.62, 0.05), (0.45, 0.05), (0.45, 0.30))
 DEFAULT_Z = 0.45  # flange height [m]
-DEFAULT_JERK = 20.0  # task-space jerk limit of the pivot [m/s³] (keeps the joints within their jerk limits)
+JERK_RAMP = 0.04  # default jerk ramp a_max/j_max as a fraction of the period [-] (≤ 5 % added time)
 ROBUST_BUDGET_RAD = math.radians(0.3)  # linear worst-case residual allowed per layout with a length tolerance
 
 
@@ -49,7 +49,7 @@ class AntiSwayOptions:
     """Planner settings: shaper name, pivot jerk/velocity limits, string-length tolerance, tuning."""
 
     shaper: str = "auto"
-    j_max: float = DEFAULT_JERK  # [m/s³]
+    j_max: float | None = None  # [m/s³]; None: a_max / (JERK_RAMP·T), a ramp of 4 % of the period
     v_max: float = math.inf  # [m/s]
     length_tolerance: float = 0.0  # relative, e.g. 0.2 for ±20 %
     tune: bool = True
@@ -139,7 +139,7 @@ def _box_boxes(s: float, period: float, a_max: float, j_max: float, v_max: float
     tj = a_max / j_max
     if period - tj < tau < period + tj:
         tau = period + tj
-    return (period, tau, min(tj, tau))
+    return (period, tau, tj)
 
 
 def design_profile(design: str, s: float, period: float, a_max: float, j_max: float, v_max: float) -> BoxProfile:
@@ -230,7 +230,8 @@ def design_segment(
         seg = baseline_segment(s, a_max, natural_period(length))
         return SegmentPlan(index, start, end, "accel", seg, seg.period, seg.accel)
     period0 = effective_period(length, a_max)
-    args = (a_max, options.j_max, options.v_max)
+    j_max = options.j_max if options.j_max is not None else a_max / (JERK_RAMP * natural_period(length))
+    args = (a_max, j_max, options.v_max)
     if options.shaper != "auto":
         design = options.shaper
     elif options.length_tolerance > 0:
@@ -295,6 +296,26 @@ def sample_plan(
     )
 
 
+def simulate_path(
+    t: np.ndarray, positions: np.ndarray, length: float, stop_time: float, settle_periods: float = 3.0,
+    rtol: float = 1e-6, atol: float = 1e-8,
+) -> PendulumRun:
+    """Nonlinear spherical pendulum (hanging at rest at t = 0) driven by a pivot path sampled at t (n,) [s].
+
+    The pivot acceleration is what a position-controlled robot realises from the samples; the run goes on
+    ``settle_periods`` small-angle periods past ``stop_time`` [s], sampled at the path step.
+    """
+    acc = SampledAcceleration(t, positions)
+    h = float(t[1] - t[0])
+    end = max(float(t[-1]), stop_time + settle_periods * natural_period(length))
+    return simulate(np.arange(0.0, end + 0.5 * h, h), acc, length, rtol=rtol, atol=atol)
+
+
+def residual_sway(run: PendulumRun, stop_time: float) -> float:
+    """Largest tilt [rad] after ``stop_time`` [s]."""
+    return float(run.theta[run.t >= stop_time - 1e-12].max())
+
+
 def baseline_duration(points: np.ndarray, length: float, a_max: float) -> float:
     """Total moving time [s] of the thesis baseline on a layout (sum of 2T + t_max)."""
     T = natural_period(length)
@@ -304,4 +325,5 @@ def baseline_duration(points: np.ndarray, length: float, a_max: float) -> float:
 __all__ = [
     "AntiSwayOptions", "AntiSwayPlan", "SegmentPlan", "SHAPERS", "DEFAULT_LAYOUT", "DEFAULT_Z", "plan_layout",
     "effective_period", "linear_residual", "planar_midpoint_angle", "design_profile", "baseline_duration", "Shaper",
+    "simulate_path", "residual_sway",
 ]

@@ -100,22 +100,12 @@ def _joints_of(plan, robot, q0, lim, progress=None):
     return JointTrajectory(t=plan.t, q=res.q), res.max_position_error
 
 
-def predict_sway(joints, robot, string_length: float, stop_time: float, settle_periods: float = SETTLE_PERIODS,
-                 rtol: float = 1e-6, atol: float = 1e-8):
-    """Nonlinear spherical pendulum driven by the TCP path of the joint trajectory (FK), from hanging at rest.
-
-    Sampled at the joint step up to ``stop_time`` + ``settle_periods`` periods [s].
-    """
-    import numpy as np
-
-    from planners.pendulum import SampledAcceleration, natural_period, simulate
+def predict_sway(joints, robot, string_length: float, stop_time: float, settle_periods: float = SETTLE_PERIODS):
+    """Nonlinear spherical pendulum driven by the TCP path that the joint trajectory produces (FK)."""
+    from planners.antisway import simulate_path
 
     pos, _ = robot.fk_path(joints.q)
-    acc = SampledAcceleration(joints.t, pos)
-    h = joints.dt
-    end = max(float(joints.t[-1]), stop_time + settle_periods * natural_period(string_length))
-    times = np.arange(0.0, end + 0.5 * h, h)
-    return simulate(times, acc, string_length, rtol=rtol, atol=atol)
+    return simulate_path(joints.t, pos, string_length, stop_time, settle_periods)
 
 
 def _failing_segments(plan, report) -> list[int]:
@@ -179,7 +169,7 @@ def plan_anti_sway(
     """
     import numpy as np
 
-    from planners.antisway import DEFAULT_JERK, DEFAULT_Z, AntiSwayOptions, plan_layout
+    from planners.antisway import DEFAULT_Z, AntiSwayOptions, plan_layout
     from trajectories.errors import OptionError, PlanningError
     from trajectories.limits import load_limits
 
@@ -191,7 +181,7 @@ def plan_anti_sway(
     z = DEFAULT_Z if z is None else float(z)
     _validate(pts, length, a_max, dt, shaper, length_tolerance, margin)
     options = AntiSwayOptions(
-        shaper=shaper, j_max=DEFAULT_JERK if j_max is None else float(j_max), v_max=float(v_max),
+        shaper=shaper, j_max=None if j_max is None else float(j_max), v_max=float(v_max),
         length_tolerance=float(length_tolerance), tune=tune,
     )
     lim = limits if limits is not None else load_limits(None)
@@ -325,7 +315,7 @@ def plan_anti_sway_command(
     length_tolerance: Annotated[
         float, typer.Option("--length-tolerance", help="Relative string-length uncertainty (0.2 = ±20 %): auto picks robust shapers.")
     ] = 0.0,
-    j_max: Annotated[Optional[float], typer.Option("--j-max", help="Pivot jerk limit of the shaped profiles \\[m/s³]; default 20.")] = None,
+    j_max: Annotated[Optional[float], typer.Option("--j-max", help="Pivot jerk limit of the shaped profiles \\[m/s³]; default a_max/(0.04·T): jerk ramps of 4 % of the period.")] = None,
     v_max: Annotated[Optional[float], typer.Option("--v-max", help="Pivot speed limit \\[m/s]; default none.")] = None,
     no_tune: Annotated[bool, typer.Option("--no-tune", help="Skip the per-segment nonlinear tuning of the period.")] = False,
     task_out: Annotated[Optional[Path], typer.Option("--task-out", help="Planned pivot path t,x,y,z,qw,qx,qy,qz \\[s, m].")] = None,

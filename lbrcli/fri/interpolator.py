@@ -3,7 +3,7 @@
 Each cycle of length dt [s] the interpolator takes a target joint position. If reaching it in one step keeps
 every joint within its velocity [rad/s] and acceleration [rad/s²] limits, the robot lands exactly on it
 (tracking performance 1). Otherwise the step is clipped per joint — acceleration window around the current
-velocity, a braking bound √(2·a_max·|e|) so that a distant target is approached without overshoot, and the
+velocity, a braking bound (the discrete √(2·a_max·|e|)) so that a distant target is approached without overshoot, and the
 velocity limit — and the tracking performance is the achieved fraction of the requested step of the worst
 joint (0..1). All arrays are preallocated; ``step`` allocates only numpy temporaries of 7 elements.
 """
@@ -45,7 +45,10 @@ class Interpolator:
             self.q[:] = target
             return 1.0
         # joints that cannot land on the target: braking bound towards it, velocity limit, acceleration window
-        brake = np.sqrt(2.0 * self.amax * np.abs(err))
+        # fastest velocity from which whole-step braking at a_max stops within |err|: n·a·dt with
+        # a·dt²·n(n+1)/2 = |err|
+        adt = self._dv
+        brake = adt * (np.sqrt(0.25 + 2.0 * np.abs(err) / (adt * dt)) - 0.5)
         v_new = np.clip(v_req, -brake, brake)
         np.clip(v_new, -self.vmax, self.vmax, out=v_new)
         np.clip(v_new, self.v - self._dv, self.v + self._dv, out=v_new)

@@ -179,17 +179,21 @@ def _percentiles(values: np.ndarray) -> tuple[float | None, float | None, float 
     return float(p50), float(p99), float(values.max())
 
 
-def _corrupt(data: bytes, rng: random.Random) -> bytes:
-    """A damaged copy of a datagram: truncated, a flipped byte, or random bytes."""
+def _corrupt(data: bytes, rng: random.Random, framed: bool) -> bytes:
+    """A damaged copy of a datagram that no FRI decoder accepts: truncated, a flipped byte, or garbage.
+
+    1.x (no CRC): truncation inside the header field, or a byte sequence starting with the invalid tag 0.
+    2.7: truncation (length mismatch) or one flipped payload byte (CRC-32 mismatch).
+    """
     kind = rng.randrange(3)
-    if kind == 0:
-        return data[: rng.randrange(1, max(2, len(data) - 1))]
-    if kind == 1:
+    if kind == 0:  # truncated
+        cut = rng.randrange(2, data[1] + 2) if not framed else rng.randrange(1, len(data) - 1)
+        return data[:cut]
+    if kind == 1 and framed:  # one payload byte flipped
         b = bytearray(data)
-        i = rng.randrange(len(b))
-        b[i] ^= 0xFF
+        b[rng.randrange(4, len(b) - 4)] ^= 1 << rng.randrange(8)
         return bytes(b)
-    return bytes(rng.getrandbits(8) for _ in range(rng.randrange(1, 64)))
+    return b"\x00" + bytes(rng.getrandbits(8) for _ in range(rng.randrange(0, 64)))
 
 
 class Simulator:
@@ -302,7 +306,11 @@ class Simulator:
         n = N_JOINTS
         self._hold = self.interp.q.copy()  # [rad] where the robot stands outside COMMANDING_ACTIVE
         self._cmd_q = np.zeros(n)  # last received command [rad]
-        self._cmd_prev = self.interp.q.copy()  # previous executed command [rad]
+        self._cmd_refl = -1  # the monitoring counter the last received command reflects
+        self._last_cmd = self.interp.q.copy()  # last command used [rad]
+        self._last_refl = -1  # ... and the counter it reflected
+        self._vel_est = np.zeros(n)  # commanded velocity [rad/cycle], for late or missing commands
+        self._vel_cap = self.limits.velocity * self.period  # [rad/cycle] no faster extrapolation than allowed
         self._cmd_fresh = False  # a command with 7 positions arrived in this interval
         self._header_only = False  # a reply without joint positions arrived in this interval
         self._target = self.interp.q.copy()
@@ -383,6 +391,7 @@ class Simulator:
         if len(jp) == N_JOINTS:
             self._cmd_q[:] = jp
             self._cmd_fresh = True
+            self._cmd_refl = refl
         else:
             self._header_only = True
 
@@ -446,19 +455,27 @@ class Simulator:
         if state is SessionState.COMMANDING_ACTIVE:
             k = self._mult
             if was is not SessionState.COMMANDING_ACTIVE:
-                self._sub = k  # just entered: hold the mirrored position until the first command
-                self._sub_from[:] = self._sub_to
-            elif self._cmd_fresh:
-                # a new command: fine-interpolate from the last one over the k cycles of the slot
-                self._sub_from[:] = self._sub_to
-                self._sub_to[:] = self._cmd_q
+                # just entered: hold the mirrored position until the first command
+                self._sub, self._sub_from[:], self._vel_est[:] = k, self._sub_to, 0.0
+            elif self._cmd_fresh and self._cmd_refl > self._last_refl:
+                # a new command, meant for the cycle after the message it reflects; a late one (reflecting an
+                # older message) is carried forward by its lateness at the commands' velocity [rad/cycle]
+                gap = self._cmd_refl - self._last_refl
+                np.subtract(self._cmd_q, self._last_cmd, out=self._vel_est)
+                self._vel_est /= gap if gap < 64 else np.inf
+                np.clip(self._vel_est, -self._vel_cap, self._vel_cap, out=self._vel_est)
+                self._last_cmd[:] = self._cmd_q
+                self._last_refl = self._cmd_refl
+                late = (self._seq & _U32) - self._cmd_refl
+                self._sub_from[:] = self._target
+                np.multiply(self._vel_est, late if 0 < late < 64 else 0, out=self._sub_to)
+                self._sub_to += self._cmd_q
                 self._sub = 0
                 self.counts["commanded"] += 1
             elif self._sub >= k:
-                # no command in time: bridge by extrapolating the last command's velocity
-                step = self._sub_to - self._sub_from
+                # no command in time: bridge by extrapolating at the commands' velocity
                 self._sub_from[:] = self._sub_to
-                self._sub_to += step
+                self._sub_to += k * self._vel_est
                 self._sub = 0
             self._sub = min(self._sub + 1, k)
             w = self._sub / k
@@ -485,6 +502,9 @@ class Simulator:
                 if ok:
                     self._sub_from[:] = self._cmd_q
                     self._sub_to[:] = self._cmd_q
+                    self._target[:] = self._cmd_q
+                    self._last_cmd[:] = self._cmd_q
+                    self._last_refl = self._cmd_refl
                 return ok, False
             return (False if self._header_only else None), False
         if state is SessionState.COMMANDING_ACTIVE and self._cmd_fresh and not self._safety:
@@ -545,7 +565,7 @@ class Simulator:
             return
         if cfg.malformed > 0.0 and rng.random() < cfg.malformed:
             self.counts["malformed_tx"] += 1
-            data = _corrupt(data, rng)
+            data = _corrupt(data, rng, self.codec.framed)
             seq_mark = -1
         else:
             seq_mark = self._seq

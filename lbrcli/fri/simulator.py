@@ -120,6 +120,8 @@ class SimConfig:
             bad(f"--q0: expected {N_JOINTS} finite joint angles")
         if self.ball_length is not None and not (math.isfinite(self.ball_length) and self.ball_length > 0):
             bad(f"--length: string length must be > 0 m, got {self.ball_length:g}")
+        if not (math.isfinite(self.ball_damping) and self.ball_damping >= 0):
+            bad(f"--damping: must be >= 0 1/s, got {self.ball_damping:g}")
         for name, port in (("--port", self.port), ("--client port", self.client_port)):
             if not 0 <= port <= 65535:
                 bad(f"{name}: not a UDP port: {port}")
@@ -127,10 +129,14 @@ class SimConfig:
             bad("--client: the client port must not be 0")
         if self.operation_mode not in OPERATION_MODES:
             bad(f"--operation-mode: one of {', '.join(OPERATION_MODES)}, got {self.operation_mode!r}")
+        if not 0.0 < self.quality_good <= 1.0:
+            bad(f"--quality-good: share of timely cycles must be in (0, 1], got {self.quality_good:g}")
         if not 0.0 <= self.quality_fair <= self.quality_good <= self.quality_excellent <= 1.0:
             bad("quality thresholds must satisfy 0 <= fair <= good <= excellent <= 1")
-        if self.quality_window < 1 or self.wait_cycles < 1:
-            bad("quality_window and wait_cycles must be >= 1")
+        if not 1 <= self.quality_window <= 100_000:
+            bad(f"--quality-window: must be 1..100000 cycles, got {self.quality_window}")
+        if self.wait_cycles < 1:
+            bad(f"wait_cycles must be >= 1, got {self.wait_cycles}")
         for name, v in (("--duration", self.session_duration_s), ("--timeout", self.max_runtime_s)):
             if v is not None and not (math.isfinite(v) and v > 0):
                 bad(f"{name}: must be > 0 s, got {v:g}")
@@ -221,6 +227,10 @@ class Simulator:
         self.period = config.period_ms * 1e-3  # [s]
         self.codec = FriCodec(config.version)
         self.limits = load_limits(config.limits_path)
+        if np.any(np.abs(config.q0) > self.limits.position):
+            j = int(np.argmax(np.abs(config.q0) - self.limits.position))
+            raise OptionError(f"--q0: q{j + 1} = {config.q0[j]:.4f} rad is outside the position limit "
+                              f"±{self.limits.position[j]:.4f} rad")
         self.robot = Robot(RobotConfig(flange=Flange(config.flange), tool=tuple(config.tool)))
         self._pin = pin
         self._rk4_step = rk4_step

@@ -317,3 +317,54 @@ def test_bad_configuration_is_refused():
             SimulatorProcess(SimConfig(port=taken.getsockname()[1])).start()
     finally:
         taken.close()
+
+
+def test_lbr_sim_command_runs_a_session_and_reports_json():
+    import json
+    import subprocess
+    import sys
+
+    client = ScriptedClient("2.7")
+    try:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "lbrcli", "sim", "--client", f"127.0.0.1:{client.port}", "--period", "5",
+             "--quality-window", "25", "--quality-good", "0.75",
+             "--duration", "0.2", "--commanding-after", "0.05", "--fri-version", "2.7", "--length", "0.4",
+             "--q0", "0,10deg,0,-80deg,0,30deg,0", "--timeout", "20", "--json"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )
+        run = client.run(timeout=30.0)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        client.close()
+    assert proc.returncode == 0, err
+    figures = json.loads(out)
+    assert figures["states_seen"][:1] == ["MONITORING_WAIT"] and figures["states_seen"][-1] == "IDLE"
+    assert "COMMANDING_ACTIVE" in figures["states_seen"] and figures["end_reason"] == "duration"
+    assert figures["fri_version"] == "2.7" and figures["max_ball_theta"] == 0.0
+    assert figures["replies"] == pytest.approx(len(run.sent_seq), abs=2)
+    assert np.allclose(run.received[0].msr_q, np.radians([0, 10, 0, -80, 0, 30, 0]))
+    assert "COMMANDING_ACTIVE" in err  # the states as they change, on stderr with --json
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--period", "0"], "--period"),
+        (["--period", "101"], "--period"),
+        (["--client", "nohost"], "--client"),
+        (["--client", "127.0.0.1:x"], "--client"),
+        (["--q0", "1,2,3"], "--q0"),
+        (["--q0", "3,0,0,0,0,0,0"], "--q0"),
+        (["--fri-version", "3"], "--fri-version"),
+        (["--loss", "2"], "--loss"),
+        (["--length", "-1"], "--length"),
+        (["--operation-mode", "T9"], "--operation-mode"),
+        (["--quality-good", "1.5"], "quality"),
+    ],
+)
+def test_lbr_sim_bad_options_exit_2_with_one_line(lbr, args, message):
+    res = lbr("sim", *args, "--timeout", "0.1")
+    assert res.returncode == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("lbr: error:") and message in lines[0]

@@ -255,3 +255,74 @@ def damped_swing(duration_s: float, amplitude_rad: float, string_m: float = 0.25
     t = np.arange(int(round(duration_s * rate_hz)) + 1) / rate_hz
     omega = math.sqrt(9.81 / string_m)
     return t, amplitude_rad * np.exp(-damping * omega * t) * np.cos(omega * t)
+
+
+def _normalised_rays(K: np.ndarray, D: np.ndarray, w: int, h: int) -> np.ndarray:
+    """(h, w, 3) normalised camera rays (x, y, 1) of the pixel centres of a camera with distortion D.
+
+    The lens model is inverted exactly (iterated undistortPoints) on a coarse grid and interpolated with
+    bicubic splines (the distortion is smooth, so the interpolation error is far below 0.01 px).
+    """
+    from scipy.interpolate import RectBivariateSpline
+
+    from .calibration import undistort_exact
+
+    step = 8.0
+    gx = np.arange(-2 * step, w + 2 * step, step)
+    gy = np.arange(-2 * step, h + 2 * step, step)
+    grid = np.stack(np.meshgrid(gx, gy), axis=-1).reshape(-1, 1, 2)
+    norm = undistort_exact(grid, K, D).reshape(len(gy), len(gx), 2)
+    xs, ys = np.arange(w, dtype=float), np.arange(h, dtype=float)
+    nx = RectBivariateSpline(gy, gx, norm[:, :, 0])(ys, xs)
+    ny = RectBivariateSpline(gy, gx, norm[:, :, 1])(ys, xs)
+    return np.stack([nx, ny, np.ones_like(nx)], axis=-1)
+
+
+def _ramp(X: np.ndarray) -> np.ndarray:
+    """±1 square parity along one board axis, ramped linearly over one pixel across each grid line."""
+    gy, gx = np.gradient(X)
+    per_px = np.maximum(np.hypot(gx, gy), 1e-9)  # board units per pixel
+    edge_px = np.abs(X - np.round(X)) / per_px  # distance to the nearest grid line [px]
+    parity = np.where(np.floor(X) % 2 == 0, 1.0, -1.0)
+    return parity * np.minimum(1.0, 2.0 * edge_px)
+
+
+def render_board_views(
+    camera_matrix: np.ndarray,
+    dist_coeffs: np.ndarray,
+    poses: Sequence[tuple[np.ndarray, np.ndarray]],
+    board: tuple[int, int] = (9, 6),
+    square_m: float = 0.025,
+    size: tuple[int, int] = (640, 480),
+    noise_std: float = 1.0,
+    seed: int = 0,
+) -> list[np.ndarray]:
+    """Grey images of a checkerboard seen by a camera with lens distortion, one per pose.
+
+    poses: (rvec (3,), tvec (3,) [m]) of the board in the camera frame (OpenCV convention); board: inner
+    corners (cols, rows), whose first corner is the board origin; the board has one more square per side
+    and a white margin of one square. Square edges are anti-aliased over one pixel; noise_std [grey levels].
+    The inner corners lie where cv2.projectPoints puts them.
+    """
+    import cv2
+
+    w, h = size
+    rays = _normalised_rays(np.asarray(camera_matrix, float), np.asarray(dist_coeffs, float), w, h)
+    cols, rows = board
+    rng = np.random.default_rng(seed)
+    images = []
+    for rvec, tvec in poses:
+        R, _ = cv2.Rodrigues(np.asarray(rvec, float))
+        Hn = np.column_stack([R[:, 0], R[:, 1], np.asarray(tvec, float).ravel()])  # board (X, Y, 1) → ray
+        to_squares = np.diag([1.0 / square_m, 1.0 / square_m, 1.0]) @ np.linalg.inv(Hn)
+        p = rays @ to_squares.T
+        front = p[..., 2] > 0
+        X, Y = p[..., 0] / p[..., 2], p[..., 1] / p[..., 2]
+        on_squares = (X >= -1) & (X < cols) & (Y >= -1) & (Y < rows) & front
+        on_board = (X >= -2) & (X < cols + 1) & (Y >= -2) & (Y < rows + 1) & front
+        img = np.where(on_board, 235.0, 90.0)  # white margin on a grey background
+        checker = _ramp(X) * _ramp(Y)  # +1 black, −1 white
+        img = np.where(on_squares, 127.5 - 107.5 * checker, img)
+        img += noise_std * rng.standard_normal(img.shape)
+        images.append(np.clip(img + 0.5, 0, 255).astype(np.uint8))
+    return images

@@ -44,6 +44,7 @@ def _open(path: str | Path):
         raise InputError("file not found", file=spath)
     if os.path.isdir(spath):
         raise InputError("is a directory, not a video file", file=spath)
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # FFmpeg's own messages (e.g. "moov atom not found") off
     cap = cv2.VideoCapture(spath)
     if not cap.isOpened():
         cap.release()

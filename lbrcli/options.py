@@ -15,13 +15,13 @@ FlangeOpt = Annotated[
     typer.Option("--flange", help="Media flange: touch-electric (d7 = 0.152 m), standard (0.126 m), touch-pneumatic (0.187 m)."),
 ]
 ToolOpt = Annotated[
-    Optional[str], typer.Option("--tool", help="Tool offset x,y,z [m] in the flange frame (e.g. the string attachment).")
+    Optional[str], typer.Option("--tool", help="Tool offset x,y,z \\[m] in the flange frame (e.g. the string attachment).")
 ]
 LimitsOpt = Annotated[
     Optional[Path], typer.Option("--limits", help="TOML file overriding the limit tables (see trajectories/data).")
 ]
 DtOpt = Annotated[
-    Optional[float], typer.Option("--dt", help="Sample step [s] of a headerless 7-column joint file.")
+    Optional[float], typer.Option("--dt", help="Sample step \\[s] of a headerless 7-column joint file.")
 ]
 
 DEFAULT_FLANGE = "touch-electric"

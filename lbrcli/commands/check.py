@@ -58,7 +58,7 @@ def print_report(rep, report, name: str) -> None:
 
 
 def check(
-    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 [s, rad].")],
+    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad].")],
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of joint velocity and acceleration with the limits.")] = None,
     margin: Annotated[float, typer.Option("--margin", help="Check against the limits scaled by (1 − margin), 0 ≤ margin < 1.")] = 0.0,
     jerk: Annotated[bool, typer.Option("--jerk", help="Fail on jerk violations too (jerk is always reported).")] = False,

@@ -12,8 +12,8 @@ from ..options import DEFAULT_FLANGE, THESIS_Q_START, DtOpt, FlangeOpt, JsonOpt,
 
 
 def fk(
-    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 [s, rad].")],
-    out: Annotated[Path, typer.Option("-o", "--out", help="Task trajectory to write: t,x,y,z,qw,qx,qy,qz [s, m].")],
+    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad].")],
+    out: Annotated[Path, typer.Option("-o", "--out", help="Task trajectory to write: t,x,y,z,qw,qx,qy,qz \\[s, m].")],
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     dt: DtOpt = None,
@@ -37,8 +37,8 @@ def fk(
 
 
 def ik(
-    task_csv: Annotated[Path, typer.Argument(help="Task trajectory t,x,y,z,qw,qx,qy,qz [s, m] of the flange (or tool).")],
-    out: Annotated[Path, typer.Option("-o", "--out", help="Joint trajectory to write: t,q1..q7 [s, rad].")],
+    task_csv: Annotated[Path, typer.Argument(help="Task trajectory t,x,y,z,qw,qx,qy,qz \\[s, m] of the flange (or tool).")],
+    out: Annotated[Path, typer.Option("-o", "--out", help="Joint trajectory to write: t,q1..q7 \\[s, rad].")],
     q0: Annotated[
         str,
         typer.Option("--q0", help="Reference configuration: start of the solve and redundancy target (7 angles, deg/rad suffixes)."),

@@ -12,7 +12,7 @@ from ..options import JsonOpt
 
 def listen(
     url: Annotated[str, typer.Argument(help="mqtt://HOST:PORT/TOPIC published by `lbr execute/monitor --mqtt`.")],
-    duration: Annotated[Optional[float], typer.Option("--duration", help="Stop after this many seconds [s].")] = None,
+    duration: Annotated[Optional[float], typer.Option("--duration", help="Stop after this many seconds \\[s].")] = None,
     count: Annotated[Optional[int], typer.Option("--count", help="Stop after this many messages.")] = None,
     out: Annotated[Optional[Path], typer.Option("-o", "--out", help="Record every message as one JSON line.")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", help="Do not print each message.")] = False,

@@ -11,10 +11,10 @@ from ..options import DtOpt, JsonOpt, LimitsOpt
 
 
 def retime(
-    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 [s, rad] (an ordinary path).")],
+    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad] (an ordinary path).")],
     out: Annotated[Path, typer.Option("-o", "--out", help="Re-timed joint trajectory to write.")],
     step: Annotated[
-        Optional[float], typer.Option("--step", help="Output sample step [s] (default: the input's step, e.g. the FRI period).")
+        Optional[float], typer.Option("--step", help="Output sample step \\[s] (default: the input's step, e.g. the FRI period).")
     ] = None,
     margin: Annotated[float, typer.Option("--margin", help="Use the limits scaled by (1 − margin).")] = 0.02,
     limits: LimitsOpt = None,

@@ -2,10 +2,11 @@
 
 Each cycle of length dt [s] the interpolator takes a target joint position. If reaching it in one step keeps
 every joint within its velocity [rad/s] and acceleration [rad/s²] limits, the robot lands exactly on it
-(tracking performance 1). Otherwise the step is clipped per joint — acceleration window around the current
-velocity, a braking bound (the discrete √(2·a_max·|e|)) so that a distant target is approached without overshoot, and the
-velocity limit — and the tracking performance is the achieved fraction of the requested step of the worst
-joint (0..1). All arrays are preallocated; ``step`` allocates only numpy temporaries of 7 elements.
+(tracking performance 1). Otherwise the step is clipped per joint — a braking bound on the speed relative to
+the target's own velocity (the discrete √(2·a_max·|e|)) so that the target is caught up with without overshoot,
+the velocity limit, and the acceleration window around the current velocity — and the tracking performance is
+the achieved fraction of the requested step of the worst joint (0..1). A joint that was catching up lands on
+the target only once it can also keep to the target's velocity. All arrays are preallocated; ``step`` allocates only numpy temporaries of 7 elements.
 """
 
 from __future__ import annotations
@@ -25,11 +26,21 @@ class Interpolator:
         self.dt = float(dt)  # [s]
         self._dv = self.amax * self.dt  # [rad/s] largest velocity change per step
         self._tol = 1e-9  # relative slack on the limits for "exactly reachable"
+        self._prev_target = self.q.copy()  # last cycle's target [rad]
+        self._catching = np.zeros(self.q.shape, dtype=bool)  # joints clipped in the last cycle
 
     def hold(self) -> None:
         """Stand still at the current position (v = a = 0), e.g. after the robot stopped."""
         self.v[:] = 0.0
         self.a[:] = 0.0
+        self._prev_target[:] = self.q
+        self._catching[:] = False
+
+    def _brake(self, err: np.ndarray) -> np.ndarray:
+        """Fastest speed relative to the target [rad/s] from which whole-step braking at a_max stops within
+        |err| [rad]: n·a·dt with a·dt²·n(n+1)/2 = |err| (the discrete √(2·a·|err|))."""
+        adt = self._dv
+        return adt * (np.sqrt(0.25 + 2.0 * np.abs(err) / (adt * self.dt)) - 0.5)
 
     def step(self, target: np.ndarray) -> float:
         """Advance one cycle towards ``target`` [rad]; returns the tracking performance of this step (0..1)."""
@@ -39,17 +50,26 @@ class Interpolator:
         a_req = (v_req - self.v) / dt
         lim = 1.0 + self._tol
         exact = (np.abs(v_req) <= self.vmax * lim) & (np.abs(a_req) <= self.amax * lim)
+        v_t = brake = None
+        if self._catching.any():
+            # a joint catching up lands on the target only if it can then keep to the target's velocity
+            v_t = np.clip((target - self._prev_target) / dt, -self.vmax, self.vmax)
+            brake = self._brake(err - v_t * dt)  # distance to go in the frame moving with the target
+            exact &= ~self._catching | (np.abs(v_req - v_t) <= brake * lim + 1e-12)
         if exact.all():
             self.a[:] = a_req
             self.v[:] = v_req
             self.q[:] = target
+            self._prev_target[:] = target
+            self._catching[:] = False
             return 1.0
-        # joints that cannot land on the target: braking bound towards it, velocity limit, acceleration window
-        # fastest velocity from which whole-step braking at a_max stops within |err|: n·a·dt with
-        # a·dt²·n(n+1)/2 = |err|
-        adt = self._dv
-        brake = adt * (np.sqrt(0.25 + 2.0 * np.abs(err) / (adt * dt)) - 0.5)
-        v_new = np.clip(v_req, -brake, brake)
+        # joints that cannot land on the target: relative to the target's velocity no faster than the braking
+        # bound, then the velocity limit, then the acceleration window
+        if v_t is None:
+            v_t = np.clip((target - self._prev_target) / dt, -self.vmax, self.vmax)
+            brake = self._brake(err - v_t * dt)
+        self._prev_target[:] = target
+        v_new = v_t + np.clip(v_req - v_t, -brake, brake)
         np.clip(v_new, -self.vmax, self.vmax, out=v_new)
         np.clip(v_new, self.v - self._dv, self.v + self._dv, out=v_new)
         v_new[exact] = v_req[exact]
@@ -62,4 +82,5 @@ class Interpolator:
         self.v[:] = v_new
         self.q += step
         self.q[exact] = target[exact]
+        self._catching[:] = clipped
         return float(np.clip(frac.min(), 0.0, 1.0))

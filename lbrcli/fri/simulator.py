@@ -171,6 +171,9 @@ class SimStats:
     reply_latency_ms_p99: float | None = None
     reply_latency_ms_max: float | None = None
     final_q: tuple[float, ...] = ()  # [rad] robot position at the end
+    work_us_p50: float | None = None  # per-cycle computation (state, interpolator, dynamics, ball, encode) [µs]
+    work_us_p99: float | None = None
+    cpu_fraction: float = 0.0  # CPU time of the loop / wall time (1.0 = a whole core)
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -336,6 +339,8 @@ class Simulator:
         self._send_time = np.full(_RING, np.nan)  # actual send time of message seq % _RING [s]
         self._cycle_time = np.empty(_RING)  # send instant of each cycle (perf_counter) [s]
         self._latency = np.empty(_RING)
+        self._work = np.empty(_RING)  # computation time of each cycle [s]
+        self._cpu_fraction = 0.0
         self._n_latency = 0
         self._delay_line: list[tuple[float, int, bytes]] = []
         self._safety = False
@@ -599,6 +604,7 @@ class Simulator:
         cfg = self.cfg
         c = self.counts
         t0 = time.perf_counter()
+        cpu0 = time.process_time()
         next_t = t0
         ppid = os.getppid()
         end_reason = ""
@@ -625,6 +631,7 @@ class Simulator:
                         self._on_state(state, self._quality, rel)
                 self._state = state
                 self._fill_and_send(state)
+                self._work[k % _RING] = time.perf_counter() - now
                 c["cycles"] += 1
                 if state is SessionState.IDLE:
                     self.machine.note_idle_sent()
@@ -647,6 +654,8 @@ class Simulator:
                 self._wait_until(min(max(d[0] for d in self._delay_line), time.perf_counter() + 0.2) + 1e-4)
         finally:
             self.sock.close()
+        wall = time.perf_counter() - t0
+        self._cpu_fraction = (time.process_time() - cpu0) / wall if wall > 0 else 0.0
         return self._stats(c["cycles"], end_reason)
 
     def _stats(self, ncycles: int, end_reason: str) -> SimStats:
@@ -657,6 +666,7 @@ class Simulator:
         lat = self._latency[: min(self._n_latency, _RING)] * 1e3
         pp = _percentiles(periods)
         lp = _percentiles(lat)
+        wp = _percentiles(self._work[:n] * 1e6)
         return SimStats(
             cycles=c["cycles"], replies=c["replies"], late_replies=c["late"], missed_replies=c["missed"],
             malformed_received=c["malformed_rx"], foreign_received=c["foreign_rx"],
@@ -668,6 +678,7 @@ class Simulator:
             period_ms_p50=pp[0], period_ms_p99=pp[1], period_ms_max=pp[2],
             reply_latency_ms_p50=lp[0], reply_latency_ms_p99=lp[1], reply_latency_ms_max=lp[2],
             final_q=tuple(float(x) for x in self.interp.q),
+            work_us_p50=wp[0], work_us_p99=wp[1], cpu_fraction=self._cpu_fraction,
         )
 
 

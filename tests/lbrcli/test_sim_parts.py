@@ -1,0 +1,148 @@
+"""The simulator's pure parts: the interpolator within the limits, connection quality, the session machine."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lbrcli.fri.constants import ConnectionQuality as Q
+from lbrcli.fri.constants import SessionState as S
+from lbrcli.fri.interpolator import Interpolator
+from lbrcli.fri.sim_session import QualityMonitor, QualityThresholds, SessionMachine, SessionTiming
+
+DT = 0.002  # [s]
+
+
+def _interp(limits, q0=None):
+    return Interpolator(np.zeros(7) if q0 is None else q0, limits.velocity, limits.acceleration, DT)
+
+
+def test_feasible_motion_is_followed_exactly(limits):
+    ip = _interp(limits)
+    t = np.arange(1, 600) * DT
+    path = 0.4 * (1 - np.cos(2 * np.pi * 0.8 * t))[:, None] * np.linspace(0.3, 1.0, 7)  # a < 10 rad/s²
+    tracking = [ip.step(q) for q in path]
+    assert tracking == [1.0] * len(path)
+    assert np.array_equal(ip.q, path[-1])
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.floats(-2.0, 2.0), min_size=7, max_size=7), st.integers(1, 3))
+def test_clipped_motion_respects_the_limits_and_arrives(limits, target, hold):
+    ip = _interp(limits)
+    target = np.array(target)
+    qs, tracking = [ip.q.copy()], []
+    for _ in range(1500):  # 3 s: enough for any 2 rad move
+        tracking.append(ip.step(target))
+        qs.append(ip.q.copy())
+    q = np.array(qs)
+    v = np.diff(q, axis=0) / DT
+    a = np.diff(v, axis=0) / DT
+    assert np.all(np.abs(v) <= limits.velocity * (1 + 1e-9))
+    assert np.all(np.abs(a) <= limits.acceleration * (1 + 1e-9))
+    assert np.allclose(ip.q, target, atol=1e-12) and np.all(ip.v == 0.0)
+    if np.abs(target).max() > 0.01:
+        assert min(tracking) < 1.0
+    assert tracking[-1] == 1.0
+    # approaching a fixed target does not overshoot it by more than one acceleration step
+    overshoot = np.max(np.sign(target) * (q - target), axis=0)
+    assert np.all(overshoot <= limits.acceleration * DT * DT + 1e-12)
+
+
+def test_a_moving_target_is_caught_up_with_and_then_followed_exactly(limits):
+    ip = _interp(limits)
+    speed = 0.5 * limits.velocity  # [rad/s] from the first cycle on: an infeasible velocity jump
+    tracking, lag = [], []
+    for k in range(1, 400):
+        target = speed * k * DT
+        tracking.append(ip.step(target))
+        lag.append(target - ip.q)
+    assert tracking[0] < 0.1
+    assert tracking[-100:] == [1.0] * 100
+    lag = np.array(lag)
+    assert np.all(lag >= -limits.acceleration * DT * DT)  # never ahead by more than one acceleration step
+    assert np.allclose(ip.v, speed)
+
+
+def test_tracking_performance_is_the_achieved_fraction_of_the_step(limits):
+    ip = _interp(limits)
+    target = np.zeros(7)
+    target[3] = 0.1  # one cycle could only take a_max·dt² of it
+    tp = ip.step(target)
+    assert tp == pytest.approx(limits.acceleration[3] * DT * DT / 0.1)
+    assert ip.q[3] == pytest.approx(limits.acceleration[3] * DT * DT)
+
+
+def test_quality_from_the_share_of_timely_cycles():
+    qm = QualityMonitor(QualityThresholds(window=10, fair=0.5, good=0.8, excellent=1.0))
+    assert qm.quality is Q.POOR
+    seen = [qm.push(True) for _ in range(10)]
+    assert seen[4] is Q.FAIR and seen[7] is Q.GOOD and seen[-1] is Q.EXCELLENT
+    assert qm.push(False) is Q.GOOD
+    for _ in range(2):
+        qm.push(False)
+    assert qm.quality is Q.FAIR and qm.ratio == pytest.approx(0.7)
+
+
+def _machine(**kw):
+    return SessionMachine(SessionTiming(**{"commanding_after_s": 0.1, "wait_cycles": 3, "end_delay_s": 0.05,
+                                           "idle_messages": 2, **kw}))
+
+
+def test_session_machine_full_sequence_and_normal_end():
+    m = _machine(session_duration_s=0.2)
+    t, states = 0.0, []
+
+    def step(q=Q.EXCELLENT, mirror=None, safety=False):
+        nonlocal t
+        t += 0.01
+        s = m.advance(t, q, mirror, safety)
+        if not states or states[-1] != s:
+            states.append(s)
+        return s
+
+    assert step(Q.FAIR) is S.MONITORING_WAIT
+    assert step() is S.MONITORING_READY
+    while step() is S.MONITORING_READY:
+        pass
+    assert states[-1] is S.COMMANDING_WAIT and t >= 0.1
+    step(mirror=True)
+    step(mirror=False)  # an inconsistent command restarts the count
+    step(mirror=True)
+    step(mirror=True)
+    assert m.state is S.COMMANDING_WAIT
+    assert step(mirror=True) is S.COMMANDING_ACTIVE
+    t_active = t
+    while step() is S.COMMANDING_ACTIVE:
+        pass
+    assert t - t_active == pytest.approx(0.2, abs=0.011) and m.end_reason == "duration"
+    while step() is not S.IDLE:
+        pass
+    assert states == [S.MONITORING_WAIT, S.MONITORING_READY, S.COMMANDING_WAIT, S.COMMANDING_ACTIVE,
+                      S.MONITORING_READY, S.IDLE]
+    assert not m.finished
+    m.note_idle_sent()
+    m.note_idle_sent()
+    assert m.finished
+
+
+@pytest.mark.parametrize("quality, safety, state, reason", [
+    (Q.FAIR, False, S.MONITORING_WAIT, "quality"),
+    (Q.EXCELLENT, True, S.MONITORING_READY, "safety_stop"),
+])
+def test_session_machine_leaves_commanding(quality, safety, state, reason):
+    m = _machine()
+    m.state = S.COMMANDING_ACTIVE
+    assert m.advance(1.0, quality, None, safety) is state
+    assert m.end_reason == reason
+    assert m.advance(1.02, quality, None, False) is state
+    assert m.advance(1.06, quality, None, False) is S.IDLE
+
+
+def test_ready_falls_back_to_wait_when_quality_drops():
+    m = _machine()
+    assert m.advance(0.0, Q.GOOD, None, False) is S.MONITORING_READY
+    assert m.advance(0.05, Q.FAIR, None, False) is S.MONITORING_WAIT
+    assert m.end_reason == ""  # not an end: the application still waits for a good connection

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from trajectories.csvio import write_table
+from test_foundation_cli import one_line_error
 from tracking.synthetic import render_pendulum_video
 
 LAG = 0.45  # [s] the video starts this long before the modelled motion
@@ -18,14 +19,6 @@ def model(t):
     """Still until 0.3 s, then a sway that builds up (as after an unshaped crane move) [rad]."""
     s = np.clip(t - 0.3, 0.0, None)
     return 0.4 * (1 - np.exp(-s / 0.5)) * np.sin(OMEGA * s)
-
-
-def one_line_error(res, code=2):
-    assert res.returncode == code, res.stderr
-    lines = [l for l in res.stderr.strip().splitlines() if l]
-    assert len(lines) == 1, res.stderr
-    assert "Traceback" not in res.stderr
-    return lines[0]
 
 
 @pytest.fixture(scope="module")

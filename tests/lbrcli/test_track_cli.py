@@ -5,20 +5,13 @@ import json
 import numpy as np
 import pytest
 
+from test_foundation_cli import one_line_error
 from tracking.synthetic import render_board_views, render_pendulum_video
 from tracking.trackfile import read_track_csv
 from tracking.video import probe_video
 
 SIZE = (640, 360)
 PIVOT = (320.0, 40.0)
-
-
-def one_line_error(res, code=2):
-    assert res.returncode == code, res.stderr
-    lines = [l for l in res.stderr.strip().splitlines() if l]
-    assert len(lines) == 1, res.stderr
-    assert "Traceback" not in res.stderr
-    return lines[0]
 
 
 @pytest.fixture(scope="module")

@@ -62,7 +62,8 @@ def rk4_step(
 ) -> tuple[np.ndarray, np.ndarray]:
     """One RK4 step of length h [s] with the pivot acceleration going linearly from acc0 to acc1 [m/s²].
 
-    Used by the FRI simulator at every controller cycle; the result is re-projected onto the sphere.
+    For fixed-step use (``rk4_step_floats`` is the same step on float tuples, for the FRI simulator's
+    per-cycle loop); the result is re-projected onto the sphere.
     """
     acc_mid = 0.5 * (acc0 + acc1)
     k1v = rhs(s, sdot, acc0, length, damping)
@@ -78,6 +79,42 @@ def rk4_step(
     s_new /= np.linalg.norm(s_new)
     v_new -= np.dot(v_new, s_new) * s_new
     return s_new, v_new
+
+
+Vec3 = tuple[float, float, float]
+
+
+def _rhs_floats(s: Vec3, v: Vec3, a: Vec3, length: float, damping: float) -> Vec3:
+    """``rhs`` on 3-tuples of floats (no Baumgarte term)."""
+    fx, fy, fz = -a[0] / length, -a[1] / length, (-G - a[2]) / length
+    lam = s[0] * fx + s[1] * fy + s[2] * fz + v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    return (fx - lam * s[0] - damping * v[0], fy - lam * s[1] - damping * v[1], fz - lam * s[2] - damping * v[2])
+
+
+def rk4_step_floats(
+    s: Vec3, sdot: Vec3, acc0: Vec3, acc1: Vec3, h: float, length: float, damping: float = 0.0
+) -> tuple[Vec3, Vec3]:
+    """``rk4_step`` on plain 3-tuples of floats: the same scheme without numpy's per-call overhead (several
+    times faster for a single step; used in the FRI simulator's 1 kHz loop). Returns (s, ṡ) as tuples."""
+    am = (0.5 * (acc0[0] + acc1[0]), 0.5 * (acc0[1] + acc1[1]), 0.5 * (acc0[2] + acc1[2]))
+    hh = 0.5 * h
+    k1v = _rhs_floats(s, sdot, acc0, length, damping)
+    s2 = (s[0] + hh * sdot[0], s[1] + hh * sdot[1], s[2] + hh * sdot[2])
+    v2 = (sdot[0] + hh * k1v[0], sdot[1] + hh * k1v[1], sdot[2] + hh * k1v[2])
+    k2v = _rhs_floats(s2, v2, am, length, damping)
+    s3 = (s[0] + hh * v2[0], s[1] + hh * v2[1], s[2] + hh * v2[2])
+    v3 = (sdot[0] + hh * k2v[0], sdot[1] + hh * k2v[1], sdot[2] + hh * k2v[2])
+    k3v = _rhs_floats(s3, v3, am, length, damping)
+    s4 = (s[0] + h * v3[0], s[1] + h * v3[1], s[2] + h * v3[2])
+    v4 = (sdot[0] + h * k3v[0], sdot[1] + h * k3v[1], sdot[2] + h * k3v[2])
+    k4v = _rhs_floats(s4, v4, acc1, length, damping)
+    h6 = h / 6.0
+    sn = [s[i] + h6 * (sdot[i] + 2.0 * v2[i] + 2.0 * v3[i] + v4[i]) for i in range(3)]
+    vn = [sdot[i] + h6 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i]) for i in range(3)]
+    norm = math.sqrt(sn[0] * sn[0] + sn[1] * sn[1] + sn[2] * sn[2])
+    sn = [x / norm for x in sn]
+    radial = vn[0] * sn[0] + vn[1] * sn[1] + vn[2] * sn[2]
+    return (sn[0], sn[1], sn[2]), (vn[0] - radial * sn[0], vn[1] - radial * sn[1], vn[2] - radial * sn[2])
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ the second difference of the TCP positions around it (as ``planners.pendulum.Sam
 
 from __future__ import annotations
 
+import gc
 import heapq
 import math
 import multiprocessing as mp
@@ -95,6 +96,7 @@ class SimConfig:
     torque_noise: float = 0.0  # [Nm] standard deviation added to the measured torques
     # timing
     spin_us: float = 200.0  # [µs] busy-wait before each send deadline (sleep until then)
+    realtime: bool = False  # run the loop with real-time scheduling (SCHED_FIFO) if the OS permits
 
     def validate(self) -> None:
         """Raise OptionError naming the bad value."""
@@ -174,6 +176,7 @@ class SimStats:
     work_us_p50: float | None = None  # per-cycle computation (state, interpolator, dynamics, ball, encode) [µs]
     work_us_p99: float | None = None
     cpu_fraction: float = 0.0  # CPU time of the loop / wall time (1.0 = a whole core)
+    realtime: bool = False  # the loop ran with real-time scheduling
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -219,7 +222,7 @@ class Simulator:
         from trajectories.limits import load_limits
         from trajectories.robot import Flange, Robot, RobotConfig
 
-        from planners.pendulum import rk4_step
+        from planners.pendulum import rk4_step_floats
 
         from .interpolator import Interpolator
 
@@ -236,7 +239,7 @@ class Simulator:
                               f"±{self.limits.position[j]:.4f} rad")
         self.robot = Robot(RobotConfig(flange=Flange(config.flange), tool=tuple(config.tool)))
         self._pin = pin
-        self._rk4_step = rk4_step
+        self._rk4 = rk4_step_floats
         k = config.receive_multiplier
         self.interp = Interpolator(np.array(config.q0, dtype=float), self.limits.velocity, self.limits.acceleration,
                                    self.period)
@@ -341,6 +344,7 @@ class Simulator:
         self._latency = np.empty(_RING)
         self._work = np.empty(_RING)  # computation time of each cycle [s]
         self._cpu_fraction = 0.0
+        self._realtime = False
         self._n_latency = 0
         self._delay_line: list[tuple[float, int, bytes]] = []
         self._safety = False
@@ -355,14 +359,13 @@ class Simulator:
         )
         # ball
         self._ball = self.cfg.ball_length is not None
-        self._p = np.zeros((3, 3))  # TCP positions at k, k-1, k-2 [m]
-        self._acc_prev = np.zeros(3)  # TCP acceleration at k-2 [m/s^2]
-        self._s = np.array([0.0, 0.0, -1.0])  # string direction (hanging)
-        self._sdot = np.zeros(3)
+        p0 = self._tcp(self.interp.q).tolist()
+        self._p0, self._p1 = p0, p0  # TCP positions at the last two cycles [m] (at rest before the start)
+        self._acc_prev = (0.0, 0.0, 0.0)  # TCP acceleration at the sample before [m/s^2]
+        self._s = (0.0, 0.0, -1.0)  # string direction (hanging)
+        self._sdot = (0.0, 0.0, 0.0)  # [1/s]
         self._ball_angles = [0.0, 0.0, 0.0, 0.0]
         self._max_theta = 0.0
-        p0 = self._tcp(self.interp.q)
-        self._p[:] = p0
 
     def _tcp(self, q: np.ndarray) -> np.ndarray:
         pin, model, data = self._pin, self.robot.model, self.robot.data
@@ -531,15 +534,16 @@ class Simulator:
         return None, False
 
     def _ball_step(self) -> None:
-        rk4_step = self._rk4_step
+        """Advance the ball by one cycle (to the previous sample; see the module docstring)."""
         h = self.period
-        p = self._p
-        p[2] = p[1]
-        p[1] = p[0]
-        p[0] = self._tcp(self.interp.q)
-        acc = (p[0] - 2.0 * p[1] + p[2]) / (h * h)  # at the previous cycle
-        self._s, self._sdot = rk4_step(self._s, self._sdot, self._acc_prev, acc, h, self.cfg.ball_length,
-                                       self.cfg.ball_damping)
+        p2, p1 = self._p1, self._p0
+        p0 = self._tcp(self.interp.q).tolist()
+        ih2 = 1.0 / (h * h)
+        acc = ((p0[0] - 2.0 * p1[0] + p2[0]) * ih2, (p0[1] - 2.0 * p1[1] + p2[1]) * ih2,
+               (p0[2] - 2.0 * p1[2] + p2[2]) * ih2)  # TCP acceleration at the previous sample [m/s^2]
+        self._p0, self._p1 = p0, p1
+        self._s, self._sdot = self._rk4(self._s, self._sdot, self._acc_prev, acc, h, self.cfg.ball_length,
+                                        self.cfg.ball_damping)
         self._acc_prev = acc
         sx, sy, sz = self._s
         theta = math.acos(max(-1.0, min(1.0, -sz)))
@@ -598,11 +602,22 @@ class Simulator:
             ri.driveState[:] = [DriveState.OFF] * N_JOINTS  # stop category 1: stopped, then drives off
 
     # -- the loop --------------------------------------------------------------------------------------------
+    def _enter_realtime(self) -> bool:
+        """SCHED_FIFO for this process (Linux, needs the privilege); False if not granted."""
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(10))
+            return True
+        except (AttributeError, OSError):
+            return False
+
     def run(self) -> SimStats:
         """Drive the session until it ends (IDLE sent), ``stop()`` says so, or max_runtime_s elapses."""
         period = self.period
         cfg = self.cfg
         c = self.counts
+        self._realtime = self._enter_realtime() if cfg.realtime else False
+        gc.collect()
+        gc.freeze()  # the objects built so far are never collected again: short collections in the loop
         t0 = time.perf_counter()
         cpu0 = time.process_time()
         next_t = t0
@@ -654,6 +669,7 @@ class Simulator:
                 self._wait_until(min(max(d[0] for d in self._delay_line), time.perf_counter() + 0.2) + 1e-4)
         finally:
             self.sock.close()
+            gc.unfreeze()
         wall = time.perf_counter() - t0
         self._cpu_fraction = (time.process_time() - cpu0) / wall if wall > 0 else 0.0
         return self._stats(c["cycles"], end_reason)
@@ -678,7 +694,7 @@ class Simulator:
             period_ms_p50=pp[0], period_ms_p99=pp[1], period_ms_max=pp[2],
             reply_latency_ms_p50=lp[0], reply_latency_ms_p99=lp[1], reply_latency_ms_max=lp[2],
             final_q=tuple(float(x) for x in self.interp.q),
-            work_us_p50=wp[0], work_us_p99=wp[1], cpu_fraction=self._cpu_fraction,
+            work_us_p50=wp[0], work_us_p99=wp[1], cpu_fraction=self._cpu_fraction, realtime=self._realtime,
         )
 
 

@@ -146,3 +146,18 @@ def test_ready_falls_back_to_wait_when_quality_drops():
     assert m.advance(0.0, Q.GOOD, None, False) is S.MONITORING_READY
     assert m.advance(0.05, Q.FAIR, None, False) is S.MONITORING_WAIT
     assert m.end_reason == ""  # not an end: the application still waits for a good connection
+
+
+def test_float_rk4_step_is_the_numpy_step():
+    from planners.pendulum import rk4_step, rk4_step_floats
+
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        s = rng.normal(size=3)
+        s /= np.linalg.norm(s)
+        v = rng.normal(size=3)
+        v -= v.dot(s) * s
+        a0, a1 = rng.normal(size=3) * 5, rng.normal(size=3) * 5
+        ref = rk4_step(s, v, a0, a1, 0.002, 0.45, 0.2)
+        got = rk4_step_floats(tuple(s), tuple(v), tuple(a0), tuple(a1), 0.002, 0.45, 0.2)
+        assert np.allclose(got[0], ref[0], rtol=0, atol=1e-14) and np.allclose(got[1], ref[1], rtol=0, atol=1e-13)

@@ -45,6 +45,7 @@ def sim(
     jitter: Annotated[float, typer.Option("--jitter", help="Fault injection: extra random delay, uniform 0..J \\[ms].")] = 0.0,
     malformed: Annotated[float, typer.Option("--malformed", help="Fault injection: probability of sending a corrupted datagram instead.")] = 0.0,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the fault injection.")] = 0,
+    realtime: Annotated[bool, typer.Option("--realtime", help="Run the loop with real-time scheduling (SCHED_FIFO) if permitted: steadier 1 ms under load.")] = False,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -76,7 +77,7 @@ def sim(
         loss=loss, delay_ms=delay, jitter_ms=jitter, malformed=malformed, seed=seed,
         quality_window=quality_window, quality_good=quality_good,
         quality_fair=min(0.5, quality_good), quality_excellent=max(0.98, quality_good),
-        operation_mode=operation_mode.upper(), limits_path=str(limits) if limits is not None else None,
+        operation_mode=operation_mode.upper(), realtime=realtime, limits_path=str(limits) if limits is not None else None,
     )
     config.validate()
     interrupted = []
@@ -94,6 +95,8 @@ def sim(
         stats = sim_.run()
     finally:
         signal.signal(signal.SIGINT, previous)
+    if realtime and not stats.realtime:
+        rep.warn("real-time scheduling was not granted (needs CAP_SYS_NICE); ran with normal priority")
     figures = stats.to_dict()
     rep.print(
         f"end: {stats.end_reason or '-'}; {stats.cycles} cycles, {stats.replies} replies "

@@ -24,6 +24,7 @@ import random
 import select
 import signal
 import socket
+import struct
 import time
 from dataclasses import asdict, dataclass, field
 from typing import Callable
@@ -55,6 +56,9 @@ BALL_IO_NAMES = ("ball_theta", "ball_phi", "ball_theta_x", "ball_theta_y")  # [r
 OPERATION_MODES = {"T1": OperationMode.TEST_MODE_1, "T2": OperationMode.TEST_MODE_2, "AUT": OperationMode.AUTOMATIC_MODE}
 _RING = 1 << 19  # per-cycle records kept for the timing statistics (8.7 min at 1 kHz)
 _U32 = 0xFFFFFFFF
+_SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", None)
+_TIMESPEC = struct.Struct("@qq")  # struct timespec (64-bit Linux)
+_ANC_SIZE = socket.CMSG_SPACE(_TIMESPEC.size) if _SO_TIMESTAMPNS is not None else 0
 
 
 @dataclass(frozen=True)
@@ -265,6 +269,8 @@ class Simulator:
             self.sock.close()
             raise FriError(f"simulator cannot bind {config.host}:{config.port} ({exc})") from None
         self.sock.setblocking(False)
+        if _SO_TIMESTAMPNS is not None:
+            self.sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
         self._build_messages()
         self._init_state()
 
@@ -339,7 +345,7 @@ class Simulator:
         self._timely = False
         self._since_timely = 0
         self._any_reply = False
-        self._send_time = np.full(_RING, np.nan)  # actual send time of message seq % _RING [s]
+        self._send_time = np.full(_RING, np.nan)  # actual send time of message seq % _RING (time.time) [s]
         self._cycle_time = np.empty(_RING)  # send instant of each cycle (perf_counter) [s]
         self._latency = np.empty(_RING)
         self._work = np.empty(_RING)  # computation time of each cycle [s]
@@ -374,7 +380,8 @@ class Simulator:
         return data.oMf[self.robot.tcp_id].translation
 
     # -- receiving -------------------------------------------------------------------------------------------
-    def _on_datagram(self, data: bytes, addr: tuple, now: float) -> None:
+    def _on_datagram(self, data: bytes, addr: tuple, arrival: float) -> None:
+        """One received datagram; ``arrival`` its receive time (time.time seconds)."""
         c = self.counts
         if addr[0] != self.client_ip:
             c["foreign_rx"] += 1
@@ -403,7 +410,7 @@ class Simulator:
             c["late"] += 1
         sent = self._send_time[refl % _RING]
         if sent == sent and refl <= self._seq:  # not NaN: the message was actually sent
-            self._latency[self._n_latency % _RING] = now - sent
+            self._latency[self._n_latency % _RING] = arrival - sent
             self._n_latency += 1
         jp = cmd.commandData.jointPosition.value
         if len(jp) == N_JOINTS:
@@ -413,17 +420,22 @@ class Simulator:
         else:
             self._header_only = True
 
-    def _drain(self, now: float) -> None:
+    def _drain(self) -> None:
+        """Read every datagram waiting in the socket (non-blocking)."""
         sock = self.sock
         while True:
             try:
-                data, addr = sock.recvfrom(MAX_DATAGRAM + 64)
+                data, anc, _, addr = sock.recvmsg(MAX_DATAGRAM + 64, _ANC_SIZE)
             except (BlockingIOError, InterruptedError):
                 return
             except OSError:  # e.g. ICMP port unreachable reported on loopback: the client is not there (yet)
                 continue
-            self._on_datagram(data, addr, now)
-            now = time.perf_counter()
+            arrival = None
+            for level, kind, cdata in anc:  # the kernel's receive time: the latency without our own delays
+                if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(cdata) >= _TIMESPEC.size:
+                    sec, nsec = _TIMESPEC.unpack_from(cdata)
+                    arrival = sec + nsec * 1e-9
+            self._on_datagram(data, addr, time.time() if arrival is None else arrival)
 
     def _flush_delay_line(self, now: float) -> float:
         """Send delayed datagrams that are due; returns the next due time (inf if none)."""
@@ -434,12 +446,15 @@ class Simulator:
         return line[0][0] if line else math.inf
 
     def _sendto(self, data: bytes, seq: int) -> None:
+        """Send a datagram; ``seq`` >= 0 records its send time for the reply latency (on loopback the kernel
+        delivers inside sendto, so the time is taken before)."""
+        t = time.time()
         try:
             self.sock.sendto(data, self.client_addr)
         except OSError:
             return
         if seq >= 0:
-            self._send_time[seq % _RING] = time.perf_counter()
+            self._send_time[seq % _RING] = t
 
     def _wait_until(self, deadline: float) -> None:
         """Receive replies (and send delayed datagrams) until ``deadline`` (perf_counter seconds)."""
@@ -454,7 +469,7 @@ class Simulator:
             timeout = min(remaining - spin, due - now)
             r, _, _ = select.select(fd, (), (), timeout if timeout > 0.0 else 0.0)
             if r:
-                self._drain(time.perf_counter())
+                self._drain()
 
     # -- one cycle -------------------------------------------------------------------------------------------
     def _evaluate_interval(self) -> None:
@@ -632,6 +647,7 @@ class Simulator:
                     next_t = now
                 rel = next_t - t0
                 was = self._state
+                self._drain()  # replies waiting now arrived before the next send, even if this loop was late
                 if k > 0 and was is not SessionState.IDLE:
                     self._evaluate_interval()
                 mirror_ok, safety = self._check_command(was)

@@ -57,7 +57,10 @@ class FastParams:
         return cls(*(float(a) for a in v))
 
 
-PARAM_RANGES = ((0.3, 1.0), (0.1, 1.0), (0.0, 6.0), (-0.4, 0.4))
+def param_ranges(problem: "FastProblem") -> tuple[tuple[float, float], ...]:
+    """Search box of (speed, first_speed, centring, apex_offset); with ``taut`` the apex may aim far lower."""
+    low = -min(problem.theta_d - 0.2, 1.2) if problem.taut else -0.4
+    return ((0.3, 1.0), (0.1, 1.0), (0.0, 6.0), (low, 0.4))
 
 
 @dataclass(frozen=True)
@@ -165,7 +168,8 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
 
 
 def score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
-    """Cost: the reach time if θ_d is reached inside the band (and taut if asked), else a penalty > 100."""
+    """Cost: the reach time if θ_d is reached inside the band, else a penalty > 100 (growing with the missing
+    angle, so that a search that cannot reach θ_d finds the highest angle); slack with ``taut`` costs > 1000."""
     max_theta = plan.max_theta
     max_travel = float(np.max(np.abs(plan.x)))
     min_tension = float(np.min(plan.tension))
@@ -177,8 +181,8 @@ def score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
         penalty += 100.0 + 10.0 * over
     if max_travel > problem.travel:
         penalty += 100.0 + 100.0 * (max_travel - problem.travel)
-    if problem.taut and min_tension < problem.min_tension:
-        penalty += 100.0 + (problem.min_tension - min_tension)
+    if problem.taut and min_tension < problem.min_tension:  # a hard constraint: worse than any miss
+        penalty += 1000.0 + (problem.min_tension - min_tension)
     cost = penalty + (plan.t_reach if plan.t_reach is not None else problem.horizon)
     return FastOutcome(plan.t_reach, max_theta, max_travel, min_tension, cost)
 
@@ -196,26 +200,34 @@ def _cost(vector: np.ndarray, problem: FastProblem) -> float:
 class SearchSettings:
     """Differential evolution settings: population multiplier, generations, seed, worker processes."""
 
-    popsize: int = 8
-    maxiter: int = 25
+    popsize: int = 6
+    maxiter: int = 16
     seed: int = 1
     workers: int = 2
     coarse_dt: float = 0.005  # [s] step used while searching (the final plan uses the problem's dt)
 
 
-def optimise(problem: FastProblem, settings: SearchSettings = SearchSettings()) -> tuple[FastParams, FastOutcome]:
-    """Tune FastParams for the soonest reach (scipy differential evolution, parallel candidates)."""
+def optimise(problem: FastProblem, settings: SearchSettings = SearchSettings(),
+             start: FastParams | None = None) -> tuple[FastParams, FastOutcome]:
+    """Tune FastParams for the soonest reach (scipy differential evolution, parallel candidates).
+
+    ``start`` seeds the population (e.g. the best of a previous search with other bounds).
+    """
     from scipy.optimize import differential_evolution
 
     coarse = replace(problem, dt=max(problem.dt, settings.coarse_dt))
+    ranges = param_ranges(problem)
     kwargs = dict(args=(coarse,), popsize=settings.popsize, maxiter=settings.maxiter, seed=settings.seed,
                   polish=False, tol=1e-3, init="sobol", updating="deferred")
+    if start is not None:
+        kwargs["x0"] = np.clip([start.speed, start.first_speed, start.centring, start.apex_offset],
+                               [r[0] for r in ranges], [r[1] for r in ranges])
     if settings.workers > 1:
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(max_workers=settings.workers) as pool:
-            res = differential_evolution(_cost, PARAM_RANGES, workers=pool.map, **kwargs)
+            res = differential_evolution(_cost, ranges, workers=pool.map, **kwargs)
     else:
-        res = differential_evolution(_cost, PARAM_RANGES, **kwargs)
+        res = differential_evolution(_cost, ranges, **kwargs)
     best = FastParams.from_vector(res.x)
     return best, evaluate(problem, best)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trajectories.ik import solve_ik_path
+from trajectories.ik import IkOptions, solve_ik_path
 from trajectories.limits import JointLimits
 from trajectories.robot import Robot
 from trajectories.trajectory import JointTrajectory
@@ -27,6 +27,9 @@ from .pendulum import PendulumRun, SampledAcceleration, direction_from_angles, s
 from .swingup_plan import TaskBounds
 
 ORIENTATIONS = ("fixed", "follow")
+# Strong null-space pull toward q_start: q becomes (nearly) a function of the pivot position, so the arm
+# rests as soon as the pivot does (the default 0.02/sample leaves a slow self-motion after the stop).
+IK_OPTIONS = IkOptions(nullspace_gain=0.3)
 CONSTRAINT_RATE = 20.0  # [1/s] Baumgarte rate keeping |s| = 1 through slack phases (rigid-string model)
 
 
@@ -67,17 +70,19 @@ def joint_path(robot: Robot, setup: ArmSetup, t: np.ndarray, x: np.ndarray, limi
                progress=None) -> tuple[JointTrajectory, float]:
     """IK of the pivot path (thesis §5.3.2, one pose per sample) → joint trajectory and max TCP error [m]."""
     pos, rot = pivot_poses(robot, setup, x)
-    res = solve_ik_path(robot, pos, rot, np.asarray(setup.q_start, dtype=float), limits, times=t, progress=progress)
+    res = solve_ik_path(robot, pos, rot, np.asarray(setup.q_start, dtype=float), limits, IK_OPTIONS, times=t,
+                        progress=progress)
     return JointTrajectory(t=np.asarray(t, dtype=float), q=res.q), res.max_position_error
 
 
 def axis_bounds(robot: Robot, setup: ArmSetup, limits: JointLimits, travel: float, margin: float = 0.1,
-                samples: int = 41) -> TaskBounds:
+                samples: int = 41, first_order: bool = False) -> TaskBounds:
     """Pivot speed, acceleration and jerk along base y that keep every joint within (1 − margin)·limits.
 
     q(y) is solved by IK over |y| ≤ travel [m]; with q' = dq/dy, q'' and q''' (finite differences, max over
     the band) the joint rates are q̇ = q'·v, q̈ = q'·a + q''·v², q⃛ = q'·j + 3q''·v·a + q'''·v³, bounded
-    joint by joint.
+    joint by joint (worst cases combined: conservative). ``first_order`` keeps only the q' terms, an
+    optimistic first guess for plans that are checked and rescaled afterwards.
     """
     y = np.linspace(-travel, travel, samples)
     mid = samples // 2
@@ -91,6 +96,8 @@ def axis_bounds(robot: Robot, setup: ArmSetup, limits: JointLimits, travel: floa
     w1, w2, w3 = (np.abs(d).max(axis=0) + 1e-9 for d in (d1, d2, d3))
     lim = limits.scaled(1.0 - margin)
     v = float(np.min(lim.velocity / w1))
+    if first_order:
+        return TaskBounds(v_max=v, a_max=float(np.min(lim.acceleration / w1)), j_max=float(np.min(lim.jerk / w1)))
     for _ in range(20):
         a = float(np.min((lim.acceleration - w2 * v**2) / w1))
         j = float(np.min((lim.jerk - 3 * w2 * v * a - w3 * v**3) / w1)) if a > 0 else -1.0

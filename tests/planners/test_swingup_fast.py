@@ -1,0 +1,102 @@
+"""Fast swing-up: reaches 115° within 3 s from rest inside every joint limit; claims vs independent simulations."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from planners.cartpole import rhs
+from planners.pendulum import SampledAcceleration
+from planners.swingup import SwingUpRequest, plan_swing_up
+from planners.swingup_fast import FastParams, FastProblem, SearchSettings, optimise, simulate_fast
+from planners.swingup_plan import StopProfile, TaskBounds
+from trajectories.check import check_trajectory
+from trajectories.differences import derivatives
+
+THETA_D = math.radians(115)
+
+
+@pytest.fixture(scope="module")
+def fast(robot, limits):
+    return plan_swing_up(SwingUpRequest(length=0.25, mass=0.0139, theta_d=THETA_D, method="fast"), robot, limits)
+
+
+def test_reaches_115_deg_from_rest_within_3_s(fast):
+    ver = fast.verification
+    k = int(np.flatnonzero(np.abs(ver.theta) >= THETA_D)[0])
+    assert ver.t[k] < 3.0
+    assert ver.theta[0] == 0.0 and fast.plan.theta_dot[0] == 0.0  # from the ball at rest
+    assert fast.reached and fast.failure() is None
+
+
+def test_inside_all_joint_limits_including_jerk(fast, limits):
+    rep = check_trajectory(fast.trajectory, limits, jerk=True)
+    assert rep.ok, [v.describe() for v in rep.violations]
+    for q, r in rep.ratios().items():
+        assert r.max() < 1.0, q
+    # the bounds are really used (not a trivially slow plan)
+    assert rep.ratios()["acceleration"].max() > 0.5
+
+
+def test_pivot_stays_in_the_band_on_base_y_and_ends_at_rest(fast, robot):
+    pos, _ = robot.fk_path(fast.trajectory.q)
+    start = pos[0]
+    assert np.abs(pos[:, 1] - start[1]).max() <= 0.3
+    assert np.abs(pos[:, [0, 2]] - start[[0, 2]]).max() < 1e-6
+    tail = fast.trajectory.t >= fast.plan.t_rest
+    assert tail.sum() > 10
+    qd = derivatives(fast.trajectory.q, fast.trajectory.dt, 1)[0]
+    assert np.abs(qd[-5:]).max() < 1e-6  # the arm ends at rest (its null-space motion has settled too)
+    assert np.abs(qd[tail]).max() < 1e-2
+    assert np.ptp(pos[tail, 1]) < 1e-9  # the pivot rests from t_rest on
+
+
+def test_claim_agrees_with_the_ball_simulated_under_the_joint_path(fast):
+    ver, plan = fast.verification, fast.plan
+    assert abs(ver.max_theta - plan.max_theta) < math.radians(3)
+    assert np.abs(ver.theta - plan.theta).max() < math.radians(3)
+    # and with an independent planar integration of the written pivot samples
+    acc = SampledAcceleration(plan.t, np.column_stack([0 * plan.x, plan.x, 0 * plan.x]))
+    sol = solve_ivp(lambda t, y: rhs(y, acc(t)[1], 0.25), (0, plan.t[-1]), [0, 0, 0, 0], method="LSODA",
+                    t_eval=plan.t, rtol=1e-10, atol=1e-12, max_step=plan.dt)
+    assert np.abs(sol.y[2] - plan.theta).max() < math.radians(1)
+
+
+def test_reports_slack_honestly(fast):
+    figures = fast.figures()
+    assert figures["taut"] is False and figures["min_tension_margin"] < 0
+    assert figures["first_slack_s"] is not None
+    # the slack starts near the top of the swing, past 90°
+    k = np.searchsorted(fast.verification.t, figures["first_slack_s"])
+    assert abs(fast.verification.theta[k]) > math.radians(90)
+
+
+def test_taut_constraint_gives_the_highest_taut_angle():
+    bounds = TaskBounds(v_max=0.8, a_max=3.9, j_max=25.0)
+    problem = FastProblem(length=0.25, theta_d=THETA_D, bounds=bounds, taut=True)
+    params, outcome = optimise(problem, SearchSettings(popsize=6, maxiter=12, workers=2))
+    plan = simulate_fast(problem, params)
+    assert plan.tension.min() >= problem.min_tension
+    assert outcome.t_reach is None
+    assert math.radians(75) < plan.max_theta < THETA_D
+
+
+def test_stop_profile_reaches_rest_within_the_bounds():
+    b = TaskBounds(v_max=0.8, a_max=4.0, j_max=30.0)
+    stop = StopProfile(0.5, 3.0, b)  # still accelerating: v peaks at 0.5 + 3²/(2·30) = 0.65
+    tau = np.linspace(0, stop.duration + 0.1, 2001)
+    x, v, a = stop.at(tau)
+    assert v[-1] == 0.0 and a[-1] == 0.0
+    assert np.abs(a).max() <= b.a_max + 1e-9 and np.abs(v).max() <= b.v_max + 1e-9
+    jerk = np.diff(a) / np.diff(tau)
+    assert np.abs(jerk).max() <= b.j_max * 1.001
+    assert stop.distance == pytest.approx(x[-1]) and stop.distance > 0
+
+
+def test_candidates_are_picklable():
+    import pickle
+
+    problem = FastProblem(length=0.25, theta_d=THETA_D, bounds=TaskBounds(0.8, 3.9, 25.0))
+    again = pickle.loads(pickle.dumps((problem, FastParams())))
+    assert again == (problem, FastParams())

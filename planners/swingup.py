@@ -23,7 +23,7 @@ from trajectories.trajectory import JointTrajectory
 
 from .swingup_energy import EnergyParams, plan_energy
 from .swingup_fast import FastProblem, SearchSettings, optimise, simulate_fast
-from .swingup_plan import PivotPlan, TaskBounds, first_reach
+from .swingup_plan import PivotPlan, TaskBounds, first_reach, mirrored, reach_side
 from .swingup_robot import ArmSetup, Verification, axis_bounds, joint_path, verify
 from .tension import slack_report
 
@@ -52,6 +52,7 @@ class SwingUpRequest:
     k_d: float = 0.05
     taut: bool = False
     min_tension: float = 0.5  # [m/s²] margin required when ``taut``
+    side: int = 0  # +1 / −1: reach θ_d toward +y / −y (the plan is mirrored if needed); 0: either side
     limit_margin: float = 0.1  # the bounds keep joints within (1 − margin)·limits
     search: SearchSettings = SearchSettings()
 
@@ -202,7 +203,7 @@ def _fast_on_arm(r: SwingUpRequest, robot: Robot, setup: ArmSetup, limits: Joint
         problem = _fast_problem(r, bounds)
         settings = r.search if attempt == 1 else replace(r.search, maxiter=max(5, r.search.maxiter // 2))
         params, _ = optimise(problem, settings, start=params)
-        plan = simulate_fast(problem, params)
+        plan = _on_side(r, simulate_fast(problem, params), notes if attempt == 1 else [])
         traj, ik_err = joint_path(robot, setup, plan.t, plan.x, limits, progress)
         report = check_trajectory(traj, limits, jerk=True)
         last = (plan, traj, ik_err, report, bounds, attempt)
@@ -219,6 +220,17 @@ def _fast_on_arm(r: SwingUpRequest, robot: Robot, setup: ArmSetup, limits: Joint
         bounds = TaskBounds(bounds.v_max * factor["velocity"], bounds.a_max * factor["acceleration"],
                             bounds.j_max * factor["jerk"])
     return best if best is not None else last
+
+
+def _on_side(r: SwingUpRequest, plan: PivotPlan, notes: list[str]) -> PivotPlan:
+    """Mirror the plan if it reaches θ_d on the side opposite to ``r.side`` (possible when it starts centred)."""
+    side = reach_side(plan)
+    if r.side == 0 or side in (0, r.side):
+        return plan
+    if r.theta0 != 0.0:
+        notes.append("θ_d is reached on the other side; a plan from --theta0 ≠ 0 cannot be mirrored (flip its sign)")
+        return plan
+    return mirrored(plan)
 
 
 def _reach_key(plan: PivotPlan) -> float:
@@ -248,6 +260,7 @@ def plan_swing_up(r: SwingUpRequest, robot: Robot, limits: JointLimits, progress
             plan, highest = _highest_taut_energy(r, bounds)
         else:
             plan = plan_energy(_energy_params(r, r.theta_d), bounds)
+        plan = _on_side(r, plan, notes)
         traj, ik_err = joint_path(robot, setup, plan.t, plan.x, limits, progress)
         report = check_trajectory(traj, limits)
     else:

@@ -122,3 +122,18 @@ def first_reach(t: np.ndarray, theta: np.ndarray, angle: float) -> float | None:
         return float(t[0])
     w = (angle - a[k - 1]) / (a[k] - a[k - 1])
     return float(t[k - 1] + w * (t[k] - t[k - 1]))
+
+
+def reach_side(plan: PivotPlan) -> int:
+    """+1 if θ_d is first reached toward +x (positive θ), −1 toward −x, 0 if never reached."""
+    if plan.t_reach is None:
+        return 0
+    k = int(np.searchsorted(plan.t, plan.t_reach))
+    return 1 if plan.theta[min(k, len(plan.t) - 1)] > 0 else -1
+
+
+def mirrored(plan: PivotPlan) -> PivotPlan:
+    """The same swing-up mirrored about the start (x → −x, θ → −θ): the ball reaches θ_d on the other side."""
+    from dataclasses import replace
+
+    return replace(plan, x=-plan.x, v=-plan.v, u=-plan.u, theta=-plan.theta, theta_dot=-plan.theta_dot)

@@ -16,10 +16,11 @@ import typer
 from ..options import DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
 
 PREDICTION_COLUMNS = ("t", "theta", "theta_planned")
+SIDES = {"any": 0, "+y": 1, "-y": -1}
 
 
 def _validate(length, mass, theta_d, method, theta0, dt, duration, travel, k_e, k_p, k_d, tolerance, margin,
-              orientation, push) -> None:
+              orientation, push, side="any") -> None:
     from trajectories.errors import OptionError
 
     checks = (
@@ -36,6 +37,7 @@ def _validate(length, mass, theta_d, method, theta0, dt, duration, travel, k_e, 
         (0 <= margin < 1, f"--margin must be in [0, 1), got {margin:g}"),
         (orientation in ("auto", "fixed", "follow"), f"--orientation must be auto, fixed or follow, got {orientation!r}"),
         (math.isfinite(push), "--push must be finite"),
+        (side in SIDES, f"--side must be one of {', '.join(SIDES)}, got {side!r}"),
     )
     for ok, message in checks:
         if not ok:
@@ -69,6 +71,7 @@ def plan_swing_up_files(
     tool: str | None = None,
     limits: Path | None = None,
     workers: int = 2,
+    side: str = "any",
     strict: bool = False,
     progress=None,
 ) -> dict[str, Any]:
@@ -91,7 +94,7 @@ def plan_swing_up_files(
     from ..parsing import parse_joint_vector
 
     _validate(length, mass, theta_d, method, theta0, dt, duration, travel, k_e, k_p, k_d, tolerance, margin,
-              orientation, push)
+              orientation, push, side)
     q0 = parse_joint_vector(q_start, "--q-start")
     robot = make_robot(flange, tool)
     lim = limits_from(limits)
@@ -99,7 +102,7 @@ def plan_swing_up_files(
         length=length, mass=mass, theta_d=theta_d, method=method, q_start=tuple(float(v) for v in q0),
         orientation=None if orientation == "auto" else orientation, travel=travel, dt=dt, duration=duration,
         tolerance=tolerance, theta0=theta0, push=push, k_e=k_e, k_p=k_p, k_d=k_d, taut=taut, limit_margin=margin,
-        search=SearchSettings(workers=max(1, int(workers))),
+        search=SearchSettings(workers=max(1, int(workers))), side=SIDES[side],
     )
     result = plan_swing_up(request, robot, lim, progress=progress)
     write_joint_csv(out, result.trajectory)
@@ -184,6 +187,7 @@ def swing_up(
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: θ(t), pivot x(t) and u(t), tension margin, joint rates vs limits.")] = None,
     task_out: Annotated[Optional[Path], typer.Option("--task-out", help="Write the TCP path t,x,y,z,qw,qx,qy,qz [s, m].")] = None,
     workers: Annotated[int, typer.Option("--workers", help="fast: processes evaluating candidates in parallel.")] = 2,
+    side: Annotated[str, typer.Option("--side", help="Reach θ_d toward +y, -y or any (a centred plan is mirrored).")] = "any",
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -208,7 +212,7 @@ def swing_up(
             task_out=task_out, theta0=parse_angle(theta0, "--theta0"), push=push, duration=duration, dt=dt,
             q_start=q_start, k_e=ke, k_p=kp, k_d=kd, travel=max_travel, taut=taut,
             tolerance=parse_angle(tolerance, "--tolerance"), margin=margin, orientation=orientation, flange=flange,
-            tool=tool, limits=limits, workers=workers, progress=update,
+            tool=tool, limits=limits, workers=workers, side=side, progress=update,
         )
     _summary(rep, figures)
     rep.emit(figures)

@@ -72,13 +72,17 @@ def test_thesis_example_claims_agree_with_the_simulated_ball(lbr, tmp_path):
 
 
 def test_fast_at_1_ms_reaches_115_deg_within_3_s_inside_the_limits(lbr, tmp_path):
-    out = tmp_path / "fast.csv"
-    res = lbr(*BASE, "--theta-d", "115deg", "--method", "fast", "--dt", "0.001", "-o", out, "--json")
+    out, pred = tmp_path / "fast.csv", tmp_path / "fast_pred.csv"
+    res = lbr(*BASE, "--theta-d", "115deg", "--method", "fast", "--dt", "0.001", "--side", "+y", "-o", out,
+              "--prediction", pred, "--json")
     assert res.returncode == 0, res.stderr
     f = json.loads(res.stdout)
     assert f["reached"] and f["limits_ok"] and f["t_theta_d_s"] < 3.0 and f["dt_s"] == pytest.approx(0.001)
     assert f["max_travel_m"] <= 0.3 and f["taut"] is False
     assert abs(f["max_theta_deg"] - f["claimed"]["max_theta_deg"]) < 3
+    theta = read_table(pred, ("t", "theta")).data[:, 1]
+    first = theta[np.flatnonzero(np.abs(theta) >= math.radians(113))[0]]
+    assert first > 0  # on the +y side as asked (θ positive toward +y)
     check = lbr("check", out, "--jerk", "--json")
     assert check.returncode == 0, check.stdout
     assert json.loads(check.stdout)["limits_ok"] is True

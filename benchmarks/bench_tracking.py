@@ -42,16 +42,16 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         t = np.arange(0.0, duration, 0.001)
         gt = render_pendulum_video(path, t, _model(t - LAG_S), PIVOT, 380.0, 6.5, (1280, 720), 60.0, pivot_marker="green")
         _decode_only(path)  # warm the file cache
-        decode = min(_decode_only(path) for _ in range(2))
         red, green = color_spec("red"), color_spec("green")
-        best = math.inf
-        for _ in range(2):
+        decode = best = with_marker = math.inf
+        for _ in range(3):  # interleaved, best of three: the machine is shared
+            decode = min(decode, _decode_only(path))
             t0 = time.perf_counter()
             track = track_video(path, red, pivot_uv=PIVOT)
             best = min(best, time.perf_counter() - t0)
-        t0 = time.perf_counter()
-        marker = track_video(path, red, pivot_color=green)
-        with_marker = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            marker = track_video(path, red, pivot_color=green)
+            with_marker = min(with_marker, time.perf_counter() - t0)
 
     n = len(gt.t)
     err = np.linalg.norm(track.uv - gt.ball_uv, axis=1)[track.found]

@@ -78,7 +78,11 @@ def blob_mask(bgr: np.ndarray, spec: ColorSpec) -> np.ndarray:
 
 
 def ellipse_fit(contour: np.ndarray) -> float:
-    """IoU of the filled contour with the ellipse of equal second moments (1 for an ellipse, ≈ 0.83 for a box)."""
+    """IoU of the filled contour with the ellipse of equal second moments (1 for an ellipse, ≈ 0.83 for a box).
+
+    A pixel is in the ellipse when its centre is (Mahalanobis distance² ≤ 4: a uniform ellipse with
+    semi-axes a, b has variances a²/4, b²/4 along its axes).
+    """
     import cv2
 
     x, y, w, h = cv2.boundingRect(contour)
@@ -88,16 +92,16 @@ def ellipse_fit(contour: np.ndarray) -> float:
     m = cv2.moments(fill, True)
     if m["m00"] <= 0:
         return 0.0
-    cov = np.array([[m["mu20"], m["mu11"]], [m["mu11"], m["mu02"]]]) / m["m00"]
-    det = cov[0, 0] * cov[1, 1] - cov[0, 1] ** 2
+    c20, c11, c02 = m["mu20"] / m["m00"], m["mu11"] / m["m00"], m["mu02"] / m["m00"]
+    det = c20 * c02 - c11 * c11
     if det <= 1e-9:
         return 0.0
-    inv = np.array([[cov[1, 1], -cov[0, 1]], [-cov[0, 1], cov[0, 0]]]) / det
-    ys, xs = np.mgrid[0 : fill.shape[0], 0 : fill.shape[1]]
+    ys, xs = np.ogrid[0 : fill.shape[0], 0 : fill.shape[1]]
     dx, dy = xs - m["m10"] / m["m00"], ys - m["m01"] / m["m00"]
-    inside = inv[0, 0] * dx * dx + 2 * inv[0, 1] * dx * dy + inv[1, 1] * dy * dy <= 4.0  # uniform ellipse: Σ = diag(a², b²)/4
-    blob = fill > 0
-    return float(np.count_nonzero(blob & inside) / np.count_nonzero(blob | inside))
+    inside = (c02 * dx * dx - 2.0 * c11 * dx * dy + c20 * dy * dy) <= 4.0 * det
+    blob = fill.astype(bool)
+    union = np.count_nonzero(blob | inside)
+    return float(np.count_nonzero(blob & inside) / union) if union else 0.0
 
 
 def find_blobs(

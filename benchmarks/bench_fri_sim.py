@@ -1,6 +1,8 @@
 """FRI simulator timing at a 1 ms send period: the achieved send period (p50/p99/max) and the reply latency
 it measures, with a trivial echo client in another process (mirrors the ipo position, so the session goes
-to COMMANDING_ACTIVE and the interpolator, the inverse dynamics and the ball run every cycle)."""
+to COMMANDING_ACTIVE and the interpolator, the inverse dynamics and the ball run every cycle). The quality
+thresholds are lenient so that the session lasts the whole measurement on a loaded machine; the late and
+missed replies are reported."""
 
 from __future__ import annotations
 
@@ -58,7 +60,8 @@ def measure(duration_s: float, period_ms: int = 1, version: str = "1.15", ball: 
     client.start()
     port = q.get(timeout=30)
     cfg = SimConfig(client_port=port, period_ms=period_ms, version=version, max_runtime_s=duration_s,
-                    ball_length=0.5 if ball else None, commanding_after_s=0.1, realtime=realtime)
+                    ball_length=0.5 if ball else None, commanding_after_s=0.1, realtime=realtime,
+                    quality_window=500, quality_good=0.3, quality_fair=0.2)  # keep commanding through hiccups
     with SimulatorProcess(cfg) as sim:
         stats = sim.wait(duration_s + 30.0) or sim.stop()
     client.join(5)

@@ -41,7 +41,7 @@ class SwingUpRequest:
     method: str = "energy"
     q_start: tuple[float, ...] = THESIS_Q_START
     orientation: str | None = None  # "fixed" | "follow"; None: fixed for energy (thesis), follow for fast
-    travel: float = 0.3  # [m] band |y − y_start| for the pivot (fast; the bounds are derived over it)
+    travel: float = 0.3  # [m] band |y − y_start| the pivot must stay in (the bounds are derived over it)
     dt: float = 0.005  # [s] FRI period
     duration: float | None = None  # [s] pumping horizon; None: 60 (energy), 10 (fast)
     tolerance: float = math.radians(2.0)  # [rad]
@@ -261,6 +261,10 @@ def plan_swing_up(r: SwingUpRequest, robot: Robot, limits: JointLimits, progress
         else:
             plan = plan_energy(_energy_params(r, r.theta_d), bounds)
         plan = _on_side(r, plan, notes)
+        travel = float(np.max(np.abs(plan.x)))
+        if travel > r.travel:
+            raise PlanningError(f"the energy law moves the pivot {travel:.2f} m from its start, beyond the "
+                                f"±{r.travel:g} m band (--max-travel); raise --kp/--kd or lower --push")
         traj, ik_err = joint_path(robot, setup, plan.t, plan.x, limits, progress)
         report = check_trajectory(traj, limits)
     else:

@@ -34,7 +34,7 @@ class EnergyParams:
     k_d: float = 0.05  # [1/s]
     theta0: float = 0.0  # [rad] initial ball angle
     theta_dot0: float = 0.0  # [rad/s] initial ball rate
-    push: float = 0.0  # [m/s²] peak of one sin² start push of half a natural period (0: none)
+    push: float = 0.0  # [m/s²] amplitude of a one-period sine start push at the natural period (0: none)
     duration: float = 60.0  # [s] longest pumping time before giving up
     dt: float = 0.005  # [s] output sample step (FRI period)
     tolerance: float = math.radians(2.0)  # [rad] θ_d counts as reached at θ_d − tolerance; the plan aims at
@@ -44,9 +44,12 @@ class EnergyParams:
 
 
 def push_acceleration(t: float, peak: float, length: float) -> float:
-    """Start push [m/s²]: peak·sin²(π t/τ) for 0 ≤ t < τ = T0/2, zero afterwards."""
-    tau = 0.5 * natural_period(length)
-    return peak * math.sin(math.pi * t / tau) ** 2 if 0.0 <= t < tau else 0.0
+    """Start push [m/s²]: peak·sin(2π t/T0) for one natural period T0, zero afterwards.
+
+    Resonant, and it leaves the pivot at rest (zero net velocity), displaced by peak·T0²/(2π).
+    """
+    t0 = natural_period(length)
+    return peak * math.sin(2.0 * math.pi * t / t0) if 0.0 <= t < t0 else 0.0
 
 
 def control(p: EnergyParams, t: float, state: np.ndarray, e_d: float) -> float:

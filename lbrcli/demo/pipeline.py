@@ -1,0 +1,248 @@
+"""The demo's steps: each one is the `lbr` command a user would type (run as a subprocess with --json), so the
+demo exercises exactly the user's path and `summary.md` can list the commands to reproduce every file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+BALL_LENGTH = 0.25  # [m] string of the demo ball (thesis l = 0.25 m)
+BALL_MASS = 0.0139  # [kg] thesis ball
+CRANE_A_MAX = 2.0  # [m/s²]
+SWING_THETA_D = "115deg"
+
+
+@dataclass
+class StepResult:
+    name: str
+    argv: list[str] | None
+    returncode: int
+    seconds: float
+    figures: dict[str, Any] = field(default_factory=dict)
+    error: str = ""
+
+    @property
+    def ok(self) -> bool:
+        return self.returncode == 0
+
+
+@dataclass(frozen=True)
+class Step:
+    name: str
+    title: str
+    argv: tuple[str, ...] | None = None  # an `lbr` command line
+    action: Callable[[Path, dict[str, StepResult]], dict[str, Any]] | None = None  # in-process work
+    needs: tuple[str, ...] = ()
+
+
+def run_lbr_step(step: Step, out: Path) -> StepResult:
+    """Run `lbr <argv> --json` in ``out``; its stderr (the human report) goes to ``out/logs/<step>.txt``."""
+    argv = ["lbr", *step.argv, "--json"]
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "lbrcli", *argv[1:]], cwd=out, capture_output=True, text=True)
+    seconds = time.perf_counter() - t0
+    (out / "logs").mkdir(exist_ok=True)
+    (out / "logs" / f"{step.name}.txt").write_text(f"$ {' '.join(argv)}\n{proc.stderr}")
+    figures: dict[str, Any] = {}
+    try:
+        figures = json.loads(proc.stdout) if proc.stdout.strip() else {}
+    except json.JSONDecodeError:
+        pass
+    error = ""
+    if proc.returncode != 0:
+        lines = [l for l in proc.stderr.strip().splitlines() if l.strip()]
+        error = lines[-1] if lines else f"exit {proc.returncode}"
+    return StepResult(step.name, argv, proc.returncode, seconds, figures, error)
+
+
+def _film(out: Path, results: dict[str, StepResult]) -> dict[str, Any]:
+    from .render import film_execution_log
+
+    footage = film_execution_log(out / "swingup_log.csv", out / "swingup.mp4", BALL_LENGTH)
+    truth = footage.truth
+    import numpy as np
+
+    np.savetxt(
+        out / "swingup_video_truth.csv",
+        np.column_stack([truth.t, truth.ball_uv, truth.pivot_uv, truth.theta]),
+        delimiter=",", header="t,u,v,pivot_u,pivot_v,theta", comments="", fmt="%.6f",
+    )
+    return {"frames": int(len(truth.t)), "video_s": float(truth.t[-1]), "t0_log_s": footage.t0_log}
+
+
+def _tracking_error(out: Path, results: dict[str, StepResult]) -> dict[str, Any]:
+    """Tracked centre and θ against what was drawn (the ground truth of the rendered video)."""
+    import numpy as np
+
+    from trajectories.csvio import read_table
+
+    track = read_table(out / "swingup_track.csv", ("t", "frame", "u", "v", "found"), time="increasing",
+                       nan_columns=("u", "v", "theta", "pivot_u", "pivot_v"))
+    truth = np.loadtxt(out / "swingup_video_truth.csv", delimiter=",", skiprows=1)
+    n = min(len(truth), len(track.data))
+    found = track.column("found")[:n] > 0.5
+    du = track.column("u")[:n][found] - truth[:n, 1][found]
+    dv = track.column("v")[:n][found] - truth[:n, 2][found]
+    dth = np.degrees(track.column("theta")[:n][found] - truth[:n, 5][found])
+    return {
+        "found_fraction": float(found.mean()),
+        "centre_rms_px": float(np.sqrt(np.mean(du**2 + dv**2))),
+        "theta_rms_deg": float(np.sqrt(np.mean(dth**2))),
+        "theta_max_deg": float(np.abs(dth).max()),
+    }
+
+
+def demo_steps() -> list[Step]:
+    L = str(BALL_LENGTH)
+    crane = []
+    for name, shaper in (("baseline", "accel"), ("shaped", "auto")):
+        crane += [
+            Step(f"plan_{name}", f"plan crane move ({shaper})",
+                 ("plan", "anti-sway", "--length", L, "--a-max", str(CRANE_A_MAX), "--shaper", shaper,
+                  "-o", f"crane_{name}.csv", "--prediction", f"crane_{name}_prediction.csv",
+                  "--task-out", f"crane_{name}_pivot.csv", "--plot", f"crane_{name}_plan.png")),
+            Step(f"check_{name}", f"check crane move ({shaper})",
+                 ("check", f"crane_{name}.csv", "--plot", f"crane_{name}_check.png"), needs=(f"plan_{name}",)),
+            Step(f"execute_{name}", f"execute crane move ({shaper}) on the simulator",
+                 ("execute", f"crane_{name}.csv", "--port", "0", "--length", L, "--settle", "3",
+                  "--log", f"crane_{name}_log.csv", "--plot", f"crane_{name}_execution.png"),
+                 needs=(f"check_{name}",)),
+        ]
+    swing = [
+        Step("plan_swingup", "plan swing-up (fast)",
+             ("plan", "swing-up", "--method", "fast", "--length", L, "--mass", str(BALL_MASS), "--theta-d",
+              SWING_THETA_D, "--side", "+y", "-o", "swingup.csv", "--prediction", "swingup_prediction.csv",
+              "--plot", "swingup_plan.png")),
+        Step("execute_swingup", "execute swing-up on the simulator",
+             ("execute", "swingup.csv", "--port", "0", "--length", L, "--settle", "1.5", "--log", "swingup_log.csv",
+              "--plot", "swingup_execution.png"), needs=("plan_swingup",)),
+        Step("film", "film the simulated ball (render swingup.mp4)", action=_film, needs=("execute_swingup",)),
+        Step("track", "track the ball in the video",
+             ("track", "video", "swingup.mp4", "-o", "swingup_track.csv", "--pivot-color", "green",
+              "--plot", "swingup_track.png", "--preview", "swingup_preview.mp4"), needs=("film",)),
+        Step("tracking_error", "tracked ball vs what was drawn", action=_tracking_error, needs=("track",)),
+        Step("compare", "compare model and experiment",
+             ("compare", "swingup_prediction.csv", "swingup_track.csv", "--plot", "swingup_compare.png"),
+             needs=("track",)),
+    ]
+    return crane + swing
+
+
+def run_demo(out: Path, on_step: Callable[[Step, int], None] | None = None,
+             on_done: Callable[[Step, StepResult], None] | None = None) -> dict[str, StepResult]:
+    """Run every step in order (skipping those whose inputs failed); results by step name."""
+    out.mkdir(parents=True, exist_ok=True)
+    results: dict[str, StepResult] = {}
+    for k, step in enumerate(demo_steps()):
+        if on_step:
+            on_step(step, k)
+        failed = [n for n in step.needs if n in results and not results[n].ok]
+        if failed:
+            res = StepResult(step.name, None, 1, 0.0, error=f"skipped: {', '.join(failed)} failed")
+        elif step.argv is not None:
+            res = run_lbr_step(step, out)
+        else:
+            t0 = time.perf_counter()
+            try:
+                res = StepResult(step.name, None, 0, 0.0, step.action(out, results))
+            except Exception as exc:  # a demo step failing must not hide the others' results
+                res = StepResult(step.name, None, 1, 0.0, error=f"{type(exc).__name__}: {exc}")
+            res.seconds = time.perf_counter() - t0
+        results[step.name] = res
+        if on_done:
+            on_done(step, res)
+    return results
+
+
+def _get(results: dict[str, StepResult], step: str, key: str) -> Any:
+    r = results.get(step)
+    return None if r is None else r.figures.get(key)
+
+
+def summary_figures(results: dict[str, StepResult]) -> dict[str, Any]:
+    """The demo's headline figures (None where a step failed)."""
+    f: dict[str, Any] = {}
+    for name in ("baseline", "shaped"):
+        f[f"crane_{name}"] = {
+            "duration_s": _get(results, f"plan_{name}", "duration_s"),
+            "predicted_peak_sway_deg": _get(results, f"plan_{name}", "peak_sway_deg"),
+            "predicted_residual_sway_deg": _get(results, f"plan_{name}", "residual_sway_deg"),
+            "executed_peak_sway_deg": _get(results, f"execute_{name}", "max_ball_theta_deg"),
+            "executed_residual_sway_deg": _get(results, f"execute_{name}", "residual_ball_theta_deg"),
+            "limits_ok": _get(results, f"check_{name}", "limits_ok"),
+            "fri_cycles": _get(results, f"execute_{name}", "cycles"),
+            "fri_missed": _get(results, f"execute_{name}", "missed"),
+        }
+    f["swingup"] = {
+        "max_theta_deg": _get(results, "plan_swingup", "max_theta_deg"),
+        "t_reach_s": _get(results, "plan_swingup", "t_reach_s"),
+        "reached": _get(results, "plan_swingup", "reached"),
+        "executed_max_theta_deg": _get(results, "execute_swingup", "max_ball_theta_deg"),
+        "fri_cycles": _get(results, "execute_swingup", "cycles"),
+        "fri_missed": _get(results, "execute_swingup", "missed"),
+    }
+    f["tracking"] = dict(results["tracking_error"].figures) if "tracking_error" in results else {}
+    f["compare"] = {k: _get(results, "compare", k) for k in ("lag_s", "rms_deg", "max_deg", "overlap_s")}
+    missed = [f[k]["fri_missed"] for k in ("crane_baseline", "crane_shaped", "swingup")]
+    f["fri_missed_total"] = sum(m for m in missed if isinstance(m, (int, float))) if any(
+        isinstance(m, (int, float)) for m in missed) else None
+    f["steps_failed"] = [n for n, r in results.items() if not r.ok]
+    f["ok"] = not f["steps_failed"]
+    return f
+
+
+def fmt(value: Any, spec: str = ".2f", unit: str = "") -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "—"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    return f"{value:{spec}}{unit}"
+
+
+def summary_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
+    """(figure, value) rows of the closing table."""
+    b, s, sw, tr, cp = f["crane_baseline"], f["crane_shaped"], f["swingup"], f["tracking"], f["compare"]
+    found = tr.get("found_fraction")
+    missed = f["fri_missed_total"]
+    return [
+        ("crane duration, baseline / shaped [s]", f"{fmt(b['duration_s'])} / {fmt(s['duration_s'])}"),
+        ("crane peak sway (simulated), baseline / shaped [°]",
+         f"{fmt(b['executed_peak_sway_deg'])} / {fmt(s['executed_peak_sway_deg'])}"),
+        ("crane residual sway (simulated), baseline / shaped [°]",
+         f"{fmt(b['executed_residual_sway_deg'], '.3f')} / {fmt(s['executed_residual_sway_deg'], '.3f')}"),
+        ("crane residual sway (plan's prediction), baseline / shaped [°]",
+         f"{fmt(b['predicted_residual_sway_deg'], '.3f')} / {fmt(s['predicted_residual_sway_deg'], '.3f')}"),
+        ("swing-up max θ, planned / simulated [°]",
+         f"{fmt(sw['max_theta_deg'], '.1f')} / {fmt(sw['executed_max_theta_deg'], '.1f')}"),
+        ("swing-up time to θ_d − 2° [s]", fmt(sw["t_reach_s"])),
+        ("tracking: found / centre RMS / θ RMS",
+         f"{fmt(100 * found if found is not None else None, '.1f', ' %')} / "
+         f"{fmt(tr.get('centre_rms_px'), '.2f', ' px')} / {fmt(tr.get('theta_rms_deg'), '.3f', '°')}"),
+        ("model vs experiment: θ RMS / max error [°]", f"{fmt(cp['rms_deg'])} / {fmt(cp['max_deg'])}"),
+        ("model vs experiment: lag [s]", fmt(cp["lag_s"], ".3f")),
+        ("FRI cycles missed (all runs)", fmt(missed, ".0f")),
+    ]
+
+
+def write_summary(out: Path, results: dict[str, StepResult], f: dict[str, Any], seconds: float) -> Path:
+    """`summary.md`: the table, every step with its command, time and outcome, and the files."""
+    lines = ["# lbr demo", "", f"The user's loop on the built-in FRI simulator, {seconds:.0f} s in all.", "",
+             "| figure | value |", "|---|---|"]
+    lines += [f"| {a} | {b} |" for a, b in summary_rows(f)]
+    lines += ["", "## Steps", "", "| step | command | time [s] | outcome |", "|---|---|---|---|"]
+    for name, r in results.items():
+        cmd = f"`{' '.join(r.argv)}`" if r.argv else "(in-process)"
+        outcome = "ok" if r.ok else f"FAILED: {r.error}"
+        lines.append(f"| {name} | {cmd} | {r.seconds:.1f} | {outcome} |")
+    lines += ["", "Each command's report is in `logs/<step>.txt`. Files:", ""]
+    lines += [f"- `{p.name}`" for p in sorted(out.iterdir()) if p.is_file() and p.name != "summary.md"]
+    path = out / "summary.md"
+    path.write_text("\n".join(lines) + "\n")
+    return path

@@ -37,19 +37,19 @@ LogOpt = Annotated[
 ]
 WaitOpt = Annotated[
     Optional[float],
-    typer.Option("--wait", help="Seconds to wait for the first FRI message [s] (default 60 with --robot, 20 simulated)."),
+    typer.Option("--wait", help="Seconds to wait for the first FRI message \\[s] (default 60 with --robot, 20 simulated)."),
 ]
 PeriodOpt = Annotated[
     Optional[int],
     typer.Option(
         "--period",
-        help="Send period [ms]: the simulator's (default: the file's step), or with --robot the period the "
+        help="Send period \\[ms]: the simulator's (default: the file's step), or with --robot the period the "
         "controller must have.",
     ),
 ]
 LengthOpt = Annotated[
     Optional[float],
-    typer.Option("--length", help=f"Simulated ball string length [m] (default {DEFAULT_BALL_LENGTH}; 0: no ball)."),
+    typer.Option("--length", help=f"Simulated ball string length \\[m] (default {DEFAULT_BALL_LENGTH}; 0: no ball)."),
 ]
 SimStartOpt = Annotated[
     Optional[str],
@@ -125,7 +125,14 @@ def _run_session(
         else:
             rep.print(f"waiting for FRI messages from {session.robot_ip} on UDP port {session.port} …")
         with sigint_interrupts(session):
-            result = session.run(prepare, log, duration_s=duration_s, extra_names=extra_names, extra=extra)
+            result = session.run(
+                prepare,
+                log,
+                duration_s=duration_s,
+                extra_names=extra_names,
+                extra=extra,
+                watchdog=(lambda: None if sim.running else "the simulator process ended") if sim is not None else None,
+            )
     finally:
         session.close()
         if sim is not None:
@@ -215,7 +222,7 @@ def _plot(path: Path | None, log_path: Path | None, rep, title: str) -> None:
 
 # -- lbr execute ----------------------------------------------------------------------------------------------
 def execute(
-    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 [s, rad]; its step must be the FRI period.")],
+    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad]; its step must be the FRI period.")],
     robot: RobotOpt = None,
     port: PortOpt = 30200,
     bind: BindOpt = None,
@@ -226,13 +233,13 @@ def execute(
         bool, typer.Option("--resample", help="Resample the file (cubic spline) to the controller's period if it differs.")
     ] = False,
     start_tolerance: Annotated[
-        float, typer.Option("--start-tolerance", help="Largest |first row − measured position| accepted [rad].")
+        float, typer.Option("--start-tolerance", help="Largest |first row − measured position| accepted \\[rad].")
     ] = 1e-3,
     move_to_start: Annotated[
         bool,
         typer.Option("--move-to-start", help="If the robot is farther away, first stream a jerk-limited move there (≤ 20 % of the limits)."),
     ] = False,
-    settle: Annotated[float, typer.Option("--settle", help="Hold the last row this long before stopping [s].")] = 1.0,
+    settle: Annotated[float, typer.Option("--settle", help="Hold the last row this long before stopping \\[s].")] = 1.0,
     margin: Annotated[float, typer.Option("--margin", help="Check the file against the limits × (1 − margin).")] = 0.0,
     t1: Annotated[bool, typer.Option("--t1", help="Also refuse files whose flange speed exceeds T1's 250 mm/s.")] = False,
     length: LengthOpt = None,
@@ -372,7 +379,7 @@ def execute(
 
 # -- lbr monitor ----------------------------------------------------------------------------------------------
 def monitor(
-    duration: Annotated[float, typer.Option("--duration", help="How long to monitor [s].")],
+    duration: Annotated[float, typer.Option("--duration", help="How long to monitor \\[s].")],
     log: LogOpt = None,
     robot: RobotOpt = None,
     port: PortOpt = 30200,
@@ -390,7 +397,7 @@ def monitor(
     """Record everything FRI monitors, plus the flange position by forward kinematics (thesis LBRMonitor).
 
     Never commands motion: header-only answers in the monitoring states, the ipo position mirrored when the
-    robot application starts commanding. Log columns as `lbr execute` plus flange_x, flange_y, flange_z [m].
+    robot application starts commanding. Log columns as `lbr execute` plus flange_x, flange_y, flange_z \\[m].
     """
     import pinocchio as pin
 
@@ -463,7 +470,7 @@ def monitor(
 # -- lbr ptp --------------------------------------------------------------------------------------------------
 def ptp(
     q: Annotated[str, typer.Argument(help="Target joint position: 7 comma-separated angles (deg/rad suffixes; default rad).")],
-    time_s: Annotated[float, typer.Option("--time", help="Duration of the move [s] (jerk-limited, rest to rest).")],
+    time_s: Annotated[float, typer.Option("--time", help="Duration of the move \\[s] (jerk-limited, rest to rest).")],
     robot: RobotOpt = None,
     port: PortOpt = 30200,
     bind: BindOpt = None,
@@ -472,7 +479,7 @@ def ptp(
     speed_scale: Annotated[
         float, typer.Option("--speed-scale", help="Fraction of the velocity/acceleration/jerk limits the move may use (≤ 0.5).")
     ] = 0.2,
-    settle: Annotated[float, typer.Option("--settle", help="Hold the target this long before stopping [s].")] = 0.2,
+    settle: Annotated[float, typer.Option("--settle", help="Hold the target this long before stopping \\[s].")] = 0.2,
     period: PeriodOpt = None,
     sim_start: SimStartOpt = None,
     length: LengthOpt = None,

@@ -20,6 +20,7 @@ import contextlib
 import gc
 import math
 import signal
+from operator import sub as _sub
 import socket
 import time
 from dataclasses import dataclass, field
@@ -189,26 +190,27 @@ class FriSession:
         duration_s: float | None = None,
         extra_names: Sequence[str] = (),
         extra: ExtraFn | None = None,
-        on_first: Callable[[Any], None] | None = None,
+        watchdog: Callable[[], str | None] | None = None,
     ) -> SessionResult:
         """Answer the controller until an end condition; return the statistics.
 
-        ``prepare(first_message, period_s)`` is called once at the first monitoring message (before anything is
-        sent) and returns the plan to stream in COMMANDING_ACTIVE (None: never command motion, mirror ipo). It may
+        ``prepare(message, period_s)`` is called once, at the first message of a session (not IDLE), before
+        anything is sent, and returns the plan to stream in COMMANDING_ACTIVE (None: never command motion, mirror ipo). It may
         raise (e.g. CheckFailed for a far start): the session then ends without having sent anything, the log
         holding that first message. ``duration_s`` [s] ends the session after that wall time from the first
-        message. ``extra(mon)`` adds the ``extra_names`` columns to each log row.
+        message. ``extra(mon)`` adds the ``extra_names`` columns to each log row. ``watchdog()`` is asked whenever
+        no datagram came for a while; a text it returns ends the session with FriError (e.g. the simulator died).
         """
         gc.collect()
         gc_was = gc.isenabled()
         gc.disable()
         try:
-            return self._loop(prepare, log, duration_s, tuple(extra_names), extra, on_first)
+            return self._loop(prepare, log, duration_s, tuple(extra_names), extra, watchdog)
         finally:
             if gc_was:
                 gc.enable()
 
-    def _loop(self, prepare, log, duration_s, extra_names, extra, on_first) -> SessionResult:  # noqa: C901
+    def _loop(self, prepare, log, duration_s, extra_names, extra, watchdog) -> SessionResult:  # noqa: C901
         codec = self.codec
         sock = self.sock
         recvfrom = sock.recvfrom
@@ -238,6 +240,7 @@ class FriSession:
         guard: CommandGuard | None = None
         ball_k: int | None = None
         period_s: float | None = None
+        period_key: tuple[int, int] | None = None  # (sendPeriod [ms], receiveMultiplier) the plan was made for
         t_per_tick = 0.0  # [s] per controller sequence step
         use_local_clock = False
         t_local0 = 0.0
@@ -275,6 +278,10 @@ class FriSession:
                 data, addr = recvfrom(2048)
             except (TimeoutError, BlockingIOError, InterruptedError):
                 now = mono()
+                if watchdog is not None:
+                    problem = watchdog()
+                    if problem:
+                        raise FriError(problem)
                 if t_first is None:
                     if now - t_open > self.first_message_timeout_s:
                         raise FriError(self._no_message_text(st, now - t_open)) from None
@@ -314,13 +321,11 @@ class FriSession:
                 last_state = state
             ipo_q = mon.ipoData.jointPosition.value
 
-            # ---- first message: columns, period, plan ----------------------------------------------------
+            # ---- first message: columns and time base; first session message: period and plan ------------
             if t_first is None:
                 t_first = now
-                k = ci.receiveMultiplier or 1
                 if ci.sendPeriod:
                     t_per_tick = ci.sendPeriod * 1e-3
-                    period_s = t_per_tick * k
                 else:
                     use_local_clock = True
                     t_local0 = time.perf_counter()
@@ -329,25 +334,26 @@ class FriSession:
                 if log is not None:
                     log.start(layout)
                 cmd_in_force = tuple(ipo_q) if len(ipo_q) == 7 else tuple(mon.monitorData.measuredJointPosition.value)
-                if on_first is not None:
-                    on_first(mon)
+            t = (time.perf_counter() - t_local0) if use_local_clock else tick * t_per_tick
+            if period_key is None and state != IDLE:
+                period_key = (ci.sendPeriod, ci.receiveMultiplier or 1)
+                period_s = ci.sendPeriod * 1e-3 * period_key[1] if ci.sendPeriod else None
                 if prepare is not None:
                     try:
                         if period_s is None:
                             raise FriError("the controller did not send its send period; cannot stream a trajectory")
+                        if self.limits is None:
+                            raise FriError("a session that commands motion needs the joint limits for its guard")
                         plan = prepare(mon, period_s)
                     except BaseException:
                         if log is not None:
-                            log.write(self._row(layout, 0.0, mon, cmd_in_force, -1, 0, 0, PHASE_NONE, -1, extra))
+                            log.write(self._row(layout, t, mon, cmd_in_force, -1, 0, 0, PHASE_NONE, -1, extra))
                         raise
                     if plan is not None:
                         rows = plan.tuples()
-                        if self.limits is None:
-                            raise FriError("a session that commands motion needs the joint limits for its guard")
                         guard = CommandGuard.from_limits(self.limits, period_s)
                 cpu0 = time.thread_time()  # the per-cycle cost excludes the one-off preparation
                 cycles0 = st.cycles
-            t = (time.perf_counter() - t_local0) if use_local_clock else tick * t_per_tick
 
             # ---- end conditions seen in this message -----------------------------------------------------
             end: tuple[str, str] | None = None
@@ -360,10 +366,17 @@ class FriSession:
                 if state >= CMD_WAIT:
                     commanding = True
                 if plan is not None:
-                    if ri.safetyState != 0:
+                    if (ci.sendPeriod, ci.receiveMultiplier or 1) != period_key:
+                        end = (
+                            STOPPED,
+                            f"the controller changed its period from {period_key[0]} ms × {period_key[1]} to "  # type: ignore[index]
+                            f"{ci.sendPeriod} ms × {ci.receiveMultiplier or 1}",
+                        )
+                    elif ri.safetyState != 0:
                         end = (STOPPED, f"safety stop ({SafetyState(ri.safetyState).name})")
                     elif commanding:
-                        if any(ds != _DRIVE_ACTIVE for ds in ri.driveState):
+                        drives = ri.driveState
+                        if drives and min(drives) != _DRIVE_ACTIVE:  # ACTIVE is the highest drive state
                             end = (STOPPED, "drives not active")
                         elif ci.quality == _POOR:
                             end = (STOPPED, "connection quality POOR")
@@ -467,7 +480,7 @@ class FriSession:
                     st.min_tracking = tp
                 msr = mon.monitorData.measuredJointPosition.value
                 if len(msr) == 7 and plan is not None:
-                    e = max(abs(a - b) for a, b in zip(msr, cmd_in_force))
+                    e = max(map(abs, map(_sub, msr, cmd_in_force)))
                     if e > st.max_err:
                         st.max_err = e
             if ball_k is not None:

@@ -56,6 +56,7 @@ PHASE_MIRROR = 5  # COMMANDING_ACTIVE without motion (monitor): the ipo position
 
 _ZERO7 = (0.0,) * 7
 _ZERO6 = (0.0,) * 6
+_CMD = "%r"  # the commanded position exactly as sent (shortest text that round-trips the double)
 _Q = "%.12g"
 _F = "%.9g"
 _I = "%d"
@@ -78,7 +79,7 @@ class LogLayout:
         self.version = FriVersion(version)
         md = first.monitorData
         names = list(LOG_COLUMNS + CONTROL_COLUMNS)
-        fmts = ["%.6f", _I, _I] + [_Q] * 21 + [_F] * 14 + [_F] + [_I] * 9 + [_I] * 8 + [_F] * 7
+        fmts = ["%.6f", _I, _I] + [_CMD] * 7 + [_Q] * 14 + [_F] * 14 + [_F] + [_I] * 9 + [_I] * 8 + [_F] * 7
         self.ctl_q = self.version is FriVersion.V1_15
         if self.ctl_q:
             names += CTL_Q_COLUMNS

@@ -13,6 +13,7 @@ import socket
 import threading
 import time
 from dataclasses import dataclass, field
+from typing import Callable
 
 from lbrcli.fri.codec import FriCodec
 from lbrcli.fri.constants import MONITORING_MESSAGE_ID
@@ -59,6 +60,8 @@ class ScriptedController:
     unanswered: list[int] = field(default_factory=list)  # cycles whose expected reply did not come
     unexpected: list[int] = field(default_factory=list)  # replies reflecting a message that must not be answered
     sent_seqs: list[int] = field(default_factory=list)
+    on_cycle: Callable[[int], None] | None = None  # called with the script index before each cycle is sent
+    wait_for_client: float = 0.0  # [s] > 0: repeat the first expected-reply cycle (new counters) until answered
 
     def __post_init__(self) -> None:
         self.codec = FriCodec(self.version)
@@ -138,6 +141,8 @@ class ScriptedController:
         send_counter = 0
         dest = ("127.0.0.1", self.client_port)
         for i, c in enumerate(self.script):
+            if self.on_cycle is not None:
+                self.on_cycle(i)
             if c.raw is not None:
                 self.sock.sendto(c.raw, dest)
                 time.sleep(self.pace_s)
@@ -163,7 +168,20 @@ class ScriptedController:
             if not expect:
                 time.sleep(self.pace_s)
                 continue
-            cmd = self._await_reply(time.monotonic() + self.reply_timeout)
+            if self.wait_for_client > 0:  # a client still starting up: keep sending until it answers the latest
+                give_up = time.monotonic() + self.wait_for_client
+                cmd = self._await_reply(time.monotonic() + 0.02)
+                while (cmd is None or cmd.header.reflectedSequenceCounter != seq) and time.monotonic() < give_up:
+                    if self.client_done.is_set():
+                        break
+                    if cmd is None:
+                        seq += 1
+                        self.sock.sendto(self._message(c, seq, reflected), dest)
+                        self.sent_seqs.append(seq)
+                    cmd = self._await_reply(time.monotonic() + 0.02)
+                self.wait_for_client = 0.0
+            else:
+                cmd = self._await_reply(time.monotonic() + self.reply_timeout)
             if cmd is None:
                 self.unanswered.append(i)
                 return  # the client ended; so does the script

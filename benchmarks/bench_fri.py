@@ -1,0 +1,202 @@
+"""FRI client timing: reply latency measured from a separate process acting as the controller.
+
+The client is the real command, `lbr execute TRAJ.csv --robot 127.0.0.1 --log LOG.csv --json`, in its own process.
+This process plays the controller: every send period (1 ms, then 5 ms) it sends a monitoring message
+(MONITORING_READY → COMMANDING_WAIT → COMMANDING_ACTIVE, ideal position tracking) and waits for the reply
+reflecting it. A reply that has not arrived when the next message is due counts as missed. Figures: send → reply
+latency p50/p99/max [ms], answered fraction, missed replies, and the client's own CPU time per cycle [µs] and
+internal receive → send latency (from its --json). Full: 60 s of streaming per period; quick: 5 s.
+
+Run: `python benchmarks/run_all.py fri [--quick]` or `python benchmarks/bench_fri.py [--quick]`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import select
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # [rad]
+SETTLE_S = 0.05
+
+
+def _free_port() -> int:
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+def _trajectory(path: Path, period_s: float, duration_s: float) -> int:
+    from trajectories.csvio import write_joint_csv
+    from trajectories.trajectory import JointTrajectory
+
+    t = np.arange(0.0, duration_s + 1e-12, period_s)
+    s = (1 - np.cos(2 * np.pi * t / min(duration_s, 10.0))) / 2
+    q = Q0 + s[:, None] * np.array([0.2, 0.1, -0.1, 0.15, 0.1, -0.2, 0.3])
+    write_joint_csv(path, JointTrajectory(t=t, q=q))
+    return len(t)
+
+
+class _Controller:
+    """A paced FRI 1.15 controller on loopback with an ideal robot (ipo = measured = last command)."""
+
+    def __init__(self, client_port: int, period_ms: int) -> None:
+        from lbrcli.fri.codec import FriCodec
+
+        self.codec = FriCodec("1.15")
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.setblocking(False)
+        self.dest = ("127.0.0.1", client_port)
+        self.period = period_ms * 1e-3
+        self.msg = self.codec.new_monitoring()
+        m = self.msg
+        m.header.messageIdentifier, m.header.sequenceCounter, m.header.reflectedSequenceCounter = 0x245142, 0, 0
+        m.connectionInfo.sessionState, m.connectionInfo.quality = 2, 3
+        m.connectionInfo.sendPeriod, m.connectionInfo.receiveMultiplier = period_ms, 1
+        m.robotInfo.numberOfJoints, m.robotInfo.safetyState = 7, 0
+        m.robotInfo.driveState.extend([2] * 7)
+        md = m.monitorData
+        for f in ("measuredJointPosition", "measuredTorque", "externalTorque", "commandedTorque", "commandedJointPosition"):
+            getattr(md, f).value.extend(Q0.tolist() if "Position" in f else [0.0] * 7)
+        for name in ("ball_theta", "ball_phi", "ball_theta_x", "ball_theta_y"):
+            io = md.readIORequest.add()
+            io.name, io.type, io.direction, io.analogValue = name, 2, 0, 0.0
+        m.ipoData.jointPosition.value.extend(Q0.tolist())
+        m.ipoData.clientCommandMode, m.ipoData.overlayType = 1, 1
+        self.q = Q0.tolist()
+        self.cmd = self.codec.new_command()
+        self.seq = 0
+
+    def _fill(self, state: int) -> bytes:
+        m = self.msg
+        m.header.sequenceCounter = self.seq
+        m.connectionInfo.sessionState = state
+        m.ipoData.trackingPerformance = 1.0 if state == 4 else 0.0
+        m.monitorData.measuredJointPosition.value[:] = self.q
+        m.ipoData.jointPosition.value[:] = self.q
+        m.monitorData.commandedJointPosition.value[:] = self.q
+        m.monitorData.timestamp.sec = int(time.time())
+        m.monitorData.timestamp.nanosec = 0
+        return self.codec.encode(m)
+
+    def cycle(self, state: int, deadline: float) -> float | None:
+        """Send one message at ``deadline`` [perf_counter s]; wait for its reply until the next deadline.
+        Returns the latency [s] or None (missed)."""
+        now = time.perf_counter()
+        if deadline - now > 3e-4:
+            time.sleep(deadline - now - 3e-4)
+        while time.perf_counter() < deadline:
+            pass
+        data = self._fill(state)
+        t0 = time.perf_counter()
+        self.sock.sendto(data, self.dest)
+        seq = self.seq
+        self.seq += 1
+        next_deadline = deadline + self.period
+        while True:
+            left = next_deadline - time.perf_counter() - 2e-4
+            if left <= 0:
+                return None
+            r, _, _ = select.select([self.sock], [], [], left)
+            if not r:
+                return None
+            try:
+                reply, _ = self.sock.recvfrom(2048)
+            except BlockingIOError:
+                continue
+            t1 = time.perf_counter()
+            try:
+                c = self.codec.decode_command(reply, self.cmd)
+            except Exception:  # noqa: BLE001
+                continue
+            if c.header.reflectedSequenceCounter != seq:
+                continue  # a late reply to an earlier message
+            m = self.msg
+            m.header.reflectedSequenceCounter = c.header.sequenceCounter
+            pos = c.commandData.jointPosition.value
+            if state >= 3 and len(pos) == 7:
+                self.q = list(pos)
+            return t1 - t0
+
+
+def _measure(period_ms: int, duration_s: float, workdir: Path) -> list[tuple[str, float, str]]:
+    traj = workdir / f"traj_{period_ms}ms.csv"
+    log = workdir / f"log_{period_ms}ms.csv"
+    n_rows = _trajectory(traj, period_ms * 1e-3, duration_s)
+    port = _free_port()
+    client = subprocess.Popen(
+        [sys.executable, "-m", "lbrcli", "execute", str(traj), "--robot", "127.0.0.1", "--port", str(port),
+         "--log", str(log), "--settle", str(SETTLE_S), "--json", "--wait", "60"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    ctl = _Controller(port, period_ms)
+    period = period_ms * 1e-3
+    deadline = time.perf_counter() + period
+    t_wait = time.monotonic()
+    # until the client is up: MONITORING_READY until its first reply
+    while ctl.cycle(2, deadline) is None:
+        deadline = max(deadline + period, time.perf_counter())
+        if time.monotonic() - t_wait > 60 or client.poll() is not None:
+            client.kill()
+            raise RuntimeError(f"client did not answer: {client.communicate()[1]}")
+    lat: list[float] = []
+    missed = 0
+    phases = [(2, 200), (3, 10), (4, n_rows + int(round(SETTLE_S / period)))]
+    for state, count in phases:
+        for _ in range(count):
+            deadline = max(deadline + period, time.perf_counter())
+            r = ctl.cycle(state, deadline)
+            if r is None:
+                missed += 1
+            else:
+                lat.append(r)
+    # the client stops answering after the settle rows; let it finish
+    for _ in range(5):
+        deadline = max(deadline + period, time.perf_counter())
+        ctl.cycle(4, deadline)
+    out, err = client.communicate(timeout=60)
+    figures = json.loads(out) if out.strip() else {}
+    arr = np.sort(np.array(lat)) * 1e3
+    total = len(lat) + missed
+    tag = f"{period_ms} ms"
+    rows = [
+        (f"{tag}: reply latency p50 (controller side)", float(np.percentile(arr, 50)), "ms"),
+        (f"{tag}: reply latency p99 (controller side)", float(np.percentile(arr, 99)), "ms"),
+        (f"{tag}: reply latency max (controller side)", float(arr[-1]), "ms"),
+        (f"{tag}: answered within the period", len(lat) / total, "fraction"),
+        (f"{tag}: missed replies of {total}", float(missed), "cycles"),
+        (f"{tag}: trajectory rows commanded of {n_rows}", float(figures.get("trajectory_rows", -1)), "rows"),
+    ]
+    if figures.get("cpu_us_per_cycle") is not None:
+        rows += [
+            (f"{tag}: client CPU per cycle (decode, guard, reply, log row)", figures["cpu_us_per_cycle"], "µs"),
+            (f"{tag}: client-internal receive→send p99", figures["latency_p99_ms"], "ms"),
+        ]
+    return rows
+
+
+def run(quick: bool = False) -> list[tuple[str, float, str]]:
+    duration = 5.0 if quick else 60.0
+    rows: list[tuple[str, float, str]] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for period_ms in (1, 5):
+            rows += _measure(period_ms, duration, Path(tmp))
+    return rows
+
+
+if __name__ == "__main__":
+    for name, value, unit in run(quick="--quick" in sys.argv):
+        print(f"  {name:<62} {value:>12.4g} {unit}")
+    sys.stdout.flush()
+    os._exit(0)

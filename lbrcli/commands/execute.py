@@ -5,6 +5,7 @@ its own process on loopback; a real robot is commanded only when named with --ro
 
 from __future__ import annotations
 
+import contextlib
 import math
 from pathlib import Path
 from typing import Annotated, Any, Callable, Optional
@@ -58,6 +59,13 @@ SimStartOpt = Annotated[
 MultiplierOpt = Annotated[
     int, typer.Option("--receive-multiplier", help="Simulator only: the client answers every k-th message.")
 ]
+RealtimeOpt = Annotated[
+    bool,
+    typer.Option(
+        "--realtime",
+        help="Run the FRI loop with real-time scheduling (SCHED_FIFO, needs CAP_SYS_NICE or root); steadier 1 ms under load.",
+    ),
+]
 PlotOpt = Annotated[
     Optional[Path], typer.Option("--plot", help="PNG: commanded vs measured joints, tracking, simulated ball sway.")
 ]
@@ -95,6 +103,7 @@ def _run_session(
     extra_names: tuple[str, ...] = (),
     extra: Callable | None = None,
     commanding_timeout_s: float | None = None,
+    realtime: bool = False,
 ):
     """Bind, start the simulator if no robot was named, run the session, stop everything; (result, sim stats)."""
     from lbrcli.fri.client import FriSession, sigint_interrupts
@@ -119,12 +128,14 @@ def _run_session(
         if embedded:
             from lbrcli.fri.simulator import SimConfig, SimulatorProcess
 
+            if realtime and "realtime" in SimConfig.__dataclass_fields__:
+                sim_kwargs = {**sim_kwargs, "realtime": True}
             sim = SimulatorProcess(SimConfig(client_port=session.port, version=version, **sim_kwargs))
             sim.start()
             rep.print(f"simulator on {sim.address[0]}:{sim.address[1]} → client on 127.0.0.1:{session.port}")
         else:
             rep.print(f"waiting for FRI messages from {session.robot_ip} on UDP port {session.port} …")
-        with sigint_interrupts(session):
+        with sigint_interrupts(session), _realtime(rep, realtime):
             result = session.run(
                 prepare,
                 log,
@@ -143,6 +154,27 @@ def _run_session(
         if log is not None:
             log.close()
     return result, sim_stats
+
+
+@contextlib.contextmanager
+def _realtime(rep, wanted: bool):
+    """SCHED_FIFO for the FRI loop if wanted and permitted (a warning otherwise); normal scheduling afterwards."""
+    import os
+
+    if not wanted:
+        yield
+        return
+    try:
+        old = os.sched_getscheduler(0), os.sched_getparam(0)
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(20))
+    except (AttributeError, PermissionError, OSError):
+        rep.warn("real-time scheduling was not granted (needs CAP_SYS_NICE); running with normal priority")
+        yield
+        return
+    try:
+        yield
+    finally:
+        os.sched_setscheduler(0, old[0], old[1])
 
 
 def _deg(x: float | None) -> float | None:
@@ -247,6 +279,7 @@ def execute(
     receive_multiplier: MultiplierOpt = 1,
     wait: WaitOpt = None,
     plot: PlotOpt = None,
+    realtime: RealtimeOpt = False,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -369,6 +402,7 @@ def execute(
         wait=wait,
         sim_kwargs=sim_kwargs,
         prepare=prepare,
+        realtime=realtime,
     )
     figures = _print_summary(rep, result, sim_stats, log)
     figures.update(file=name, rows=len(traj), duration_s=traj.duration, robot=robot or "simulator")
@@ -390,6 +424,7 @@ def monitor(
     sim_start: SimStartOpt = None,
     wait: WaitOpt = None,
     plot: PlotOpt = None,
+    realtime: RealtimeOpt = False,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     json_out: JsonOpt = False,
@@ -459,6 +494,7 @@ def monitor(
         duration_s=duration,
         extra_names=("flange_x", "flange_y", "flange_z"),
         extra=flange_xyz,
+        realtime=realtime,
     )
     figures = _print_summary(rep, result, sim_stats, log)
     figures.update(duration_s=duration, robot=robot or "simulator")
@@ -485,6 +521,7 @@ def ptp(
     length: LengthOpt = None,
     wait: WaitOpt = None,
     plot: PlotOpt = None,
+    realtime: RealtimeOpt = False,
     limits: LimitsOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
@@ -562,6 +599,7 @@ def ptp(
         wait=wait,
         sim_kwargs=sim_kwargs,
         prepare=prepare,
+        realtime=realtime,
     )
     figures = _print_summary(rep, result, sim_stats, log)
     figures.update(target=goal, time_s=time_s, robot=robot or "simulator")

@@ -18,6 +18,7 @@ rows that ``trajectories.csvio.read_table(path, LOG_COLUMNS, time="increasing")`
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 from pathlib import Path
@@ -224,9 +225,13 @@ class ExecutionLog:
             n = os.write(self._fd, data)
 
     def close(self) -> None:
+        """Close the file; a log that never got its header (no FRI message arrived) is removed."""
         if self._fd is not None:
             os.close(self._fd)
             self._fd = None
+            if self.layout is None:
+                with contextlib.suppress(OSError):
+                    self.path.unlink()
 
     def __enter__(self) -> "ExecutionLog":
         return self

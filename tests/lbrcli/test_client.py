@@ -368,3 +368,19 @@ def test_resample_and_jerk_limited_move(limits):
     plan = build_plan(move, np.array(Q0) + 5e-4, 0.002, limits, start_tolerance=1e-3, move_to_start=False, settle_s=0.01)
     assert (plan.n_move, plan.n_traj, plan.n_settle) == (0, len(move), 5)
     assert plan.phase(len(move)) == (PHASE_SETTLE, -1) and plan.phase(3) == (PHASE_TRAJECTORY, 3)
+
+
+def test_period_change_mid_stream_stops_it(tmp_path):
+    n = 30
+    traj = wave(n, 0.002)
+    body = [Cycle(state=CA)] * 8 + [Cycle(state=CA, send_period=2)] + [Cycle(state=CA)] * 5
+    res, ctl, log_path, err = run(preamble() + body, traj, tmp_path=tmp_path)
+    assert err is None and res.outcome == STOPPED and "changed its period from 1 ms × 1 to 2 ms × 1" in res.end_reason
+    assert res.trajectory_rows == 8
+
+
+def test_log_without_any_message_is_removed(tmp_path):
+    log = ExecutionLog(tmp_path / "empty.csv")
+    assert (tmp_path / "empty.csv").exists()
+    log.close()
+    assert not (tmp_path / "empty.csv").exists()

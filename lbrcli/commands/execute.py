@@ -199,7 +199,9 @@ def _print_summary(rep, result, sim_stats, log_path: Path | None) -> dict[str, A
     if r.min_tracking is not None:
         rep.print(f"min tracking performance {r.min_tracking:.4f} over {r.active_cycles} COMMANDING_ACTIVE cycles")
     if r.max_tracking_error is not None:
-        rep.print(f"max |measured − commanded| {r.max_tracking_error:.3e} rad (same cycle)")
+        prev = r.max_tracking_error_prev
+        lag = f", {prev:.3e} rad against the previous cycle's command" if prev is not None else ""
+        rep.print(f"max |measured − commanded| {r.max_tracking_error:.3e} rad (same cycle){lag}")
     if r.max_ball_theta is not None:
         resid = f", residual {_deg(r.residual_ball_theta):.3f}°" if r.residual_ball_theta is not None else ""
         rep.print(f"ball sway: max {_deg(r.max_ball_theta):.3f}°{resid}")

@@ -76,6 +76,7 @@ class SessionResult:
     active_cycles: int  # cycles in COMMANDING_ACTIVE
     min_tracking: float | None  # lowest trackingPerformance in COMMANDING_ACTIVE
     max_tracking_error: float | None  # max |measured − commanded| [rad] in COMMANDING_ACTIVE (same cycle)
+    max_tracking_error_prev: float | None  # ... against the command of the cycle before (one cycle of lag) [rad]
     max_ball_theta: float | None  # [rad] largest simulated (or measured) ball tilt, 'ball_theta' IO value
     residual_ball_theta: float | None  # [rad] largest tilt while settling (after the last trajectory row)
     latency_p50_ms: float | None  # receive → reply, inside the client
@@ -108,6 +109,7 @@ class _Stats:
     active: int = 0
     min_tracking: float = math.inf
     max_err: float = 0.0
+    max_err_prev: float = 0.0
     max_ball: float = -math.inf
     residual_ball: float = -math.inf
     move_rows: int = 0
@@ -257,6 +259,8 @@ class FriSession:
         hold_end: tuple[str, str] | None = None
         last_cmd: tuple[float, ...] | None = None
         cmd_in_force: Sequence[float] = (0.0,) * 7
+        cmd_before: Sequence[float] = cmd_in_force
+        prev_active = False
         outcome = end_reason = ""
         t_open = mono()
         t_first = None
@@ -393,6 +397,7 @@ class FriSession:
                 end = (COMPLETED, f"monitored for {duration_s:g} s")
 
             # ---- reply -----------------------------------------------------------------------------------
+            cmd_before = cmd_in_force  # the command the controller has been executing until this cycle
             answered = sent = 0
             phase = PHASE_NONE
             row_idx = -1
@@ -483,6 +488,13 @@ class FriSession:
                     e = max(map(abs, map(_sub, msr, cmd_in_force)))
                     if e > st.max_err:
                         st.max_err = e
+                    if prev_active:
+                        e = max(map(abs, map(_sub, msr, cmd_before)))
+                        if e > st.max_err_prev:
+                            st.max_err_prev = e
+                prev_active = True
+            else:
+                prev_active = False
             if ball_k is not None:
                 b = layout.io_values[ball_k]  # type: ignore[union-attr]
                 if b > st.max_ball:
@@ -513,6 +525,7 @@ class FriSession:
             active_cycles=st.active,
             min_tracking=st.min_tracking if st.active else None,
             max_tracking_error=st.max_err if (st.active and plan is not None) else None,
+            max_tracking_error_prev=st.max_err_prev if (st.active > 1 and plan is not None) else None,
             max_ball_theta=st.max_ball if ball_k is not None and st.cycles else None,
             residual_ball_theta=st.residual_ball if st.settle_rows and ball_k is not None else None,
             latency_p50_ms=_percentile_ms(lat, 50),

@@ -123,6 +123,8 @@ def test_session_states_counters_and_rows(tmp_path, version):
     np.testing.assert_array_equal(tab.column("msr_tau3"), 3.0)
     np.testing.assert_allclose(np.diff(tab.column("t")), 1e-3)
     assert res.max_ball_theta == pytest.approx(0.01) and res.min_tracking == 1.0
+    # the ideal scripted robot is where the previous command put it
+    assert res.max_tracking_error_prev == 0.0 and res.max_tracking_error == pytest.approx(np.abs(np.diff(traj, axis=0)).max())
 
 
 def test_receive_multiplier_answers_every_kth(tmp_path):

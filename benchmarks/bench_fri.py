@@ -5,7 +5,9 @@ This process plays the controller: every send period (1 ms, then 5 ms) it sends 
 (MONITORING_READY → COMMANDING_WAIT → COMMANDING_ACTIVE, ideal position tracking) and waits for the reply
 reflecting it. A reply that has not arrived when the next message is due counts as missed. Figures: send → reply
 latency p50/p99/max [ms], answered fraction, missed replies, and the client's own CPU time per cycle [µs] and
-internal receive → send latency (from its --json). Full: 60 s of streaming per period; quick: 5 s.
+internal receive → send latency (from its --json). 1 ms is measured twice: with normal scheduling and with
+`--realtime` (SCHED_FIFO; needs root or CAP_SYS_NICE, else the client warns and runs normally).
+Full: 60 s of streaming per run; quick: 5 s.
 
 Run: `python benchmarks/run_all.py fri [--quick]` or `python benchmarks/bench_fri.py [--quick]`.
 """
@@ -134,14 +136,14 @@ class _Controller:
             return (t_rx - t_send) * 1e-9 if t_rx <= limit_ns else None
 
 
-def _measure(period_ms: int, duration_s: float, workdir: Path) -> list[tuple[str, float, str]]:
+def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = False) -> list[tuple[str, float, str]]:
     traj = workdir / f"traj_{period_ms}ms.csv"
     log = workdir / f"log_{period_ms}ms.csv"
     n_rows = _trajectory(traj, period_ms * 1e-3, duration_s)
     port = _free_port()
     client = subprocess.Popen(
         [sys.executable, "-m", "lbrcli", "execute", str(traj), "--robot", "127.0.0.1", "--port", str(port),
-         "--log", str(log), "--settle", str(SETTLE_S), "--json", "--wait", "60"],
+         "--log", str(log), "--settle", str(SETTLE_S), "--json", "--wait", "60"] + (["--realtime"] if realtime else []),
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     ctl = _Controller(port, period_ms)
@@ -173,7 +175,7 @@ def _measure(period_ms: int, duration_s: float, workdir: Path) -> list[tuple[str
     figures = json.loads(out) if out.strip() else {}
     arr = np.sort(np.array(lat)) * 1e3
     total = len(lat) + missed
-    tag = f"{period_ms} ms"
+    tag = f"{period_ms} ms" + (" --realtime" if realtime else "")
     rows = [
         (f"{tag}: reply latency p50 (controller side)", float(np.percentile(arr, 50)), "ms"),
         (f"{tag}: reply latency p99 (controller side)", float(np.percentile(arr, 99)), "ms"),
@@ -186,6 +188,7 @@ def _measure(period_ms: int, duration_s: float, workdir: Path) -> list[tuple[str
         rows += [
             (f"{tag}: client CPU per cycle (decode, guard, reply, log row)", figures["cpu_us_per_cycle"], "µs"),
             (f"{tag}: client-internal receive→send p99", figures["latency_p99_ms"], "ms"),
+            (f"{tag}: client-internal receive→send max", figures["latency_max_ms"], "ms"),
         ]
     return rows
 
@@ -236,8 +239,8 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         ("client Python work per cycle without socket I/O (decode, guard, encode, log row)", _processing_cost(), "µs")
     ]
     with tempfile.TemporaryDirectory() as tmp:
-        for period_ms in (1, 5):
-            rows += _measure(period_ms, duration, Path(tmp))
+        for period_ms, realtime in ((1, False), (1, True), (5, False)):
+            rows += _measure(period_ms, duration, Path(tmp), realtime)
     return rows
 
 

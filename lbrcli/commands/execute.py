@@ -194,6 +194,9 @@ def _print_summary(rep, result, sim_stats, log_path: Path | None) -> dict[str, A
         f"cycles {r.cycles} (period {period}), answered {r.answered}, missed {r.missed}, "
         f"stale {r.stale}, foreign {r.foreign}, malformed {r.malformed}"
     )
+    if r.prepare_ms is not None:
+        skipped = f"; {r.skipped} messages that queued meanwhile were dropped" if r.skipped else ""
+        rep.print(f"start checks and planning at the first session message: {r.prepare_ms:.1f} ms{skipped}")
     if r.move_rows or r.trajectory_rows or r.settle_rows:
         rep.print(f"commanded: {r.move_rows} move-to-start rows, {r.trajectory_rows} trajectory rows, {r.settle_rows} settle rows")
     if r.min_tracking is not None:

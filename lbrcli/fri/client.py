@@ -68,6 +68,8 @@ class SessionResult:
     stale: int  # datagrams whose sequence counter was not newer (duplicates, reordering): ignored
     foreign: int  # datagrams from another address: ignored
     malformed: int  # datagrams that did not decode: ignored
+    skipped: int  # datagrams that queued up while the plan was prepared: dropped unanswered (also in missed)
+    prepare_ms: float | None  # [ms] checking and planning at the first session message (excluded from latencies)
     states_seen: tuple[int, ...]  # distinct session states in order
     period_s: float | None  # command period (send period × receive multiplier) [s]
     move_rows: int  # rows of the move to the start commanded
@@ -115,6 +117,7 @@ class _Stats:
     move_rows: int = 0
     traj_rows: int = 0
     settle_rows: int = 0
+    skipped: int = 0
     latencies: list[int] = field(default_factory=list)  # [ns]
 
 
@@ -238,10 +241,11 @@ class FriSession:
         lat = st.latencies
         layout: LogLayout | None = None
         plan: Plan | None = None
-        rows: list[tuple[float, ...]] = []
+        rows: list[list[float]] = []
         guard: CommandGuard | None = None
         ball_k: int | None = None
         period_s: float | None = None
+        prepare_ms: float | None = None
         period_key: tuple[int, int] | None = None  # (sendPeriod [ms], receiveMultiplier) the plan was made for
         t_per_tick = 0.0  # [s] per controller sequence step
         use_local_clock = False
@@ -257,7 +261,7 @@ class FriSession:
         i_row = 0
         holding = 0  # remaining hold cycles
         hold_end: tuple[str, str] | None = None
-        last_cmd: tuple[float, ...] | None = None
+        last_cmd: Sequence[float] | None = None
         cmd_in_force: Sequence[float] = (0.0,) * 7
         cmd_before: Sequence[float] = cmd_in_force
         prev_active = False
@@ -354,8 +358,14 @@ class FriSession:
                             log.write(self._row(layout, t, mon, cmd_in_force, -1, 0, 0, PHASE_NONE, -1, extra))
                         raise
                     if plan is not None:
-                        rows = plan.tuples()
+                        rows = plan.rows.tolist()  # Python floats, one list per row (fast to hand to protobuf)
                         guard = CommandGuard.from_limits(self.limits, period_s)
+                    # messages that queued up while preparing are stale: drop them (the sequence gap counts them
+                    # as missed) so that the next reply goes to a fresh message, not to a backlog
+                    st.skipped += self._drain()
+                    t_ready = perf()
+                    prepare_ms = (t_ready - t_rx) * 1e-6
+                    t_rx = t_ready  # the reply latency statistics exclude the one-off preparation
                 cpu0 = time.thread_time()  # the per-cycle cost excludes the one-off preparation
                 cycles0 = st.cycles
 
@@ -517,6 +527,8 @@ class FriSession:
             stale=st.stale,
             foreign=st.foreign,
             malformed=st.malformed,
+            skipped=st.skipped,
+            prepare_ms=prepare_ms,
             states_seen=tuple(st.states),
             period_s=period_s,
             move_rows=st.move_rows,
@@ -534,6 +546,20 @@ class FriSession:
             cpu_us_per_cycle=cpu / (st.cycles - cycles0) * 1e6 if st.cycles > cycles0 else None,
             log_rows=log.rows if log is not None else 0,
         )
+
+    def _drain(self) -> int:
+        """Discard the datagrams waiting in the socket; their number."""
+        n = 0
+        self.sock.setblocking(False)
+        try:
+            while True:
+                self.sock.recvfrom(2048)
+                n += 1
+        except (BlockingIOError, InterruptedError):
+            pass
+        finally:
+            self.sock.settimeout(_RECV_TIMEOUT)
+        return n
 
     @staticmethod
     def _row(layout, t, mon, cmd, client_seq, answered, sent, phase, row, extra) -> str:

@@ -48,10 +48,6 @@ class Plan:
             return PHASE_TRAJECTORY, i - self.n_move
         return PHASE_SETTLE, -1
 
-    def tuples(self) -> list[tuple[float, ...]]:
-        """Rows as tuples of Python floats (cheap to hand to protobuf per cycle)."""
-        return [tuple(map(float, r)) for r in self.rows]
-
 
 def jerk_limited_move(
     q_from: np.ndarray,

@@ -4,6 +4,7 @@ loss, malformed/foreign/stale datagrams, end conditions, guard, far start, inter
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -386,3 +387,34 @@ def test_log_without_any_message_is_removed(tmp_path):
     assert (tmp_path / "empty.csv").exists()
     log.close()
     assert not (tmp_path / "empty.csv").exists()
+
+
+def test_messages_queued_during_preparation_are_dropped():
+    import socket
+
+    from trajectories.limits import default_limits
+
+    n = 20
+    traj = wave(n, 0.002)
+    codec = FriCodec("1.15")
+    port = {}
+
+    def plan_fn(mon, period_s):  # three messages arrive while the plan is being made
+        m = codec.new_monitoring()
+        m.header.messageIdentifier, m.header.reflectedSequenceCounter = 0x245142, 0
+        m.connectionInfo.sessionState, m.connectionInfo.quality = MW, 1
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+            for k in range(3):
+                m.header.sequenceCounter = 10_000 + k
+                s.sendto(codec.encode(m), ("127.0.0.1", port["p"]))
+        time.sleep(0.05)
+        msr = np.array(mon.monitorData.measuredJointPosition.value)
+        return build_plan(traj, msr, period_s, default_limits(), start_tolerance=1e-3, move_to_start=False, settle_s=0)
+
+    def on_cycle(i, sess):
+        port["p"] = sess.port
+
+    res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * (n + 5), plan_fn=plan_fn, on_cycle=on_cycle)
+    assert err is None and res.outcome == COMPLETED and res.skipped == 3 and res.prepare_ms >= 50
+    assert res.missed == 0  # the dropped ones were not from the session's sequence (other counters)
+    np.testing.assert_array_equal(np.array([r.position for r in ctl.replies if r.state == CA])[:n], traj)

@@ -374,7 +374,7 @@ def execute(
         )
         if plan.n_move:
             rep.print(f"moving to the start first: {plan.n_move} rows ({plan.n_move * period_s:.2f} s, ≤ 20 % of the limits)")
-        if mon.robotInfo.operationMode == 0 and not t1:
+        if robot is not None and mon.robotInfo.operationMode == 0 and not t1:
             rep.warn("the robot is in T1: the controller limits the flange speed to 250 mm/s (check with --t1)")
         return plan
 

@@ -136,14 +136,16 @@ class _Controller:
             return (t_rx - t_send) * 1e-9 if t_rx <= limit_ns else None
 
 
-def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = False) -> list[tuple[str, float, str]]:
+def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = False, extra_args: tuple[str, ...] = (),
+             tag: str | None = None) -> list[tuple[str, float, str]]:
     traj = workdir / f"traj_{period_ms}ms.csv"
     log = workdir / f"log_{period_ms}ms.csv"
     n_rows = _trajectory(traj, period_ms * 1e-3, duration_s)
     port = _free_port()
     client = subprocess.Popen(
         [sys.executable, "-m", "lbrcli", "execute", str(traj), "--robot", "127.0.0.1", "--port", str(port),
-         "--log", str(log), "--settle", str(SETTLE_S), "--json", "--wait", "60"] + (["--realtime"] if realtime else []),
+         "--log", str(log), "--settle", str(SETTLE_S), "--json", "--wait", "60"] + (["--realtime"] if realtime else [])
+        + list(extra_args),
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     ctl = _Controller(port, period_ms)
@@ -175,7 +177,7 @@ def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = 
     figures = json.loads(out) if out.strip() else {}
     arr = np.sort(np.array(lat)) * 1e3
     total = len(lat) + missed
-    tag = f"{period_ms} ms" + (" --realtime" if realtime else "")
+    tag = tag or f"{period_ms} ms" + (" --realtime" if realtime else "")
     rows = [
         (f"{tag}: reply latency p50 (controller side)", float(np.percentile(arr, 50)), "ms"),
         (f"{tag}: reply latency p99 (controller side)", float(np.percentile(arr, 99)), "ms"),

@@ -43,12 +43,16 @@ def compare(
     if column == "theta":
         pred = read_table(prediction, PREDICTION_COLUMNS, time="increasing")
     else:
-        pred = read_table(prediction, ("t",), time="increasing")
+        from lbrcli.fri.log import NAN_COLUMNS
+
+        pred = read_table(prediction, ("t",), time="increasing", nan_columns=NAN_COLUMNS)
         if not pred.has(column):
             raise CsvFormatError(f"no column '{column}' (columns: {', '.join(pred.names)})", file=pred.path, row=1)
-    if len(pred.data) < 2:
-        raise CsvFormatError("need at least 2 samples", file=pred.path)
     t_model, theta_model = pred.column("t"), pred.column(column)
+    known = np.isfinite(theta_model)  # an execution log's pendulum columns are nan before the first reading
+    t_model, theta_model = t_model[known], theta_model[known]
+    if len(t_model) < 2:
+        raise CsvFormatError("need at least 2 samples", file=pred.path)
     tr = read_track_csv(track)
     if tr.theta is None:
         raise CsvFormatError("no 'theta' column: track the video with --pivot or --pivot-color", file=tr.path, row=1)

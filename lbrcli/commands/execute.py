@@ -71,6 +71,20 @@ PlotOpt = Annotated[
 ]
 
 
+PendulumOpt = Annotated[
+    Optional[str],
+    typer.Option("--pendulum", help="Serial port of the pendulum module (thesis ch. 6, e.g. /dev/ttyUSB0); 'sim': the "
+                 "simulator's emulated module on a pseudo-terminal. Logs pend_theta \\[rad], pend_omega \\[rad/s]."),
+]
+BaudOpt = Annotated[int, typer.Option("--baud", help="Baud rate of the pendulum module's serial port.")]
+PendZeroOpt = Annotated[int, typer.Option("--pendulum-zero", help="Encoder count (0..4095) of the hanging pendulum.")]
+MqttOpt = Annotated[
+    Optional[str],
+    typer.Option("--mqtt", help="Publish the state as JSON to mqtt://HOST:PORT/TOPIC (off the FRI loop; see `lbr listen`)."),
+]
+MqttRateOpt = Annotated[float, typer.Option("--mqtt-rate", help="Telemetry messages per second \\[Hz].")]
+
+
 # -- shared pieces --------------------------------------------------------------------------------------------
 def _validate_version(version: str) -> str:
     from trajectories.errors import OptionError
@@ -104,8 +118,10 @@ def _run_session(
     extra: Callable | None = None,
     commanding_timeout_s: float | None = None,
     realtime: bool = False,
+    lab=None,
 ):
-    """Bind, start the simulator if no robot was named, run the session, stop everything; (result, sim stats)."""
+    """Bind, start the simulator if no robot was named, attach the pendulum module and telemetry, run the session,
+    stop everything; (result, sim stats, lab figures)."""
     from lbrcli.fri.client import FriSession, sigint_interrupts
     from lbrcli.fri.log import ExecutionLog
 
@@ -122,6 +138,10 @@ def _run_session(
     sim = None
     sim_stats = None
     log = None
+    attached = None
+    lab_figures: dict[str, Any] = {}
+    if lab is not None:
+        lab.validate(embedded)
     try:
         if log_path is not None:
             log = ExecutionLog(log_path)
@@ -130,11 +150,27 @@ def _run_session(
 
             if realtime and "realtime" in SimConfig.__dataclass_fields__:
                 sim_kwargs = {**sim_kwargs, "realtime": True}
+            if lab is not None and lab.pendulum == "sim":
+                sim_kwargs = {**sim_kwargs, "pendulum_pty": True}
             sim = SimulatorProcess(SimConfig(client_port=session.port, version=version, **sim_kwargs))
             sim.start()
             rep.print(f"simulator on {sim.address[0]}:{sim.address[1]} → client on 127.0.0.1:{session.port}")
         else:
             rep.print(f"waiting for FRI messages from {session.robot_ip} on UDP port {session.port} …")
+        tap = None
+        if lab is not None and (lab.pendulum or lab.mqtt):
+            from lbrcli.lab.attach import LabAttachments
+
+            path = sim.pendulum_path if lab.pendulum == "sim" else lab.pendulum
+            attached = LabAttachments(lab, path).start()
+            if attached.pendulum is not None:
+                rep.print(f"pendulum module on {path}")
+                base_names, base_extra = extra_names, extra
+                extra_names = tuple(base_names) + attached.extra_names
+                extra = (lambda mon: (*base_extra(mon), *attached.extra(mon))) if base_extra else attached.extra
+            if attached.publisher is not None:
+                rep.print(f"telemetry to {lab.mqtt} at {lab.mqtt_rate_hz:g} Hz")
+                tap = attached.tap
         with sigint_interrupts(session), _realtime(rep, realtime):
             result = session.run(
                 prepare,
@@ -143,9 +179,14 @@ def _run_session(
                 extra_names=extra_names,
                 extra=extra,
                 watchdog=(lambda: None if sim.running else "the simulator process ended") if sim is not None else None,
+                tap=tap,
             )
     finally:
         session.close()
+        if attached is not None:
+            attached.stop()
+            lab_figures = attached.summary()
+            rep.print("lab: " + ", ".join(f"{k} {v}" for k, v in lab_figures.items()))
         if sim is not None:
             try:
                 sim_stats = sim.stop()
@@ -153,7 +194,7 @@ def _run_session(
                 rep.warn(f"simulator: {exc}")
         if log is not None:
             log.close()
-    return result, sim_stats
+    return result, sim_stats, lab_figures
 
 
 @contextlib.contextmanager
@@ -285,6 +326,11 @@ def execute(
     wait: WaitOpt = None,
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
+    pendulum: PendulumOpt = None,
+    baud: BaudOpt = 115200,
+    pendulum_zero: PendZeroOpt = 0,
+    mqtt: MqttOpt = None,
+    mqtt_rate: MqttRateOpt = 50.0,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -299,6 +345,8 @@ def execute(
     cleanly on a safety stop, drives not active, POOR quality, the session leaving COMMANDING_ACTIVE or Ctrl-C
     (the last command is held a few cycles). Exit 0 completed, 1 refused or stopped, 2 bad input, 130 Ctrl-C.
     """
+    from lbrcli.lab.attach import LabOptions
+
     import numpy as np
 
     from lbrcli.fri.motion import build_plan, resample as resample_traj
@@ -396,7 +444,7 @@ def execute(
             limits_path=str(limits) if limits is not None else None,
             max_runtime_s=traj.duration + settle + 120.0,
         )
-    result, sim_stats = _run_session(
+    result, sim_stats, lab_figures = _run_session(
         rep,
         robot=robot,
         port=port,
@@ -408,8 +456,10 @@ def execute(
         sim_kwargs=sim_kwargs,
         prepare=prepare,
         realtime=realtime,
+        lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
     )
     figures = _print_summary(rep, result, sim_stats, log)
+    figures.update(lab_figures)
     figures.update(file=name, rows=len(traj), duration_s=traj.duration, robot=robot or "simulator")
     _plot(plot, log, rep, joint_csv.name)
     rep.emit(figures)
@@ -430,6 +480,11 @@ def monitor(
     wait: WaitOpt = None,
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
+    pendulum: PendulumOpt = None,
+    baud: BaudOpt = 115200,
+    pendulum_zero: PendZeroOpt = 0,
+    mqtt: MqttOpt = None,
+    mqtt_rate: MqttRateOpt = 50.0,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     json_out: JsonOpt = False,
@@ -439,6 +494,8 @@ def monitor(
     Never commands motion: header-only answers in the monitoring states, the ipo position mirrored when the
     robot application starts commanding. Log columns as `lbr execute` plus flange_x, flange_y, flange_z \\[m].
     """
+    from lbrcli.lab.attach import LabOptions
+
     import pinocchio as pin
 
     from trajectories.errors import OptionError
@@ -486,7 +543,7 @@ def monitor(
             ball_length=ball if ball > 0 else None,
             max_runtime_s=duration + 120.0,
         )
-    result, sim_stats = _run_session(
+    result, sim_stats, lab_figures = _run_session(
         rep,
         robot=robot,
         port=port,
@@ -500,8 +557,10 @@ def monitor(
         extra_names=("flange_x", "flange_y", "flange_z"),
         extra=flange_xyz,
         realtime=realtime,
+        lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
     )
     figures = _print_summary(rep, result, sim_stats, log)
+    figures.update(lab_figures)
     figures.update(duration_s=duration, robot=robot or "simulator")
     _plot(plot, log, rep, "monitor")
     rep.emit(figures)
@@ -593,7 +652,7 @@ def ptp(
             limits_path=str(limits) if limits is not None else None,
             max_runtime_s=time_s + settle + 120.0,
         )
-    result, sim_stats = _run_session(
+    result, sim_stats, lab_figures = _run_session(
         rep,
         robot=robot,
         port=port,
@@ -607,6 +666,7 @@ def ptp(
         realtime=realtime,
     )
     figures = _print_summary(rep, result, sim_stats, log)
+    figures.update(lab_figures)
     figures.update(target=goal, time_s=time_s, robot=robot or "simulator")
     if sim_stats is not None and sim_stats.final_q:
         err = float(np.max(np.abs(np.array(sim_stats.final_q) - goal)))

@@ -46,6 +46,7 @@ def sim(
     malformed: Annotated[float, typer.Option("--malformed", help="Fault injection: probability of sending a corrupted datagram instead.")] = 0.0,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the fault injection.")] = 0,
     realtime: Annotated[bool, typer.Option("--realtime", help="Run the loop with real-time scheduling (SCHED_FIFO) if permitted: steadier 1 ms under load.")] = False,
+    pendulum_pty: Annotated[bool, typer.Option("--pendulum-pty", help="Also emulate the thesis's pendulum module: the ball's planar angle θy as AS5600 lines on a pseudo-terminal (its path is printed; read it with --pendulum PATH). Needs --length.")] = False,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -78,6 +79,7 @@ def sim(
         quality_window=quality_window, quality_good=quality_good,
         quality_fair=min(0.5, quality_good), quality_excellent=max(0.98, quality_good),
         operation_mode=operation_mode.upper(), realtime=realtime, limits_path=str(limits) if limits is not None else None,
+        pendulum_pty=pendulum_pty,
     )
     config.validate()
     interrupted = []
@@ -88,6 +90,8 @@ def sim(
     sim_ = Simulator(config, stop=lambda: bool(interrupted), on_state=on_state)
     h, p = sim_.address
     rep.print(f"FRI {fri_version} simulator on {h}:{p}, sending every {period} ms to {client_host}:{client_port} (Ctrl-C stops)")
+    if sim_.pendulum_path is not None:
+        rep.print(f"pendulum module emulated on {sim_.pendulum_path}")
     import signal
 
     previous = signal.signal(signal.SIGINT, lambda *_: interrupted.append(True))
@@ -98,6 +102,7 @@ def sim(
     if realtime and not stats.realtime:
         rep.warn("real-time scheduling was not granted (needs CAP_SYS_NICE); ran with normal priority")
     figures = stats.to_dict()
+    figures["pendulum_path"] = sim_.pendulum_path
     rep.print(
         f"end: {stats.end_reason or '-'}; {stats.cycles} cycles, {stats.replies} replies "
         f"({stats.late_replies} late, {stats.missed_replies} missed), {stats.commanded_rows} commands executed"

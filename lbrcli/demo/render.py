@@ -43,9 +43,9 @@ def film_execution_log(log_csv: str | Path, video: str | Path, length: float, ca
     from trajectories.csvio import read_table
     from trajectories.robot import Flange, Robot, RobotConfig
 
-    from lbrcli.fri.log import LOG_COLUMNS, PHASE_TRAJECTORY
+    from lbrcli.fri.log import LOG_COLUMNS, NAN_COLUMNS, PHASE_TRAJECTORY
 
-    table = read_table(log_csv, LOG_COLUMNS, time="increasing")
+    table = read_table(log_csv, LOG_COLUMNS, time="increasing", nan_columns=NAN_COLUMNS)
     t = table.column("t")
     phase = table.column("phase")
     moving = np.flatnonzero(phase == PHASE_TRAJECTORY)

@@ -196,6 +196,7 @@ class FriSession:
         extra_names: Sequence[str] = (),
         extra: ExtraFn | None = None,
         watchdog: Callable[[], str | None] | None = None,
+        tap: Callable[[float, Any], None] | None = None,
     ) -> SessionResult:
         """Answer the controller until an end condition; return the statistics.
 
@@ -205,17 +206,18 @@ class FriSession:
         holding that first message. ``duration_s`` [s] ends the session after that wall time from the first
         message. ``extra(mon)`` adds the ``extra_names`` columns to each log row. ``watchdog()`` is asked whenever
         no datagram came for a while; a text it returns ends the session with FriError (e.g. the simulator died).
+        ``tap(t, mon)`` is called every cycle after the reply went out (telemetry); it must return at once.
         """
         gc.collect()
         gc_was = gc.isenabled()
         gc.disable()
         try:
-            return self._loop(prepare, log, duration_s, tuple(extra_names), extra, watchdog)
+            return self._loop(prepare, log, duration_s, tuple(extra_names), extra, watchdog, tap)
         finally:
             if gc_was:
                 gc.enable()
 
-    def _loop(self, prepare, log, duration_s, extra_names, extra, watchdog) -> SessionResult:  # noqa: C901
+    def _loop(self, prepare, log, duration_s, extra_names, extra, watchdog, tap=None) -> SessionResult:  # noqa: C901
         codec = self.codec
         sock = self.sock
         recvfrom = sock.recvfrom
@@ -488,6 +490,8 @@ class FriSession:
                 )  # fmt: skip
             elif ball_k is not None:
                 layout.update_io(mon)  # type: ignore[union-attr]
+            if tap is not None:
+                tap(t, mon)
             if state == CMD_ACTIVE:
                 st.active += 1
                 tp = mon.ipoData.trackingPerformance

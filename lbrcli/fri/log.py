@@ -47,6 +47,8 @@ CTL_Q_COLUMNS = tuple(f"ctl_q{i}" for i in J)
 EXT_FORCE_COLUMNS = ("ext_fx", "ext_fy", "ext_fz", "ext_tx", "ext_ty", "ext_tz")
 POSE_COLUMNS = ("pose_x", "pose_y", "pose_z", "pose_qw", "pose_qx", "pose_qy", "pose_qz")
 
+# extra columns that may hold nan (the pendulum module before its first reading): readers pass them as nan_columns
+NAN_COLUMNS = ("pend_theta", "pend_omega", "pend_age")
 # phase column values
 PHASE_NONE = 0  # not commanding (monitoring states, mirror in COMMANDING_WAIT)
 PHASE_MOVE = 1  # jerk-limited move to the start

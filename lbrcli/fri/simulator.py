@@ -101,6 +101,10 @@ class SimConfig:
     # timing
     spin_us: float = 200.0  # [µs] busy-wait before each send deadline (sleep until then)
     realtime: bool = False  # run the loop with real-time scheduling (SCHED_FIFO) if the OS permits
+    # the thesis's pendulum module (ch. 6) emulated on a pseudo-terminal: the ball's planar angle θy and its rate
+    # as AS5600 lines, the path is reported by SimulatorProcess.pendulum_path (needs ball_length)
+    pendulum_pty: bool = False
+    pendulum_rate_hz: float = 200.0  # [Hz] readings per second on the serial line
 
     def validate(self) -> None:
         """Raise OptionError naming the bad value."""
@@ -124,6 +128,10 @@ class SimConfig:
                 bad(f"{name}: must be 0..1000 ms, got {v:g}")
         if len(self.q0) != N_JOINTS or not all(math.isfinite(x) for x in self.q0):
             bad(f"--q0: expected {N_JOINTS} finite joint angles")
+        if self.pendulum_pty and self.ball_length is None:
+            bad("the pendulum module emulation needs a simulated ball (--length)")
+        if not (math.isfinite(self.pendulum_rate_hz) and 1.0 <= self.pendulum_rate_hz <= 10000.0):
+            bad(f"pendulum rate must be 1..10000 Hz, got {self.pendulum_rate_hz:g}")
         if self.ball_length is not None and not (math.isfinite(self.ball_length) and self.ball_length > 0):
             bad(f"--length: string length must be > 0 m, got {self.ball_length:g}")
         if not (math.isfinite(self.ball_damping) and self.ball_damping >= 0):
@@ -372,6 +380,17 @@ class Simulator:
         self._sdot = (0.0, 0.0, 0.0)  # [1/s]
         self._ball_angles = [0.0, 0.0, 0.0, 0.0]
         self._max_theta = 0.0
+        self._pend = None
+        self._pend_t = 0.0  # [s] simulated time of the pendulum emulation
+        if self.cfg.pendulum_pty:
+            from lbrcli.lab.pendulum_serial import PendulumEmulator
+
+            self._pend = PendulumEmulator(rate_hz=self.cfg.pendulum_rate_hz)
+
+    @property
+    def pendulum_path(self) -> str | None:
+        """Device path of the emulated pendulum module's serial port (None without the emulation)."""
+        return self._pend.path if self._pend is not None else None
 
     def _tcp(self, q: np.ndarray) -> np.ndarray:
         pin, model, data = self._pin, self.robot.model, self.robot.data
@@ -568,6 +587,12 @@ class Simulator:
             self._max_theta = theta
         for io, v in zip(self._io, a):
             io.analogValue = v
+        if self._pend is not None:
+            self._pend_t += h
+            vx, vy, vz = self._sdot
+            # θy = atan2(sy, −sz) and its rate, as the module's encoder on a y–z plane pendulum would read them
+            omega = (sy * vz - sz * vy) / (sy * sy + sz * sz)
+            self._pend.feed(self._pend_t, a[3], omega)
 
     def _fill_and_send(self, state: SessionState) -> None:
         m = self.mon
@@ -685,6 +710,8 @@ class Simulator:
                 self._wait_until(min(max(d[0] for d in self._delay_line), time.perf_counter() + 0.2) + 1e-4)
         finally:
             self.sock.close()
+            if self._pend is not None:
+                self._pend.close()
             gc.unfreeze()
         wall = time.perf_counter() - t0
         self._cpu_fraction = (time.process_time() - cpu0) / wall if wall > 0 else 0.0
@@ -722,7 +749,7 @@ def _child_main(config: SimConfig, conn, stop_event) -> None:
     except BaseException as exc:  # noqa: BLE001 - reported to the parent as one line
         conn.send(("error", f"{exc}"))
         return
-    conn.send(("bound", sim.address))
+    conn.send(("bound", (sim.address, sim.pendulum_path)))
     try:
         stats = sim.run()
     except BaseException as exc:  # noqa: BLE001
@@ -737,6 +764,7 @@ class SimulatorProcess:
 
     config: SimConfig
     address: tuple[str, int] | None = None
+    pendulum_path: str | None = None  # the emulated pendulum module's serial device (config.pendulum_pty)
     stats: SimStats | None = None
     _proc: object = field(default=None, repr=False)
     _conn: object = field(default=None, repr=False)
@@ -764,7 +792,8 @@ class SimulatorProcess:
         if kind != "bound":
             self._proc.join(5)
             raise FriError(f"FRI simulator: {payload}")
-        self.address = tuple(payload)
+        address, self.pendulum_path = payload
+        self.address = tuple(address)
         return self
 
     def _receive_stats(self, timeout: float | None) -> SimStats | None:

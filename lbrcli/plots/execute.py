@@ -17,9 +17,9 @@ def plot_execution(log_path: str | Path, path: str | Path, title: str = "") -> N
 
     from trajectories.csvio import read_table
 
-    from ..fri.log import LOG_COLUMNS
+    from ..fri.log import LOG_COLUMNS, NAN_COLUMNS
 
-    tab = read_table(log_path, LOG_COLUMNS, time="increasing")
+    tab = read_table(log_path, LOG_COLUMNS, time="increasing", nan_columns=NAN_COLUMNS)
     t = tab.column("t")
     cmd = np.column_stack([tab.column(f"cmd_q{j}") for j in range(1, 8)])
     msr = np.column_stack([tab.column(f"msr_q{j}") for j in range(1, 8)])

@@ -166,3 +166,88 @@ def test_listen_cli_records(broker, tmp_path, lbr):
 def test_listen_bad_url_exit_2(lbr):
     res = lbr("listen", "http://nowhere/x")
     assert res.returncode == 2 and "expected mqtt://" in res.stderr and "Traceback" not in res.stderr
+
+
+# -- attached to a real FRI session on the simulator -----------------------------------------------------------
+import numpy as np
+
+from conftest import Q_START
+
+
+def _move_csv(path, h=0.005, seconds=1.5):
+    from trajectories.csvio import write_joint_csv
+    from trajectories.trajectory import JointTrajectory
+
+    t = np.arange(0, seconds + h / 2, h)
+    s = 0.5 - 0.5 * np.cos(np.pi * t / seconds)
+    write_joint_csv(path, JointTrajectory(t=t, q=Q_START + np.outer(s, [0.3, 0, 0, 0, 0, 0, 0])))
+    return path
+
+
+def _log(path):
+    from lbrcli.fri.log import LOG_COLUMNS, NAN_COLUMNS
+    from trajectories.csvio import read_table
+
+    return read_table(path, LOG_COLUMNS, time="increasing", nan_columns=NAN_COLUMNS)
+
+
+def test_execute_reads_the_emulated_pendulum_module_over_a_pty(tmp_path, lbr):
+    csv = _move_csv(tmp_path / "move.csv")
+    log = tmp_path / "log.csv"
+    res = lbr("execute", csv, "--port", "0", "--pendulum", "sim", "--log", log, "--json")
+    assert res.returncode == 0, res.stderr
+    figures = json.loads(res.stdout)
+    assert figures["pendulum_lines"] > 100 and figures["pendulum_malformed"] == 0
+    table = _log(log)
+    pend, ball = table.column("pend_theta"), table.column("ball_theta_y")
+    ok = np.isfinite(pend)
+    assert ok.mean() > 0.9
+    assert np.abs(ball).max() > np.radians(1.0)  # the ball really swung
+    # one encoder count (0.088°) plus one reading of radio latency
+    assert np.degrees(np.abs(pend[ok] - ball[ok]).max()) < 0.5
+    assert np.nanmax(table.column("pend_age")) < 0.1
+
+
+def test_execute_publishes_telemetry_to_a_real_broker(broker, tmp_path):
+    csv = _move_csv(tmp_path / "move.csv")
+    got = []
+    listener = TelemetryListener(broker, got.append).start()
+    assert listener.connected.wait(5)
+    time.sleep(0.2)
+    url = f"mqtt://{broker.host}:{broker.port}/{broker.topic}"
+    res = subprocess.run([sys.executable, "-m", "lbrcli", "execute", str(csv), "--port", "0", "--mqtt", url,
+                          "--mqtt-rate", "20", "--pendulum", "sim", "--json"], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    figures = json.loads(res.stdout)
+    assert wait_for(lambda: len(got) >= figures["mqtt_published"], 3)
+    listener.stop()
+    assert figures["mqtt_published"] >= 20
+    states = {m["state"] for m in got}
+    assert "COMMANDING_ACTIVE" in states
+    active = [m for m in got if m["state"] == "COMMANDING_ACTIVE"]
+    assert len(active[0]["msr_q"]) == 7 and "ball_theta" in active[0] and "pend_theta" in got[-1]
+    ts = [m["t"] for m in got]
+    assert all(b - a >= 0.049 for a, b in zip(ts, ts[1:]))  # decimated to 20 Hz
+    # the robot moved: A1 went from the start toward +0.3 rad
+    assert max(m["msr_q"][0] for m in got) > 0.2
+
+
+def test_lab_options_refused_with_one_line(tmp_path, lbr):
+    csv = _move_csv(tmp_path / "move.csv")
+    res = lbr("execute", csv, "--port", "0", "--pendulum", "/dev/does-not-exist")
+    assert res.returncode == 2 and "cannot open serial port" in res.stderr and "Traceback" not in res.stderr
+    res = lbr("execute", csv, "--robot", "127.0.0.1", "--port", "0", "--pendulum", "sim")
+    assert res.returncode == 2 and "not with --robot" in res.stderr
+    res = lbr("monitor", "--duration", "0.5", "--mqtt", "http://x/y")
+    assert res.returncode == 2 and "expected mqtt://" in res.stderr
+
+
+def test_monitor_logs_the_pendulum(tmp_path, lbr):
+    log = tmp_path / "mon.csv"
+    res = lbr("monitor", "--duration", "1", "--pendulum", "sim", "--length", "0.25", "--log", log, "--json")
+    assert res.returncode == 0, res.stderr
+    table = _log(log)
+    assert table.has("pend_theta") and table.has("flange_x")
+    pend = table.column("pend_theta")
+    # the robot stands still: the module reads the hanging pendulum (0 within one count)
+    assert np.isfinite(pend).sum() > 50 and np.nanmax(np.abs(pend)) < 2e-3

@@ -37,6 +37,7 @@ class Cycle:
     foreign: bool = False  # send the message from 127.0.0.2 instead (must be ignored)
     repeat_seq: bool = False  # reuse the previous sequence counter (stale duplicate, must be ignored)
     ball: float | None = 0.01  # analog IO 'ball_theta' [rad] (None: no IO values)
+    pause_s: float = 0.0  # [s] wait after sending this message (e.g. while the client prepares its plan)
 
 
 @dataclass
@@ -156,6 +157,8 @@ class ScriptedController:
                 continue
             self.sock.sendto(data, dest)
             self.sent_seqs.append(seq)
+            if c.pause_s:
+                time.sleep(c.pause_s)
             if c.repeat_seq:
                 time.sleep(self.pace_s)
                 continue

@@ -32,7 +32,10 @@ def wave(n: int, amp: float = 0.005) -> np.ndarray:
 def preamble(k: int = 1, **kw) -> list[Cycle]:
     return (
         [Cycle(state=IDLE, **kw)]
-        + [Cycle(state=MW, quality=1, receive_multiplier=k, **kw)] * 3
+        # the client checks the start and plans at the first session message: give it the time a loaded machine
+        # needs, so that no backlog builds up (the client drops a backlog, which would shift every-k-th counting)
+        + [Cycle(state=MW, quality=1, receive_multiplier=k, pause_s=0.3, **kw)]
+        + [Cycle(state=MW, quality=1, receive_multiplier=k, **kw)] * 2
         + [Cycle(state=MR, receive_multiplier=k, **kw)] * 3
         + [Cycle(state=CW, receive_multiplier=k, **kw)] * 4
     )

@@ -20,6 +20,7 @@ def main() -> int:
     parser.add_argument("only", nargs="*", help="names of benchmarks to run (e.g. ik fri)")
     args = parser.parse_args()
     here = Path(__file__).parent
+    sys.path.insert(0, str(here))  # spawned worker processes import bench modules by name
     figures: dict[str, dict[str, object]] = {}
     for path in sorted(here.glob("bench_*.py")):
         name = path.stem.removeprefix("bench_")
@@ -27,6 +28,7 @@ def main() -> int:
             continue
         spec = importlib.util.spec_from_file_location(path.stem, path)
         module = importlib.util.module_from_spec(spec)
+        sys.modules[path.stem] = module  # functions handed to worker processes pickle by module name
         spec.loader.exec_module(module)  # type: ignore[union-attr]
         t0 = time.perf_counter()
         rows = module.run(quick=args.quick)

@@ -81,25 +81,34 @@ class PendulumReader:
         return self
 
     def _run(self) -> None:
+        # Read whatever has arrived in one call and split lines here: pyserial's readline() reads byte by byte,
+        # which would take the GIL from the FRI loop a dozen times per reading.
         ser = self._serial
+        pending = b""
         while not self._stop.is_set():
             try:
-                line = ser.readline()
+                chunk = ser.read(max(1, ser.in_waiting))
             except Exception as exc:  # the device went away: keep the session running, report it at the end
                 self.error = str(exc)
                 return
-            if not line:
+            if not chunk:
                 continue
-            if not line.endswith(b"\n"):
-                self.malformed += 1  # a partial line (timeout mid-line or garbage)
+            pending += chunk
+            if b"\n" not in chunk:
+                if len(pending) > 256:  # no line end in sight: garbage
+                    self.malformed += 1
+                    pending = b""
                 continue
-            self.lines += 1
-            try:
-                theta, omega = parse_line(line, self.zero_count)
-            except (ValueError, UnicodeDecodeError):
-                self.malformed += 1
-                continue
-            self.latest = PendulumReading(time.monotonic(), theta, omega)
+            *lines, pending = pending.split(b"\n")
+            latest = None
+            for line in lines:
+                self.lines += 1
+                try:
+                    latest = parse_line(line, self.zero_count)
+                except (ValueError, UnicodeDecodeError):
+                    self.malformed += 1
+            if latest is not None:
+                self.latest = PendulumReading(time.monotonic(), latest[0], latest[1])
 
     def stop(self) -> None:
         self._stop.set()

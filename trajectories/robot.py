@@ -139,12 +139,14 @@ class Robot:
         pin.framesForwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
         return self.data.oMf[self.tcp_id].copy()
 
-    def fk_path(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """TCP positions (n, 3) [m] and rotation matrices (n, 3, 3) along a path q (n, 7) [rad]."""
+    def fk_path(self, q: np.ndarray, frame: str = TCP_FRAME) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (n, 3) [m] and rotation matrices (n, 3, 3) of a frame (TCP by default, or ``FLANGE_FRAME``)
+        along a path q (n, 7) [rad]."""
         q = np.asarray(q, dtype=float)
         pos = np.empty((len(q), 3))
         rot = np.empty((len(q), 3, 3))
-        model, data, fid = self.model, self.data, self.tcp_id
+        model, data = self.model, self.data
+        fid = self.tcp_id if frame == TCP_FRAME else self.model.getFrameId(frame)
         for k in range(len(q)):
             pin.framesForwardKinematics(model, data, q[k])
             m = data.oMf[fid]

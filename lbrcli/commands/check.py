@@ -15,16 +15,7 @@ def run_check(traj, lim, margin: float, jerk: bool, t1: bool, robot=None):
     from trajectories.check import check_trajectory
     from trajectories.robot import FLANGE_FRAME
 
-    cart = None
-    if t1:
-        import pinocchio as pin
-        import numpy as np
-
-        fid = robot.model.getFrameId(FLANGE_FRAME)
-        cart = np.empty((len(traj), 3))
-        for k in range(len(traj)):
-            pin.framesForwardKinematics(robot.model, robot.data, traj.q[k])
-            cart[k] = robot.data.oMf[fid].translation
+    cart = robot.fk_path(traj.q, FLANGE_FRAME)[0] if t1 else None
     return check_trajectory(traj, lim, margin, jerk=jerk, cartesian_positions=cart)
 
 

@@ -22,6 +22,7 @@ def demo(
     """
     import time
 
+    from rich.markup import escape
     from rich.table import Table
 
     from ..console import Reporter
@@ -50,7 +51,7 @@ def demo(
     table.add_column("figure")
     table.add_column("value", justify="right")
     for row in summary_rows(figures):
-        table.add_row(*row)
+        table.add_row(*(escape(cell) for cell in row))  # labels carry units like [s]
     rep.print(table)
     rep.print(f"summary: {summary}")
     figures["seconds"] = seconds

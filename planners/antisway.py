@@ -109,8 +109,7 @@ class AntiSwayPlan:
 
     def acceleration(self) -> np.ndarray:
         """(n, 3) pivot acceleration realised by the samples (second differences, rest outside) [m/s²]."""
-        p = np.vstack([self.position[:1], self.position, self.position[-1:]])
-        return (p[2:] - 2 * p[1:-1] + p[:-2]) / self.dt**2
+        return SampledAcceleration(self.t, self.position).samples()
 
     def segment_of(self, time: float) -> int:
         """1-based index of the segment running at ``time`` [s]."""

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from trajectories.differences import derivatives
 from trajectories.ik import IkOptions, solve_ik_path
 from trajectories.limits import JointLimits
 from trajectories.robot import Robot
@@ -90,9 +91,7 @@ def axis_bounds(robot: Robot, setup: ArmSetup, limits: JointLimits, travel: floa
     down, _ = joint_path(robot, setup, y[mid::-1], y[mid::-1], limits)
     q = np.vstack([down.q[::-1], up.q[1:]])
     h = y[1] - y[0]
-    d1 = np.gradient(q, h, axis=0)
-    d2 = np.gradient(d1, h, axis=0)
-    d3 = np.gradient(d2, h, axis=0)
+    d1, d2, d3 = derivatives(q, h, 3)
     w1, w2, w3 = (np.abs(d).max(axis=0) + 1e-9 for d in (d1, d2, d3))
     lim = limits.scaled(1.0 - margin)
     v = float(np.min(lim.velocity / w1))

@@ -48,6 +48,8 @@ class AntiSwayResult:
         """The JSON figures of the plan."""
         import numpy as np
 
+        from planners.pendulum import natural_period
+
         after = self.run.t >= self.stop_time - 1e-12
         theta = self.run.theta
         ratios = self.report.ratios()
@@ -65,7 +67,7 @@ class AntiSwayResult:
             "max_ratio": {k: float(v.max()) for k, v in ratios.items()},
             "shaper": plan.shaper,
             "string_length_m": plan.string_length,
-            "period_s": 2 * math.pi * math.sqrt(plan.string_length / 9.81),
+            "period_s": natural_period(plan.string_length),
             "a_max_m_s2": plan.a_max,
             "peak_pivot_accel_m_s2": float(np.linalg.norm(plan.acceleration(), axis=1).max()),
             "samples": len(self.joints),

@@ -259,6 +259,7 @@ class FriSession:
         commanding = False  # COMMANDING_WAIT or ACTIVE was seen
         was_active = False
         send_counter = 0
+        backlog = 0  # messages dropped after preparing; they count toward receiveMultiplier like received ones
         client_seq = 0
         i_row = 0
         holding = 0  # remaining hold cycles
@@ -364,7 +365,8 @@ class FriSession:
                         guard = CommandGuard.from_limits(self.limits, period_s)
                     # messages that queued up while preparing are stale: drop them (the sequence gap counts them
                     # as missed) so that the next reply goes to a fresh message, not to a backlog
-                    st.skipped += self._drain()
+                    backlog = self._drain()
+                    st.skipped += backlog
                     t_ready = perf()
                     prepare_ms = (t_ready - t_rx) * 1e-6
                     t_rx = t_ready  # the reply latency statistics exclude the one-off preparation
@@ -416,8 +418,13 @@ class FriSession:
             reply = None
             if end is None and state != IDLE:
                 send_counter += 1
-                if send_counter >= (ci.receiveMultiplier or 1):
+                due = send_counter >= (ci.receiveMultiplier or 1)
+                if due:
                     send_counter = 0
+                if backlog:  # they arrived after this message: every k-th stays aligned with the controller
+                    send_counter = (send_counter + backlog) % (ci.receiveMultiplier or 1)
+                    backlog = 0
+                if due:
                     if state == CMD_ACTIVE:
                         was_active = True
                         if plan is None:

@@ -33,7 +33,8 @@ def preamble(k: int = 1, **kw) -> list[Cycle]:
     return (
         [Cycle(state=IDLE, **kw)]
         # the client checks the start and plans at the first session message: give it the time a loaded machine
-        # needs, so that no backlog builds up (the client drops a backlog, which would shift every-k-th counting)
+        # needs, so that no backlog builds up (the client drops a backlog unanswered, which would end these
+        # strict lock-step scripts; test_backlog_dropped_after_preparing_keeps_every_kth_aligned covers that case)
         + [Cycle(state=MW, quality=1, receive_multiplier=k, pause_s=0.3, **kw)]
         + [Cycle(state=MW, quality=1, receive_multiplier=k, **kw)] * 2
         + [Cycle(state=MR, receive_multiplier=k, **kw)] * 3
@@ -42,13 +43,13 @@ def preamble(k: int = 1, **kw) -> list[Cycle]:
 
 
 def run(script, traj=None, *, version="1.15", tmp_path=None, plan_fn=None, limits=None, on_cycle=None, hold=10,
-        move_to_start=False, q_start=Q0):  # fmt: skip
+        move_to_start=False, q_start=Q0, **controller):  # fmt: skip
     from trajectories.limits import default_limits
 
     lim = limits or default_limits()
     sess = FriSession("127.0.0.1", 0, bind_host="127.0.0.1", version=version, limits=lim,
                       first_message_timeout_s=10, silence_timeout_s=5, hold_cycles=hold)  # fmt: skip
-    ctl = ScriptedController(sess.port, script, q_start, version=version)
+    ctl = ScriptedController(sess.port, script, q_start, version=version, **controller)
     if on_cycle is not None:
         ctl.on_cycle = lambda i: on_cycle(i, sess)
 
@@ -145,6 +146,40 @@ def test_receive_multiplier_answers_every_kth(tmp_path):
     tab = read_log(log_path)
     assert tab.column("answered").sum() == res.answered == len(ctl.replies)
     assert res.period_s == pytest.approx(k * 1e-3)
+
+
+def test_backlog_dropped_after_preparing_keeps_every_kth_aligned(tmp_path):
+    """A slow preparation lets messages queue; the client drops them but still counts them toward the
+    receive multiplier, so afterwards it answers exactly the messages the controller expects."""
+    k, n = 3, 12
+    traj = wave(n, 0.002)
+    from trajectories.limits import default_limits
+
+    lim = default_limits()
+
+    def slow_plan(mon, period_s):
+        time.sleep(0.1)  # the controller sends the rest of its group meanwhile
+        msr = np.array(mon.monitorData.measuredJointPosition.value)
+        return build_plan(traj, msr, period_s, lim, start_tolerance=1e-3, move_to_start=False, settle_s=SETTLE_S)
+
+    script = (
+        [Cycle(state=IDLE)]
+        + [Cycle(state=MW, quality=1, receive_multiplier=k)] * (2 * k)
+        + [Cycle(state=MR, receive_multiplier=k)] * k
+        + [Cycle(state=CW, receive_multiplier=k)] * (2 * k)
+        + [Cycle(state=CA, receive_multiplier=k)] * (k * (n + 4) + 2)
+    )
+    res, ctl, _, err = run(script, traj, tmp_path=tmp_path, plan_fn=slow_plan, reply_timeout=0.5,
+                           tolerate_unanswered=1)  # fmt: skip
+    assert err is None and res.outcome == COMPLETED
+    assert res.skipped >= 2  # the rest of the first group was dropped, unanswered
+    # only the dropped group's expected message (script cycle 3) went unanswered before the client completed,
+    # and no reply went to a message the controller did not expect
+    assert ctl.unanswered[0] == 3 and all(i > ctl.replies[-1].cycle for i in ctl.unanswered[1:])
+    assert ctl.unexpected == []
+    assert all((r.seq % k) == 0 for r in ctl.replies)  # every k-th message of the controller's count (seq from 1)
+    active = np.array([r.position for r in ctl.replies if r.state == CA])
+    np.testing.assert_array_equal(active[:n], traj)
 
 
 def test_sequence_gaps_count_as_missed_and_rows_continue(tmp_path):

@@ -28,7 +28,13 @@ def demo(
     from ..console import Reporter
     from ..demo.pipeline import demo_steps, run_demo, summary_figures, summary_rows, write_summary
 
+    from trajectories.errors import OptionError
+
     rep = Reporter(json_out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OptionError(f"--out: cannot create the folder {out} ({exc.strerror})") from None
     steps = demo_steps()
     t0 = time.perf_counter()
     with rep.progress("lbr demo", len(steps)) as update:

@@ -29,3 +29,11 @@ def test_demo_runs_the_whole_loop(tmp_path):
     assert "lbr execute crane_shaped.csv" in summary and "FAILED" not in summary
     for name in ("crane_baseline_log.csv", "crane_shaped_execution.png", "swingup.mp4", "swingup_compare.png"):
         assert (out / name).stat().st_size > 1000
+
+
+def test_demo_bad_out_folder_is_one_line_exit_2(tmp_path, lbr):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("x")
+    res = lbr("demo", "--out", blocker)
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    assert res.stderr.strip().splitlines() == [f"lbr: error: --out: cannot create the folder {blocker} (File exists)"]

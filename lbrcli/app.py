@@ -35,7 +35,8 @@ for _info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.nam
 
 
 def main() -> None:
-    """Entry point: runs the app and turns lbr errors into one line on stderr and an exit code."""
+    """Entry point: runs the app and turns lbr errors, and file-system errors naming their file (an output folder
+    that does not exist, a path that is a directory, no permission), into one line on stderr and an exit code."""
     from trajectories.errors import LbrError
 
     try:
@@ -43,6 +44,11 @@ def main() -> None:
     except LbrError as exc:
         sys.stderr.write(f"lbr: error: {exc}\n")
         sys.exit(exc.exit_code)
+    except OSError as exc:
+        if exc.filename is None:  # not about a file the user named (e.g. a socket): a bug, keep the traceback
+            raise
+        sys.stderr.write(f"lbr: error: {exc.filename}: {exc.strerror or exc}\n")
+        sys.exit(2)
     except KeyboardInterrupt:
         sys.stderr.write("lbr: interrupted\n")
         sys.exit(130)

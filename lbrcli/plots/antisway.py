@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from . import save_figure
+
 from pathlib import Path
 
 import numpy as np
@@ -65,6 +67,5 @@ def plot_antisway(result, path: str | Path) -> None:
         f"a_max {plan.a_max:g} m/s², {status}"
     )
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from . import save_figure
+
 from pathlib import Path
 
 import numpy as np
@@ -36,5 +38,4 @@ def plot_check(report, path: str | Path, title: str = "") -> None:
     status = "within limits" if report.ok else f"{len(report.failing)} violations"
     fig.suptitle(f"{title} — {status}" if title else status)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from . import save_figure
+
 from pathlib import Path
 
 import numpy as np
@@ -42,5 +44,4 @@ def plot_compare(
     figures = f"lag {cmp.lag_s:.3f} s, RMS {cmp.rms_deg:.2f}°, max {cmp.max_deg:.2f}° over {cmp.overlap_s:.2f} s"
     fig.suptitle(f"{title}\n{figures}" if title else figures, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)

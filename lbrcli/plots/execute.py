@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from . import save_figure
+
 from pathlib import Path
 
 import numpy as np
@@ -62,5 +64,4 @@ def plot_execution(log_path: str | Path, path: str | Path, title: str = "") -> N
             a.axvspan(t[active][0], t[active][-1], color="0.9", zorder=-1)
     fig.suptitle(title or str(log_path))
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)

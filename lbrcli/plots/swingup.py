@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from . import save_figure
+
 import math
 from pathlib import Path
 
@@ -65,5 +67,4 @@ def plot_swingup(result, path: str | Path) -> None:
         f"max {math.degrees(ver.max_theta):.1f}°, {'taut' if ver.tension.min() > 0 else 'slack'}, {status}"
     )
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save_figure(fig, path, dpi=100)

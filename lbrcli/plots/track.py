@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from . import save_figure
+
 from pathlib import Path
 
 import numpy as np
@@ -40,5 +42,4 @@ def plot_track(track, path: str | Path, title: str = "") -> None:
     found_pct = 100.0 * (1.0 - lost.mean()) if len(lost) else 0.0
     fig.suptitle(f"{title} — ball found in {found_pct:.1f} % of {len(t)} frames" if title else f"found {found_pct:.1f} %")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)

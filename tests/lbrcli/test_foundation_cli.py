@@ -137,3 +137,23 @@ def test_headerless_with_dt(lbr, tmp_path):
     p.write_text("".join(",".join(f"{x:.6f}" for x in Q_START) + "\n" for _ in range(5)))
     res = lbr("check", p, "--dt", "0.005", "--json")
     assert res.returncode == 0 and json.loads(res.stdout)["duration_s"] == pytest.approx(0.02)
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["fk", "{slow}", "-o", "{bad}"],
+        ["check", "{slow}", "--plot", "{badpng}"],
+        ["check", "{slow}", "--plot", "{csvplot}"],
+        ["retime", "{slow}", "-o", "{bad}"],
+        ["plan", "anti-sway", "--length", "0.25", "--a-max", "1", "-o", "{bad}"],
+        ["plan", "swing-up", "--length", "0.25", "--mass", "0.01", "--theta-d", "60deg", "--theta0", "0.1", "-o", "{bad}"],
+        ["plan", "anti-sway", "--length", "0.25", "--a-max", "1", "-o", "{folder}"],
+    ],
+)
+def test_unwritable_output_is_one_line_exit_2(lbr, tmp_path, slow_csv, args):
+    names = dict(slow=slow_csv, bad=tmp_path / "missing" / "out.csv", folder=tmp_path, csvplot=tmp_path / "plot.csv",
+                 badpng=tmp_path / "missing" / "plot.png")
+    line = one_line_error(lbr(*[a.format(**names) for a in args]))
+    assert line.startswith("lbr: error: ") and str(tmp_path) in line
+    assert any(w in line for w in ("No such file or directory", "Is a directory", "not an image format"))

@@ -7,12 +7,17 @@ the command functions so that ``lbr --help`` stays fast.
 from __future__ import annotations
 
 import importlib
+import json
+import os
 import pkgutil
+import signal
 import sys
+from typing import Annotated, NoReturn
 
 import typer
 
 from . import commands
+from .outputs import guarded
 
 app = typer.Typer(
     name="lbr",
@@ -21,7 +26,7 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
     rich_markup_mode="rich",
     context_settings={"help_option_names": ["-h", "--help"]},
-    add_completion=False,
+    add_completion=True,
 )
 groups: dict[str, typer.Typer] = {
     "plan": typer.Typer(help="Plan trajectories (anti-sway crane moves, swing-up).", no_args_is_help=True),
@@ -33,22 +38,115 @@ for _name, _group in groups.items():
 for _info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
     importlib.import_module(f"{commands.__name__}.{_info.name}").register(app, groups)
 
+# Every command refuses to overwrite its own inputs (Path arguments) with its outputs (Path options), centrally.
+for _typer in (app, *groups.values()):
+    for _command in _typer.registered_commands:
+        _command.callback = guarded(_command.callback)
 
-def main() -> None:
-    """Entry point: runs the app and turns lbr errors, and file-system errors naming their file (an output folder
-    that does not exist, a path that is a directory, no permission), into one line on stderr and an exit code."""
-    from trajectories.errors import LbrError
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
 
     try:
-        app()
+        return version("lbr")
+    except PackageNotFoundError:  # run from a source tree that is not installed
+        return "unknown"
+
+
+def _show_version(value: bool) -> None:
+    if value:
+        sys.stdout.write(f"lbr {_version()}\n")
+        raise typer.Exit(0)
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_show_version, is_eager=True, help="Print the lbr version and exit."),
+    ] = False,
+) -> None:
+    """Dynamic-control experiments with the KUKA LBR iiwa 7 R800: plan, check, execute over FRI, track, compare."""
+
+
+def _json_requested(argv: list[str]) -> bool:
+    head = argv[: argv.index("--")] if "--" in argv else argv
+    return "--json" in head
+
+
+def _usage_message(exc) -> str:
+    """A click usage error as one line: what is wrong, then where to read the usage."""
+    message = " ".join(line.strip() for line in exc.format_message().splitlines() if line.strip())
+    ctx = getattr(exc, "ctx", None)
+    if ctx is not None:
+        return f"{ctx.command_path}: {message} (see '{ctx.command_path} --help')"
+    return message
+
+
+def _fail(message: str, code: int, argv: list[str], extra: dict | None = None) -> NoReturn:
+    """One line on stderr; with --json also one JSON object on stdout (unless the command already printed its
+    figures); then exit with ``code``."""
+    from .console import json_emitted
+
+    sys.stderr.write(f"lbr: error: {message}\n")
+    if _json_requested(argv) and not json_emitted():
+        sys.stdout.write(json.dumps({"ok": False, "exit_code": code, "error": message, **(extra or {})}) + "\n")
+    sys.stdout.flush()
+    sys.exit(code)
+
+
+def _interrupted(argv: list[str]) -> NoReturn:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C must not print a traceback during cleanup
+    from .console import json_emitted
+
+    sys.stderr.write("lbr: interrupted\n")
+    if _json_requested(argv) and not json_emitted():
+        sys.stdout.write(json.dumps({"ok": False, "exit_code": 130, "error": "interrupted"}) + "\n")
+    sys.stdout.flush()
+    sys.exit(130)
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point: runs the app and turns every failure into one line on stderr and an exit code.
+
+    Usage errors (unknown option, missing argument, a value that does not parse) exit 2; lbr errors carry their
+    code (2 bad input, 1 a check failed); file-system errors naming their file (an output folder that does not
+    exist, a path that is a directory, no permission) exit 2; Ctrl-C exits 130. With --json the error is also one
+    JSON object on stdout: ``{"ok": false, "exit_code": N, "error": "..."}``.
+    """
+    from trajectories.errors import InputError, LbrError
+
+    from ._click import click_exceptions
+
+    argv = list(sys.argv[1:] if argv is None else argv)
+    exc_mod = click_exceptions()
+    try:
+        rv = app(args=argv, prog_name="lbr", standalone_mode=False)
+    except getattr(exc_mod, "NoArgsIsHelpError", ()):  # `lbr` or `lbr plan` alone: the help was printed
+        sys.exit(2)
+    except exc_mod.ClickException as exc:
+        _fail(_usage_message(exc), exc.exit_code, argv)
+    except typer.Abort:  # end of input at a prompt, or Ctrl-C inside click
+        _interrupted(argv)
     except LbrError as exc:
-        sys.stderr.write(f"lbr: error: {exc}\n")
-        sys.exit(exc.exit_code)
+        extra = {}
+        if isinstance(exc, InputError):
+            extra = {k: v for k, v in (("file", exc.file), ("row", exc.row), ("column", exc.column)) if v is not None}
+        _fail(str(exc), exc.exit_code, argv, extra)
+    except BrokenPipeError:  # `lbr ... | head`: the reader left; say nothing more
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        sys.exit(1)
     except OSError as exc:
         if exc.filename is None:  # not about a file the user named (e.g. a socket): a bug, keep the traceback
             raise
-        sys.stderr.write(f"lbr: error: {exc.filename}: {exc.strerror or exc}\n")
-        sys.exit(2)
+        _fail(f"{exc.filename}: {exc.strerror or exc}", 2, argv, {"file": str(exc.filename)})
     except KeyboardInterrupt:
-        sys.stderr.write("lbr: interrupted\n")
-        sys.exit(130)
+        _interrupted(argv)
+    if rv == 130:  # typer turned a Ctrl-C into exit 130
+        _interrupted(argv)
+    if isinstance(rv, int) and rv:
+        from .console import json_emitted
+
+        if _json_requested(argv) and not json_emitted():
+            sys.stdout.write(json.dumps({"ok": False, "exit_code": rv}) + "\n")
+        sys.exit(rv)

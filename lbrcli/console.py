@@ -33,6 +33,14 @@ def _jsonable(obj: Any) -> Any:
     return obj
 
 
+_emitted = False  # whether this process printed its JSON figures (main() then adds no error object)
+
+
+def json_emitted() -> bool:
+    """True once a Reporter printed the command's JSON object on stdout."""
+    return _emitted
+
+
 class Reporter:
     """Where a command prints: text on stdout (stderr with --json), figures as one JSON object."""
 
@@ -44,11 +52,13 @@ class Reporter:
         self.console.print(*args, **kwargs)
 
     def warn(self, text: str) -> None:
-        Console(stderr=True, highlight=False).print(f"[yellow]warning:[/yellow] {text}")
+        Console(stderr=True, highlight=False, soft_wrap=True).print(f"[yellow]warning:[/yellow] {text}")
 
     def emit(self, figures: dict[str, Any]) -> None:
         """Print the figures as one JSON object on stdout (only with --json)."""
+        global _emitted
         if self.json_mode:
+            _emitted = True
             sys.stdout.write(json.dumps(_jsonable(figures)) + "\n")
             sys.stdout.flush()
 

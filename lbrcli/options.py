@@ -49,8 +49,45 @@ def limits_from(path: Path | None):
 
 
 def check_margin(margin: float) -> float:
+    """--margin in [0, 1)."""
+    return check_number("--margin", margin, 0.0, 1.0, high_open=True)
+
+
+def check_number(
+    option: str,
+    value: float | None,
+    low: float | None = None,
+    high: float | None = None,
+    *,
+    low_open: bool = False,
+    high_open: bool = False,
+    unit: str = "",
+) -> float | None:
+    """``value`` if it is a finite number inside the range, else OptionError (exit 2) in one line.
+
+    The range is [low, high] (open at an end with ``low_open``/``high_open``; None: unbounded). NaN and ±inf are
+    always refused; None (an option not given) passes through.
+    """
+    import math
+
     from trajectories.errors import OptionError
 
-    if not 0.0 <= margin < 1.0:
-        raise OptionError(f"--margin must be in [0, 1), got {margin:g}")
-    return margin
+    if value is None:
+        return None
+    ok = math.isfinite(value)
+    if ok and low is not None:
+        ok = value > low if low_open else value >= low
+    if ok and high is not None:
+        ok = value < high if high_open else value <= high
+    if not ok:
+        u = f" {unit}" if unit else ""
+        if low is not None and high is not None:
+            want = f"in {'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}{u}"
+        elif low is not None:
+            want = f"{'>' if low_open else '≥'} {low:g}{u}"
+        elif high is not None:
+            want = f"{'<' if high_open else '≤'} {high:g}{u}"
+        else:
+            want = "a finite number"
+        raise OptionError(f"{option} must be {want}, got {value:g}")
+    return value

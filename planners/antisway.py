@@ -9,8 +9,14 @@ Each segment is a rest-to-rest move along a straight line, written as a box prof
 * ``zv``, ``zvd``, ``zvdd``, ``mzv``, ``ei``, ``ei2`` — the time-optimal jerk-limited move (= ruckig's) convolved
   with that input shaper; ``box-zv``, ``box-zvd``, ``box-ei`` — the ``box`` move convolved with a shaper
   (robust to string-length errors at ≤ one added period).
-* ``auto`` (default) — per segment the quicker of ``box`` and ``zv``; with a length tolerance, per segment the
-  quickest design whose worst residual over the tolerance band (linear model) stays within the budget.
+* ``robust`` — the quickest piecewise-linear acceleration whose residual swing stays within the budget for every
+  string length in the tolerance band (``robust_shaping``: a linear programme per duration, bisection on the
+  duration), checked and tightened on the nonlinear pendulum at five lengths across the band; with
+  ``max_sway`` the transient tilt is a constraint of the same programme.
+* ``auto`` (default) — with a length tolerance (default ±10 %) the ``robust`` design; a segment whose robust move
+  would take longer than the baseline's is capped at the baseline's duration when the least residual reachable
+  in that time still fits the layout's budget. With ``length_tolerance=0`` per segment the quicker of ``box``
+  and ``zv`` (nominal length only).
 
 Nonlinear correction: while the pivot accelerates with a the pendulum hangs in the effective gravity
 √(g² + a²) and swings about a tilted equilibrium with amplitude atan(a/g), so the design period starts from
@@ -28,20 +34,26 @@ from typing import Sequence
 
 import numpy as np
 
-from .accel_shaping import BaselineSegment, baseline_segment, segment_lengths
-from .pendulum import G, PendulumRun, SampledAcceleration, natural_period, simulate
-from .profiles import BoxProfile, time_optimal_boxes
-from .shapers import SHAPER_NAMES, Shaper, frequency_ratio_band, identity_shaper, make_shaper
+from trajectories.errors import PlanningError
 
-SHAPERS = ("auto", "accel", "box", *SHAPER_NAMES, "box-zv", "box-zvd", "box-ei")
+from .accel_shaping import BaselineSegment, baseline_segment, segment_lengths
+from .pendulum import G, PendulumRun, SampledAcceleration, natural_period
+from .sway_prediction import predict
+from .profiles import BoxProfile, time_optimal_boxes
+from .ramp_profile import RampProfile
+from .robust_shaping import RobustSpec, linear_residual_phasor, nonlinear_phasor, planar_run, robust_profile
+from .shapers import SHAPER_NAMES, Shaper, identity_shaper, make_shaper
+
+SHAPERS = ("auto", "robust", "accel", "box", *SHAPER_NAMES, "box-zv", "box-zvd", "box-ei")
 TUNABLE = ("box", "zv", "mzv")  # designs with a simple zero at the design frequency
-ROBUST_CANDIDATES = ("box", "zv", "mzv", "box-zv", "zvd", "ei", "box-zvd", "box-ei", "zvdd", "ei2")
 
 # Thesis-like obstacle course (thesis Fig. 4.6: 90° turns on the table beside the robot), base frame [m].
 DEFAULT_LAYOUT = ((0.40, -0.30), (0.62, -0.30), (0.62, 0.05), (0.45, 0.05), (0.45, 0.30))
 DEFAULT_Z = 0.45  # flange height [m]
 JERK_RAMP = 0.04  # default jerk ramp a_max/j_max as a fraction of the period [-] (≤ 5 % added time)
-ROBUST_BUDGET_RAD = math.radians(0.3)  # linear worst-case residual allowed per layout with a length tolerance
+ROBUST_BUDGET_RAD = math.radians(0.3)  # worst-case residual allowed per layout with a length tolerance
+DEFAULT_LENGTH_TOLERANCE = 0.1  # relative string-length uncertainty the default design is robust to
+BAND_LENGTHS = (-1.0, -0.5, 0.0, 0.5, 1.0)  # where in the tolerance band the nonlinear check looks [× tolerance]
 
 
 @dataclass(frozen=True)
@@ -51,9 +63,11 @@ class AntiSwayOptions:
     shaper: str = "auto"
     j_max: float | None = None  # [m/s³]; None: a_max / (JERK_RAMP·T), a ramp of 4 % of the period
     v_max: float = math.inf  # [m/s]
-    length_tolerance: float = 0.0  # relative, e.g. 0.2 for ±20 %
+    length_tolerance: float = DEFAULT_LENGTH_TOLERANCE  # relative, e.g. 0.2 for ±20 %
     tune: bool = True
-    robust_budget: float = ROBUST_BUDGET_RAD  # [rad]
+    robust_budget: float = ROBUST_BUDGET_RAD  # [rad] residual allowed over the whole layout and band
+    max_sway: float | None = None  # [rad] largest tilt allowed during the move (robust/auto designs plan for it)
+    time_cap: bool = True  # auto: cap a segment at the baseline's duration when the budget allows
 
 
 @dataclass(frozen=True)
@@ -64,9 +78,11 @@ class SegmentPlan:
     start: np.ndarray
     end: np.ndarray
     design: str
-    profile: BoxProfile | BaselineSegment
+    profile: BoxProfile | BaselineSegment | RampProfile
     period: float  # design period after correction and tuning [s]
     accel: float  # peak pivot acceleration of the design [m/s²]
+    band_residual: float = math.nan  # worst residual [rad] of the planar nonlinear pendulum over the band
+    band_peak: float = math.nan  # worst tilt [rad] during the segment over the band
 
     @property
     def length(self) -> float:
@@ -157,28 +173,8 @@ def planar_midpoint_angle(profile: BoxProfile, length: float, step: float = 0.00
 
     Zero means the pendulum ends the (antisymmetric) move at rest.
     """
-    half = 0.5 * profile.duration
-    n = max(8, int(math.ceil(half / step)))
-    h = half / n
-    tk = np.arange(n) * h
-    a0 = profile.acceleration(tk).tolist()
-    am = profile.acceleration(tk + 0.5 * h).tolist()
-    a1 = profile.acceleration(tk + h).tolist()
-    th, w = 0.0, 0.0
-    sin, cos = math.sin, math.cos
-    gl, il = G / length, 1.0 / length
-    for k in range(n):
-        x0, xm, x1 = a0[k], am[k], a1[k]
-        k1t, k1w = w, -(x0 * cos(th) * il + gl * sin(th))
-        t2, w2 = th + 0.5 * h * k1t, w + 0.5 * h * k1w
-        k2t, k2w = w2, -(xm * cos(t2) * il + gl * sin(t2))
-        t3, w3 = th + 0.5 * h * k2t, w + 0.5 * h * k2w
-        k3t, k3w = w3, -(xm * cos(t3) * il + gl * sin(t3))
-        t4, w4 = th + h * k3t, w + h * k3w
-        k4t, k4w = w4, -(x1 * cos(t4) * il + gl * sin(t4))
-        th += h / 6.0 * (k1t + 2 * k2t + 2 * k3t + k4t)
-        w += h / 6.0 * (k1w + 2 * k2w + 2 * k3w + k4w)
-    return th
+    th, _, _ = planar_run(profile, np.array([length]), step, until=0.5 * profile.duration)
+    return float(th[0])
 
 
 def _tune(design: str, s: float, period0: float, a_max: float, j_max: float, v_max: float, length: float) -> float:
@@ -213,34 +209,90 @@ def linear_residual(profile: BoxProfile, omega: np.ndarray) -> np.ndarray:
     return out
 
 
-def _worst_residual(profile: BoxProfile, period: float, tolerance: float) -> float:
-    lo, hi = frequency_ratio_band(tolerance)
-    w = 2 * np.pi / period * np.linspace(lo, hi, 61)
-    return float(linear_residual(profile, w).max())
+def band_lengths(length: float, tolerance: float) -> np.ndarray:
+    """String lengths [m] at which a design is checked across ±tolerance."""
+    return length * (1.0 + tolerance * np.array(BAND_LENGTHS if tolerance > 0 else (0.0,)))
+
+
+def robust_spec(length: float, a_max: float, tolerance: float, residual: float, max_sway: float | None) -> RobustSpec:
+    """Frequency band [rad/s] from the longest string at rest to the shortest one in the accelerating field."""
+    lo = 2 * math.pi / natural_period(length * (1 + tolerance))
+    hi = 2 * math.pi / effective_period(length * (1 - tolerance), a_max)
+    return RobustSpec(lo, hi, residual, max_sway)
+
+
+def _robust_segment(
+    s: float, length: float, a_max: float, j_max: float, options: AntiSwayOptions, budget: float, cap: float | None,
+    total_budget: float,
+) -> tuple[RampProfile, float, float]:
+    """Robust design of one segment checked on the nonlinear pendulum → (profile, band residual, band peak) [rad].
+
+    Sequential correction (≤ 5 rounds): the nonlinear pendulum's residual phasor at each band frequency minus
+    the linear one is added to the next programme as a fixed offset, and the linear sway bound is tightened,
+    until the nonlinear pendulum across the band meets ``budget`` and ``options.max_sway``. With ``cap`` [s] a
+    segment whose quickest robust move is longer takes the baseline's duration instead if its nonlinear
+    residual then stays within ``total_budget``.
+    """
+    spec = robust_spec(length, a_max, options.length_tolerance, budget, options.max_sway)
+    omegas = spec.omegas
+    best, too_short = None, 0.0
+
+    def check(prof):
+        z, peak = nonlinear_phasor(prof, omegas)
+        res = float(np.abs(z).max())
+        return z, res, float(np.maximum(peak, np.abs(z)).max())
+
+    for _ in range(5):
+        try:
+            prof, _ = robust_profile(s, spec, a_max, j_max, options.v_max, min_duration=too_short)
+        except ValueError as exc:
+            if best is not None:
+                return best
+            raise PlanningError(f"robust design of a {s:.3f} m segment: {exc}") from None
+        if cap is not None and prof.duration > cap:
+            try:
+                capped, _ = robust_profile(s, spec, a_max, j_max, options.v_max, max_duration=cap)
+            except ValueError:  # nothing fits within the cap (e.g. with --max-sway): keep the longer move
+                capped = None
+            if capped is not None:
+                _, res_c, pk_c = check(capped)
+                if res_c <= total_budget and (options.max_sway is None or pk_c <= options.max_sway):
+                    return capped, res_c, pk_c
+        z, res, pk = check(prof)
+        if best is None or (res, pk) < (best[1], best[2]):
+            best = (prof, res, pk)
+        sway_ok = options.max_sway is None or pk <= options.max_sway
+        if res <= budget and sway_ok:
+            return prof, res, pk
+        too_short = 0.97 * prof.duration  # the corrected problem is about as hard (up to the grid)
+        offset = z - linear_residual_phasor(prof, omegas)
+        sway = None if sway_ok else spec.max_sway * min(0.9, 0.95 * options.max_sway / pk)
+        spec = RobustSpec(spec.omega_lo, spec.omega_hi, budget, sway if sway is not None else spec.max_sway,
+                          spec.n_freq, tuple(offset))
+    return best
 
 
 def design_segment(
     index: int, start: np.ndarray, end: np.ndarray, length: float, a_max: float, options: AntiSwayOptions,
-    budget: float,
+    budget: float, total_budget: float | None = None,
 ) -> SegmentPlan:
-    """Choose (``auto``), correct and tune the design of one segment."""
+    """Choose (``auto``), correct and tune the design of one segment; ``budget`` [rad] is its residual share."""
     s = float(np.linalg.norm(end - start))
+    T = natural_period(length)
     if options.shaper == "accel":
-        seg = baseline_segment(s, a_max, natural_period(length))
+        seg = baseline_segment(s, a_max, T)
         return SegmentPlan(index, start, end, "accel", seg, seg.period, seg.accel)
     period0 = effective_period(length, a_max)
-    j_max = options.j_max if options.j_max is not None else a_max / (JERK_RAMP * natural_period(length))
+    j_max = options.j_max if options.j_max is not None else a_max / (JERK_RAMP * T)
     args = (a_max, j_max, options.v_max)
-    if options.shaper != "auto":
-        design = options.shaper
-    elif options.length_tolerance > 0:
-        cands = [(design_profile(d, s, period0, *args), d) for d in ROBUST_CANDIDATES]
-        ok = [(p.duration, d) for p, d in cands if _worst_residual(p, period0, options.length_tolerance) <= budget]
-        if ok:
-            design = min(ok)[1]
-        else:
-            design = min(cands, key=lambda c: _worst_residual(c[0], period0, options.length_tolerance))[1]
-    else:
+    robust = options.shaper == "robust" or (options.shaper == "auto" and options.length_tolerance > 0)
+    if robust:
+        cap = baseline_segment(s, a_max, T).duration if options.shaper == "auto" and options.time_cap else None
+        tb = budget if total_budget is None else total_budget
+        prof, res, pk = _robust_segment(s, length, a_max, j_max, options, budget, cap, tb)
+        return SegmentPlan(index, start, end, "robust", prof, T, prof.peaks()[1], res, pk)
+    design = options.shaper
+    if options.shaper == "auto":
         design = min(("box", "zv"), key=lambda d: design_profile(d, s, period0, *args).duration)
     period = period0
     if options.tune and design in TUNABLE:
@@ -261,7 +313,8 @@ def plan_layout(
 
     ``a_max`` [m/s²] is one value or one per segment. Every segment starts and ends at rest; each is sampled at
     k·dt from its own start (the pivot rests one sample at each turning point, as in the thesis's
-    concatenation).
+    concatenation). The robust designs share ``options.robust_budget`` equally between the segments (residual
+    swings of successive segments add at most linearly).
     """
     pts = np.asarray(points, dtype=float)
     if options.shaper not in SHAPERS:
@@ -269,8 +322,11 @@ def plan_layout(
     nseg = len(pts) - 1
     accels = np.broadcast_to(np.asarray(a_max, dtype=float), (nseg,))
     budget = options.robust_budget / max(1, nseg)
+    # a capped segment may spend what the others leave: at most the whole budget minus the others' shares
+    total = options.robust_budget - budget * (nseg - 1) * 0.5
     segments = tuple(
-        design_segment(i + 1, pts[i], pts[i + 1], length, float(accels[i]), options, budget) for i in range(nseg)
+        design_segment(i + 1, pts[i], pts[i + 1], length, float(accels[i]), options, budget, total)
+        for i in range(nseg)
     )
     return sample_plan(segments, length, float(accels.max()), z, dt, options)
 
@@ -296,18 +352,15 @@ def sample_plan(
 
 
 def simulate_path(
-    t: np.ndarray, positions: np.ndarray, length: float, stop_time: float, settle_periods: float = 3.0,
-    rtol: float = 1e-6, atol: float = 1e-8,
+    t: np.ndarray, positions: np.ndarray, length: float, stop_time: float, settle_periods: float = 3.0
 ) -> PendulumRun:
     """Nonlinear spherical pendulum (hanging at rest at t = 0) driven by a pivot path sampled at t (n,) [s].
 
-    The pivot acceleration is what a position-controlled robot realises from the samples; the run goes on
-    ``settle_periods`` small-angle periods past ``stop_time`` [s], sampled at the path step.
+    The pivot acceleration is what a position-controlled robot realises from the samples (second differences,
+    ``sway_prediction``); the run goes on ``settle_periods`` small-angle periods past ``stop_time`` [s],
+    sampled at the path step.
     """
-    acc = SampledAcceleration(t, positions)
-    h = float(t[1] - t[0])
-    end = max(float(t[-1]), stop_time + settle_periods * natural_period(length))
-    return simulate(np.arange(0.0, end + 0.5 * h, h), acc, length, rtol=rtol, atol=atol)
+    return predict(t, positions, length, stop_time, settle_periods)
 
 
 def residual_sway(run: PendulumRun, stop_time: float) -> float:

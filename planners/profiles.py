@@ -19,8 +19,31 @@ import numpy as np
 from .shapers import Shaper, identity_shaper
 
 
+class ProfileDerivatives:
+    """position … jerk of a rest-to-rest profile from its ``derivative(t, order)``."""
+
+    def derivative(self, t: np.ndarray, order: int) -> np.ndarray:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def position(self, t: np.ndarray) -> np.ndarray:
+        """Distance along the segment [m] at times t [s]."""
+        return self.derivative(t, 0)
+
+    def velocity(self, t: np.ndarray) -> np.ndarray:
+        """[m/s]"""
+        return self.derivative(t, 1)
+
+    def acceleration(self, t: np.ndarray) -> np.ndarray:
+        """[m/s²]"""
+        return self.derivative(t, 2)
+
+    def jerk(self, t: np.ndarray) -> np.ndarray:
+        """[m/s³] (steps where the acceleration has corners)."""
+        return self.derivative(t, 3)
+
+
 @dataclass(frozen=True)
-class BoxProfile:
+class BoxProfile(ProfileDerivatives):
     """distance [m] moved by H ⊗ boxes (widths [s]) ⊗ shaper impulses."""
 
     distance: float
@@ -63,19 +86,6 @@ class BoxProfile:
         else:
             out = np.where((t >= self.duration) | (t < 0), 0.0, out)
         return out
-
-    def position(self, t: np.ndarray) -> np.ndarray:
-        return self.derivative(t, 0)
-
-    def velocity(self, t: np.ndarray) -> np.ndarray:
-        return self.derivative(t, 1)
-
-    def acceleration(self, t: np.ndarray) -> np.ndarray:
-        return self.derivative(t, 2)
-
-    def jerk(self, t: np.ndarray) -> np.ndarray:
-        """Jerk [m/s³] (needs three boxes; steps at the box corners)."""
-        return self.derivative(t, 3)
 
     def breakpoints(self) -> np.ndarray:
         """Sorted times [s] where the highest derivative jumps (box corners shifted by the impulses)."""

@@ -196,6 +196,20 @@ def _cost(vector: np.ndarray, problem: FastProblem) -> float:
     return evaluate(problem, FastParams.from_vector(vector)).cost
 
 
+def _ignore_sigint() -> None:
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def worker_pool(processes: int):
+    """A process pool whose workers ignore SIGINT: Ctrl-C reaches only the parent, which terminates them
+    (no traceback from every worker, no wait for the running candidates)."""
+    import multiprocessing
+
+    return multiprocessing.Pool(processes, initializer=_ignore_sigint)
+
+
 @dataclass(frozen=True)
 class SearchSettings:
     """Differential evolution settings: population multiplier, generations, seed, worker processes."""
@@ -223,10 +237,15 @@ def optimise(problem: FastProblem, settings: SearchSettings = SearchSettings(),
         kwargs["x0"] = np.clip([start.speed, start.first_speed, start.centring, start.apex_offset],
                                [r[0] for r in ranges], [r[1] for r in ranges])
     if settings.workers > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
-        with ProcessPoolExecutor(max_workers=settings.workers) as pool:
+        pool = worker_pool(settings.workers)
+        try:
             res = differential_evolution(_cost, ranges, workers=pool.map, **kwargs)
+            pool.close()
+        except BaseException:  # Ctrl-C or an error: end the workers now, do not wait for their candidates
+            pool.terminate()
+            raise
+        finally:
+            pool.join()
     else:
         res = differential_evolution(_cost, ranges, **kwargs)
     best = FastParams.from_vector(res.x)

@@ -138,15 +138,17 @@ def plane_from_corners(cal: CameraCalibration, corners: np.ndarray) -> PlaneCali
     H /= H[2, 2]
     centre = undistort_points(cal, corners.reshape(-1, 2)).mean(axis=0)
     pts = np.array([centre, centre + (1.0, 0.0), centre + (0.0, 1.0)])
-    xy = _apply_h(H, pts)
+    xy = apply_homography(H, pts)
     J = np.column_stack([xy[1] - xy[0], xy[2] - xy[0]])
     return PlaneCalibration(
         homography=H, metres_per_px=float(math.sqrt(abs(np.linalg.det(J)))), rvec=rvec.ravel(), tvec=tvec.ravel()
     )
 
 
-def _apply_h(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    p = np.column_stack([pts, np.ones(len(pts))]) @ H.T
+def apply_homography(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Points (n, 2) mapped by the 3×3 homography H."""
+    pts = np.asarray(pts, float).reshape(-1, 2)
+    p = np.column_stack([pts, np.ones(len(pts))]) @ np.asarray(H, float).T
     return p[:, :2] / p[:, 2:3]
 
 
@@ -155,7 +157,7 @@ def to_plane(cal: CameraCalibration, uv: np.ndarray) -> np.ndarray:
     if cal.plane is None:
         raise ValueError("calibration has no plane")
     und = undistort_points(cal, np.asarray(uv, float).reshape(-1, 2))
-    return _apply_h(cal.plane.homography, und)
+    return apply_homography(cal.plane.homography, und)
 
 
 # ---------------------------------------------------------------- files

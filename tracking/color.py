@@ -75,3 +75,12 @@ def color_mask(hsv: np.ndarray, spec: ColorSpec) -> np.ndarray:
         m = cv2.inRange(hsv, band.lower, band.upper)
         mask = m if mask is None else cv2.bitwise_or(mask, m)
     return mask
+
+
+def with_min_saturation(spec: ColorSpec, min_s: int, min_v: int | None = None) -> ColorSpec:
+    """The same hue bands with another minimum saturation (and value): for a ball smeared by motion blur,
+    whose colour is mixed with the background's and so less saturated."""
+    bands = tuple(
+        HsvBand((b.lower[0], int(min_s), int(b.lower[2] if min_v is None else min_v)), b.upper) for b in spec.bands
+    )
+    return ColorSpec(f"{spec.name}@S{int(min_s)}", bands)

@@ -15,6 +15,8 @@ from trajectories.errors import CheckFailed
 
 _GAP_FACTOR = 2.5  # a gap longer than this × the median frame interval is masked, not interpolated over
 _MIN_OVERLAP = 0.25  # a lag must overlap at least this fraction of the shorter series
+_MIN_WINDOW_S = 2.0  # [s] the default lag window is at least ± this
+_RIVAL_SEPARATION_S = 0.15  # [s] a rival peak lies at least this far from the chosen lag
 
 
 @dataclass(frozen=True)
@@ -23,6 +25,15 @@ class LagEstimate:
 
     lag_s: float
     correlation: float
+    window_s: float = math.inf  # the lag was searched within ± this [s]
+    rival_lag_s: float = math.nan  # the best other peak of the score (NaN when none) [s]
+    rival_correlation: float = math.nan  # its score
+
+
+def default_lag_window(t_model: np.ndarray, t_meas: np.ndarray) -> float:
+    """± window [s] searched for the lag by default: half the longer series, at least 2 s."""
+    span = max(float(np.ptp(np.asarray(t_model, float))), float(np.ptp(np.asarray(t_meas, float))))
+    return max(_MIN_WINDOW_S, 0.5 * span)
 
 
 @dataclass(frozen=True)
@@ -31,6 +42,9 @@ class Comparison:
 
     lag_s: float  # measured time − model time [s]
     lag_estimated: bool  # False when the lag was given
+    lag_window_s: float  # the lag was searched within ± this [s] (NaN when given)
+    rival_lag_s: float  # the best other peak of the lag score [s] (NaN when none or given)
+    rival_correlation: float  # its score (close to `correlation`: the lag is ambiguous)
     correlation: float  # match score 2Σxy/(Σx²+Σy²) at the lag, −1..1 (NaN when the lag was given)
     mirrored: bool  # the negated measurement correlates better: the camera sees θ mirrored (use flip)
     rms_deg: float  # RMS of measured − model over the overlap [deg]
@@ -93,8 +107,10 @@ def estimate_lag(
     removed, gaps masked. For every shift the overlap is scored by 2·Σxy / (Σx² + Σy²) — the normalised
     cross-correlation made amplitude-sensitive, so a shift by one period of a growing or decaying swing
     scores lower than the true lag (all sums by FFT). Shifts overlapping less than a quarter of the shorter
-    series, or holding less than half of the weaker series' energy, are not considered. The peak is refined
-    to sub-sample by least squares of the residual.
+    series, or holding less than half of the weaker series' energy, are not considered, nor lags beyond
+    ± max_lag_s (default :func:`default_lag_window`). The peak is refined to sub-sample by least squares of
+    the residual; the best other local peak is reported as a rival (a periodic swing scores nearly alike one
+    period off).
     """
     from scipy.optimize import minimize_scalar
     from scipy.signal import correlate
@@ -117,13 +133,19 @@ def estimate_lag(
         raise CheckFailed("cannot estimate the lag: a θ series is constant (give --lag)")
     energy = sxx + syy
     valid = (count >= _MIN_OVERLAP * min(mm.sum(), my.sum()) - 0.5) & (energy >= min(ex, ey))
-    if max_lag_s is not None:
-        valid &= np.abs(lags) <= max_lag_s
+    if max_lag_s is None:
+        max_lag_s = default_lag_window(t_model, t_meas)
+    valid &= np.abs(lags) <= max_lag_s
     if not valid.any():
         raise CheckFailed("no lag with enough overlap between prediction and track")
     score = np.where(valid, 2.0 * sxy / np.maximum(energy, 1e-300), -np.inf)
     k = int(np.argmax(score))
     lag0 = float(lags[k])
+    peaks = np.flatnonzero(
+        (score[1:-1] >= score[:-2]) & (score[1:-1] >= score[2:]) & np.isfinite(score[1:-1])
+        & (np.abs(lags[1:-1] - lag0) >= _RIVAL_SEPARATION_S)
+    ) + 1
+    rival = int(peaks[np.argmax(score[peaks])]) if len(peaks) else None
 
     def residual(lag: float) -> float:
         e = _errors(t_model, theta_model, t_meas, theta_meas, lag)[2]
@@ -131,7 +153,13 @@ def estimate_lag(
 
     res = minimize_scalar(residual, bounds=(lag0 - step, lag0 + step), method="bounded", options={"xatol": step * 1e-3})
     lag = float(res.x) if res.success and res.fun <= residual(lag0) else lag0
-    return LagEstimate(lag_s=lag, correlation=float(score[k]))
+    return LagEstimate(
+        lag_s=lag,
+        correlation=float(score[k]),
+        window_s=float(max_lag_s),
+        rival_lag_s=float(lags[rival]) if rival is not None else math.nan,
+        rival_correlation=float(score[rival]) if rival is not None else math.nan,
+    )
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
@@ -160,7 +188,8 @@ def compare_angles(
 ) -> Comparison:
     """Align a measured θ [rad] (NaN = not found) with the model's θ [rad] and report the errors.
 
-    lag_s: measured time − model time [s]; estimated by cross-correlation when None. flip negates the
+    lag_s: measured time − model time [s]; estimated by cross-correlation when None, within ± max_lag_s
+    [s] (default :func:`default_lag_window`). flip negates the
     measurement (camera looking from the other side). Raises CheckFailed when the series do not overlap.
     """
     tm = np.asarray(t_model, float)
@@ -172,7 +201,7 @@ def compare_angles(
     if np.count_nonzero(np.isfinite(y)) < 2 or len(tm) < 2:
         raise CheckFailed("not enough samples: the track needs θ in at least two frames, the prediction two samples")
     mirrored = False
-    corr = math.nan
+    corr = window = rival = rival_corr = math.nan
     if lag_s is None:
         est = estimate_lag(tm, xm, ty, y, max_lag_s)
         try:
@@ -182,6 +211,7 @@ def compare_angles(
         except CheckFailed:
             pass
         lag, corr = est.lag_s, est.correlation
+        window, rival, rival_corr = est.window_s, est.rival_lag_s, est.rival_correlation
     else:
         lag = float(lag_s)
     t, model, err = _errors(tm, xm, ty, y, lag)
@@ -195,6 +225,9 @@ def compare_angles(
     return Comparison(
         lag_s=lag,
         lag_estimated=lag_s is None,
+        lag_window_s=window,
+        rival_lag_s=rival,
+        rival_correlation=rival_corr,
         correlation=corr,
         mirrored=mirrored,
         rms_deg=float(np.sqrt(np.mean(ad**2))),

@@ -53,6 +53,7 @@ class Blob:
     circularity: float  # 4π·area/perimeter²
     ellipse_fit: float  # IoU of the blob with its second-moment ellipse
     clipped: bool  # the blob touches an edge of the searched window that is not an edge of the frame
+    saturation: float = float("nan")  # peak HSV saturation of the blob's pixels (0–255; the ball's own colour)
 
     @property
     def radius_px(self) -> float:
@@ -66,11 +67,19 @@ def _kernel():
     return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (_KERNEL_SIZE, _KERNEL_SIZE))
 
 
-def blob_mask(bgr: np.ndarray, spec: ColorSpec) -> np.ndarray:
-    """Cleaned uint8 mask of the colour: 3×3 Gaussian blur → HSV → bands → open → close."""
+def to_hsv(bgr: np.ndarray) -> np.ndarray:
+    """3×3 Gaussian blur → HSV (OpenCV ranges), the input of :func:`blob_mask`."""
     import cv2
 
-    hsv = cv2.cvtColor(cv2.GaussianBlur(bgr, (3, 3), 0), cv2.COLOR_BGR2HSV)
+    return cv2.cvtColor(cv2.GaussianBlur(bgr, (3, 3), 0), cv2.COLOR_BGR2HSV)
+
+
+def blob_mask(bgr: np.ndarray, spec: ColorSpec, hsv: np.ndarray | None = None) -> np.ndarray:
+    """Cleaned uint8 mask of the colour: 3×3 Gaussian blur → HSV → bands → open → close (hsv: precomputed)."""
+    import cv2
+
+    if hsv is None:
+        hsv = to_hsv(bgr)
     mask = color_mask(hsv, spec)
     k = _kernel()
     mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, k)
@@ -110,15 +119,19 @@ def find_blobs(
     gates: BlobGates,
     origin: tuple[int, int] = (0, 0),
     frame_size: tuple[int, int] | None = None,
+    hsv: np.ndarray | None = None,
 ) -> list[Blob]:
     """All blobs of the colour passing the gates in a BGR image, or in a window of a frame.
 
     origin: (x0, y0) [px] of the window in the frame; frame_size: (width, height) [px] of the frame (the
-    window's size when None), so that a blob cut by the window's inner edge is flagged ``clipped``.
+    window's size when None), so that a blob cut by the window's inner edge is flagged ``clipped``; hsv:
+    the image already converted by :func:`to_hsv` (several colour thresholds on one image).
     """
     import cv2
 
-    mask = blob_mask(bgr, spec)
+    if hsv is None:
+        hsv = to_hsv(bgr)
+    mask = blob_mask(bgr, spec, hsv)
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     h, w = mask.shape
     x0, y0 = origin
@@ -147,5 +160,50 @@ def find_blobs(
             or (inner_right and bx + bw >= w)
             or (inner_bottom and by + bh >= h)
         )
-        out.append(Blob(m["m10"] / area + x0, m["m01"] / area + y0, area, circ, fit, clipped))
+        sat = float(cv2.minMaxLoc(hsv[by : by + bh, bx : bx + bw, 1], mask[by : by + bh, bx : bx + bw])[1])
+        out.append(Blob(m["m10"] / area + x0, m["m01"] / area + y0, area, circ, fit, clipped, sat))
+    return out
+
+
+_COARSE_MAX_REGIONS = 24  # more candidate regions than this: search the full-resolution frame instead
+
+
+def coarse_factor(width_px: int) -> int:
+    """Downscaling factor of the first pass of a whole-frame search: 2 from 960 px wide, else 1 (none)."""
+    return 2 if width_px >= 960 else 1
+
+
+def find_blobs_coarse(bgr: np.ndarray, spec: ColorSpec, gates: BlobGates, factor: int) -> list[Blob]:
+    """:func:`find_blobs` on a whole frame in two passes: the colour's pixels on the frame shrunk by factor
+    (area averaging, no morphology, so a ball of 2 px radius still shows), then the exact detection at full
+    resolution in a window around each region found, skipping regions longer than the largest ball. Same result as one full-resolution pass at a fraction
+    of the cost; falls back to it when the coarse pass finds very many regions or a blob is cut by a window.
+    """
+    import cv2
+
+    if factor <= 1:
+        return find_blobs(bgr, spec, gates)
+    h, w = bgr.shape[:2]
+    small = cv2.resize(bgr, (w // factor, h // factor), interpolation=cv2.INTER_AREA)
+    mask = color_mask(cv2.cvtColor(small, cv2.COLOR_BGR2HSV), spec)
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    # regions longer than the largest ball (a cable, a big box) cannot hold one apart from them; tiny ones are noise
+    longest = 1.5 * 2.0 * math.sqrt(gates.max_area_px / math.pi) / factor + 2.0
+    least = 0.25 * gates.min_area_px / (factor * factor)
+    boxes = [
+        r for r, c in ((cv2.boundingRect(c), c) for c in contours)
+        if max(r[2], r[3]) <= longest and max(cv2.contourArea(c), 1.0) >= least
+    ]
+    if len(boxes) > _COARSE_MAX_REGIONS:
+        return find_blobs(bgr, spec, gates)
+    out: list[Blob] = []
+    for x, y, bw, bh in boxes:
+        pad = 4 + max(bw, bh) // 2
+        x0, y0 = max((x - pad) * factor, 0), max((y - pad) * factor, 0)
+        x1, y1 = min((x + bw + pad) * factor, w), min((y + bh + pad) * factor, h)
+        for b in find_blobs(bgr[y0:y1, x0:x1], spec, gates, (x0, y0), (w, h)):
+            if b.clipped:
+                return find_blobs(bgr, spec, gates)
+            if all(abs(b.u - o.u) > 0.5 or abs(b.v - o.v) > 0.5 for o in out):
+                out.append(b)
     return out

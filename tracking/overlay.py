@@ -45,3 +45,17 @@ def draw_overlay(
     cv2.putText(frame, text, (12, 30), cv2.FONT_HERSHEY_SIMPLEX, 0.8, (0, 0, 0), 4, cv2.LINE_AA)
     cv2.putText(frame, text, (12, 30), cv2.FONT_HERSHEY_SIMPLEX, 0.8, _TEXT, 1, cv2.LINE_AA)
     return frame
+
+
+def draw_candidates(frame: np.ndarray, blobs: list) -> np.ndarray:  # list[tracking.detect.Blob]
+    """Draw in place every ball-like blob of a frame with its centre 'U,V' [px] (to pick one for --start)."""
+    import cv2
+
+    for b in blobs:
+        r = max(float(b.radius_px), 3.0) + 5.0
+        cv2.circle(frame, (int(round(b.u * 16)), int(round(b.v * 16))), int(r * 16), _BALL, 2, cv2.LINE_AA, 4)
+        text = f"{b.u:.0f},{b.v:.0f}"
+        org = (int(b.u + r + 4), int(b.v + 5))
+        cv2.putText(frame, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.6, (0, 0, 0), 3, cv2.LINE_AA)
+        cv2.putText(frame, text, org, cv2.FONT_HERSHEY_SIMPLEX, 0.6, _TEXT, 1, cv2.LINE_AA)
+    return frame

@@ -1,13 +1,16 @@
 """A whole video → per-frame ball centre, found flag, decoder time, and θ when the pivot is known.
 
 The pivot is a fixed pixel or a second coloured marker tracked like the ball. With a camera calibration
-the ball and pivot are undistorted before θ is taken, and a plane calibration adds plane metres.
+the ball and pivot are undistorted before θ is taken; with a plane calibration θ is measured in the plane of
+motion from metric coordinates (a camera that sees the plane obliquely does not distort it), and the track
+gets plane metres. Frames revised by the tracker after it chose among several ball-like candidates are
+rewritten (the on_frame preview shows what was known at the time).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
@@ -15,7 +18,7 @@ import numpy as np
 
 from trajectories.errors import InputError
 
-from .angle import string_angle
+from .angle import plane_axes, plane_string_angle, string_angle
 from .calibration import CameraCalibration, to_plane, undistort_points
 from .color import ColorSpec
 from .detect import Blob
@@ -48,10 +51,33 @@ class Track:
     radius_px: np.ndarray  # (n,) radius of the disc with the blob's area [px]
     info: VideoInfo
     full_frame_searches: int  # frames where the search window failed and the whole frame was searched
+    notes: tuple[str, ...] = ()  # ambiguities met (several ball-like candidates) and how they were resolved
+    theta_in_plane: bool = False  # θ measured in the calibrated plane of motion (else in the image)
 
     @property
     def found_fraction(self) -> float:
         return float(self.found.mean()) if len(self.found) else 0.0
+
+
+class _Angles:
+    """θ [rad] from raw ball and pivot pixels: in the image (undistorted when calibrated) or in the plane."""
+
+    def __init__(self, calibration: CameraCalibration | None, size: tuple[int, int]) -> None:
+        self.cal = calibration
+        self.axes = None
+        if calibration is not None and calibration.plane is not None:
+            centre = np.array([size[0] / 2.0, size[1] / 2.0])
+            self.axes = plane_axes(calibration.plane.homography, undistort_points(calibration, centre))
+
+    def __call__(self, ball_uv: np.ndarray, pivot_uv: np.ndarray) -> np.ndarray:
+        b, p = np.asarray(ball_uv, float), np.asarray(pivot_uv, float)
+        if self.cal is None:
+            return string_angle(b, p)
+        if self.axes is not None:
+            xb = to_plane(self.cal, b).reshape(b.shape)
+            xp = to_plane(self.cal, p).reshape(p.shape)
+            return plane_string_angle(xb, xp, *self.axes)
+        return string_angle(undistort_points(self.cal, b), undistort_points(self.cal, p))
 
 
 def track_video(
@@ -63,14 +89,16 @@ def track_video(
     pivot_color: ColorSpec | None = None,
     pivot_options: TrackerOptions | None = None,
     calibration: CameraCalibration | None = None,
+    fps: float | None = None,
     progress: Callable[[int], None] | None = None,
     on_frame: Callable[[np.ndarray, FrameResult], None] | None = None,
 ) -> Track:
     """Track the ball through every frame of a video.
 
     pivot_uv: fixed pivot [px] in the raw image, or pivot_color: colour of a pivot marker to track (not
-    both). progress(frames_done) and on_frame(bgr, result) are called after each frame (e.g. to draw a
-    preview). Raises InputError for unreadable videos or a calibration made for another image size.
+    both). fps [1/s] overrides the container's frame rate (times = index / fps). progress(frames_done) and
+    on_frame(bgr, result) are called after each frame (e.g. to draw a preview). Raises InputError for
+    unreadable videos or a calibration made for another image size.
     """
     if pivot_uv is not None and pivot_color is not None:
         raise ValueError("give a fixed pivot or a pivot colour, not both")
@@ -82,59 +110,63 @@ def track_video(
             file=str(path),
         )
     ball_tracker = BallTracker(ball, options)
-    pivot_tracker = BallTracker(pivot_color, pivot_options or options) if pivot_color is not None else None
-    fixed = None
-    if pivot_uv is not None:
-        fixed = np.asarray(pivot_uv, float)
-        fixed_und = undistort_points(calibration, fixed) if calibration is not None else fixed
+    pivot_opts = pivot_options or (replace(options, start_uv=None) if options is not None else None)
+    pivot_tracker = BallTracker(pivot_color, pivot_opts) if pivot_color is not None else None
+    fixed = None if pivot_uv is None else (float(pivot_uv[0]), float(pivot_uv[1]))
+    angle = _Angles(calibration, info.size)
 
     ts: list[float] = []
     uv: list[tuple[float, float]] = []
     radius: list[float] = []
     piv: list[tuple[float, float]] = []
-    theta: list[float] = []
     nan2 = (math.nan, math.nan)
-    for k, t, frame in iter_frames(path):
-        b = ball_tracker.update(frame, t)
-        p: tuple[float, float] | None = None
+
+    def revise(tracker: BallTracker, positions: list, radii: list | None) -> None:
+        for k, blob in tracker.pop_revision():
+            positions[k] = (blob.u, blob.v) if blob is not None else nan2
+            if radii is not None:
+                radii[k] = blob.radius_px if blob is not None else math.nan
+
+    for k, t, frame in iter_frames(path, fps):
+        p: tuple[float, float] | None = fixed
         if pivot_tracker is not None:
             pb = pivot_tracker.update(frame, t)
+            revise(pivot_tracker, piv, None)
             p = (pb.u, pb.v) if pb is not None else None
-            piv.append(p if p is not None else nan2)
-        elif fixed is not None:
-            p = (float(fixed[0]), float(fixed[1]))
-        th = math.nan
-        if b is not None and p is not None:
-            bu = np.array([b.u, b.v])
-            if calibration is not None:
-                bu = undistort_points(calibration, bu)
-                pu = fixed_und if pivot_tracker is None else undistort_points(calibration, np.array(p))
-            else:
-                pu = np.array(p)
-            th = float(string_angle(bu, pu))
+        piv.append(p if p is not None else nan2)
+        b = ball_tracker.update(frame, t, p)
+        revise(ball_tracker, uv, radius)
         ts.append(t)
         uv.append((b.u, b.v) if b is not None else nan2)
         radius.append(b.radius_px if b is not None else math.nan)
-        theta.append(th)
         if on_frame is not None:
+            th = float(angle(np.array([b.u, b.v]), np.array(p))) if b is not None and p is not None else math.nan
             on_frame(frame, FrameResult(k, t, b, p, th))
         if progress is not None:
             progress(k + 1)
+    for tracker, positions, radii in ((ball_tracker, uv, radius), (pivot_tracker, piv, None)):
+        if tracker is not None:
+            tracker.finish()
+            revise(tracker, positions, radii)
 
     uv_a = np.array(uv, float).reshape(-1, 2)
+    piv_a = np.array(piv, float).reshape(-1, 2)
     xy = None
     if calibration is not None and calibration.plane is not None:
         xy = to_plane(calibration, uv_a)
     has_pivot = pivot_tracker is not None or fixed is not None
+    notes = tuple(ball_tracker.notes) + tuple(f"pivot marker: {n}" for n in (pivot_tracker.notes if pivot_tracker else ()))
     return Track(
         t=np.array(ts),
         frame=np.arange(len(ts)),
         uv=uv_a,
         found=np.all(np.isfinite(uv_a), axis=1),
-        theta=np.array(theta) if has_pivot else None,
-        pivot_uv=np.array(piv, float).reshape(-1, 2) if pivot_tracker is not None else None,
+        theta=angle(uv_a, piv_a) if has_pivot else None,
+        pivot_uv=piv_a if pivot_tracker is not None else None,
         xy_m=xy,
         radius_px=np.array(radius),
         info=info,
         full_frame_searches=ball_tracker.full_frame_searches,
+        notes=notes,
+        theta_in_plane=angle.axes is not None,
     )

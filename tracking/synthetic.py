@@ -5,6 +5,12 @@ The ball is an anti-aliased, shaded disc with motion blur over the exposure; the
 sensor noise and lossy compression (mp4v by default), and optionally red distractors (a box and a cable)
 that a tracker must not take for the ball. θ is measured from the downward vertical, positive toward +u
 (image x to the right): ball = pivot + L·(sin θ, cos θ) with image v pointing down.
+
+Harder footage for robustness checks: a static red disc (``Distractor("disc", ...)``), dark early frames
+(``gain``), foreground objects drawn over the ball (``foreground``: an occluding rod, a skin-coloured hand
+beside an orange ball), long exposures at 30 or 60 fps (``exposure``), and a camera that sees the plane of
+motion obliquely (``plane_to_image``: the pendulum lives in a plane whose coordinates are "plane pixels",
+mapped to the image by a homography; θ is then measured in that plane).
 """
 
 from __future__ import annotations
@@ -18,17 +24,26 @@ import numpy as np
 
 from trajectories.errors import InputError
 
+from .calibration import apply_homography
+
 BALL_BGR = (35, 30, 205)  # a saturated red (OpenCV hue ≈ 178)
 MARKER_BGR = {"green": (60, 170, 40), "blue": (200, 90, 30), "yellow": (30, 200, 220), "red": BALL_BGR}
+ORANGE_BGR = (20, 110, 235)  # an orange ball (OpenCV hue ≈ 12)
+SKIN_BGR = (120, 150, 200)  # a light skin tone (OpenCV hue ≈ 11, saturation ≈ 100: at the orange band's edge)
+ROD_BGR = (70, 70, 75)  # a dark grey rod
+
+Foreground = Callable[[np.ndarray, float, np.ndarray], None]  # draw(frame, t [s], ball centre (2,) [px]) in place
 
 
 @dataclass(frozen=True)
 class Distractor:
-    """A red object that is not the ball: ``box`` (points = two opposite corners) or ``cable`` (polyline) [px]."""
+    """A red object that is not the ball [px]: ``box`` (points = two opposite corners), ``cable`` (polyline) or
+    ``disc`` (points = its centre, radius_px: its radius; as round as the ball)."""
 
-    kind: Literal["box", "cable"]
+    kind: Literal["box", "cable", "disc"]
     points: np.ndarray
     thickness_px: int = 5  # cable width [px]
+    radius_px: float = 8.0  # disc radius [px]
 
 
 @dataclass(frozen=True)
@@ -98,6 +113,8 @@ def _draw_distractors(frame: np.ndarray, distractors: Sequence[Distractor]) -> N
         p = np.round(np.asarray(d.points) * 16).astype(np.int32)
         if d.kind == "box":
             cv2.rectangle(frame, tuple(p[0]), tuple(p[1]), BALL_BGR, -1, cv2.LINE_AA, 4)
+        elif d.kind == "disc":
+            _draw_ball(frame, np.asarray(d.points, float).reshape(1, 2), d.radius_px, BALL_BGR)
         else:
             cv2.polylines(frame, [p.reshape(-1, 1, 2)], False, BALL_BGR, d.thickness_px, cv2.LINE_AA, 4)
 
@@ -134,6 +151,74 @@ def _draw_ball(frame: np.ndarray, centres: np.ndarray, r: float, color: tuple[in
     frame[cy0:cy1, cx0:cx1] = np.clip(patch * (1.0 - a) + ball * a + 0.5, 0, 255).astype(np.uint8)
 
 
+def rod_occluder(p0: Sequence[float], p1: Sequence[float], width_px: float = 6.0,
+                 bgr: tuple[int, int, int] = ROD_BGR) -> Foreground:
+    """A static rod from p0 to p1 [px] drawn in front of the ball (it hides the ball where they cross)."""
+    import cv2
+
+    a = tuple(int(round(c * 16)) for c in p0)
+    b = tuple(int(round(c * 16)) for c in p1)
+
+    def draw(frame: np.ndarray, t: float, ball: np.ndarray) -> None:
+        cv2.line(frame, a, b, bgr, max(1, int(round(width_px))), cv2.LINE_AA, 4)
+
+    return draw
+
+
+def hand_beside_ball(offset_px: Sequence[float], release_s: float, scale_px: float = 14.0,
+                     bgr: tuple[int, int, int] = SKIN_BGR) -> Foreground:
+    """A skin-coloured hand (palm and four fingers) held at offset_px [px] from the ball until release_s [s],
+    then lowered by 3.5 × scale_px over 0.15 s, out of the swing's way, and left in view."""
+    import cv2
+
+    state: dict[str, np.ndarray] = {}
+
+    def draw(frame: np.ndarray, t: float, ball: np.ndarray) -> None:
+        if t <= release_s or "at" not in state:
+            state["at"] = np.asarray(ball, float) + np.asarray(offset_px, float)
+        drop = 3.5 * scale_px * min(1.0, max(0.0, (t - release_s) / 0.15))  # the hand moves down out of the way
+        c = state["at"] + (0.0, drop)
+        s = scale_px
+        centre = (int(c[0] * 16), int(c[1] * 16))
+        cv2.ellipse(frame, centre, (int(1.1 * s * 16), int(1.3 * s * 16)), 0, 0, 360, bgr, -1, cv2.LINE_AA, 4)
+        for k in range(4):  # fingers pointing up
+            x = c[0] + (k - 1.5) * 0.55 * s
+            p0 = (int(x * 16), int((c[1] - 0.9 * s) * 16))
+            p1 = (int((x + 0.1 * (k - 1.5) * s) * 16), int((c[1] - (2.1 - 0.15 * abs(k - 1.5)) * s) * 16))
+            cv2.line(frame, p0, p1, bgr, max(2, int(0.4 * s)), cv2.LINE_AA, 4)
+        thumb0 = (int((c[0] + 1.0 * s) * 16), int((c[1] + 0.1 * s) * 16))
+        thumb1 = (int((c[0] + 1.9 * s) * 16), int((c[1] - 0.6 * s) * 16))
+        cv2.line(frame, thumb0, thumb1, bgr, max(2, int(0.45 * s)), cv2.LINE_AA, 4)
+
+    return draw
+
+
+def homography_scale(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """(n,) local linear scale sqrt|det J| of the homography H at points (n, 2) (image px per plane px)."""
+    pts = np.asarray(pts, float).reshape(-1, 2)
+    e = 0.5
+    a, bx, by = apply_homography(H, pts), apply_homography(H, pts + (e, 0.0)), apply_homography(H, pts + (0.0, e))
+    jx, jy = (bx - a) / e, (by - a) / e
+    return np.sqrt(np.abs(jx[:, 0] * jy[:, 1] - jx[:, 1] * jy[:, 0]))
+
+
+def tilted_view(size: tuple[int, int], focal_px: float, tilt_deg: Sequence[float], centre_plane_px: Sequence[float],
+                distance_px: float | None = None) -> np.ndarray:
+    """Homography plane px → image px of a pinhole camera (focal_px, principal point at the image centre) looking at
+    the plane of motion from a direction tilted by (about x, about y, about the optical axis) [deg], aimed at
+    centre_plane_px, at distance_px (plane px; default: focal_px, so the scale there is ≈ 1 image px per plane px)."""
+    import cv2
+
+    w, h = size
+    K = np.array([[focal_px, 0.0, w / 2.0], [0.0, focal_px, h / 2.0], [0.0, 0.0, 1.0]])
+    R, _ = cv2.Rodrigues(np.radians(np.asarray(tilt_deg, float)))
+    d = float(distance_px if distance_px is not None else focal_px)
+    c = np.array([centre_plane_px[0], centre_plane_px[1], 0.0])
+    t = np.array([0.0, 0.0, d]) - R @ c  # the plane point c lies on the optical axis at depth d
+    H = K @ np.column_stack([R[:, 0], R[:, 1], t])
+    return H / H[2, 2]
+
+
 def render_pendulum_video(
     path: str | Path,
     t: np.ndarray,
@@ -152,6 +237,10 @@ def render_pendulum_video(
     pivot_marker: str | None = None,
     pivot_marker_radius_px: float = 9.0,
     ball_bgr: tuple[int, int, int] = BALL_BGR,
+    gain: Callable[[float], float] | None = None,
+    foreground: Sequence[Foreground] = (),
+    plane_to_image: np.ndarray | None = None,
+    jpeg_quality: int | None = None,
     seed: int = 0,
     progress: Callable[[int], None] | None = None,
 ) -> GroundTruth:
@@ -163,7 +252,12 @@ def render_pendulum_video(
     t[0]). exposure: shutter-open fraction of a frame (motion blur); defocus_px: Gaussian blur σ [px];
     noise_std: sensor noise σ [grey levels]; codec: FourCC for cv2.VideoWriter ('mp4v' lossy, 'MJPG', ...);
     distractors: 'auto' (a red box and a red cable clear of the ball's path), None or explicit ones;
-    pivot_marker: colour name of a disc drawn on the pivot (for --pivot-color tracking), or None.
+    pivot_marker: colour name of a disc drawn on the pivot (for --pivot-color tracking), or None;
+    gain(t): brightness factor of the frame at time t [s] (e.g. dark early frames); foreground: drawers called
+    on every frame after the ball (occluders, a hand); plane_to_image: homography from the plane of motion
+    (pivot_uv, string_px and ball_radius_px are then in plane px) to the image (ball radius scaled by the
+    local scale); the returned ball and pivot positions are in the image, θ in the plane; jpeg_quality:
+    each frame JPEG-compressed at this quality (1–100) before encoding (heavy compression artifacts).
     """
     import cv2
 
@@ -183,12 +277,28 @@ def render_pendulum_video(
     n_frames = int(math.floor((t[-1] - t[0]) * fps + 1e-9)) + 1
     tf = t[0] + np.arange(n_frames) / fps
 
+    def interp(times: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Linear interpolation, extrapolated along the end slopes (the exposure of the last frame runs past t[-1])."""
+        out = np.interp(times, t, y)
+        for sel, i, j in ((times > t[-1], -2, -1), (times < t[0], 0, 1)):
+            if np.any(sel):
+                slope = (y[j] - y[i]) / (t[j] - t[i])
+                out[sel] = y[j if i < 0 else i] + slope * (times[sel] - t[j if i < 0 else i])
+        return out
+
     def state(times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        th = np.interp(times, t, theta)
-        pv = np.column_stack([np.interp(times, t, piv[:, 0]), np.interp(times, t, piv[:, 1])])
+        th = interp(times, theta)
+        pv = np.column_stack([interp(times, piv[:, 0]), interp(times, piv[:, 1])])
         return th, pv, pv + L * np.column_stack([np.sin(th), np.cos(th)])
 
+    H = None if plane_to_image is None else np.asarray(plane_to_image, float)
+
+    def to_image(pts: np.ndarray) -> np.ndarray:
+        return pts if H is None else apply_homography(H, pts)
+
     th_f, piv_f, ball_f = state(tf)
+    ball_f_plane = ball_f
+    piv_f, ball_f = to_image(piv_f), to_image(ball_f)
     if isinstance(distractors, str):
         dis = _auto_distractors((w, h), ball_f, piv_f, r)
     else:
@@ -222,15 +332,26 @@ def render_pendulum_video(
                 m = int(min(24, max(1, math.ceil(np.linalg.norm(ends[1] - ends[0]) / 0.5))))
             times = tf[k] + (np.linspace(-half, half, m) if m > 1 else np.zeros(1))
             _, _, centres = state(times)
+            rk = r if H is None else r * float(homography_scale(H, centres.mean(axis=0))[0])
+            centres = to_image(centres)
             b = ball_f[k]
             cv2.line(frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1, cv2.LINE_AA, 4)
-            _draw_ball(frame, centres, r, ball_bgr)
+            _draw_ball(frame, centres, rk, ball_bgr)
+            for draw in foreground:
+                draw(frame, float(tf[k] - t[0]), b)
+            if gain is not None:
+                g = float(gain(float(tf[k] - t[0])))
+                if g != 1.0:
+                    frame = np.clip(frame.astype(np.float32) * g + 0.5, 0, 255).astype(np.uint8)
             if defocus_px > 0:
                 frame = cv2.GaussianBlur(frame, (0, 0), defocus_px)
             if noise_std > 0:
                 cv2.randn(noise, 0, noise_std)
                 np.add(frame, noise, out=frame16, dtype=np.int16)
                 frame = np.clip(frame16, 0, 255).astype(np.uint8)
+            if jpeg_quality is not None:  # blocky, chroma-subsampled frames like a low-bitrate stream
+                ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, int(jpeg_quality)])
+                frame = cv2.imdecode(buf, cv2.IMREAD_COLOR)
             writer.write(frame)
             if progress is not None:
                 progress(k + 1)
@@ -241,7 +362,7 @@ def render_pendulum_video(
         ball_uv=ball_f,
         pivot_uv=piv_f,
         theta=th_f,
-        ball_radius_px=r,
+        ball_radius_px=r if H is None else r * float(np.median(homography_scale(H, ball_f_plane))),
         string_px=L,
         size=(w, h),
         fps=float(fps),
@@ -255,6 +376,15 @@ def damped_swing(duration_s: float, amplitude_rad: float, string_m: float = 0.25
     t = np.arange(int(round(duration_s * rate_hz)) + 1) / rate_hz
     omega = math.sqrt(9.81 / string_m)
     return t, amplitude_rad * np.exp(-damping * omega * t) * np.cos(omega * t)
+
+
+def swing_up(duration_s: float, max_deg: float = 150.0, period_s: float = 1.0,
+             rate_hz: float = 1000.0) -> tuple[np.ndarray, np.ndarray]:
+    """A test signal like a pumped swing-up: θ(t) [rad] oscillating with period_s [s], its amplitude growing
+    linearly from 0 to max_deg [deg] over the first half of duration_s [s], then held (at 150° and 1 s a 25 cm
+    string moves the ball at ≈ 4 m/s)."""
+    t = np.arange(int(round(duration_s * rate_hz)) + 1) / rate_hz
+    return t, np.radians(max_deg) * np.minimum(1.0, 2.0 * t / t[-1]) * np.sin(2 * np.pi * t / period_s)
 
 
 def _normalised_rays(K: np.ndarray, D: np.ndarray, w: int, h: int) -> np.ndarray:

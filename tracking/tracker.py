@@ -5,37 +5,64 @@ While the ball was seen recently (within ``max_coast_s``) only blobs inside a ga
 count — a ball does not jump, so a red object elsewhere is not taken even when the ball is hidden. The gate
 is tight when the velocity is known (two fixes close in time) and grows with the time since the last fix;
 after a single fix it allows any plausible speed. Inside the window the shape gates are relaxed (a fast
-ball smeared by a long exposure and compression is ragged); acquisition on the full frame uses the strict
-gates. After ``max_coast_s`` without a fix the whole frame is searched freely.
+ball smeared by a long exposure and compression is ragged), and when the ball moves fast the colour's
+saturation threshold is lowered step by step (a blurred streak is the ball's colour mixed with the
+background's). Acquisition on the full frame uses the strict gates. After ``max_coast_s`` without a fix the
+whole frame is searched freely and what was learned about the ball (its area) is forgotten.
+
+No lock-in on a bad first fix: the learned area is the median of the last fixes, and when a blob at the
+predicted place, passing the strict shape gates, is rejected for its area alone in ``area_reset_misses``
+frames in a row, the learned area is dropped (a fragment seen in a dark frame does not shut out the real ball). When the free search finds
+several candidates, each is followed, and once one moves like a pendulum over the last ``resolve_s`` it is
+kept (:mod:`tracking.ambiguity`); if none moves within ``max_resolve_s`` (or by the end of the video) the
+static rules choose. The frames seen meanwhile are then revised (:meth:`BallTracker.pop_revision`).
+``start_uv`` names the ball instead: the first fix is the candidate nearest to it.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, field, replace
+from statistics import median
 
 import numpy as np
 
-from .color import ColorSpec
-from .detect import Blob, BlobGates, find_blobs
+from .ambiguity import choose_pendulum
+from .color import ColorSpec, with_min_saturation
+from .detect import Blob, BlobGates, coarse_factor, find_blobs, find_blobs_coarse, to_hsv
 
 
 @dataclass(frozen=True)
 class TrackerOptions:
-    """Tuning of the search: blob gates, window, proximity gate, area consistency, coasting."""
+    """Tuning of the search: blob gates, window, proximity gate, area consistency, coasting, acquisition."""
 
     gates: BlobGates = field(default_factory=BlobGates)
     window_min_half_px: int = 32  # smallest half-size of the search window [px]
     window_radius_factor: float = 4.0  # window half-size ≥ this × the ball radius + the gate
     area_ratio_max: float = 2.5  # once locked, a blob whose area differs by more than this factor is not the ball
+    area_history: int = 15  # the learned area is the median of this many last fixes
+    area_reset_misses: int = 3  # frames in a row with a blob rejected for its area alone → forget the area
     gate_radius_factor: float = 3.0  # gate ≥ this × the ball radius [px]
     gate_step_factor: float = 0.6  # gate ≥ this × the predicted displacement since the last fix
-    max_acceleration_px_s2: float = 1.5e4  # the gate grows by ½·a·Δt² with the time Δt since the last fix
+    max_acceleration_px_s2: float = 4e4  # the gate grows by ½·a·Δt² with the time Δt since the last fix
     max_speed_px_s: float = 4000.0  # with a single recent fix (velocity unknown) the gate is speed × Δt
     velocity_max_gap_s: float = 0.1  # two fixes further apart than this [s] give no velocity
     max_coast_s: float = 0.25  # [s] after this long without a fix the whole frame is searched freely
     locked_min_circularity: float = 0.35  # relaxed shape gates inside the window while locked
     locked_min_ellipse_fit: float = 0.75
+    streak_min_circularity: float = 0.2  # ... and more so for a streak (moving more than its diameter per frame)
+    streak_min_ellipse_fit: float = 0.65
+    learned_saturation_factor: float = 0.55  # in the window, first try pixels this saturated relative to the ball's peak
+    acquire_min_saturation: int = 170  # on a free search finding nothing, retry with only this saturated pixels
+    blur_min_step_radii: float = 0.5  # moving more than this many radii per frame, the ball is a blurred streak:
+    blur_saturation_factor: float = 0.5  # ... its pixels are taken from this × its expected peak saturation
+    blur_min_saturation: int = 20  # ... but never below this (the background's own saturation and noise)
+    start_uv: tuple[float, float] | None = None  # [px] the ball at the first fix is the candidate nearest to this
+    start_radius_px: float = 60.0  # [px] ... within this distance
+    resolve_s: float = 0.4  # [s] several candidates on a free search: follow each, judge the motion over this
+    max_resolve_s: float = 10.0  # [s] ... and wait up to this long for one to move (else the static rules)
+    max_candidates: int = 4  # at most this many candidates are followed
 
 
 @dataclass(frozen=True)
@@ -46,6 +73,7 @@ class Prediction:
     v: float
     step_px: float
     gate_px: float  # inf when the ball was not seen recently (free search)
+    frame_step_px: float = 0.0  # displacement between the last two fixes [px] (the length of a motion-blur streak at most)
 
 
 @dataclass
@@ -55,84 +83,374 @@ class _Fix:
     v: float  # [px]
 
 
+class _Follower:
+    """One locked ball hypothesis: last fixes, learned area, window search."""
+
+    def __init__(self, spec: ColorSpec, options: TrackerOptions, blob: Blob, t: float) -> None:
+        self.spec = spec
+        self.options = options
+        self.fixes: list[_Fix] = [_Fix(t, blob.u, blob.v)]
+        self.areas: deque[float] = deque([blob.area_px], maxlen=options.area_history)
+        self.area_misses = 0
+        self.fit = blob.ellipse_fit
+        self.sats: deque[float] = deque([blob.saturation], maxlen=options.area_history)
+        self._min_s = min(b.lower[1] for b in spec.bands)
+        self._sat_specs: dict[int, ColorSpec] = {}
+
+    def _at(self, level: int) -> ColorSpec:
+        if level not in self._sat_specs:
+            self._sat_specs[level] = with_min_saturation(self.spec, level)
+        return self._sat_specs[level]
+
+    def _specs(self, pred: Prediction) -> list[ColorSpec]:
+        """Colour thresholds to try in the window, in order. Moving fast, the ball is a streak whose colour is
+        mixed with the background's: its peak saturation falls to about the ball's × its coverage 2r/ℓ (ℓ the
+        distance moved in a frame, the longest the exposure can smear it, doubled for a ball speeding up), so
+        the threshold is half of that.
+        Otherwise the ball's own saturation first (keeps out paler objects of the same hue, such as skin
+        beside an orange ball), then the colour's."""
+        o = self.options
+        sats = [x for x in self.sats if math.isfinite(x)]
+        peak = median(sats) if sats else 255.0
+        if pred.frame_step_px > o.blur_min_step_radii * self.radius():
+            coverage = min(1.0, self.radius() / pred.frame_step_px)  # allowing the speed to double
+            level = int(o.blur_saturation_factor * coverage * peak) // 5 * 5
+            level = max(o.blur_min_saturation, level)
+            if level < self._min_s:
+                return [self._at(level), self.spec]
+            return [self.spec]
+        level = int(o.learned_saturation_factor * peak) // 10 * 10
+        if sats and level > self._min_s:
+            return [self._at(level), self.spec]
+        return [self.spec]
+
+    @property
+    def area(self) -> float:
+        return float(median(self.areas))
+
+    def radius(self) -> float:
+        return math.sqrt(self.area / math.pi)
+
+    def predict(self, t: float) -> Prediction:
+        o = self.options
+        last = self.fixes[-1]
+        age = t - last.t
+        if age > o.max_coast_s:
+            return Prediction(last.u, last.v, 0.0, math.inf)
+        base = o.gate_radius_factor * self.radius()
+        if len(self.fixes) == 2 and 0 < last.t - self.fixes[0].t <= o.velocity_max_gap_s:
+            prev = self.fixes[0]
+            dt = last.t - prev.t
+            du, dv = (last.u - prev.u) / dt * age, (last.v - prev.v) / dt * age
+            step = math.hypot(du, dv)
+            gate = max(base, o.gate_step_factor * step) + 0.5 * o.max_acceleration_px_s2 * age * age
+            moved = math.hypot(last.u - prev.u, last.v - prev.v)
+            return Prediction(last.u + du, last.v + dv, step, gate, moved)
+        return Prediction(last.u, last.v, 0.0, base + o.max_speed_px_s * age)
+
+    def _smear(self, pred: Prediction) -> float:
+        """Area factor of a motion-blurred streak: longer by up to the distance moved in a frame."""
+        return 1.0 + pred.frame_step_px / max(2.0 * self.radius(), 1.0)
+
+    def _area_ok(self, b: Blob, pred: Prediction) -> bool:
+        r = b.area_px / self.area
+        smear = self._smear(pred)
+        return 1.0 / self.options.area_ratio_max <= r <= self.options.area_ratio_max * smear
+
+    def _saturation_ok(self, b: Blob, pred: Prediction) -> bool:
+        """The blob's peak saturation is the ball's, allowing for motion blur (the colour mixed with the
+        background over a streak up to a frame's displacement long): a paler object of the same hue that the
+        ball merged with or hid behind (a hand) is not taken for it."""
+        sats = [x for x in self.sats if math.isfinite(x)]
+        if not sats or not math.isfinite(b.saturation):
+            return True
+        coverage = min(1.0, 2.0 * self.radius() / max(pred.frame_step_px, 1e-9))
+        return b.saturation >= self.options.learned_saturation_factor * coverage * median(sats)
+
+    def choose(self, blobs: list[Blob], pred: Prediction) -> Blob | None:
+        """The blob nearest the prediction inside the gate and of a plausible area; counts area-only rejections."""
+        inside = sorted(
+            ((math.hypot(b.u - pred.u, b.v - pred.v), b) for b in blobs), key=lambda db: db[0]
+        )
+        inside = [(d, b) for d, b in inside if d <= pred.gate_px]
+        for _, b in inside:
+            if self._area_ok(b, pred) and self._saturation_ok(b, pred):
+                return b
+        g = self.options.gates
+        round_ = [
+            b for _, b in inside
+            if b.circularity >= g.min_circularity and b.ellipse_fit >= g.min_ellipse_fit and self._saturation_ok(b, pred)
+        ]
+        if round_:  # as round as a ball and where the ball should be, only its area is off
+            self.area_misses += 1
+            if self.area_misses >= self.options.area_reset_misses:  # the learned area was wrong: relearn
+                self.areas.clear()
+                self.areas.append(round_[0].area_px)
+                self.area_misses = 0
+                return round_[0]
+        return None
+
+    def window(self, pred: Prediction, w: int, h: int) -> tuple[int, int, int, int] | None:
+        o = self.options
+        half = int(max(o.window_min_half_px, o.window_radius_factor * self.radius() + pred.gate_px))
+        x0, y0 = max(int(pred.u) - half, 0), max(int(pred.v) - half, 0)
+        x1, y1 = min(int(pred.u) + half + 1, w), min(int(pred.v) + half + 1, h)
+        if x1 - x0 > 4 and y1 - y0 > 4 and (x1 - x0) * (y1 - y0) < w * h // 2:
+            return x0, y0, x1, y1
+        return None
+
+    def search_window(self, frame: np.ndarray, pred: Prediction) -> tuple[Blob | None, bool]:
+        """(blob, settled): the ball in the window around a finite prediction (the window covers the whole
+        gate). settled False when the window is too large, or the blob is cut by its edge: the caller then
+        searches the whole frame; a settled None means the ball is not within the gate."""
+        h, w = frame.shape[:2]
+        o = self.options
+        box = self.window(pred, w, h)
+        if box is None:
+            return None, False
+        x0, y0, x1, y1 = box
+        streak = pred.frame_step_px > 2.0 * self.radius()  # blurred over more than its own size: ragged
+        gates = replace(
+            o.gates,
+            min_circularity=min(o.gates.min_circularity, o.streak_min_circularity if streak else o.locked_min_circularity),
+            min_ellipse_fit=min(o.gates.min_ellipse_fit, o.streak_min_ellipse_fit if streak else o.locked_min_ellipse_fit),
+            max_area_px=o.gates.max_area_px * self._smear(pred),
+        )
+        sub = frame[y0:y1, x0:x1]
+        hsv = to_hsv(sub)
+        for spec in self._specs(pred):
+            blob = self.choose(find_blobs(sub, spec, gates, (x0, y0), (w, h), hsv), pred)
+            if blob is not None:
+                return (None, False) if blob.clipped else (blob, True)  # clipped: measure it on the whole frame
+        return None, True
+
+    def accept(self, blob: Blob, t: float, pred: Prediction | None = None) -> None:
+        """Take the blob as the ball at time t [s]; its area and saturation are learned only while it moves
+        slowly (a motion-blurred streak is larger and paler than the ball)."""
+        self.fixes = (self.fixes + [_Fix(t, blob.u, blob.v)])[-2:]
+        self.area_misses = 0
+        if pred is not None and pred.frame_step_px > self.options.blur_min_step_radii * self.radius():
+            return
+        self.areas.append(blob.area_px)
+        self.sats.append(blob.saturation)
+
+
+@dataclass
+class _Hypotheses:
+    """Candidates followed side by side until one is chosen."""
+
+    followers: list[_Follower]
+    t0: float  # [s] time of the free search that found them
+    first: int  # update index of that frame
+    centres: list[list[tuple[float, float]]]  # per follower, per frame since `first`
+    blobs: list[list[Blob | None]]
+    pivots: list[tuple[float, float]]
+    times: list[float]  # [s] of the frames since `first`
+    leader: int  # provisional choice (best ellipse fit)
+    shown: list[Blob | None]  # what was returned for each frame meanwhile
+    starts: list[tuple[float, float]]  # where every candidate was first seen [px]
+    merged: bool = False  # some candidates' followers converged onto another's blob and were dropped
+
+
 class BallTracker:
     """Stateful tracker of one coloured ball; call :meth:`update` once per frame in time order."""
 
     def __init__(self, spec: ColorSpec, options: TrackerOptions | None = None) -> None:
         self.spec = spec
         self.options = options or TrackerOptions()
-        self._fixes: list[_Fix] = []  # the last two fixes
-        self._area: float | None = None  # learned ball area [px²]
+        self._follower: _Follower | None = None
+        self._hyp: _Hypotheses | None = None
+        self._n = 0  # updates so far
+        self._revision: list[tuple[int, Blob | None]] = []
         self.full_frame_searches = 0  # how often the window failed and the whole frame was searched
+        self.notes: list[str] = []  # ambiguities met and how they were resolved (for the user)
+        self._started = False  # a first fix was made (start_uv only applies before it)
+        self._acquire_spec = with_min_saturation(spec, self.options.acquire_min_saturation)
 
-    def _radius(self) -> float:
-        if self._area is not None:
-            return math.sqrt(self._area / math.pi)
-        return math.sqrt(self.options.gates.max_area_px / math.pi) / 3.0
+    # ------------------------------------------------------------------ public
 
     def predict(self, t: float) -> Prediction | None:
         """The prediction for a frame at time t [s]; None before the first fix."""
-        if not self._fixes:
-            return None
+        f = self._current()
+        return f.predict(t) if f is not None else None
+
+    def pop_revision(self) -> list[tuple[int, Blob | None]]:
+        """Frames (update index, blob or None) whose result changed since returned, after choosing among
+        candidates; cleared by the call."""
+        out, self._revision = self._revision, []
+        return out
+
+    @property
+    def resolving(self) -> bool:
+        """Several candidates are being followed; results returned meanwhile may be revised."""
+        return self._hyp is not None
+
+    def finish(self) -> None:
+        """End of the video: choose among candidates still open (revisions via :meth:`pop_revision`)."""
+        if self._hyp is not None:
+            self._resolve(final=True)
+
+    def update(self, frame: np.ndarray, t: float, pivot_uv: tuple[float, float] | None = None) -> Blob | None:
+        """Find the ball in a BGR frame taken at time t [s]; None when it is not found.
+
+        pivot_uv: the pivot in this frame [px] when known (helps choosing among candidates).
+        """
+        index = self._n
+        self._n += 1
+        if self._hyp is not None:
+            return self._update_hypotheses(frame, t, pivot_uv, index)
+        f = self._follower
+        pred = f.predict(t) if f is not None else None
+        if f is not None and pred is not None and math.isfinite(pred.gate_px):
+            blob, settled = f.search_window(frame, pred)
+            if not settled:
+                self.full_frame_searches += 1
+                blob = f.choose(self._whole(frame, self.spec), pred)
+            if blob is not None:
+                f.accept(blob, t, pred)
+            return blob
+        return self._acquire(frame, t, pivot_uv, index)
+
+    # ------------------------------------------------------------------ internals
+
+    def _whole(self, frame: np.ndarray, spec: ColorSpec) -> list[Blob]:
+        """Blobs passing the strict gates on the whole frame (a coarse pass first on large frames)."""
+        return find_blobs_coarse(frame, spec, self.options.gates, coarse_factor(frame.shape[1]))
+
+    def _current(self) -> _Follower | None:
+        if self._hyp is not None:
+            return self._hyp.followers[self._hyp.leader]
+        return self._follower
+
+    def _acquire(self, frame: np.ndarray, t: float, pivot_uv, index: int) -> Blob | None:
+        """Free search of the whole frame (strict gates); forgets what was learned about the ball."""
         o = self.options
-        last = self._fixes[-1]
-        age = t - last.t
-        if age > o.max_coast_s:
-            return Prediction(last.u, last.v, 0.0, math.inf)
-        base = o.gate_radius_factor * self._radius()
-        if len(self._fixes) == 2 and 0 < last.t - self._fixes[0].t <= o.velocity_max_gap_s:
-            prev = self._fixes[0]
-            dt = last.t - prev.t
-            du, dv = (last.u - prev.u) / dt * age, (last.v - prev.v) / dt * age
-            step = math.hypot(du, dv)
-            gate = max(base, o.gate_step_factor * step) + 0.5 * o.max_acceleration_px_s2 * age * age
-            return Prediction(last.u + du, last.v + dv, step, gate)
-        return Prediction(last.u, last.v, 0.0, base + o.max_speed_px_s * age)
-
-    def _area_ok(self, b: Blob) -> bool:
-        if self._area is None:
-            return True
-        r = b.area_px / self._area
-        return 1.0 / self.options.area_ratio_max <= r <= self.options.area_ratio_max
-
-    def _choose(self, blobs: list[Blob], pred: Prediction | None) -> Blob | None:
-        cands = [b for b in blobs if self._area_ok(b)]
-        if pred is not None:
-            dist = [math.hypot(b.u - pred.u, b.v - pred.v) for b in cands]
-            inside = [(d, b) for d, b in zip(dist, cands) if d <= pred.gate_px]
-            return min(inside, key=lambda db: db[0])[1] if inside else None
-        if not cands:
+        self.full_frame_searches += 1
+        self._follower = None
+        blobs = self._whole(frame, self.spec)
+        if not blobs and o.acquire_min_saturation > min(b.lower[1] for b in self.spec.bands):
+            # a ball touching a paler object of its hue (a hand) merges with it; its saturated core does not
+            blobs = self._whole(frame, self._acquire_spec)
+        if o.start_uv is not None and not self._started:
+            su, sv = o.start_uv
+            near = [b for b in blobs if math.hypot(b.u - su, b.v - sv) <= o.start_radius_px]
+            if not near:
+                return None
+            blob = min(near, key=lambda b: math.hypot(b.u - su, b.v - sv))
+            self._started = True
+            self._follower = _Follower(self.spec, o, blob, t)
+            return blob
+        if not blobs:
             return None
-        return max(cands, key=lambda b: b.ellipse_fit)
+        self._started = True
+        if len(blobs) == 1:
+            self._follower = _Follower(self.spec, o, blobs[0], t)
+            return blobs[0]
+        cands = sorted(blobs, key=lambda b: -b.ellipse_fit)[: o.max_candidates]
+        self._hyp = _Hypotheses(
+            followers=[_Follower(self.spec, o, b, t) for b in cands],
+            t0=t,
+            first=index,
+            centres=[[(b.u, b.v)] for b in cands],
+            blobs=[[b] for b in cands],
+            pivots=[pivot_uv if pivot_uv is not None else (math.nan, math.nan)],
+            times=[t],
+            leader=0,
+            shown=[cands[0]],
+            starts=[(b.u, b.v) for b in cands],
+        )
+        return cands[0]
 
-    def update(self, frame: np.ndarray, t: float) -> Blob | None:
-        """Find the ball in a BGR frame taken at time t [s]; None when it is not found."""
-        h, w = frame.shape[:2]
-        o = self.options
-        pred = self.predict(t)
-        blob = None
-        if pred is not None:
-            locked = math.isfinite(pred.gate_px)
-            reach = pred.gate_px if locked else 0.0
-            half = int(max(o.window_min_half_px, o.window_radius_factor * self._radius() + reach))
-            x0, y0 = max(int(pred.u) - half, 0), max(int(pred.v) - half, 0)
-            x1, y1 = min(int(pred.u) + half + 1, w), min(int(pred.v) + half + 1, h)
-            if x1 - x0 > 4 and y1 - y0 > 4 and (x1 - x0) * (y1 - y0) < w * h // 2:
-                gates = o.gates
-                if locked:
-                    gates = replace(
-                        gates,
-                        min_circularity=min(gates.min_circularity, o.locked_min_circularity),
-                        min_ellipse_fit=min(gates.min_ellipse_fit, o.locked_min_ellipse_fit),
-                    )
-                blob = self._choose(find_blobs(frame[y0:y1, x0:x1], self.spec, gates, (x0, y0), (w, h)), pred)
-                if blob is not None and blob.clipped:  # cut by the window: measure it on the whole frame
-                    blob = None
-        if blob is None:
-            self.full_frame_searches += 1
-            blob = self._choose(find_blobs(frame, self.spec, o.gates), pred)
-        if blob is None:
+    def _update_hypotheses(self, frame: np.ndarray, t: float, pivot_uv, index: int) -> Blob | None:
+        hyp = self._hyp
+        assert hyp is not None
+        for k, f in enumerate(hyp.followers):
+            pred = f.predict(t)
+            blob = None
+            if math.isfinite(pred.gate_px):
+                blob, _ = f.search_window(frame, pred)
+                if blob is not None:
+                    f.accept(blob, t, pred)
+            hyp.centres[k].append((blob.u, blob.v) if blob is not None else (math.nan, math.nan))
+            hyp.blobs[k].append(blob)
+        hyp.pivots.append(pivot_uv if pivot_uv is not None else (math.nan, math.nan))
+        hyp.times.append(t)
+        self._merge_converged()
+        if len(hyp.followers) == 1:
+            chosen = self._resolve(final=True)
+            return chosen[-1] if chosen else None
+        if all(not math.isfinite(f.predict(t).gate_px) for f in hyp.followers):  # all lost: none was the ball
+            self._abandon()
             return None
-        self._fixes = (self._fixes + [_Fix(t, blob.u, blob.v)])[-2:]
-        self._area = blob.area_px if self._area is None else 0.8 * self._area + 0.2 * blob.area_px
-        return blob
+        if t - hyp.t0 >= self.options.resolve_s:
+            chosen = self._resolve(final=t - hyp.t0 >= self.options.max_resolve_s)
+            if chosen is not None:
+                return chosen[-1]
+        hyp.shown.append(hyp.blobs[hyp.leader][-1])
+        return hyp.shown[-1]
+
+    def _merge_converged(self) -> None:
+        """Two candidates followed onto the same blob: drop the one that jumped there (it lost its own)."""
+        hyp = self._hyp
+        assert hyp is not None
+
+        def jump(k: int) -> float:
+            c = hyp.centres[k]
+            prev = next((p for p in reversed(c[:-1]) if math.isfinite(p[0])), None)
+            return math.hypot(c[-1][0] - prev[0], c[-1][1] - prev[1]) if prev is not None else math.inf
+
+        drop: set[int] = set()
+        n = len(hyp.followers)
+        for i in range(n):
+            for j in range(i + 1, n):
+                a, b = hyp.centres[i][-1], hyp.centres[j][-1]
+                if i in drop or j in drop or not (math.isfinite(a[0]) and math.isfinite(b[0])):
+                    continue
+                if math.hypot(a[0] - b[0], a[1] - b[1]) < 1.0:
+                    drop.add(i if jump(i) > jump(j) else j)
+        if not drop:
+            return
+        keep = [k for k in range(n) if k not in drop]
+        leader = hyp.followers[hyp.leader]
+        for name in ("followers", "centres", "blobs"):
+            setattr(hyp, name, [getattr(hyp, name)[k] for k in keep])
+        hyp.merged = True
+        hyp.leader = hyp.followers.index(leader) if leader in hyp.followers else 0
+
+    def _abandon(self) -> None:
+        """No candidate lasted: what was returned for them is withdrawn (revised to not found)."""
+        hyp = self._hyp
+        assert hyp is not None
+        self.notes.append(f"t = {hyp.t0:.3f} s: {len(hyp.followers)} ball-like candidates, all lost again; none kept")
+        self._revision.extend((hyp.first + j, None) for j in range(len(hyp.pivots) - 1))
+        self._hyp = None
+        self._follower = None
+
+    def _resolve(self, final: bool) -> list[Blob | None] | None:
+        hyp = self._hyp
+        assert hyp is not None
+        times = np.array(hyp.times)
+        recent = times >= times[-1] - self.options.resolve_s - 1e-9  # motion judged over the last resolve_s
+        centres = [np.array(c, float)[recent] for c in hyp.centres]
+        pivots = np.array(hyp.pivots, float)[recent]
+        radius = float(median(f.radius() for f in hyp.followers))
+        fits = [f.fit for f in hyp.followers]
+        sats = [float(np.nanmedian(np.array(f.sats, float))) for f in hyp.followers]
+        choice = choose_pendulum(centres, pivots, radius, fits, sats, final=final)
+        if choice.index is None:
+            return None
+        k = choice.index
+        reason = choice.reason
+        if len(hyp.followers) == 1 and hyp.merged:
+            reason = "the others were lost, their followers drifted onto it"
+        start = hyp.centres[k][0]
+        others = ", ".join(f"({u:.0f}, {v:.0f})" for u, v in hyp.starts if (u, v) != tuple(start))
+        self.notes.append(
+            f"t = {hyp.t0:.3f} s: {len(hyp.starts)} ball-like candidates; took the one at "
+            f"({start[0]:.0f}, {start[1]:.0f}) px, not {others}: {reason}"
+        )
+        blobs = hyp.blobs[k]
+        self._revision.extend((hyp.first + j, b) for j, (b, s) in enumerate(zip(blobs, hyp.shown)) if b is not s)
+        self._follower = hyp.followers[k]
+        self._hyp = None
+        return blobs

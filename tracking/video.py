@@ -77,8 +77,11 @@ def probe_video(path: str | Path) -> VideoInfo:
         cap.release()
 
 
-def iter_frames(path: str | Path) -> Iterator[tuple[int, float, np.ndarray]]:
+def iter_frames(path: str | Path, fps: float | None = None) -> Iterator[tuple[int, float, np.ndarray]]:
     """Yield (frame index, time [s] from the first frame, BGR frame (h, w, 3) uint8) for every frame.
+
+    fps: the capture rate [1/s] when the container's is wrong (slow-motion videos state their playback rate):
+    times are then index / fps, ignoring the container's timestamps.
 
     Raises InputError when the file cannot be opened or yields no frame at all.
     """
@@ -95,6 +98,10 @@ def iter_frames(path: str | Path) -> Iterator[tuple[int, float, np.ndarray]]:
             ok, frame = cap.read()
             if not ok or frame is None:
                 break
+            if fps is not None:
+                yield k, k / fps, frame
+                k += 1
+                continue
             ms = cap.get(cv2.CAP_PROP_POS_MSEC)
             t = ms / 1000.0 if ms is not None and math.isfinite(ms) else math.nan
             if t0 is None:

@@ -47,7 +47,7 @@ class CheckReport:
     margin: float
     cartesian_speed_peak: float | None = None  # [m/s], with --t1
     cartesian_speed_limit: float | None = None
-    series: dict[str, np.ndarray] = field(default_factory=dict, repr=False)  # t, velocity, acceleration, jerk
+    series: dict[str, np.ndarray] = field(default_factory=dict, repr=False)  # t, position, velocity, acceleration, jerk
 
     @property
     def failing(self) -> tuple[Violation, ...]:
@@ -150,5 +150,19 @@ def check_trajectory(
         margin=margin,
         cartesian_speed_peak=cart_peak,
         cartesian_speed_limit=cart_limit,
-        series={"t": traj.t, "velocity": vel, "acceleration": acc, "jerk": jrk},
+        series={"t": traj.t, "position": traj.q, "velocity": vel, "acceleration": acc, "jerk": jrk},
     )
+
+
+def step_ratios(traj: JointTrajectory, limits: JointLimits) -> dict[str, float]:
+    """Peak |forward difference| / limit over all joints: velocity (q[k+1] − q[k])/h and acceleration
+    (q[k+1] − 2q[k] + q[k−1])/h², what the controller executes step by step [ratio, 1 = at the limit]."""
+    if len(traj) < 3:
+        return {"velocity": 0.0, "acceleration": 0.0}
+    h = traj.dt
+    vel = np.abs(np.diff(traj.q, axis=0)) / h
+    acc = np.abs(np.diff(traj.q, 2, axis=0)) / (h * h)
+    return {
+        "velocity": float((vel / limits.velocity).max()),
+        "acceleration": float((acc / limits.acceleration).max()),
+    }

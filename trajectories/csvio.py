@@ -7,18 +7,22 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal, Sequence, TextIO
 
 import numpy as np
 
+from .atomic import atomic_path
 from .errors import CsvFormatError
 from .trajectory import N_JOINTS, JointTrajectory, TaskTrajectory
 
 JOINT_COLUMNS = ("t",) + tuple(f"q{i}" for i in range(1, N_JOINTS + 1))
 TASK_COLUMNS = ("t", "x", "y", "z", "qw", "qx", "qy", "qz")
 PREDICTION_COLUMNS = ("t", "theta")
+
+_NOT_BLANK = re.compile(rb"[^\s,]")  # a line or text holding more than separators and white space
 
 TimeRule = Literal["uniform", "increasing", "none"]
 
@@ -95,6 +99,116 @@ def _check_time(t: np.ndarray, path: str, rule: TimeRule, first_row: int) -> Non
             )
 
 
+def _read_bytes(path: str | Path, spath: str) -> bytes:
+    """The whole file (a leading UTF-8 byte-order mark dropped)."""
+    try:
+        raw = Path(path).read_bytes()
+    except FileNotFoundError:
+        raise CsvFormatError("file not found", file=spath) from None
+    except IsADirectoryError:
+        raise CsvFormatError("is a directory, not a CSV file", file=spath) from None
+    except OSError as exc:
+        raise CsvFormatError(f"cannot open: {exc.strerror}", file=spath) from None
+    return raw[3:] if raw.startswith(b"\xef\xbb\xbf") else raw
+
+
+def _decode(raw: bytes, start: int, end: int, spath: str) -> str:
+    """UTF-8 text of raw[start:end]; a byte that is not UTF-8 is named by its row."""
+    try:
+        return raw[start:end].decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[: start + exc.start].count(b"\n") + 1
+        raise CsvFormatError(
+            f"not a readable CSV file (not UTF-8 text: byte {raw[start + exc.start]:#04x})", file=spath, row=line
+        ) from None
+
+
+def _first_line(raw: bytes) -> tuple[int, int, int, int]:
+    """(1-based line number, offset, end, offset of the next line) of the first line that is not blank."""
+    pos, line_no = 0, 1
+    while pos < len(raw):
+        end = raw.find(b"\n", pos)
+        end = len(raw) if end < 0 else end
+        if _NOT_BLANK.search(raw, pos, end):
+            return line_no, pos, end, end + 1
+        pos, line_no = end + 1, line_no + 1
+    return 0, len(raw), len(raw), len(raw)
+
+
+def _fast_body(path: str | Path, raw: bytes, start: int, skip_lines: int, width: int,
+               nan_ok: set[int]) -> np.ndarray | None:
+    """Parse the data rows (raw[start:], after the first ``skip_lines`` lines of the file) with numpy's C reader
+    straight from the file; None when anything is unusual (blank lines, quotes, empty or malformed cells, a wrong
+    number of cells, a non-finite value outside ``nan_ok``, not UTF-8): the strict per-cell reader then finds and
+    names the fault."""
+    import warnings
+
+    end = len(raw)
+    while end > start and raw[end - 1 : end] in (b"\n", b"\r", b" ", b"\t"):
+        end -= 1  # trailing blank lines do not shift any row number
+    if end == start or raw.find(b'"', start, end) >= 0:
+        return None
+    lines = raw.count(b"\n", start, end) + 1
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # e.g. "input contained no data"
+            data = np.loadtxt(path, delimiter=",", comments=None, dtype=float, ndmin=2, skiprows=skip_lines,
+                              max_rows=lines, encoding="utf-8-sig")
+    except (ValueError, UserWarning):  # UnicodeDecodeError is a ValueError
+        return None
+    if data.shape != (lines, width):  # blank lines were skipped, or the column count differs
+        return None
+    finite = np.isfinite(data)
+    if not finite.all():
+        bad_cols = set(np.flatnonzero(~finite.all(axis=0)).tolist())
+        if not bad_cols <= nan_ok or np.isinf(data[:, sorted(bad_cols)]).any():
+            return None
+    return data
+
+
+def _parse_rows(rows: list[tuple[int, list[str]]], width: int, names: Sequence[str], nan_ok: set[int],
+                spath: str, block: int = 2048) -> np.ndarray:
+    """The strict reader: blocks of rows converted at once, a block with any fault cell by cell, so that the first
+    fault in the file is named by file, row and column."""
+    data = np.empty((len(rows), width), dtype=float)
+    allowed = np.zeros(width, dtype=bool)
+    allowed[sorted(nan_ok)] = True
+    for b0 in range(0, len(rows), block):
+        chunk = rows[b0 : b0 + block]
+        cells = [r for _, r in chunk]
+        if all(len(r) == width for r in cells):
+            try:
+                values = np.array(cells, dtype=float)
+            except ValueError:
+                values = None
+            if values is not None:
+                finite = np.isfinite(values)
+                if finite.all() or not (~finite & ~allowed).any() and not np.isinf(values).any():
+                    data[b0 : b0 + len(chunk)] = values
+                    continue
+        for i, (line, row_cells) in enumerate(chunk, start=b0):
+            if len(row_cells) != width:
+                what = "missing" if len(row_cells) < width else "extra"
+                col = min(len(row_cells), width) + 1 if len(row_cells) < width else width + 1
+                raise CsvFormatError(
+                    f"{what} columns: {len(row_cells)} cells, expected {width}", file=spath, row=line, column=col
+                )
+            for j, cell in enumerate(row_cells):
+                data[i, j] = _parse_float(cell, path=spath, row=line, col=j + 1, name=names[j], allow_nan=j in nan_ok)
+    return data
+
+
+def _csv_rows(text: str, spath: str, first_line: int = 1) -> list[tuple[int, list[str]]]:
+    """Non-blank CSV rows with their 1-based line numbers."""
+    import io
+
+    try:
+        rows = list(csv.reader(io.StringIO(text, newline="")))
+    except csv.Error as exc:
+        raise CsvFormatError(f"not a readable CSV file ({exc})", file=spath) from None
+    return [(first_line + i, r) for i, r in enumerate(rows) if any(c.strip() for c in r)]
+
+
 def read_table(
     path: str | Path,
     columns: Sequence[str],
@@ -109,28 +223,16 @@ def read_table(
     A headerless file of exactly ``headerless_width`` numeric columns is accepted when ``headerless_dt`` [s]
     is given; it gets the column names ``columns[1:]`` and a time column t = k·dt.
     Cells of ``nan_columns`` may be empty or 'nan' (e.g. the ball position of a frame where it was not found).
+    UTF-8 with or without a byte-order mark. Well-formed files are parsed by numpy's C reader (about the cost of
+    ``numpy.loadtxt``); any fault sends the file through the strict per-cell reader, which names it.
     """
     spath = str(path)
-    try:
-        fh: TextIO = open(path, newline="")
-    except FileNotFoundError:
-        raise CsvFormatError("file not found", file=spath) from None
-    except IsADirectoryError:
-        raise CsvFormatError("is a directory, not a CSV file", file=spath) from None
-    except OSError as exc:
-        raise CsvFormatError(f"cannot open: {exc.strerror}", file=spath) from None
-    with fh:
-        try:
-            rows = list(csv.reader(fh))
-        except (csv.Error, UnicodeDecodeError) as exc:
-            raise CsvFormatError(f"not a readable CSV file ({exc})", file=spath) from None
-
-    # Skip fully blank lines but remember line numbers (1-based).
-    numbered = [(i + 1, r) for i, r in enumerate(rows) if any(c.strip() for c in r)]
-    if not numbered:
+    raw = _read_bytes(path, spath)
+    first_line, first_start, first_end, body_start = _first_line(raw)
+    if first_line == 0:
         raise CsvFormatError("empty file", file=spath)
+    first = _csv_rows(_decode(raw, first_start, first_end, spath), spath, first_line)[0][1]
 
-    first_line, first = numbered[0]
     headerless = False
     if _looks_numeric(first):
         if headerless_width is None or len(first) != headerless_width:
@@ -140,11 +242,11 @@ def read_table(
             raise CsvFormatError(
                 f"headerless {headerless_width}-column file: give the sample step with --dt", file=spath, row=first_line
             )
-        if not headerless_dt > 0:
-            raise CsvFormatError(f"--dt must be positive, got {headerless_dt:g}", file=spath)
+        if not (headerless_dt > 0 and math.isfinite(headerless_dt)):
+            raise CsvFormatError(f"--dt must be a positive number of seconds, got {headerless_dt:g}", file=spath)
         names = tuple(columns[1:])
-        body = numbered
         headerless = True
+        body_start, body_line = first_start, first_line
     else:
         names = tuple(c.strip() for c in first)
         for j, want in enumerate(columns):
@@ -163,35 +265,33 @@ def read_table(
         if len(set(names)) != len(names):
             dup = next(n for n in names if names.count(n) > 1)
             raise CsvFormatError(f"duplicate column '{dup}'", file=spath, row=first_line, column=names.index(dup) + 1)
-        body = numbered[1:]
-        if not body:
+        body_line = first_line + 1
+        if not _NOT_BLANK.search(raw, body_start):
             raise CsvFormatError("no data rows after the header", file=spath, row=first_line)
 
     width = len(names)
     nan_ok = {names.index(c) for c in nan_columns if c in names}
-    data = np.empty((len(body), width), dtype=float)
-    for i, (line, cells) in enumerate(body):
-        if len(cells) != width:
-            what = "missing" if len(cells) < width else "extra"
-            col = min(len(cells), width) + 1 if len(cells) < width else width + 1
-            raise CsvFormatError(
-                f"{what} columns: {len(cells)} cells, expected {width}", file=spath, row=line, column=col
-            )
-        for j, cell in enumerate(cells):
-            data[i, j] = _parse_float(cell, path=spath, row=line, col=j + 1, name=names[j], allow_nan=j in nan_ok)
+    data = _fast_body(path, raw, body_start, body_line - 1, width, nan_ok)
+    if data is None:
+        rows = _csv_rows(_decode(raw, body_start, len(raw), spath), spath, body_line)
+        if not rows:
+            raise CsvFormatError("no data rows after the header", file=spath, row=first_line)
+        data = _parse_rows(rows, width, names, nan_ok, spath)
+        body_line = rows[0][0]
 
     if headerless:
-        t = np.arange(len(body)) * float(headerless_dt)
+        t = np.arange(len(data)) * float(headerless_dt)
         data = np.column_stack([t, data])
         names = tuple(columns[:1]) + names
     else:
-        _check_time(data[:, 0], spath, time, body[0][0])
+        _check_time(data[:, 0], spath, time, body_line)
     return Table(path=spath, names=names, data=data)
 
 
 def write_table(path: str | Path, names: Sequence[str], data: np.ndarray, fmt: str | Sequence[str] = "%.10g") -> None:
-    """Write an (n, m) array with a header line."""
-    np.savetxt(path, np.asarray(data, dtype=float), delimiter=",", header=",".join(names), comments="", fmt=fmt)
+    """Write an (n, m) array with a header line, atomically (a temporary name renamed when complete)."""
+    with atomic_path(path) as tmp:
+        np.savetxt(tmp, np.asarray(data, dtype=float), delimiter=",", header=",".join(names), comments="", fmt=fmt)
 
 
 def read_joint_csv(path: str | Path, dt: float | None = None) -> JointTrajectory:

@@ -61,13 +61,33 @@ class CheckFailed(LbrError):
 
 
 class IkError(LbrError):
-    """Inverse kinematics did not reach a pose within tolerance. Exit code 1."""
+    """Inverse kinematics did not reach a pose within tolerance. Exit code 1.
 
-    def __init__(self, message: str, *, index: int, t: float, position_error: float, rotation_error: float):
+    ``reason`` is "out of reach" (no joint configuration reaches the pose), "position limit" (reachable only
+    beyond a joint's position limit), "velocity limit" (reachable only faster than a joint's speed limit) or
+    "not converged"; ``joint`` (0-based) and ``needed`` [rad] or [rad/s] name the limiting joint and the value
+    it would need.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        index: int,
+        t: float,
+        position_error: float,
+        rotation_error: float,
+        reason: str = "not converged",
+        joint: int | None = None,
+        needed: float | None = None,
+    ):
         self.index = index
         self.t = t
         self.position_error = position_error  # [m]
         self.rotation_error = rotation_error  # [rad]
+        self.reason = reason
+        self.joint = joint
+        self.needed = needed
         super().__init__(message)
 
 

@@ -1,46 +1,84 @@
-"""Inverse kinematics of whole paths on pinocchio: warm-started damped least squares.
+"""Inverse kinematics of whole paths on pinocchio, inside the joint position, velocity and acceleration limits.
 
-Each sample starts from a first-order extrapolation of the two previous solutions, so a path sampled at the
-FRI rate needs one or two Newton steps per pose. The 7th degree of freedom is resolved by a null-space pull
-toward the reference configuration ``q0`` (the minimum-norm step otherwise keeps the previous sample's
-configuration), so the arm never flips configuration mid-path. Joint positions are kept inside the limits.
+Two passes:
+
+1. A sequential pass over the path sampled every ``coarse_dt`` (every sample when the path is sparser):
+   each pose starts from a first-order extrapolation of the two previous solutions and takes damped
+   Gauss-Newton steps. The limits are constraints of each step — the joint positions, the speed limit
+   (q̇_max·Δt around the previous solution) and the acceleration limit (q̈_max·Δt² around the extrapolation)
+   form a box, and a step that would leave it is replaced by the box-constrained least-squares step
+   (:mod:`.boxqp`). The 7th degree of freedom is resolved by a null-space pull toward the reference
+   configuration at ``nullspace_rate`` [1/s], so it does not depend on the sampling; steps are weighted by
+   the speed limits. When a sample is reachable only faster than the limits from where the redundancy has led,
+   the pass goes back 0.1, 0.3 or 1 s and pulls the self-motion toward the configuration that sample needs.
+   Library default (``nullspace_gain`` set): the legacy per-sample pull, every sample solved sequentially,
+   speed bounds only with ``speed_limits=True``.
+2. The coarse solution is interpolated (cubic spline) to every sample and refined by a few vectorised Newton
+   iterations (:mod:`.chain`); if the refined path misses the tolerance or a limit, the sequential pass runs
+   again on every sample.
+
+When ``q0`` is ``None`` the start is chosen for the whole path among the inverse solutions of the first pose
+(:mod:`.ik_start`). A pose that cannot be reached raises :class:`IkError` saying why: out of reach (by how
+much), reachable only beyond a joint's position limit, or only faster than a joint's speed limit (which joint
+and the speed it needs).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 import pinocchio as pin
+from scipy.interpolate import CubicSpline
 
+from .boxqp import solve_box_qp
+from .chain import Chain, pose_errors
 from .errors import IkError
 from .limits import JointLimits
 from .robot import Robot
 
+NO_TIMES_DT = 1e-3  # [s] sample period assumed for the null-space pull when a path has no times
+REPAIR_BACK = (0.1, 0.3, 1.0)  # [s] how far a repair goes back before a sample too fast to reach, per try
+REPAIR_RATE = 10.0  # [1/s] null-space pull toward the configuration the stalled sample needs
+MAX_REPAIRS = 6  # backtracks per pass at most
+
 
 @dataclass(frozen=True)
 class IkOptions:
-    """Tolerances and gains of the path IK."""
+    """Tolerances, gains and limits handling of the path IK."""
 
     position_tolerance: float = 1e-9  # [m]
     rotation_tolerance: float = 1e-8  # [rad]
-    max_iterations_first: int = 200  # Newton steps for the first pose (from q0)
+    max_iterations_first: int = 200  # Newton steps for the first pose
     max_iterations: int = 30  # Newton steps for each following pose
     damping: float = 1e-9  # DLS damping λ² [-]
-    nullspace_gain: float = 0.02  # fraction of the way toward q0 in the null space, per sample [-]
+    nullspace_rate: float = 1.0  # [1/s] pull toward q0 in the null space (fraction 1 − exp(−rate·Δt) per sample)
+    # Legacy: a fraction per sample instead of the rate [-], and every sample solved sequentially (no coarse
+    # pass). Set None to use ``nullspace_rate`` (what ``lbr ik`` does).
+    nullspace_gain: float | None = 0.02
     max_step: float = 0.3  # largest joint step per Newton iteration [rad]
     limit_margin: float = 1e-4  # stay this far inside the position limits [rad]
+    speed_limits: bool = False  # bound joint speeds and accelerations per sample (needs increasing times)
+    coarse_dt: float = 0.02  # [s] sample spacing of the sequential pass on dense paths
+    refine_iterations: int = 5  # vectorised Newton iterations on every sample after the coarse pass
+    start_attempts: int = 4  # with q0 = None: best-scored start candidates tried on the full path
 
 
 @dataclass(frozen=True)
 class IkResult:
-    """Joint path (n, 7) [rad] with the remaining TCP error per sample and iterations used."""
+    """Joint path (n, 7) [rad] with the remaining TCP error per sample and how it was found."""
 
     q: np.ndarray
     position_error: np.ndarray  # [m]
     rotation_error: np.ndarray  # [rad]
-    iterations: np.ndarray
+    iterations: np.ndarray  # Newton steps of the sequential pass per sample (0 where only refined)
+    start: str = "q0"  # where the start came from: "q0" or "auto (candidate i of m, margin x°)"
+    velocity_ratio: float = 0.0  # peak |q̇| / limit over the path (backward differences)
+    acceleration_ratio: float = 0.0  # peak |q̈| / limit over the path (second differences)
+    acceleration_relaxed: int = 0  # samples whose acceleration bound was dropped because the path demands more
+    candidates: tuple[str, ...] = field(default=())  # with q0 = None: what each start candidate scored
 
     @property
     def max_position_error(self) -> float:
@@ -51,88 +89,370 @@ class IkResult:
         return float(self.rotation_error.max()) if len(self.rotation_error) else 0.0
 
 
+def format_length(x: float) -> str:
+    """3.2 mm / 12.4 µm."""
+    return f"{x * 1e3:.1f} mm" if x >= 1e-3 else f"{x * 1e6:.1f} µm"
+
+
+def format_angle(x: float) -> str:
+    """2.50° / 17.5 µrad."""
+    return f"{math.degrees(x):.2f}°" if x >= 1e-3 else f"{x * 1e6:.1f} µrad"
+
+
+class _Stall(Exception):
+    """The sequential pass could not reach sample ``k`` within its box."""
+
+    def __init__(self, k: int, q: np.ndarray, q_prev: np.ndarray | None, dt: float, ep: float, er: float):
+        self.k, self.q, self.q_prev, self.dt, self.ep, self.er = k, q, q_prev, dt, ep, er
+
+
+class PathSolver:
+    """One path's targets, limits and options; runs the passes of :func:`solve_ik_path`."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        positions: np.ndarray,
+        rotations: np.ndarray,
+        limits: JointLimits,
+        options: IkOptions = IkOptions(),
+        times: np.ndarray | None = None,
+    ) -> None:
+        self.robot, self.limits, self.options = robot, limits, options
+        self.positions = np.asarray(positions, dtype=float)
+        self.rotations = np.asarray(rotations, dtype=float)
+        self.times = None if times is None else np.asarray(times, dtype=float)
+        self.n = len(self.positions)
+        self.upper = limits.position - options.limit_margin
+        self.lower = -self.upper
+        self.speed = options.speed_limits and self.times is not None and bool((np.diff(self.times) > 0).all())
+        self.chain = Chain.of(robot)
+        self.weights = limits.velocity / limits.velocity.max()  # step weights [-]
+        self._w_inv2 = np.diag(1.0 / self.weights**2)
+        self._damp6 = options.damping * np.eye(6)
+        self._eye7 = np.eye(7)
+        self._eye6 = np.eye(6)
+
+    def target(self, k: int) -> pin.SE3:
+        return pin.SE3(self.rotations[k], self.positions[k])
+
+    def time(self, k: int) -> float:
+        return float(self.times[k]) if self.times is not None else float(k)
+
+    def null_gain(self, dt: float) -> float:
+        if self.options.nullspace_gain is not None:
+            return self.options.nullspace_gain
+        return 1.0 - math.exp(-self.options.nullspace_rate * dt)
+
+    def box(
+        self, q1: np.ndarray | None, q2: np.ndarray | None, dt: float, dt_prev: float, scale: float = 1.0
+    ) -> tuple[np.ndarray, np.ndarray, bool]:
+        """Bounds of the next solution from the two previous ones, speed and acceleration limits × ``scale``;
+        flag = acceleration bound dropped."""
+        lo, hi = self.lower, self.upper
+        if not self.speed or q1 is None:
+            return lo, hi, False
+        step = self.limits.velocity * (dt * scale)
+        lo, hi = np.maximum(lo, q1 - step), np.minimum(hi, q1 + step)
+        if q2 is None:
+            return lo, hi, False
+        pred = q1 + (q1 - q2) * (dt / dt_prev)
+        room = self.limits.acceleration * (dt * dt * scale)
+        lo_a, hi_a = np.maximum(lo, pred - room), np.minimum(hi, pred + room)
+        clash = lo_a > hi_a
+        if clash.any():  # braking in time is impossible: keep the position and speed bounds only
+            lo_a[clash], hi_a[clash] = lo[clash], hi[clash]
+        return lo_a, hi_a, bool(clash.any())
+
+    def track(
+        self, k: int, q: np.ndarray, lo: np.ndarray, hi: np.ndarray, q_ref: np.ndarray, gain: float, budget: int,
+        first: bool = False, loose: bool = False,
+    ) -> tuple[np.ndarray, float, float, int]:
+        """Newton steps toward target k inside [lo, hi] → (q, position error [m], rotation error [rad], steps).
+
+        ``loose``: stop at 1e-7 m / 1e-6 rad (samples refined afterwards)."""
+        model, data, fid = self.robot.model, self.robot.data, self.robot.tcp_id
+        opt = self.options
+        tol_p, tol_r = opt.position_tolerance, opt.rotation_tolerance
+        if loose:
+            tol_p, tol_r = max(tol_p, 1e-7), max(tol_r, 1e-6)
+        target = self.target(k)
+        damp6, eye7, w, w_inv2 = self._damp6, self._eye7, self.weights, self._w_inv2
+        q = np.minimum(np.maximum(q, lo), hi)
+        null_pending = gain > 0.0
+        it = 0
+        while True:
+            pin.computeJointJacobians(model, data, q)
+            dM = target.actInv(pin.updateFramePlacement(model, data, fid))
+            err = pin.log6(dM).vector
+            ep = math.sqrt(dM.translation @ dM.translation)
+            er = math.sqrt(err[3:] @ err[3:])
+            if (ep <= tol_p and er <= tol_r and not null_pending) or it >= budget:
+                return q, ep, er, it
+            J = pin.Jlog6(dM) @ pin.getFrameJacobian(model, data, fid, pin.LOCAL)
+            Jw = J * w  # speed-weighted: the step minimises Σ (dq_j / q̇max_j)²
+            JJt = Jw @ Jw.T + damp6
+            dq = -w * (Jw.T @ np.linalg.solve(JJt, err))
+            pull = None
+            if null_pending:
+                pinv = w[:, None] * np.linalg.solve(JJt, Jw).T
+                pull = gain * ((eye7 - pinv @ J) @ (q_ref - q))
+                dq += pull
+                null_pending = first and it < 20  # converge the first pose to the q_ref-closest solution
+            size = np.abs(dq).max()
+            if size > opt.max_step:
+                dq *= opt.max_step / size
+            new = q + dq
+            if (new < lo).any() or (new > hi).any():
+                H = J.T @ J + opt.damping * w_inv2
+                g = -J.T @ err
+                if pull is not None:
+                    H += 1e-6 * w_inv2
+                    g += 1e-6 * w_inv2 @ pull
+                new = q + solve_box_qp(H, g, lo - q, hi - q).x
+            q = new
+            it += 1
+
+    def sequential(
+        self,
+        indices: np.ndarray,
+        q_start: np.ndarray,
+        q_ref: np.ndarray,
+        progress: Callable[[int], None] | None = None,
+        margin_floor: float | None = None,
+        loose: bool = False,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+        """Solve the samples ``indices`` in order → (q (m, 7), position errors, rotation errors, steps, relaxed).
+
+        Raises _Stall at the first sample missing the tolerance, or (``margin_floor`` [rad] given) coming
+        closer than that to a position limit."""
+        opt = self.options
+        m = len(indices)
+        out = np.empty((m, 7))
+        ep_all, er_all = np.empty(m), np.empty(m)
+        steps = np.zeros(m, dtype=np.int32)
+        tol_p, tol_r = max(opt.position_tolerance, 1e-7), max(opt.rotation_tolerance, 1e-6)
+        relaxed = 0
+        dt_prev = 1.0
+        scale = 0.97 if loose else 1.0  # room for the spline and refinement between loosely solved samples
+        q = np.asarray(q_start, dtype=float)
+        repairs: dict[int, int] = {}  # stalled sample → backtracks tried
+        goal, goal_end = q_ref, -1  # pull target of a repair window, and where the window ends
+        i = 0
+        while i < m:
+            k = indices[i]
+            ref = goal if i <= goal_end else q_ref
+            if i == 0:
+                dt = NO_TIMES_DT
+                lo, hi, _ = self.box(None, None, dt, dt)
+                gain, budget, first = 1.0, opt.max_iterations_first, True
+            else:
+                dt = (self.times[k] - self.times[indices[i - 1]]) if self.times is not None else NO_TIMES_DT
+                q1 = out[i - 1]
+                q2 = out[i - 2] if i >= 2 else q1  # the arm starts at rest
+                lo, hi, clash = self.box(q1, q2, dt, dt if i == 1 else dt_prev, scale)
+                relaxed += clash
+                q = 2.0 * q1 - q2
+                budget, first = opt.max_iterations, False
+                gain = 1.0 - math.exp(-REPAIR_RATE * dt) if i <= goal_end else self.null_gain(dt)
+            q, ep, er, it = self.track(k, q, lo, hi, ref, gain, budget, first, loose)
+            if (ep > tol_p or er > tol_r) and i >= 1 and self.speed:
+                # the acceleration bound may be what stops it: retry with position and speed bounds only
+                lo, hi, _ = self.box(out[i - 1], None, dt, dt_prev, scale)
+                q, ep, er, it2 = self.track(k, q, lo, hi, ref, 0.0, budget, loose=loose)
+                it += it2
+                relaxed += 1
+            if (
+                (ep > tol_p or er > tol_r) and i >= 2 and self.speed
+                and repairs.get(i, 0) < len(REPAIR_BACK) and sum(repairs.values()) < MAX_REPAIRS
+            ):
+                # too fast here from where the redundancy has led: go back and steer the self-motion early
+                # toward the configuration this pose needs (reached from the previous sample, limits ignored)
+                target_q, gp, gr = self.nearest_solution(k, out[i - 1])
+                if gp <= tol_p and gr <= tol_r and (np.abs(target_q) <= self.upper).all():
+                    tries = repairs.get(i, 0)
+                    repairs[i] = tries + 1
+                    back = max(1, int(round(REPAIR_BACK[tries] / max(dt, 1e-9))))
+                    goal, goal_end = target_q, i
+                    i = max(1, i - back)
+                    dt_prev = (self.times[indices[i - 1]] - self.times[indices[i - 2]]) if i >= 2 else 1.0
+                    continue
+            if ep > tol_p or er > tol_r:
+                raise _Stall(int(k), q, out[i - 1] if i else None, dt, ep, er)
+            if margin_floor is not None and (self.limits.position - np.abs(q)).min() < margin_floor:
+                raise _Stall(int(k), q, out[i - 1] if i else None, dt, ep, er)
+            out[i], ep_all[i], er_all[i], steps[i] = q, ep, er, it
+            dt_prev = dt
+            if progress is not None and i % 250 == 0:
+                progress(int(k))
+            i += 1
+        return out, ep_all, er_all, steps, relaxed
+
+    def refine(self, q: np.ndarray, iterations: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Vectorised Newton iterations on every sample → (q, position errors [m], rotation errors [rad])."""
+        opt = self.options
+        q = np.array(q, dtype=float)
+        damp = opt.damping * np.eye(6)
+        for it in range(iterations + 1):
+            pos, rot, jac = self.chain.kinematics(q)
+            err = pose_errors(pos, rot, self.positions, self.rotations)
+            ep = np.linalg.norm(err[:, :3], axis=1)
+            er = np.linalg.norm(err[:, 3:], axis=1)
+            todo = np.flatnonzero((ep > opt.position_tolerance) | (er > opt.rotation_tolerance))
+            if len(todo) == 0 or it == iterations:
+                break
+            J = jac[todo]
+            x = np.linalg.solve(J @ J.transpose(0, 2, 1) + damp, err[todo, :, None])
+            q[todo] += (J.transpose(0, 2, 1) @ x)[:, :, 0]
+            np.clip(q, self.lower, self.upper, out=q)
+        return q, ep, er
+
+    def rates(self, q: np.ndarray) -> tuple[float, float]:
+        """Peak |q̇| and |q̈| over the path relative to the limits (backward and second differences)."""
+        if self.times is None or len(q) < 2:
+            return 0.0, 0.0
+        dt = np.diff(self.times)[:, None]
+        vel = np.diff(q, axis=0) / dt
+        v = float((np.abs(vel) / self.limits.velocity).max())
+        if len(q) < 3:
+            return v, 0.0
+        acc = np.diff(vel, axis=0) / dt[1:]
+        return v, float((np.abs(acc) / self.limits.acceleration).max())
+
+    def nearest_solution(self, k: int, q_from: np.ndarray) -> tuple[np.ndarray, float, float]:
+        """Unconstrained Gauss-Newton toward pose k from q_from → (q [rad], position error [m], rotation error [rad])."""
+        model, data, fid = self.robot.model, self.robot.data, self.robot.tcp_id
+        target = self.target(k)
+        q = np.array(q_from, dtype=float)
+        for _ in range(200):
+            pin.computeJointJacobians(model, data, q)
+            dM = target.actInv(pin.updateFramePlacement(model, data, fid))
+            err = pin.log6(dM).vector
+            J = pin.Jlog6(dM) @ pin.getFrameJacobian(model, data, fid, pin.LOCAL)
+            dq = -J.T @ np.linalg.solve(J @ J.T + 1e-10 * self._eye6, err)
+            size = np.abs(dq).max()
+            q = q + dq * min(1.0, 0.3 / max(size, 1e-300))
+            if size < 1e-13:
+                break
+        pin.framesForwardKinematics(model, data, q)
+        dM = target.actInv(data.oMf[fid])
+        return q, float(np.linalg.norm(dM.translation)), float(np.linalg.norm(pin.log3(dM.rotation)))
+
+    def diagnose(self, stall: _Stall) -> IkError:
+        """Why sample ``stall.k`` was not reached: out of reach, a position limit or a speed limit."""
+        k, t = stall.k, self.time(stall.k)
+        # the configuration reaching the pose closest to the previous sample's (or to where it stalled)
+        q, ep, er = self.nearest_solution(k, stall.q_prev if stall.q_prev is not None else stall.q)
+        where = f"pose {k} (t = {t:.4f} s)"
+        kw = dict(index=k, t=t, position_error=stall.ep, rotation_error=stall.er)
+        if ep > 1e-6 or er > 1e-5:
+            return IkError(
+                f"{where} out of reach by {format_length(ep)}, {format_angle(er)} (remaining error of the "
+                f"closest configuration found, joint limits ignored)",
+                reason="out of reach",
+                **kw,
+            )
+        remaining = f"remaining error {format_length(stall.ep)}, {format_angle(stall.er)}"
+
+        def held(text: str, reason: str, j: int, needed: float) -> IkError:
+            return IkError(f"{where}{text}; {remaining}", reason=reason, joint=j, needed=needed, **kw)
+
+        wrapped = np.where(np.abs(q) > self.limits.position, (q + np.pi) % (2 * np.pi) - np.pi, q)
+        over = np.abs(wrapped) - self.limits.position
+        if (over > 0).any():
+            j = int(np.argmax(over))
+            return held(
+                f" did not converge: A{j + 1} held at its position limit (the pose needs "
+                f"{math.degrees(wrapped[j]):.2f}°, limit ±{math.degrees(self.limits.position[j]):.2f}°)",
+                "position limit", j, float(wrapped[j]),
+            )
+        if stall.q_prev is not None and self.speed:
+            speed = np.abs(q - stall.q_prev) / stall.dt
+            ratio = speed / self.limits.velocity
+            j = int(np.argmax(ratio))
+            if ratio[j] > 1.0:
+                return held(
+                    f": the path needs A{j + 1} at {speed[j]:.2f} rad/s, above its limit "
+                    f"{self.limits.velocity[j]:.2f} rad/s (×{ratio[j]:.1f})",
+                    "velocity limit", j, float(speed[j]),
+                )
+        return IkError(f"{where} did not converge inside the joint limits: {remaining}", **kw)
+
+    def coarse_indices(self) -> np.ndarray:
+        if self.times is None or self.n < 3 or self.options.nullspace_gain is not None:
+            return np.arange(self.n)
+        dt = float(np.median(np.diff(self.times)))
+        stride = max(1, int(round(self.options.coarse_dt / dt))) if dt > 0 else 1
+        idx = np.arange(0, self.n, stride)
+        if idx[-1] != self.n - 1:
+            idx = np.append(idx, self.n - 1)
+        return idx
+
+    def solve(
+        self,
+        q_start: np.ndarray,
+        q_ref: np.ndarray,
+        progress: Callable[[int], None] | None = None,
+        fallback: bool = True,
+    ) -> IkResult:
+        """Coarse sequential pass, spline + vectorised refinement, then (``fallback``) the sequential pass on
+        every sample if the coarse one stalled or its refined path misses a tolerance or limit. Raises _Stall."""
+        opt = self.options
+        idx = self.coarse_indices()
+        if len(idx) < self.n:
+            try:
+                qc, _, _, steps_c, relaxed = self.sequential(idx, q_start, q_ref, progress, loose=True)
+            except _Stall:
+                if not fallback:
+                    raise
+                qc = None
+            if qc is not None:
+                spline = CubicSpline(self.times[idx], qc, axis=0)
+                q, ep, er = self.refine(spline(self.times), opt.refine_iterations)
+                vel, acc = self.rates(q)
+                inside = (np.abs(q) <= self.upper + 1e-12).all()
+                if (
+                    inside
+                    and ep.max() <= max(opt.position_tolerance, 1e-7)
+                    and er.max() <= max(opt.rotation_tolerance, 1e-6)
+                    and (not self.speed or (vel <= 1.0 and (relaxed > 0 or acc <= 1.0)))
+                ):
+                    steps = np.zeros(self.n, dtype=np.int32)
+                    steps[idx] = steps_c
+                    return IkResult(q, ep, er, steps, velocity_ratio=vel, acceleration_ratio=acc,
+                                    acceleration_relaxed=relaxed)
+        q, ep, er, steps, relaxed = self.sequential(np.arange(self.n), q_start, q_ref, progress)
+        vel, acc = self.rates(q)
+        return IkResult(q, ep, er, steps, velocity_ratio=vel, acceleration_ratio=acc, acceleration_relaxed=relaxed)
+
+
 def solve_ik_path(
     robot: Robot,
     positions: np.ndarray,
     rotations: np.ndarray,
-    q0: np.ndarray,
+    q0: np.ndarray | None,
     limits: JointLimits,
     options: IkOptions = IkOptions(),
     *,
     times: np.ndarray | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> IkResult:
-    """Solve IK for TCP targets (positions (n, 3) [m], rotations (n, 3, 3)) starting near q0 (7,) [rad].
+    """Solve IK for TCP targets (positions (n, 3) [m], rotations (n, 3, 3)) at ``times`` (n,) [s].
 
-    Raises IkError naming the first sample whose error stays above tolerance.
+    ``q0`` (7,) [rad] is the start guess and redundancy target; ``None`` chooses the start for the whole path
+    (reported in ``IkResult.start``). Joint speeds and accelerations are bounded only when ``times`` is given.
+    Raises IkError naming the first sample that cannot be reached and why.
     """
-    model, data, fid = robot.model, robot.data, robot.tcp_id
-    n = len(positions)
-    out_q = np.empty((n, 7))
-    pos_err = np.empty(n)
-    rot_err = np.empty(n)
-    iters = np.empty(n, dtype=np.int32)
-    upper = limits.position - options.limit_margin
-    lower = -upper
-    q_ref = np.clip(np.asarray(q0, dtype=float), lower, upper)
-    eye7 = np.eye(7)
-    damp6 = options.damping * np.eye(6)
-    tol_p, tol_r = options.position_tolerance, options.rotation_tolerance
-    local = pin.ReferenceFrame.LOCAL
-    joint_jacobians, frame_placement, frame_jacobian = (
-        pin.computeJointJacobians,
-        pin.updateFramePlacement,
-        pin.getFrameJacobian,
-    )
-    log6, jlog6 = pin.log6, pin.Jlog6
-    SE3 = pin.SE3
+    solver = PathSolver(robot, positions, rotations, limits, options, times)
+    if solver.n == 0:
+        empty = np.empty(0)
+        return IkResult(np.empty((0, 7)), empty, empty, np.empty(0, dtype=np.int32))
+    if q0 is None:
+        from .ik_start import solve_with_auto_start
 
-    q = q_ref.copy()
-    for k in range(n):
-        if k >= 2:
-            q = 2.0 * out_q[k - 1] - out_q[k - 2]
-        elif k == 1:
-            q = out_q[0].copy()
-        np.clip(q, lower, upper, out=q)
-        target = SE3(rotations[k], positions[k])
-        budget = options.max_iterations_first if k == 0 else options.max_iterations
-        null_pending = True
-        it = 0
-        while True:
-            joint_jacobians(model, data, q)  # forward kinematics + all joint Jacobians
-            dM = target.actInv(frame_placement(model, data, fid))
-            err = log6(dM).vector
-            ep = np.linalg.norm(dM.translation)
-            er = np.linalg.norm(err[3:])
-            if (ep <= tol_p and er <= tol_r and not null_pending) or it >= budget:
-                break
-            Jl = jlog6(dM) @ frame_jacobian(model, data, fid, local)
-            pinv = np.linalg.solve(Jl @ Jl.T + damp6, Jl).T  # J^T (J J^T + λ²I)^-1
-            dq = -pinv @ err
-            if null_pending:
-                gain = 1.0 if k == 0 else options.nullspace_gain
-                dq += gain * ((eye7 - pinv @ Jl) @ (q_ref - q))
-                null_pending = k == 0 and it < 20  # converge the first pose to the q0-closest solution
-            step = np.abs(dq).max()
-            if step > options.max_step:
-                dq *= options.max_step / step
-            q = q + dq
-            np.clip(q, lower, upper, out=q)
-            it += 1
-        out_q[k] = q
-        pos_err[k] = ep
-        rot_err[k] = er
-        iters[k] = it
-        if ep > max(tol_p, 1e-7) or er > max(tol_r, 1e-6):
-            t = float(times[k]) if times is not None else float(k)
-            raise IkError(
-                f"pose {k} (t = {t:.4f} s) not reached: remaining error {ep * 1e3:.3f} mm, "
-                f"{np.degrees(er):.4f} deg (out of reach or beyond the joint limits)",
-                index=k,
-                t=t,
-                position_error=float(ep),
-                rotation_error=float(er),
-            )
-        if progress is not None and k % 500 == 0:
-            progress(k)
-    return IkResult(q=out_q, position_error=pos_err, rotation_error=rot_err, iterations=iters)
+        return solve_with_auto_start(solver, progress)
+    q_ref = np.clip(np.asarray(q0, dtype=float), solver.lower, solver.upper)
+    try:
+        return solver.solve(q_ref, q_ref, progress)
+    except _Stall as stall:
+        raise solver.diagnose(stall) from None

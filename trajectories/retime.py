@@ -20,6 +20,8 @@ class RetimeResult:
     trajectory: JointTrajectory
     duration_in: float  # [s]
     duration_out: float  # [s]
+    scale: float = 1.0  # fraction of the velocity and acceleration limits given to toppra
+    attempts: int = 1
 
 
 def _path_parameter(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -64,4 +66,46 @@ def retime(traj: JointTrajectory, limits: JointLimits, dt: float, *, scale: floa
     t = np.arange(n) * dt
     qs = result(np.minimum(t, duration))
     qs[-1] = q[-1]
-    return RetimeResult(JointTrajectory(t=t, q=np.asarray(qs)), traj.duration, float(t[-1]))
+    return RetimeResult(JointTrajectory(t=t, q=np.asarray(qs)), traj.duration, float(t[-1]), scale)
+
+
+def sampled_ratios(traj: JointTrajectory, limits: JointLimits) -> dict[str, float]:
+    """Peak / limit of the sampled trajectory: position, and velocity and acceleration by central (the thesis check)
+    and forward differences (what the controller executes step by step), whichever is larger."""
+    from .check import check_trajectory, step_ratios
+
+    central = check_trajectory(traj, limits).ratios()
+    forward = step_ratios(traj, limits)
+    return {
+        "position": float(central["position"].max()),
+        "velocity": max(float(central["velocity"].max()), forward["velocity"]),
+        "acceleration": max(float(central["acceleration"].max()), forward["acceleration"]),
+        "jerk": float(central["jerk"].max()),
+    }
+
+
+def retime_within(traj: JointTrajectory, limits: JointLimits, dt: float, *, scale: float = 0.98,
+                  attempts: int = 5) -> tuple[RetimeResult, dict[str, float]]:
+    """:func:`retime`, then verify the samples; while a velocity or acceleration ratio exceeds 1 (toppra bounds the
+    continuous spline, the samples of a sharp path can overshoot by a few %), retime again with the scale lowered
+    by the excess. Returns the result and its :func:`sampled_ratios`; raises CheckFailed when the samples stay
+    outside the limits (or the path itself leaves the position limits). Jerk is reported, not bounded."""
+    from .errors import CheckFailed
+
+    if np.any(np.abs(traj.q) > limits.position):
+        k, j = np.argwhere(np.abs(traj.q) > limits.position)[0]
+        raise CheckFailed(
+            f"the path leaves the position limit of A{j + 1} at row {k + 2} ({traj.q[k, j]:.4f} rad, limit "
+            f"±{limits.position[j]:.4f} rad): no timing can fix that"
+        )
+    for attempt in range(1, attempts + 1):
+        result = retime(traj, limits, dt, scale=scale)
+        ratios = sampled_ratios(result.trajectory, limits)
+        worst = max(ratios["velocity"], ratios["acceleration"])
+        if worst <= 1.0 and ratios["position"] <= 1.0:
+            return RetimeResult(result.trajectory, result.duration_in, result.duration_out, scale, attempt), ratios
+        scale *= 0.99 / worst
+    raise CheckFailed(
+        f"the re-timed samples stay outside the limits after {attempts} attempts (velocity "
+        f"{100 * ratios['velocity']:.0f} %, acceleration {100 * ratios['acceleration']:.0f} % of the limits)"
+    )

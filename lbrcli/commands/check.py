@@ -68,10 +68,13 @@ def check(
     from trajectories.csvio import read_joint_csv
 
     from ..console import Reporter
-    from ..options import check_margin, limits_from, make_robot
+    from ..options import check_margin, check_number, limits_from, make_robot
+    from ..outputs import guard_outputs
 
     rep = Reporter(json_out)
     check_margin(margin)
+    check_number("--dt", dt, 1e-4, 1.0, unit="s")
+    guard_outputs({"JOINT_CSV": joint_csv, "--limits": limits}, {"--plot": plot})
     lim = limits_from(limits)
     robot = make_robot(flange, tool) if t1 else None
     traj = read_joint_csv(joint_csv, dt)

@@ -15,16 +15,20 @@ def compare(
     track: Annotated[Path, typer.Argument(help="Track CSV from `lbr track video` with a theta column.")],
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG overlaying model and experiment θ \\[deg] over time, and their difference.")] = None,
     lag: Annotated[Optional[float], typer.Option("--lag", help="Track time − prediction time \\[s]; estimated by cross-correlation when omitted.")] = None,
-    max_lag: Annotated[Optional[float], typer.Option("--max-lag", help="Search the lag only within ± this \\[s].")] = None,
+    max_lag: Annotated[Optional[float], typer.Option("--max-lag", help="Search the lag only within ± this \\[s] (default: half the longer of the two series, at least 2 s).")] = None,
     flip: Annotated[bool, typer.Option("--flip", help="Negate the track's θ (camera looking at the plane of motion from the other side).")] = False,
     column: Annotated[str, typer.Option("--column", help="Angle column \\[rad] of the prediction file (e.g. ball_theta in an execution log).")] = "theta",
     json_out: JsonOpt = False,
 ) -> None:
     """Compare the model's θ with the tracked θ: align in time, report RMS and max error over the overlap.
 
-    Lag convention: track time = prediction time + lag. Frames where the ball (or pivot) was not found are
-    skipped. Exit 1 when prediction and track do not overlap.
+    Lag convention: track time = prediction time + lag. The lag is searched within a window (reported) and the
+    best other peak of the match score is reported too: when it scores nearly as well (a steady swing matches
+    itself one period off) a warning says to give --lag or a tighter --max-lag. Frames where the ball (or
+    pivot) was not found are skipped. Exit 1 when prediction and track do not overlap.
     """
+    import math
+
     import numpy as np
 
     from trajectories.csvio import PREDICTION_COLUMNS, read_table
@@ -35,8 +39,10 @@ def compare(
     from ..console import Reporter
 
     rep = Reporter(json_out)
-    if max_lag is not None and not max_lag > 0:
-        raise OptionError(f"--max-lag must be positive [s], got {max_lag:g}")
+    if max_lag is not None and not (max_lag > 0 and math.isfinite(max_lag)):
+        raise OptionError(f"--max-lag must be a positive number of seconds, got {max_lag:g}")
+    if lag is not None and not math.isfinite(lag):
+        raise OptionError(f"--lag must be a finite number of seconds, got {lag:g}")
     for p, name in ((plot, "--plot"),):
         if p is not None and not p.resolve().parent.is_dir():
             raise OptionError(f"{name}: folder does not exist: {p.parent}")
@@ -58,8 +64,15 @@ def compare(
         raise CsvFormatError("no 'theta' column: track the video with --pivot or --pivot-color", file=tr.path, row=1)
 
     cmp = compare_angles(t_model, theta_model, tr.t, tr.theta, lag_s=lag, flip=flip, max_lag_s=max_lag)
-    how = "estimated" if cmp.lag_estimated else "given"
+    how = f"estimated within ±{cmp.lag_window_s:.2f} s" if cmp.lag_estimated else "given"
     rep.print(f"lag {cmp.lag_s:+.4f} s ({how}; track time = prediction time + lag)")
+    if cmp.lag_estimated and math.isfinite(cmp.rival_lag_s):
+        rep.print(f"match score {cmp.correlation:.3f}; next best peak at {cmp.rival_lag_s:+.3f} s scores {cmp.rival_correlation:.3f}")
+        if cmp.rival_correlation >= cmp.correlation - 0.02:
+            rep.warn(
+                f"the lag is ambiguous: {cmp.rival_lag_s:+.3f} s matches nearly as well as {cmp.lag_s:+.3f} s "
+                "(give --lag, or --max-lag around the expected delay)"
+            )
     rep.print(
         f"over {cmp.overlap_s:.3f} s ({cmp.samples} frames): RMS error {cmp.rms_deg:.3f}°, max {cmp.max_deg:.3f}°"
     )
@@ -77,6 +90,9 @@ def compare(
             "track": str(track),
             "lag_s": cmp.lag_s,
             "lag_estimated": cmp.lag_estimated,
+            "lag_window_s": cmp.lag_window_s,
+            "rival_lag_s": cmp.rival_lag_s,
+            "rival_score": cmp.rival_correlation,
             "rms_deg": cmp.rms_deg,
             "max_deg": cmp.max_deg,
             "overlap_s": cmp.overlap_s,

@@ -19,6 +19,9 @@ def demo(
     Plans a crane move with the thesis baseline and with the default shaper, checks and executes both on the
     simulator with the ball simulated; plans and executes a swing-up; films the simulated ball, tracks it back
     and compares model and "experiment". Ends with a table; `summary.md` lists every command it ran.
+
+    The run happens in a hidden sibling folder that replaces --out only when it completes: an interrupted run
+    leaves --out as it was. An existing --out is replaced only if it holds a previous demo (its summary.md).
     """
     import time
 
@@ -26,15 +29,14 @@ def demo(
     from rich.table import Table
 
     from ..console import Reporter
+    from ..demo.folder import discard, prepare_out, publish, staging_folder
     from ..demo.pipeline import demo_steps, run_demo, summary_figures, summary_rows, write_summary
 
-    from trajectories.errors import OptionError
-
     rep = Reporter(json_out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OptionError(f"--out: cannot create the folder {out} ({exc.strerror})") from None
+    replaces = prepare_out(out)
+    if replaces:
+        rep.print(f"{out}/ holds a previous demo ({replaces}): it is replaced when this run completes")
+    staging = staging_folder(out)
     steps = demo_steps()
     t0 = time.perf_counter()
     with rep.progress("lbr demo", len(steps)) as update:
@@ -48,11 +50,17 @@ def demo(
             status = "[green]ok[/green]" if res.ok else f"[red]failed[/red]: {res.error}"
             rep.print(f"  {step.name}: {status} ({res.seconds:.1f} s)")
 
-        results = run_demo(out, on_step, on_done)
-        update(len(steps))
-    seconds = time.perf_counter() - t0
-    figures = summary_figures(results)
-    summary = write_summary(out, results, figures, seconds)
+        try:
+            results = run_demo(staging, on_step, on_done)
+            update(len(steps))
+            seconds = time.perf_counter() - t0
+            figures = summary_figures(results)
+            write_summary(staging, results, figures, seconds)
+        except BaseException:  # Ctrl-C or a crash: no partial folder under --out, no mix with the old one
+            discard(staging)
+            raise
+    publish(staging, out)
+    summary = out / "summary.md"
     table = Table(title=f"lbr demo — {seconds:.0f} s, files in {out}/")
     table.add_column("figure")
     table.add_column("value", justify="right")

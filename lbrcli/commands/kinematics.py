@@ -8,7 +8,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..options import DEFAULT_FLANGE, THESIS_Q_START, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
+from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
 
 
 def fk(
@@ -25,9 +25,12 @@ def fk(
     from trajectories.trajectory import TaskTrajectory
 
     from ..console import Reporter
-    from ..options import make_robot
+    from ..options import check_number, make_robot
+    from ..outputs import guard_outputs
 
     rep = Reporter(json_out)
+    check_number("--dt", dt, 1e-4, 1.0, unit="s")
+    guard_outputs({"JOINT_CSV": joint_csv}, {"-o": out})
     robot = make_robot(flange, tool)
     traj = read_joint_csv(joint_csv, dt)
     pos, rot = robot.fk_path(traj.q)
@@ -40,22 +43,37 @@ def ik(
     task_csv: Annotated[Path, typer.Argument(help="Task trajectory t,x,y,z,qw,qx,qy,qz \\[s, m] of the flange (or tool).")],
     out: Annotated[Path, typer.Option("-o", "--out", help="Joint trajectory to write: t,q1..q7 \\[s, rad].")],
     q0: Annotated[
-        str,
-        typer.Option("--q0", help="Reference configuration: start of the solve and redundancy target (7 angles, deg/rad suffixes)."),
-    ] = THESIS_Q_START,
+        Optional[str],
+        typer.Option(
+            "--q0",
+            help="Start guess and redundancy target (7 angles, deg/rad suffixes). Default: chosen for the whole "
+            "path among the inverse solutions of the first pose (the one keeping the path furthest from the limits).",
+        ),
+    ] = None,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
+    nullspace_rate: Annotated[
+        float, typer.Option("--nullspace-rate", help="Pull toward the start configuration in the null space \\[1/s].")
+    ] = 1.0,
+    no_speed_limits: Annotated[
+        bool, typer.Option("--no-speed-limits", help="Bound joint positions only, not joint speeds and accelerations.")
+    ] = False,
     json_out: JsonOpt = False,
 ) -> None:
-    """Inverse kinematics of a whole path: warm-started damped least squares on pinocchio.
+    """Inverse kinematics of a whole path inside the joint position, speed and acceleration limits.
 
-    Joint limits are respected and the redundancy is resolved toward --q0, so the arm never flips
-    configuration mid-path. Exits 1 naming the first unreachable pose and its remaining error.
+    Each Newton step is a box-constrained least-squares problem (position limits, q̇max·Δt, q̈max·Δt²), the
+    redundancy is pulled toward the start at --nullspace-rate per second. Without --q0 the start is chosen for
+    the whole path and reported. Exits 1 naming the first pose that cannot be reached and why: out of reach
+    (by how much), a joint held at its position limit, or a joint speed the path needs above its limit.
     """
+    import math
+
     from trajectories.check import check_trajectory
     from trajectories.csvio import read_task_csv, write_joint_csv
-    from trajectories.ik import solve_ik_path
+    from trajectories.errors import OptionError
+    from trajectories.ik import IkOptions, solve_ik_path
     from trajectories.poses import matrices_from_quaternions
     from trajectories.trajectory import JointTrajectory
 
@@ -64,22 +82,33 @@ def ik(
     from ..parsing import parse_joint_vector
 
     rep = Reporter(json_out)
-    q_ref = parse_joint_vector(q0, "--q0")
+    q_ref = parse_joint_vector(q0, "--q0") if q0 is not None else None
+    if not (math.isfinite(nullspace_rate) and nullspace_rate >= 0):
+        raise OptionError(f"--nullspace-rate: expected a rate >= 0 [1/s], got {nullspace_rate}")
     robot = make_robot(flange, tool)
     lim = limits_from(limits)
     task = read_task_csv(task_csv)
     rot = matrices_from_quaternions(task.quaternion)
+    options = IkOptions(nullspace_rate=nullspace_rate, nullspace_gain=None, speed_limits=not no_speed_limits)
     t0 = time.perf_counter()
     with rep.progress("IK", len(task)) as update:
-        res = solve_ik_path(robot, task.position, rot, q_ref, lim, times=task.t, progress=update)
+        res = solve_ik_path(robot, task.position, rot, q_ref, lim, options, times=task.t, progress=update)
     elapsed = time.perf_counter() - t0
     traj = JointTrajectory(t=task.t, q=res.q)
     write_joint_csv(out, traj)
     report = check_trajectory(traj, lim) if len(traj) > 1 else None
+    start_deg = ", ".join(f"{math.degrees(v):.1f}" for v in res.q[0]) if len(res.q) else ""
+    typer.echo(f"start ({'--q0' if q_ref is not None else res.start}): [{start_deg}] deg", err=True)
     rep.print(
         f"wrote {out}: {len(traj)} poses in {elapsed:.2f} s; max error {res.max_position_error:.2e} m, "
-        f"{res.max_rotation_error:.2e} rad"
+        f"{res.max_rotation_error:.2e} rad; peak speed {res.velocity_ratio * 100:.0f} %, "
+        f"acceleration {res.acceleration_ratio * 100:.0f} % of the limits"
     )
+    if res.acceleration_ratio > 1.0 and options.speed_limits:
+        rep.warn(
+            f"joint accelerations reach {res.acceleration_ratio * 100:.0f} % of the limit ({res.acceleration_relaxed} "
+            f"samples could not keep the acceleration bound); see `lbr check {out}`"
+        )
     if report is not None and not report.ok:
         rep.warn(f"the joint path violates limits ({len(report.failing)} violations); see `lbr check {out}`")
     rep.emit(
@@ -88,6 +117,11 @@ def ik(
             "solve_time_s": elapsed,
             "max_position_error_m": res.max_position_error,
             "max_rotation_error_rad": res.max_rotation_error,
+            "start": "q0" if q_ref is not None else res.start,
+            "q_start_rad": res.q[0].tolist() if len(res.q) else [],
+            "peak_velocity_ratio": res.velocity_ratio,
+            "peak_acceleration_ratio": res.acceleration_ratio,
+            "acceleration_relaxed_samples": res.acceleration_relaxed,
             "limits_ok": report.ok if report is not None else True,
             "out": str(out),
         }

@@ -31,6 +31,24 @@ def flange_down_rotation():
     return np.diag([-1.0, 1.0, -1.0])
 
 
+FALLBACK_DESIGNS = ("robust-slow", "box-zvd", "zvd", "ei", "accel")  # tried at the same a_max by auto
+FALLBACK_RESIDUAL = math.radians(0.5)  # a fallback must leave at most this swing across the length band [rad]
+DEFAULT_BALL_RADIUS = 0.02  # [m]
+
+
+@dataclass(frozen=True)
+class BandPrediction:
+    """Predicted swing for string lengths across the tolerance band: runs and their figures [rad]."""
+
+    lengths: tuple[float, ...]  # [m]
+    runs: tuple[Any, ...]  # planners.pendulum.PendulumRun per length
+    residual: tuple[float, ...]  # largest tilt after the last stop [rad]
+    peak: tuple[float, ...]  # largest tilt [rad]
+    peak_time: tuple[float, ...]  # [s]
+    ball_paths: tuple[Any, ...]  # (n, 3) ball centres [m] per length
+    clearance: Any = None  # planners.obstacles.Clearance or None
+
+
 @dataclass(frozen=True)
 class AntiSwayResult:
     """Everything a plan produced: pivot plan, joints, IK errors, check report, predicted sway."""
@@ -39,10 +57,15 @@ class AntiSwayResult:
     joints: Any  # trajectories.trajectory.JointTrajectory
     ik_error: float  # max TCP position error [m]
     report: Any  # trajectories.check.CheckReport
-    run: Any  # planners.pendulum.PendulumRun of the prediction
+    run: Any  # planners.pendulum.PendulumRun of the prediction at the nominal length
     stop_time: float  # [s]
     baseline_duration: float  # [s] moving time of the thesis baseline on the same layout and dt
     timings: dict  # compute times [s]
+    band: BandPrediction | None = None
+    obstacles: tuple = ()
+    max_sway: float | None = None  # [rad]
+    failure: str | None = None  # why the plan cannot be used (limits, sway, obstacle), None if it can
+    fallback: dict | None = None  # {"from", "to", "reason"} when another design replaced the requested one
 
     def figures(self) -> dict:
         """The JSON figures of the plan."""
@@ -54,18 +77,28 @@ class AntiSwayResult:
         theta = self.run.theta
         ratios = self.report.ratios()
         plan = self.plan
-        return {
+        band = self.band
+        figs = {
             "duration_s": float(self.joints.duration),
             "motion_s": float(self.stop_time),
             "baseline_motion_s": self.baseline_duration,
+            "time_ratio_to_baseline": float(self.stop_time / self.baseline_duration),
             "peak_sway_deg": math.degrees(float(theta.max())),
             "residual_sway_deg": math.degrees(float(theta[after].max())),
+            "length_tolerance": plan.options.length_tolerance,
+            "band_lengths_m": list(band.lengths),
+            "band_residual_sway_deg": [math.degrees(x) for x in band.residual],
+            "band_peak_sway_deg": [math.degrees(x) for x in band.peak],
+            "worst_residual_sway_deg": math.degrees(max(band.residual)),
+            "worst_peak_sway_deg": math.degrees(max(band.peak)),
+            "max_sway_deg": None if self.max_sway is None else math.degrees(self.max_sway),
             "max_ik_error_m": self.ik_error,
             "limits_ok": bool(self.report.ok),
             "jerk_ratio": float(ratios["jerk"].max()),
             "jerk_enforced": bool(self.report.jerk_enforced),
             "max_ratio": {k: float(v.max()) for k, v in ratios.items()},
             "shaper": plan.shaper,
+            "fallback": self.fallback,
             "string_length_m": plan.string_length,
             "period_s": natural_period(plan.string_length),
             "a_max_m_s2": plan.a_max,
@@ -88,6 +121,13 @@ class AntiSwayResult:
             "violations": [v.describe() for v in self.report.failing],
             "compute_s": self.timings,
         }
+        c = band.clearance
+        figs["obstacles"] = [o.name for o in self.obstacles]
+        figs["min_clearance_m"] = None if c is None else c.clearance
+        figs["nearest_obstacle"] = None if c is None else {
+            "name": c.obstacle, "t_s": c.time, "string_length_m": c.length, "ball_m": list(c.position),
+        }
+        return figs
 
 
 def _joints_of(plan, robot, q0, lim, progress=None):
@@ -110,38 +150,134 @@ def predict_sway(joints, robot, string_length: float, stop_time: float, settle_p
     return simulate_path(joints.t, pos, string_length, stop_time, settle_periods)
 
 
+def predict_band(joints, robot, lengths, stop_time: float, obstacles=(), ball_radius: float = 0.0) -> BandPrediction:
+    """Swing for each string length [m] on the FK pivot path, the ball's swept paths and their clearance."""
+    import numpy as np
+
+    from planners.obstacles import ball_path, clearance
+    from planners.pendulum import natural_period
+    from planners.sway_prediction import simulate_sampled
+
+    pos, _ = robot.fk_path(joints.q)
+    end = max(float(joints.t[-1]), stop_time + SETTLE_PERIODS * natural_period(float(max(lengths))))
+    runs, res, peak, tpk, paths = [], [], [], [], []
+    for ln in lengths:
+        run = simulate_sampled(joints.t, pos, float(ln), end)
+        th = run.theta
+        k = int(np.argmax(th))
+        runs.append(run)
+        res.append(float(th[run.t >= stop_time - 1e-12].max()))
+        peak.append(float(th[k]))
+        tpk.append(float(run.t[k]))
+        pivot = pos[np.minimum(np.arange(len(run.t)), len(pos) - 1)]
+        paths.append(ball_path(pivot, run.s, float(ln)))
+    clear = clearance(runs[0].t, dict(zip(map(float, lengths), paths)), tuple(obstacles), ball_radius) if obstacles else None
+    return BandPrediction(tuple(map(float, lengths)), tuple(runs), tuple(res), tuple(peak), tuple(tpk), tuple(paths),
+                          clear)
+
+
 def _failing_segments(plan, report) -> list[int]:
     return sorted({plan.segment_of(v.t) for v in report.failing})
 
 
-def _largest_fitting_accel(points, length, accels, z, dt, options, segment, robot, q0, lim, margin, jerk):
-    """Bisection on the a_max of one segment (others unchanged) until its samples pass the check [m/s²]."""
-    import numpy as np
+@dataclass(frozen=True)
+class _Setup:
+    """What every attempt shares: layout, string, robot, limits and the checks asked for."""
 
-    from planners.antisway import plan_layout
+    points: Any
+    length: float
+    z: float
+    dt: float
+    robot: Any
+    q0: Any
+    limits: Any
+    margin: float
+    jerk: bool
+    max_sway: float | None
+    obstacles: tuple
+    ball_radius: float
+
+
+def _attempt(setup: _Setup, a_max: float, options, progress=None) -> AntiSwayResult:
+    """Plan, IK, check, predict across the band; ``failure`` says why the plan cannot be used (or None)."""
+    from planners.antisway import band_lengths, plan_layout
     from trajectories.errors import IkError
 
     from .check import run_check
 
-    def fits(a: float) -> bool:
-        acc = np.array(accels, dtype=float)
-        acc[segment - 1] = a
-        plan = plan_layout(points, length, acc, z, dt, options)
-        try:
-            joints, _ = _joints_of(plan, robot, q0, lim)
-        except IkError:
-            return False
-        rep = run_check(joints, lim, margin, jerk, False, robot)
-        return segment not in _failing_segments(plan, rep)
+    timings = {}
+    t0 = time.perf_counter()
+    plan = plan_layout(setup.points, setup.length, a_max, setup.z, setup.dt, options)
+    timings["plan"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    joints, ik_error = _joints_of(plan, setup.robot, setup.q0, setup.limits, progress)
+    timings["ik"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    report = run_check(joints, setup.limits, setup.margin, setup.jerk, False, setup.robot)
+    timings["check"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    tol = options.length_tolerance
+    lengths = band_lengths(setup.length, tol)
+    band = predict_band(joints, setup.robot, lengths, plan.stop_time, setup.obstacles, setup.ball_radius)
+    run = band.runs[list(lengths).index(setup.length)] if setup.length in list(lengths) else predict_sway(
+        joints, setup.robot, setup.length, plan.stop_time)
+    timings["prediction"] = time.perf_counter() - t0
+    baseline = plan_layout(setup.points, setup.length, a_max, setup.z, setup.dt, type(options)(shaper="accel")).stop_time
+    failure = None
+    if not report.ok:
+        failing = _failing_segments(plan, report)
+        seg = plan.segments[failing[0] - 1]
+        first = next(v for v in report.failing if plan.segment_of(v.t) == failing[0])
+        others = f" (segments {', '.join(map(str, failing))} exceed the limits)" if len(failing) > 1 else ""
+        failure = (
+            f"a_max = {a_max:g} m/s² does not fit the joint limits at segment {failing[0]}{others} "
+            f"({seg.start[0]:.3f},{seg.start[1]:.3f})→({seg.end[0]:.3f},{seg.end[1]:.3f}): {first.describe()}"
+        )
+    elif setup.max_sway is not None and max(band.peak) > setup.max_sway:
+        k = max(range(len(band.peak)), key=lambda i: band.peak[i])
+        failure = (
+            f"predicted sway {math.degrees(band.peak[k]):.2f}° at t = {band.peak_time[k]:.3f} s (string "
+            f"{band.lengths[k]:.3f} m, segment {plan.segment_of(band.peak_time[k])}) exceeds --max-sway "
+            f"{math.degrees(setup.max_sway):.2f}°"
+        )
+    elif band.clearance is not None and band.clearance.touches:
+        c = band.clearance
+        failure = (
+            f"the ball touches obstacle {c.obstacle!r} at t = {c.time:.3f} s (segment {plan.segment_of(c.time)}, "
+            f"string {c.length:.3f} m, ball centre ({c.position[0]:.3f},{c.position[1]:.3f},{c.position[2]:.3f}) m, "
+            f"ball radius {setup.ball_radius:g} m)"
+        )
+    return AntiSwayResult(plan, joints, ik_error, report, run, plan.stop_time, baseline, timings, band,
+                          setup.obstacles, setup.max_sway, failure)
 
-    hi = float(accels[segment - 1])
-    lo = 0.02 * hi
-    if not fits(lo):
+
+def _largest_fitting_accel(setup: _Setup, a_max: float, options) -> float:
+    """Largest single a_max [m/s²] (2 decimals, ≤ a_max) at which the same options plan; 0.0 if none found.
+
+    Halving until a plan succeeds, then bisection; the printed (rounded-down) value is re-planned before it is
+    returned, and lowered in 3 % steps until it plans, because feasibility need not be monotone in a_max.
+    """
+
+    def fits(a: float) -> bool:
+        return a > 0 and _attempt(setup, a, options).failure is None
+
+    hi, lo = a_max, a_max
+    for _ in range(6):
+        lo *= 0.5
+        if fits(lo):
+            break
+        hi = lo
+    else:
         return 0.0
-    while hi - lo > 0.005 * hi:
+    while hi - lo > 0.03 * hi:
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if fits(mid) else (lo, mid)
-    return lo
+    best = math.floor(lo * 100) / 100
+    for _ in range(8):
+        if best >= 0.01 and (best == lo or fits(best)):
+            return best
+        best = math.floor(best * 0.97 * 100) / 100
+    return 0.0
 
 
 def plan_anti_sway(
@@ -160,71 +296,83 @@ def plan_anti_sway(
     jerk: bool = False,
     j_max: float | None = None,
     v_max: float = math.inf,
-    length_tolerance: float = 0.0,
+    length_tolerance: float | None = None,
     tune: bool = True,
+    max_sway: float | None = None,
+    obstacles: Sequence = (),
+    ball_radius: float = DEFAULT_BALL_RADIUS,
+    fallback: bool = True,
+    suggest: bool = True,
     progress: Callable[[int], None] | None = None,
 ) -> AntiSwayResult:
-    """Plan, solve IK, check and predict an anti-sway move; raise PlanningError if a_max does not fit.
+    """Plan, solve IK, check and predict an anti-sway move; raise PlanningError if it cannot be used.
 
     points (n, 2) [m] in the base frame: start then turning points; length [m] from the pivot (flange origin
-    + tool) to the ball centre; a_max [m/s²]; z [m] flange height; dt [s] joint sample step.
+    + tool) to the ball centre; a_max [m/s²]; z [m] flange height; dt [s] joint sample step; length_tolerance
+    relative (None: the planner's default ±10 %); max_sway [rad] during the move (across the band);
+    obstacles (planners.obstacles.Obstacle) checked against the ball of ``ball_radius`` [m] swept for the
+    string lengths across the band. With ``shaper="auto"`` and ``fallback`` other designs are tried at the
+    same a_max before giving up; with ``suggest`` the message names the largest a_max that plans (verified).
     """
     import numpy as np
 
-    from planners.antisway import DEFAULT_Z, AntiSwayOptions, plan_layout
+    from planners.antisway import DEFAULT_LENGTH_TOLERANCE, DEFAULT_Z, AntiSwayOptions
     from trajectories.errors import OptionError, PlanningError
     from trajectories.limits import load_limits
 
     from ..options import make_robot
     from ..parsing import parse_joint_vector
-    from .check import run_check
 
     pts = np.asarray(points, dtype=float)
     z = DEFAULT_Z if z is None else float(z)
-    _validate(pts, length, a_max, dt, shaper, length_tolerance, margin)
+    tol = DEFAULT_LENGTH_TOLERANCE if length_tolerance is None else float(length_tolerance)
+    _validate(pts, length, a_max, dt, shaper, tol, margin)
+    if max_sway is not None and not (0 < max_sway < math.pi / 2):
+        raise OptionError(f"--max-sway must be in (0, 90) deg, got {math.degrees(max_sway):g} deg")
+    if not (math.isfinite(ball_radius) and 0 <= ball_radius < 1):
+        raise OptionError(f"--ball-radius must be in [0, 1) m, got {ball_radius:g}")
     options = AntiSwayOptions(
         shaper=shaper, j_max=None if j_max is None else float(j_max), v_max=float(v_max),
-        length_tolerance=float(length_tolerance), tune=tune,
+        length_tolerance=tol, tune=tune, max_sway=max_sway,
     )
     lim = limits if limits is not None else load_limits(None)
     robot = make_robot(flange, tool)
     q_ref = parse_joint_vector(ANTISWAY_Q0, "--q0") if q0 is None else np.asarray(q0, dtype=float)
     if q_ref.shape != (7,):
         raise OptionError("--q0: expected 7 joint angles")
+    setup = _Setup(pts, float(length), z, float(dt), robot, q_ref, lim, margin, jerk, max_sway, tuple(obstacles),
+                   float(ball_radius))
+    result = _attempt(setup, a_max, options, progress)
+    if result.failure is None:
+        return result
+    if fallback and shaper == "auto":
+        from dataclasses import replace
 
-    timings = {}
-    t0 = time.perf_counter()
-    plan = plan_layout(pts, length, a_max, z, dt, options)
-    timings["plan"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    joints, ik_error = _joints_of(plan, robot, q_ref, lim, progress)
-    timings["ik"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    report = run_check(joints, lim, margin, jerk, False, robot)
-    timings["check"] = time.perf_counter() - t0
-    if not report.ok:
-        failing = _failing_segments(plan, report)
-        seg = failing[0]
-        accels = [a_max] * len(plan.segments)
-        best = _largest_fitting_accel(pts, length, accels, z, dt, options, seg, robot, q_ref, lim, margin, jerk)
-        s = plan.segments[seg - 1]
-        first = next(v for v in report.failing if plan.segment_of(v.t) == seg)
-        fit = (
-            f"the largest a_max that fits is {math.floor(best * 100) / 100:.2f} m/s²"
-            if best > 0
-            else "no a_max fits (the segment is outside the joint limits at any acceleration)"
+        tried = []
+        peak_speed = float(np.abs(np.diff(result.plan.position, axis=0)).max() / dt) * math.sqrt(2)
+        for design in FALLBACK_DESIGNS:
+            # robust-slow: the robust design with the pivot speed capped at 3/4 of the failed plan's peak
+            alt_opts = (replace(options, shaper="robust", v_max=min(options.v_max, 0.75 * peak_speed))
+                        if design == "robust-slow" else replace(options, shaper=design))
+            alt = _attempt(setup, a_max, alt_opts)
+            if alt.failure is None and (tol == 0 or max(alt.band.residual) <= FALLBACK_RESIDUAL):
+                tried.append(alt)
+        if tried:
+            alt = min(tried, key=lambda r: r.stop_time)
+            to = alt.plan.shaper if math.isinf(alt.plan.options.v_max) else (
+                f"{alt.plan.shaper} (pivot speed ≤ {alt.plan.options.v_max:.2f} m/s)")
+            return replace(alt, fallback={"from": shaper, "to": to, "reason": result.failure})
+    msg = result.failure
+    if fallback and shaper == "auto":
+        msg += (f"; no fallback design ({', '.join(FALLBACK_DESIGNS)}) plans either with ≤ "
+                f"{math.degrees(FALLBACK_RESIDUAL):g}° residual across the length band")
+    if suggest and result.failure.startswith("a_max") or (suggest and "sway" in result.failure):
+        best = _largest_fitting_accel(setup, a_max, options)
+        msg += (
+            f"; the largest a_max that plans is {best:.2f} m/s² (re-planned with that single a_max)"
+            if best > 0 else "; no a_max plans (the layout is outside the joint limits at any acceleration)"
         )
-        others = f" (segments {', '.join(map(str, failing))} exceed the limits)" if len(failing) > 1 else ""
-        raise PlanningError(
-            f"a_max = {a_max:g} m/s² does not fit the joint limits at segment {seg}{others} "
-            f"({s.start[0]:.3f},{s.start[1]:.3f})→({s.end[0]:.3f},{s.end[1]:.3f}): {first.describe()}; {fit} "
-            f"(an anti-sway plan is never re-timed)"
-        )
-    t0 = time.perf_counter()
-    run = predict_sway(joints, robot, length, plan.stop_time)
-    timings["prediction"] = time.perf_counter() - t0
-    baseline = plan_layout(pts, length, a_max, z, dt, AntiSwayOptions(shaper="accel")).stop_time
-    return AntiSwayResult(plan, joints, ik_error, report, run, plan.stop_time, baseline, timings)
+    raise PlanningError(msg + " (an anti-sway plan is never re-timed)")
 
 
 def _validate(pts, length, a_max, dt, shaper, tol, margin) -> None:
@@ -311,12 +459,16 @@ def plan_anti_sway_command(
     z: Annotated[Optional[float], typer.Option("--z", help="Flange (pivot) height \\[m]; default 0.45.")] = None,
     shaper: Annotated[
         str,
-        typer.Option("--shaper", help="accel (thesis baseline), auto (default: fastest zero-sway per segment), box, zv, zvd, zvdd, mzv, ei, ei2, box-zv, box-zvd, box-ei."),
+        typer.Option("--shaper", help="auto (default: per segment the quickest move robust to --length-tolerance, capped at the baseline's time; other designs as fallback), robust, accel (thesis baseline), box, zv, zvd, zvdd, mzv, ei, ei2, box-zv, box-zvd, box-ei."),
     ] = "auto",
     dt: Annotated[float, typer.Option("--dt", help="Joint sample step \\[s] (thesis FRI period 0.005).")] = DEFAULT_DT,
     length_tolerance: Annotated[
-        float, typer.Option("--length-tolerance", help="Relative string-length uncertainty (0.2 = ±20 %): auto picks robust shapers.")
-    ] = 0.0,
+        float, typer.Option("--length-tolerance", help="Relative string-length uncertainty the plan must tolerate (0.2 = ±20 %); 0: nominal length only (fastest).")
+    ] = 0.1,
+    max_sway: Annotated[Optional[str], typer.Option("--max-sway", help="Largest tilt of the string during the move, for every length in the band \\[deg; a plain number is degrees, 'rad' suffix for radians]: a planning constraint of the default design, a check for all.")] = None,
+    obstacles: Annotated[Optional[Path], typer.Option("--obstacles", help="CSV of boxes on the table: name,x_min,y_min,z_min,x_max,y_max,z_max \\[m, base frame]; the ball's predicted paths (string ±tolerance) must clear them.")] = None,
+    ball_radius: Annotated[float, typer.Option("--ball-radius", help="Ball radius for the obstacle clearance \\[m].")] = DEFAULT_BALL_RADIUS,
+    no_fallback: Annotated[bool, typer.Option("--no-fallback", help="With auto: do not try other designs when the default cannot plan.")] = False,
     j_max: Annotated[Optional[float], typer.Option("--j-max", help="Pivot jerk limit of the shaped profiles \\[m/s³]; default a_max/(0.04·T): jerk ramps of 4 % of the period.")] = None,
     v_max: Annotated[Optional[float], typer.Option("--v-max", help="Pivot speed limit \\[m/s]; default none.")] = None,
     no_tune: Annotated[bool, typer.Option("--no-tune", help="Skip the per-segment nonlinear tuning of the period.")] = False,
@@ -333,23 +485,39 @@ def plan_anti_sway_command(
 ) -> None:
     """Anti-sway crane move through turning points, stopping at each with no swing left.
 
-    The flange points straight down at height --z; the ball hangs --length below the pivot. Exit 1 naming the
-    segment and the largest a_max that fits if the joint limits are exceeded (the plan is never re-timed).
+    The flange points straight down at height --z; the ball hangs --length below the pivot. The default design
+    leaves little swing for any string length within ±--length-tolerance. Exit 1 when the plan exceeds the
+    joint limits (naming the segment and the largest a_max that plans, verified), swings more than --max-sway,
+    or the ball touches an obstacle (naming it and the time); with auto other designs are tried first. The plan
+    is never re-timed.
     """
     from ..console import Reporter
-    from ..options import limits_from
+    from ..obstacle_file import read_obstacles
+    from ..options import check_number, limits_from
     from ..parsing import parse_joint_vector, parse_points
 
     rep = Reporter(json_out)
+    for opt, v, lo, hi, unit in (("--length", length, 0.01, 5, "m"), ("--a-max", a_max, 0.01, 50, "m/s²"),
+                                 ("--j-max", j_max, 0.1, 1e4, "m/s³"), ("--v-max", v_max, 0.01, 10, "m/s"),
+                                 ("--dt", dt, 1e-4, 0.1, "s")):  # fmt: skip
+        check_number(opt, v, lo, hi, unit=unit)
+    check_number("--length-tolerance", length_tolerance, 0, 0.9)
+    check_number("--margin", margin, 0, 1, high_open=True)
     pts = parse_points(points, "--points")
     q_ref = parse_joint_vector(q0, "--q0") if q0 is not None else None
     lim = limits_from(limits)
+    sway = parse_max_sway(max_sway) if max_sway is not None else None
+    obs = read_obstacles(obstacles) if obstacles is not None else ()
     with rep.progress("IK", None) as update:
         figs = plan_anti_sway_files(
             pts, length, a_max, z, shaper, dt, out, task_out, prediction, plot, flange=flange, tool=tool, q0=q_ref,
             limits=lim, margin=margin, jerk=jerk, j_max=j_max, v_max=math.inf if v_max is None else v_max,
-            length_tolerance=length_tolerance, tune=not no_tune, progress=update,
+            length_tolerance=length_tolerance, tune=not no_tune, max_sway=sway, obstacles=obs,
+            ball_radius=ball_radius, fallback=not no_fallback, progress=update,
         )
+    if figs["fallback"]:
+        fb = figs["fallback"]
+        rep.print(f"fallback: {fb['from']} could not plan ({fb['reason']}); used {fb['to']}")
     designs = ", ".join(f"{s['index']}:{s['design']}" for s in figs["segments"])
     rep.print(
         f"wrote {out}: {figs['samples']} samples, {figs['duration_s']:.3f} s (moving {figs['motion_s']:.3f} s; "
@@ -359,6 +527,15 @@ def plan_anti_sway_command(
         f"predicted sway: peak {figs['peak_sway_deg']:.2f}°, residual after the last stop "
         f"{figs['residual_sway_deg']:.3f}°; max IK error {figs['max_ik_error_m']:.1e} m"
     )
+    if len(figs["band_lengths_m"]) > 1:
+        rep.print(
+            f"string {min(figs['band_lengths_m']):.3f}–{max(figs['band_lengths_m']):.3f} m "
+            f"(±{figs['length_tolerance'] * 100:g} %): worst residual {figs['worst_residual_sway_deg']:.3f}°, "
+            f"worst peak {figs['worst_peak_sway_deg']:.2f}°"
+        )
+    if figs["nearest_obstacle"] is not None:
+        nb = figs["nearest_obstacle"]
+        rep.print(f"obstacles: least clearance {figs['min_clearance_m'] * 1000:.1f} mm ({nb['name']} at t = {nb['t_s']:.2f} s)")
     jr = figs["jerk_ratio"]
     rep.print(
         f"limits: {'OK' if figs['limits_ok'] else 'FAILED'}; peak joint jerk {jr * 100:.0f} % of the limit"
@@ -368,6 +545,14 @@ def plan_anti_sway_command(
         if figs[name] is not None:
             rep.print(f"{name.replace('_', ' ')}: {figs[name]}")
     rep.emit(figs)
+
+
+def parse_max_sway(text: str) -> float:
+    """'--max-sway': a plain number in degrees, or with a deg/rad suffix → [rad]."""
+    from ..parsing import parse_angle
+
+    t = str(text).strip().lower()
+    return parse_angle(t if t.endswith(("deg", "rad", "°")) else t + "deg", "--max-sway")
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

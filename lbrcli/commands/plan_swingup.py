@@ -19,24 +19,36 @@ PREDICTION_COLUMNS = ("t", "theta", "theta_planned")
 SIDES = {"any": 0, "+y": 1, "-y": -1}
 
 
+# Ranges of the numeric options: physical sense, and work that ends (a 1e6 m/s² push or a 1e-9 s step would
+# integrate for hours or allocate gigabytes).
+MAX_PUSH = 20.0  # [m/s²] about 2 g; the arm's pivot bounds along y are a few m/s²
+MAX_DURATION = 600.0  # [s]
+MAX_GAIN = 1e4
+
+
 def _validate(length, mass, theta_d, method, theta0, dt, duration, travel, k_e, k_p, k_d, tolerance, margin,
-              orientation, push, side="any") -> None:
+              orientation, push, side="any", workers=2) -> None:
     from trajectories.errors import OptionError
 
+    from ..options import check_number
+
+    check_number("--length", length, 0.01, 5.0, unit="m")
+    check_number("--mass", mass, 0.0, 100.0, low_open=True, unit="kg")
+    check_number("--dt", dt, 1e-4, 0.02, unit="s")
+    check_number("--duration", duration, 0.0, MAX_DURATION, low_open=True, unit="s")
+    check_number("--max-travel", travel, 0.0, 1.0, low_open=True, unit="m")
+    check_number("--ke", k_e, 0.0, MAX_GAIN, low_open=True)
+    check_number("--kp", k_p, 0.0, MAX_GAIN, unit="1/s²")
+    check_number("--kd", k_d, 0.0, MAX_GAIN, unit="1/s")
+    check_number("--margin", margin, 0.0, 1.0, high_open=True)
+    check_number("--push", push, -MAX_PUSH, MAX_PUSH, unit="m/s²")
+    check_number("--workers", workers, 1, 64)
     checks = (
-        (length > 0 and math.isfinite(length), f"--length must be > 0 m, got {length:g}"),
-        (mass > 0 and math.isfinite(mass), f"--mass must be > 0 kg, got {mass:g}"),
         (0 < theta_d < math.pi, f"--theta-d must be in (0, 180°), got {math.degrees(theta_d):g}°"),
         (method in ("energy", "fast"), f"--method must be energy or fast, got {method!r}"),
         (abs(theta0) < math.pi / 2, f"--theta0 must be within ±90°, got {math.degrees(theta0):g}°"),
-        (0 < dt <= 0.02, f"--dt must be in (0, 0.02] s, got {dt:g}"),
-        (duration is None or duration > 0, f"--duration must be > 0 s, got {duration}"),
-        (0 < travel <= 1.0, f"--max-travel must be in (0, 1] m, got {travel:g}"),
-        (k_e > 0 and k_p >= 0 and k_d >= 0, "--ke must be > 0, --kp and --kd ≥ 0"),
         (0 <= tolerance < theta_d, f"--tolerance must be in [0, θ_d), got {math.degrees(tolerance):g}°"),
-        (0 <= margin < 1, f"--margin must be in [0, 1), got {margin:g}"),
         (orientation in ("auto", "fixed", "follow"), f"--orientation must be auto, fixed or follow, got {orientation!r}"),
-        (math.isfinite(push), "--push must be finite"),
         (side in SIDES, f"--side must be one of {', '.join(SIDES)}, got {side!r}"),
     )
     for ok, message in checks:
@@ -91,10 +103,12 @@ def plan_swing_up_files(
     from trajectories.trajectory import TaskTrajectory
 
     from ..options import limits_from, make_robot
+    from ..outputs import guard_outputs
     from ..parsing import parse_joint_vector
 
     _validate(length, mass, theta_d, method, theta0, dt, duration, travel, k_e, k_p, k_d, tolerance, margin,
-              orientation, push, side)
+              orientation, push, side, workers)
+    guard_outputs({"--limits": limits}, {"-o": out, "--prediction": prediction, "--plot": plot, "--task-out": task_out})
     q0 = parse_joint_vector(q_start, "--q-start")
     robot = make_robot(flange, tool)
     lim = limits_from(limits)
@@ -102,7 +116,7 @@ def plan_swing_up_files(
         length=length, mass=mass, theta_d=theta_d, method=method, q_start=tuple(float(v) for v in q0),
         orientation=None if orientation == "auto" else orientation, travel=travel, dt=dt, duration=duration,
         tolerance=tolerance, theta0=theta0, push=push, k_e=k_e, k_p=k_p, k_d=k_d, taut=taut, limit_margin=margin,
-        search=SearchSettings(workers=max(1, int(workers))), side=SIDES[side],
+        search=SearchSettings(workers=int(workers)), side=SIDES[side],
     )
     result = plan_swing_up(request, robot, lim, progress=progress)
     write_joint_csv(out, result.trajectory)

@@ -16,7 +16,7 @@ def retime(
     step: Annotated[
         Optional[float], typer.Option("--step", help="Output sample step \\[s] (default: the input's step, e.g. the FRI period).")
     ] = None,
-    margin: Annotated[float, typer.Option("--margin", help="Use the limits scaled by (1 − margin).")] = 0.02,
+    margin: Annotated[float, typer.Option("--margin", help="Use the limits scaled by (1 − margin); the samples are verified against them.")] = 0.02,
     limits: LimitsOpt = None,
     dt: DtOpt = None,
     json_out: JsonOpt = False,
@@ -25,32 +25,54 @@ def retime(
 
     [bold]Never use it on anti-sway or swing-up plans[/bold]: their timing is what damps or pumps the
     swing; re-timing detunes them. Lower the planner's acceleration instead.
+
+    The samples are verified by central and forward differences against the limits × (1 − margin); toppra is rerun
+    slower until they pass. Exit 1 without writing when they cannot (e.g. the path leaves the position limits).
     """
     from trajectories.csvio import read_joint_csv, write_joint_csv
-    from trajectories.errors import OptionError
-    from trajectories.retime import retime as do_retime
+    from trajectories.errors import CheckFailed, OptionError
+    from trajectories.retime import retime_within
 
     from ..console import Reporter
-    from ..options import check_margin, limits_from
+    from ..options import check_margin, check_number, limits_from
+    from ..outputs import guard_outputs
     from .check import print_report, run_check
 
     rep = Reporter(json_out)
     check_margin(margin)
+    check_number("--step", step, 1e-4, 1.0, unit="s")
+    check_number("--dt", dt, 1e-4, 1.0, unit="s")
+    guard_outputs({"JOINT_CSV": joint_csv, "--limits": limits}, {"-o": out})
     lim = limits_from(limits)
     traj = read_joint_csv(joint_csv, dt)
     h = step if step is not None else traj.dt
     if not h or h <= 0:
         raise OptionError("--step must be positive (a single-sample file has no step; give --step)")
-    result = do_retime(traj, lim, h, scale=1.0 - margin)
+    check_number("the step (--step or the input's)", h, 1e-4, 1.0, unit="s")
+    # toppra bounds the spline; the samples are verified (central and forward differences) against the limits
+    # × (1 − margin) and re-timed slower until they pass; a file outside the limits is never written.
+    try:
+        result, ratios = retime_within(traj, lim.scaled(1.0 - margin), h, scale=1.0)
+    except CheckFailed as exc:
+        raise CheckFailed(f"{joint_csv}: {exc}; nothing written to {out}") from None
+    report = run_check(result.trajectory, lim, margin, False, False)
+    if not report.ok:  # retime_within verified the same limits: a bug if reached
+        raise CheckFailed(f"{joint_csv}: the re-timed path fails the limit check; nothing written to {out}")
     write_joint_csv(out, result.trajectory)
-    report = run_check(result.trajectory, lim, 0.0, False, False)
     print_report(rep, report, str(out))
-    rep.print(f"wrote {out}: {result.duration_in:.3f} s → {result.duration_out:.3f} s at step {h:g} s")
-    rep.emit(
-        {"duration_in_s": result.duration_in, "duration_s": result.duration_out, "step_s": h, "limits_ok": report.ok, "out": str(out)}
+    if ratios["jerk"] > 1.0:
+        rep.warn(
+            f"joint jerk peaks at {ratios['jerk']:.2f}× the jerk limit (toppra bounds velocity and acceleration "
+            "only; `lbr check --jerk` fails such files)"
+        )
+    rep.print(
+        f"wrote {out}: {result.duration_in:.3f} s → {result.duration_out:.3f} s at step {h:g} s "
+        f"(limits × {1 - margin:.2f}; toppra at {result.scale:.3f} of them after {result.attempts} attempt(s))"
     )
-    if not report.ok:
-        raise typer.Exit(1)
+    rep.emit(
+        {"duration_in_s": result.duration_in, "duration_s": result.duration_out, "step_s": h, "limits_ok": report.ok,
+         "ratios": ratios, "toppra_scale": result.scale, "attempts": result.attempts, "out": str(out)}
+    )
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

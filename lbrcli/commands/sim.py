@@ -24,6 +24,18 @@ def _parse_client(text: str) -> tuple[str, int]:
     return host, number
 
 
+def _floats(text: str, n: int, option: str) -> tuple[float, ...]:
+    from trajectories.errors import OptionError
+
+    try:
+        values = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        raise OptionError(f"{option}: expected {n} comma-separated numbers, got {text!r}") from None
+    if len(values) != n:
+        raise OptionError(f"{option}: expected {n} comma-separated numbers, got {len(values)}")
+    return values
+
+
 def sim(
     port: Annotated[int, typer.Option("--port", help="UDP port the simulator sends from and listens on (0: any free port).")] = 0,
     host: Annotated[str, typer.Option("--host", help="Address the simulator binds.")] = "127.0.0.1",
@@ -47,6 +59,16 @@ def sim(
     seed: Annotated[int, typer.Option("--seed", help="Seed of the fault injection.")] = 0,
     realtime: Annotated[bool, typer.Option("--realtime", help="Run the loop with real-time scheduling (SCHED_FIFO) if permitted: steadier 1 ms under load.")] = False,
     pendulum_pty: Annotated[bool, typer.Option("--pendulum-pty", help="Also emulate the thesis's pendulum module: the ball's planar angle θy as AS5600 lines on a pseudo-terminal (its path is printed; read it with --pendulum PATH). Needs --length.")] = False,
+    no_overlay: Annotated[bool, typer.Option("--no-overlay", help="The application only monitors the session (stays in MONITORING_READY, --duration counts there), e.g. for KUKA's IOAccess example, which mirrors no positions.")] = False,
+    mode: Annotated[str, typer.Option("--mode", help="Client command mode of the simulated FRI overlay: position (joint position, position control), torque (joint impedance + commanded torque) or wrench (Cartesian impedance + commanded wrench).")] = "position",
+    stiffness: Annotated[float, typer.Option("--stiffness", help="Joint impedance stiffness \\[Nm/rad] (--mode torque), every joint.")] = 1000.0,
+    cartesian_stiffness: Annotated[str, typer.Option("--cartesian-stiffness", help="Cartesian impedance stiffness TRANS,ROT \\[N/m, Nm/rad] along the TCP axes (--mode wrench).")] = "2000,200",
+    damping_ratio: Annotated[float, typer.Option("--damping-ratio", help="Damping ratio ζ of the impedance controllers (KUKA's default 0.7).")] = 0.7,
+    io: Annotated[Optional[list[str]], typer.Option("--io", help="An IO channel of the application's FRI IO configuration: NAME:TYPE:DIRECTION\\[:VALUE], TYPE boolean|digital|analog, DIRECTION in|out (repeatable).")] = None,
+    io_preset: Annotated[Optional[str], typer.Option("--io-preset", help="A ready IO configuration: kuka-ioaccess (the channels KUKA's IOAccess example uses).")] = None,
+    external_torque: Annotated[Optional[str], typer.Option("--external-torque", help="A constant push of the environment on the joints τ1..τ7 \\[Nm].")] = None,
+    external_force: Annotated[Optional[str], typer.Option("--external-force", help="A constant external wrench on the TCP Fx,Fy,Fz,Mx,My,Mz \\[N, Nm], base-frame axes.")] = None,
+    torque_noise: Annotated[float, typer.Option("--torque-noise", help="Standard deviation of the noise on the measured torques \\[Nm].")] = 0.0,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -59,27 +81,48 @@ def sim(
     COMMANDING_ACTIVE (commands executed within the velocity/acceleration limits); late or missing replies fall
     back to monitoring, a command outside the position limits is a safety stop. Runs until the session ends
     (IDLE), --timeout, or Ctrl-C; prints the states as they change and the session statistics.
+
+    The robot application holds the robot (PositionHold): the ipo position stays where the robot stood when the
+    overlay started, the measured position follows the client's commands (KUKA's LBRJointSineOverlay commands
+    ipo + sine). FRI 2.7 messages carry the measured and ipo Cartesian poses, the external force and E1 (A3).
     """
     from trajectories.robot import parse_flange, parse_tool
 
     from ..console import Reporter
     from ..fri.constants import ConnectionQuality, SessionState
-    from ..fri.simulator import SimConfig, Simulator
+    from trajectories.errors import OptionError
+
+    from ..fri.sim import IO_PRESETS, SimConfig, Simulator, parse_io
     from ..parsing import parse_joint_vector
+    from ..plants import default_plants
 
     rep = Reporter(json_out)
     client_host, client_port = _parse_client(client)
+    channels = tuple(parse_io(text) for text in io or ())
+    if io_preset is not None:
+        if io_preset not in IO_PRESETS:
+            raise OptionError(f"--io-preset: one of {', '.join(IO_PRESETS)}, got {io_preset!r}")
+        channels = IO_PRESETS[io_preset] + channels
+    if length is not None and not length > 0:
+        raise OptionError(f"--length: string length must be > 0 m, got {length:g}")
+    extra = {}
+    for name, text, n in (("external_torque", external_torque, 7), ("external_force", external_force, 6),
+                          ("cartesian_stiffness", cartesian_stiffness, 2)):
+        if text is not None:
+            extra[name] = _floats(text, n, "--" + name.replace("_", "-"))
     config = SimConfig(
         client_host=client_host, client_port=client_port, host=host, port=port, period_ms=period,
         receive_multiplier=receive_multiplier, version=fri_version,
         q0=tuple(float(x) for x in parse_joint_vector(q0, "--q0")),
-        flange=parse_flange(flange).value, tool=parse_tool(tool), ball_length=length, ball_damping=damping,
+        flange=parse_flange(flange).value, tool=parse_tool(tool),
+        plants=default_plants(length, damping, pendulum_pty=pendulum_pty),
         commanding_after_s=commanding_after, session_duration_s=duration, max_runtime_s=timeout,
         loss=loss, delay_ms=delay, jitter_ms=jitter, malformed=malformed, seed=seed,
         quality_window=quality_window, quality_good=quality_good,
         quality_fair=min(0.5, quality_good), quality_excellent=max(0.98, quality_good),
         operation_mode=operation_mode.upper(), realtime=realtime, limits_path=str(limits) if limits is not None else None,
-        pendulum_pty=pendulum_pty,
+        overlay=not no_overlay, command_mode=mode.lower(), joint_stiffness=stiffness, damping_ratio=damping_ratio, io=channels,
+        torque_noise=torque_noise, **extra,
     )
     config.validate()
     interrupted = []
@@ -89,7 +132,8 @@ def sim(
 
     sim_ = Simulator(config, stop=lambda: bool(interrupted), on_state=on_state)
     h, p = sim_.address
-    rep.print(f"FRI {fri_version} simulator on {h}:{p}, sending every {period} ms to {client_host}:{client_port} (Ctrl-C stops)")
+    rep.print(f"FRI {fri_version} simulator on {h}:{p}, sending every {period} ms to {client_host}:{client_port}, "
+              f"{config.command_mode} command mode (Ctrl-C stops)")
     if sim_.pendulum_path is not None:
         rep.print(f"pendulum module emulated on {sim_.pendulum_path}")
     import signal
@@ -119,8 +163,12 @@ def sim(
         )
     if stats.foreign_received or stats.malformed_received:
         rep.print(f"ignored: {stats.foreign_received} foreign, {stats.malformed_received} malformed datagrams")
+    if stats.io_writes or stats.io_refused:
+        rep.print(f"IO: {stats.io_writes} writes applied, {stats.io_refused} refused (input or unknown channel)")
+    if stats.incomplete_commands:
+        rep.print(f"{stats.incomplete_commands} commands lacked the {config.command_mode} the mode needs (taken as 0)")
     if stats.safety_stop:
-        rep.print("[red]safety stop[/red]: a command was outside the position limits")
+        rep.print("[red]safety stop[/red]: a command was outside the position limits (or not a number)")
     if stats.max_ball_theta is not None:
         import math
 

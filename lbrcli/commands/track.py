@@ -40,9 +40,14 @@ def video(
     radius: Annotated[Optional[float], typer.Option("--radius", help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: 2–62 px radius).")] = None,
     min_circularity: Annotated[float, typer.Option("--min-circularity", help="Minimum 4π·area/perimeter² of the ball blob (disc ≈ 0.9, cable ≈ 0.1).")] = 0.6,
     min_fit: Annotated[float, typer.Option("--min-fit", help="Minimum overlap (IoU) of the blob with its moment ellipse (disc ≥ 0.9, any box ≈ 0.83).")] = 0.88,
-    calibration: Annotated[Optional[Path], typer.Option("--calibration", help="Camera JSON from `lbr track calibrate`: undistort points; with a plane also x_m,y_m \\[m].")] = None,
+    calibration: Annotated[Optional[Path], typer.Option("--calibration", help="Camera JSON from `lbr track calibrate`: undistort points; with a plane, θ in the plane of motion and x_m,y_m \\[m].")] = None,
+    start: Annotated[Optional[str], typer.Option("--start", help="Where the ball is when first seen, U,V \\[px]: the ball is the candidate nearest to it (names it among round objects of its colour).")] = None,
+    fps: Annotated[Optional[float], typer.Option("--fps", help="Capture frame rate \\[1/s] when the container's is wrong (slow-motion videos state their playback rate): times = frame / fps.")] = None,
+    min_saturation: Annotated[Optional[int], typer.Option("--min-saturation", help="Minimum HSV saturation (0–255) of ball pixels (default 100, or 80 for green, cyan, blue); lowered automatically inside the search window for motion-blurred balls.")] = None,
+    min_found: Annotated[float, typer.Option("--min-found", help="Exit 1 with a warning when the ball is found in fewer than this share of frames \\[%].")] = 90.0,
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of θ \\[deg] and u, v \\[px] over time with lost frames marked.")] = None,
     preview: Annotated[Optional[Path], typer.Option("--preview", help="Video (mp4) with the detection drawn over it: ball circle, pivot, string, θ.")] = None,
+    candidates: Annotated[Optional[Path], typer.Option("--candidates", help="PNG of the first frame with every ball-like blob circled and labelled U,V \\[px] (pick one for --start).")] = None,
     json_out: JsonOpt = False,
 ) -> None:
     """Track a coloured ball in every frame of a video; θ from the pivot when one is known.
@@ -51,7 +56,12 @@ def video(
     runs in a window around a constant-velocity prediction with a full-frame fallback. Frames where the ball
     is not found are written with found = 0 and empty (nan) positions — never invented. Times are the
     decoder timestamps \\[s] (variable frame rates kept). θ = atan2(u_ball − u_pivot, v_ball − v_pivot) \\[rad]:
-    0 hanging straight down, positive toward the right of the image. Exit 1 if the ball is never found.
+    0 hanging straight down, positive toward the right of the image; with a plane calibration θ is measured in
+    the plane of motion (metric coordinates; the board's edges level and plumb), so an oblique camera does not
+    bias it. When several round blobs of the ball's colour are seen at once, each is followed for a moment
+    and the one moving like a pendulum about the pivot is kept (said in a warning); --start names the ball
+    instead. Exit 1 if the ball is found in fewer than --min-found percent of the frames, or the pivot
+    marker in none.
     """
     import math
     import time
@@ -60,7 +70,7 @@ def video(
 
     from trajectories.errors import OptionError
     from tracking.calibration import load_calibration
-    from tracking.color import color_spec
+    from tracking.color import color_spec, with_min_saturation
     from tracking.detect import BlobGates
     from tracking.pipeline import track_video
     from tracking.tracker import TrackerOptions
@@ -78,19 +88,33 @@ def video(
     if piv_spec is not None and piv_spec.bands == ball_spec.bands:
         raise OptionError("--pivot-color must differ from the ball's --color")
     piv_uv = tuple(parse_floats(pivot, "--pivot", 2)) if pivot is not None else None
+    start_uv = tuple(parse_floats(start, "--start", 2)) if start is not None else None
+    if fps is not None and not (math.isfinite(fps) and fps > 0):
+        raise OptionError(f"--fps must be a positive frame rate [1/s], got {fps:g}")
+    if min_saturation is not None and not 1 <= min_saturation <= 255:
+        raise OptionError(f"--min-saturation must be in 1–255, got {min_saturation}")
+    if not 0.0 <= min_found <= 100.0:
+        raise OptionError(f"--min-found must be a percentage in [0, 100], got {min_found:g}")
+    if min_saturation is not None:
+        ball_spec = with_min_saturation(ball_spec, min_saturation)
     if radius is not None and not radius > 0:
         raise OptionError(f"--radius must be positive, got {radius:g}")
     for value, name in ((min_circularity, "--min-circularity"), (min_fit, "--min-fit")):
         if not 0.0 <= value <= 1.0:
             raise OptionError(f"{name} must be in [0, 1], got {value:g}")
-    for p, name in ((out, "--out"), (plot, "--plot"), (preview, "--preview")):
+    for p, name in ((out, "--out"), (plot, "--plot"), (preview, "--preview"), (candidates, "--candidates")):
         _check_out(p, name)
     shape = {"min_circularity": min_circularity, "min_ellipse_fit": min_fit}
     gates = BlobGates.for_radius(radius, **shape) if radius else BlobGates(**shape)
-    options = TrackerOptions(gates=gates)
+    options = TrackerOptions(gates=gates, start_uv=start_uv)
     pivot_options = TrackerOptions(gates=BlobGates(**shape))
     cal = load_calibration(calibration) if calibration is not None else None
     info = probe_video(video_path)
+    for point, name in ((piv_uv, "--pivot"), (start_uv, "--start")):
+        if point is not None and not (0 <= point[0] <= info.width and 0 <= point[1] <= info.height):
+            raise OptionError(
+                f"{name} {point[0]:g},{point[1]:g} is outside the {info.width}x{info.height} px image of {video_path}"
+            )
 
     writer = None
     on_frame = None
@@ -99,7 +123,7 @@ def video(
 
         from tracking.overlay import draw_overlay
 
-        writer = cv2.VideoWriter(str(preview), cv2.VideoWriter_fourcc(*"mp4v"), info.fps, info.size)
+        writer = cv2.VideoWriter(str(preview), cv2.VideoWriter_fourcc(*"mp4v"), fps or info.fps, info.size)
         if not writer.isOpened():
             raise OptionError(f"--preview: cannot write a video to {preview}")
 
@@ -107,6 +131,10 @@ def video(
             b = res.ball
             draw_overlay(frame, res.t, (b.u, b.v) if b else None, b.radius_px if b else None, res.pivot_uv, res.theta)
             writer.write(frame)
+
+    if candidates is not None:
+        n_cand = _write_candidates(video_path, ball_spec, gates, candidates)
+        rep.print(f"candidates: {n_cand} ball-like blobs in the first frame, drawn in {candidates}")
 
     t0 = time.perf_counter()
     try:
@@ -119,6 +147,7 @@ def video(
                 pivot_color=piv_spec,
                 pivot_options=pivot_options,
                 calibration=cal,
+                fps=fps,
                 progress=update,
                 on_frame=on_frame,
             )
@@ -145,18 +174,27 @@ def video(
         "ball_radius_px": float(np.nanmedian(track.radius_px)) if found else math.nan,
         "full_frame_searches": track.full_frame_searches,
         "processing_fps": n / elapsed if elapsed > 0 else math.nan,
+        "fps_given": fps,
+        "theta_in_plane": track.theta_in_plane,
+        "ambiguities": list(track.notes),
     }
     rep.print(
         f"{video_path}: {n} frames over {duration:.3f} s ({info.width}x{info.height}, {figures['fps_measured']:.2f} fps); "
         f"ball found in {found} ({figures['found_percent']:.1f} %), radius ≈ {figures['ball_radius_px']:.1f} px; "
         f"tracked at {figures['processing_fps']:.0f} frames/s"
     )
+    for note in track.notes:
+        rep.warn(f"several ball-like blobs: {note}")
     if track.theta is not None:
         th = track.theta[np.isfinite(track.theta)]
         figures["theta_frames"] = int(len(th))
         figures["theta_min_deg"] = float(np.degrees(th.min())) if len(th) else math.nan
         figures["theta_max_deg"] = float(np.degrees(th.max())) if len(th) else math.nan
-        rep.print(f"θ in {len(th)} frames, from {figures['theta_min_deg']:.2f}° to {figures['theta_max_deg']:.2f}°")
+        where = "in the calibrated plane of motion" if track.theta_in_plane else "in the image"
+        if len(th):
+            rep.print(f"θ ({where}) in {len(th)} frames, from {figures['theta_min_deg']:.2f}° to {figures['theta_max_deg']:.2f}°")
+        else:
+            rep.print("θ in no frame")
     if track.pivot_uv is not None:
         figures["pivot_found"] = int(np.all(np.isfinite(track.pivot_uv), axis=1).sum())
         rep.print(f"pivot marker found in {figures['pivot_found']} frames")
@@ -173,8 +211,39 @@ def video(
         rep.print(f"preview: {preview}")
     rep.emit(figures)
     if found == 0:
-        rep.warn(f"the {color} ball was not found in any frame (try --color, --radius, --min-circularity or --min-fit)")
+        rep.warn(f"the {color} ball was not found in any frame (try --color, --radius, --min-circularity, --min-fit or --min-saturation)")
         raise typer.Exit(1)
+    if figures["found_percent"] < min_found:
+        rep.warn(
+            f"the ball was found in only {figures['found_percent']:.1f} % of the frames (--min-found {min_found:g} %): "
+            "check --color, --radius, --start and the lost frames in --plot or --preview"
+        )
+        raise typer.Exit(1)
+    if track.pivot_uv is not None and figures["pivot_found"] == 0:
+        rep.warn(f"the {pivot_color} pivot marker was not found in any frame: no θ (try another --pivot-color or --pivot U,V)")
+        raise typer.Exit(1)
+
+
+def _write_candidates(video_path: Path, spec, gates, png: Path) -> int:  # noqa: ANN001
+    """Draw the first frame's ball-like blobs (strict gates) with their U,V into a PNG; how many there were."""
+    from tracking.detect import coarse_factor, find_blobs_coarse
+    from tracking.overlay import draw_candidates
+    from tracking.video import iter_frames
+
+    import cv2
+
+    from trajectories.errors import OptionError
+
+    for _, _, frame in iter_frames(video_path):
+        blobs = find_blobs_coarse(frame, spec, gates, coarse_factor(frame.shape[1]))
+        try:
+            ok = cv2.imwrite(str(png), draw_candidates(frame, blobs))
+        except cv2.error:
+            ok = False
+        if not ok:
+            raise OptionError(f"--candidates {png}: cannot write an image there (use .png or .jpg)")
+        return len(blobs)
+    return 0
 
 
 def calibrate(

@@ -89,3 +89,23 @@ class FriCodec:
     def decode_command(self, data: bytes, into: Any | None = None) -> Any:
         """Parse a command message (client → controller) into ``into`` (or a new message)."""
         return self._decode(data, into if into is not None else self.msgs.Command(), COMMAND_MESSAGE_ID, "command")
+
+
+def detect_version(data: bytes) -> FriVersion | None:
+    """The wire format of a monitoring datagram: 2.7 when it carries a matching length and CRC-32, 1.15 when it
+    decodes as a bare 1.15 monitoring message, None otherwise."""
+    if len(data) >= 8:
+        (length,) = _U32.unpack_from(data, 0)
+        if length == len(data) - 8:
+            (crc,) = _U32.unpack_from(data, 4 + length)
+            if crc == (zlib.crc32(data[4 : 4 + length]) & 0xFFFFFFFF):
+                try:
+                    FriCodec(FriVersion.V2_7).decode_monitoring(data)
+                    return FriVersion.V2_7
+                except FriDecodeError:
+                    return None
+    try:
+        FriCodec(FriVersion.V1_15).decode_monitoring(data)
+        return FriVersion.V1_15
+    except FriDecodeError:
+        return None

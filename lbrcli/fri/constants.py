@@ -64,3 +64,14 @@ class OverlayType(IntEnum):
     NO_OVERLAY = 0
     JOINT = 1
     CARTESIAN = 2
+
+
+class Phase(IntEnum):
+    """What a cycle's command was (the log's ``phase`` column)."""
+
+    NONE = 0  # not commanding (monitoring states, the mirror in COMMANDING_WAIT)
+    MOVE = 1  # jerk-limited move to the start
+    TRAJECTORY = 2  # the file's rows
+    SETTLE = 3  # holding the last row
+    BRAKE = 4  # the application's braking stop (Ctrl-C, a guard refusal, the end of the stream)
+    MIRROR = 5  # COMMANDING_ACTIVE without motion (monitor): the ipo position held

@@ -1,50 +1,97 @@
-"""Per-cycle command guard: every joint position sent to the robot is inside the position limits and reached
-from the previous command no faster than the velocity limit.
+"""Per-cycle command guard: every command that leaves the client is one the robot can follow.
 
-Pure Python over 7 floats (cheaper per cycle than numpy on tiny arrays). A refusal returns a reason; the
-session then holds the last safe command and ends the stream.
+Joint position: 7 finite values inside the position limits, the step from the previous command within the velocity
+limit and the second difference within the acceleration limit (both × period, as the controller executes them).
+Torque (TORQUE mode): 7 finite values within the torque table. Wrench (WRENCH mode): 6 finite values within the
+configured force [N] and torque [Nm] bounds. Limits are compared with a stated relative tolerance (REL_TOL), so a
+command exactly at a limit passes. Pure Python over 7 floats: cheaper per cycle than numpy on tiny arrays.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Sequence
 
 from trajectories.limits import JointLimits
 
+REL_TOL = 1e-9  # relative slack on every limit (floating-point rounding of a command exactly at a limit)
+DEFAULT_MAX_FORCE = 20.0  # [N] per axis, WRENCH mode
+DEFAULT_MAX_MOMENT = 2.0  # [Nm] per axis, WRENCH mode
+
 
 @dataclass(frozen=True)
 class CommandGuard:
-    """Bounds for one command period.
+    """Bounds for one command period ``period_s`` [s] (send period × receive multiplier)."""
 
-    lower/upper: position limits [rad]; max_step: velocity limit × period [rad per command].
-    """
-
-    lower: tuple[float, ...]
-    upper: tuple[float, ...]
-    max_step: tuple[float, ...]
-    period_s: float  # [s] between two commands (send period × receive multiplier)
+    upper: tuple[float, ...]  # [rad] |q| ≤ upper
+    max_step: tuple[float, ...]  # [rad] velocity limit × period
+    max_second: tuple[float, ...]  # [rad] acceleration limit × period²
+    max_torque: tuple[float, ...]  # [Nm]
+    max_force: float  # [N] per axis
+    max_moment: float  # [Nm] per axis
+    period_s: float
 
     @classmethod
-    def from_limits(cls, limits: JointLimits, period_s: float) -> "CommandGuard":
-        pos = [float(p) for p in limits.position]
+    def from_limits(
+        cls,
+        limits: JointLimits,
+        period_s: float,
+        max_force: float = DEFAULT_MAX_FORCE,
+        max_moment: float = DEFAULT_MAX_MOMENT,
+    ) -> "CommandGuard":
+        k = 1.0 + REL_TOL
         return cls(
-            lower=tuple(-p for p in pos),
-            upper=tuple(pos),
-            max_step=tuple(float(v) * period_s for v in limits.velocity),
+            upper=tuple(float(p) * k for p in limits.position),
+            max_step=tuple(float(v) * period_s * k for v in limits.velocity),
+            max_second=tuple(float(a) * period_s * period_s * k for a in limits.acceleration),
+            max_torque=tuple(float(t) * k for t in limits.torque),
+            max_force=max_force,
+            max_moment=max_moment,
             period_s=period_s,
         )
 
-    def refuse(self, previous: Sequence[float], command: Sequence[float]) -> str | None:
-        """None if ``command`` [rad] is safe after ``previous`` [rad]; else the reason (joint, value, limit)."""
+    def refuse_position(
+        self, q: Sequence[float], prev: Sequence[float], prev2: Sequence[float]
+    ) -> str | None:
+        """None if ``q`` [rad] may follow the commands ``prev`` and ``prev2`` (one and two periods before)."""
+        if q is None or len(q) != 7:
+            return f"the joint position command has {0 if q is None else len(q)} values, not 7"
+        dt = self.period_s
         for j in range(7):
-            q = command[j]
-            if not (self.lower[j] <= q <= self.upper[j]):  # also catches NaN
-                return f"A{j + 1} command {q:.6f} rad outside the position limit ±{self.upper[j]:.6f} rad"
-            step = q - previous[j]
+            x = q[j]
+            if not (-self.upper[j] <= x <= self.upper[j]):  # also NaN
+                return f"A{j + 1} command {x:.6f} rad outside the position limit ±{self.upper[j]:.6f} rad"
+            step = x - prev[j]
             if step > self.max_step[j] or -step > self.max_step[j]:
                 return (
-                    f"A{j + 1} step {step:+.6f} rad in {self.period_s * 1e3:g} ms = {step / self.period_s:+.4f} rad/s "
-                    f"exceeds the velocity limit {self.max_step[j] / self.period_s:.4f} rad/s"
+                    f"A{j + 1} step {step:+.6f} rad in {dt * 1e3:g} ms = {step / dt:+.4f} rad/s exceeds the "
+                    f"velocity limit {self.max_step[j] / dt:.4f} rad/s"
                 )
+            second = step - (prev[j] - prev2[j])
+            if second > self.max_second[j] or -second > self.max_second[j]:
+                return (
+                    f"A{j + 1} second difference {second:+.3e} rad = {second / (dt * dt):+.2f} rad/s² exceeds the "
+                    f"acceleration limit {self.max_second[j] / (dt * dt):.2f} rad/s²"
+                )
+        return None
+
+    def refuse_torque(self, tau: Sequence[float] | None) -> str | None:
+        if tau is None or len(tau) != 7:
+            return f"the torque command has {0 if tau is None else len(tau)} values, not 7"
+        for j in range(7):
+            x = tau[j]
+            if not (-self.max_torque[j] <= x <= self.max_torque[j]):
+                return f"A{j + 1} torque command {x:.4f} Nm outside the torque limit ±{self.max_torque[j]:.1f} Nm"
+        return None
+
+    def refuse_wrench(self, w: Sequence[float] | None) -> str | None:
+        if w is None or len(w) != 6:
+            return f"the wrench command has {0 if w is None else len(w)} values, not 6"
+        for i in range(6):
+            bound = self.max_force if i < 3 else self.max_moment
+            x = w[i]
+            if not (-bound <= x <= bound) or math.isnan(x):
+                unit = "N" if i < 3 else "Nm"
+                return f"wrench component {'xyzxyz'[i]}{'' if i < 3 else ' moment'} {x:.4f} {unit} outside ±{bound:g} {unit}"
         return None

@@ -26,6 +26,7 @@ from typing import Any, Sequence
 
 from trajectories.errors import InputError
 
+from .constants import Phase
 from .messages import FriVersion
 
 J = range(1, 8)
@@ -49,13 +50,13 @@ POSE_COLUMNS = ("pose_x", "pose_y", "pose_z", "pose_qw", "pose_qx", "pose_qy", "
 
 # extra columns that may hold nan (the pendulum module before its first reading): readers pass them as nan_columns
 NAN_COLUMNS = ("pend_theta", "pend_omega", "pend_age")
-# phase column values
-PHASE_NONE = 0  # not commanding (monitoring states, mirror in COMMANDING_WAIT)
-PHASE_MOVE = 1  # jerk-limited move to the start
-PHASE_TRAJECTORY = 2  # the file's rows
-PHASE_SETTLE = 3  # holding the last row (--settle)
-PHASE_HOLD = 4  # holding the last safe command after Ctrl-C or a guard refusal
-PHASE_MIRROR = 5  # COMMANDING_ACTIVE without motion (monitor): the ipo position mirrored
+# phase column values (constants.Phase)
+PHASE_NONE = int(Phase.NONE)
+PHASE_MOVE = int(Phase.MOVE)
+PHASE_TRAJECTORY = int(Phase.TRAJECTORY)
+PHASE_SETTLE = int(Phase.SETTLE)
+PHASE_BRAKE = PHASE_HOLD = int(Phase.BRAKE)
+PHASE_MIRROR = int(Phase.MIRROR)
 
 _ZERO7 = (0.0,) * 7
 _ZERO6 = (0.0,) * 6
@@ -207,6 +208,7 @@ class ExecutionLog:
             raise InputError(f"cannot write the log: {exc.strerror}", file=self.path) from None
         self.layout: LogLayout | None = None
         self.rows = 0
+        self._size = 0  # [bytes] written in complete rows
 
     def start(self, layout: LogLayout) -> None:
         """Fix the columns and write the header."""
@@ -220,11 +222,19 @@ class ExecutionLog:
     def _write(self, text: str) -> None:
         if self._fd is None:
             return
-        data = text.encode()
-        n = os.write(self._fd, data)
-        while n < len(data):  # a regular file takes it all at once; be correct anyway
-            data = data[n:]
+        data = encoded = text.encode()
+        try:
             n = os.write(self._fd, data)
+            while n < len(data):  # a regular file takes it all at once; be correct anyway
+                data = data[n:]
+                n = os.write(self._fd, data)
+        except OSError as exc:
+            # never leave a cut row: back to the last complete one, then report (the session brakes and ends)
+            with contextlib.suppress(OSError):
+                os.ftruncate(self._fd, self._size)
+                os.lseek(self._fd, self._size, os.SEEK_SET)
+            raise InputError(f"cannot write the log: {exc.strerror}", file=self.path) from None
+        self._size += len(encoded)
 
     def close(self) -> None:
         """Close the file; a log that never got its header (no FRI message arrived) is removed."""
@@ -240,3 +250,34 @@ class ExecutionLog:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+class LogObserver:
+    """Writes one log row per accepted monitoring message, after the reply went out (an application observer)."""
+
+    name = "the execution log"
+
+    def __init__(self, log: ExecutionLog, extra_names: Sequence[str] = (), extra: Any = None) -> None:
+        self.log = log
+        self.extra_names = tuple(extra_names)
+        self.extra = extra  # callable(LBRState) -> extra values, or None
+
+    def on_cycle(self, app: Any) -> None:
+        log = self.log
+        layout = log.layout
+        state = app.state
+        if layout is None:
+            layout = LogLayout(state.message, app.version, self.extra_names)
+            log.start(layout)
+        cyc = app.cycle
+        phase = int(Phase.BRAKE) if cyc.braking else (cyc.phase if cyc.answered or cyc.state >= 3 else 0)
+        log.write(
+            layout.format(
+                cyc.t, state.message, cyc.command, app.client_sequence if cyc.answered else -1,
+                1 if cyc.answered else 0, 1 if cyc.sent_position else 0, phase, cyc.row if not cyc.braking else -1,
+                self.extra(state) if self.extra is not None else (),
+            )
+        )  # fmt: skip
+
+    def figures(self) -> dict[str, Any]:
+        return {"log_rows": self.log.rows}

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import save_figure
+from . import limits_phrase, save_figure, unwrap_deg
 
 from pathlib import Path
 
@@ -22,6 +22,23 @@ def plot_antisway(result, path: str | Path) -> None:
     grid = fig.add_gridspec(2, 2, width_ratios=(1, 1.6))
     top = fig.add_subplot(grid[:, 0])
     top.plot(plan.position[:, 0], plan.position[:, 1], lw=1.5, color="tab:blue", label="pivot path")
+    band = result.band
+    if band is not None:
+        colours = plt.cm.viridis(np.linspace(0.0, 0.85, len(band.lengths)))
+        for ln, ball, col in zip(band.lengths, band.ball_paths, colours):
+            top.plot(ball[:, 0], ball[:, 1], lw=0.8, color=col, alpha=0.9, label=f"ball, string {ln:.3f} m")
+    from matplotlib.patches import Rectangle
+
+    for ob in result.obstacles:
+        w, h = ob.upper[0] - ob.lower[0], ob.upper[1] - ob.lower[1]
+        top.add_patch(Rectangle(ob.lower[:2], w, h, color="tab:red", alpha=0.35))
+        top.annotate(f"{ob.name} (z {ob.lower[2]:.2f}–{ob.upper[2]:.2f} m)", (ob.lower[0], ob.upper[1]),
+                     fontsize=8, color="tab:red")
+    if result.obstacles:
+        c = band.clearance
+        top.plot([c.position[0]], [c.position[1]], "x", color="tab:red", ms=8,
+                 label=f"least clearance {c.clearance * 1000:.0f} mm ({c.obstacle})")
+    top.legend(fontsize=7, loc="best")
     ends = np.array([plan.segments[0].start] + [s.end for s in plan.segments])
     top.plot(ends[:, 0], ends[:, 1], "o", color="k", ms=5)
     for k, (x, y) in enumerate(ends):
@@ -48,9 +65,15 @@ def plot_antisway(result, path: str | Path) -> None:
     )
 
     sway = fig.add_subplot(grid[1, 1], sharex=acc_ax)
-    sway.plot(run.t, np.degrees(run.theta_x), lw=1.0, label="θx (toward +x)")
-    sway.plot(run.t, np.degrees(run.theta_y), lw=1.0, label="θy (toward +y)")
-    sway.plot(run.t, np.degrees(run.theta), lw=0.8, color="k", alpha=0.5, label="tilt θ")
+    sway.plot(run.t, np.degrees(run.theta), lw=2.2, color="0.75", label="tilt θ", zorder=1)
+    sway.plot(run.t, unwrap_deg(run.theta_x), lw=1.0, color="tab:blue", label="θx (toward +x)", zorder=2)
+    sway.plot(run.t, unwrap_deg(run.theta_y), lw=1.0, ls="--", color="tab:orange", label="θy (toward +y)", zorder=3)
+    if band is not None and len(band.lengths) > 1:
+        env = np.max([np.degrees(r.theta) for r in band.runs], axis=0)
+        sway.plot(band.runs[0].t, env, lw=0.8, ls="--", color="tab:purple",
+                  label=f"worst tilt, string ±{plan.options.length_tolerance * 100:g} %")
+    if result.max_sway is not None:
+        sway.axhline(np.degrees(result.max_sway), ls="-.", lw=0.8, color="tab:red", label="--max-sway")
     sway.axvline(result.stop_time, ls=":", color="tab:red", lw=1.0, label="last stop")
     sway.set_xlabel("t [s]")
     sway.set_ylabel("predicted sway [deg]")
@@ -61,10 +84,10 @@ def plot_antisway(result, path: str | Path) -> None:
         f"residual {figs['residual_sway_deg']:.3f}°",
         fontsize=10,
     )
-    status = "within joint limits" if figs["limits_ok"] else "LIMITS VIOLATED"
     fig.suptitle(
         f"anti-sway plan: moving {figs['motion_s']:.2f} s (thesis baseline {figs['baseline_motion_s']:.2f} s), "
-        f"a_max {plan.a_max:g} m/s², {status}"
+        f"a_max {plan.a_max:g} m/s²\njoints: {limits_phrase(result.report)}",
+        fontsize=11,
     )
     fig.tight_layout()
     save_figure(fig, path, dpi=110)

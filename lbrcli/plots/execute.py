@@ -2,11 +2,21 @@
 
 from __future__ import annotations
 
-from . import save_figure
+from . import save_figure, unwrap_deg
 
 from pathlib import Path
 
 import numpy as np
+
+
+def mask_degenerate(planar: np.ndarray, theta: np.ndarray, phi: np.ndarray, axis: str,
+                    min_projection: float = 0.2) -> np.ndarray:
+    """NaN where the planar swing angle θx (axis 'x') or θy ('y') is undefined: the string's projection onto that
+    vertical plane is shorter than ``min_projection`` of its length (the string nearly perpendicular to the
+    plane, e.g. θx while the ball swings over the top in the y–z plane). θ tilt, φ azimuth [rad]."""
+    horizontal = np.sin(theta) * (np.cos(phi) if axis == "x" else np.sin(phi))
+    projection = np.hypot(horizontal, np.cos(theta))
+    return np.where(projection >= min_projection, planar, np.nan)
 
 
 def plot_execution(log_path: str | Path, path: str | Path, title: str = "") -> None:
@@ -51,12 +61,17 @@ def plot_execution(log_path: str | Path, path: str | Path, title: str = "") -> N
     ax2.set_ylabel("max |measured − commanded| [mrad]", color="tab:red")
     if has_ball:
         ax = axes[2]
-        ax.plot(t, np.degrees(tab.column("ball_theta")), color="tab:green", lw=1.0, label="tilt θ")
-        for name, style in (("ball_theta_x", ":"), ("ball_theta_y", "-.")):
+        theta = tab.column("ball_theta")
+        ax.plot(t, np.degrees(theta), color="0.7", lw=2.4, label="tilt θ", zorder=1)
+        for name, style, color in (("ball_theta_x", "-", "tab:blue"), ("ball_theta_y", "--", "tab:orange")):
             if tab.has(name):
-                ax.plot(t, np.degrees(tab.column(name)), lw=0.8, ls=style, label=name.replace("ball_", ""))
+                planar = tab.column(name)
+                if tab.has("ball_phi"):
+                    planar = mask_degenerate(planar, theta, tab.column("ball_phi"), axis=name[-1])
+                ax.plot(t, unwrap_deg(planar), lw=1.0, ls=style, color=color, zorder=2,
+                        label=name.replace("ball_", "") + " (unwrapped)")
         ax.set_ylabel("ball sway [deg]")
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=7, title="θx, θy blank where the string is perpendicular to their plane", title_fontsize=7)
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("t [s] (controller time)")
     if active.any():

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import save_figure
+from . import limits_phrase, save_figure, unwrap_deg
 
 import math
 from pathlib import Path
@@ -22,8 +22,9 @@ def plot_swingup(result, path: str | Path) -> None:
     fig, axes = plt.subplots(5, 1, figsize=(10, 13), sharex=True)
 
     ax = axes[0]
-    ax.plot(ver.t, np.degrees(ver.theta), lw=1.2, label="verified (ball simulated under the joint path)")
-    ax.plot(plan.t, np.degrees(plan.theta), lw=0.9, ls="--", label="planned (planar model)")
+    ax.plot(ver.t, unwrap_deg(ver.theta), lw=2.2, color="tab:blue", alpha=0.6, zorder=2,
+            label="verified (ball simulated under the joint path)")
+    ax.plot(plan.t, unwrap_deg(plan.theta), lw=1.0, ls="--", color="k", zorder=3, label="planned (planar model)")
     for sign in (1, -1):
         ax.axhline(sign * math.degrees(r.theta_d), color="k", ls=":", lw=0.8)
     if result.t_reach is not None:
@@ -40,8 +41,8 @@ def plot_swingup(result, path: str | Path) -> None:
     twin.set_ylabel("u = ẍ [m/s²]", color="tab:orange")
 
     ax = axes[2]
-    ax.plot(ver.t, ver.tension, lw=1.0, label="verified")
-    ax.plot(plan.t, plan.tension, lw=0.8, ls="--", label="planned")
+    ax.plot(ver.t, ver.tension, lw=2.2, color="tab:blue", alpha=0.6, zorder=2, label="verified")
+    ax.plot(plan.t, plan.tension, lw=1.0, ls="--", color="k", zorder=3, label="planned")
     ax.axhline(0.0, color="k", lw=0.8)
     slack = ver.tension <= 0
     if slack.any():
@@ -54,17 +55,19 @@ def plot_swingup(result, path: str | Path) -> None:
         ratio = np.abs(rep.series[qname]) / rep.limits[qname][None, :] * 100
         for j in range(7):
             ax.plot(t, ratio[:, j], lw=0.8, label=f"A{j + 1}")
-        if qname == "acceleration" and rep.jerk_enforced:
+        if qname == "acceleration":
             jr = (np.abs(rep.series["jerk"]) / rep.limits["jerk"][None, :]).max(axis=1) * 100
-            ax.plot(t, jr, color="k", lw=0.6, ls="--", label="jerk (max joint)")
+            ax.plot(t, jr, color="k", lw=0.6, ls="--",
+                    label="jerk (max joint)" + ("" if rep.jerk_enforced else ", not checked"))
         ax.axhline(100, color="tab:red", lw=1.0)
         ax.set_ylabel(f"|joint {qname}| / limit [%]")
         ax.legend(fontsize=7, ncol=8, loc="upper left")
     axes[-1].set_xlabel("t [s]")
-    status = "within limits" if rep.ok else f"{len(rep.failing)} limit violations"
     fig.suptitle(
         f"swing-up ({plan.method}): l = {r.length:g} m, θ_d = {math.degrees(r.theta_d):.0f}°, "
-        f"max {math.degrees(ver.max_theta):.1f}°, {'taut' if ver.tension.min() > 0 else 'slack'}, {status}"
+        f"max {math.degrees(ver.max_theta):.1f}°, {'taut' if ver.tension.min() > 0 else 'slack'}\n"
+        f"joints: {limits_phrase(rep)}",
+        fontsize=11,
     )
     fig.tight_layout()
     save_figure(fig, path, dpi=100)

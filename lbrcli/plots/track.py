@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import save_figure
+from . import save_figure, unwrap_deg
 
 from pathlib import Path
 
@@ -23,7 +23,7 @@ def plot_track(track, path: str | Path, title: str = "") -> None:
     ax_list = list(axes)
     if has_theta:
         ax = ax_list.pop(0)
-        ax.plot(t, np.degrees(track.theta), lw=1.2, color="tab:orange", label="tracked θ")
+        ax.plot(t, unwrap_deg(track.theta), lw=1.2, color="tab:orange", label="tracked θ")
         ax.set_ylabel("θ [deg]")
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)

@@ -91,12 +91,13 @@ class ScriptedClient:
         k_active = 0
         q_active = None
         end = time.perf_counter() + timeout
-        sock.settimeout(1.0)
+        sock.settimeout(min(timeout, 20.0))  # the first message: the simulator process may still be starting
         while time.perf_counter() < end:
             try:
                 data, addr = sock.recvfrom(2048)
             except socket.timeout:
                 break
+            sock.settimeout(1.0)
             now = time.perf_counter()
             try:
                 codec.decode_monitoring(data, into=mon)

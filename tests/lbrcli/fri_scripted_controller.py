@@ -38,6 +38,9 @@ class Cycle:
     repeat_seq: bool = False  # reuse the previous sequence counter (stale duplicate, must be ignored)
     ball: float | None = 0.01  # analog IO 'ball_theta' [rad] (None: no IO values)
     pause_s: float = 0.0  # [s] wait after sending this message (e.g. while the client prepares its plan)
+    mode: int = 1  # clientCommandMode: 1 POSITION, 2 WRENCH, 3 TORQUE
+    mutate: Callable | None = None  # edits the message before it is encoded (wrong-but-decodable messages)
+    io_out: tuple = ()  # extra IO channels (name, type, direction, value) — outputs reflect the client's writes
 
 
 @dataclass
@@ -47,6 +50,9 @@ class Reply:
     seq: int  # of the monitoring message answered (expected)
     header: tuple[int, int]  # (sequenceCounter, reflectedSequenceCounter) of the reply
     position: tuple[float, ...] | None  # commandData.jointPosition (None: header only)
+    torque: tuple[float, ...] | None = None
+    wrench: tuple[float, ...] | None = None
+    io: tuple = ()  # (name, value) written
 
 
 @dataclass
@@ -74,6 +80,7 @@ class ScriptedController:
         self.client_done = threading.Event()
         self.thread = threading.Thread(target=self._run, daemon=True)
         self.q = list(self.q0)
+        self.io_values: dict = {}
 
     def start(self) -> "ScriptedController":
         self.thread.start()
@@ -112,10 +119,20 @@ class ScriptedController:
             io.name, io.type, io.direction, io.analogValue = "ball_theta", 2, 0, c.ball
             io = md.readIORequest.add()
             io.name, io.type, io.direction, io.digitalValue = "gripper", 1, 0, 1
+        for name, kind, direction, value in c.io_out:
+            io = md.readIORequest.add()
+            io.name, io.type, io.direction = name, kind, direction
+            v = self.io_values.get(name, value)
+            if kind == 2:
+                io.analogValue = v
+            else:
+                io.digitalValue = int(v)
         m.ipoData.jointPosition.value.extend(self.q)
-        m.ipoData.clientCommandMode = 1
+        m.ipoData.clientCommandMode = c.mode
         m.ipoData.overlayType = 1
         m.ipoData.trackingPerformance = 1.0 if c.state == CA else 0.0
+        if c.mutate is not None:
+            c.mutate(m)
         return self.codec.encode(m)
 
     def _await_reply(self, deadline: float):
@@ -197,8 +214,15 @@ class ScriptedController:
             pos = tuple(cmd.commandData.jointPosition.value) if cmd.HasField("commandData") else None
             if pos is not None and len(pos) == 0:
                 pos = None
+            cd = cmd.commandData
+            tau = tuple(cd.jointTorque.value) or None
+            wr = tuple(cd.cartesianWrenchFeedForward.element) or None
+            io = tuple((w.name, w.analogValue if w.type == 2 else w.digitalValue) for w in cd.writeIORequest)
+            for name, v in io:
+                self.io_values[name] = v
             self.replies.append(
-                Reply(i, c.state, seq, (cmd.header.sequenceCounter, cmd.header.reflectedSequenceCounter), pos)
+                Reply(i, c.state, seq, (cmd.header.sequenceCounter, cmd.header.reflectedSequenceCounter), pos,
+                      tau, wr, io)
             )
             if c.state == CA and pos is not None:
                 self.q = list(pos)

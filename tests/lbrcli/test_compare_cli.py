@@ -99,3 +99,21 @@ def test_bad_files_exit_2(lbr, files, tmp_path):
     wrong.write_text("t,angle\n0,0\n0.1,0.2\n")
     assert "expected 'theta'" in one_line_error(lbr("compare", wrong, track))
     assert "file not found" in one_line_error(lbr("compare", tmp_path / "none.csv", track))
+
+
+def test_lag_window_and_rival_reported(lbr, files):
+    pred, track = files
+    fig = json.loads(lbr("compare", pred, track, "--json").stdout)
+    assert fig["lag_window_s"] == pytest.approx(2.0)  # half of the 3.6 s track, at least 2 s
+    assert fig["rival_lag_s"] is not None and abs(fig["rival_lag_s"] - fig["lag_s"]) >= 0.15
+    assert fig["rival_score"] < fig["score"] - 0.02  # a growing sway: one period off matches clearly worse
+    res = lbr("compare", pred, track)
+    assert "estimated within ±2.00 s" in res.stdout and "next best peak" in res.stdout
+    fig = json.loads(lbr("compare", pred, track, "--max-lag", "0.3", "--json").stdout)
+    assert fig["lag_window_s"] == 0.3 and abs(fig["lag_s"]) <= 0.3 + 1e-9
+
+
+def test_non_finite_lag_options_exit_2(lbr, files):
+    pred, track = files
+    assert "--lag" in one_line_error(lbr("compare", pred, track, "--lag", "nan"))
+    assert "--max-lag" in one_line_error(lbr("compare", pred, track, "--max-lag", "nan"))

@@ -16,7 +16,10 @@ def test_demo_runs_the_whole_loop(tmp_path):
     # both crane plans pass the check; the shaped move is faster and leaves no sway on the simulated ball
     assert base["limits_ok"] and shaped["limits_ok"]
     assert shaped["duration_s"] < base["duration_s"]
-    assert shaped["executed_residual_sway_deg"] < 0.1
+    # the robust default (±10 % string length) trades a little nominal sway for robustness: the plan predicts it and
+    # the simulated ball shows it
+    assert shaped["executed_residual_sway_deg"] < 0.3
+    assert abs(shaped["executed_residual_sway_deg"] - shaped["predicted_residual_sway_deg"]) < 0.05
     assert shaped["executed_peak_sway_deg"] > 1.0  # the ball really swung during the move
     # the swing-up reaches θ_d on the simulator too
     assert f["swingup"]["reached"] and f["swingup"]["executed_max_theta_deg"] > 113
@@ -36,4 +39,13 @@ def test_demo_bad_out_folder_is_one_line_exit_2(tmp_path, lbr):
     blocker.write_text("x")
     res = lbr("demo", "--out", blocker)
     assert res.returncode == 2 and "Traceback" not in res.stderr
-    assert res.stderr.strip().splitlines() == [f"lbr: error: --out: cannot create the folder {blocker} (File exists)"]
+    assert res.stderr.strip().splitlines() == [f"lbr: error: --out: {blocker} exists and is not a folder"]
+
+
+def test_demo_refuses_a_folder_that_holds_other_work(tmp_path, lbr):
+    work = tmp_path / "thesis"
+    work.mkdir()
+    (work / "notes.txt").write_text("mine")
+    res = lbr("demo", "--out", work)
+    assert res.returncode == 2 and "holds no previous demo" in res.stderr
+    assert [p.name for p in work.iterdir()] == ["notes.txt"]

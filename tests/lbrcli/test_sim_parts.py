@@ -9,8 +9,8 @@ from hypothesis import strategies as st
 
 from lbrcli.fri.constants import ConnectionQuality as Q
 from lbrcli.fri.constants import SessionState as S
-from lbrcli.fri.interpolator import Interpolator
-from lbrcli.fri.sim_session import QualityMonitor, QualityThresholds, SessionMachine, SessionTiming
+from lbrcli.fri.sim.interpolator import Interpolator
+from lbrcli.fri.sim.session import QualityMonitor, QualityThresholds, SessionMachine, SessionTiming
 
 DT = 0.002  # [s]
 
@@ -161,3 +161,28 @@ def test_float_rk4_step_is_the_numpy_step():
         ref = rk4_step(s, v, a0, a1, 0.002, 0.45, 0.2)
         got = rk4_step_floats(tuple(s), tuple(v), tuple(a0), tuple(a1), 0.002, 0.45, 0.2)
         assert np.allclose(got[0], ref[0], rtol=0, atol=1e-14) and np.allclose(got[1], ref[1], rtol=0, atol=1e-13)
+
+
+def test_session_machine_without_overlay_only_monitors_then_ends():
+    m = SessionMachine(SessionTiming(commanding_after_s=0.05, session_duration_s=0.3, end_delay_s=0.05, overlay=False))
+    seen, t = [], 0.0
+    while m.state is not S.IDLE and t < 2.0:
+        t += 0.01
+        s = m.advance(t, Q.EXCELLENT, True, False)  # even mirrored commands start no overlay
+        if not seen or seen[-1] != s:
+            seen.append(s)
+    assert seen == [S.MONITORING_READY, S.IDLE] and m.end_reason == "duration"
+    assert t == pytest.approx(0.01 + 0.3 + 0.05, abs=0.021)
+
+
+def test_the_sim_package_imports_no_cli_planners_or_lab():
+    """lbrcli.fri.sim is a library: a controller without plants pulls in neither the CLI, nor planners, nor lab."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from lbrcli.fri.sim import SimConfig; from lbrcli.fri.sim.controller import Controller; "
+            "c = Controller(SimConfig(version='2.7')); c.cycle(0.0); "
+            "bad = [m for m in sys.modules if m.split('.')[0] == 'planners' or m.startswith(('lbrcli.lab', "
+            "'lbrcli.commands', 'lbrcli.app', 'typer'))]; print(bad); sys.exit(1 if bad else 0)")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stdout + res.stderr

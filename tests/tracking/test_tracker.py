@@ -138,3 +138,40 @@ def test_ball_crossing_a_red_cable_next_to_a_red_box(tmp_path):
     assert (~clear).sum() >= 5  # the ball does cross the cable
     assert track.found[clear].all()
     assert not track.found[~clear].all()  # merged with the cable: reported lost, not invented
+
+
+def test_bad_first_fix_does_not_lock_out_the_ball():
+    """A fragment (r ≈ 2 px) taken as the ball in the first frames, then the real ball (r = 12 px, 30× the area)
+    at the same place: relearned within a few frames, not rejected for good."""
+    import cv2
+
+    blank = np.full((360, 640, 3), 160, np.uint8)
+
+    def frame(cx, cy, r):
+        img = blank.copy()
+        cv2.circle(img, (int(cx * 16), int(cy * 16)), int(r * 16), (35, 30, 205), -1, cv2.LINE_AA, 4)
+        return img
+
+    tr = BallTracker(color_spec("red"))
+    for k in range(5):
+        assert tr.update(frame(200, 150, 2.3), k / 60) is not None
+    found = [tr.update(frame(200 + k, 150, 12.0), (5 + k) / 60) for k in range(20)]
+    first = next(i for i, b in enumerate(found) if b is not None)
+    assert first <= 3
+    assert all(b is not None and abs(b.u - (200 + i)) < 0.3 for i, b in enumerate(found) if i >= first)
+    assert tr.predict(25 / 60) is not None and abs(tr._current().radius() - 12.0) < 1.0
+
+
+def test_start_point_names_the_ball_among_two():
+    import cv2
+
+    from tracking.tracker import TrackerOptions
+
+    img = np.full((360, 640, 3), 160, np.uint8)
+    for c in ((100, 100), (400, 250)):
+        cv2.circle(img, c, 9, (35, 30, 205), -1, cv2.LINE_AA)
+    tr = BallTracker(color_spec("red"), TrackerOptions(start_uv=(390.0, 260.0)))
+    b = tr.update(img, 0.0)
+    assert abs(b.u - 400) < 0.5 and abs(b.v - 250) < 0.5 and not tr.resolving
+    far = BallTracker(color_spec("red"), TrackerOptions(start_uv=(600.0, 30.0)))
+    assert far.update(img, 0.0) is None  # nothing near the start point: not found rather than another blob

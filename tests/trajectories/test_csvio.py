@@ -102,3 +102,70 @@ def test_nan_columns_and_increasing_time(tmp_path):
     p = write(tmp_path, "t,frame,u,v,found\n0,0,1.5,2.5,1\n0.017,1,,,0\n0.033,2,1.6,2.4,1\n", "track.csv")
     table = read_table(p, ("t", "frame", "u", "v", "found"), time="increasing", nan_columns=("u", "v"))
     assert np.isnan(table.column("u")[1]) and table.column("v")[2] == 2.4
+
+
+# -- encodings, line endings, blank lines; the fast reader agrees with the strict one ------------------------------
+def test_utf8_bom_is_read(tmp_path):
+    p = tmp_path / "bom.csv"
+    p.write_bytes(b"\xef\xbb\xbf" + good(4).encode())
+    traj = read_joint_csv(p)
+    assert len(traj) == 4 and traj.q[0, 0] == 0.1
+    p.write_bytes(b"\xef\xbb\xbf" + "0.1,0.2,0.3,-1.0,0.5,0.6,0.7\n".encode() * 3)  # headerless with a BOM
+    assert read_joint_csv(p, dt=0.01).q.shape == (3, 7)
+
+
+def test_crlf_trailing_and_inner_blank_lines_keep_row_numbers(tmp_path):
+    rows = good(6).splitlines()
+    text = "\r\n".join(rows[:3] + ["", " , ,"] + rows[3:]) + "\r\n\r\n\r\n"
+    traj = read_joint_csv(write(tmp_path, text))
+    assert len(traj) == 6 and np.allclose(np.diff(traj.t), 0.005)
+    bad = rows[:3] + ["", ""] + rows[3:4] + [rows[4].replace("0.5", "oops", 1)] + rows[5:]
+    with pytest.raises(CsvFormatError) as exc:
+        read_joint_csv(write(tmp_path, "\n".join(bad) + "\n"))
+    assert exc.value.row == 7 and exc.value.column == 6 and "'oops'" in str(exc.value)
+
+
+def test_quoted_cells_read_like_csv(tmp_path):
+    text = HEADER + '"0",1,2,3,4,5,6,7\n0.005,"1",2,3,4,5,6,7\n'
+    assert read_joint_csv(write(tmp_path, text)).q[1, 0] == 1.0
+
+
+def test_not_utf8_names_the_row(tmp_path):
+    p = tmp_path / "latin1.csv"
+    p.write_bytes(good(3).encode() + "0.015,1,2,3,4,5,6,\xb57\n".encode("latin-1"))
+    with pytest.raises(CsvFormatError) as exc:
+        read_joint_csv(p)
+    assert exc.value.row == 5 and "not UTF-8" in str(exc.value)
+
+
+@pytest.mark.parametrize("rows", [10, 3000, 5001])
+def test_large_files_read_exactly_and_name_the_first_fault(tmp_path, rows):
+    rng = np.random.default_rng(rows)
+    traj = JointTrajectory.from_samples(rng.normal(size=(rows, 7)), 0.001)
+    p = tmp_path / "big.csv"
+    write_joint_csv(p, traj)
+    back = read_joint_csv(p)
+    assert np.array_equal(back.q, np.loadtxt(p, delimiter=",", skiprows=1)[:, 1:])
+    lines = p.read_text().splitlines()
+    k = rows // 2 + 1  # a data line in the middle of the file (1-based line k + 1)
+    cells = lines[k].split(",")
+    cells[3] = "inf"
+    lines[k] = ",".join(cells)
+    later = lines[-1].split(",")
+    later[2] = "x"  # a second fault further down must not be the one reported
+    lines[-1] = ",".join(later)
+    p.write_text("\n".join(lines) + "\n")
+    with pytest.raises(CsvFormatError) as exc:
+        read_joint_csv(p)
+    assert (exc.value.row, exc.value.column) == (k + 1, 4) and "not a finite number" in str(exc.value)
+
+
+def test_nan_columns_allow_nan_text_but_not_inf(tmp_path):
+    head = "t,frame,u,v,found\n"
+    ok = write(tmp_path, head + "0,0,1.5,2.5,1\n0.017,1,nan,nan,0\n", "ok.csv")
+    table = read_table(ok, ("t", "frame", "u", "v", "found"), time="increasing", nan_columns=("u", "v"))
+    assert np.isnan(table.column("u")[1])
+    bad = write(tmp_path, head + "0,0,1.5,2.5,1\n0.017,1,inf,2,0\n", "bad.csv")
+    with pytest.raises(CsvFormatError) as exc:
+        read_table(bad, ("t", "frame", "u", "v", "found"), time="increasing", nan_columns=("u", "v"))
+    assert (exc.value.row, exc.value.column) == (3, 3)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .constants import ConnectionQuality, SessionState
+from ..constants import ConnectionQuality, SessionState
 
 
 @dataclass(frozen=True)
@@ -72,6 +72,7 @@ class SessionTiming:
     session_duration_s: float | None = None  # COMMANDING_ACTIVE length (None: until the client stops)
     end_delay_s: float = 0.1  # monitoring after the overlay ended, before IDLE
     idle_messages: int = 3  # IDLE messages sent before the simulator stops
+    overlay: bool = True  # False: the application only monitors (stays in MONITORING_READY; the duration counts there)
 
 
 class SessionMachine:
@@ -116,6 +117,9 @@ class SessionMachine:
         elif s is SessionState.MONITORING_READY:
             if not good:
                 self.state = SessionState.MONITORING_WAIT
+            elif not self.timing.overlay:
+                if self.timing.session_duration_s is not None and now - self._since >= self.timing.session_duration_s:
+                    self._end(now, EndReason.DURATION, SessionState.MONITORING_READY)
             elif now - self._since >= self.timing.commanding_after_s:
                 self.state, self._since, self._consistent = SessionState.COMMANDING_WAIT, now, 0
         elif s is SessionState.COMMANDING_WAIT:

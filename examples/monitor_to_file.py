@@ -1,0 +1,25 @@
+"""Watch a session and log everything the controller reports (KUKA's default client never moves the robot).
+
+    python examples/monitor_to_file.py --log mon.csv --duration 10 [--robot IP]
+"""
+
+from __future__ import annotations
+
+from _connect import arguments, run
+
+from lbrcli.fri import ExecutionLog, LBRClient, LogObserver
+
+
+def main(argv=None):
+    p = arguments(__doc__.splitlines()[0])
+    p.add_argument("--log", required=True)
+    args = p.parse_args(argv)
+    with ExecutionLog(args.log) as log:
+        result = run(LBRClient(), args, observers=[LogObserver(log)])
+        rows = log.rows
+    print(f"{result.outcome.value}: {result.detail}; {rows} rows in {args.log}")
+    return result, rows
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,129 @@
+"""`lbr monitor`: record everything FRI monitors (thesis LBRMonitor) with a client that never commands motion."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any
+
+import typer
+
+from ..fri_options import (
+    DEFAULT_BALL_LENGTH,
+    BaudOpt,
+    BindOpt,
+    LengthOpt,
+    LogOpt,
+    MqttOpt,
+    MqttRateOpt,
+    PendulumOpt,
+    PendZeroOpt,
+    PeriodOpt,
+    PlotOpt,
+    PortOpt,
+    RealtimeOpt,
+    SimLenientOpt,
+    RobotOpt,
+    SimStartOpt,
+    VersionOpt,
+    WaitOpt,
+)
+from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, ToolOpt
+
+
+def monitor(
+    duration: Annotated[float, typer.Option("--duration", help="How long to monitor \\[s].")],
+    log: LogOpt = None,
+    robot: RobotOpt = None,
+    port: PortOpt = 30200,
+    bind: BindOpt = None,
+    fri_version: VersionOpt = None,
+    period: PeriodOpt = None,
+    length: LengthOpt = None,
+    sim_start: SimStartOpt = None,
+    wait: WaitOpt = None,
+    plot: PlotOpt = None,
+    realtime: RealtimeOpt = False,
+    sim_lenient: SimLenientOpt = False,
+    pendulum: PendulumOpt = None,
+    baud: BaudOpt = 115200,
+    pendulum_zero: PendZeroOpt = 0,
+    mqtt: MqttOpt = None,
+    mqtt_rate: MqttRateOpt = 50.0,
+    flange: FlangeOpt = DEFAULT_FLANGE,
+    tool: ToolOpt = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Record everything FRI monitors, plus the flange position by forward kinematics (thesis LBRMonitor).
+
+    Never commands motion: header-only answers in the monitoring states, the robot held at the ipo position when
+    the robot application starts commanding. Log columns as `lbr execute` plus flange_x, flange_y, flange_z \\[m].
+    """
+    import numpy as np
+    import pinocchio as pin
+
+    from lbrcli.fri import LBRClient, Phase
+    from lbrcli.lab.attach import LabOptions
+    from trajectories.errors import OptionError
+    from trajectories.robot import FLANGE_FRAME, parse_tool
+
+    from ..console import Reporter
+    from ..fri_options import validate_period, validate_port, validate_version, validate_wait
+    from ..fri_runner import exit_for, plot_log, print_summary, run_client
+    from ..options import THESIS_Q_START, make_robot
+    from ..parsing import parse_joint_vector
+
+    rep = Reporter(json_out)
+    validate_version(fri_version)
+    validate_port(port)
+    validate_wait(wait)
+    validate_period(period)
+    if not (math.isfinite(duration) and 0 < duration <= 86400):
+        raise OptionError(f"--duration must be in (0, 86400] s, got {duration:g}")
+    if robot is not None and (sim_start is not None or length is not None or sim_lenient):
+        raise OptionError("--sim-start, --length and --sim-lenient apply to the simulator only, not with --robot")
+    model = make_robot(flange, tool)
+    fid = model.model.getFrameId(FLANGE_FRAME)
+    mdl, data = model.model, model.data
+    qbuf = np.zeros(7)
+
+    def flange_xyz(state) -> tuple[float, float, float]:
+        qbuf[:] = state.message.monitorData.measuredJointPosition.value
+        pin.framesForwardKinematics(mdl, data, qbuf)
+        p = data.oMf[fid].translation
+        return (p[0], p[1], p[2])
+
+    class Watcher(LBRClient):
+        """KUKA's default client: watches, and holds the ipo position if the application starts commanding."""
+
+        def command(self, state):
+            self.phase = Phase.MIRROR
+            return super().command(state)
+
+    sim_kwargs: dict[str, Any] = {}
+    if robot is None:
+        ball = DEFAULT_BALL_LENGTH if length is None else length
+        if not (math.isfinite(ball) and 0 <= ball <= 5):
+            raise OptionError(f"--length must be 0..5 m, got {ball:g}")
+        sim_kwargs = dict(
+            period_ms=period or 1,
+            q0=tuple(float(v) for v in parse_joint_vector(sim_start or THESIS_Q_START, "--sim-start")),
+            flange=flange,
+            tool=parse_tool(tool),
+            ball_length=ball if ball > 0 else None,
+            max_runtime_s=duration + 120.0,
+        )
+    result, sim_stats, lab_figures = run_client(
+        rep, Watcher(), robot=robot, port=port, bind=bind, version=fri_version, limits=None, log_path=log, wait=wait,
+        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, duration_s=duration, extra_names=("flange_x", "flange_y", "flange_z"), extra=flange_xyz,
+        realtime=realtime, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
+    )  # fmt: skip
+    figures = print_summary(rep, result, sim_stats, log)
+    figures.update(lab_figures)
+    figures.update(duration_s=duration, robot=robot or "simulator")
+    plot_log(plot, log, rep, "monitor")
+    rep.emit(figures)
+    exit_for(result)
+
+
+def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
+    app.command("monitor")(monitor)

@@ -1,0 +1,132 @@
+"""`lbr ptp`: a jerk-limited joint move (thesis LBRJointPTP) with the TrajectoryPlayer's online ruckig move."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any
+
+import typer
+
+from ..fri_options import BindOpt, LengthOpt, LogOpt, PeriodOpt, PlotOpt, PortOpt, RealtimeOpt, RobotOpt, SimLenientOpt, SimStartOpt, VersionOpt, WaitOpt
+from ..options import JsonOpt, LimitsOpt
+
+
+def ptp(
+    q: Annotated[str, typer.Argument(help="Target joint position: 7 comma-separated angles (deg/rad suffixes; default rad).")],
+    time_s: Annotated[float, typer.Option("--time", help="Duration of the move \\[s] (jerk-limited, rest to rest).")],
+    robot: RobotOpt = None,
+    port: PortOpt = 30200,
+    bind: BindOpt = None,
+    log: LogOpt = None,
+    fri_version: VersionOpt = None,
+    speed_scale: Annotated[
+        float, typer.Option("--speed-scale", help="Fraction of the velocity/acceleration/jerk limits the move may use (≤ 0.5).")
+    ] = 0.2,
+    settle: Annotated[float, typer.Option("--settle", help="Hold the target this long before stopping \\[s].")] = 0.2,
+    period: PeriodOpt = None,
+    sim_start: SimStartOpt = None,
+    length: LengthOpt = None,
+    wait: WaitOpt = None,
+    plot: PlotOpt = None,
+    realtime: RealtimeOpt = False,
+    sim_lenient: SimLenientOpt = False,
+    limits: LimitsOpt = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Jerk-limited joint move to Q reaching it in --time seconds (thesis LBRJointPTP; ruckig).
+
+    Planned from the measured position at the first FRI message with the limits scaled by --speed-scale; refused
+    (exit 1, nothing sent) if Q is outside the position limits, or the move cannot be done in --time within the
+    scaled limits.
+    """
+    import numpy as np
+
+    from lbrcli.fri import OnlineMove, StopSession, TrajectoryPlayer
+    from trajectories.errors import CheckFailed, OptionError
+
+    from ..console import Reporter
+    from ..fri_options import validate_period, validate_port, validate_version, validate_wait
+    from ..fri_runner import exit_for, plot_log, print_summary, run_client
+    from ..options import THESIS_Q_START, limits_from
+    from ..parsing import parse_joint_vector
+
+    rep = Reporter(json_out)
+    validate_version(fri_version)
+    validate_port(port)
+    validate_wait(wait)
+    validate_period(period)
+    goal = parse_joint_vector(q, "Q")
+    if not (math.isfinite(time_s) and 0 < time_s <= 600):
+        raise OptionError(f"--time must be in (0, 600] s, got {time_s:g}")
+    if not (math.isfinite(speed_scale) and 0 < speed_scale <= 0.5):
+        raise OptionError(f"--speed-scale must be in (0, 0.5], got {speed_scale:g}")
+    if not (math.isfinite(settle) and 0 <= settle <= 60):
+        raise OptionError(f"--settle must be 0..60 s, got {settle:g}")
+    if robot is not None and (sim_start is not None or length is not None or sim_lenient):
+        raise OptionError("--sim-start, --length and --sim-lenient apply to the simulator only, not with --robot")
+    lim = limits_from(limits)
+    over = np.flatnonzero(np.abs(goal) > lim.position)
+    if over.size:
+        j = int(over[0])
+        raise CheckFailed(f"Q: A{j + 1} = {goal[j]:.4f} rad is outside the position limit ±{lim.position[j]:.4f} rad")
+
+    class Ptp(TrajectoryPlayer):
+        """The move to the start of a one-row trajectory is the point-to-point move; refused before it starts
+        if it cannot be done in --time within the scaled limits."""
+
+        def _check_time(self, state) -> None:
+            if getattr(self, "_timed", False):
+                return
+            self._timed = True
+            period_s = state.sample_time * state.receive_multiplier
+            need = OnlineMove(lim, period_s, speed_scale).start(state.measured_joint_position, goal)
+            self.needed_s = need
+            if need > time_s + 1.5 * period_s:
+                raise StopSession(
+                    f"the move needs {need:.3f} s within {speed_scale * 100:g} % of the limits; give --time ≥ "
+                    f"{math.ceil(need * 10) / 10:g} or a larger --speed-scale (≤ 0.5)", completed=False,
+                )  # fmt: skip
+            rep.print(f"move: {need if need > time_s else time_s:.3f} s from the measured position to Q")
+
+        def monitor(self, state) -> None:
+            self._check_time(state)
+            super().monitor(state)
+
+        def wait_for_command(self, state) -> None:
+            self._check_time(state)
+            super().wait_for_command(state)
+
+    client = Ptp(
+        goal[None, :], lim, start_tolerance=math.inf, move_to_start=True, move_scale=speed_scale,
+        move_minimum_duration=time_s, settle_s=settle, finish_text="reached Q and settled",
+    )  # fmt: skip
+    sim_kwargs: dict[str, Any] = {}
+    if robot is None:
+        ball = 0.0 if length is None else length
+        if not (math.isfinite(ball) and 0 <= ball <= 5):
+            raise OptionError(f"--length must be 0..5 m, got {ball:g}")
+        sim_kwargs = dict(
+            period_ms=period or 1,
+            q0=tuple(float(v) for v in parse_joint_vector(sim_start or THESIS_Q_START, "--sim-start")),
+            ball_length=ball if ball > 0 else None,
+            limits_path=str(limits) if limits is not None else None,
+            max_runtime_s=time_s + settle + 120.0,
+        )
+    result, sim_stats, lab_figures = run_client(
+        rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
+        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime,
+    )  # fmt: skip
+    figures = print_summary(rep, result, sim_stats, log)
+    figures.update(lab_figures)
+    figures.update(target=goal, time_s=time_s, robot=robot or "simulator")
+    if sim_stats is not None and sim_stats.final_q:
+        err = float(np.max(np.abs(np.array(sim_stats.final_q) - goal)))
+        figures["final_error_rad"] = err
+        rep.print(f"simulated robot ended {err:.2e} rad from Q")
+    plot_log(plot, log, rep, "ptp")
+    rep.emit(figures)
+    exit_for(result)
+
+
+def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
+    app.command("ptp")(ptp)

@@ -1,0 +1,744 @@
+"""The client application (KUKA's ``ClientApplication``): the one loop that talks to the controller.
+
+``ClientApplication(client, robot=IP, port=30200)`` binds the port (``connect()``), then every ``step()`` receives
+one monitoring message, checks it, calls the client's callback for the session state, passes the command through
+the guard, sends it (every k-th message with receive multiplier k) and then calls the observers (log, figures,
+telemetry) — after the reply is out. ``run()`` steps until the session ends and returns a
+:class:`~lbrcli.fri.outcome.SessionResult`.
+
+Safety lives here, once, for every client: a message that is not self-consistent is never answered; every command
+passes the guard; every stop the client side initiates (interrupt, a guard refusal, the client's end or error, a
+failed observer) is a jerk-limited braking stop (``BrakingStop``) when the robot was being commanded; events on the
+robot side (safety stop, drives off, POOR quality, the session leaving COMMANDING_ACTIVE, IDLE, a period change, a
+silent controller) end the session at once (the controller stops the robot itself).
+"""
+
+from __future__ import annotations
+
+import gc
+import math
+import time
+from typing import Any, Callable, Protocol, Sequence
+
+from trajectories.limits import JointLimits, default_limits
+
+from .braking import BrakingStop
+from .client import LBRClient
+from .codec import FriCodec, detect_version
+from .command import LBRCommand
+from .constants import (
+    COMMAND_MESSAGE_ID,
+    DEFAULT_PORT,
+    ClientCommandMode,
+    ConnectionQuality,
+    DriveState,
+    SafetyState,
+    SessionState,
+)
+from .errors import FriDecodeError, FriError, FriTimeout, StopSession
+from .guard import DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT, CommandGuard
+from .messages import FriVersion
+from .outcome import EndReason, Outcome, SessionResult
+from .state import LBRState
+from .transport import UdpTransport
+
+IDLE, MON_WAIT, MON_READY, CMD_WAIT, CMD_ACTIVE = 0, 1, 2, 3, 4
+_TORQUE = int(ClientCommandMode.TORQUE)
+_WRENCH = int(ClientCommandMode.WRENCH)
+_DRIVE_ACTIVE = int(DriveState.ACTIVE)
+_POOR = int(ConnectionQuality.POOR)
+_POSITION_SLACK = 0.05  # [rad] a reported position beyond the limits by more than this is not a real robot's
+_ZERO6 = (0.0,) * 6
+_ZERO7 = (0.0,) * 7
+
+
+class Observer(Protocol):
+    """Called by the application; must return quickly (the next message is due within a period)."""
+
+    def on_start(self, app: "ClientApplication") -> None: ...
+
+    def on_cycle(self, app: "ClientApplication") -> None: ...
+
+    def on_end(self, app: "ClientApplication", result: SessionResult) -> None: ...
+
+
+class Cycle:
+    """What happened in the current cycle (read by observers after the reply went out)."""
+
+    __slots__ = ("t", "state", "answered", "sent_position", "command", "torque", "wrench", "braking", "phase", "row")
+
+    def __init__(self) -> None:
+        self.t = 0.0  # [s] controller time since the first message (sequence counter × send period)
+        self.state = IDLE  # session state (int)
+        self.answered = False  # a command message went out for this monitoring message
+        self.sent_position = False  # ... carrying a joint position
+        self.command: Sequence[float] = _ZERO7  # [rad] the joint position in force after this cycle
+        self.torque: Sequence[float] | None = None  # [Nm] sent this cycle (TORQUE mode)
+        self.wrench: Sequence[float] | None = None  # sent this cycle (WRENCH mode)
+        self.braking = False  # the command came from the braking stop
+        self.phase = 0  # the client's phase / row (logged)
+        self.row = -1
+
+
+class ClientApplication:
+    """Runs one FRI session for ``client`` against the controller at ``robot`` (IPv4 address or name)."""
+
+    def __init__(
+        self,
+        client: LBRClient,
+        robot: str = "127.0.0.1",
+        port: int = DEFAULT_PORT,
+        *,
+        bind_host: str = "",
+        version: FriVersion | str | None = None,
+        limits: JointLimits | None = None,
+        observers: Sequence[Observer] = (),
+        first_message_timeout_s: float = 60.0,
+        silence_timeout_s: float = 1.0,
+        commanding_timeout_s: float | None = None,
+        max_force: float = DEFAULT_MAX_FORCE,
+        max_moment: float = DEFAULT_MAX_MOMENT,
+        hold_cycles: int = 5,
+    ) -> None:
+        self.client = client
+        self.robot = robot
+        self.port_requested = port
+        self.bind_host = bind_host
+        self.version: FriVersion | None = FriVersion(version) if version is not None else None
+        self.limits = limits if limits is not None else default_limits()
+        self.observers: list[Observer] = list(observers)
+        self.first_message_timeout_s = first_message_timeout_s
+        self.silence_timeout_s = silence_timeout_s
+        self.commanding_timeout_s = commanding_timeout_s
+        self.max_force = max_force
+        self.max_moment = max_moment
+        self.hold_cycles = max(1, hold_cycles)
+        self.transport: UdpTransport | None = None
+        self.cycle = Cycle()
+        self.state: LBRState | None = None  # view of the last accepted message
+        self.result: SessionResult | None = None
+        self.error: BaseException | None = None  # a client callback's or observer's exception, if one ended it
+        self.watchdog: Callable[[], str | None] | None = None  # asked on receive time-outs; a text ends the session
+        self._interrupt: EndReason | None = None
+        self._reset()
+
+    # -- connection ------------------------------------------------------------------------------------------
+    def connect(self) -> "ClientApplication":
+        """Bind the local port (``port`` tells which; 0 binds a free one)."""
+        if self.transport is None:
+            self.transport = UdpTransport(self.robot, self.port_requested, self.bind_host)
+        return self
+
+    @property
+    def port(self) -> int:
+        return self.connect().transport.port  # type: ignore[union-attr]
+
+    def disconnect(self) -> None:
+        if self.transport is not None:
+            self.transport.close()
+            self.transport = None
+
+    close = disconnect
+
+    def __enter__(self) -> "ClientApplication":
+        return self.connect()
+
+    def __exit__(self, *exc: object) -> None:
+        self.disconnect()
+
+    def interrupt(self, reason: EndReason = EndReason.SIGINT) -> None:
+        """Ask the session to end (signal-safe): brake if commanding, then stop."""
+        if self._interrupt is None:
+            self._interrupt = reason
+
+    # -- state -----------------------------------------------------------------------------------------------
+    def _reset(self) -> None:
+        self._codec: FriCodec | None = None
+        self._mon: Any = None
+        self._out: Any = None
+        self._cmd: LBRCommand | None = None
+        self._guard: CommandGuard | None = None
+        self._brake: BrakingStop | None = None
+        self._braking = False
+        self._hold_left = 0
+        self._stop: tuple[Outcome, EndReason, str] | None = None  # a stop the client side requested
+        self._ended = False
+        self._started = False
+        self._t_open = 0.0
+        self._t_first: float | None = None
+        self._t_last_rx = 0.0
+        self._duration_s: float | None = None
+        self._last_seq = -1
+        self._tick = 0
+        self._t_per_tick = 0.0
+        self._local_clock: float | None = None
+        self._last_state = IDLE
+        self._seen_session = False
+        self._commanding = False
+        self._was_active = False
+        self._period_key: tuple[int, int] | None = None
+        self._period_s: float | None = None
+        self._send_counter = 0
+        self._client_seq = 0
+        self._prev: Sequence[float] = _ZERO7  # last two joint positions sent (what the controller executes)
+        self._prev2: Sequence[float] = _ZERO7
+        self._prev3: Sequence[float] = _ZERO7
+        self._active_sent = 0  # joint positions sent in COMMANDING_ACTIVE
+        self._io_set = False
+        self._torque_set = False
+        self._wrench_set = False
+        self._answered_any = False
+        self._unanswered_at_start = 0
+        self._cpu0 = 0.0
+        self._cycles0 = 0
+        # statistics
+        self.cycles = self.answered = self.position_commands = 0
+        self.missed = self.stale = self.malformed = 0
+        self.active_cycles = self.braking_cycles = 0
+        self.states_seen: list[int] = []
+        self._latencies: list[int] = []  # [ns]
+
+    @property
+    def client_sequence(self) -> int:
+        """Sequence counter of the last command message sent (−1 before the first)."""
+        return (self._client_seq - 1) & 0xFFFFFFFF if self.answered else -1
+
+    @property
+    def period_s(self) -> float | None:
+        """Command period [s] (send period × receive multiplier), known from the first session message."""
+        return self._period_s
+
+    # -- the loop --------------------------------------------------------------------------------------------
+    def run(self, duration_s: float | None = None) -> SessionResult:
+        """Step until the session ends (or ``duration_s`` [s] after the first message); the result."""
+        gc.collect()
+        was = gc.isenabled()
+        gc.disable()
+        try:
+            self.start(duration_s)
+            while self.step():
+                pass
+        finally:
+            if was:
+                gc.enable()
+        assert self.result is not None
+        return self.result
+
+    def start(self, duration_s: float | None = None) -> None:
+        """Prepare a session (``step`` calls it if needed): bind, reset counters, tell the observers."""
+        self.connect()
+        self._reset()
+        self._duration_s = duration_s
+        self._started = True
+        self._t_open = time.monotonic()
+        self._t_last_rx = self._t_open
+        for o in list(self.observers):
+            self._call_observer(o, "on_start", self)
+
+    def step(self) -> bool:  # noqa: C901 - one cycle, in order
+        """Process one datagram (or a receive timeout). False once the session has ended."""
+        if not self._started:
+            self.start(self._duration_s)
+        if self._ended:
+            return False
+        if self._interrupt is not None and self._stop is None:
+            text = "interrupted (Ctrl-C)" if self._interrupt is EndReason.SIGINT else "terminated (SIGTERM)"
+            if self._request_stop(Outcome.INTERRUPTED, self._interrupt, text):
+                return False
+        transport = self.transport
+        data = transport.receive()  # type: ignore[union-attr]
+        now = time.monotonic()
+        if data is None:
+            if self.watchdog is not None:
+                problem = self.watchdog()
+                if problem:
+                    self._ended = True
+                    raise FriError(problem)
+            return self._check_clocks(now)
+        t_rx = time.perf_counter_ns()
+        codec = self._codec
+        if codec is None:
+            version = self.version or detect_version(data)
+            if version is None:
+                self.malformed += 1
+                return self._check_clocks(now)
+            self._open_codec(version)
+            codec = self._codec
+        mon = self._mon
+        try:
+            codec.decode_monitoring(data, mon)  # type: ignore[union-attr]
+        except FriDecodeError:
+            self.malformed += 1
+            return self._check_clocks(now)
+        seq = mon.header.sequenceCounter
+        if self._last_seq >= 0:
+            d = (seq - self._last_seq) & 0xFFFFFFFF
+            if d == 0 or d > 0x7FFFFFFF:
+                self.stale += 1
+                return self._check_clocks(now)
+        if not self._consistent(mon):
+            self.malformed += 1
+            return self._check_clocks(now)
+        if self._last_seq >= 0:
+            self.missed += d - 1
+            self._tick += d
+        self._last_seq = seq
+        self.cycles += 1
+        self._t_last_rx = now
+        ci = mon.connectionInfo
+        state = ci.sessionState
+        cyc = self.cycle
+        # ---- time base and period -------------------------------------------------------------------------
+        if self._t_first is None:
+            self._t_first = now
+            if ci.sendPeriod:
+                self._t_per_tick = ci.sendPeriod * 1e-3
+            else:
+                self._local_clock = time.perf_counter()
+            self._prev = self._prev2 = self._prev3 = tuple(mon.monitorData.measuredJointPosition.value)
+            cyc.command = self._prev
+            self._cpu0 = time.thread_time()
+            self._cycles0 = 1
+        cyc.t = (time.perf_counter() - self._local_clock) if self._local_clock is not None else self._tick * self._t_per_tick
+        cyc.state = state
+        cyc.answered = cyc.sent_position = cyc.braking = False
+        cyc.torque = cyc.wrench = None
+        if self._period_key is None and state != IDLE:
+            k = ci.receiveMultiplier or 1
+            self._period_key = (ci.sendPeriod, k)
+            if ci.sendPeriod:
+                self._period_s = ci.sendPeriod * 1e-3 * k
+                self._guard = CommandGuard.from_limits(self.limits, self._period_s, self.max_force, self.max_moment)
+        # ---- state change and robot-side ends --------------------------------------------------------------
+        if not self.states_seen or state != self.states_seen[-1]:
+            self.states_seen.append(state)
+        if state != self._last_state:
+            old, self._last_state = self._last_state, state
+            try:
+                self.client.on_state_change(SessionState(old), SessionState(state))
+            except StopSession as s:
+                self._client_stop(s)
+            except Exception as exc:  # noqa: BLE001 - a client bug ends the session, reported
+                self._client_failed(exc, "on_state_change")
+        end = self._robot_side_end(mon, state, now)
+        if end is not None:
+            self._finish(*end, observe=True)
+            return False
+        if state == IDLE:
+            if not self._seen_session:
+                cyc.command = tuple(mon.monitorData.measuredJointPosition.value)
+            self._observe()
+            return self._check_clocks(now)
+        self._seen_session = True
+        if state >= CMD_WAIT:
+            self._commanding = True
+        if state == CMD_ACTIVE:
+            self._was_active = True
+            self.active_cycles += 1
+        # ---- receive multiplier: callbacks every message, a reply every k-th --------------------------------
+        self._send_counter += 1
+        due = self._send_counter >= (ci.receiveMultiplier or 1)
+        if due:
+            self._send_counter = 0
+        self.client.reply_due = due
+        # ---- the client's answer ---------------------------------------------------------------------------
+        cmd = self._cmd
+        cmd.reset()  # type: ignore[union-attr]
+        if self._stop is not None and not self._braking:
+            # a stop requested outside COMMANDING_ACTIVE (or before anything moved): end without answering
+            self._finish(*self._stop, observe=True)
+            return False
+        if self._braking:
+            if state != CMD_ACTIVE:
+                self._finish(*self._stop, observe=True)  # type: ignore[misc]
+                return False
+        else:
+            try:
+                if state == CMD_ACTIVE:
+                    q = self.client.command(self.state)  # type: ignore[arg-type]
+                    if q is not None:
+                        cmd.set_joint_position(q)  # type: ignore[union-attr]
+                elif state == CMD_WAIT:
+                    self.client.wait_for_command(self.state)  # type: ignore[arg-type]
+                else:
+                    self.client.monitor(self.state)  # type: ignore[arg-type]
+            except StopSession as s:
+                self._client_stop(s)
+            except Exception as exc:  # noqa: BLE001
+                self._client_failed(exc, "callback")
+            if self._stop is not None and not self._braking:
+                self._finish(*self._stop, observe=True)
+                return False
+        cyc.phase = self.client.phase
+        cyc.row = self.client.row
+        if not due:
+            self._observe()
+            return self._check_clocks(now)
+        # ---- build, guard, send ----------------------------------------------------------------------------
+        out = self._out
+        if state >= CMD_WAIT:
+            if not self._build_motion(mon, state, cmd):  # it ended the session (a refusal, nothing sent)
+                return False
+        elif self._jp_set or self._io_set:
+            out.ClearField("commandData")  # header only (plus IO writes) in the monitoring states
+            self._jp_set = self._torque_set = self._wrench_set = self._io_set = False
+        self._write_io(cmd)
+        h = out.header
+        h.sequenceCounter = self._client_seq
+        h.reflectedSequenceCounter = seq
+        try:
+            transport.send(codec.frame(out.SerializeToString()))  # type: ignore[union-attr]
+        except OSError as exc:
+            self._finish(Outcome.STOPPED, EndReason.SILENT, f"cannot send to the controller: {exc.strerror}", observe=True)
+            return False
+        self._latencies.append(time.perf_counter_ns() - t_rx)
+        if not self._answered_any:
+            self._answered_any = True
+            self._unanswered_at_start = self.missed  # messages that went by before the first reply
+        self._client_seq = (self._client_seq + 1) & 0xFFFFFFFF
+        self.answered += 1
+        cyc.answered = True
+        if cyc.sent_position:
+            self.position_commands += 1
+        if self._braking and self._brake.done:  # type: ignore[union-attr]
+            self._hold_left -= 1
+            if self._hold_left <= 0:
+                self._finish(*self._stop, observe=True)  # type: ignore[misc]
+                return False
+        self._observe()
+        return self._check_clocks(now)
+
+    # -- pieces of a cycle -----------------------------------------------------------------------------------
+    def _open_codec(self, version: FriVersion) -> None:
+        self.version = version
+        codec = FriCodec(version)
+        self._codec = codec
+        self._mon = codec.new_monitoring()
+        self.state = LBRState(self._mon, version)
+        self._cmd = LBRCommand(self.state)
+        self.client.robot_state = self.state
+        self.client.robot_command = self._cmd
+        out = codec.new_command()
+        out.header.messageIdentifier = COMMAND_MESSAGE_ID
+        out.header.sequenceCounter = 0
+        out.header.reflectedSequenceCounter = 0
+        self._out = out
+        self._jp_set = False
+
+    def _consistent(self, mon: Any) -> bool:
+        """A message a real controller could have sent: connection info, 7 finite joint values where the state
+        needs them, positions near the limits at most."""
+        if not mon.HasField("connectionInfo"):
+            return False
+        state = mon.connectionInfo.sessionState
+        if state == IDLE:
+            return True
+        if not self._joints_ok(mon.monitorData.measuredJointPosition.value):
+            return False
+        if state >= CMD_WAIT and not self._joints_ok(mon.ipoData.jointPosition.value):
+            return False
+        return True
+
+    def _joints_ok(self, values: Sequence[float]) -> bool:
+        if len(values) != 7:
+            return False
+        lim = self.limits.position
+        for j in range(7):
+            x = values[j]
+            if not (-lim[j] - _POSITION_SLACK <= x <= lim[j] + _POSITION_SLACK):  # also NaN and inf
+                return False
+        return True
+
+    def _robot_side_end(self, mon: Any, state: int, now: float) -> tuple[Outcome, EndReason, str] | None:
+        ci = mon.connectionInfo
+        ri = mon.robotInfo
+        if state == IDLE:
+            if self._seen_session:
+                return Outcome.STOPPED, EndReason.IDLE, "the robot application closed the FRI session (IDLE)"
+            return None
+        if self._commanding or state >= CMD_WAIT:
+            if (ci.sendPeriod, ci.receiveMultiplier or 1) != self._period_key:
+                pk = self._period_key
+                return (
+                    Outcome.STOPPED,
+                    EndReason.PERIOD_CHANGED,
+                    f"the controller changed its period from {pk[0]} ms × {pk[1]} to "  # type: ignore[index]
+                    f"{ci.sendPeriod} ms × {ci.receiveMultiplier or 1}",
+                )
+            if ri.safetyState != 0:
+                return Outcome.STOPPED, EndReason.SAFETY_STOP, f"safety stop ({SafetyState(ri.safetyState).name})"
+            drives = ri.driveState
+            if drives and min(drives) != _DRIVE_ACTIVE:
+                return Outcome.STOPPED, EndReason.DRIVES_OFF, "drives not active"
+            if ci.quality == _POOR:
+                return Outcome.STOPPED, EndReason.QUALITY_POOR, "connection quality POOR"
+            if self._was_active and state != CMD_ACTIVE:
+                return (
+                    Outcome.STOPPED,
+                    EndReason.LEFT_COMMANDING,
+                    f"the session left COMMANDING_ACTIVE ({SessionState(state).name})",
+                )
+        elif self.commanding_timeout_s is not None and now - self._t_first > self.commanding_timeout_s:  # type: ignore[operator]
+            return (
+                Outcome.STOPPED,
+                EndReason.NO_COMMANDING,
+                f"the robot application did not start commanding within {self.commanding_timeout_s:g} s "
+                f"(session state {SessionState(state).name})",
+            )
+        return None
+
+    def _build_motion(self, mon: Any, state: int, cmd: LBRCommand) -> bool:
+        """Guard the client's joint position (or take the braking stop's) and write it into the message."""
+        cyc = self.cycle
+        guard = self._guard
+        if guard is None:
+            self._finish(Outcome.REFUSED, EndReason.GUARD, "the controller did not send its send period; no command is safe", observe=True)
+            return False
+        mode = mon.ipoData.clientCommandMode
+        if state == CMD_WAIT:
+            # the robot stands where it is measured: the command must be reachable from there
+            ref = tuple(mon.monitorData.measuredJointPosition.value)
+            prev, prev2 = ref, ref
+        else:
+            prev, prev2 = self._prev, self._prev2
+        if self._braking:
+            q = self._brake.next()  # type: ignore[union-attr]
+            cyc.braking = True
+            self.braking_cycles += 1
+            tau = wrench = None
+        else:
+            q = cmd.joint_position
+            tau, wrench = cmd.torque, cmd.wrench
+        reason = guard.refuse_position(q, prev, prev2)  # type: ignore[arg-type]
+        if reason is None and mode == _TORQUE:
+            tau = tau if tau is not None else _ZERO7
+            reason = guard.refuse_torque(tau)
+        elif reason is None and mode == _WRENCH:
+            wrench = wrench if wrench is not None else _ZERO6
+            reason = guard.refuse_wrench(wrench)
+        if reason is not None:
+            text = f"guard refused the command: {reason}"
+            if cyc.braking or state != CMD_ACTIVE or self._active_sent == 0:
+                # nothing moving under our command (or the stop itself failed): never send it
+                self._finish(Outcome.REFUSED, EndReason.GUARD, text, observe=True)
+                return False
+            self._stop = (Outcome.REFUSED, EndReason.GUARD, text)
+            self._begin_braking()
+            q = self._brake.next()  # type: ignore[union-attr]
+            cyc.braking = True
+            self.braking_cycles += 1
+            if guard.refuse_position(q, prev, prev2) is not None:
+                q = prev  # cannot happen within the limits; a hold is the last resort
+            tau = _ZERO7 if mode == _TORQUE else None
+            wrench = _ZERO6 if mode == _WRENCH else None
+        out = self._out.commandData
+        jp = out.jointPosition.value
+        if not self._jp_set:
+            jp.extend(q)
+            self._jp_set = True
+        else:
+            jp[:] = q
+        if mode == _TORQUE:
+            tv = out.jointTorque.value
+            if self._torque_set:
+                tv[:] = tau
+            else:
+                tv.extend(tau)
+                self._torque_set = True
+            cyc.torque = tau
+        elif mode == _WRENCH:
+            wv = out.cartesianWrenchFeedForward.element
+            if self._wrench_set:
+                wv[:] = wrench
+            else:
+                wv.extend(wrench)
+                self._wrench_set = True
+            cyc.wrench = wrench
+        q = tuple(q)
+        if state == CMD_ACTIVE:
+            self._prev3, self._prev2, self._prev = self._prev2, self._prev, q
+            self._active_sent += 1
+        else:
+            self._prev = self._prev2 = self._prev3 = q
+        cyc.command = q
+        cyc.sent_position = True
+        return True
+
+    def _write_io(self, cmd: LBRCommand) -> None:
+        out = self._out.commandData
+        if self._io_set:
+            out.ClearField("writeIORequest")
+            self._io_set = False
+        if cmd.io_writes:
+            for name, kind, value in cmd.io_writes:
+                io = out.writeIORequest.add()
+                io.name, io.type, io.direction = name, kind, 1
+                if kind == 2:
+                    io.analogValue = value
+                else:
+                    io.digitalValue = value
+            self._io_set = True
+
+    # -- stops -----------------------------------------------------------------------------------------------
+    def _request_stop(self, outcome: Outcome, reason: EndReason, text: str) -> bool:
+        """Remember a client-side stop; brake when commanding. True if the session ended at once."""
+        self._stop = (outcome, reason, text)
+        if self._last_state == CMD_ACTIVE and self._active_sent > 0:
+            self._begin_braking()
+            return False
+        self._finish(outcome, reason, text)
+        return True
+
+    def _begin_braking(self) -> None:
+        if self._braking:
+            return
+        if self._brake is None:
+            self._brake = BrakingStop(self.limits, self._period_s)  # type: ignore[arg-type]
+        self._brake.start(self._prev, self._prev2, self._prev3)
+        self._braking = True
+        self._hold_left = self.hold_cycles
+
+    def _client_stop(self, s: StopSession) -> None:
+        if self._stop is not None:
+            return
+        outcome = Outcome.COMPLETED if s.completed else Outcome.REFUSED
+        reason = EndReason.FINISHED if s.completed else (EndReason.BAD_INPUT if s.bad_input else EndReason.CLIENT_REFUSED)
+        self._stop = (outcome, reason, s.reason)
+        if self._last_state == CMD_ACTIVE and self._active_sent > 0:
+            self._begin_braking()
+
+    def _client_failed(self, exc: BaseException, where: str) -> None:
+        if self._stop is not None:
+            return
+        self.error = exc
+        self._stop = (Outcome.FAILED, EndReason.CLIENT_ERROR, f"the client's {where} raised {type(exc).__name__}: {exc}")
+        if self._last_state == CMD_ACTIVE and self._active_sent > 0:
+            self._begin_braking()
+
+    def _check_clocks(self, now: float) -> bool:
+        """Time-outs and the monitoring duration; False once the session ended."""
+        if self._ended:
+            return False
+        if self._t_first is None:
+            waited = now - self._t_open
+            if waited > self.first_message_timeout_s:
+                self._ended = True
+                raise FriTimeout(self._no_message_text(waited))
+            return True
+        if now - self._t_last_rx > self.silence_timeout_s:
+            self._finish(Outcome.STOPPED, EndReason.SILENT, f"the controller was silent for {now - self._t_last_rx:.2f} s")
+            return False
+        if self._duration_s is not None and now - self._t_first >= self._duration_s and self._stop is None:
+            text = f"monitored for {self._duration_s:g} s"
+            if self._request_stop(Outcome.COMPLETED, EndReason.DURATION, text):
+                return False
+        return True
+
+    def _no_message_text(self, waited: float) -> str:
+        t = self.transport
+        text = f"no FRI monitoring message from {t.robot_ip} on UDP port {t.port} within {waited:.1f} s"  # type: ignore[union-attr]
+        hints = []
+        if self.malformed:
+            v = f"FRI {self.version.value}" if self.version else "any FRI version"
+            hints.append(f"{self.malformed} datagrams from it did not decode as {v} (--fri-version?)")
+        if t.foreign:  # type: ignore[union-attr]
+            hints.append(f"{t.foreign} datagrams came from other addresses (--robot?)")  # type: ignore[union-attr]
+        if not hints:
+            hints.append("is the robot application running with this PC's address and port, and the firewall open?")
+        return text + "; " + "; ".join(hints)
+
+    # -- observers and the end -------------------------------------------------------------------------------
+    def _call_observer(self, o: Observer, method: str, *args: Any) -> None:
+        fn = getattr(o, method, None)
+        if fn is None:
+            return
+        try:
+            fn(*args)
+        except Exception as exc:  # noqa: BLE001 - e.g. the log's disk is full: stop safely, say why
+            self.observers.remove(o)
+            if method == "on_end":
+                return
+            if self._stop is None:
+                self.error = exc
+                text = f"{type(o).__name__} failed: {exc}"
+                if self._ended:
+                    return
+                self._request_stop(Outcome.FAILED, EndReason.OBSERVER_FAILED, text)
+
+    def _observe(self) -> None:
+        for o in self.observers:
+            fn = getattr(o, "on_cycle", None)
+            if fn is None:
+                continue
+            try:
+                fn(self)
+            except Exception:  # noqa: BLE001
+                self._call_observer_failed(o)
+                break
+
+    def _call_observer_failed(self, o: Observer) -> None:
+        import sys
+
+        exc = sys.exc_info()[1]
+        if o in self.observers:
+            self.observers.remove(o)
+        if self._stop is None and exc is not None:
+            self.error = exc
+            text = f"{getattr(o, 'name', type(o).__name__)} failed: {exc}"
+            if not self._ended:
+                self._request_stop(Outcome.FAILED, EndReason.OBSERVER_FAILED, text)
+
+    def _finish(self, outcome: Outcome, reason: EndReason, text: str, observe: bool = False) -> None:
+        """End the session; with ``observe`` the observers see this cycle first (its log row, its figures)."""
+        if self._ended:
+            return
+        self._ended = True
+        if observe:
+            self._observe()
+        lat = sorted(self._latencies)
+        n = self.cycles - self._cycles0
+        cpu = time.thread_time() - self._cpu0 if self._t_first is not None else 0.0
+
+        def pct(p: float) -> float | None:
+            if not lat:
+                return None
+            k = min(len(lat) - 1, max(0, int(math.ceil(p / 100.0 * len(lat))) - 1))
+            return lat[k] * 1e-6
+
+        if not self._answered_any:
+            self._unanswered_at_start = 0
+        result = SessionResult(
+            outcome=outcome,
+            reason=reason,
+            detail=text,
+            version=self.version.value if self.version else "",
+            cycles=self.cycles,
+            answered=self.answered,
+            position_commands=self.position_commands,
+            missed=self.missed,
+            stale=self.stale,
+            foreign=self.transport.foreign if self.transport is not None else 0,
+            malformed=self.malformed,
+            states_seen=tuple(self.states_seen),
+            period_s=self._period_s,
+            active_cycles=self.active_cycles,
+            braking_cycles=self.braking_cycles,
+            unanswered_at_start=self._unanswered_at_start,
+            latency_p50_ms=pct(50),
+            latency_p99_ms=pct(99),
+            latency_max_ms=lat[-1] * 1e-6 if lat else None,
+            cpu_us_per_cycle=cpu / n * 1e6 if n > 0 else None,
+        )
+        figures: dict[str, Any] = {}
+        for o in list(self.observers):
+            fn = getattr(o, "figures", None)
+            if fn is not None:
+                try:
+                    figures.update(fn())
+                except Exception:  # noqa: BLE001
+                    pass
+        if figures:
+            result = SessionResult(**{**{k: getattr(result, k) for k in result.__dataclass_fields__}, "figures": figures})
+        self.result = result
+        for o in list(self.observers):
+            self._call_observer(o, "on_end", self, result)

@@ -1,0 +1,65 @@
+"""Jerk-limited braking stop: from the last command's position, velocity and acceleration to rest (ruckig).
+
+Every stop the client initiates (interrupt, guard refusal, a client's end, a failed observer) runs through here,
+so the commanded deceleration never exceeds the acceleration and jerk limits. The state is estimated from the
+last three commands sent (finite differences at the command period), the motion is computed online one cycle at
+a time (ruckig's velocity interface with target velocity 0), and the stop is done when ruckig says Finished.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from trajectories.limits import JointLimits
+
+
+class BrakingStop:
+    """Online braking profile; ``start()`` it with the last commands, then ``next()`` once per cycle."""
+
+    def __init__(self, limits: JointLimits, period_s: float, scale: float = 1.0) -> None:
+        from ruckig import ControlInterface, InputParameter, OutputParameter, Ruckig
+
+        self.period_s = period_s
+        self._otg = Ruckig(7, period_s)
+        self._inp = InputParameter(7)
+        self._out = OutputParameter(7)
+        self._inp.control_interface = ControlInterface.Velocity
+        lim = limits.scaled(scale) if scale != 1.0 else limits
+        # a stop must not stall on a limit it already exceeds: ruckig brakes into the limits first
+        self._inp.max_velocity = lim.velocity.tolist()
+        self._inp.max_acceleration = lim.acceleration.tolist()
+        self._inp.max_jerk = lim.jerk.tolist()
+        self._inp.target_velocity = [0.0] * 7
+        self._inp.target_acceleration = [0.0] * 7
+        self.cycles = 0  # cycles commanded so far
+        self.done = False
+
+    def start(self, q: Sequence[float], q_1: Sequence[float], q_2: Sequence[float]) -> None:
+        """Brake from the command ``q`` [rad] that followed ``q_1`` and ``q_2`` (one and two periods before)."""
+        dt = self.period_s
+        inp = self._inp
+        inp.current_position = list(q)
+        # velocity at q (not at the midpoint of the last step): second-order backward difference
+        inp.current_velocity = [(3.0 * a - 4.0 * b + c) / (2.0 * dt) for a, b, c in zip(q, q_1, q_2)]
+        inp.current_acceleration = [(a - 2.0 * b + c) / (dt * dt) for a, b, c in zip(q, q_1, q_2)]
+        self.cycles = 0
+        self.done = not any(inp.current_velocity) and not any(inp.current_acceleration)
+        self._hold = tuple(q)
+
+    def next(self) -> tuple[float, ...]:
+        """The next command [rad]; ``done`` becomes True when the robot is at rest."""
+        if self.done:
+            return self._hold
+        from ruckig import Result
+
+        res = self._otg.update(self._inp, self._out)
+        self.cycles += 1
+        if res not in (Result.Working, Result.Finished):  # cannot happen within the limits; hold what we have
+            self.done = True
+            return self._hold
+        q = tuple(self._out.new_position)
+        self._out.pass_to_input(self._inp)
+        if res == Result.Finished:
+            self.done = True
+            self._hold = q
+        return q

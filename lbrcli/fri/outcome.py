@@ -1,0 +1,83 @@
+"""How a session ended: outcome and reason enums and the figures of a session."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+from .constants import SessionState
+
+
+class Outcome(str, Enum):
+    COMPLETED = "completed"  # the client finished (or the monitoring duration elapsed)
+    INTERRUPTED = "interrupted"  # Ctrl-C or SIGTERM
+    STOPPED = "stopped"  # the robot side ended or broke the session
+    REFUSED = "refused"  # the guard or the client refused to go on
+    FAILED = "failed"  # the client side failed (log not writable, observer error)
+
+
+class EndReason(str, Enum):
+    FINISHED = "finished"  # the client said it is done
+    DURATION = "duration"  # run(duration_s) elapsed
+    SIGINT = "sigint"
+    SIGTERM = "sigterm"
+    CLIENT_REFUSED = "client_refused"  # the client raised StopSession(completed=False)
+    BAD_INPUT = "bad_input"  # ... because its input does not fit this controller (e.g. another period)
+    GUARD = "guard"  # a command failed the guard
+    CLIENT_ERROR = "client_error"  # a client callback raised
+    OBSERVER_FAILED = "observer_failed"  # e.g. the log could not be written
+    SUPERVISION = "supervision"  # measured vs commanded, timing, counters
+    SAFETY_STOP = "safety_stop"
+    DRIVES_OFF = "drives_off"
+    QUALITY_POOR = "quality_poor"
+    LEFT_COMMANDING = "left_commanding"
+    IDLE = "idle"  # the robot application closed the session
+    PERIOD_CHANGED = "period_changed"
+    SILENT = "silent"  # no message for silence_timeout_s
+    NO_COMMANDING = "no_commanding"  # the application did not start commanding in time
+
+
+@dataclass(frozen=True)
+class SessionResult:
+    """What happened in a session (latencies in ms, CPU in µs)."""
+
+    outcome: Outcome
+    reason: EndReason
+    detail: str  # one line for people
+    version: str  # FRI wire format used
+    cycles: int  # monitoring messages accepted
+    answered: int  # command messages sent
+    position_commands: int  # of which carried a joint position
+    missed: int  # gaps in the controller's sequence counter
+    stale: int  # not newer than the last accepted (duplicates, reordering): ignored
+    foreign: int  # from another address: ignored
+    malformed: int  # undecodable or not self-consistent: never answered
+    states_seen: tuple[int, ...]
+    period_s: float | None  # command period (send period × receive multiplier) [s]
+    active_cycles: int  # cycles in COMMANDING_ACTIVE
+    braking_cycles: int  # cycles of the client-initiated braking stop (0: none)
+    unanswered_at_start: int  # messages of the session start (before the first reply) left unanswered
+    latency_p50_ms: float | None  # receive → reply, inside the client
+    latency_p99_ms: float | None
+    latency_max_ms: float | None
+    cpu_us_per_cycle: float | None
+    figures: dict[str, Any] = field(default_factory=dict)  # from the observers
+
+    @property
+    def ok(self) -> bool:
+        return self.outcome is Outcome.COMPLETED
+
+    @property
+    def end_reason(self) -> str:
+        return self.detail
+
+    def to_dict(self) -> dict[str, Any]:
+        d = {k: getattr(self, k) for k in self.__dataclass_fields__ if k != "figures"}
+        d["outcome"] = self.outcome.value
+        d["reason"] = self.reason.value
+        d["end_reason"] = self.detail
+        d["states_seen"] = [SessionState(s).name for s in self.states_seen]
+        d["ok"] = self.ok
+        d.update(self.figures)
+        return d

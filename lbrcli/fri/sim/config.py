@@ -1,0 +1,198 @@
+"""What the simulated controller is configured with: the robot application, its FRI configuration, faults, timing.
+
+``SimConfig`` is frozen and picklable (it crosses into the simulator process); ``validate()`` raises OptionError
+naming the option. ``IoChannel`` is one IO of the application's FRI IO configuration.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from trajectories.errors import OptionError
+
+from ..constants import N_JOINTS, OperationMode
+from ..messages import FriVersion
+
+THESIS_Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)  # [rad], thesis §5.3.2 start pose
+OPERATION_MODES = {"T1": OperationMode.TEST_MODE_1, "T2": OperationMode.TEST_MODE_2, "AUT": OperationMode.AUTOMATIC_MODE}
+COMMAND_MODES = ("position", "torque", "wrench")  # the overlay's client command mode
+IO_TYPES = ("boolean", "digital", "analog")  # FriIOType 0, 1, 2
+IO_DIRECTIONS = ("in", "out")  # FriIODirection INPUT = 0, OUTPUT = 1
+
+
+@dataclass(frozen=True)
+class IoChannel:
+    """One IO of the robot application's FRI IO configuration (sent in every monitoring message)."""
+
+    name: str
+    type: str = "analog"  # boolean, digital or analog
+    direction: str = "in"  # in (INPUT: the controller reports it) or out (OUTPUT: the client may write it)
+    value: float = 0.0  # initial value (boolean: 0/1, digital: unsigned integer)
+
+    @property
+    def is_output(self) -> bool:
+        return self.direction == "out"
+
+    @property
+    def is_analog(self) -> bool:
+        return self.type == "analog"
+
+    def validate(self) -> None:
+        if not self.name or len(self.name) > 60:
+            raise OptionError(f"--io: channel name must be 1..60 characters, got {self.name!r}")
+        if self.type not in IO_TYPES:
+            raise OptionError(f"--io {self.name}: type must be one of {', '.join(IO_TYPES)}, got {self.type!r}")
+        if self.direction not in IO_DIRECTIONS:
+            raise OptionError(f"--io {self.name}: direction must be in or out, got {self.direction!r}")
+        if not math.isfinite(self.value) or (not self.is_analog and (self.value < 0 or self.value != int(self.value))):
+            raise OptionError(f"--io {self.name}: bad initial value {self.value!r}")
+
+
+def parse_io(text: str) -> IoChannel:
+    """``NAME:TYPE:DIRECTION[:VALUE]`` (TYPE boolean|digital|analog, DIRECTION in|out) → IoChannel.
+    The name may itself contain no colon; OptionError on anything else."""
+    parts = text.split(":")
+    if len(parts) not in (3, 4):
+        raise OptionError(f"--io: expected NAME:TYPE:DIRECTION[:VALUE], got {text!r}")
+    value = 0.0
+    if len(parts) == 4:
+        try:
+            value = float(parts[3])
+        except ValueError:
+            raise OptionError(f"--io: initial value must be a number, got {parts[3]!r}") from None
+    ch = IoChannel(parts[0], parts[1].lower(), parts[2].lower(), value)
+    ch.validate()
+    return ch
+
+
+# IO configurations of KUKA's example applications (the IOAccess client aborts if a channel is missing)
+IO_PRESETS: dict[str, tuple[IoChannel, ...]] = {
+    "kuka-ioaccess": (
+        IoChannel("FRI.Out_Analog_Deci_Seconds", "analog", "out"),
+        IoChannel("FRI.Out_Integer_Seconds", "digital", "out"),
+        IoChannel("FRI.In_Bool_Clock_Enabled", "boolean", "in", 1.0),
+    ),
+}
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Everything the simulated controller needs; picklable (it crosses into the simulator process)."""
+
+    client_host: str = "127.0.0.1"  # where monitoring messages are sent
+    client_port: int = 30200
+    host: str = "127.0.0.1"  # simulator's own bind address
+    port: int = 0  # 0 = ephemeral
+    period_ms: int = 1  # send period [ms], 1..100
+    receive_multiplier: int = 1  # the client answers every k-th message
+    version: str = "1.15"
+    q0: tuple[float, ...] = THESIS_Q0  # [rad], robot standing here at start
+    flange: str = "touch-electric"
+    tool: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [m] in the flange frame: the TCP (Cartesian pose, plants)
+    commanding_after_s: float = 0.2  # time in MONITORING_READY before the overlay starts
+    session_duration_s: float | None = None  # COMMANDING_ACTIVE length before the app ends the session
+    max_runtime_s: float | None = None  # hard stop of the simulator
+    loss: float = 0.0  # probability of dropping an outgoing monitoring message
+    delay_ms: float = 0.0  # [ms] added to every outgoing message
+    jitter_ms: float = 0.0  # [ms] extra uniform random delay 0..jitter
+    malformed: float = 0.0  # probability of sending a corrupted datagram instead of the message
+    seed: int = 0
+    # session and quality
+    quality_window: int = 50  # [cycles] sliding window of the connection quality
+    quality_fair: float = 0.5  # share of timely cycles for FAIR
+    quality_good: float = 0.9  # ... for GOOD (needed for commanding)
+    quality_excellent: float = 0.98  # ... for EXCELLENT
+    wait_cycles: int = 10  # mirroring commands needed in COMMANDING_WAIT
+    mirror_tolerance: float = 1e-3  # [rad] command vs ipo position in COMMANDING_WAIT
+    end_delay_s: float = 0.1  # monitoring after the overlay ended, before IDLE
+    idle_messages: int = 3
+    # robot application: FRI overlay configuration
+    operation_mode: str = "T1"  # T1, T2 or AUT
+    overlay: bool = True  # False: the application only monitors the session (no COMMANDING states)
+    command_mode: str = "position"  # position (joint position overlay), torque (joint impedance), wrench (Cartesian)
+    joint_stiffness: float = 1000.0  # [Nm/rad] joint impedance (torque mode), every joint
+    cartesian_stiffness: tuple[float, float] = (2000.0, 200.0)  # [N/m], [Nm/rad] Cartesian impedance (wrench mode)
+    nullspace_stiffness: float = 20.0  # [Nm/rad] joint stiffness in the null space of the Cartesian impedance
+    damping_ratio: float = 0.7  # Lehr's damping of the impedance controllers
+    io: tuple[IoChannel, ...] = ()  # the application's FRI IO configuration (plants add their inputs)
+    plants: tuple = ()  # PlantSpec objects (see lbrcli.fri.sim.plant): things attached to the flange
+    # robot
+    limits_path: str | None = None  # TOML overriding the joint limits
+    torque_noise: float = 0.0  # [Nm] standard deviation added to the measured torques
+    external_torque: tuple[float, ...] = (0.0,) * N_JOINTS  # [Nm] a constant push on the joints (by the environment)
+    external_force: tuple[float, ...] = (0.0,) * 6  # [N, Nm] a constant wrench on the TCP, base-frame axes
+    # timing
+    spin_us: float = 200.0  # [µs] busy-wait before each send deadline (sleep until then)
+    realtime: bool = False  # run the loop with real-time scheduling (SCHED_FIFO) if the OS permits
+
+    @property
+    def fri_version(self) -> FriVersion:
+        return FriVersion(self.version)
+
+    def validate(self) -> None:
+        """Raise OptionError naming the bad value."""
+
+        def bad(msg: str) -> None:
+            raise OptionError(msg)
+
+        if not (isinstance(self.period_ms, int) and 1 <= self.period_ms <= 100):
+            bad(f"--period: send period must be an integer 1..100 ms, got {self.period_ms}")
+        if not (isinstance(self.receive_multiplier, int) and 1 <= self.receive_multiplier <= 100):
+            bad(f"--receive-multiplier: must be an integer 1..100, got {self.receive_multiplier}")
+        try:
+            FriVersion(self.version)
+        except ValueError:
+            bad(f"--fri-version: must be 1.15 or 2.7, got {self.version!r}")
+        for name, p in (("--loss", self.loss), ("--malformed", self.malformed)):
+            if not 0.0 <= p <= 1.0:
+                bad(f"{name}: probability must be in [0, 1], got {p:g}")
+        for name, v in (("--delay", self.delay_ms), ("--jitter", self.jitter_ms)):
+            if not (math.isfinite(v) and 0.0 <= v <= 1000.0):
+                bad(f"{name}: must be 0..1000 ms, got {v:g}")
+        if len(self.q0) != N_JOINTS or not all(math.isfinite(x) for x in self.q0):
+            bad(f"--q0: expected {N_JOINTS} finite joint angles")
+        for name, port in (("--port", self.port), ("--client port", self.client_port)):
+            if not 0 <= port <= 65535:
+                bad(f"{name}: not a UDP port: {port}")
+        if self.client_port == 0:
+            bad("--client: the client port must not be 0")
+        if self.operation_mode not in OPERATION_MODES:
+            bad(f"--operation-mode: one of {', '.join(OPERATION_MODES)}, got {self.operation_mode!r}")
+        if self.command_mode not in COMMAND_MODES:
+            bad(f"--mode: one of {', '.join(COMMAND_MODES)}, got {self.command_mode!r}")
+        if not (math.isfinite(self.joint_stiffness) and 0.0 < self.joint_stiffness <= 1e5):
+            bad(f"--stiffness: joint stiffness must be in (0, 1e5] Nm/rad, got {self.joint_stiffness:g}")
+        kx, kr = self.cartesian_stiffness
+        if not (math.isfinite(kx) and 0.0 < kx <= 1e5 and math.isfinite(kr) and 0.0 < kr <= 1e4):
+            bad(f"--cartesian-stiffness: needs (0, 1e5] N/m and (0, 1e4] Nm/rad, got {kx:g}, {kr:g}")
+        if not (math.isfinite(self.nullspace_stiffness) and 0.0 <= self.nullspace_stiffness <= 1e4):
+            bad(f"nullspace stiffness must be 0..1e4 Nm/rad, got {self.nullspace_stiffness:g}")
+        if not (math.isfinite(self.damping_ratio) and 0.0 <= self.damping_ratio <= 10.0):
+            bad(f"--damping-ratio: must be 0..10, got {self.damping_ratio:g}")
+        if len(self.external_torque) != N_JOINTS or not all(math.isfinite(x) for x in self.external_torque):
+            bad(f"--external-torque: expected {N_JOINTS} finite values [Nm]")
+        if len(self.external_force) != 6 or not all(math.isfinite(x) for x in self.external_force):
+            bad("--external-force: expected 6 finite values [N, Nm]")
+        if not (math.isfinite(self.torque_noise) and self.torque_noise >= 0):
+            bad(f"--torque-noise: must be >= 0 Nm, got {self.torque_noise:g}")
+        names = [c.name for c in self.io]
+        for ch in self.io:
+            ch.validate()
+        if len(set(names)) != len(names):
+            bad(f"--io: channel configured twice: {sorted({n for n in names if names.count(n) > 1})[0]}")
+        for spec in self.plants:
+            check = getattr(spec, "validate", None)
+            if check is not None:
+                check()
+        if not 0.0 < self.quality_good <= 1.0:
+            bad(f"--quality-good: share of timely cycles must be in (0, 1], got {self.quality_good:g}")
+        if not 0.0 <= self.quality_fair <= self.quality_good <= self.quality_excellent <= 1.0:
+            bad("quality thresholds must satisfy 0 <= fair <= good <= excellent <= 1")
+        if not 1 <= self.quality_window <= 100_000:
+            bad(f"--quality-window: must be 1..100000 cycles, got {self.quality_window}")
+        if self.wait_cycles < 1:
+            bad(f"wait_cycles must be >= 1, got {self.wait_cycles}")
+        for name, v in (("--duration", self.session_duration_s), ("--timeout", self.max_runtime_s)):
+            if v is not None and not (math.isfinite(v) and v > 0):
+                bad(f"{name}: must be > 0 s, got {v:g}")

@@ -1,0 +1,160 @@
+"""The simulator loop: one simulated controller (``Controller``) on a UDP link (``Link``), in real time.
+
+Every send period the loop sends a monitoring message and collects the client's command messages until the next
+send. A cycle counts as timely when a reply to the message just sent arrives before the next send (with
+receiveMultiplier k: one such reply within k cycles). The loop sleeps in select and busy-waits the last
+``spin_us`` before each send (steadier than a sleep-only rate limiter at 1 ms), re-synchronises after an overrun,
+and can run with SCHED_FIFO (``realtime``).
+"""
+
+from __future__ import annotations
+
+import gc
+import os
+import time
+from typing import Callable
+
+import numpy as np
+
+from ..constants import ConnectionQuality, SessionState
+from .config import SimConfig
+from .controller import Controller
+from .link import RING, Faults, Link
+from .stats import SimStats, percentiles
+
+
+class Simulator:
+    """One simulated controller bound to a UDP socket; ``run()`` drives the session until it ends."""
+
+    def __init__(
+        self,
+        config: SimConfig,
+        stop: Callable[[], bool] | None = None,
+        on_state: Callable[[SessionState, ConnectionQuality, float], None] | None = None,
+    ) -> None:
+        config.validate()
+        self.cfg = config
+        self._stop = stop or (lambda: False)
+        self._on_state = on_state
+        self.period = config.period_ms * 1e-3  # [s]
+        framed = config.version == "2.7"
+        self.link = Link(config.host, config.port, config.client_host, config.client_port,
+                         Faults(config.loss, config.delay_ms, config.jitter_ms, config.malformed, config.seed), framed)
+        try:
+            self.controller = Controller(config, sent_at=self.link.sent_at)
+        except BaseException:
+            self.link.close()
+            raise
+        self._cycle_time = np.empty(RING)  # send instant of each cycle (perf_counter) [s]
+        self._work = np.empty(RING)  # computation time of each cycle [s]
+        self.overruns = 0
+
+    @property
+    def address(self) -> tuple[str, int]:
+        return self.link.address
+
+    @property
+    def plant_info(self) -> dict:
+        """What the plants report right after start (e.g. ``pendulum_path``), merged."""
+        info: dict = {}
+        for plant in self.controller.plants:
+            info.update(plant.info())
+        return info
+
+    @property
+    def pendulum_path(self) -> str | None:
+        """Device path of an emulated pendulum module's serial port (None without one)."""
+        return self.plant_info.get("pendulum_path")
+
+    @staticmethod
+    def _enter_realtime() -> bool:
+        """SCHED_FIFO for this process (Linux, needs the privilege); False if not granted."""
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(10))
+            return True
+        except (AttributeError, OSError):
+            return False
+
+    def run(self) -> SimStats:
+        """Drive the session until it ends (IDLE sent), ``stop()`` says so, or max_runtime_s elapses."""
+        period, cfg, ctl, link = self.period, self.cfg, self.controller, self.link
+        on_datagram = ctl.on_datagram
+        spin = cfg.spin_us * 1e-6
+        realtime = self._enter_realtime() if cfg.realtime else False
+        gc.collect()
+        gc.freeze()  # the objects built so far are never collected again: short collections in the loop
+        t0 = time.perf_counter()
+        cpu0 = time.process_time()
+        next_t = t0
+        ppid = os.getppid()
+        end_reason = ""
+        k = 0
+        n_states = 0
+        try:
+            while True:
+                now = time.perf_counter()
+                if now - next_t > period:  # fell behind by more than a cycle: re-synchronise
+                    self.overruns += 1
+                    next_t = now
+                rel = next_t - t0
+                link.drain(on_datagram)  # replies waiting now arrived before the next send, even if we are late
+                data = ctl.cycle(rel)
+                self._cycle_time[k % RING] = time.perf_counter()  # the send instant of this cycle
+                link.send(data, ctl.seq)
+                self._work[k % RING] = time.perf_counter() - now
+                state = ctl.state
+                if len(ctl.states_seen) != n_states:
+                    n_states = len(ctl.states_seen)
+                    if self._on_state is not None:
+                        self._on_state(state, ctl.quality, rel)
+                if state is SessionState.IDLE:
+                    ctl.machine.note_idle_sent()
+                    if ctl.machine.finished:
+                        end_reason = ctl.machine.end_reason or "idle"
+                        break
+                if self._stop():
+                    end_reason = "stopped"
+                    break
+                if cfg.max_runtime_s is not None and rel >= cfg.max_runtime_s:
+                    end_reason = "max_runtime"
+                    break
+                if k % 512 == 0 and os.getppid() != ppid:
+                    end_reason = "parent_exited"
+                    break
+                k += 1
+                next_t += period
+                link.wait_until(next_t, on_datagram, spin)
+            link.flush(on_datagram)  # let in-flight delayed datagrams go out
+        finally:
+            link.close()
+            ctl.close()
+            gc.unfreeze()
+        wall = time.perf_counter() - t0
+        cpu = (time.process_time() - cpu0) / wall if wall > 0 else 0.0
+        return self._stats(k + 1, end_reason, cpu, realtime)
+
+    def _stats(self, ncycles: int, end_reason: str, cpu_fraction: float, realtime: bool) -> SimStats:
+        ctl, link = self.controller, self.link
+        c = ctl.counts
+        n = min(ncycles, RING)
+        times = self._cycle_time[:n] if ncycles <= RING else np.roll(self._cycle_time, -(ncycles % RING))
+        pp = percentiles(np.diff(times) * 1e3)
+        lp = percentiles(ctl.latency[: min(ctl.n_latency, RING)] * 1e3)
+        wp = percentiles(self._work[:n] * 1e6)
+        plants = {p.name: p.figures() for p in ctl.plants}
+        ball = next((f["max_ball_theta"] for f in plants.values() if "max_ball_theta" in f), None)
+        return SimStats(
+            cycles=ncycles, replies=c["replies"], late_replies=c["late"], missed_replies=c["missed"],
+            malformed_received=c["malformed_rx"], foreign_received=c["foreign_rx"] + link.foreign,
+            states_seen=tuple(ctl.states_seen), safety_stop=ctl.safety,
+            min_tracking_performance=ctl.min_tracking, commanded_rows=c["commanded"],
+            max_ball_theta=ball, end_reason=end_reason,
+            lost_sent=link.lost, malformed_sent=link.malformed_sent, client_sequence_gaps=c["gaps"],
+            overruns=self.overruns, active_cycles=c["active"],
+            period_ms_p50=pp[0], period_ms_p99=pp[1], period_ms_max=pp[2],
+            reply_latency_ms_p50=lp[0], reply_latency_ms_p99=lp[1], reply_latency_ms_max=lp[2],
+            final_q=tuple(float(x) for x in ctl.arm.q),
+            work_us_p50=wp[0], work_us_p99=wp[1], cpu_fraction=cpu_fraction, realtime=realtime,
+            command_mode=self.cfg.command_mode, io_writes=ctl.io.writes, io_refused=ctl.io.refused,
+            incomplete_commands=c["incomplete"], plants=plants,
+        )

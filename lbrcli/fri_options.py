@@ -1,0 +1,130 @@
+"""Typer options shared by the FRI commands (execute, monitor, ptp)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+DEFAULT_BALL_LENGTH = 0.25  # [m] string length of the simulated ball without --length
+
+RobotOpt = Annotated[
+    Optional[str],
+    typer.Option(
+        "--robot",
+        help="The robot controller's FRI address (thesis lab: 192.170.10.2). The ONLY way a real robot is "
+        "commanded; without it the built-in simulator is started on loopback.",
+    ),
+]
+PortOpt = Annotated[
+    int, typer.Option("--port", help="Local UDP port from the robot's FRI configuration (0: any free port, simulator).")
+]
+BindOpt = Annotated[
+    Optional[str],
+    typer.Option("--bind", help="Local address to bind (default: all interfaces; 127.0.0.1 with the simulator)."),
+]
+VersionOpt = Annotated[
+    Optional[str],
+    typer.Option(
+        "--fri-version",
+        help="FRI wire format: 1.15 or 2.7. Default: detected from the first datagram with --robot (2.7 frames carry "
+        "a length and a CRC); 1.15 for the simulator.",
+    ),
+]
+LogOpt = Annotated[
+    Optional[Path],
+    typer.Option("--log", help="Execution log CSV, one row per monitoring message (valid after any ending)."),
+]
+WaitOpt = Annotated[
+    Optional[float],
+    typer.Option("--wait", help="Seconds to wait for the first FRI message \\[s] (default 60 with --robot, 20 simulated)."),
+]
+PeriodOpt = Annotated[
+    Optional[int],
+    typer.Option(
+        "--period",
+        help="Send period \\[ms]: the simulator's (default: the file's step), or with --robot the period the "
+        "controller must have.",
+    ),
+]
+LengthOpt = Annotated[
+    Optional[float],
+    typer.Option("--length", help=f"Simulated ball string length \\[m] (default {DEFAULT_BALL_LENGTH}; 0: no ball)."),
+]
+SimStartOpt = Annotated[
+    Optional[str],
+    typer.Option("--sim-start", help="Simulator only: where the simulated robot stands at start (7 angles, deg/rad)."),
+]
+MultiplierOpt = Annotated[
+    int, typer.Option("--receive-multiplier", help="Simulator only: the client answers every k-th message.")
+]
+RealtimeOpt = Annotated[
+    bool,
+    typer.Option(
+        "--realtime",
+        help="Run the FRI loop with real-time scheduling (SCHED_FIFO, needs CAP_SYS_NICE or root); steadier 1 ms under load.",
+    ),
+]
+SimLenientOpt = Annotated[
+    bool,
+    typer.Option(
+        "--sim-lenient",
+        help="Simulator only: a controller tolerant of a loaded machine — connection quality judged over 1 s and "
+        "GOOD with half the replies in time (default: over 50 cycles, 90 %, as strict as the real one).",
+    ),
+]
+
+
+def lenient_quality(period_ms: int, receive_multiplier: int = 1) -> dict[str, float | int]:
+    """Simulator quality thresholds that tolerate a loaded machine: a 1 s window, GOOD at 50 % timely replies."""
+    return dict(quality_window=max(50, round(1000 / (period_ms * receive_multiplier))), quality_good=0.5,
+                quality_fair=0.3, quality_excellent=0.9)
+
+
+PlotOpt = Annotated[
+    Optional[Path], typer.Option("--plot", help="PNG: commanded vs measured joints, tracking, simulated ball sway.")
+]
+PendulumOpt = Annotated[
+    Optional[str],
+    typer.Option("--pendulum", help="Serial port of the pendulum module (thesis ch. 6, e.g. /dev/ttyUSB0); 'sim': the "
+                 "simulator's emulated module on a pseudo-terminal. Logs pend_theta \\[rad], pend_omega \\[rad/s]."),
+]
+BaudOpt = Annotated[int, typer.Option("--baud", help="Baud rate of the pendulum module's serial port.")]
+PendZeroOpt = Annotated[int, typer.Option("--pendulum-zero", help="Encoder count (0..4095) of the hanging pendulum.")]
+MqttOpt = Annotated[
+    Optional[str],
+    typer.Option("--mqtt", help="Publish the state as JSON to mqtt://HOST:PORT/TOPIC (off the FRI loop; see `lbr listen`)."),
+]
+MqttRateOpt = Annotated[float, typer.Option("--mqtt-rate", help="Telemetry messages per second \\[Hz].")]
+
+
+def validate_version(version: str | None) -> str | None:
+    from trajectories.errors import OptionError
+
+    if version is not None and version not in ("1.15", "2.7"):
+        raise OptionError(f"--fri-version must be 1.15 or 2.7, got {version!r}")
+    return version
+
+
+def validate_port(port: int) -> None:
+    from trajectories.errors import OptionError
+
+    if not 0 <= port <= 65535:
+        raise OptionError(f"--port: not a UDP port: {port}")
+
+
+def validate_wait(wait: float | None) -> None:
+    import math
+
+    from trajectories.errors import OptionError
+
+    if wait is not None and not (math.isfinite(wait) and 0 < wait <= 3600):
+        raise OptionError(f"--wait must be in (0, 3600] s, got {wait:g}")
+
+
+def validate_period(period: int | None) -> None:
+    from trajectories.errors import OptionError
+
+    if period is not None and not 1 <= period <= 100:
+        raise OptionError(f"--period must be 1..100 ms, got {period}")

@@ -1,0 +1,218 @@
+"""Running an FRI client from the command line: the embedded simulator (no --robot), the log, the lab
+attachments, signals and the summary. The commands `execute`, `monitor` and `ptp` are thin layers over this."""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import typer
+
+
+@contextlib.contextmanager
+def realtime_scheduling(rep, wanted: bool):
+    """SCHED_FIFO for the FRI loop if wanted and permitted (a warning otherwise); normal scheduling afterwards."""
+    import os
+
+    if not wanted:
+        yield
+        return
+    try:
+        old = os.sched_getscheduler(0), os.sched_getparam(0)
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(20))
+    except (AttributeError, PermissionError, OSError):
+        rep.warn("real-time scheduling was not granted (needs CAP_SYS_NICE); running with normal priority")
+        yield
+        return
+    try:
+        yield
+    finally:
+        os.sched_setscheduler(0, old[0], old[1])
+
+
+class _TapObserver:
+    """Adapts the lab's telemetry tap to an application observer."""
+
+    name = "the MQTT telemetry"
+
+    def __init__(self, tap: Callable[[float, Any], None]) -> None:
+        self.tap = tap
+
+    def on_cycle(self, app) -> None:
+        self.tap(app.cycle.t, app.state.message)
+
+
+def run_client(
+    rep,
+    client,
+    *,
+    robot: str | None,
+    port: int,
+    bind: str | None,
+    version: str | None,
+    limits,
+    log_path: Path | None,
+    wait: float | None,
+    sim_kwargs: dict[str, Any],
+    duration_s: float | None = None,
+    extra_names: Sequence[str] = (),
+    extra: Callable | None = None,
+    commanding_timeout_s: float | None = None,
+    realtime: bool = False,
+    sim_lenient: bool = False,
+    lab=None,
+    observers: Sequence[Any] = (),
+):
+    """Bind, start the simulator if no robot was named, attach the log, the pendulum module and telemetry, run the
+    session with Ctrl-C/SIGTERM braking, stop everything; (result, simulator stats or None, lab figures)."""
+    from lbrcli.fri import ClientApplication, ExecutionLog, LogObserver, SessionFigures, interrupts_brake
+
+    embedded = robot is None
+    app = ClientApplication(
+        client,
+        "127.0.0.1" if embedded else robot,
+        port,
+        bind_host=bind if bind is not None else ("127.0.0.1" if embedded else ""),
+        version=version or ("1.15" if embedded else None),
+        limits=limits,
+        observers=[SessionFigures(), *observers],
+        first_message_timeout_s=wait if wait is not None else (20.0 if embedded else 60.0),
+        commanding_timeout_s=commanding_timeout_s if commanding_timeout_s is not None else (20.0 if embedded else None),
+    )
+    if lab is not None:
+        lab.validate(embedded)
+    app.connect()
+    sim = sim_stats = log = attached = None
+    lab_figures: dict[str, Any] = {}
+    extra_names = tuple(extra_names)
+    try:
+        if log_path is not None:
+            log = ExecutionLog(log_path)
+        if embedded:
+            from lbrcli.fri.sim import SimConfig, SimulatorProcess
+            from lbrcli.plants import default_plants
+
+            kw = dict(sim_kwargs)
+            if realtime:
+                kw["realtime"] = True
+            if sim_lenient:
+                from .fri_options import lenient_quality
+
+                kw.update(lenient_quality(kw.get("period_ms", 1), kw.get("receive_multiplier", 1)))
+            plants = default_plants(kw.pop("ball_length", None), pendulum_pty=lab is not None and lab.pendulum == "sim")
+            sim = SimulatorProcess(SimConfig(client_port=app.port, version=version or "1.15", plants=plants, **kw))
+            sim.start()
+            rep.print(f"simulator on {sim.address[0]}:{sim.address[1]} → client on 127.0.0.1:{app.port}")
+        else:
+            rep.print(f"waiting for FRI messages from {app.transport.robot_ip} on UDP port {app.port} …")
+        if lab is not None and (lab.pendulum or lab.mqtt):
+            from lbrcli.lab.attach import LabAttachments
+
+            path = sim.pendulum_path if lab.pendulum == "sim" else lab.pendulum
+            attached = LabAttachments(lab, path).start()
+            if attached.pendulum is not None:
+                rep.print(f"pendulum module on {path}")
+                base_names, base_extra = extra_names, extra
+                extra_names = base_names + attached.extra_names
+                extra = (lambda s: (*base_extra(s), *attached.extra(s))) if base_extra else attached.extra
+            if attached.publisher is not None:
+                rep.print(f"telemetry to {lab.mqtt} at {lab.mqtt_rate_hz:g} Hz")
+                app.observers.append(_TapObserver(attached.tap))
+        if log is not None:
+            app.observers.insert(0, LogObserver(log, extra_names, extra))
+        if hasattr(client, "figures"):
+            app.observers.append(client)
+        if sim is not None:
+            app.watchdog = lambda: None if sim.running else "the simulator process ended"
+        with interrupts_brake(app), realtime_scheduling(rep, realtime):
+            result = app.run(duration_s)
+    finally:
+        app.disconnect()
+        if attached is not None:
+            attached.stop()
+            lab_figures = attached.summary()
+            rep.print("lab: " + ", ".join(f"{k} {v}" for k, v in lab_figures.items()))
+        if sim is not None:
+            try:
+                sim_stats = sim.stop()
+            except Exception as exc:  # the session's own outcome matters more
+                rep.warn(f"simulator: {exc}")
+        if log is not None:
+            log.close()
+    return result, sim_stats, lab_figures
+
+
+def _deg(x: float | None) -> float | None:
+    return None if x is None else math.degrees(x)
+
+
+def print_summary(rep, result, sim_stats, log_path: Path | None) -> dict[str, Any]:
+    """Human summary and the figures for --json."""
+    from lbrcli.fri.constants import SessionState
+
+    r = result
+    f = r.figures
+    states = " → ".join(SessionState(s).name for s in r.states_seen)
+    period = f"{r.period_s * 1e3:g} ms" if r.period_s else "?"
+    rep.print(f"session: {states} (FRI {r.version})")
+    rep.print(f"ended: {r.detail} ({r.outcome.value})")
+    rep.print(
+        f"cycles {r.cycles} (period {period}), answered {r.answered}, missed {r.missed}, "
+        f"stale {r.stale}, foreign {r.foreign}, malformed {r.malformed}"
+    )
+    if f.get("move_rows") or f.get("trajectory_rows") or f.get("settle_rows"):
+        rep.print(
+            f"commanded: {f.get('move_rows', 0)} move-to-start rows, {f.get('trajectory_rows', 0)} trajectory rows, "
+            f"{f.get('settle_rows', 0)} settle rows"
+        )
+    if r.braking_cycles:
+        rep.print(f"braking stop: {r.braking_cycles} cycles ({r.braking_cycles * (r.period_s or 0):.3f} s) within the limits")
+    if f.get("min_tracking") is not None:
+        rep.print(f"min tracking performance {f['min_tracking']:.4f} over {r.active_cycles} COMMANDING_ACTIVE cycles")
+    if f.get("max_tracking_error") is not None:
+        prev = f.get("max_tracking_error_prev")
+        lag = f", {prev:.3e} rad against the previous cycle's command" if prev is not None else ""
+        rep.print(f"max |measured − commanded| {f['max_tracking_error']:.3e} rad (same cycle){lag}")
+    if f.get("max_ball_theta") is not None:
+        resid = f", residual {f['residual_ball_theta_deg']:.3f}°" if f.get("residual_ball_theta") is not None else ""
+        rep.print(f"ball sway: max {f['max_ball_theta_deg']:.3f}°{resid}")
+    if r.latency_p50_ms is not None:
+        rep.print(
+            f"reply latency p50 {r.latency_p50_ms:.3f} ms, p99 {r.latency_p99_ms:.3f} ms, max {r.latency_max_ms:.3f} ms"
+            + (f"; CPU {r.cpu_us_per_cycle:.1f} µs per cycle" if r.cpu_us_per_cycle is not None else "")
+        )
+    if log_path is not None:
+        rep.print(f"log: {log_path} ({f.get('log_rows', 0)} rows)")
+    figures = r.to_dict()
+    figures["log"] = str(log_path) if log_path is not None else None
+    if sim_stats is not None:
+        figures["simulator"] = sim_stats.to_dict()
+    return figures
+
+
+def exit_for(result) -> None:
+    import sys
+
+    from lbrcli.fri import EndReason, Outcome
+
+    if result.ok:
+        return
+    if result.reason is EndReason.BAD_INPUT:
+        sys.stderr.write(f"lbr: error: {result.detail}\n")
+        raise typer.Exit(2)
+    sys.stderr.write(f"lbr: {result.outcome.value}: {result.detail}\n")
+    raise typer.Exit(130 if result.outcome is Outcome.INTERRUPTED else 1)
+
+
+def plot_log(path: Path | None, log_path: Path | None, rep, title: str) -> None:
+    if path is None:
+        return
+    if log_path is None:
+        rep.warn("--plot needs --log (the plot is drawn from the log); no plot written")
+        return
+    from .plots.execute import plot_execution
+
+    plot_execution(log_path, path, title=title)
+    rep.print(f"plot: {path}")

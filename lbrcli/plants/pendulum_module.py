@@ -1,0 +1,61 @@
+"""The thesis's pendulum module (ch. 6) emulated on a pseudo-terminal: the simulated ball's planar angle θy and
+its rate as AS5600 lines at ``rate_hz``; the device path is reported as ``pendulum_path`` (plant info). Needs a
+ball plant before it in ``SimConfig.plants``."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+from trajectories.errors import OptionError
+
+
+@dataclass(frozen=True)
+class PendulumModuleSpec:
+    """The emulated module reading the ball plant; ``rate_hz`` [Hz] readings per second on the serial line."""
+
+    rate_hz: float = 200.0
+
+    def validate(self) -> None:
+        if not (math.isfinite(self.rate_hz) and 1.0 <= self.rate_hz <= 10000.0):
+            raise OptionError(f"pendulum rate must be 1..10000 Hz, got {self.rate_hz:g}")
+
+    def build(self, context) -> "PendulumModule":
+        from .ball import Ball
+
+        self.validate()
+        ball = next((p for p in context.plants if isinstance(p, Ball)), None)
+        if ball is None:
+            raise OptionError("the pendulum module emulation needs a simulated ball (--length)")
+        return PendulumModule(self, ball, context.period_s)
+
+
+class PendulumModule:
+    """Feeds the ball's θy and rate to a PendulumEmulator every cycle (it throttles to its rate)."""
+
+    name = "pendulum_module"
+    inputs: tuple[str, ...] = ()
+
+    def __init__(self, spec: PendulumModuleSpec, ball, period_s: float) -> None:
+        from lbrcli.lab.pendulum_serial import PendulumEmulator
+
+        self._ball = ball
+        self._h = period_s
+        self._t = 0.0  # [s] simulated time
+        self._emu = PendulumEmulator(rate_hz=spec.rate_hz)
+
+    def step(self, t: float, tcp: Sequence[float]) -> tuple[()]:
+        self._t += self._h
+        theta, omega = self._ball.plane_angle_rate()
+        self._emu.feed(self._t, theta, omega)
+        return ()
+
+    def info(self) -> dict:
+        return {"pendulum_path": self._emu.path}
+
+    def figures(self) -> dict:
+        return {"lines_sent": self._emu.sent}
+
+    def close(self) -> None:
+        self._emu.close()

@@ -1,0 +1,388 @@
+"""The FRI client application over loopback against a scripted controller: states, counters, both wire formats,
+version detection, receiveMultiplier, loss, malformed / foreign / stale / inconsistent datagrams, robot-side ends,
+the guard, braking stops, far starts, interrupts, client errors, a failing log, and the execution log."""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+
+import numpy as np
+import pytest
+from fri_scripted_controller import CA, CW, IDLE, MR, MW, Cycle, ScriptedController
+
+from lbrcli.fri import (
+    ClientApplication,
+    EndReason,
+    ExecutionLog,
+    FriTimeout,
+    LBRClient,
+    LogObserver,
+    Outcome,
+    Phase,
+    SessionFigures,
+    StopSession,
+    TrajectoryPlayer,
+)
+from lbrcli.fri.log import LOG_COLUMNS
+from trajectories.csvio import read_table
+from trajectories.limits import default_limits
+
+Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)
+LIM = default_limits()
+DIRECTION = np.array([1, 0.5, -0.5, 1, 0.3, -1, 1])
+
+
+def min_jerk(n: int, amp: float | None = None) -> np.ndarray:
+    """(n, 7) rest-to-rest minimum-jerk move from Q0 [rad] at 1 ms rows; the default amplitude keeps the peak
+    acceleration (5.77·amp/T²) near 3 rad/s², inside every joint's limit."""
+    if amp is None:
+        amp = 0.5 * ((n - 1) * 1e-3) ** 2
+    s = np.linspace(0.0, 1.0, n)
+    p = 10 * s**3 - 15 * s**4 + 6 * s**5
+    return np.array(Q0) + amp * p[:, None] * DIRECTION
+
+
+def preamble(k: int = 1, **kw) -> list[Cycle]:
+    return (
+        [Cycle(state=IDLE, **kw)]
+        + [Cycle(state=MW, quality=1, receive_multiplier=k, **kw)] * 3
+        + [Cycle(state=MR, receive_multiplier=k, **kw)] * 3
+        + [Cycle(state=CW, receive_multiplier=k, **kw)] * 4
+    )
+
+
+def run(script, client, *, version="1.15", detect=False, tmp_path=None, on_cycle=None, q_start=Q0, duration=None,
+        observers=(), **controller):  # fmt: skip
+    fig = SessionFigures()
+    app = ClientApplication(client, "127.0.0.1", 0, bind_host="127.0.0.1", version=None if detect else version,
+                            limits=LIM, first_message_timeout_s=10, silence_timeout_s=3,
+                            observers=[fig, *observers])  # fmt: skip
+    app.connect()
+    ctl = ScriptedController(app.port, script, q_start, version=version, **controller)
+    if on_cycle is not None:
+        ctl.on_cycle = lambda i: on_cycle(i, app)
+    log_path = tmp_path / "log.csv" if tmp_path is not None else None
+    log = ExecutionLog(log_path) if log_path is not None else None
+    if log is not None:
+        app.observers.insert(0, LogObserver(log))
+    ctl.start()
+    error = None
+    try:
+        try:
+            res = app.run(duration)
+        except Exception as exc:  # noqa: BLE001 - returned to the test
+            res, error = None, exc
+    finally:
+        ctl.client_done.set()
+        ctl.join()
+        app.close()
+        if log is not None:
+            log.close()
+    return res, ctl, log_path, error
+
+
+def read_log(path):
+    return read_table(path, LOG_COLUMNS, time="increasing")
+
+
+def sent_positions(ctl, state=CA) -> np.ndarray:
+    return np.array([r.position for r in ctl.replies if r.state == state and r.position is not None])
+
+
+def assert_within_limits(q: np.ndarray, dt: float, before: np.ndarray | None = None) -> None:
+    """Every step within the velocity limit and every second difference within the acceleration limit."""
+    if before is not None:
+        q = np.vstack([before, q])
+    v = np.abs(np.diff(q, axis=0)) / dt
+    assert np.all(v <= LIM.velocity * (1 + 1e-9)), (v / LIM.velocity).max()
+    if len(q) > 2:
+        a = np.abs(np.diff(q, 2, axis=0)) / dt**2
+        assert np.all(a <= LIM.acceleration * (1 + 1e-6)), (a / LIM.acceleration).max()
+
+
+# -- the normal session ---------------------------------------------------------------------------------------
+@pytest.mark.parametrize("version", ["1.15", "2.7"])
+@pytest.mark.parametrize("detect", [False, True])
+def test_session_streams_every_row_bit_exact_and_logs(tmp_path, version, detect):
+    n = 100
+    traj = min_jerk(n)
+    player = TrajectoryPlayer(traj, LIM, period_s=1e-3, settle_cycles=4)
+    script = preamble() + [Cycle(state=CA)] * (n + 20)
+    res, ctl, log_path, err = run(script, player, version=version, detect=detect, tmp_path=tmp_path)
+    assert err is None
+    assert res.outcome is Outcome.COMPLETED and res.reason is EndReason.FINISHED and res.version == version
+    assert player.trajectory_rows == n and player.settle_rows == 4 and player.move_rows == 0
+    assert res.states_seen == (IDLE, MW, MR, CW, CA)
+    assert ctl.unexpected == [] and res.missed == 0 and res.malformed == 0 and res.foreign == 0
+    assert res.unanswered_at_start == 0
+    # IDLE is never answered; every other message is, with consecutive client counters reflecting the message
+    assert [r.header[0] for r in ctl.replies] == list(range(len(ctl.replies)))
+    assert all(r.header[1] == r.seq for r in ctl.replies) and all(r.state != IDLE for r in ctl.replies)
+    assert all(r.position is None for r in ctl.replies if r.state in (MW, MR))  # header only
+    assert all(r.position == Q0 for r in ctl.replies if r.state == CW)  # the ipo position held
+    active = sent_positions(ctl)
+    np.testing.assert_array_equal(active[:n], traj)  # the file's rows, in order, bit for bit
+    np.testing.assert_array_equal(active[n:], np.repeat(traj[-1:], len(active) - n, axis=0))  # settle, then the stop
+    assert res.braking_cycles == len(active) - n - 4  # at rest: the stop holds a few cycles, then ends
+    tab = read_log(log_path)
+    assert len(tab.data) == res.cycles == res.figures["log_rows"]
+    phase = tab.column("phase")
+    cmd = np.column_stack([tab.column(f"cmd_q{j}") for j in range(1, 8)])
+    np.testing.assert_array_equal(cmd[phase == Phase.TRAJECTORY], traj)
+    np.testing.assert_array_equal(tab.column("row")[phase == Phase.TRAJECTORY], np.arange(n))
+    assert (phase == Phase.SETTLE).sum() == 4 and (phase == Phase.BRAKE).sum() == res.braking_cycles
+    assert tab.has("ball_theta") and tab.has("gripper") and tab.has("ctl_q1") == (version == "1.15")
+    np.testing.assert_allclose(np.diff(tab.column("t")), 1e-3)
+    assert res.figures["max_ball_theta"] == pytest.approx(0.01) and res.figures["min_tracking"] == 1.0
+
+
+def test_receive_multiplier_calls_every_message_and_sends_every_kth():
+    k, n = 3, 30
+    traj = min_jerk(n)
+    calls = []
+
+    class Counting(TrajectoryPlayer):
+        def command(self, state):
+            calls.append(self.reply_due)
+            return super().command(state)
+
+    player = Counting(traj, LIM, period_s=k * 1e-3, settle_cycles=2)
+    script = preamble(k) + [Cycle(state=CA, receive_multiplier=k)] * ((n + 12) * k)
+    res, ctl, _, err = run(script, player)
+    assert err is None and res.outcome is Outcome.COMPLETED and ctl.unexpected == []
+    active = sent_positions(ctl)
+    np.testing.assert_array_equal(active[:n], traj)
+    # KUKA's counting: a callback for every message, every k-th one sent
+    assert len(calls) >= 3 * (len(active) - res.braking_cycles) - 3
+    assert calls.count(True) == len(active) - res.braking_cycles + 1  # the last call ended the stream
+    assert all(calls[i : i + k].count(True) == 1 for i in range(0, len(calls) - k, k))
+    assert res.period_s == pytest.approx(3e-3)
+
+
+def test_gaps_stale_foreign_and_malformed_are_counted_and_never_answered():
+    n = 40
+    traj = min_jerk(n)
+    player = TrajectoryPlayer(traj, LIM, period_s=1e-3)
+    ca = [Cycle(state=CA)] * 10
+    script = (preamble() + ca + [Cycle(state=CA, seq_jump=2)] + [Cycle(state=CA, repeat_seq=True)]
+              + [Cycle(state=CA, foreign=True), Cycle(raw=b"\x00\x01garbage")] + [Cycle(state=CA)] * (n + 100))  # fmt: skip
+    res, ctl, _, err = run(script, player)
+    assert err is None and res.outcome is Outcome.COMPLETED
+    # the jump skips 2 counters, the foreign sender's message takes one: 3 missed
+    assert res.missed == 3 and res.stale == 1 and res.foreign == 1 and res.malformed == 1
+    assert ctl.unexpected == []
+    np.testing.assert_array_equal(sent_positions(ctl)[:n], traj)  # a gap does not skip rows
+
+
+@pytest.mark.parametrize(
+    "mutate",
+    [
+        lambda m: m.ipoData.jointPosition.value.__delitem__(slice(6, 7)),  # 6 ipo values
+        lambda m: m.ipoData.ClearField("jointPosition"),  # none
+        lambda m: m.ipoData.jointPosition.value.__setitem__(3, 1e6),  # absurd
+        lambda m: m.monitorData.measuredJointPosition.value.__setitem__(0, math.nan),
+        lambda m: m.ClearField("connectionInfo"),  # truncated before its connection info
+    ],
+    ids=["six-ipo", "no-ipo", "ipo-1e6", "nan-measured", "no-connection-info"],
+)
+def test_a_message_that_is_not_self_consistent_is_never_answered(mutate):
+    player = TrajectoryPlayer(min_jerk(20), LIM, period_s=1e-3)
+    bad = Cycle(state=CW, mutate=mutate)
+    script = preamble()[:-1] + [bad] + [Cycle(state=CW)] * 2 + [Cycle(state=CA)] * 100
+    # the controller gives up on the unanswered message well within the client's 3 s silence timeout
+    res, ctl, _, err = run(script, player, tolerate_unanswered=1, reply_timeout=1.0)
+    assert err is None
+    assert res.malformed == 1 and res.outcome is Outcome.COMPLETED
+    bad_index = len(preamble()) - 1
+    assert bad_index in ctl.unanswered
+    assert all(len(r.position) == 7 and max(abs(v) for v in r.position) < 3 for r in ctl.replies if r.position)
+
+
+@pytest.mark.parametrize(
+    "bad, reason",
+    [
+        (dict(safety=2), EndReason.SAFETY_STOP),
+        (dict(drive=1), EndReason.DRIVES_OFF),
+        (dict(quality=0), EndReason.QUALITY_POOR),
+        (dict(state=MR), EndReason.LEFT_COMMANDING),
+        (dict(state=IDLE), EndReason.IDLE),
+        (dict(send_period=2), EndReason.PERIOD_CHANGED),
+    ],
+)
+def test_robot_side_events_end_the_session_at_once(bad, reason):
+    player = TrajectoryPlayer(min_jerk(60), LIM, period_s=1e-3)
+    script = preamble() + [Cycle(state=CA)] * 20 + [Cycle(**{"state": CA, **bad})] + [Cycle(state=CA)] * 5
+    res, ctl, _, err = run(script, player)
+    assert err is None and res.outcome is Outcome.STOPPED and res.reason is reason
+    # the event's message gets no command (an IDLE message expects none: the next one goes unanswered)
+    assert ctl.unanswered == [len(preamble()) + 20 + (reason is EndReason.IDLE)]
+
+
+# -- stops initiated by the client brake within the limits ----------------------------------------------------
+def fast_ramp(n: int, speed: float = 0.73, ramp_s: float = 0.4) -> np.ndarray:
+    """(n, 7) rows from rest at Q0 that reach ``speed`` × the velocity limit on every joint with a smooth
+    acceleration (≤ 0.73 of its limit) and keep that speed (they never end at rest) [rad]."""
+    t = np.arange(n) * 1e-3
+    w = 2 * np.pi / ramp_s
+    s = np.where(t < ramp_s, t**2 / (2 * ramp_s) + (np.cos(w * t) - 1) / (w**2 * ramp_s), ramp_s / 2 + (t - ramp_s))
+    return np.array(Q0) + s[:, None] * speed * LIM.velocity
+
+
+def test_interrupt_mid_motion_is_a_jerk_limited_braking_stop(tmp_path):
+    n = 600
+    traj = fast_ramp(n)
+    assert_within_limits(traj, 1e-3)
+    player = TrajectoryPlayer(traj, LIM, period_s=1e-3)
+    at = len(preamble()) + 400
+
+    def on_cycle(i, app):
+        if i == at:
+            app.interrupt(EndReason.SIGTERM)
+
+    script = preamble() + [Cycle(state=CA)] * (n + 500)
+    res, ctl, log_path, err = run(script, player, tmp_path=tmp_path, on_cycle=on_cycle)
+    assert err is None and res.outcome is Outcome.INTERRUPTED and res.reason is EndReason.SIGTERM
+    q = sent_positions(ctl)
+    assert_within_limits(q, 1e-3, before=np.array([Q0, Q0]))
+    assert res.braking_cycles > 50  # 0.73 of the velocity limit takes time to stop
+    v_end = np.abs(q[-1] - q[-2]) / 1e-3
+    assert np.all(v_end < 1e-9)  # at rest when the session ends
+    jerk = np.abs(np.diff(q, 3, axis=0)) / 1e-9
+    assert np.all(jerk[-res.braking_cycles:] <= LIM.jerk * 1.01)
+    tab = read_log(log_path)
+    assert (tab.column("phase") == Phase.BRAKE).sum() == res.braking_cycles
+
+
+def test_guard_refusal_mid_motion_brakes_instead_of_sending_the_jump():
+    n = 500
+    traj = fast_ramp(n, speed=0.5)
+    traj[350:, 3] += 0.05  # a jump the robot cannot follow
+    player = TrajectoryPlayer(traj, LIM, period_s=1e-3)
+    script = preamble() + [Cycle(state=CA)] * (n + 500)
+    res, ctl, _, err = run(script, player)
+    assert err is None and res.outcome is Outcome.REFUSED and res.reason is EndReason.GUARD
+    assert "A4" in res.detail and "velocity" in res.detail
+    q = sent_positions(ctl)
+    np.testing.assert_array_equal(q[:350], traj[:350])
+    assert_within_limits(q, 1e-3, before=np.array([Q0, Q0]))
+    assert res.braking_cycles > 20
+
+
+def test_oscillating_rows_are_refused_by_the_second_difference():
+    n = 60
+    traj = np.repeat(np.array(Q0)[None], n, axis=0)
+    traj[10:, 0] += 0.95 * LIM.velocity[0] * 1e-3 * (np.arange(n - 10) % 2)  # ±0.95 of the velocity step
+    player = TrajectoryPlayer(traj, LIM, period_s=1e-3)
+    res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * (n + 50), player)
+    assert err is None and res.reason is EndReason.GUARD and "acceleration" in res.detail
+    assert_within_limits(sent_positions(ctl), 1e-3, before=np.array([Q0, Q0]))
+
+
+def test_client_error_and_stop_session_end_cleanly():
+    class Faulty(LBRClient):
+        def __init__(self):
+            self.n = 0
+
+        def command(self, state):
+            self.n += 1
+            if self.n == 5:
+                raise ZeroDivisionError("boom")
+            return super().command(state)
+
+    res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * 30, Faulty())
+    assert err is None and res.outcome is Outcome.FAILED and res.reason is EndReason.CLIENT_ERROR
+    assert "ZeroDivisionError" in res.detail
+
+    class Done(LBRClient):
+        def monitor(self, state):
+            raise StopSession("nothing to do", completed=True)
+
+    res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * 5, Done())
+    assert err is None and res.outcome is Outcome.COMPLETED and res.answered == 0  # ended before any reply
+
+
+def test_far_start_is_refused_before_anything_is_sent():
+    traj = min_jerk(30) + 0.01
+    player = TrajectoryPlayer(traj, LIM, period_s=1e-3, start_tolerance=1e-3)
+    res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * 40, player)
+    assert err is None and res.outcome is Outcome.REFUSED and res.reason is EndReason.CLIENT_REFUSED
+    assert "--move-to-start" in res.detail and ctl.replies == [] and res.answered == 0
+
+
+def test_move_to_start_is_jerk_limited_then_streams_the_file():
+    traj = min_jerk(30) + np.array([0, 0, 0, 0.02, 0, 0, 0])
+    player = TrajectoryPlayer(traj, LIM, period_s=1e-3, move_to_start=True)
+    res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * 2000, player)
+    assert err is None and res.outcome is Outcome.COMPLETED and player.move_rows > 10
+    q = sent_positions(ctl)
+    assert_within_limits(q, 1e-3, before=np.array([Q0, Q0]))
+    np.testing.assert_array_equal(q[player.move_rows : player.move_rows + 30], traj)
+    v = np.abs(np.diff(q[: player.move_rows + 1], axis=0)) / 1e-3
+    assert np.all(v <= 0.2 * LIM.velocity * 1.001)  # the move runs at ≤ 20 % of the limits
+
+
+def test_a_small_start_offset_is_closed_by_a_move_never_a_jump():
+    traj = min_jerk(30) + 5e-4  # within --start-tolerance 1e-3, but 0.5 rad/s as one step
+    player = TrajectoryPlayer(traj, LIM, period_s=1e-3)
+    res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * 400, player)
+    assert err is None and res.outcome is Outcome.COMPLETED and player.move_rows > 0
+    assert_within_limits(sent_positions(ctl), 1e-3, before=np.array([Q0, Q0]))
+
+
+# -- connecting ------------------------------------------------------------------------------------------------
+def test_no_message_times_out_naming_the_cause():
+    app = ClientApplication(LBRClient(), "127.0.0.1", 0, bind_host="127.0.0.1", first_message_timeout_s=0.3)
+    with app:
+        t0 = time.monotonic()
+        with pytest.raises(FriTimeout, match="no FRI monitoring message"):
+            app.run()
+        assert time.monotonic() - t0 < 1.0
+
+
+def test_wait_is_honoured_while_garbage_keeps_arriving():
+    import socket
+    import threading
+
+    app = ClientApplication(LBRClient(), "127.0.0.1", 0, bind_host="127.0.0.1", first_message_timeout_s=0.5)
+    app.connect()
+    stop = threading.Event()
+
+    def spam():
+        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        while not stop.is_set():
+            s.sendto(b"\x07not fri at all", ("127.0.0.1", app.port))
+            time.sleep(0.0005)
+        s.close()
+
+    th = threading.Thread(target=spam, daemon=True)
+    th.start()
+    t0 = time.monotonic()
+    try:
+        with pytest.raises(FriTimeout, match="did not decode"):
+            app.run()
+    finally:
+        stop.set()
+        th.join()
+        app.close()
+    assert time.monotonic() - t0 < 0.5 + 0.5
+
+
+@pytest.mark.parametrize("version", ["1.15", "2.7"])
+def test_version_is_detected_from_the_first_datagram(version):
+    res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * 5, LBRClient(), version=version, detect=True, duration=0.05)
+    assert err is None and res.version == version and res.malformed == 0
+
+
+def test_a_log_that_cannot_be_written_brakes_and_ends(tmp_path):
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full on this system")
+    n = 500
+    traj = fast_ramp(n, speed=0.5)
+    player = TrajectoryPlayer(traj, LIM, period_s=1e-3)
+    log = ExecutionLog("/dev/full")
+
+    res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * (n + 300), player, observers=[LogObserver(log)])
+    assert err is None and res.outcome is Outcome.FAILED and res.reason is EndReason.OBSERVER_FAILED
+    assert "log" in res.detail

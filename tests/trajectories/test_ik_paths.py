@@ -1,0 +1,36 @@
+import numpy as np
+
+from trajectories.ik_paths import build_suite, cartesian_path, issue_circle, verify_joint_path
+
+
+def test_suite_is_wide_and_fk_built_paths_are_feasible(robot, limits):
+    suite = build_suite(robot, limits)
+    assert len(suite) >= 60
+    assert len({p.name for p in suite}) == len(suite)
+    assert {p.kind for p in suite} >= {"joint", "singular", "limit", "line", "circle", "figure8"}
+    assert {round(p.dt, 4) for p in suite} == {0.001, 0.005}
+    for p in suite:
+        assert np.allclose(np.linalg.det(p.rotation), 1.0)
+        if p.witness is not None:  # reachable by construction: the joint path is inside every limit
+            check = verify_joint_path(robot, p, p.witness, limits)
+            assert check.ok(acceleration=True), p.name
+    # the singular paths really reach their singularity, the limit paths really brush the limit
+    wrist = next(p for p in suite if p.name.startswith("singular-wrist-0-"))
+    assert np.abs(wrist.witness[:, 5]).min() < 1e-2
+    brush = [p for p in suite if p.kind == "limit"]
+    assert all((np.abs(p.witness) / limits.position).max() > 0.98 for p in brush)
+
+
+def test_cartesian_shapes_are_what_they_say(robot):
+    c = issue_circle(0.005)
+    assert len(c.t) == 801 and c.t[-1] == 4.0
+    assert np.allclose(c.position[:, 0], 0.55)
+    assert np.allclose(c.position[:, 1], 0.12 * np.sin(2 * np.pi * c.t / 4.0))
+    assert np.allclose(c.position[:, 2], 0.45 + 0.12 * (np.cos(2 * np.pi * c.t / 4.0) - 1))
+    z = c.rotation[:, :, 2]  # flange z axis points down, the yaw oscillates by ±30°
+    assert np.allclose(z, [0, 0, -1])
+    yaw = np.degrees(np.arctan2(c.rotation[:, 1, 0], c.rotation[:, 0, 0]))
+    assert abs(yaw.max() - 30) < 0.1 and abs(yaw.min() + 30) < 0.1
+    tilted = cartesian_path("figure8", 0.005, tilt_deg=45.0)
+    tilt = np.degrees(np.arccos(-tilted.rotation[:, 2, 2]))
+    assert np.allclose(tilt, 45.0)

@@ -1,0 +1,249 @@
+"""A reproducible suite of TCP paths for testing and benchmarking the path IK.
+
+Kinds (each at 1 ms and 5 ms sampling):
+
+- ``joint``: FK of smooth random joint paths (sums of sines) whose positions, speeds and accelerations stay
+  inside the limits — reachable by construction, the joint path is the witness;
+- ``singular``: the same through or near the wrist (A6 = 0), elbow (A4 = 0) and shoulder (A2 = 0) singularities;
+- ``limit``: the same with one joint brushing its position limit;
+- ``line``, ``circle``, ``figure8``: Cartesian shapes with the flange down, tilted up to 45° and yawing up to
+  ±90°, with smooth (rest-to-rest) or periodic timing. Their reachability is shown by any solver returning a
+  joint path that is accurate and inside the limits (see ``verify_joint_path``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .chain import rotation_log
+from .limits import JointLimits
+from .robot import Robot
+
+DOWN = np.diag([1.0, -1.0, -1.0])  # flange z along base −z
+
+
+@dataclass(frozen=True)
+class TaskPath:
+    """TCP poses over time, with the joint path they were made from when built by FK."""
+
+    name: str
+    kind: str
+    t: np.ndarray  # (n,) [s]
+    position: np.ndarray  # (n, 3) [m]
+    rotation: np.ndarray  # (n, 3, 3)
+    witness: np.ndarray | None = None  # (n, 7) [rad], a feasible joint path for these poses
+
+    @property
+    def dt(self) -> float:
+        return float(self.t[1] - self.t[0])
+
+
+@dataclass(frozen=True)
+class PathCheck:
+    """How well a joint path realises a task path: TCP errors and peak joint rates relative to the limits."""
+
+    position_error: float  # [m], max over samples
+    rotation_error: float  # [rad]
+    position_ratio: float  # max |q| / limit
+    velocity_ratio: float  # max |q̇| / limit (backward differences)
+    acceleration_ratio: float  # max |q̈| / limit (second differences)
+
+    def ok(self, position_tolerance: float = 1e-6, rotation_tolerance: float = 1e-5, acceleration: bool = False):
+        within = self.position_ratio <= 1.0 and self.velocity_ratio <= 1.0 + 1e-6
+        if acceleration:
+            within = within and self.acceleration_ratio <= 1.0 + 1e-6
+        return bool(self.position_error <= position_tolerance and self.rotation_error <= rotation_tolerance and within)
+
+
+def verify_joint_path(robot: Robot, path: TaskPath, q: np.ndarray, limits: JointLimits) -> PathCheck:
+    """FK of q (n, 7) [rad] against the path, and its peak joint position, speed and acceleration ratios."""
+    pos, rot = robot.fk_path(q)
+    perr = float(np.linalg.norm(pos - path.position, axis=1).max())
+    rerr = float(np.linalg.norm(rotation_log(path.rotation @ rot.transpose(0, 2, 1)), axis=1).max())
+    dt = path.dt
+    vel = np.abs(np.diff(q, axis=0)) / dt
+    acc = np.abs(np.diff(q, 2, axis=0)) / dt**2
+    return PathCheck(
+        position_error=perr,
+        rotation_error=rerr,
+        position_ratio=float((np.abs(q) / limits.position).max()),
+        velocity_ratio=float((vel / limits.velocity).max()) if len(vel) else 0.0,
+        acceleration_ratio=float((acc / limits.acceleration).max()) if len(acc) else 0.0,
+    )
+
+
+def _smooth_ramp(t: np.ndarray, duration: float) -> np.ndarray:
+    """0 → 1 quintic rest-to-rest ramp over [0, duration]."""
+    s = np.clip(t / duration, 0.0, 1.0)
+    return s**3 * (10 - 15 * s + 6 * s**2)
+
+
+def random_joint_path(
+    rng: np.random.Generator,
+    limits: JointLimits,
+    dt: float,
+    duration: float,
+    center: np.ndarray,
+    amplitude: np.ndarray,
+    speed: float = 0.8,
+) -> np.ndarray:
+    """Smooth joint path (n, 7) [rad] around ``center``: sums of sines starting at rest, scaled so that peak
+    speed and acceleration are at most ``speed`` × the limits and positions stay 1° inside the limits."""
+    t = np.arange(int(round(duration / dt)) + 1) * dt
+    q = np.zeros((len(t), 7))
+    for j in range(7):
+        for _ in range(3):
+            f = rng.uniform(0.1, 0.6)  # [Hz]
+            q[:, j] += rng.normal() * (1 - np.cos(2 * np.pi * f * t)) + rng.normal() * 0.3 * np.sin(2 * np.pi * f * t) ** 2
+    q -= q[0]
+    peak = np.abs(q).max(axis=0) + 1e-12
+    q *= amplitude / peak
+    vel = np.abs(np.gradient(q, dt, axis=0)).max(axis=0) / limits.velocity
+    acc = np.abs(np.gradient(np.gradient(q, dt, axis=0), dt, axis=0)).max(axis=0) / limits.acceleration
+    scale = min(1.0, speed / max(vel.max(), 1e-12), speed / max(acc.max(), 1e-12))
+    q = q * scale
+    bound = limits.position - math.radians(1.0)
+    room_up = np.maximum(bound - center, 0.0) / np.maximum(q.max(axis=0), 1e-12)
+    room_down = np.maximum(bound + center, 0.0) / np.maximum(-q.min(axis=0), 1e-12)
+    return center + q * np.minimum(1.0, np.minimum(room_up, room_down))
+
+
+def _rot_z(a: np.ndarray) -> np.ndarray:
+    return Rotation.from_rotvec(np.outer(a, [0.0, 0.0, 1.0])).as_matrix()
+
+
+def _cartesian(
+    name: str,
+    kind: str,
+    t: np.ndarray,
+    position: np.ndarray,
+    tilt: float,
+    tilt_axis: float,
+    yaw: np.ndarray,
+) -> TaskPath:
+    """Flange-down orientation tilted by ``tilt`` [rad] about a horizontal axis at ``tilt_axis`` [rad] from x,
+    then turned by ``yaw`` (n,) [rad] about the vertical."""
+    axis = np.array([math.cos(tilt_axis), math.sin(tilt_axis), 0.0])
+    tilted = Rotation.from_rotvec(axis * tilt).as_matrix() @ DOWN
+    rot = np.einsum("nij,jk->nik", _rot_z(yaw), tilted)
+    return TaskPath(name=name, kind=kind, t=t, position=position, rotation=rot)
+
+
+def cartesian_path(
+    shape: str,
+    dt: float,
+    center: tuple[float, float, float] = (0.55, 0.0, 0.45),
+    size: float = 0.12,  # [m]
+    duration: float = 4.0,  # [s]
+    tilt_deg: float = 0.0,
+    tilt_axis_deg: float = 0.0,
+    yaw_deg: float = 0.0,  # amplitude of the yaw oscillation [deg]
+    yaw_offset_deg: float = 0.0,
+    plane: str = "yz",
+    timing: str = "periodic",
+    name: str | None = None,
+) -> TaskPath:
+    """A line, circle or figure-eight of size ``size`` [m] about ``center`` [m] in a base plane."""
+    t = np.arange(int(round(duration / dt)) + 1) * dt
+    phase = 2 * np.pi * (_smooth_ramp(t, duration) if timing == "smooth" else t / duration)
+    if shape == "line":
+        u, v = size * np.sin(phase / 2) ** 2 * 2 - size, np.zeros_like(t)
+        u = u + size  # start at the centre, go out by 2·size and back
+    elif shape == "circle":
+        u, v = size * np.sin(phase), size * (np.cos(phase) - 1.0)
+    elif shape == "figure8":
+        u, v = size * np.sin(phase), size * 0.5 * np.sin(2 * phase)
+    else:
+        raise ValueError(f"unknown shape {shape!r}")
+    axes = {"yz": (1, 2), "xy": (0, 1), "xz": (0, 2)}[plane]
+    pos = np.tile(np.asarray(center, dtype=float), (len(t), 1))
+    pos[:, axes[0]] += u
+    pos[:, axes[1]] += v
+    yaw = np.radians(yaw_offset_deg + yaw_deg * np.sin(phase))
+    label = name or f"{shape}-{plane}-tilt{tilt_deg:g}-yaw{yaw_deg:g}-{timing}-{dt * 1e3:g}ms"
+    return _cartesian(label, shape, t, pos, math.radians(tilt_deg), math.radians(tilt_axis_deg), yaw)
+
+
+def issue_circle(dt: float) -> TaskPath:
+    """Flange-down circle x 0.55, y 0.12 sin, z 0.45 + 0.12 (cos − 1) [m], yaw 30° sin, 4 s."""
+    return cartesian_path("circle", dt, yaw_deg=30.0, name=f"issue-circle-{dt * 1e3:g}ms")
+
+
+# Joint-space centres: the thesis start and other comfortable configurations [rad].
+CENTRES = (
+    (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0),
+    (0.3, 0.6, 0.2, -1.2, 0.3, 0.9, -0.4),
+    (-0.8, 0.4, -0.5, -1.6, -0.6, 1.0, 0.8),
+    (1.2, -0.5, 0.7, 1.4, -0.4, -0.8, 1.5),
+    (0.0, 0.9, 0.0, -0.9, 0.0, 0.9, 0.0),
+    (-1.5, 0.3, 1.0, -1.0, 1.2, -1.1, -1.0),
+)
+
+
+def _fk_path(robot: Robot, name: str, kind: str, dt: float, q: np.ndarray) -> TaskPath:
+    t = np.arange(len(q)) * dt
+    pos, rot = robot.fk_path(q)
+    return TaskPath(name=name, kind=kind, t=t, position=pos, rotation=rot, witness=q)
+
+
+def build_suite(robot: Robot, limits: JointLimits, seed: int = 0, quick: bool = False) -> list[TaskPath]:
+    """The path suite, per sample period (1 ms and 5 ms): 25 FK-built joint paths (12 random around 6 centres,
+    6 through or near singularities, 7 brushing a position limit) and 13 Cartesian shapes (with the issue's
+    circle) → 76 paths; ``quick`` keeps every fourth (and the issue circle)."""
+    rng = np.random.default_rng(seed)
+    paths: list[TaskPath] = []
+    duration = 3.0
+    for dt in (1e-3, 5e-3):
+        # random joint paths around each centre, moderate and fast
+        for c, centre in enumerate(CENTRES):
+            for speed, amp in ((0.5, 0.6), (0.9, 1.2)):
+                amplitude = np.full(7, amp) * rng.uniform(0.5, 1.0, 7)
+                q = random_joint_path(rng, limits, dt, duration, np.array(centre), amplitude, speed)
+                paths.append(_fk_path(robot, f"joint-c{c}-v{speed:g}-{dt * 1e3:g}ms", "joint", dt, q))
+        # through or near singularities: the named joint crosses (or approaches) 0 while the others move
+        for joint, offset in ((5, 0.0), (5, 0.02), (3, 0.03), (3, 0.08), (1, 0.0), (1, 0.05)):
+            centre = np.array(CENTRES[rng.integers(len(CENTRES))])
+            amplitude = rng.uniform(0.2, 0.6, 7)
+            q = random_joint_path(rng, limits, dt, duration, centre, amplitude, 0.6)
+            t = np.arange(len(q)) * dt
+            wave = np.cos(np.pi * t / duration)
+            # through 0 (±0.5 rad), or down to ``offset`` at mid-path and back
+            q[:, joint] = 0.5 * wave if offset == 0.0 else offset + 0.5 * wave**2
+            kind_name = {5: "wrist", 3: "elbow", 1: "shoulder"}[joint]
+            paths.append(_fk_path(robot, f"singular-{kind_name}-{offset:g}-{dt * 1e3:g}ms", "singular", dt, q))
+        # brushing a position limit (0.5°–2° inside), one joint at a time
+        for joint in range(7):
+            centre = np.array(CENTRES[rng.integers(len(CENTRES))])
+            amplitude = rng.uniform(0.2, 0.5, 7)
+            q = random_joint_path(rng, limits, dt, duration, centre, amplitude, 0.6)
+            t = np.arange(len(q)) * dt
+            sign = rng.choice([-1.0, 1.0])
+            inside = math.radians(rng.uniform(0.5, 2.0))
+            peak = sign * (limits.position[joint] - inside)
+            q[:, joint] = peak - sign * 0.6 * np.cos(np.pi * t / duration) ** 2  # 0.6 rad inside → limit → back
+            paths.append(_fk_path(robot, f"limit-A{joint + 1}-{dt * 1e3:g}ms", "limit", dt, q))
+        # Cartesian shapes
+        shapes = [
+            ("line", dict(center=(0.4, -0.15, 0.4), size=0.15, plane="xy", timing="smooth", duration=6.0)),
+            ("line", dict(center=(0.45, 0.0, 0.3), size=0.15, plane="xz", timing="smooth", tilt_deg=30)),
+            ("line", dict(center=(0.4, -0.2, 0.5), size=0.2, plane="yz", timing="smooth", yaw_deg=90, duration=8.0)),
+            ("line", dict(center=(0.35, 0.0, 0.25), size=0.1, plane="xy", timing="smooth", tilt_deg=45, tilt_axis_deg=90)),
+            ("circle", dict(yaw_deg=30.0)),
+            ("circle", dict(center=(0.5, 0.1, 0.35), size=0.1, plane="xy", tilt_deg=20)),
+            ("circle", dict(center=(0.55, 0.0, 0.5), size=0.15, plane="yz", tilt_deg=45, tilt_axis_deg=-90)),
+            ("circle", dict(center=(0.0, 0.55, 0.4), size=0.12, plane="xz", yaw_deg=90, yaw_offset_deg=90)),
+            ("circle", dict(center=(0.5, -0.2, 0.4), size=0.1, plane="xy", tilt_deg=45, yaw_deg=60, timing="smooth")),
+            ("figure8", dict(center=(0.55, 0.0, 0.4), size=0.15, plane="yz")),
+            ("figure8", dict(center=(0.5, 0.0, 0.3), size=0.12, plane="xy", tilt_deg=30, yaw_deg=45)),
+            ("figure8", dict(center=(-0.3, 0.45, 0.45), size=0.12, plane="xz", tilt_deg=45, tilt_axis_deg=45, yaw_deg=90, yaw_offset_deg=120)),
+        ]
+        for shape, kw in shapes:
+            paths.append(cartesian_path(shape, dt, **{"duration": 4.0, **kw}))
+        paths.append(issue_circle(dt))
+    if quick:
+        paths = [p for i, p in enumerate(paths) if i % 4 == 0 or p.name.startswith("issue-circle")]
+    return paths

@@ -11,7 +11,11 @@ from .limits import JointLimits
 from .trajectory import JointTrajectory
 
 QUANTITIES = ("position", "velocity", "acceleration", "jerk")
-UNITS = {"position": "rad", "velocity": "rad/s", "acceleration": "rad/s^2", "jerk": "rad/s^3", "cartesian speed": "m/s"}
+STEP_QUANTITIES = ("step velocity", "step acceleration", "step jerk")  # forward differences, robot at rest around
+JERKS = ("jerk", "step jerk")  # fail only when jerk is enforced
+UNITS = {"position": "rad", "velocity": "rad/s", "acceleration": "rad/s^2", "jerk": "rad/s^3", "cartesian speed": "m/s",
+         "step velocity": "rad/s", "step acceleration": "rad/s^2", "step jerk": "rad/s^3", "rest": "rad/s"}
+REL_TOL = 1e-9  # a value exactly at its limit passes (the file's decimals round either way)
 
 
 @dataclass(frozen=True)
@@ -26,10 +30,18 @@ class Violation:
     peak: float  # largest |value| over the whole trajectory
     t_peak: float  # [s]
     samples: int  # number of samples over the limit
+    note: str = ""  # for "rest": "start" or "end"
 
     def describe(self) -> str:
         unit = UNITS[self.quantity]
         who = f"A{self.joint}" if self.joint else "flange"
+        if self.quantity == "rest":
+            return (
+                f"{who} is not at rest at the {self.note}: it moves at {self.value:+.4g} {unit} there (a "
+                f"file must start and end at rest: |step velocity| ≤ acceleration limit × step = {self.limit:.4g} "
+                f"{unit}); the controller would have to jump to that speed or stop dead — plans from `lbr plan` "
+                f"and `lbr retime` start and end at rest, or add rows that accelerate from and brake to rest"
+            )
         return (
             f"{who} {self.quantity} {self.value:+.4g} {unit} at t = {self.t:.3f} s exceeds the limit "
             f"{self.limit:.4g} {unit} (peak {self.peak:.4g} {unit} at t = {self.t_peak:.3f} s, {self.samples} samples)"
@@ -52,7 +64,7 @@ class CheckReport:
     @property
     def failing(self) -> tuple[Violation, ...]:
         """Violations that fail the check (jerk only when enforced)."""
-        return tuple(v for v in self.violations if v.quantity != "jerk" or self.jerk_enforced)
+        return tuple(v for v in self.violations if v.quantity not in JERKS or self.jerk_enforced)
 
     @property
     def ok(self) -> bool:
@@ -79,7 +91,7 @@ class CheckReport:
                     "peak": v.peak,
                     "t_peak_s": v.t_peak,
                     "samples": v.samples,
-                    "fails": v.quantity != "jerk" or self.jerk_enforced,
+                    "fails": v.quantity not in JERKS or self.jerk_enforced,
                 }
                 for v in self.violations
             ],
@@ -92,7 +104,7 @@ class CheckReport:
 
 def _violations(quantity: str, t: np.ndarray, x: np.ndarray, limit: np.ndarray, joint_base: int = 1) -> list[Violation]:
     out = []
-    over = np.abs(x) > limit[None, :]
+    over = np.abs(x) > limit[None, :] * (1.0 + REL_TOL)
     for j in np.flatnonzero(over.any(axis=0)):
         idx = np.flatnonzero(over[:, j])
         k = int(idx[0])
@@ -132,9 +144,16 @@ def check_trajectory(
     vel, acc, jrk = derivatives(traj.q, h, 3)
     values = {"position": traj.q, "velocity": vel, "acceleration": acc, "jerk": jrk}
     applied = {"position": lim.position, "velocity": lim.velocity, "acceleration": lim.acceleration, "jerk": lim.jerk}
-    violations: list[Violation] = []
+    steps = step_differences(traj.q, h)
+    for qname, x in zip(STEP_QUANTITIES, steps):
+        values[qname] = x
+    applied.update({"step velocity": lim.velocity, "step acceleration": lim.acceleration, "step jerk": lim.jerk})
+    violations: list[Violation] = rest_violations(traj, lim)
     for qname in QUANTITIES:
         violations += _violations(qname, traj.t, values[qname], applied[qname])
+    t_steps = _step_times(traj.t)
+    for qname, x in zip(STEP_QUANTITIES, steps):
+        violations += _violations(qname, t_steps[: len(x)], x, applied[qname])
     peaks = {k: np.abs(v).max(axis=0) for k, v in values.items()}
     cart_peak = cart_limit = None
     if cartesian_positions is not None:
@@ -154,15 +173,44 @@ def check_trajectory(
     )
 
 
-def step_ratios(traj: JointTrajectory, limits: JointLimits) -> dict[str, float]:
-    """Peak |forward difference| / limit over all joints: velocity (q[k+1] − q[k])/h and acceleration
-    (q[k+1] − 2q[k] + q[k−1])/h², what the controller executes step by step [ratio, 1 = at the limit]."""
-    if len(traj) < 3:
-        return {"velocity": 0.0, "acceleration": 0.0}
+def step_differences(q: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Forward differences as the controller executes the rows one step [s] ``h`` apart, with the robot at rest
+    before the first row and after the last: velocity (n+1, 7) [rad/s], acceleration (n+2, 7) [rad/s²], jerk
+    (n+3, 7) [rad/s³]."""
+    padded = np.vstack([q[:1], q[:1], q[:1], q, q[-1:], q[-1:], q[-1:]])
+    return (np.diff(padded[2:-2], axis=0) / h, np.diff(padded[1:-1], 2, axis=0) / (h * h),
+            np.diff(padded, 3, axis=0) / (h * h * h))  # fmt: skip
+
+
+def _step_times(t: np.ndarray) -> np.ndarray:
+    """Times [s] to name the step differences by: the row where each step series entry ends (clipped to the file),
+    padded for the longest (jerk) series."""
+    n = len(t)
+    return t[np.clip(np.arange(n + 3), 0, n - 1)]
+
+
+def rest_violations(traj: JointTrajectory, limits: JointLimits) -> list[Violation]:
+    """The file must start and end at rest: the first and last step's speed [rad/s] at most what the acceleration
+    limit reaches from rest in one step (a_max · h)."""
+    if len(traj) < 2:
+        return []
     h = traj.dt
-    vel = np.abs(np.diff(traj.q, axis=0)) / h
-    acc = np.abs(np.diff(traj.q, 2, axis=0)) / (h * h)
+    tol = limits.acceleration * h * (1.0 + REL_TOL)
+    out = []
+    for where, v, t in (("start", (traj.q[1] - traj.q[0]) / h, traj.t[0]), ("end", (traj.q[-1] - traj.q[-2]) / h, traj.t[-1])):
+        for j in np.flatnonzero(np.abs(v) > tol):
+            out.append(Violation(int(j) + 1, "rest", float(t), float(v[j]), float(limits.acceleration[j] * h),
+                                 float(abs(v[j])), float(t), 1, note=where))  # fmt: skip
+    return out
+
+
+def step_ratios(traj: JointTrajectory, limits: JointLimits) -> dict[str, float]:
+    """Peak |forward difference| / limit over all joints, the robot at rest before and after the file (see
+    :func:`step_differences`): what the controller executes step by step [ratio, 1 = at the limit]."""
+    if len(traj) < 2:
+        return {"velocity": 0.0, "acceleration": 0.0}
+    vel, acc, _ = step_differences(traj.q, traj.dt)
     return {
-        "velocity": float((vel / limits.velocity).max()),
-        "acceleration": float((acc / limits.acceleration).max()),
+        "velocity": float((np.abs(vel) / limits.velocity).max()),
+        "acceleration": float((np.abs(acc) / limits.acceleration).max()),
     }

@@ -23,16 +23,20 @@ def print_report(rep, report, name: str) -> None:
     """Per-joint table of peak/limit ratios [%] and the violations."""
     from rich.table import Table
 
-    table = Table(title=f"{name}: peak / limit [%] (limits × {1 - report.margin:.2f})")
+    from trajectories.check import JERKS
+
+    table = Table(title=f"{name}: peak / limit [%] (limits × {1 - report.margin:.2f}); central differences (thesis) "
+                        "and per step (forward, from and to rest: what the controller executes)")
     table.add_column("joint")
-    for qname in ("position", "velocity", "acceleration", "jerk"):
-        table.add_column(qname, justify="right")
+    columns = ("position", "velocity", "acceleration", "jerk", "step velocity", "step acceleration", "step jerk")
+    for qname in columns:
+        table.add_column(qname.replace("step ", "step\n"), justify="right")
     ratios = report.ratios()
     for j in range(7):
         cells = []
-        for qname in ("position", "velocity", "acceleration", "jerk"):
+        for qname in columns:
             r = ratios[qname][j] * 100
-            style = "red" if r > 100 and (qname != "jerk" or report.jerk_enforced) else ("yellow" if r > 100 else "")
+            style = "red" if r > 100 and (qname not in JERKS or report.jerk_enforced) else ("yellow" if r > 100 else "")
             cells.append(f"[{style}]{r:.1f}[/{style}]" if style else f"{r:.1f}")
         table.add_row(f"A{j + 1}", *cells)
     rep.print(table)
@@ -42,7 +46,7 @@ def print_report(rep, report, name: str) -> None:
             f"(limit {report.cartesian_speed_limit * 1e3:.0f} mm/s)"
         )
     for v in report.violations:
-        fails = v.quantity != "jerk" or report.jerk_enforced
+        fails = v.quantity not in JERKS or report.jerk_enforced
         tag = "[red]violation[/red]" if fails else "[yellow]note (jerk not enforced)[/yellow]"
         rep.print(f"{tag}: {v.describe()}")
     rep.print("[green]OK[/green]: within limits" if report.ok else f"[red]FAILED[/red]: {len(report.failing)} violations")
@@ -62,8 +66,10 @@ def check(
 ) -> None:
     """Check a joint trajectory against the limits; exit 1 on any violation.
 
-    Derivatives by central differences (thesis eq. 5.7) applied repeatedly. Jerk fails only with --jerk:
-    in position mode the controller's interpolator smooths jerk.
+    Derivatives by central differences (thesis eq. 5.7) applied repeatedly, and per step as the controller executes
+    the rows (forward differences, the robot at rest before the first row and after the last). The file must start
+    and end at rest. Values exactly at a limit pass (relative tolerance 1e-9). Jerk fails only with --jerk: in
+    position mode the controller's interpolator smooths jerk.
     """
     from trajectories.csvio import read_joint_csv
 

@@ -15,10 +15,12 @@ def sine_traj(amplitude, freq, h=0.005, duration=2.0, q0=None):
 
 
 def test_slow_motion_passes(limits):
-    rep = check_trajectory(sine_traj(0.1, 0.5), limits)
+    t = np.arange(0, 2.0 + 0.0025, 0.005)
+    q = 0.05 * (1 - np.cos(np.pi * t))[:, None] * np.ones(7)  # one period: starts and ends at rest
+    rep = check_trajectory(JointTrajectory(t=t, q=q), limits)
     assert rep.ok and not rep.violations
     # velocity peak ≈ A·ω
-    assert rep.peaks["velocity"][0] == pytest.approx(0.1 * 2 * np.pi * 0.5, rel=1e-3)
+    assert rep.peaks["velocity"][0] == pytest.approx(0.05 * np.pi, rel=1e-3)
 
 
 def test_velocity_violation_names_joint_time_value_limit(limits):
@@ -81,3 +83,52 @@ def test_limits_override_file(tmp_path):
     p.write_text("speed = [1, 1, 1, 1, 1, 1, 1]\n")
     with pytest.raises(InputError, match="unknown limit table"):
         load_limits(p)
+
+
+def _rest_to_rest(q_peak, n=400, h=0.005):
+    """Rows moving all joints by ``q_peak`` [rad] on a 1 − cos velocity profile: at rest at both ends."""
+    t = np.arange(n) * h
+    s = (t / t[-1]) - np.sin(2 * np.pi * t / t[-1]) / (2 * np.pi)
+    return JointTrajectory(t=t, q=np.outer(s, q_peak))
+
+
+def test_cycle_to_cycle_oscillation_fails_by_step_acceleration(limits):
+    """±0.95 of the velocity step every cycle: central differences cancel it, the controller would not."""
+    h = 0.005
+    traj = _rest_to_rest(np.full(7, 0.2))
+    q = traj.q.copy()
+    q[100:300:2, 3] += 0.95 * limits.velocity[3] * h
+    rep = check_trajectory(JointTrajectory(t=traj.t, q=q), limits)
+    step = [v for v in rep.failing if v.quantity == "step acceleration" and v.joint == 4]
+    assert step and step[0].peak > 50 * limits.acceleration[3]
+    assert rep.ratios()["step velocity"][3] > 0.9
+
+
+def test_exactly_at_the_limit_passes_a_hair_above_fails(limits):
+    """A step of exactly the velocity limit passes (relative tolerance, not rounding); 1 % more fails."""
+    h = 0.005
+    n_ramp = 400
+    # accelerate at 0.5 of the limit, cruise at the velocity limit, brake: steps built exactly
+    v_max, a = limits.velocity[0], 0.5 * limits.acceleration[0]
+    v = np.concatenate([np.arange(1, n_ramp) * a * h, np.full(50, v_max), np.arange(n_ramp - 1, 0, -1) * a * h])
+    v = np.minimum(v, v_max)
+    for factor, ok in ((1.0, True), (1.01, False)):
+        steps = np.where(v == v_max, v_max * factor, v)
+        q = np.zeros((len(steps) + 1, 7))
+        q[1:, 0] = np.cumsum(steps) * h
+        rep = check_trajectory(JointTrajectory(t=np.arange(len(q)) * h, q=q), limits)
+        assert rep.ratios()["step velocity"][0] == pytest.approx(factor, rel=1e-9)
+        over = [v for v in rep.failing if v.quantity in ("velocity", "step velocity")]
+        assert (len(over) == 0) is ok
+
+
+def test_a_file_that_ends_moving_fails_saying_it_is_not_at_rest(limits):
+    traj = _rest_to_rest(np.full(7, 0.2))
+    cut = JointTrajectory(t=traj.t[:250], q=traj.q[:250])  # stops mid-motion
+    rep = check_trajectory(cut, limits)
+    rest = [v for v in rep.failing if v.quantity == "rest"]
+    assert {v.note for v in rest} == {"end"} and {v.joint for v in rest} == set(range(1, 8))
+    assert "not at rest at the end" in rest[0].describe() and "lbr retime" in rest[0].describe()
+    assert check_trajectory(traj, limits).ok
+    late = JointTrajectory(t=traj.t[150:] - traj.t[150], q=traj.q[150:])  # starts mid-motion
+    assert {v.note for v in check_trajectory(late, limits).failing if v.quantity == "rest"} == {"start"}

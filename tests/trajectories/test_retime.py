@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from trajectories.check import check_trajectory
-from trajectories.retime import retime
+from trajectories.retime import retime, retime_within
 from trajectories.trajectory import JointTrajectory
 
 
@@ -12,7 +12,7 @@ def test_retime_makes_a_too_fast_path_feasible_and_keeps_the_path(limits, q_star
     q = q_start + np.outer(s, [1.5, 0.5, 1, 1, 1, 1, 2])
     fast = JointTrajectory.from_samples(q, h)  # 1 s: far beyond the velocity limits
     assert not check_trajectory(fast, limits).ok
-    res = retime(fast, limits, h)
+    res, _ = retime_within(fast, limits, h)  # toppra, then the samples verified step by step
     out = res.trajectory
     assert check_trajectory(out, limits).ok
     assert out.dt == pytest.approx(h)
@@ -22,7 +22,7 @@ def test_retime_makes_a_too_fast_path_feasible_and_keeps_the_path(limits, q_star
     offsets = out.q - q[0]
     residual = offsets - np.outer(offsets @ direction, direction)
     assert np.abs(residual).max() < 1e-6
-    # time-optimal within limits: some joint runs at ≥ 95 % of a limit
+    # near time-optimal within limits: some joint runs at ≥ 90 % of a limit (the samples are verified step by step)
     ratios = check_trajectory(out, limits).ratios()
-    assert max(ratios["velocity"].max(), ratios["acceleration"].max()) > 0.95
+    assert max(ratios["velocity"].max(), ratios["acceleration"].max()) > 0.9
     assert res.duration_out > res.duration_in

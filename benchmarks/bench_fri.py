@@ -265,9 +265,54 @@ def _processing_cost(n: int = 20000) -> list[tuple[str, float, str]]:
     ]  # fmt: skip
 
 
+def _echo(port: int) -> None:
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.bind(("127.0.0.1", port))
+    s.settimeout(2.0)
+    try:
+        while True:
+            data, addr = s.recvfrom(2048)
+            s.sendto(data, addr)
+    except OSError:
+        pass
+
+
+def _machine_floor(n: int = 3000) -> list[tuple[str, float, str]]:
+    """What this machine allows any Python client: round trip of a 400-byte datagram to an echoing process, one per
+    millisecond (the controller side of the figures above, without any FRI work)."""
+    import multiprocessing
+
+    port = _free_port()
+    echo = multiprocessing.get_context("spawn").Process(target=_echo, args=(port,), daemon=True)
+    echo.start()
+    time.sleep(1.0)
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.settimeout(1.0)
+    lat = []
+    deadline = time.perf_counter()
+    for _ in range(n):
+        deadline += 1e-3
+        while time.perf_counter() < deadline:
+            pass
+        t0 = time.perf_counter()
+        s.sendto(b"x" * 400, ("127.0.0.1", port))
+        try:
+            s.recvfrom(2048)
+        except OSError:
+            continue
+        lat.append(time.perf_counter() - t0)
+    s.close()
+    echo.join(5.0)
+    arr = np.array(lat) * 1e3
+    return [
+        ("machine floor: Python UDP echo round trip p50", float(np.percentile(arr, 50)), "ms"),
+        ("machine floor: Python UDP echo round trip p99", float(np.percentile(arr, 99)), "ms"),
+    ]
+
+
 def run(quick: bool = False) -> list[tuple[str, float, str]]:
     duration = 5.0 if quick else 60.0
-    rows: list[tuple[str, float, str]] = _processing_cost()
+    rows: list[tuple[str, float, str]] = _machine_floor() + _processing_cost()
     with tempfile.TemporaryDirectory() as tmp:
         for period_ms, realtime in ((1, False), (1, True), (5, False)):
             rows += _measure(period_ms, duration, Path(tmp), realtime)

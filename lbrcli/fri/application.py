@@ -309,6 +309,7 @@ class ClientApplication:
             if ci.sendPeriod:
                 self._period_s = ci.sendPeriod * 1e-3 * k
                 self._guard = CommandGuard.from_limits(self.limits, self._period_s, self.max_force, self.max_moment)
+                self._brake = BrakingStop(self.limits, self._period_s)  # ready before it is needed
         # ---- state change and robot-side ends --------------------------------------------------------------
         if not self.states_seen or state != self.states_seen[-1]:
             self.states_seen.append(state)

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from typing import Sequence
 
+from ruckig import ControlInterface, InputParameter, OutputParameter, Result, Ruckig
+
 from trajectories.limits import JointLimits
 
 
@@ -17,8 +19,6 @@ class BrakingStop:
     """Online braking profile; ``start()`` it with the last commands, then ``next()`` once per cycle."""
 
     def __init__(self, limits: JointLimits, period_s: float, scale: float = 1.0) -> None:
-        from ruckig import ControlInterface, InputParameter, OutputParameter, Ruckig
-
         self.period_s = period_s
         self._otg = Ruckig(7, period_s)
         self._inp = InputParameter(7)
@@ -50,8 +50,6 @@ class BrakingStop:
         """The next command [rad]; ``done`` becomes True when the robot is at rest."""
         if self.done:
             return self._hold
-        from ruckig import Result
-
         res = self._otg.update(self._inp, self._out)
         self.cycles += 1
         if res not in (Result.Working, Result.Finished):  # cannot happen within the limits; hold what we have

@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Callable, Sequence
 
 import numpy as np
+from ruckig import InputParameter, OutputParameter, Result, Ruckig, Trajectory
 
 from trajectories.limits import JointLimits
 
@@ -28,8 +29,6 @@ class OnlineMove:
     """A rest-to-rest ruckig move computed one cycle at a time (position interface)."""
 
     def __init__(self, limits: JointLimits, period_s: float, scale: float, minimum_duration: float | None = None) -> None:
-        from ruckig import InputParameter, OutputParameter, Ruckig
-
         self._otg = Ruckig(7, period_s)
         self._inp = InputParameter(7)
         self._out = OutputParameter(7)
@@ -45,8 +44,6 @@ class OnlineMove:
 
     def start(self, q_from: Sequence[float], q_to: Sequence[float]) -> float:
         """Plan from rest at ``q_from`` to rest at ``q_to`` [rad]; the duration [s]."""
-        from ruckig import Result, Trajectory
-
         inp = self._inp
         inp.current_position = list(q_from)
         inp.current_velocity = [0.0] * 7
@@ -64,8 +61,6 @@ class OnlineMove:
         return traj.duration
 
     def next(self) -> tuple[float, ...]:
-        from ruckig import Result
-
         if self.done:
             return self.target
         res = self._otg.update(self._inp, self._out)

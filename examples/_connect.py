@@ -14,6 +14,7 @@ def arguments(description: str, duration_s: float = 5.0) -> argparse.ArgumentPar
     p.add_argument("--duration", type=float, default=duration_s, help="session length [s]")
     p.add_argument("--period", type=int, default=5, help="simulator send period [ms]")
     p.add_argument("--fri-version", default="1.15", choices=("1.15", "2.7"), help="simulator wire format")
+    p.add_argument("--sim-lenient", action="store_true", help="simulator tolerant of a loaded PC (1 s quality window)")
     return p
 
 
@@ -22,7 +23,10 @@ def run(client, args, observers=(), **sim_options) -> SessionResult:
     if args.robot is not None:
         with ClientApplication(client, args.robot, args.port, observers=observers) as app, interrupts_brake(app):
             return app.run(args.duration)
-    from lbrcli.fri.sim import SimConfig, SimulatorProcess
+    from lbrcli.fri.sim import SimConfig, SimulatorProcess, lenient_quality
+
+    if args.sim_lenient:
+        sim_options = {**lenient_quality(args.period), **sim_options}
 
     with ClientApplication(client, "127.0.0.1", 0, bind_host="127.0.0.1", version=args.fri_version,
                            observers=observers, first_message_timeout_s=20) as app:  # fmt: skip

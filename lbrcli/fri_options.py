@@ -76,12 +76,6 @@ SimLenientOpt = Annotated[
 ]
 
 
-def lenient_quality(period_ms: int, receive_multiplier: int = 1) -> dict[str, float | int]:
-    """Simulator quality thresholds that tolerate a loaded machine: a 1 s window, GOOD at 50 % timely replies."""
-    return dict(quality_window=max(50, round(1000 / (period_ms * receive_multiplier))), quality_good=0.5,
-                quality_fair=0.3, quality_excellent=0.9)
-
-
 PlotOpt = Annotated[
     Optional[Path], typer.Option("--plot", help="PNG: commanded vs measured joints, tracking, simulated ball sway.")
 ]

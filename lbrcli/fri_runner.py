@@ -98,7 +98,7 @@ def run_client(
             if realtime:
                 kw["realtime"] = True
             if sim_lenient:
-                from .fri_options import lenient_quality
+                from .fri.sim import lenient_quality
 
                 kw.update(lenient_quality(kw.get("period_ms", 1), kw.get("receive_multiplier", 1)))
             plants = default_plants(kw.pop("ball_length", None), pendulum_pty=lab is not None and lab.pendulum == "sim")

@@ -2,11 +2,11 @@
 PositionHold application with an FRI overlay (position, torque or wrench command mode), plants attached to the
 flange plugged in from outside (``Plant``/``PlantSpec``)."""
 
-from .config import IO_PRESETS, THESIS_Q0, IoChannel, SimConfig, parse_io
+from .config import IO_PRESETS, THESIS_Q0, IoChannel, SimConfig, lenient_quality, parse_io
 from .plant import Plant, PlantContext, PlantSpec
 from .process import SimulatorProcess
 from .simulator import Simulator
 from .stats import SimStats
 
-__all__ = ["IO_PRESETS", "THESIS_Q0", "IoChannel", "Plant", "PlantContext", "PlantSpec", "SimConfig", "SimStats",
+__all__ = ["IO_PRESETS", "THESIS_Q0", "IoChannel", "Plant", "PlantContext", "PlantSpec", "SimConfig", "SimStats", "lenient_quality",
            "Simulator", "SimulatorProcess", "parse_io"]

@@ -76,6 +76,13 @@ IO_PRESETS: dict[str, tuple[IoChannel, ...]] = {
 }
 
 
+def lenient_quality(period_ms: int, receive_multiplier: int = 1) -> dict[str, float | int]:
+    """SimConfig quality thresholds that tolerate a loaded PC: a 1 s window, GOOD at 50 % timely replies (default:
+    50 cycles, 90 %, as strict as the real controller)."""
+    return dict(quality_window=max(50, round(1000 / (period_ms * receive_multiplier))), quality_good=0.5,
+                quality_fair=0.3, quality_excellent=0.9)
+
+
 @dataclass(frozen=True)
 class SimConfig:
     """Everything the simulated controller needs; picklable (it crosses into the simulator process)."""

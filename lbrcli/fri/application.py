@@ -18,7 +18,7 @@ from __future__ import annotations
 import gc
 import math
 import time
-from typing import Any, Callable, Protocol, Sequence
+from typing import Any, Callable, Sequence
 
 from trajectories.limits import JointLimits, default_limits
 
@@ -26,58 +26,22 @@ from .braking import BrakingStop
 from .client import LBRClient
 from .codec import FriCodec, detect_version
 from .command import LBRCommand
-from .constants import (
-    COMMAND_MESSAGE_ID,
-    DEFAULT_PORT,
-    ClientCommandMode,
-    ConnectionQuality,
-    DriveState,
-    SafetyState,
-    SessionState,
-)
+from .cycle import Cycle, Observer
+from .constants import DEFAULT_PORT, ClientCommandMode, SessionState
 from .errors import FriDecodeError, FriError, FriTimeout, StopSession
 from .guard import DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT, CommandGuard
 from .messages import FriVersion
 from .outcome import EndReason, Outcome, SessionResult
+from .reply import ReplyMessage
 from .state import LBRState
-from .transport import UdpTransport
+from .supervision import consistent, robot_side_end
+from .transport import UdpTransport, no_message_text
 
 IDLE, MON_WAIT, MON_READY, CMD_WAIT, CMD_ACTIVE = 0, 1, 2, 3, 4
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
-_DRIVE_ACTIVE = int(DriveState.ACTIVE)
-_POOR = int(ConnectionQuality.POOR)
-_POSITION_SLACK = 0.05  # [rad] a reported position beyond the limits by more than this is not a real robot's
 _ZERO6 = (0.0,) * 6
 _ZERO7 = (0.0,) * 7
-
-
-class Observer(Protocol):
-    """Called by the application; must return quickly (the next message is due within a period)."""
-
-    def on_start(self, app: "ClientApplication") -> None: ...
-
-    def on_cycle(self, app: "ClientApplication") -> None: ...
-
-    def on_end(self, app: "ClientApplication", result: SessionResult) -> None: ...
-
-
-class Cycle:
-    """What happened in the current cycle (read by observers after the reply went out)."""
-
-    __slots__ = ("t", "state", "answered", "sent_position", "command", "torque", "wrench", "braking", "phase", "row")
-
-    def __init__(self) -> None:
-        self.t = 0.0  # [s] controller time since the first message (sequence counter × send period)
-        self.state = IDLE  # session state (int)
-        self.answered = False  # a command message went out for this monitoring message
-        self.sent_position = False  # ... carrying a joint position
-        self.command: Sequence[float] = _ZERO7  # [rad] the joint position in force after this cycle
-        self.torque: Sequence[float] | None = None  # [Nm] sent this cycle (TORQUE mode)
-        self.wrench: Sequence[float] | None = None  # sent this cycle (WRENCH mode)
-        self.braking = False  # the command came from the braking stop
-        self.phase = 0  # the client's phase / row (logged)
-        self.row = -1
 
 
 class ClientApplication:
@@ -155,7 +119,7 @@ class ClientApplication:
     def _reset(self) -> None:
         self._codec: FriCodec | None = None
         self._mon: Any = None
-        self._out: Any = None
+        self._reply: ReplyMessage | None = None
         self._cmd: LBRCommand | None = None
         self._guard: CommandGuard | None = None
         self._brake: BrakingStop | None = None
@@ -184,9 +148,6 @@ class ClientApplication:
         self._prev2: Sequence[float] = _ZERO7
         self._prev3: Sequence[float] = _ZERO7
         self._active_sent = 0  # joint positions sent in COMMANDING_ACTIVE
-        self._io_set = False
-        self._torque_set = False
-        self._wrench_set = False
         self._answered_any = False
         self._unanswered_at_start = 0
         self._cpu0 = 0.0
@@ -276,7 +237,7 @@ class ClientApplication:
             if d == 0 or d > 0x7FFFFFFF:
                 self.stale += 1
                 return self._check_clocks(now)
-        if not self._consistent(mon):
+        if not consistent(mon, self.limits.position):
             self.malformed += 1
             return self._check_clocks(now)
         if self._last_seq >= 0:
@@ -321,7 +282,9 @@ class ClientApplication:
                 self._client_stop(s)
             except Exception as exc:  # noqa: BLE001 - a client bug ends the session, reported
                 self._client_failed(exc, "on_state_change")
-        end = self._robot_side_end(mon, state, now)
+        end = robot_side_end(mon, state, seen_session=self._seen_session, commanding=self._commanding,
+                             was_active=self._was_active, period_key=self._period_key, waited_s=now - self._t_first,
+                             commanding_timeout_s=self.commanding_timeout_s)  # fmt: skip
         if end is not None:
             self._finish(*end, observe=True)
             return False
@@ -376,19 +339,15 @@ class ClientApplication:
             self._observe()
             return self._check_clocks(now)
         # ---- build, guard, send ----------------------------------------------------------------------------
-        out = self._out
+        reply = self._reply
         if state >= CMD_WAIT:
             if not self._build_motion(mon, state, cmd):  # it ended the session (a refusal, nothing sent)
                 return False
-        elif self._jp_set or self._io_set:
-            out.ClearField("commandData")  # header only (plus IO writes) in the monitoring states
-            self._jp_set = self._torque_set = self._wrench_set = self._io_set = False
-        self._write_io(cmd)
-        h = out.header
-        h.sequenceCounter = self._client_seq
-        h.reflectedSequenceCounter = seq
+        else:
+            reply.header_only()  # plus IO writes, in the monitoring states
+        reply.set_io(cmd.io_writes)  # type: ignore[union-attr]
         try:
-            transport.send(codec.frame(out.SerializeToString()))  # type: ignore[union-attr]
+            transport.send(reply.datagram(self._client_seq, seq))  # type: ignore[union-attr]
         except OSError as exc:
             self._finish(Outcome.STOPPED, EndReason.SILENT, f"cannot send to the controller: {exc.strerror}", observe=True)
             return False
@@ -419,74 +378,7 @@ class ClientApplication:
         self._cmd = LBRCommand(self.state)
         self.client.robot_state = self.state
         self.client.robot_command = self._cmd
-        out = codec.new_command()
-        out.header.messageIdentifier = COMMAND_MESSAGE_ID
-        out.header.sequenceCounter = 0
-        out.header.reflectedSequenceCounter = 0
-        self._out = out
-        self._jp_set = False
-
-    def _consistent(self, mon: Any) -> bool:
-        """A message a real controller could have sent: connection info, 7 finite joint values where the state
-        needs them, positions near the limits at most."""
-        if not mon.HasField("connectionInfo"):
-            return False
-        state = mon.connectionInfo.sessionState
-        if state == IDLE:
-            return True
-        if not self._joints_ok(mon.monitorData.measuredJointPosition.value):
-            return False
-        if state >= CMD_WAIT and not self._joints_ok(mon.ipoData.jointPosition.value):
-            return False
-        return True
-
-    def _joints_ok(self, values: Sequence[float]) -> bool:
-        if len(values) != 7:
-            return False
-        lim = self.limits.position
-        for j in range(7):
-            x = values[j]
-            if not (-lim[j] - _POSITION_SLACK <= x <= lim[j] + _POSITION_SLACK):  # also NaN and inf
-                return False
-        return True
-
-    def _robot_side_end(self, mon: Any, state: int, now: float) -> tuple[Outcome, EndReason, str] | None:
-        ci = mon.connectionInfo
-        ri = mon.robotInfo
-        if state == IDLE:
-            if self._seen_session:
-                return Outcome.STOPPED, EndReason.IDLE, "the robot application closed the FRI session (IDLE)"
-            return None
-        if self._commanding or state >= CMD_WAIT:
-            if (ci.sendPeriod, ci.receiveMultiplier or 1) != self._period_key:
-                pk = self._period_key
-                return (
-                    Outcome.STOPPED,
-                    EndReason.PERIOD_CHANGED,
-                    f"the controller changed its period from {pk[0]} ms × {pk[1]} to "  # type: ignore[index]
-                    f"{ci.sendPeriod} ms × {ci.receiveMultiplier or 1}",
-                )
-            if ri.safetyState != 0:
-                return Outcome.STOPPED, EndReason.SAFETY_STOP, f"safety stop ({SafetyState(ri.safetyState).name})"
-            drives = ri.driveState
-            if drives and min(drives) != _DRIVE_ACTIVE:
-                return Outcome.STOPPED, EndReason.DRIVES_OFF, "drives not active"
-            if ci.quality == _POOR:
-                return Outcome.STOPPED, EndReason.QUALITY_POOR, "connection quality POOR"
-            if self._was_active and state != CMD_ACTIVE:
-                return (
-                    Outcome.STOPPED,
-                    EndReason.LEFT_COMMANDING,
-                    f"the session left COMMANDING_ACTIVE ({SessionState(state).name})",
-                )
-        elif self.commanding_timeout_s is not None and now - self._t_first > self.commanding_timeout_s:  # type: ignore[operator]
-            return (
-                Outcome.STOPPED,
-                EndReason.NO_COMMANDING,
-                f"the robot application did not start commanding within {self.commanding_timeout_s:g} s "
-                f"(session state {SessionState(state).name})",
-            )
-        return None
+        self._reply = ReplyMessage(codec)
 
     def _build_motion(self, mon: Any, state: int, cmd: LBRCommand) -> bool:
         """Guard the client's joint position (or take the braking stop's) and write it into the message."""
@@ -532,28 +424,10 @@ class ClientApplication:
                 q = prev  # cannot happen within the limits; a hold is the last resort
             tau = _ZERO7 if mode == _TORQUE else None
             wrench = _ZERO6 if mode == _WRENCH else None
-        out = self._out.commandData
-        jp = out.jointPosition.value
-        if not self._jp_set:
-            jp.extend(q)
-            self._jp_set = True
-        else:
-            jp[:] = q
+        self._reply.set_motion(mode, q, tau, wrench)
         if mode == _TORQUE:
-            tv = out.jointTorque.value
-            if self._torque_set:
-                tv[:] = tau
-            else:
-                tv.extend(tau)
-                self._torque_set = True
             cyc.torque = tau
         elif mode == _WRENCH:
-            wv = out.cartesianWrenchFeedForward.element
-            if self._wrench_set:
-                wv[:] = wrench
-            else:
-                wv.extend(wrench)
-                self._wrench_set = True
             cyc.wrench = wrench
         q = tuple(q)
         if state == CMD_ACTIVE:
@@ -564,21 +438,6 @@ class ClientApplication:
         cyc.command = q
         cyc.sent_position = True
         return True
-
-    def _write_io(self, cmd: LBRCommand) -> None:
-        out = self._out.commandData
-        if self._io_set:
-            out.ClearField("writeIORequest")
-            self._io_set = False
-        if cmd.io_writes:
-            for name, kind, value in cmd.io_writes:
-                io = out.writeIORequest.add()
-                io.name, io.type, io.direction = name, kind, 1
-                if kind == 2:
-                    io.analogValue = value
-                else:
-                    io.digitalValue = value
-            self._io_set = True
 
     # -- stops -----------------------------------------------------------------------------------------------
     def _request_stop(self, outcome: Outcome, reason: EndReason, text: str) -> bool:
@@ -636,17 +495,8 @@ class ClientApplication:
         return True
 
     def _no_message_text(self, waited: float) -> str:
-        t = self.transport
-        text = f"no FRI monitoring message from {t.robot_ip} on UDP port {t.port} within {waited:.1f} s"  # type: ignore[union-attr]
-        hints = []
-        if self.malformed:
-            v = f"FRI {self.version.value}" if self.version else "any FRI version"
-            hints.append(f"{self.malformed} datagrams from it did not decode as {v} (--fri-version?)")
-        if t.foreign:  # type: ignore[union-attr]
-            hints.append(f"{t.foreign} datagrams came from other addresses (--robot?)")  # type: ignore[union-attr]
-        if not hints:
-            hints.append("is the robot application running with this PC's address and port, and the firewall open?")
-        return text + "; " + "; ".join(hints)
+        version = f"FRI {self.version.value}" if self.version else "any FRI version"
+        return no_message_text(self.transport, waited, self.malformed, version)  # type: ignore[arg-type]
 
     # -- observers and the end -------------------------------------------------------------------------------
     def _call_observer(self, o: Observer, method: str, *args: Any) -> None:

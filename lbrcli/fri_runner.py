@@ -192,12 +192,18 @@ def print_summary(rep, result, sim_stats, log_path: Path | None) -> dict[str, An
     return figures
 
 
-def exit_for(result) -> None:
+def exit_for(result, lab_figures: dict[str, Any] | None = None, mqtt: str | None = None) -> None:
+    """Exit 2 for bad input found in the session, 1 for any other end that is not what was asked (the session's,
+    or lab telemetry that never reached its broker), 130 for Ctrl-C."""
     import sys
 
     from lbrcli.fri import EndReason, Outcome
 
     if result.ok:
+        lab = lab_figures or {}
+        if mqtt and not lab.get("mqtt_published"):
+            sys.stderr.write(f"lbr: failed: telemetry: nothing was published to {mqtt} (is the broker running?)\n")
+            raise typer.Exit(1)
         return
     if result.reason is EndReason.BAD_INPUT:
         sys.stderr.write(f"lbr: error: {result.detail}\n")

@@ -213,7 +213,7 @@ def execute(
         rep.warn("the robot is in T1: the controller limits the flange speed to 250 mm/s (check with --t1)")
     plot_log(plot, log, rep, joint_csv.name)
     rep.emit(figures)
-    exit_for(result)
+    exit_for(result, lab_figures, mqtt)
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -122,7 +122,7 @@ def monitor(
     figures.update(duration_s=duration, robot=robot or "simulator")
     plot_log(plot, log, rep, "monitor")
     rep.emit(figures)
-    exit_for(result)
+    exit_for(result, lab_figures, mqtt)
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -289,3 +289,10 @@ def test_monitor_logs_the_pendulum(tmp_path, lbr):
     pend = table.column("pend_theta")
     # the robot stands still: the module reads the hanging pendulum (0 within one count)
     assert np.isfinite(pend).sum() > 50 and np.nanmax(np.abs(pend)) < 2e-3
+
+
+def test_telemetry_that_reaches_no_broker_is_a_failure(lbr):
+    """The session ran, but what was asked (telemetry) did not happen: exit 1, one line."""
+    res = lbr("monitor", "--duration", "0.5", "--port", "0", "--sim-lenient", "--mqtt", "mqtt://127.0.0.1:1/lbr/state")
+    assert res.returncode == 1 and "Traceback" not in res.stderr
+    assert res.stderr.strip().splitlines()[-1].startswith("lbr: failed: telemetry: nothing was published")

@@ -112,7 +112,8 @@ def test_wrench_mode_constant_force_deflects_by_force_over_stiffness(robot):
         return np.zeros(7), None, np.array([F, 0, 0, 0, 0, 0])
 
     run, stats, cfg = session("2.7", overlay, mode="wrench", period_ms=2, session_duration_s=2.0,
-                              cartesian_stiffness=(k, 150.0))
+                              cartesian_stiffness=(k, 150.0),
+                              quality_window=500, quality_good=0.2, quality_fair=0.1)  # a loaded machine answers late
     assert not stats.safety_stop and stats.incomplete_commands == 0
     active = run.active()
     assert all(m.ipoData.overlayType == 2 and m.robotInfo.controlMode == 1 for m in active)

@@ -17,11 +17,12 @@ The application owns the loop: transport, counters, the per-cycle guard, the bra
 (log, figures). The simulator is in :mod:`lbrcli.fri.sim`.
 """
 
-from .application import ClientApplication, Cycle, Observer
+from .application import ClientApplication
 from .braking import BrakingStop
 from .client import LBRClient
 from .codec import FriCodec, detect_version
 from .command import LBRCommand
+from .cycle import Cycle, Observer
 from .constants import (
     DEFAULT_PORT,
     ClientCommandMode,

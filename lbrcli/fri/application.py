@@ -452,8 +452,7 @@ class ClientApplication:
     def _begin_braking(self) -> None:
         if self._braking:
             return
-        if self._brake is None:
-            self._brake = BrakingStop(self.limits, self._period_s)  # type: ignore[arg-type]
+        # built with the guard when the period became known; nothing was sent (so nothing brakes) before that
         self._brake.start(self._prev, self._prev2, self._prev3)
         self._braking = True
         self._hold_left = self.hold_cycles

@@ -10,7 +10,11 @@ Safety lives here, once, for every client: a message that is not self-consistent
 passes the guard; every stop the client side initiates (interrupt, a guard refusal, the client's end or error, a
 failed observer) is a jerk-limited braking stop (``BrakingStop``) when the robot was being commanded; events on the
 robot side (safety stop, drives off, POOR quality, the session leaving COMMANDING_ACTIVE, IDLE, a period change, a
-silent controller) end the session at once (the controller stops the robot itself).
+silent controller) end the session at once (the controller stops the robot itself). Supervision (``Supervisor``) ends
+the stream with a braking stop when the controller's timestamps disagree with its period, when our replies stop
+reaching it (its reflected counter) or when the measured position leaves the command (position mode). Lost
+monitoring messages were bridged by the controller's extrapolation: the guard's reference and the braking stop
+continue from there, and the client is told how many command periods it missed (``LBRClient.skipped``).
 """
 
 from __future__ import annotations
@@ -34,10 +38,11 @@ from .messages import FriVersion
 from .outcome import EndReason, Outcome, SessionResult
 from .reply import ReplyMessage
 from .state import LBRState
-from .supervision import consistent, robot_side_end
+from .supervision import Supervisor, consistent, robot_side_end
 from .transport import UdpTransport, no_message_text
 
 IDLE, MON_WAIT, MON_READY, CMD_WAIT, CMD_ACTIVE = 0, 1, 2, 3, 4
+_POSITION = int(ClientCommandMode.POSITION)
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
 _ZERO6 = (0.0,) * 6
@@ -63,6 +68,8 @@ class ClientApplication:
         max_force: float = DEFAULT_MAX_FORCE,
         max_moment: float = DEFAULT_MAX_MOMENT,
         hold_cycles: int = 5,
+        max_tracking_error: float | None = None,
+        reply_gap_s: float | None = None,
     ) -> None:
         self.client = client
         self.robot = robot
@@ -77,6 +84,8 @@ class ClientApplication:
         self.max_force = max_force
         self.max_moment = max_moment
         self.hold_cycles = max(1, hold_cycles)
+        self.max_tracking_error = max_tracking_error  # [rad] None: velocity limit × max(20 ms, 8 periods) per joint
+        self.reply_gap_s = reply_gap_s  # [s] None: 50 ms
         self.transport: UdpTransport | None = None
         self.cycle = Cycle()
         self.state: LBRState | None = None  # view of the last accepted message
@@ -123,6 +132,7 @@ class ClientApplication:
         self._cmd: LBRCommand | None = None
         self._guard: CommandGuard | None = None
         self._brake: BrakingStop | None = None
+        self._sup: Supervisor | None = None
         self._braking = False
         self._hold_left = 0
         self._stop: tuple[Outcome, EndReason, str] | None = None  # a stop the client side requested
@@ -155,7 +165,7 @@ class ClientApplication:
         # statistics
         self.cycles = self.answered = self.position_commands = 0
         self.missed = self.stale = self.malformed = 0
-        self.active_cycles = self.braking_cycles = 0
+        self.active_cycles = self.braking_cycles = self.extrapolated_cycles = 0
         self.states_seen: list[int] = []
         self._latencies: list[int] = []  # [ns]
 
@@ -240,9 +250,12 @@ class ClientApplication:
         if not consistent(mon, self.limits.position):
             self.malformed += 1
             return self._check_clocks(now)
+        skipped = 0
         if self._last_seq >= 0:
             self.missed += d - 1
             self._tick += d
+            if d > 1 and self._last_state == CMD_ACTIVE and self._active_sent > 0:
+                skipped = self._extrapolate((d - 1) // (self._period_key[1] if self._period_key else 1))
         self._last_seq = seq
         self.cycles += 1
         self._t_last_rx = now
@@ -271,6 +284,18 @@ class ClientApplication:
                 self._period_s = ci.sendPeriod * 1e-3 * k
                 self._guard = CommandGuard.from_limits(self.limits, self._period_s, self.max_force, self.max_moment)
                 self._brake = BrakingStop(self.limits, self._period_s)  # ready before it is needed
+                self._sup = Supervisor.from_limits(self.limits.velocity, ci.sendPeriod * 1e-3, k,
+                                                   self.max_tracking_error, self.reply_gap_s)  # fmt: skip
+        sup = self._sup
+        if sup is not None and state != IDLE and self._stop is None:
+            ts = mon.monitorData.timestamp
+            problem = sup.clock(seq, ts.sec, ts.nanosec)
+            if problem is None and state == CMD_ACTIVE and not self._braking:
+                problem = sup.replies(seq, mon.header.reflectedSequenceCounter, self.client_sequence)
+                if problem is None and self._active_sent > 0 and mon.ipoData.clientCommandMode == _POSITION:
+                    problem = sup.tracking(mon.monitorData.measuredJointPosition.value, self._prev)
+            if problem is not None:
+                self._supervision_stop(problem)
         # ---- state change and robot-side ends --------------------------------------------------------------
         if not self.states_seen or state != self.states_seen[-1]:
             self.states_seen.append(state)
@@ -305,6 +330,7 @@ class ClientApplication:
         if due:
             self._send_counter = 0
         self.client.reply_due = due
+        self.client.skipped = skipped
         # ---- the client's answer ---------------------------------------------------------------------------
         cmd = self._cmd
         cmd.reset()  # type: ignore[union-attr]
@@ -352,6 +378,8 @@ class ClientApplication:
             self._finish(Outcome.STOPPED, EndReason.SILENT, f"cannot send to the controller: {exc.strerror}", observe=True)
             return False
         self._latencies.append(time.perf_counter_ns() - t_rx)
+        if sup is not None:
+            sup.sent(self._client_seq, seq)
         if not self._answered_any:
             self._answered_any = True
             self._unanswered_at_start = self.missed  # messages that went by before the first reply
@@ -439,7 +467,29 @@ class ClientApplication:
         cyc.sent_position = True
         return True
 
+    def _extrapolate(self, n: int) -> int:
+        """The controller bridged ``n`` command periods without our commands (its messages were lost): continue the
+        sent history as it did (at the last commands' velocity, within the velocity limit); ``n`` (≤ 64)."""
+        n = min(n, 64)
+        cap = self._guard.max_step if self._guard is not None else None
+        for _ in range(n):
+            prev, prev2 = self._prev, self._prev2
+            if cap is None:
+                nxt = prev
+            else:
+                nxt = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(prev, prev2, cap))
+            self._prev3, self._prev2, self._prev = prev2, prev, nxt
+        self.extrapolated_cycles += n
+        return n
+
     # -- stops -----------------------------------------------------------------------------------------------
+    def _supervision_stop(self, text: str) -> None:
+        if self._stop is not None:
+            return
+        self._stop = (Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {text}")
+        if self._last_state == CMD_ACTIVE and self._active_sent > 0:
+            self._begin_braking()
+
     def _request_stop(self, outcome: Outcome, reason: EndReason, text: str) -> bool:
         """Remember a client-side stop; brake when commanding. True if the session ended at once."""
         self._stop = (outcome, reason, text)
@@ -578,6 +628,9 @@ class ClientApplication:
             latency_p99_ms=pct(99),
             latency_max_ms=lat[-1] * 1e-6 if lat else None,
             cpu_us_per_cycle=cpu / n * 1e6 if n > 0 else None,
+            extrapolated_cycles=self.extrapolated_cycles,
+            largest_tracking_error_rad=self._sup.largest_tracking_error if self._sup is not None else None,
+            largest_reply_gap=self._sup.largest_reply_gap if self._sup is not None else None,
         )
         figures: dict[str, Any] = {}
         for o in list(self.observers):

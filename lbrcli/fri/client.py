@@ -27,6 +27,8 @@ class LBRClient:
     robot_state: LBRState  # set by the application before the first callback
     robot_command: LBRCommand
     reply_due: bool = True  # set by the application: this cycle's command is sent (every k-th message)
+    skipped: int = 0  # set by the application: command periods the controller bridged since the last command
+    # (its messages to us were lost; it extrapolated) — a client that follows time should advance by them
     phase: int = 0  # free for the client: logged per cycle (e.g. which part of a trajectory is playing)
     row: int = -1
 

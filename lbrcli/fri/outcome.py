@@ -62,6 +62,9 @@ class SessionResult:
     latency_p99_ms: float | None
     latency_max_ms: float | None
     cpu_us_per_cycle: float | None
+    extrapolated_cycles: int = 0  # command periods the controller bridged because its messages were lost
+    largest_tracking_error_rad: float | None = None  # max |measured − commanded| in COMMANDING_ACTIVE (position)
+    largest_reply_gap: int | None = None  # most controller messages between two replies of ours it received
     figures: dict[str, Any] = field(default_factory=dict)  # from the observers
 
     @property

@@ -3,13 +3,15 @@
 :class:`TrajectoryPlayer` streams rows [rad] at the command period, one per sent command: first a jerk-limited
 move (ruckig, online, ≤ ``move_scale`` of the limits) from where the controller holds the robot to the first row —
 always, so that the stream never starts with a jump; farther than ``start_tolerance`` only with
-``move_to_start`` — then the rows, then the last row for ``settle_cycles``. It checks the start at the first
+``move_to_start`` — then the rows, then the last row for ``settle_cycles``. Rows follow the controller's clock: when its messages were
+lost (it bridged those periods by extrapolation) the rows it would have executed are skipped. It checks the start at the first
 message (before anything is sent) and again at activation, and ends with :class:`StopSession` (the application
 then brakes to rest and ends).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Callable, Sequence
 
 import numpy as np
@@ -42,11 +44,12 @@ class OnlineMove:
         self.done = True
         self.duration_s = 0.0
 
-    def start(self, q_from: Sequence[float], q_to: Sequence[float]) -> float:
-        """Plan from rest at ``q_from`` to rest at ``q_to`` [rad]; the duration [s]."""
+    def start(self, q_from: Sequence[float], q_to: Sequence[float], v_from: Sequence[float] | None = None) -> float:
+        """Plan from ``q_from`` [rad] (at rest, or moving at ``v_from`` [rad/s]) to rest at ``q_to``; the duration
+        [s]."""
         inp = self._inp
         inp.current_position = list(q_from)
-        inp.current_velocity = [0.0] * 7
+        inp.current_velocity = list(v_from) if v_from is not None else [0.0] * 7
         inp.current_acceleration = [0.0] * 7
         inp.target_position = list(q_to)
         inp.target_velocity = [0.0] * 7
@@ -71,6 +74,48 @@ class OnlineMove:
             raise StopSession(f"ruckig failed during the move ({res.name})", completed=False)
         self._out.pass_to_input(self._inp)
         return tuple(self._out.new_position)
+
+
+def rejoin(limits: JointLimits, period_s: float, q: Sequence[float], v: Sequence[float], rows: Sequence[Sequence[float]],
+           first: int, max_tries: int = 20) -> tuple[list[tuple[float, ...]], int]:
+    """The commands that bring the robot from ``q`` [rad] moving at ``v`` [rad/s] (where the controller's
+    extrapolation left it) back onto ``rows`` in step: jerk-limited (ruckig, at the limits), ``m`` commands for rows
+    ``first`` … ``first + m − 1``, the last one exactly that row (with its velocity and acceleration). Returns (the
+    commands, the next row). Towards the end of the rows: to the last row at rest, taking the time it needs."""
+    otg = Ruckig(7, period_s)
+    inp = InputParameter(7)
+    inp.max_velocity = limits.velocity.tolist()
+    inp.max_acceleration = limits.acceleration.tolist()
+    inp.max_jerk = limits.jerk.tolist()
+    inp.current_position = list(q)
+    inp.current_velocity = list(v)
+    inp.current_acceleration = [0.0] * 7  # the controller extrapolates at constant velocity
+    n = len(rows)
+    dt = period_s
+    m = 8
+    for _ in range(max_tries):
+        r = first + m - 1
+        traj = Trajectory(7)
+        if r + 1 >= n:  # the end of the rows is near: stop on the last row
+            inp.target_position = list(rows[-1])
+            inp.target_velocity = [0.0] * 7
+            inp.target_acceleration = [0.0] * 7
+            inp.minimum_duration = None
+            if otg.calculate(inp, traj) not in (Result.Working, Result.Finished):
+                break
+            k = max(1, int(math.ceil(traj.duration / dt - 1e-9)))
+            out = [tuple(traj.at_time(min(i * dt, traj.duration))[0]) for i in range(1, k)]
+            return out + [tuple(rows[-1])], n
+        a, b, c = rows[r - 1], rows[r], rows[r + 1]
+        inp.target_position = list(b)
+        inp.target_velocity = [(z - x) / (2.0 * dt) for x, z in zip(a, c)]
+        inp.target_acceleration = [(x - 2.0 * y + z) / (dt * dt) for x, y, z in zip(a, b, c)]
+        inp.minimum_duration = m * dt
+        res = otg.calculate(inp, traj)
+        if res in (Result.Working, Result.Finished) and traj.duration <= m * dt * (1 + 1e-12):
+            return [tuple(traj.at_time(i * dt)[0]) for i in range(1, m)] + [tuple(b)], r + 1
+        m = int(math.ceil(m * 1.25))  # (the time-optimal rejoin is not monotonic in m: no jump to its duration)
+    raise StopSession(f"messages were lost at row {first}: the rows cannot be rejoined within the limits", completed=False)
 
 
 class TrajectoryPlayer(LBRClient):
@@ -110,8 +155,12 @@ class TrajectoryPlayer(LBRClient):
         self._i = 0  # next row
         self._settled = 0
         self._last: tuple[float, ...] | None = None
+        self._last2: tuple[float, ...] | None = None  # the command before _last
+        self._queue: list[tuple[float, ...]] = []  # commands of a rejoin after lost messages
+        self._period = 0.0  # [s] command period (known at activation)
         # figures
         self.move_rows = self.trajectory_rows = self.settle_rows = 0
+        self.skipped_rows = 0  # commands the controller bridged by extrapolation (its messages were lost)
         self.start_distance = 0.0  # [rad] largest |first row − measured| at the first message
         self.operation_mode: str | None = None  # T1, T2 or AUT as reported at the first message
 
@@ -176,6 +225,7 @@ class TrajectoryPlayer(LBRClient):
             q0 = state.ipo_joint_position
             self._last = q0
             period = self.period_s or state.sample_time * state.receive_multiplier
+            self._period = period
             if self.settle_s is not None:
                 self.settle_cycles = int(round(self.settle_s / period))
             self._move = OnlineMove(self.limits, period, self.move_scale, self.move_minimum_duration)
@@ -183,6 +233,36 @@ class TrajectoryPlayer(LBRClient):
                 self._move.start(q0, self.rows[0])
         if not self.reply_due:  # with receive multiplier k only every k-th command is sent: advance then
             return self._last
+        if self.skipped and self._last2 is not None:
+            self._bridged(self.skipped)
+        self._last2 = self._last
+        if self._advance():
+            return self._last
+        raise StopSession(self.finish_text)
+
+    def _bridged(self, n: int) -> None:
+        """The controller extrapolated our last command for ``n`` periods (its messages were lost): continue from
+        there — the move re-planned, the rows rejoined in step (never rows behind), the settle unchanged."""
+        dt = self._period
+        vel = [(a - b) / dt for a, b in zip(self._last, self._last2)]  # [rad/s]
+        q = tuple(a + n * v * dt for a, v in zip(self._last, vel))
+        self._last, self._last2 = q, tuple(a - v * dt for a, v in zip(q, vel))
+        self.skipped_rows += n
+        move = self._move
+        if move is not None and not move.done:
+            move.start(q, self.rows[0], vel)
+        elif self._queue or self._i < len(self.rows):
+            first = self._i + n - len(self._queue)  # the row due now (a rejoin in progress: its rows)
+            self._queue, self._i = rejoin(self.limits, dt, q, vel, self.rows, min(first, len(self.rows)))
+            self._queue.reverse()  # popped from the end
+
+    def _advance(self) -> bool:
+        """Step to the next command (``_last``, ``phase``, ``row``); False when the hold at the end is over."""
+        if self._queue:
+            self._last = self._queue.pop()
+            self.phase, self.row = PHASE_TRAJECTORY, self._i - len(self._queue) - 1
+            self.trajectory_rows += 1
+            return True
         move = self._move
         if move is not None and not move.done:
             q = move.next()
@@ -190,26 +270,26 @@ class TrajectoryPlayer(LBRClient):
                 self.phase, self.row = PHASE_MOVE, -1
                 self.move_rows += 1
                 self._last = q
-                return q
+                return True
         if self._i < len(self.rows):
-            q = self.rows[self._i]
             self.phase, self.row = PHASE_TRAJECTORY, self._i
+            self._last = self.rows[self._i]
             self._i += 1
             self.trajectory_rows += 1
-            self._last = q
-            return q
+            return True
         if self._settled < self.settle_cycles:
             self._settled += 1
             self.settle_rows += 1
             self.phase, self.row = PHASE_SETTLE, -1
-            return self._last
-        raise StopSession(self.finish_text)
+            return True
+        return False
 
     def figures(self) -> dict[str, float | int]:
         return {
             "move_rows": self.move_rows,
             "trajectory_rows": self.trajectory_rows,
             "settle_rows": self.settle_rows,
+            "skipped_rows": self.skipped_rows,
             "start_distance_rad": self.start_distance,
             "operation_mode": self.operation_mode,
         }

@@ -1,8 +1,10 @@
-"""What the application checks in every monitoring message: is it one a real controller could send, and has the
-robot side ended the session (safety stop, drives off, POOR quality, leaving COMMANDING_ACTIVE, a period change)."""
+"""What the application checks in every monitoring message: is it one a real controller could send, has the robot
+side ended the session (safety stop, drives off, POOR quality, leaving COMMANDING_ACTIVE, a period change), and does
+the session still hold (``Supervisor``: the controller's clock, our replies reaching it, the robot following)."""
 
 from __future__ import annotations
 
+import math
 from typing import Any, Sequence
 
 from .constants import ConnectionQuality, DriveState, SafetyState, SessionState
@@ -69,3 +71,113 @@ def robot_side_end(mon: Any, state: int, *, seen_session: bool, commanding: bool
         return (Outcome.STOPPED, EndReason.NO_COMMANDING, f"the robot application did not start commanding within "
                 f"{commanding_timeout_s:g} s (session state {SessionState(state).name})")  # fmt: skip
     return None
+
+
+# -- supervision of a commanding session --------------------------------------------------------------------------
+TRACKING_LAG_S = 0.02  # [s] the lag the default tracking bound allows at full speed (at least 8 command periods)
+REPLY_GAP_S = 0.05  # [s] the default: longest time the controller may go without receiving a reply of ours
+CLOCK_SLACK = 0.1  # relative: timestamps may run this much slower than sequence × send period before we object
+_RING = 256
+
+
+class Supervisor:
+    """Per-message checks of a session once its period is known (hot path: a few float operations each).
+
+    - ``clock``: the controller's timestamps must advance by at least ``send_period_s`` per sequence step (less
+      means the controller really runs faster than it says, and every step would be executed faster);
+    - ``replies``: the reflected sequence counter tells which reply of ours the controller last received; more than
+      ``max_reply_gap`` of its messages since then means our commands are not reaching it;
+    - ``tracking``: |measured − commanded| per joint within ``max_tracking_error`` [rad] (position mode).
+    """
+
+    __slots__ = ("send_period_s", "max_tracking_error", "max_reply_gap", "_ts0", "_seq0", "_ts_last", "_answered",
+                 "_reflecting", "largest_tracking_error", "largest_reply_gap")  # fmt: skip
+
+    def __init__(self, max_tracking_error: Sequence[float], max_reply_gap: int, send_period_s: float) -> None:
+        self.send_period_s = send_period_s
+        self.max_tracking_error = tuple(max_tracking_error)  # [rad] per joint
+        self.max_reply_gap = max_reply_gap  # controller messages
+        self._ts0 = -1  # [ns] timestamp of the first message
+        self._seq0 = 0
+        self._ts_last = -1
+        self._answered = [-1] * _RING  # monitoring sequence counter answered by each of our replies (ring)
+        self._reflecting = False  # the controller has been seen reflecting our counter
+        self.largest_tracking_error = 0.0  # [rad]
+        self.largest_reply_gap = 0  # controller messages
+
+    @classmethod
+    def from_limits(cls, velocity_limit: Sequence[float], send_period_s: float, receive_multiplier: int = 1,
+                    max_tracking_error: float | None = None, reply_gap_s: float | None = None) -> "Supervisor":
+        """Defaults: tracking bound = velocity limit × max(20 ms, 8 command periods) per joint; reply gap =
+        max(50 ms, 2 command periods + 1 message) in messages."""
+        k = max(1, receive_multiplier)
+        period = send_period_s * k
+        if max_tracking_error is None:
+            lag = max(TRACKING_LAG_S, 8 * period)
+            bound = tuple(v * lag for v in velocity_limit)
+        else:
+            bound = (max_tracking_error,) * 7
+        gap_s = REPLY_GAP_S if reply_gap_s is None else reply_gap_s
+        gap = max(2 * k + 1, int(math.ceil(gap_s / send_period_s - 1e-9)))
+        return cls(bound, gap, send_period_s)
+
+    def clock(self, seq: int, sec: int, nanosec: int) -> str | None:
+        """None while the timestamps agree with the send period (evaluated when the timestamp changes)."""
+        ts = sec * 1_000_000_000 + nanosec
+        if ts == self._ts_last:
+            return None  # no timestamps, or a coarse clock between ticks: nothing to judge
+        self._ts_last = ts
+        if self._ts0 < 0 or ts == 0:
+            self._ts0, self._seq0 = ts, seq
+            return None
+        steps = (seq - self._seq0) & 0xFFFFFFFF
+        expected = steps * self.send_period_s  # [s]
+        elapsed = (ts - self._ts0) * 1e-9
+        slack = max(3 * self.send_period_s, 0.02)
+        if elapsed < expected * (1.0 - CLOCK_SLACK) - slack:
+            return (f"the controller's timestamps advanced {elapsed * 1e3:.1f} ms over {steps} messages: it sends every "
+                    f"{elapsed / steps * 1e3:.2f} ms, not every {self.send_period_s * 1e3:g} ms as its period says")  # fmt: skip
+        return None
+
+    def sent(self, client_seq: int, answered_seq: int) -> None:
+        """Our reply ``client_seq`` answered the monitoring message ``answered_seq``."""
+        self._answered[client_seq % _RING] = answered_seq
+
+    def replies(self, seq: int, reflected: int, last_sent: int) -> str | None:
+        """None while the controller keeps receiving our replies (``reflected``: its echo of our counter)."""
+        if not self._reflecting:
+            if reflected == 0 or last_sent < 0:
+                return None  # 0 is also "nothing reflected yet": judge once the controller has echoed a later one
+            self._reflecting = True
+        behind = (last_sent - reflected) & 0xFFFFFFFF
+        if behind >= _RING:
+            return (f"the controller reflects our reply {reflected}, {behind} replies behind the last one sent: "
+                    "our commands are not reaching it")  # fmt: skip
+        answered = self._answered[reflected % _RING]
+        if answered < 0:
+            return None
+        gap = ((seq - answered) & 0xFFFFFFFF) - 1  # its messages since the one our received reply answered
+        if gap > self.largest_reply_gap:
+            self.largest_reply_gap = gap
+        if gap > self.max_reply_gap:
+            return (f"replies lost: the controller received none of our last {behind} replies over {gap} of its "
+                    f"messages ({gap * self.send_period_s * 1e3:.0f} ms)")  # fmt: skip
+        return None
+
+    def tracking(self, measured: Sequence[float], command: Sequence[float]) -> str | None:
+        """None while every joint's measured position [rad] is within the bound of the command in force."""
+        bound = self.max_tracking_error
+        worst = 0.0
+        for j in range(7):
+            e = measured[j] - command[j]
+            if e < 0.0:
+                e = -e
+            if e > worst:
+                worst = e
+            if e > bound[j]:
+                self.largest_tracking_error = max(self.largest_tracking_error, e)
+                return (f"A{j + 1} measured {measured[j]:.4f} rad is {e:.4f} rad from the command {command[j]:.4f} "
+                        f"rad (bound {bound[j]:.4f} rad): the robot does not follow, or was pushed")  # fmt: skip
+        if worst > self.largest_tracking_error:
+            self.largest_tracking_error = worst
+        return None

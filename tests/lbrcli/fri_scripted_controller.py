@@ -4,7 +4,11 @@ Unlike the simulator (real time, its own session logic), this controller sends t
 scripted cycle, waits for the reply the FRI rules require (receiveMultiplier counted as KUKA's client does) and
 records it. It can inject what the simulator doesn't produce on demand: safety stops, drives off, POOR quality,
 jumps in the sequence counter, malformed datagrams and datagrams from another address (127.0.0.2).
-The simulated robot is ideal: in COMMANDING_ACTIVE the ipo and measured positions become the last command.
+The simulated robot is ideal: in COMMANDING_ACTIVE the ipo and measured positions become the last command; a cycle
+without a command (its message lost on the way to the client, its reply lost or missing) is bridged by extrapolating
+at the last velocity, as KUKA's controller does. ``executed`` records where the robot was after every cycle and
+``command_at`` which of those positions a received command set — the fault campaign measures each command against
+what the robot executed before it (``command_ratios``).
 """
 
 from __future__ import annotations
@@ -41,6 +45,10 @@ class Cycle:
     mode: int = 1  # clientCommandMode: 1 POSITION, 2 WRENCH, 3 TORQUE
     mutate: Callable | None = None  # edits the message before it is encoded (wrong-but-decodable messages)
     io_out: tuple = ()  # extra IO channels (name, type, direction, value) — outputs reflect the client's writes
+    clock_ms: float | None = None  # [ms] the timestamp advances this much per sequence step (None: send_period)
+    stale_by: int = 0  # > 0: send a message this many sequence steps old (reordered), expect no reply
+    drop_reply: bool = False  # the reply to this message is lost (the controller never sees it)
+    push: float = 0.0  # [rad] the robot is pushed: A1's measured position is this far from where it was commanded
 
 
 @dataclass
@@ -81,6 +89,44 @@ class ScriptedController:
         self.thread = threading.Thread(target=self._run, daemon=True)
         self.q = list(self.q0)
         self.io_values: dict = {}
+        self.clock_ns = 0  # [ns] the controller's clock (timestamps), advanced per sequence step
+        self.executed: list[tuple[float, ...]] = []  # [rad] the robot's position after each cycle (COMMANDING_WAIT on)
+        self.command_at: list[int] = []  # indices into executed set by a received command
+        self.periods: list[float] = []  # [s] the send period of each executed cycle
+        self._vel = [0.0] * 7  # [rad/cycle] last commanded velocity (for extrapolation)
+        self._push = 0.0
+
+    def _robot_step(self, c: Cycle, pos: tuple[float, ...] | None) -> None:
+        """The robot's motion in one cycle: to the received command, else extrapolated (COMMANDING_ACTIVE)."""
+        if c.state < CW:
+            self._vel = [0.0] * 7
+            return
+        if c.state == CA and pos is not None:
+            self._vel = [a - b for a, b in zip(pos, self.q)]
+            self.q = list(pos)
+            self.command_at.append(len(self.executed))
+        elif c.state == CA:
+            self.q = [a + v for a, v in zip(self.q, self._vel)]
+        else:
+            self._vel = [0.0] * 7
+        self.executed.append(tuple(self.q))
+        self.periods.append(c.send_period * c.receive_multiplier * 1e-3)
+
+    def command_ratios(self, velocity, acceleration) -> tuple[float, float]:
+        """Largest |command − executed before| / (velocity limit × period) and |second difference| / (acceleration
+        limit × period²) over the received commands, against the robot's executed positions."""
+        step_r = second_r = 0.0
+        e = self.executed
+        for i in self.command_at:
+            if i < 2:
+                continue
+            dt = self.periods[i]
+            for j in range(7):
+                step = e[i][j] - e[i - 1][j]
+                second = step - (e[i - 1][j] - e[i - 2][j])
+                step_r = max(step_r, abs(step) / (velocity[j] * dt))
+                second_r = max(second_r, abs(second) / (acceleration[j] * dt * dt))
+        return step_r, second_r
 
     def start(self) -> "ScriptedController":
         self.thread.start()
@@ -106,14 +152,14 @@ class ScriptedController:
         m.robotInfo.operationMode = 0
         m.robotInfo.controlMode = 0
         md = m.monitorData
-        md.measuredJointPosition.value.extend(self.q)
+        md.measuredJointPosition.value.extend([self.q[0] + c.push, *self.q[1:]])
         md.measuredTorque.value.extend([1.0 + j for j in range(7)])
         md.externalTorque.value.extend([0.1 * j for j in range(7)])
         md.commandedTorque.value.extend([0.0] * 7)
         if self.version == "1.15":
             md.commandedJointPosition.value.extend(self.q)
-        md.timestamp.sec = 1_700_000_000 + seq // 1000
-        md.timestamp.nanosec = (seq % 1000) * 1_000_000
+        md.timestamp.sec = 1_700_000_000 + self.clock_ns // 1_000_000_000
+        md.timestamp.nanosec = self.clock_ns % 1_000_000_000
         if c.ball is not None:
             io = md.readIORequest.add()
             io.name, io.type, io.direction, io.analogValue = "ball_theta", 2, 0, c.ball
@@ -166,18 +212,23 @@ class ScriptedController:
                 self.sock.sendto(c.raw, dest)
                 time.sleep(self.pace_s)
                 continue
-            if not c.repeat_seq:
-                seq += 1 + c.seq_jump
-            data = self._message(c, max(seq, 0), reflected)
-            if c.foreign:
-                self.foreign_sock.sendto(data, dest)
+            if c.foreign:  # another sender forging the next counter: the controller's own counter is not used
+                self.foreign_sock.sendto(self._message(c, seq + 1, reflected), dest)
                 time.sleep(self.pace_s)
                 continue
+            if not c.repeat_seq and not c.stale_by:
+                seq += 1 + c.seq_jump
+                if seq > 0:
+                    self.clock_ns += int(round((1 + c.seq_jump) * (c.clock_ms or c.send_period) * 1e6))
+                if c.state == CA:  # the cycles of the messages the client never got: bridged
+                    for _ in range(c.seq_jump):
+                        self._robot_step(c, None)
+            data = self._message(c, max(seq - c.stale_by, 0), reflected)
             self.sock.sendto(data, dest)
             self.sent_seqs.append(seq)
             if c.pause_s:
                 time.sleep(c.pause_s)
-            if c.repeat_seq:
+            if c.repeat_seq or c.stale_by:
                 time.sleep(self.pace_s)
                 continue
             expect = False
@@ -187,6 +238,8 @@ class ScriptedController:
                     send_counter = 0
                     expect = True
             if not expect:
+                if c.receive_multiplier == 1:  # (with k > 1 the robot interpolates between commands: not recorded)
+                    self._robot_step(c, None)
                 time.sleep(self.pace_s)
                 continue
             if self.wait_for_client > 0:  # a client still starting up: keep sending until it answers the latest
@@ -205,9 +258,14 @@ class ScriptedController:
                 cmd = self._await_reply(time.monotonic() + self.reply_timeout)
             if cmd is None:
                 self.unanswered.append(i)
+                self._robot_step(c, None)
                 if len(self.unanswered) <= self.tolerate_unanswered and not self.client_done.is_set():
                     continue
                 return  # the client ended; so does the script
+            if c.drop_reply:
+                self._robot_step(c, None)
+                time.sleep(self.pace_s)
+                continue
             if cmd.header.reflectedSequenceCounter != seq:
                 self.unexpected.append(i)
             reflected = cmd.header.sequenceCounter
@@ -224,6 +282,5 @@ class ScriptedController:
                 Reply(i, c.state, seq, (cmd.header.sequenceCounter, cmd.header.reflectedSequenceCounter), pos,
                       tau, wr, io)
             )
-            if c.state == CA and pos is not None:
-                self.q = list(pos)
+            self._robot_step(c, pos)
             time.sleep(self.pace_s)

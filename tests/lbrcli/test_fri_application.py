@@ -162,18 +162,24 @@ def test_receive_multiplier_calls_every_message_and_sends_every_kth():
 
 
 def test_gaps_stale_foreign_and_malformed_are_counted_and_never_answered():
-    n = 40
+    n = 400  # within the jerk limit (a rejoin is jerk-limited)
     traj = min_jerk(n)
     player = TrajectoryPlayer(traj, LIM, period_s=1e-3)
-    ca = [Cycle(state=CA)] * 10
+    ca = [Cycle(state=CA)] * 100
     script = (preamble() + ca + [Cycle(state=CA, seq_jump=2)] + [Cycle(state=CA, repeat_seq=True)]
               + [Cycle(state=CA, foreign=True), Cycle(raw=b"\x00\x01garbage")] + [Cycle(state=CA)] * (n + 100))  # fmt: skip
     res, ctl, _, err = run(script, player)
     assert err is None and res.outcome is Outcome.COMPLETED
-    # the jump skips 2 counters, the foreign sender's message takes one: 3 missed
-    assert res.missed == 3 and res.stale == 1 and res.foreign == 1 and res.malformed == 1
+    # the jump skips 2 counters (the controller bridged 2 cycles): the rows it would have executed are skipped
+    assert res.missed == 2 and res.stale == 1 and res.foreign == 1 and res.malformed == 1
+    assert res.extrapolated_cycles == 2 and player.skipped_rows == 2
     assert ctl.unexpected == []
-    np.testing.assert_array_equal(sent_positions(ctl)[:n], traj)  # a gap does not skip rows
+    sent = sent_positions(ctl)
+    np.testing.assert_array_equal(sent[:100], traj[:100])
+    # a short jerk-limited rejoin from where the controller's extrapolation left the robot, then the rows in step
+    back = next(k for k in range(100, n - 2) if np.array_equal(sent[k : n - 2], traj[k + 2 :]))
+    assert back <= 100 + 100  # [cycles] catching up an acceleration of 2.8 rad/s² at the jerk limit takes time
+    assert max(ctl.command_ratios(LIM.velocity, LIM.acceleration)) <= 1.0
 
 
 @pytest.mark.parametrize(

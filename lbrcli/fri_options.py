@@ -74,6 +74,14 @@ SimLenientOpt = Annotated[
         "GOOD with half the replies in time (default: over 50 cycles, 90 %, as strict as the real one).",
     ),
 ]
+TrackingErrorOpt = Annotated[
+    Optional[float],
+    typer.Option(
+        "--max-tracking-error",
+        help="End the stream with a braking stop when a joint's measured position is farther than this from the "
+        "command \\[rad] (default: its velocity limit × max(20 ms, 8 command periods)).",
+    ),
+]
 
 
 PlotOpt = Annotated[
@@ -115,6 +123,15 @@ def validate_wait(wait: float | None) -> None:
 
     if wait is not None and not (math.isfinite(wait) and 0 < wait <= 3600):
         raise OptionError(f"--wait must be in (0, 3600] s, got {wait:g}")
+
+
+def validate_tracking_error(bound: float | None) -> None:
+    import math
+
+    from trajectories.errors import OptionError
+
+    if bound is not None and not (math.isfinite(bound) and 0 < bound <= 3.0):
+        raise OptionError(f"--max-tracking-error must be in (0, 3] rad, got {bound:g}")
 
 
 def validate_period(period: int | None) -> None:

@@ -64,6 +64,7 @@ def run_client(
     sim_lenient: bool = False,
     lab=None,
     observers: Sequence[Any] = (),
+    max_tracking_error: float | None = None,
 ):
     """Bind, start the simulator if no robot was named, attach the log, the pendulum module and telemetry, run the
     session with Ctrl-C/SIGTERM braking, stop everything; (result, simulator stats or None, lab figures)."""
@@ -80,6 +81,7 @@ def run_client(
         observers=[SessionFigures(), *observers],
         first_message_timeout_s=wait if wait is not None else (20.0 if embedded else 60.0),
         commanding_timeout_s=commanding_timeout_s if commanding_timeout_s is not None else (20.0 if embedded else None),
+        max_tracking_error=max_tracking_error,
     )
     if lab is not None:
         lab.validate(embedded)

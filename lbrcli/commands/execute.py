@@ -28,6 +28,7 @@ from ..fri_options import (
     PortOpt,
     RealtimeOpt,
     SimLenientOpt,
+    TrackingErrorOpt,
     RobotOpt,
     SimStartOpt,
     VersionOpt,
@@ -87,6 +88,7 @@ def execute(
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
     sim_lenient: SimLenientOpt = False,
+    max_tracking_error: TrackingErrorOpt = None,
     pendulum: PendulumOpt = None,
     baud: BaudOpt = 115200,
     pendulum_zero: PendZeroOpt = 0,
@@ -115,7 +117,7 @@ def execute(
     from trajectories.errors import InputError, OptionError
 
     from ..console import Reporter
-    from ..fri_options import validate_period, validate_port, validate_version, validate_wait
+    from ..fri_options import validate_period, validate_port, validate_tracking_error, validate_version, validate_wait
     from ..fri_runner import exit_for, plot_log, print_summary, run_client
     from ..options import check_margin, limits_from, make_robot
     from ..parsing import parse_joint_vector
@@ -124,6 +126,7 @@ def execute(
     validate_version(fri_version)
     validate_port(port)
     validate_wait(wait)
+    validate_tracking_error(max_tracking_error)
     validate_period(period)
     check_margin(margin)
     if not (math.isfinite(start_tolerance) and 0 <= start_tolerance <= 0.1):
@@ -204,7 +207,7 @@ def execute(
         )
     result, sim_stats, lab_figures = run_client(
         rep, player, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
+        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, max_tracking_error=max_tracking_error, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
     )  # fmt: skip
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)

@@ -7,7 +7,7 @@ from typing import Annotated, Any
 
 import typer
 
-from ..fri_options import BindOpt, LengthOpt, LogOpt, PeriodOpt, PlotOpt, PortOpt, RealtimeOpt, RobotOpt, SimLenientOpt, SimStartOpt, VersionOpt, WaitOpt
+from ..fri_options import BindOpt, LengthOpt, LogOpt, PeriodOpt, PlotOpt, PortOpt, RealtimeOpt, RobotOpt, SimLenientOpt, SimStartOpt, TrackingErrorOpt, VersionOpt, WaitOpt
 from ..options import JsonOpt, LimitsOpt
 
 
@@ -30,6 +30,7 @@ def ptp(
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
     sim_lenient: SimLenientOpt = False,
+    max_tracking_error: TrackingErrorOpt = None,
     limits: LimitsOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
@@ -45,7 +46,7 @@ def ptp(
     from trajectories.errors import CheckFailed, OptionError
 
     from ..console import Reporter
-    from ..fri_options import validate_period, validate_port, validate_version, validate_wait
+    from ..fri_options import validate_period, validate_port, validate_tracking_error, validate_version, validate_wait
     from ..fri_runner import exit_for, plot_log, print_summary, run_client
     from ..options import THESIS_Q_START, limits_from
     from ..parsing import parse_joint_vector
@@ -54,6 +55,7 @@ def ptp(
     validate_version(fri_version)
     validate_port(port)
     validate_wait(wait)
+    validate_tracking_error(max_tracking_error)
     validate_period(period)
     goal = parse_joint_vector(q, "Q")
     if not (math.isfinite(time_s) and 0 < time_s <= 600):
@@ -114,7 +116,7 @@ def ptp(
         )
     result, sim_stats, lab_figures = run_client(
         rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime,
+        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, max_tracking_error=max_tracking_error,
     )  # fmt: skip
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)

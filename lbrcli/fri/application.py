@@ -255,6 +255,12 @@ class ClientApplication:
             self.missed += d - 1
             self._tick += d
             if d > 1 and self._last_state == CMD_ACTIVE and self._active_sent > 0:
+                if self._sup is not None and d - 1 > self._sup.max_reply_gap:
+                    # longer than any controller bridges: where the robot is, is unknown — it stopped it itself
+                    self._last_seq = seq
+                    self._finish(Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {d - 1} messages of the "
+                                 "controller were lost in a row: no command is safe from here", observe=False)  # fmt: skip
+                    return False
                 skipped = self._extrapolate((d - 1) // (self._period_key[1] if self._period_key else 1))
         self._last_seq = seq
         self.cycles += 1
@@ -430,7 +436,7 @@ class ClientApplication:
         else:
             q = cmd.joint_position
             tau, wrench = cmd.torque, cmd.wrench
-        reason = guard.refuse_position(q, prev, prev2)  # type: ignore[arg-type]
+        reason = guard.refuse_position(q, prev, prev2, not cyc.braking)  # type: ignore[arg-type]
         if reason is None and mode == _TORQUE:
             tau = tau if tau is not None else _ZERO7
             reason = guard.refuse_torque(tau)
@@ -448,7 +454,7 @@ class ClientApplication:
             q = self._brake.next()  # type: ignore[union-attr]
             cyc.braking = True
             self.braking_cycles += 1
-            if guard.refuse_position(q, prev, prev2) is not None:
+            if guard.refuse_position(q, prev, prev2, False) is not None:
                 q = prev  # cannot happen within the limits; a hold is the last resort
             tau = _ZERO7 if mode == _TORQUE else None
             wrench = _ZERO6 if mode == _WRENCH else None

@@ -1,7 +1,8 @@
 """Per-cycle command guard: every command that leaves the client is one the robot can follow.
 
-Joint position: 7 finite values inside the position limits, the step from the previous command within the velocity
-limit and the second difference within the acceleration limit (both × period, as the controller executes them).
+Joint position: 7 finite values inside the position limits — with room to stop before them (a jerk-limited stop from
+the command's velocity: v²/2a + v·a/2j) — the step from the previous command within the velocity limit and the
+second difference within the acceleration limit (both × period, as the controller executes them).
 Torque (TORQUE mode): 7 finite values within the torque table. Wrench (WRENCH mode): 6 finite values within the
 configured force [N] and torque [Nm] bounds. Limits are compared with a stated relative tolerance (REL_TOL), so a
 command exactly at a limit passes. Pure Python over 7 floats: cheaper per cycle than numpy on tiny arrays.
@@ -27,6 +28,7 @@ class CommandGuard:
     upper: tuple[float, ...]  # [rad] |q| ≤ upper
     max_step: tuple[float, ...]  # [rad] velocity limit × period
     max_second: tuple[float, ...]  # [rad] acceleration limit × period²
+    stop_k: tuple[tuple[float, float], ...]  # per joint (acceleration limit, jerk limit): for stopping distances
     max_torque: tuple[float, ...]  # [Nm]
     max_force: float  # [N] per axis
     max_moment: float  # [Nm] per axis
@@ -45,6 +47,7 @@ class CommandGuard:
             upper=tuple(float(p) * k for p in limits.position),
             max_step=tuple(float(v) * period_s * k for v in limits.velocity),
             max_second=tuple(float(a) * period_s * period_s * k for a in limits.acceleration),
+            stop_k=tuple((float(a), float(j)) for a, j in zip(limits.acceleration, limits.jerk)),
             max_torque=tuple(float(t) * k for t in limits.torque),
             max_force=max_force,
             max_moment=max_moment,
@@ -52,9 +55,10 @@ class CommandGuard:
         )
 
     def refuse_position(
-        self, q: Sequence[float], prev: Sequence[float], prev2: Sequence[float]
+        self, q: Sequence[float], prev: Sequence[float], prev2: Sequence[float], room_to_stop: bool = True
     ) -> str | None:
-        """None if ``q`` [rad] may follow the commands ``prev`` and ``prev2`` (one and two periods before)."""
+        """None if ``q`` [rad] may follow the commands ``prev`` and ``prev2`` (one and two periods before);
+        ``room_to_stop``: also a jerk-limited stop from there must end inside the position limits."""
         if q is None or len(q) != 7:
             return f"the joint position command has {0 if q is None else len(q)} values, not 7"
         dt = self.period_s
@@ -74,6 +78,14 @@ class CommandGuard:
                     f"A{j + 1} second difference {second:+.3e} rad = {second / (dt * dt):+.2f} rad/s² exceeds the "
                     f"acceleration limit {self.max_second[j] / (dt * dt):.2f} rad/s²"
                 )
+            if room_to_stop and step != 0.0:
+                a_max, j_max = self.stop_k[j]
+                stop = x + stopping_distance(step / dt, second / (dt * dt), a_max, j_max)
+                if not (-self.upper[j] <= stop <= self.upper[j]):
+                    return (
+                        f"A{j + 1} at {x:.6f} rad moving {step / dt:+.4f} rad/s cannot stop before the position limit "
+                        f"±{self.upper[j]:.6f} rad (it needs to {stop:.6f} rad)"
+                    )
         return None
 
     def refuse_torque(self, tau: Sequence[float] | None) -> str | None:
@@ -95,3 +107,20 @@ class CommandGuard:
                 unit = "N" if i < 3 else "Nm"
                 return f"wrench component {'xyzxyz'[i]}{'' if i < 3 else ' moment'} {x:.4f} {unit} outside ±{bound:g} {unit}"
         return None
+
+
+def stopping_distance(v: float, a: float, a_max: float, j_max: float) -> float:
+    """Signed distance [rad] a jerk-limited stop travels from velocity ``v`` [rad/s] and acceleration ``a``
+    [rad/s²] (an upper bound, exact for fast stops): first the acceleration to 0 (or from 0, if it already brakes),
+    then a stop at ``a_max`` with jerk ``j_max``."""
+    sign = 1.0 if v > 0.0 else -1.0
+    v, a = abs(v), a * sign  # a > 0: still speeding up in the direction of motion
+    t = abs(a) / j_max
+    if a > 0.0:  # ramp the acceleration down first: it keeps going
+        d1 = v * t + 0.5 * a * t * t - j_max * t * t * t / 6.0
+        v1 = v + 0.5 * a * t
+        return sign * (d1 + v1 * v1 / (2.0 * a_max) + v1 * a_max / (2.0 * j_max))
+    # braking already: as a stop that started from a = 0 at the higher velocity, minus the part already done
+    v0 = v + 0.5 * a * a / j_max
+    done = v0 * t - j_max * t * t * t / 6.0
+    return sign * max(0.0, v0 * v0 / (2.0 * a_max) + v0 * a_max / (2.0 * j_max) - done)

@@ -130,6 +130,7 @@ class Supervisor:
         if self._ts0 < 0 or ts == 0:
             self._ts0, self._seq0 = ts, seq
             return None
+        # cumulative from the first message: a late first message or a controller catching up cannot trip it
         steps = (seq - self._seq0) & 0xFFFFFFFF
         expected = steps * self.send_period_s  # [s]
         elapsed = (ts - self._ts0) * 1e-9

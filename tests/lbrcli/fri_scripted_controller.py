@@ -78,6 +78,8 @@ class ScriptedController:
     on_cycle: Callable[[int], None] | None = None  # called with the script index before each cycle is sent
     tolerate_unanswered: int = 0  # expected replies that may be missing (e.g. a backlog the client dropped)
     wait_for_client: float = 0.0  # [s] > 0: repeat the first expected-reply cycle (new counters) until answered
+    max_bridge: int | None = None  # more cycles than this without a command in COMMANDING_ACTIVE: the controller
+    # stops the robot and reports POOR quality in MONITORING_READY from then on (as a real one does); None: never
 
     def __post_init__(self) -> None:
         self.codec = FriCodec(self.version)
@@ -94,13 +96,20 @@ class ScriptedController:
         self.command_at: list[int] = []  # indices into executed set by a received command
         self.periods: list[float] = []  # [s] the send period of each executed cycle
         self._vel = [0.0] * 7  # [rad/cycle] last commanded velocity (for extrapolation)
-        self._push = 0.0
+        self._bridged = 0  # consecutive COMMANDING_ACTIVE cycles without a command
+        self.fell_back = False  # the controller stopped commanding because commands were missing
 
     def _robot_step(self, c: Cycle, pos: tuple[float, ...] | None) -> None:
         """The robot's motion in one cycle: to the received command, else extrapolated (COMMANDING_ACTIVE)."""
         if c.state < CW:
             self._vel = [0.0] * 7
             return
+        if c.state == CA and pos is None and self.max_bridge is not None:
+            self._bridged += 1
+            if self._bridged > self.max_bridge:
+                self.fell_back = True
+        elif c.state == CA:
+            self._bridged = 0
         if c.state == CA and pos is not None:
             self._vel = [a - b for a, b in zip(pos, self.q)]
             self.q = list(pos)
@@ -110,7 +119,7 @@ class ScriptedController:
         else:
             self._vel = [0.0] * 7
         self.executed.append(tuple(self.q))
-        self.periods.append(c.send_period * c.receive_multiplier * 1e-3)
+        self.periods.append((c.clock_ms or c.send_period) * c.receive_multiplier * 1e-3)  # the true period
 
     def command_ratios(self, velocity, acceleration) -> tuple[float, float]:
         """Largest |command − executed before| / (velocity limit × period) and |second difference| / (acceleration
@@ -208,6 +217,9 @@ class ScriptedController:
         for i, c in enumerate(self.script):
             if self.on_cycle is not None:
                 self.on_cycle(i)
+            if self.fell_back and c.state >= CW:
+                self._vel = [0.0] * 7  # the controller stopped the robot
+                c = Cycle(**{**c.__dict__, "state": MR, "quality": 0})
             if c.raw is not None:
                 self.sock.sendto(c.raw, dest)
                 time.sleep(self.pace_s)

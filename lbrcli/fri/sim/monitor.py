@@ -66,6 +66,8 @@ class MonitoringWriter:
             md.commandedJointPosition.value.extend(zeros)
             self._v_cmd_q = md.commandedJointPosition.value
         self._ts = md.timestamp
+        self._t0_ns: int | None = None
+        self._period_ns = int(cfg.period_ms) * 1_000_000
         self._ts.sec = 0
         self._ts.nanosec = 0
         ipo = m.ipoData
@@ -115,7 +117,11 @@ class MonitoringWriter:
                 self._ipo_posed[:] = ipo_q
                 _pose7(arm.tcp_pose(ipo_q), ipo.cartesianPose.element)
                 ipo.redundancyInformation.value = float(ipo_q[2])
-        ns = time.time_ns()
+        # the controller's real-time clock: its cycle instants (wall clock at the first message + seq × period), not
+        # this process's scheduling jitter
+        if self._t0_ns is None:
+            self._t0_ns = time.time_ns() - seq * self._period_ns
+        ns = self._t0_ns + seq * self._period_ns
         self._ts.sec = (ns // 1_000_000_000) & _U32
         self._ts.nanosec = ns % 1_000_000_000
         return self.codec.encode(m)

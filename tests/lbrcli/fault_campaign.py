@@ -1,0 +1,308 @@
+"""The FRI fault campaign: the client application against the scripted (independent) controller under loss,
+bursts, duplicates, reordering, delay, lost replies, malformed and wrong-but-decodable messages, foreign senders,
+robot-side stops, state and period changes, a lying clock, a pushed robot, signals, a full disk and bad files.
+
+For every case: how the session ended, the largest commanded step / (velocity limit × period) and second difference
+/ (acceleration limit × period²) measured against what the robot executed (the controller's extrapolation included),
+whether a traceback escaped, and whether the log reads back with the project's own reader. Used by
+``test_fault_campaign.py`` (every case) and ``benchmarks/bench_faults.py`` (the table)."""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import resource
+import signal
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+from fri_scripted_controller import CA, CW, IDLE, MR, MW, Cycle, ScriptedController
+
+from lbrcli.fri import ClientApplication, EndReason, ExecutionLog, LogObserver, TrajectoryPlayer
+from lbrcli.fri.log import LOG_COLUMNS
+from trajectories.csvio import read_table
+from trajectories.limits import default_limits
+
+LIM = default_limits()
+Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])
+DIRECTION = np.array([1, 0.5, -0.5, 1, 0.3, -1, 1])
+PREAMBLE = 11  # script cycles before COMMANDING_ACTIVE
+
+
+def ramp(n: int = 700, speed: float = 0.73, ramp_s: float = 0.4, dt: float = 1e-3) -> np.ndarray:
+    """From rest to ``speed`` × the velocity limit on every joint, smoothly, and on at that speed [rad]."""
+    t = np.arange(n) * dt
+    w = 2 * np.pi / ramp_s
+    s = np.where(t < ramp_s, t**2 / (2 * ramp_s) + (np.cos(w * t) - 1) / (w**2 * ramp_s), ramp_s / 2 + (t - ramp_s))
+    return Q0 + s[:, None] * speed * LIM.velocity
+
+
+def swing(n: int = 800, amp: float = 0.3, dt: float = 1e-3) -> np.ndarray:
+    """A rest-to-rest minimum-jerk move of ``amp`` [rad] (scaled per joint) over n rows."""
+    s = np.linspace(0.0, 1.0, n)
+    p = 10 * s**3 - 15 * s**4 + 6 * s**5
+    return Q0 + amp * p[:, None] * DIRECTION
+
+
+def preamble(**kw: Any) -> list[Cycle]:
+    return ([Cycle(state=IDLE, **kw)] + [Cycle(state=MW, quality=1, **kw)] * 3 + [Cycle(state=MR, **kw)] * 3
+            + [Cycle(state=CW, **kw)] * 4)  # fmt: skip
+
+
+def active(n: int, at: dict[int, Cycle] | None = None, **kw: Any) -> list[Cycle]:
+    """n COMMANDING_ACTIVE cycles; ``at`` replaces (or, for lists, inserts) cycles at those indices."""
+    out: list[Cycle] = [Cycle(state=CA, **kw)] * n
+    for i in sorted(at or {}, reverse=True):
+        c = at[i]
+        out[i : i + 1] = c if isinstance(c, list) else [c]
+    return out
+
+
+@dataclass
+class Case:
+    name: str
+    category: str
+    script: list[Cycle]
+    rows: np.ndarray
+    expect: tuple[EndReason, ...]  # acceptable ends
+    period_s: float = 1e-3
+    on_cycle: Callable[[int, ClientApplication], None] | None = None
+    full_disk_at: int | None = None  # the file system fills at this script cycle (the next log row is cut)
+    move_to_start: bool = False
+    controller: dict[str, Any] = field(default_factory=lambda: dict(tolerate_unanswered=1000, reply_timeout=0.3))
+    q_start: np.ndarray = field(default_factory=lambda: Q0.copy())
+    log: bool = True
+
+
+@dataclass
+class CaseResult:
+    name: str
+    category: str
+    outcome: str
+    reason: str
+    detail: str
+    step_ratio: float  # largest |step| / (velocity limit × period) against the executed positions
+    second_ratio: float  # largest |second difference| / (acceleration limit × period²)
+    traceback: str | None
+    log_readable: bool
+    log_rows: int
+    expected: bool
+
+    @property
+    def ok(self) -> bool:
+        return (self.traceback is None and self.step_ratio <= 1.0 + 1e-9 and self.second_ratio <= 1.0 + 1e-9
+                and self.log_readable and self.expected)  # fmt: skip
+
+
+def _mutate(fn: Callable[[Any], None]) -> Cycle:
+    return Cycle(state=CA, mutate=fn)
+
+
+def _flip(bit: int) -> Callable[[Any], None]:
+    """Flip one bit of the measured position of A1 (a wrong value that still decodes)."""
+
+    def f(m: Any) -> None:
+        v = np.array([m.monitorData.measuredJointPosition.value[0]], dtype=np.float64)
+        v.view(np.uint64)[0] ^= np.uint64(1) << np.uint64(bit)
+        m.monitorData.measuredJointPosition.value[0] = float(v[0])
+
+    return f
+
+
+def _interrupt(at: int, reason: EndReason) -> Callable[[int, ClientApplication], None]:
+    def f(i: int, app: ClientApplication) -> None:
+        if i == at:
+            app.interrupt(reason)
+
+    return f
+
+
+def cases() -> list[Case]:
+    """The campaign (≥ 60 cases)."""
+    R = ramp()  # fast, never at rest at its end
+    S = swing()  # rest to rest
+    fin, stop = (EndReason.FINISHED,), (EndReason.FINISHED, EndReason.SUPERVISION, EndReason.GUARD)
+    out: list[Case] = []
+
+    def add(name, category, script, rows=R, expect=fin, **kw):
+        out.append(Case(name, category, script, rows, expect, **kw))
+
+    full = lambda rows, at=None, **kw: preamble() + active(len(rows) + 300, at, **kw)  # noqa: E731
+    # loss of monitoring messages (the controller bridges by extrapolation; the client rejoins in step)
+    for lost in (1, 2, 5, 10, 30):
+        add(f"loss {lost} at speed", "loss", full(R, {500: Cycle(state=CA, seq_jump=lost)}), R, stop)
+    for lost in (1, 3):
+        add(f"loss {lost} accelerating", "loss", full(S, {150: Cycle(state=CA, seq_jump=lost)}), S, fin)
+    add("loss during the move to start", "loss", preamble() + active(len(S) + 2000, {20: Cycle(state=CA, seq_jump=3)}), S, fin,
+        move_to_start=True, q_start=Q0 + 0.05)  # fmt: skip
+    add("loss 1 at the last row", "loss", full(S, {len(S) - 2: Cycle(state=CA, seq_jump=1)}), S, fin)
+    # bursts of loss
+    add("burst: 3 × loss 3", "bursts", full(R, {400: Cycle(state=CA, seq_jump=3), 402: Cycle(state=CA, seq_jump=3),
+                                             404: Cycle(state=CA, seq_jump=3)}), R, stop)  # fmt: skip
+    add("burst: every other lost", "bursts", full(S, {k: Cycle(state=CA, seq_jump=1) for k in range(200, 240, 2)}),
+        S, stop)  # fmt: skip
+    add("burst: 100 lost at once", "bursts", full(R, {450: Cycle(state=CA, seq_jump=100)}), R, stop)
+    # duplicates and reordering (stale: ignored)
+    add("duplicate at speed", "duplicates", full(R, {500: [Cycle(state=CA), Cycle(state=CA, repeat_seq=True)]}), R, stop)
+    add("5 duplicates", "duplicates", full(S, {300: [Cycle(state=CA)] + [Cycle(state=CA, repeat_seq=True)] * 5}), S)
+    add("reordered by 1", "reordering", full(R, {500: [Cycle(state=CA), Cycle(state=CA, stale_by=1)]}), R, stop)
+    add("reordered by 3", "reordering", full(S, {300: [Cycle(state=CA), Cycle(state=CA, stale_by=3)]}), S)
+    add("old message after a gap", "reordering", full(S, {300: [Cycle(state=CA, seq_jump=2),
+                                                                Cycle(state=CA, stale_by=2)]}), S)  # fmt: skip
+    # delay (the controller pauses; lock-step)
+    add("controller pauses 50 ms", "delay", full(S, {300: Cycle(state=CA, pause_s=0.05)}), S)
+    add("controller pauses in COMMANDING_WAIT", "delay", preamble()[:-1] + [Cycle(state=CW, pause_s=0.2)]
+        + active(len(S) + 300), S)  # fmt: skip
+    # replies lost (the controller never sees them)
+    for n in (1, 2):
+        add(f"{n} replies lost at speed", "replies lost", full(R, {500: [Cycle(state=CA, drop_reply=True)] * n}), R, stop)
+    add("replies lost: the controller falls back", "replies lost",
+        full(R, {500: [Cycle(state=CA, drop_reply=True)] * 10}), R, (EndReason.QUALITY_POOR,),
+        controller=dict(max_bridge=2, tolerate_unanswered=1000, reply_timeout=0.3))  # fmt: skip
+    # malformed datagrams and wrong-but-decodable messages (never answered)
+    add("garbage datagram", "malformed", full(R, {500: [Cycle(raw=b"\x00\x01garbage"), Cycle(state=CA)]}), R, stop)
+    add("empty datagram", "malformed", full(S, {300: [Cycle(raw=b""), Cycle(state=CA)]}), S)
+    add("6 ipo values", "wrong but decodable",
+        full(R, {500: _mutate(lambda m: m.ipoData.jointPosition.value.__delitem__(slice(6, 7)))}), R, stop)
+    add("no ipo values", "wrong but decodable", full(S, {300: _mutate(lambda m: m.ipoData.ClearField("jointPosition"))}), S, stop)
+    add("ipo 1e6", "wrong but decodable", full(R, {500: _mutate(lambda m: m.ipoData.jointPosition.value.__setitem__(3, 1e6))}), R, stop)
+    add("measured NaN", "wrong but decodable",
+        full(R, {500: _mutate(lambda m: m.monitorData.measuredJointPosition.value.__setitem__(0, math.nan))}), R, stop)
+    add("measured inf", "wrong but decodable",
+        full(S, {300: _mutate(lambda m: m.monitorData.measuredJointPosition.value.__setitem__(2, math.inf))}), S, stop)
+    add("no connection info", "wrong but decodable", full(R, {500: _mutate(lambda m: m.ClearField("connectionInfo"))}), R, stop)
+    add("6 measured values", "wrong but decodable",
+        full(S, {300: _mutate(lambda m: m.monitorData.measuredJointPosition.value.__delitem__(slice(0, 1)))}), S, stop)
+    for bit in (63, 62, 55, 52, 40):
+        add(f"measured A1 bit {bit} flipped", "wrong but decodable", full(R, {500: _mutate(_flip(bit))}), R, stop)
+    add("6 values in COMMANDING_WAIT", "wrong but decodable",
+        preamble()[:-1] + [Cycle(state=CW, mutate=lambda m: m.ipoData.jointPosition.value.__delitem__(slice(6, 7)))]
+        + active(len(S) + 300), S)  # fmt: skip
+    add("ipo 10 rad in COMMANDING_WAIT", "wrong but decodable",
+        preamble()[:-1] + [Cycle(state=CW, mutate=lambda m: m.ipoData.jointPosition.value.__setitem__(0, 10.0))]
+        + active(len(S) + 300), S)  # fmt: skip
+    # foreign senders (ignored)
+    add("foreign sender once", "foreign", full(R, {500: [Cycle(state=CA, foreign=True), Cycle(state=CA)]}), R, stop)
+    add("foreign sender 10 times", "foreign", full(S, {300: [Cycle(state=CA, foreign=True)] * 10 + [Cycle(state=CA)]}), S)
+    # robot-side ends at speed (the controller stops the robot itself: the client stops answering)
+    side = {"safety stop": dict(safety=2), "drives off": dict(drive=1), "quality POOR": dict(quality=0),
+            "back to MONITORING_READY": dict(state=MR), "back to COMMANDING_WAIT": dict(state=CW), "IDLE": dict(state=IDLE)}
+    reasons = {"safety stop": EndReason.SAFETY_STOP, "drives off": EndReason.DRIVES_OFF,
+               "quality POOR": EndReason.QUALITY_POOR, "IDLE": EndReason.IDLE}  # fmt: skip
+    for name, kw in side.items():
+        add(name + " at speed", "robot side", full(R, {500: Cycle(**{"state": CA, **kw})}), R,
+            (reasons.get(name, EndReason.LEFT_COMMANDING),))  # fmt: skip
+    add("quality FAIR at speed", "quality", full(R, {500: Cycle(state=CA, quality=1)}), R, stop)
+    add("safety stop in COMMANDING_WAIT", "robot side", preamble()[:-1] + [Cycle(state=CW, safety=1)] + active(100), S,
+        (EndReason.SAFETY_STOP,))  # fmt: skip
+    # period and clock
+    add("period change at speed", "period", full(R, {500: Cycle(state=CA, send_period=2)}), R, (EndReason.PERIOD_CHANGED,))
+    add("receive multiplier change", "period", full(S, {300: Cycle(state=CA, receive_multiplier=2)}), S,
+        (EndReason.PERIOD_CHANGED,))  # fmt: skip
+    add("5 ms claimed, 2 ms real", "clock", preamble(send_period=5, clock_ms=2) + active(700, send_period=5, clock_ms=2),
+        swing(400, amp=0.3), (EndReason.SUPERVISION,), period_s=5e-3)  # fmt: skip
+    add("clock jumps back", "clock", full(S, {300: Cycle(state=CA, clock_ms=-100)}), S, (EndReason.SUPERVISION,))
+    add("5 ms session", "period", preamble(send_period=5) + active(700, send_period=5), swing(400), fin, period_s=5e-3)
+    add("2 ms, receive multiplier 2", "period", preamble(send_period=2, receive_multiplier=2)
+        + active(2 * 400 + 200, send_period=2, receive_multiplier=2), swing(400), fin, period_s=4e-3)  # fmt: skip
+    # the robot does not follow
+    add("pushed 0.3 rad at speed", "pushed", full(R, {k: Cycle(state=CA, push=0.3) for k in range(500, 520)}), R,
+        (EndReason.SUPERVISION,))  # fmt: skip
+    add("pushed 0.1 rad at rest", "pushed", full(S, {k: Cycle(state=CA, push=0.1) for k in range(20, 60)}), S,
+        (EndReason.SUPERVISION,))  # fmt: skip
+    add("pushed away before activation", "pushed", preamble()[:-2] + [Cycle(state=CW, push=0.01)] * 2
+        + active(len(S) + 300), S, (EndReason.CLIENT_REFUSED, EndReason.GUARD))  # fmt: skip
+    # signals
+    for at, rows, label in ((PREAMBLE + 500, R, "at speed"), (PREAMBLE + 150, S, "accelerating"),
+                            (PREAMBLE + 5, S, "just activated"), (5, S, "before commanding")):  # fmt: skip
+        for reason in (EndReason.SIGINT, EndReason.SIGTERM):
+            add(f"{reason.name} {label}", "signals", full(rows), rows, (reason,), on_cycle=_interrupt(at, reason))
+    # a full disk
+    for at, rows, label in ((200, R, "accelerating"), (600, R, "at speed"), (3, S, "at the start")):
+        add(f"disk full {label}", "full disk", full(rows), rows, (EndReason.OBSERVER_FAILED,), full_disk_at=PREAMBLE + at)
+    # bad files (the library level: what the CLI's checks would refuse before, the guard refuses here)
+    jump = R.copy()
+    jump[450:, 3] += 0.05
+    nan = S.copy()
+    nan[300, 2] = math.nan
+    osc = np.repeat(Q0[None], 200, axis=0)
+    osc[50:, 0] += 0.95 * LIM.velocity[0] * 1e-3 * (np.arange(150) % 2)
+    u = np.linspace(0.0, 1.0, 800)
+    beyond = np.repeat(Q0[None], 800, axis=0)
+    beyond[:, 0] = LIM.position[0] - 0.1 + 0.15 * (10 * u**3 - 15 * u**4 + 6 * u**5)  # ends 0.05 rad past A1's limit
+    ends_moving = R[:600]
+    far = S + 0.1
+    add("file jumps at speed", "bad files", full(jump), jump, (EndReason.GUARD,))
+    add("file has NaN", "bad files", full(nan), nan, (EndReason.GUARD,))
+    add("file oscillates", "bad files", full(osc), osc, (EndReason.GUARD,))
+    add("file crosses a position limit", "bad files", full(beyond), beyond, (EndReason.GUARD, EndReason.CLIENT_REFUSED),
+        q_start=beyond[0])  # fmt: skip
+    add("file ends moving", "bad files", full(ends_moving), ends_moving, fin)
+    add("file starts far away", "bad files", full(far), far, (EndReason.CLIENT_REFUSED,))
+    return out
+
+
+@contextlib.contextmanager
+def _disk_full(path: Path, at: int | None, ctl: ScriptedController, app: ClientApplication):
+    """From script cycle ``at`` on, writes beyond the log's size + 50 bytes fail (EFBIG through RLIMIT_FSIZE, with
+    SIGXFSZ ignored): a file system that fills in the middle of a row."""
+    if at is None:
+        yield
+        return
+    old_sig = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    before = ctl.on_cycle
+
+    def fill(i: int) -> None:
+        if before is not None:
+            before(i)
+        if i == at:
+            resource.setrlimit(resource.RLIMIT_FSIZE, (path.stat().st_size + 50, hard))
+
+    ctl.on_cycle = fill
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, old_sig)
+
+
+def run_case(case: Case, folder: Path) -> CaseResult:
+    """Run one case; its log goes to ``folder``."""
+    period = case.period_s
+    player = TrajectoryPlayer(case.rows, LIM, period_s=period, move_to_start=case.move_to_start)
+    app = ClientApplication(player, "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=LIM,
+                            first_message_timeout_s=10, silence_timeout_s=3)  # fmt: skip
+    app.connect()
+    ctl = ScriptedController(app.port, case.script, tuple(case.q_start), **case.controller)
+    if case.on_cycle is not None:
+        ctl.on_cycle = lambda i: case.on_cycle(i, app)  # type: ignore[misc]
+    path = folder / f"{abs(hash(case.name))}.csv"
+    log = ExecutionLog(path)
+    app.observers.append(LogObserver(log))
+    traceback = None
+    res = None
+    try:
+        with _disk_full(path, case.full_disk_at, ctl, app):
+            ctl.start()
+            res = app.run()
+    except Exception as exc:  # noqa: BLE001 - a traceback is a finding
+        traceback = f"{type(exc).__name__}: {exc}"
+    finally:
+        ctl.client_done.set()
+        ctl.join()
+        app.close()
+        log.close()
+    readable, rows = True, 0
+    if path.exists():
+        try:
+            rows = len(read_table(path, LOG_COLUMNS, time="increasing").column("t"))
+        except Exception:  # noqa: BLE001
+            readable = False
+        path.unlink()
+    step_r, second_r = ctl.command_ratios(LIM.velocity, LIM.acceleration)
+    return CaseResult(case.name, case.category, res.outcome.value if res else "traceback",
+                      res.reason.value if res else "-", res.detail if res else "", step_r, second_r, traceback,
+                      readable, rows, res is not None and res.reason in case.expect)  # fmt: skip

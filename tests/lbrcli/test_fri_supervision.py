@@ -1,0 +1,76 @@
+"""Supervisor (lbrcli.fri.supervision): the controller's clock, replies reaching it, the robot following; and the
+reply check end to end against the scripted controller."""
+
+from __future__ import annotations
+
+import math
+
+from fault_campaign import LIM, Q0, active, preamble, ramp
+from fri_scripted_controller import CA, Cycle, ScriptedController
+
+from lbrcli.fri import ClientApplication, EndReason, TrajectoryPlayer
+from lbrcli.fri.guard import stopping_distance
+from lbrcli.fri.supervision import Supervisor
+
+
+def sup(period=5e-3):
+    return Supervisor.from_limits(LIM.velocity, period)
+
+
+def test_a_clock_that_agrees_never_trips_even_late_or_coarse():
+    s = sup()
+    for seq in range(2000):
+        late = 3_000_000 if seq % 7 == 0 else 0  # [ns] jitter: some messages stamped late
+        ns = 1_000_000_000 + seq * 5_000_000 + late
+        assert s.clock(seq, ns // 10**9, ns % 10**9) is None
+    coarse = sup()
+    for seq in range(2000):  # whole seconds only
+        assert coarse.clock(seq, 100 + seq * 5 // 1000, 0) is None
+    none = sup()
+    assert all(none.clock(seq, 0, 0) is None for seq in range(100))  # a controller without timestamps
+
+
+def test_a_controller_faster_than_its_period_trips_within_ten_messages():
+    s = sup()
+    for seq in range(1, 40):
+        ns = seq * 2_000_000  # 2 ms real, 5 ms claimed
+        text = s.clock(seq, ns // 10**9, ns % 10**9)
+        if text:
+            break
+    assert text and "2.00 ms, not every 5 ms" in text and seq <= 10
+
+
+def test_tracking_bound_defaults_from_the_velocity_limit_and_the_period():
+    assert sup(1e-3).max_tracking_error[0] == LIM.velocity[0] * 0.02
+    assert math.isclose(sup(5e-3).max_tracking_error[0], LIM.velocity[0] * 0.04)
+    s = sup()
+    q = tuple(Q0)
+    assert s.tracking(q, q) is None
+    pushed = (q[0], q[1], q[2] + 0.2, *q[3:])
+    assert "A3" in s.tracking(pushed, q)
+
+
+def test_stopping_distance_is_an_upper_bound_of_a_jerk_limited_stop():
+    # v²/2a + v·a/2j from a = 0 at 1.5 rad/s on A1: 0.131 + 0.0475
+    assert math.isclose(stopping_distance(1.5, 0.0, 8.57, 135.0), 1.5**2 / 17.14 + 1.5 * 8.57 / 270, rel_tol=1e-12)
+    assert stopping_distance(-1.5, 0.0, 8.57, 135.0) < 0
+    assert stopping_distance(1.0, 5.0, 8.57, 135.0) > stopping_distance(1.0, 0.0, 8.57, 135.0)
+    assert stopping_distance(1.0, -8.57, 8.57, 135.0) < stopping_distance(1.0, 0.0, 8.57, 135.0)
+
+
+def test_replies_that_stop_reaching_the_controller_end_the_stream():
+    rows = ramp(900, speed=0.3)
+    player = TrajectoryPlayer(rows, LIM, period_s=1e-3)
+    app = ClientApplication(player, "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=LIM,
+                            first_message_timeout_s=10, silence_timeout_s=3)  # fmt: skip
+    app.connect()
+    script = preamble() + active(1300, {300: [Cycle(state=CA, drop_reply=True)] * 120})
+    ctl = ScriptedController(app.port, script, tuple(Q0), tolerate_unanswered=1000, reply_timeout=0.3).start()
+    try:
+        res = app.run()
+    finally:
+        ctl.client_done.set()
+        ctl.join()
+        app.close()
+    assert res.reason is EndReason.SUPERVISION and "replies lost" in res.detail
+    assert 50 <= res.largest_reply_gap <= 52  # tripped as the gap passed 50 ms

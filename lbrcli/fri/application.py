@@ -301,7 +301,7 @@ class ClientApplication:
                 if problem is None and self._active_sent > 0 and mon.ipoData.clientCommandMode == _POSITION:
                     problem = sup.tracking(mon.monitorData.measuredJointPosition.value, self._prev)
             if problem is not None:
-                self._supervision_stop(problem)
+                self._stop_braking(Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {problem}")
         # ---- state change and robot-side ends --------------------------------------------------------------
         if not self.states_seen or state != self.states_seen[-1]:
             self.states_seen.append(state)
@@ -477,22 +477,20 @@ class ClientApplication:
         """The controller bridged ``n`` command periods without our commands (its messages were lost): continue the
         sent history as it did (at the last commands' velocity, within the velocity limit); ``n`` (≤ 64)."""
         n = min(n, 64)
-        cap = self._guard.max_step if self._guard is not None else None
+        cap = self._guard.max_step  # type: ignore[union-attr] - commands were sent, so the guard exists
         for _ in range(n):
             prev, prev2 = self._prev, self._prev2
-            if cap is None:
-                nxt = prev
-            else:
-                nxt = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(prev, prev2, cap))
+            nxt = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(prev, prev2, cap))
             self._prev3, self._prev2, self._prev = prev2, prev, nxt
         self.extrapolated_cycles += n
         return n
 
     # -- stops -----------------------------------------------------------------------------------------------
-    def _supervision_stop(self, text: str) -> None:
+    def _stop_braking(self, outcome: Outcome, reason: EndReason, text: str) -> None:
+        """Remember the first stop of the session; brake when commanding (else it ends before the next answer)."""
         if self._stop is not None:
             return
-        self._stop = (Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {text}")
+        self._stop = (outcome, reason, text)
         if self._last_state == CMD_ACTIVE and self._active_sent > 0:
             self._begin_braking()
 
@@ -518,17 +516,14 @@ class ClientApplication:
             return
         outcome = Outcome.COMPLETED if s.completed else Outcome.REFUSED
         reason = EndReason.FINISHED if s.completed else (EndReason.BAD_INPUT if s.bad_input else EndReason.CLIENT_REFUSED)
-        self._stop = (outcome, reason, s.reason)
-        if self._last_state == CMD_ACTIVE and self._active_sent > 0:
-            self._begin_braking()
+        self._stop_braking(outcome, reason, s.reason)
 
     def _client_failed(self, exc: BaseException, where: str) -> None:
         if self._stop is not None:
             return
         self.error = exc
-        self._stop = (Outcome.FAILED, EndReason.CLIENT_ERROR, f"the client's {where} raised {type(exc).__name__}: {exc}")
-        if self._last_state == CMD_ACTIVE and self._active_sent > 0:
-            self._begin_braking()
+        text = f"the client's {where} raised {type(exc).__name__}: {exc}"
+        self._stop_braking(Outcome.FAILED, EndReason.CLIENT_ERROR, text)
 
     def _check_clocks(self, now: float) -> bool:
         """Time-outs and the monitoring duration; False once the session ended."""

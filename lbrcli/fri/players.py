@@ -3,9 +3,9 @@
 :class:`TrajectoryPlayer` streams rows [rad] at the command period, one per sent command: first a jerk-limited
 move (ruckig, online, ≤ ``move_scale`` of the limits) from where the controller holds the robot to the first row —
 always, so that the stream never starts with a jump; farther than ``start_tolerance`` only with
-``move_to_start`` — then the rows, then the last row for ``settle_cycles``. Rows follow the controller's clock: when its messages were
-lost (it bridged those periods by extrapolation) the rows it would have executed are skipped. It checks the start at the first
-message (before anything is sent) and again at activation, and ends with :class:`StopSession` (the application
+``move_to_start`` — then the rows, then the last row for ``settle_cycles``. Rows follow the controller's clock:
+after lost messages (it bridged those periods by extrapolation) a short jerk-limited segment rejoins the rows in
+step (``rejoin``). It checks the start at the first message (before anything is sent) and again at activation, and ends with :class:`StopSession` (the application
 then brakes to rest and ends).
 """
 

@@ -103,7 +103,8 @@ def run_client(
                 from .fri.sim import lenient_quality
 
                 kw.update(lenient_quality(kw.get("period_ms", 1), kw.get("receive_multiplier", 1)))
-            plants = default_plants(kw.pop("ball_length", None), pendulum_pty=lab is not None and lab.pendulum == "sim")
+            plants = default_plants(kw.pop("ball_length", None), kw.pop("ball_damping", 0.0),
+                                    pendulum_pty=lab is not None and lab.pendulum == "sim")
             sim = SimulatorProcess(SimConfig(client_port=app.port, version=version or "1.15", plants=plants, **kw))
             sim.start()
             rep.print(f"simulator on {sim.address[0]}:{sim.address[1]} → client on 127.0.0.1:{app.port}")
@@ -116,6 +117,8 @@ def run_client(
             attached = LabAttachments(lab, path).start()
             if attached.pendulum is not None:
                 rep.print(f"pendulum module on {path}")
+                if getattr(client, "sway", None) is not None:  # the module's angle is the sway to wait for
+                    client.sway.source = attached.pendulum_sway
                 base_names, base_extra = extra_names, extra
                 extra_names = base_names + attached.extra_names
                 extra = (lambda s: (*base_extra(s), *attached.extra(s))) if base_extra else attached.extra
@@ -169,6 +172,16 @@ def print_summary(rep, result, sim_stats, log_path: Path | None) -> dict[str, An
             f"commanded: {f.get('move_rows', 0)} move-to-start rows, {f.get('trajectory_rows', 0)} trajectory rows, "
             f"{f.get('settle_rows', 0)} settle rows"
         )
+    if f.get("start_sway_deg") is not None:
+        waited = f.get("sway_wait_s") or 0.0
+        if f.get("start_sway_above_threshold"):
+            rep.warn(
+                f"the rows started with {f['start_sway_deg']:.3f}° of sway, above --start-sway "
+                f"{f['sway_threshold_deg']:g}° after waiting {waited:.2f} s (--sway-wait; a damped ball decays, "
+                "an undamped simulated one does not)"
+            )
+        else:
+            rep.print(f"start sway {f['start_sway_deg']:.3f}° (below {f['sway_threshold_deg']:g}° after waiting {waited:.2f} s)")
     if r.braking_cycles:
         rep.print(f"braking stop: {r.braking_cycles} cycles ({r.braking_cycles * (r.period_s or 0):.3f} s) within the limits")
     if f.get("min_tracking") is not None:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Optional
 
 import typer
 
@@ -16,7 +16,6 @@ from ..fri_options import (
     DEFAULT_BALL_LENGTH,
     BaudOpt,
     BindOpt,
-    LengthOpt,
     LogOpt,
     MqttOpt,
     MqttRateOpt,
@@ -76,12 +75,38 @@ def execute(
     ] = 1e-3,
     move_to_start: Annotated[
         bool,
-        typer.Option("--move-to-start", help="If the robot is farther away, first move there (jerk-limited, ≤ 20 % of the limits)."),
+        typer.Option(
+            "--move-to-start",
+            help="If the robot is farther away, first move there (jerk-limited, ≤ 20 % of the limits; input-shaped for "
+            "the ball's swing with --length or the simulator's ball).",
+        ),
     ] = False,
     settle: Annotated[float, typer.Option("--settle", help="Hold the last row this long before stopping \\[s].")] = 1.0,
     margin: Annotated[float, typer.Option("--margin", help="Check the file against the limits × (1 − margin).")] = 0.0,
     t1: Annotated[bool, typer.Option("--t1", help="Also refuse files whose flange speed exceeds T1's 250 mm/s.")] = False,
-    length: LengthOpt = None,
+    length: Annotated[
+        Optional[float],
+        typer.Option(
+            "--length",
+            help="String length of the ball on the flange \\[m]: the move to the start is input-shaped (ZVD) for its "
+            f"swing period; without --robot also the simulated ball's (default {DEFAULT_BALL_LENGTH}; 0: no ball).",
+        ),
+    ] = None,
+    damping: Annotated[
+        float, typer.Option("--damping", help="Simulator only: damping of the simulated ball \\[1/s] (0: it swings on).")
+    ] = 0.0,
+    start_sway: Annotated[
+        float,
+        typer.Option(
+            "--start-sway",
+            help="With --move-to-start, hold the first row until the measured sway (the simulated ball, or --pendulum) "
+            "has stayed below this for 0.6 of a swing period \\[deg].",
+        ),
+    ] = 0.2,
+    sway_wait: Annotated[
+        float,
+        typer.Option("--sway-wait", help="Hold it at most this long, then start and report the sway \\[s] (0: only report)."),
+    ] = 30.0,
     sim_start: SimStartOpt = None,
     receive_multiplier: MultiplierOpt = 1,
     wait: WaitOpt = None,
@@ -105,7 +130,9 @@ def execute(
     Before anything is sent the file must pass `lbr check` and its step must equal the controller's period (send
     period × receive multiplier). At the first FRI message and again at activation its first row must be within
     --start-tolerance of the measured position; the stream starts with a short jerk-limited move from where the
-    controller holds the robot. Every command passes the guard. Ctrl-C, SIGTERM, a guard refusal and the end of the
+    controller holds the robot (input-shaped for the string's swing period when the ball's length is known, so that
+    it leaves the ball at rest); then, while the simulated ball (or the --pendulum module) sways more than
+    --start-sway, the first row is held, at most --sway-wait. The sway the rows start with is reported. Every command passes the guard. Ctrl-C, SIGTERM, a guard refusal and the end of the
     file are jerk-limited braking stops; a safety stop, drives off, POOR quality or the session leaving
     COMMANDING_ACTIVE end the stream at once. Exit 0 completed, 1 refused or stopped, 2 bad input, 130 Ctrl-C.
     """
@@ -135,8 +162,17 @@ def execute(
         raise OptionError(f"--settle must be 0..600 s, got {settle:g}")
     if not 1 <= receive_multiplier <= 100:
         raise OptionError(f"--receive-multiplier must be 1..100, got {receive_multiplier}")
-    if robot is not None and (sim_start is not None or length is not None or receive_multiplier != 1 or sim_lenient):
-        raise OptionError("--sim-start, --length, --receive-multiplier and --sim-lenient apply to the simulator only, not with --robot")
+    if robot is not None and (sim_start is not None or damping != 0.0 or receive_multiplier != 1 or sim_lenient):
+        raise OptionError("--sim-start, --damping, --receive-multiplier and --sim-lenient apply to the simulator only, not with --robot")
+    if not (math.isfinite(start_sway) and 0 < start_sway <= 45):
+        raise OptionError(f"--start-sway must be in (0, 45] deg, got {start_sway:g}")
+    if not (math.isfinite(sway_wait) and 0 <= sway_wait <= 3600):
+        raise OptionError(f"--sway-wait must be 0..3600 s, got {sway_wait:g}")
+    if not (math.isfinite(damping) and damping >= 0):
+        raise OptionError(f"--damping must be >= 0 1/s, got {damping:g}")
+    ball = DEFAULT_BALL_LENGTH if length is None and robot is None else length
+    if ball is not None and not (math.isfinite(ball) and 0 <= ball <= 5):
+        raise OptionError(f"--length must be 0..5 m, got {ball:g}")
     if log is not None and log.resolve() == joint_csv.resolve():
         raise OptionError(f"--log {log} is the trajectory file itself; choose another name")
     lim = limits_from(limits)
@@ -180,9 +216,16 @@ def execute(
         except CheckFailed as exc:
             raise StopSession(str(exc), completed=False) from None
 
+    from lbrcli.fri.sway import IoSway, SwayWatch, window_for_length
+    from planners.pendulum import natural_period
+    from planners.shapers import make_shaper
+
     player = TrajectoryPlayer(
         traj.q, lim, period_s=period_s, start_tolerance=start_tolerance,
         move_to_start=move_to_start, settle_s=settle, resample=at_controller_period if resample else None,
+        move_shaper=make_shaper("zvd", natural_period(ball)) if ball else None,
+        move_robot=(model or make_robot(flange, tool)) if ball else None,
+        sway=SwayWatch(IoSway("ball_theta"), math.radians(start_sway), window_for_length(ball), sway_wait),
     )  # fmt: skip
     if move_to_start:
         rep.print("a move to the start (≤ 20 % of the limits) precedes the file if the robot stands elsewhere")
@@ -192,9 +235,6 @@ def execute(
         from trajectories.robot import parse_tool
 
         q0 = traj.q[0] if sim_start is None else parse_joint_vector(sim_start, "--sim-start")
-        ball = DEFAULT_BALL_LENGTH if length is None else length
-        if not (math.isfinite(ball) and 0 <= ball <= 5):
-            raise OptionError(f"--length must be 0..5 m, got {ball:g}")
         sim_kwargs = dict(
             period_ms=int(period),
             receive_multiplier=receive_multiplier,
@@ -202,8 +242,9 @@ def execute(
             flange=flange,
             tool=parse_tool(tool),
             ball_length=ball if ball > 0 else None,
+            ball_damping=damping,
             limits_path=str(limits) if limits is not None else None,
-            max_runtime_s=traj.duration + settle + 120.0,
+            max_runtime_s=traj.duration + settle + sway_wait + 120.0,
         )
     result, sim_stats, lab_figures = run_client(
         rep, player, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,

@@ -75,3 +75,4 @@ class Phase(IntEnum):
     SETTLE = 3  # holding the last row
     BRAKE = 4  # the application's braking stop (Ctrl-C, a guard refusal, the end of the stream)
     MIRROR = 5  # COMMANDING_ACTIVE without motion (monitor): the ipo position held
+    WAIT = 6  # holding the first row until the ball's (pendulum's) sway has decayed

@@ -57,6 +57,7 @@ PHASE_TRAJECTORY = int(Phase.TRAJECTORY)
 PHASE_SETTLE = int(Phase.SETTLE)
 PHASE_BRAKE = PHASE_HOLD = int(Phase.BRAKE)
 PHASE_MIRROR = int(Phase.MIRROR)
+PHASE_WAIT = int(Phase.WAIT)
 
 _ZERO7 = (0.0,) * 7
 _ZERO6 = (0.0,) * 6

@@ -5,117 +5,31 @@ move (ruckig, online, ≤ ``move_scale`` of the limits) from where the controlle
 always, so that the stream never starts with a jump; farther than ``start_tolerance`` only with
 ``move_to_start`` — then the rows, then the last row for ``settle_cycles``. Rows follow the controller's clock:
 after lost messages (it bridged those periods by extrapolation) a short jerk-limited segment rejoins the rows in
-step (``rejoin``). It checks the start at the first message (before anything is sent) and again at activation, and ends with :class:`StopSession` (the application
-then brakes to rest and ends).
+step (``rejoin``). With a ``move_shaper`` (impulses for the swing period of a ball on the flange) the move is
+input-shaped so that it leaves the ball at rest; with a :class:`~lbrcli.fri.sway.SwayWatch` the sway the rows start
+with is reported, and with ``move_to_start`` the first row is held until the measured sway has stayed below its
+threshold for a window (at most its ``max_wait_s``). It checks the start at the first message (before anything is sent) and again at
+activation, and ends with :class:`StopSession` (the application then brakes to rest and ends).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
-from ruckig import InputParameter, OutputParameter, Result, Ruckig, Trajectory
 
 from trajectories.limits import JointLimits
 
 from .client import LBRClient
 from .constants import Phase
 from .errors import StopSession
+from .moves import OnlineMove, ShapedMove, rejoin
 from .state import LBRState
+from .sway import SwayWatch
 
 PHASE_NONE, PHASE_MOVE, PHASE_TRAJECTORY, PHASE_SETTLE = Phase.NONE, Phase.MOVE, Phase.TRAJECTORY, Phase.SETTLE
-
-
-class OnlineMove:
-    """A rest-to-rest ruckig move computed one cycle at a time (position interface)."""
-
-    def __init__(self, limits: JointLimits, period_s: float, scale: float, minimum_duration: float | None = None) -> None:
-        self._otg = Ruckig(7, period_s)
-        self._inp = InputParameter(7)
-        self._out = OutputParameter(7)
-        lim = limits.scaled(scale)
-        self._inp.max_velocity = lim.velocity.tolist()
-        self._inp.max_acceleration = lim.acceleration.tolist()
-        self._inp.max_jerk = lim.jerk.tolist()
-        if minimum_duration is not None:
-            self._inp.minimum_duration = float(minimum_duration)
-        self.target: tuple[float, ...] = ()
-        self.done = True
-        self.duration_s = 0.0
-
-    def start(self, q_from: Sequence[float], q_to: Sequence[float], v_from: Sequence[float] | None = None) -> float:
-        """Plan from ``q_from`` [rad] (at rest, or moving at ``v_from`` [rad/s]) to rest at ``q_to``; the duration
-        [s]."""
-        inp = self._inp
-        inp.current_position = list(q_from)
-        inp.current_velocity = list(v_from) if v_from is not None else [0.0] * 7
-        inp.current_acceleration = [0.0] * 7
-        inp.target_position = list(q_to)
-        inp.target_velocity = [0.0] * 7
-        inp.target_acceleration = [0.0] * 7
-        traj = Trajectory(7)
-        res = self._otg.calculate(inp, traj)
-        if res not in (Result.Working, Result.Finished):
-            raise StopSession(f"ruckig could not plan the move ({res.name})", completed=False)
-        self.target = tuple(q_to)
-        self.duration_s = traj.duration
-        self.done = False
-        return traj.duration
-
-    def next(self) -> tuple[float, ...]:
-        if self.done:
-            return self.target
-        res = self._otg.update(self._inp, self._out)
-        if res == Result.Finished:
-            self.done = True
-            return self.target
-        if res != Result.Working:
-            raise StopSession(f"ruckig failed during the move ({res.name})", completed=False)
-        self._out.pass_to_input(self._inp)
-        return tuple(self._out.new_position)
-
-
-def rejoin(limits: JointLimits, period_s: float, q: Sequence[float], v: Sequence[float], rows: Sequence[Sequence[float]],
-           first: int, max_tries: int = 20) -> tuple[list[tuple[float, ...]], int]:
-    """The commands that bring the robot from ``q`` [rad] moving at ``v`` [rad/s] (where the controller's
-    extrapolation left it) back onto ``rows`` in step: jerk-limited (ruckig, at the limits), ``m`` commands for rows
-    ``first`` … ``first + m − 1``, the last one exactly that row (with its velocity and acceleration). Returns (the
-    commands, the next row). Towards the end of the rows: to the last row at rest, taking the time it needs."""
-    otg = Ruckig(7, period_s)
-    inp = InputParameter(7)
-    inp.max_velocity = limits.velocity.tolist()
-    inp.max_acceleration = limits.acceleration.tolist()
-    inp.max_jerk = limits.jerk.tolist()
-    inp.current_position = list(q)
-    inp.current_velocity = list(v)
-    inp.current_acceleration = [0.0] * 7  # the controller extrapolates at constant velocity
-    n = len(rows)
-    dt = period_s
-    m = 8
-    for _ in range(max_tries):
-        r = first + m - 1
-        traj = Trajectory(7)
-        if r + 1 >= n:  # the end of the rows is near: stop on the last row
-            inp.target_position = list(rows[-1])
-            inp.target_velocity = [0.0] * 7
-            inp.target_acceleration = [0.0] * 7
-            inp.minimum_duration = None
-            if otg.calculate(inp, traj) not in (Result.Working, Result.Finished):
-                break
-            k = max(1, int(math.ceil(traj.duration / dt - 1e-9)))
-            out = [tuple(traj.at_time(min(i * dt, traj.duration))[0]) for i in range(1, k)]
-            return out + [tuple(rows[-1])], n
-        a, b, c = rows[r - 1], rows[r], rows[r + 1]
-        inp.target_position = list(b)
-        inp.target_velocity = [(z - x) / (2.0 * dt) for x, z in zip(a, c)]
-        inp.target_acceleration = [(x - 2.0 * y + z) / (dt * dt) for x, y, z in zip(a, b, c)]
-        inp.minimum_duration = m * dt
-        res = otg.calculate(inp, traj)
-        if res in (Result.Working, Result.Finished) and traj.duration <= m * dt * (1 + 1e-12):
-            return [tuple(traj.at_time(i * dt)[0]) for i in range(1, m)] + [tuple(b)], r + 1
-        m = int(math.ceil(m * 1.25))  # (the time-optimal rejoin is not monotonic in m: no jump to its duration)
-    raise StopSession(f"messages were lost at row {first}: the rows cannot be rejoined within the limits", completed=False)
+PHASE_WAIT = Phase.WAIT
 
 
 class TrajectoryPlayer(LBRClient):
@@ -135,6 +49,9 @@ class TrajectoryPlayer(LBRClient):
         move_minimum_duration: float | None = None,
         finish_text: str = "trajectory streamed and settled",
         resample: Callable[[float], np.ndarray] | None = None,
+        move_shaper: Any = None,
+        move_robot: Any = None,
+        sway: SwayWatch | None = None,
     ) -> None:
         rows = np.asarray(rows, dtype=float)
         if rows.ndim != 2 or rows.shape[1] != 7 or len(rows) == 0:
@@ -150,6 +67,13 @@ class TrajectoryPlayer(LBRClient):
         self.move_minimum_duration = move_minimum_duration
         self.finish_text = finish_text
         self.resample = resample  # (command period [s]) -> rows at that period, for a controller at another one
+        self.move_shaper = move_shaper  # .amplitudes, .times [s] (planners.shapers.Shaper): the move is shaped
+        self.move_robot = move_robot  # trajectories.robot.Robot: ... for the TCP's path (the ball hangs there)
+        self.sway = sway
+        self._started = False  # the first row was commanded
+        self._waited = 0  # commands holding the first row for the sway
+        self._max_wait = 0  # commands (from the period at activation)
+        self._rest_mark = 0  # move commands when the sway was last judged from rest
         self._move: OnlineMove | None = None
         self._checked = False
         self._i = 0  # next row
@@ -160,6 +84,8 @@ class TrajectoryPlayer(LBRClient):
         self._period = 0.0  # [s] command period (known at activation)
         # figures
         self.move_rows = self.trajectory_rows = self.settle_rows = 0
+        self.start_sway: float | None = None  # [rad] largest |sway| over the window before the first row
+        self.sway_timed_out = False  # the rows started above the sway threshold (the wait ran out)
         self.skipped_rows = 0  # commands the controller bridged by extrapolation (its messages were lost)
         self.start_distance = 0.0  # [rad] largest |first row − measured| at the first message
         self.operation_mode: str | None = None  # T1, T2 or AUT as reported at the first message
@@ -208,11 +134,15 @@ class TrajectoryPlayer(LBRClient):
             )
 
     def monitor(self, state: LBRState) -> None:
+        if self.sway is not None:
+            self.sway.update(state)
         if not self._checked:
             self._check_start(state, "at the first message")
         self.phase = PHASE_NONE
 
     def wait_for_command(self, state: LBRState) -> None:
+        if self.sway is not None:
+            self.sway.update(state)
         if not self._checked:
             self._check_start(state, "at the first message")
         self.hold_ipo(state)
@@ -220,6 +150,8 @@ class TrajectoryPlayer(LBRClient):
 
     # -- streaming -------------------------------------------------------------------------------------------
     def command(self, state: LBRState) -> Sequence[float] | None:
+        if self.sway is not None:
+            self.sway.update(state)
         if self._last is None:  # activation: the robot must still be where the start was checked
             self._check_start(state, "at activation")
             q0 = state.ipo_joint_position
@@ -228,7 +160,14 @@ class TrajectoryPlayer(LBRClient):
             self._period = period
             if self.settle_s is not None:
                 self.settle_cycles = int(round(self.settle_s / period))
-            self._move = OnlineMove(self.limits, period, self.move_scale, self.move_minimum_duration)
+            shaper = self.move_shaper
+            self._move = (
+                OnlineMove(self.limits, period, self.move_scale, self.move_minimum_duration) if shaper is None
+                else ShapedMove(self.limits, period, self.move_scale, shaper.amplitudes, shaper.times,
+                                self.move_minimum_duration, self.move_robot)
+            )  # fmt: skip
+            if self.sway is not None and self.move_to_start:  # without it the sway is only reported
+                self._max_wait = int(round(self.sway.max_wait_s / period))
             if max(abs(a - b) for a, b in zip(q0, self.rows[0])) > 0.0 or self.move_minimum_duration:
                 self._move.start(q0, self.rows[0])
         if not self.reply_due:  # with receive multiplier k only every k-th command is sent: advance then
@@ -249,7 +188,7 @@ class TrajectoryPlayer(LBRClient):
         self._last, self._last2 = q, tuple(a - v * dt for a, v in zip(q, vel))
         self.skipped_rows += n
         move = self._move
-        if move is not None and not move.done:
+        if move is not None and (not move.done or not self._started):  # moving to, or waiting at, the start
             move.start(q, self.rows[0], vel)
         elif self._queue or self._i < len(self.rows):
             first = self._i + n - len(self._queue)  # the row due now (a rejoin in progress: its rows)
@@ -271,6 +210,8 @@ class TrajectoryPlayer(LBRClient):
                 self.move_rows += 1
                 self._last = q
                 return True
+        if not self._started and self._wait_for_sway():
+            return True
         if self._i < len(self.rows):
             self.phase, self.row = PHASE_TRAJECTORY, self._i
             self._last = self.rows[self._i]
@@ -284,7 +225,26 @@ class TrajectoryPlayer(LBRClient):
             return True
         return False
 
+    def _wait_for_sway(self) -> bool:
+        """Hold the first row while the sway is above the threshold (at most ``max_wait_s``); True while holding.
+        On the way out the sway the rows start with is recorded."""
+        sway = self.sway
+        if sway is not None and self._max_wait and self._rest_mark != self.move_rows:
+            self._rest_mark = self.move_rows  # the robot has just arrived: judge its free swing from here
+            sway.restart()
+        if sway is not None and sway.readings and not sway.calm and self._waited < self._max_wait:
+            self._waited += 1
+            self.phase, self.row = PHASE_WAIT, -1
+            self._last = self.rows[0]
+            return True
+        self._started = True
+        if sway is not None and sway.readings:
+            self.start_sway = sway.amplitude
+            self.sway_timed_out = not sway.calm
+        return False
+
     def figures(self) -> dict[str, float | int]:
+        start = self.start_sway
         return {
             "move_rows": self.move_rows,
             "trajectory_rows": self.trajectory_rows,
@@ -292,4 +252,10 @@ class TrajectoryPlayer(LBRClient):
             "skipped_rows": self.skipped_rows,
             "start_distance_rad": self.start_distance,
             "operation_mode": self.operation_mode,
+            "sway_wait_rows": self._waited,
+            "sway_wait_s": self._waited * self._period,
+            "start_sway_rad": start,
+            "start_sway_deg": None if start is None else math.degrees(start),
+            "start_sway_above_threshold": self.sway_timed_out if start is not None else None,
+            "sway_threshold_deg": math.degrees(self.sway.threshold) if self.sway is not None else None,
         }

@@ -98,6 +98,13 @@ class LabAttachments:
             return (math.nan, math.nan, math.nan)
         return (r.theta, r.omega, time.monotonic() - r.host_time)
 
+    def pendulum_sway(self, state: Any) -> float | None:
+        """The pendulum module's angle [rad] as a sway source (None before a reading or if it is 0.1 s old)."""
+        r = self.pendulum.latest if self.pendulum is not None else None
+        if r is None or time.monotonic() - r.host_time > 0.1:
+            return None
+        return r.theta
+
     def tap(self, t: float, mon: Any) -> None:
         pub = self.publisher
         if pub is not None and pub.due(t):

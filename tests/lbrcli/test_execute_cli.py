@@ -268,3 +268,61 @@ def test_help_names_units_and_the_robot_option():
     for command in ("execute", "monitor", "ptp"):
         proc = run_lbr(command, "--help")
         assert proc.returncode == 0 and "--robot" in proc.stdout and "[s]" in proc.stdout
+
+
+# -- the ball at the start: the move leaves it at rest, the first row waits for its swing ----------------------
+FAR = Q0 + np.array([0.25, -0.2, 0.3, 0.3, -0.2, 0.3, 0.4])
+
+
+def test_move_to_start_leaves_the_ball_at_rest_and_the_rows_wait_until_it_is_calm(tmp_path):
+    from lbrcli.fri.log import PHASE_WAIT
+
+    traj = write_traj(tmp_path / "j.csv", 0.005, 0.6, amp=0.2)
+    log = tmp_path / "run.csv"
+    far = ",".join(f"{v:.6f}" for v in FAR)
+    proc = run_lbr("execute", tmp_path / "j.csv", "--port", "0", "--sim-start", far, "--move-to-start", "--length", "0.4",
+                   "--damping", "0.3", "--start-sway", "0.05", "--settle", "0.1", "--sim-lenient", "--log", log, "--json")  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    f = figures(proc)
+    assert f["trajectory_rows"] == len(traj) and f["move_rows"] > 100
+    tab = read_log(log)
+    phase, theta = tab.column("phase"), np.degrees(tab.column("ball_theta"))  # [deg]
+    waited = np.flatnonzero(phase == PHASE_WAIT)
+    first = np.flatnonzero(phase == PHASE_TRAJECTORY)[0]
+    window = int(np.ceil(0.6 * 2 * np.pi * np.sqrt(0.4 / 9.80665) / 0.005))  # [cycles] 0.6 of a swing period
+    assert len(waited) >= window - 1 and waited[-1] == first - 1
+    np.testing.assert_array_equal(cmd(tab)[waited], np.repeat(traj.q[:1], len(waited), axis=0))  # held at row 0
+    # the shaped move left little swing (an unshaped one leaves degrees), then the rows waited for a calm window
+    assert theta[waited[0]] < 0.5 and theta[first - window + 1 : first + 1].max() < 0.05  # the message of the first row included
+    assert f["start_sway_deg"] < 0.05 and f["start_sway_above_threshold"] is False
+    assert f["sway_wait_s"] == pytest.approx(len(waited) * 0.005)
+    assert "start sway" in proc.stderr
+
+
+def test_a_swing_that_outlasts_sway_wait_is_reported_and_the_rows_start(tmp_path):
+    traj = write_traj(tmp_path / "j.csv", 0.005, 0.4, amp=0.2)
+    far = ",".join(f"{v:.6f}" for v in FAR)
+    proc = run_lbr("execute", tmp_path / "j.csv", "--port", "0", "--sim-start", far, "--move-to-start",
+                   "--start-sway", "0.0001", "--sway-wait", "0.3", "--settle", "0.1", "--sim-lenient", "--json")  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    f = figures(proc)
+    assert f["trajectory_rows"] == len(traj) and f["sway_wait_s"] == pytest.approx(0.3)
+    assert f["start_sway_above_threshold"] is True and f["start_sway_deg"] > 0.0001
+    assert "above --start-sway" in proc.stderr and "warning" in proc.stderr
+
+
+@pytest.mark.parametrize(
+    "argv, option",
+    [
+        (("--start-sway", "0"), "--start-sway"),
+        (("--start-sway", "nan"), "--start-sway"),
+        (("--sway-wait", "-1"), "--sway-wait"),
+        (("--damping", "-0.1"), "--damping"),
+        (("--damping", "0.1", "--robot", "127.0.0.1"), "--damping"),
+        (("--length", "9"), "--length"),
+    ],
+)
+def test_sway_options_are_validated_before_anything_is_sent(tmp_path, argv, option):
+    write_traj(tmp_path / "j.csv", 0.005, 0.4, amp=0.2)
+    proc = run_lbr("execute", tmp_path / "j.csv", "--port", "0", *argv)
+    assert proc.returncode == 2 and option in proc.stderr and len(proc.stderr.strip().splitlines()) == 1, proc.stderr

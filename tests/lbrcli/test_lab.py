@@ -243,6 +243,23 @@ def test_execute_reads_the_emulated_pendulum_module_over_a_pty(tmp_path, lbr):
     # one encoder count (0.088°) plus one reading of radio latency
     assert np.degrees(np.abs(pend[ok] - ball[ok]).max()) < 0.5
     assert np.nanmax(table.column("pend_age")) < 0.1
+    assert figures["start_sway_deg"] is not None and figures["start_sway_deg"] < 0.2  # judged from the module
+
+
+def test_the_pendulum_module_is_the_sway_source_while_its_reading_is_fresh():
+    import time
+    from types import SimpleNamespace
+
+    from lbrcli.lab.attach import LabAttachments, LabOptions
+
+    attached = LabAttachments(LabOptions(), None)
+    assert attached.pendulum_sway(None) is None  # no module
+    attached.pendulum = SimpleNamespace(latest=None)
+    assert attached.pendulum_sway(None) is None  # no reading yet
+    attached.pendulum.latest = SimpleNamespace(theta=-0.12, host_time=time.monotonic())
+    assert attached.pendulum_sway(None) == -0.12
+    attached.pendulum.latest = SimpleNamespace(theta=-0.12, host_time=time.monotonic() - 0.5)
+    assert attached.pendulum_sway(None) is None  # half a second old: not the swing now
 
 
 def test_execute_publishes_telemetry_to_a_real_broker(broker, tmp_path):

@@ -20,22 +20,21 @@ continue from there, and the client is told how many command periods it missed (
 from __future__ import annotations
 
 import gc
-import math
 import time
 from typing import Any, Callable, Sequence
 
 from trajectories.limits import JointLimits, default_limits
 
-from .braking import BrakingStop
 from .client import LBRClient
 from .codec import FriCodec, detect_version
 from .command import LBRCommand
 from .cycle import Cycle, Observer
 from .constants import DEFAULT_PORT, ClientCommandMode, SessionState
 from .errors import FriDecodeError, FriError, FriTimeout, StopSession
-from .guard import DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT, CommandGuard
+from .guard import DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT
 from .messages import FriVersion
-from .outcome import EndReason, Outcome, SessionResult
+from .motion import ExecutedMotion, Refused
+from .outcome import EndReason, Outcome, SessionResult, session_result
 from .reply import ReplyMessage
 from .state import LBRState
 from .supervision import Supervisor, consistent, robot_side_end
@@ -45,8 +44,6 @@ IDLE, MON_WAIT, MON_READY, CMD_WAIT, CMD_ACTIVE = 0, 1, 2, 3, 4
 _POSITION = int(ClientCommandMode.POSITION)
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
-_ZERO6 = (0.0,) * 6
-_ZERO7 = (0.0,) * 7
 
 
 class ClientApplication:
@@ -130,11 +127,8 @@ class ClientApplication:
         self._mon: Any = None
         self._reply: ReplyMessage | None = None
         self._cmd: LBRCommand | None = None
-        self._guard: CommandGuard | None = None
-        self._brake: BrakingStop | None = None
+        self._motion: ExecutedMotion | None = None  # built when the period is known
         self._sup: Supervisor | None = None
-        self._braking = False
-        self._hold_left = 0
         self._stop: tuple[Outcome, EndReason, str] | None = None  # a stop the client side requested
         self._ended = False
         self._started = False
@@ -154,10 +148,6 @@ class ClientApplication:
         self._period_s: float | None = None
         self._send_counter = 0
         self._client_seq = 0
-        self._prev: Sequence[float] = _ZERO7  # last two joint positions sent (what the controller executes)
-        self._prev2: Sequence[float] = _ZERO7
-        self._prev3: Sequence[float] = _ZERO7
-        self._active_sent = 0  # joint positions sent in COMMANDING_ACTIVE
         self._answered_any = False
         self._unanswered_at_start = 0
         self._cpu0 = 0.0
@@ -165,7 +155,7 @@ class ClientApplication:
         # statistics
         self.cycles = self.answered = self.position_commands = 0
         self.missed = self.stale = self.malformed = 0
-        self.active_cycles = self.braking_cycles = self.extrapolated_cycles = 0
+        self.active_cycles = 0
         self.states_seen: list[int] = []
         self._latencies: list[int] = []  # [ns]
 
@@ -173,6 +163,18 @@ class ClientApplication:
     def client_sequence(self) -> int:
         """Sequence counter of the last command message sent (−1 before the first)."""
         return (self._client_seq - 1) & 0xFFFFFFFF if self.answered else -1
+
+    @property
+    def braking_cycles(self) -> int:
+        return self._motion.braking_cycles if self._motion is not None else 0
+
+    @property
+    def extrapolated_cycles(self) -> int:
+        return self._motion.extrapolated_cycles if self._motion is not None else 0
+
+    def _moving(self) -> bool:
+        """Commands were sent in COMMANDING_ACTIVE and the robot was last seen there: a stop must brake."""
+        return self._last_state == CMD_ACTIVE and self._motion is not None and self._motion.moving
 
     @property
     def period_s(self) -> float | None:
@@ -254,14 +256,14 @@ class ClientApplication:
         if self._last_seq >= 0:
             self.missed += d - 1
             self._tick += d
-            if d > 1 and self._last_state == CMD_ACTIVE and self._active_sent > 0:
+            if d > 1 and self._moving():
                 if self._sup is not None and d - 1 > self._sup.max_reply_gap:
                     # longer than any controller bridges: where the robot is, is unknown — it stopped it itself
                     self._last_seq = seq
                     self._finish(Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {d - 1} messages of the "
                                  "controller were lost in a row: no command is safe from here", observe=False)  # fmt: skip
                     return False
-                skipped = self._extrapolate((d - 1) // (self._period_key[1] if self._period_key else 1))
+                skipped = self._motion.extrapolate((d - 1) // (self._period_key[1] if self._period_key else 1))  # type: ignore[union-attr]
         self._last_seq = seq
         self.cycles += 1
         self._t_last_rx = now
@@ -275,8 +277,7 @@ class ClientApplication:
                 self._t_per_tick = ci.sendPeriod * 1e-3
             else:
                 self._local_clock = time.perf_counter()
-            self._prev = self._prev2 = self._prev3 = tuple(mon.monitorData.measuredJointPosition.value)
-            cyc.command = self._prev
+            cyc.command = tuple(mon.monitorData.measuredJointPosition.value)
             self._cpu0 = time.thread_time()
             self._cycles0 = 1
         cyc.t = (time.perf_counter() - self._local_clock) if self._local_clock is not None else self._tick * self._t_per_tick
@@ -288,18 +289,19 @@ class ClientApplication:
             self._period_key = (ci.sendPeriod, k)
             if ci.sendPeriod:
                 self._period_s = ci.sendPeriod * 1e-3 * k
-                self._guard = CommandGuard.from_limits(self.limits, self._period_s, self.max_force, self.max_moment)
-                self._brake = BrakingStop(self.limits, self._period_s)  # ready before it is needed
+                self._motion = ExecutedMotion(self.limits, self._period_s, self.max_force, self.max_moment,
+                                              self.hold_cycles, mon.monitorData.measuredJointPosition.value)  # fmt: skip
                 self._sup = Supervisor.from_limits(self.limits.velocity, ci.sendPeriod * 1e-3, k,
                                                    self.max_tracking_error, self.reply_gap_s)  # fmt: skip
         sup = self._sup
         if sup is not None and state != IDLE and self._stop is None:
             ts = mon.monitorData.timestamp
             problem = sup.clock(seq, ts.sec, ts.nanosec)
-            if problem is None and state == CMD_ACTIVE and not self._braking:
+            motion = self._motion
+            if problem is None and state == CMD_ACTIVE and motion is not None and not motion.braking:
                 problem = sup.replies(seq, mon.header.reflectedSequenceCounter, self.client_sequence)
-                if problem is None and self._active_sent > 0 and mon.ipoData.clientCommandMode == _POSITION:
-                    problem = sup.tracking(mon.monitorData.measuredJointPosition.value, self._prev)
+                if problem is None and motion.moving and mon.ipoData.clientCommandMode == _POSITION:
+                    problem = sup.tracking(mon.monitorData.measuredJointPosition.value, motion.prev)
             if problem is not None:
                 self._stop_braking(Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {problem}")
         # ---- state change and robot-side ends --------------------------------------------------------------
@@ -340,11 +342,12 @@ class ClientApplication:
         # ---- the client's answer ---------------------------------------------------------------------------
         cmd = self._cmd
         cmd.reset()  # type: ignore[union-attr]
-        if self._stop is not None and not self._braking:
+        braking = self._motion is not None and self._motion.braking
+        if self._stop is not None and not braking:
             # a stop requested outside COMMANDING_ACTIVE (or before anything moved): end without answering
             self._finish(*self._stop, observe=True)
             return False
-        if self._braking:
+        if braking:
             if state != CMD_ACTIVE:
                 self._finish(*self._stop, observe=True)  # type: ignore[misc]
                 return False
@@ -362,7 +365,7 @@ class ClientApplication:
                 self._client_stop(s)
             except Exception as exc:  # noqa: BLE001
                 self._client_failed(exc, "callback")
-            if self._stop is not None and not self._braking:
+            if self._stop is not None and not (self._motion is not None and self._motion.braking):
                 self._finish(*self._stop, observe=True)
                 return False
         cyc.phase = self.client.phase
@@ -394,11 +397,9 @@ class ClientApplication:
         cyc.answered = True
         if cyc.sent_position:
             self.position_commands += 1
-        if self._braking and self._brake.done:  # type: ignore[union-attr]
-            self._hold_left -= 1
-            if self._hold_left <= 0:
-                self._finish(*self._stop, observe=True)  # type: ignore[misc]
-                return False
+        if self._motion is not None and self._motion.held_long_enough():
+            self._finish(*self._stop, observe=True)  # type: ignore[misc]
+            return False
         self._observe()
         return self._check_clocks(now)
 
@@ -415,75 +416,31 @@ class ClientApplication:
         self._reply = ReplyMessage(codec)
 
     def _build_motion(self, mon: Any, state: int, cmd: LBRCommand) -> bool:
-        """Guard the client's joint position (or take the braking stop's) and write it into the message."""
-        cyc = self.cycle
-        guard = self._guard
-        if guard is None:
+        """Guard the client's joint position (or take the braking stop's) and write it into the message; False if
+        the session ended instead (a refusal, nothing sent)."""
+        motion = self._motion
+        if motion is None:
             self._finish(Outcome.REFUSED, EndReason.GUARD, "the controller did not send its send period; no command is safe", observe=True)
             return False
         mode = mon.ipoData.clientCommandMode
-        if state == CMD_WAIT:
-            # the robot stands where it is measured: the command must be reachable from there
-            ref = tuple(mon.monitorData.measuredJointPosition.value)
-            prev, prev2 = ref, ref
-        else:
-            prev, prev2 = self._prev, self._prev2
-        if self._braking:
-            q = self._brake.next()  # type: ignore[union-attr]
-            cyc.braking = True
-            self.braking_cycles += 1
-            tau = wrench = None
-        else:
-            q = cmd.joint_position
-            tau, wrench = cmd.torque, cmd.wrench
-        reason = guard.refuse_position(q, prev, prev2, not cyc.braking)  # type: ignore[arg-type]
-        if reason is None and mode == _TORQUE:
-            tau = tau if tau is not None else _ZERO7
-            reason = guard.refuse_torque(tau)
-        elif reason is None and mode == _WRENCH:
-            wrench = wrench if wrench is not None else _ZERO6
-            reason = guard.refuse_wrench(wrench)
-        if reason is not None:
-            text = f"guard refused the command: {reason}"
-            if cyc.braking or state != CMD_ACTIVE or self._active_sent == 0:
-                # nothing moving under our command (or the stop itself failed): never send it
-                self._finish(Outcome.REFUSED, EndReason.GUARD, text, observe=True)
-                return False
-            self._stop = (Outcome.REFUSED, EndReason.GUARD, text)
-            self._begin_braking()
-            q = self._brake.next()  # type: ignore[union-attr]
-            cyc.braking = True
-            self.braking_cycles += 1
-            if guard.refuse_position(q, prev, prev2, False) is not None:
-                q = prev  # cannot happen within the limits; a hold is the last resort
-            tau = _ZERO7 if mode == _TORQUE else None
-            wrench = _ZERO6 if mode == _WRENCH else None
-        self._reply.set_motion(mode, q, tau, wrench)
-        if mode == _TORQUE:
-            cyc.torque = tau
-        elif mode == _WRENCH:
-            cyc.wrench = wrench
+        try:
+            q, tau, wrench, refused = motion.next_command(mon.monitorData.measuredJointPosition.value, state, mode,
+                                                          cmd.joint_position, cmd.torque, cmd.wrench)  # fmt: skip
+        except Refused as exc:
+            self._finish(Outcome.REFUSED, EndReason.GUARD, str(exc), observe=True)
+            return False
+        if refused is not None and self._stop is None:
+            self._stop = (Outcome.REFUSED, EndReason.GUARD, refused)
+        cyc = self.cycle
+        cyc.braking = motion.braking
+        self._reply.set_motion(mode, q, tau, wrench)  # type: ignore[union-attr]
+        cyc.torque = tau if mode == _TORQUE else None
+        cyc.wrench = wrench if mode == _WRENCH else None
         q = tuple(q)
-        if state == CMD_ACTIVE:
-            self._prev3, self._prev2, self._prev = self._prev2, self._prev, q
-            self._active_sent += 1
-        else:
-            self._prev = self._prev2 = self._prev3 = q
+        motion.sent(q, state)
         cyc.command = q
         cyc.sent_position = True
         return True
-
-    def _extrapolate(self, n: int) -> int:
-        """The controller bridged ``n`` command periods without our commands (its messages were lost): continue the
-        sent history as it did (at the last commands' velocity, within the velocity limit); ``n`` (≤ 64)."""
-        n = min(n, 64)
-        cap = self._guard.max_step  # type: ignore[union-attr] - commands were sent, so the guard exists
-        for _ in range(n):
-            prev, prev2 = self._prev, self._prev2
-            nxt = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(prev, prev2, cap))
-            self._prev3, self._prev2, self._prev = prev2, prev, nxt
-        self.extrapolated_cycles += n
-        return n
 
     # -- stops -----------------------------------------------------------------------------------------------
     def _stop_braking(self, outcome: Outcome, reason: EndReason, text: str) -> None:
@@ -491,25 +448,17 @@ class ClientApplication:
         if self._stop is not None:
             return
         self._stop = (outcome, reason, text)
-        if self._last_state == CMD_ACTIVE and self._active_sent > 0:
-            self._begin_braking()
+        if self._moving():
+            self._motion.begin_braking()  # type: ignore[union-attr]
 
     def _request_stop(self, outcome: Outcome, reason: EndReason, text: str) -> bool:
         """Remember a client-side stop; brake when commanding. True if the session ended at once."""
         self._stop = (outcome, reason, text)
-        if self._last_state == CMD_ACTIVE and self._active_sent > 0:
-            self._begin_braking()
+        if self._moving():
+            self._motion.begin_braking()  # type: ignore[union-attr]
             return False
         self._finish(outcome, reason, text)
         return True
-
-    def _begin_braking(self) -> None:
-        if self._braking:
-            return
-        # built with the guard when the period became known; nothing was sent (so nothing brakes) before that
-        self._brake.start(self._prev, self._prev2, self._prev3)
-        self._braking = True
-        self._hold_left = self.hold_cycles
 
     def _client_stop(self, s: StopSession) -> None:
         if self._stop is not None:
@@ -551,43 +500,30 @@ class ClientApplication:
     # -- observers and the end -------------------------------------------------------------------------------
     def _call_observer(self, o: Observer, method: str, *args: Any) -> None:
         fn = getattr(o, method, None)
-        if fn is None:
-            return
-        try:
-            fn(*args)
-        except Exception as exc:  # noqa: BLE001 - e.g. the log's disk is full: stop safely, say why
-            self.observers.remove(o)
-            if method == "on_end":
-                return
-            if self._stop is None:
-                self.error = exc
-                text = f"{type(o).__name__} failed: {exc}"
-                if self._ended:
-                    return
-                self._request_stop(Outcome.FAILED, EndReason.OBSERVER_FAILED, text)
+        if fn is not None:
+            try:
+                fn(*args)
+            except Exception as exc:  # noqa: BLE001 - e.g. the log's disk is full: stop safely, say why
+                self._observer_failed(o, exc, ending=method == "on_end")
 
     def _observe(self) -> None:
         for o in self.observers:
             fn = getattr(o, "on_cycle", None)
-            if fn is None:
-                continue
-            try:
-                fn(self)
-            except Exception:  # noqa: BLE001
-                self._call_observer_failed(o)
-                break
+            if fn is not None:
+                try:
+                    fn(self)
+                except Exception as exc:  # noqa: BLE001
+                    self._observer_failed(o, exc)
+                    break
 
-    def _call_observer_failed(self, o: Observer) -> None:
-        import sys
-
-        exc = sys.exc_info()[1]
+    def _observer_failed(self, o: Observer, exc: BaseException, ending: bool = False) -> None:
+        """Drop the observer; unless the session is ending anyway, stop (braking when commanding) and say why."""
         if o in self.observers:
             self.observers.remove(o)
-        if self._stop is None and exc is not None:
-            self.error = exc
-            text = f"{getattr(o, 'name', type(o).__name__)} failed: {exc}"
-            if not self._ended:
-                self._request_stop(Outcome.FAILED, EndReason.OBSERVER_FAILED, text)
+        if ending or self._stop is not None or self._ended:
+            return
+        self.error = exc
+        self._request_stop(Outcome.FAILED, EndReason.OBSERVER_FAILED, f"{getattr(o, 'name', type(o).__name__)} failed: {exc}")
 
     def _finish(self, outcome: Outcome, reason: EndReason, text: str, observe: bool = False) -> None:
         """End the session; with ``observe`` the observers see this cycle first (its log row, its figures)."""
@@ -596,53 +532,18 @@ class ClientApplication:
         self._ended = True
         if observe:
             self._observe()
-        lat = sorted(self._latencies)
-        n = self.cycles - self._cycles0
-        cpu = time.thread_time() - self._cpu0 if self._t_first is not None else 0.0
-
-        def pct(p: float) -> float | None:
-            if not lat:
-                return None
-            k = min(len(lat) - 1, max(0, int(math.ceil(p / 100.0 * len(lat))) - 1))
-            return lat[k] * 1e-6
-
-        if not self._answered_any:
-            self._unanswered_at_start = 0
-        result = SessionResult(
-            outcome=outcome,
-            reason=reason,
-            detail=text,
-            version=self.version.value if self.version else "",
-            cycles=self.cycles,
-            answered=self.answered,
-            position_commands=self.position_commands,
-            missed=self.missed,
-            stale=self.stale,
-            foreign=self.transport.foreign if self.transport is not None else 0,
-            malformed=self.malformed,
-            states_seen=tuple(self.states_seen),
-            period_s=self._period_s,
-            active_cycles=self.active_cycles,
-            braking_cycles=self.braking_cycles,
-            unanswered_at_start=self._unanswered_at_start,
-            latency_p50_ms=pct(50),
-            latency_p99_ms=pct(99),
-            latency_max_ms=lat[-1] * 1e-6 if lat else None,
-            cpu_us_per_cycle=cpu / n * 1e6 if n > 0 else None,
-            extrapolated_cycles=self.extrapolated_cycles,
-            largest_tracking_error_rad=self._sup.largest_tracking_error if self._sup is not None else None,
-            largest_reply_gap=self._sup.largest_reply_gap if self._sup is not None else None,
-        )
         figures: dict[str, Any] = {}
         for o in list(self.observers):
             fn = getattr(o, "figures", None)
             if fn is not None:
                 try:
                     figures.update(fn())
-                except Exception:  # noqa: BLE001
+                except Exception:  # noqa: BLE001 - a figure less, the session's end is what matters
                     pass
-        if figures:
-            result = SessionResult(**{**{k: getattr(result, k) for k in result.__dataclass_fields__}, "figures": figures})
-        self.result = result
+        cpu = time.thread_time() - self._cpu0 if self._t_first is not None else 0.0
+        self.result = session_result(
+            self, outcome, reason, text, figures, cpu_s=cpu, cpu_cycles=self.cycles - self._cycles0,
+            unanswered_at_start=self._unanswered_at_start if self._answered_any else 0,
+        )  # fmt: skip
         for o in list(self.observers):
-            self._call_observer(o, "on_end", self, result)
+            self._call_observer(o, "on_end", self, self.result)

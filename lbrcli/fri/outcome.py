@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any
@@ -84,3 +85,43 @@ class SessionResult:
         d["ok"] = self.ok
         d.update(self.figures)
         return d
+
+
+def _percentile_ms(sorted_ns: list[int], p: float) -> float | None:
+    if not sorted_ns:
+        return None
+    k = min(len(sorted_ns) - 1, max(0, int(math.ceil(p / 100.0 * len(sorted_ns))) - 1))
+    return sorted_ns[k] * 1e-6
+
+
+def session_result(app: Any, outcome: Outcome, reason: EndReason, text: str, figures: dict[str, Any], *,
+                   cpu_s: float, cpu_cycles: int, unanswered_at_start: int) -> SessionResult:  # fmt: skip
+    """The result of ``app``'s session (a ClientApplication: its counters, latencies [ns] and supervisor)."""
+    lat = sorted(app._latencies)
+    sup = app._sup
+    return SessionResult(
+        outcome=outcome,
+        reason=reason,
+        detail=text,
+        version=app.version.value if app.version else "",
+        cycles=app.cycles,
+        answered=app.answered,
+        position_commands=app.position_commands,
+        missed=app.missed,
+        stale=app.stale,
+        foreign=app.transport.foreign if app.transport is not None else 0,
+        malformed=app.malformed,
+        states_seen=tuple(app.states_seen),
+        period_s=app.period_s,
+        active_cycles=app.active_cycles,
+        braking_cycles=app.braking_cycles,
+        unanswered_at_start=unanswered_at_start,
+        latency_p50_ms=_percentile_ms(lat, 50),
+        latency_p99_ms=_percentile_ms(lat, 99),
+        latency_max_ms=lat[-1] * 1e-6 if lat else None,
+        cpu_us_per_cycle=cpu_s / cpu_cycles * 1e6 if cpu_cycles > 0 else None,
+        extrapolated_cycles=app.extrapolated_cycles,
+        largest_tracking_error_rad=sup.largest_tracking_error if sup is not None else None,
+        largest_reply_gap=sup.largest_reply_gap if sup is not None else None,
+        figures=figures,
+    )

@@ -32,6 +32,28 @@ def realtime_scheduling(rep, wanted: bool):
         os.sched_setscheduler(0, old[0], old[1])
 
 
+def simulator_kwargs(*, length: float | None, default_length: float, period_ms: int, sim_start: str | None,
+                     default_start: str, flange: str, tool: str | None, max_runtime_s: float, limits=None) -> dict[str, Any]:  # fmt: skip
+    """The embedded simulator's settings from the commands' simulator options (OptionError on a bad --length)."""
+    from trajectories.errors import OptionError
+    from trajectories.robot import parse_tool
+
+    from .parsing import parse_joint_vector
+
+    ball = default_length if length is None else length
+    if not (math.isfinite(ball) and 0 <= ball <= 5):
+        raise OptionError(f"--length must be 0..5 m, got {ball:g}")
+    return dict(
+        period_ms=period_ms,
+        q0=tuple(float(v) for v in parse_joint_vector(sim_start or default_start, "--sim-start")),
+        flange=flange,
+        tool=parse_tool(tool),
+        ball_length=ball if ball > 0 else None,
+        limits_path=str(limits) if limits is not None else None,
+        max_runtime_s=max_runtime_s,
+    )
+
+
 class _TapObserver:
     """Adapts the lab's telemetry tap to an application observer."""
 

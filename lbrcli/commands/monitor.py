@@ -64,13 +64,12 @@ def monitor(
     from lbrcli.fri import LBRClient, Phase
     from lbrcli.lab.attach import LabOptions
     from trajectories.errors import OptionError
-    from trajectories.robot import FLANGE_FRAME, parse_tool
+    from trajectories.robot import FLANGE_FRAME
 
     from ..console import Reporter
     from ..fri_options import validate_period, validate_port, validate_version, validate_wait
-    from ..fri_runner import exit_for, plot_log, print_summary, run_client
+    from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import THESIS_Q_START, make_robot
-    from ..parsing import parse_joint_vector
 
     rep = Reporter(json_out)
     validate_version(fri_version)
@@ -101,17 +100,9 @@ def monitor(
 
     sim_kwargs: dict[str, Any] = {}
     if robot is None:
-        ball = DEFAULT_BALL_LENGTH if length is None else length
-        if not (math.isfinite(ball) and 0 <= ball <= 5):
-            raise OptionError(f"--length must be 0..5 m, got {ball:g}")
-        sim_kwargs = dict(
-            period_ms=period or 1,
-            q0=tuple(float(v) for v in parse_joint_vector(sim_start or THESIS_Q_START, "--sim-start")),
-            flange=flange,
-            tool=parse_tool(tool),
-            ball_length=ball if ball > 0 else None,
-            max_runtime_s=duration + 120.0,
-        )
+        sim_kwargs = simulator_kwargs(length=length, default_length=DEFAULT_BALL_LENGTH, period_ms=period or 1,
+                                      sim_start=sim_start, default_start=THESIS_Q_START, flange=flange, tool=tool,
+                                      max_runtime_s=duration + 120.0)  # fmt: skip
     result, sim_stats, lab_figures = run_client(
         rep, Watcher(), robot=robot, port=port, bind=bind, version=fri_version, limits=None, log_path=log, wait=wait,
         sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, duration_s=duration, extra_names=("flange_x", "flange_y", "flange_z"), extra=flange_xyz,

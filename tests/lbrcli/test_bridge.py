@@ -1,0 +1,237 @@
+"""`lbr serve` and lbrcli.bridge as a user drives them: a source process streaming joint targets over UDP to the
+bridge on the simulator — following within the limits, the state coming back, the dead-man, garbage, a second
+source, the end message — and the wire format."""
+
+from __future__ import annotations
+
+import json
+import math
+import socket
+import struct
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+from conftest import run_lbr
+from test_execute_cli import free_port
+
+from lbrcli.bridge import BadTarget, BridgeClient, decode_state, decode_target, encode_state, encode_target
+from lbrcli.bridge.protocol import STATE_SIZE, TARGET_SIZE
+from lbrcli.fri.log import LOG_COLUMNS, PHASE_BRAKE
+from trajectories.csvio import read_table
+from trajectories.limits import default_limits
+
+LIM = default_limits()
+Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # the simulator's default start (thesis §5.3.2)
+
+
+# -- wire format ------------------------------------------------------------------------------------------------
+def test_target_round_trip_binary_and_json():
+    q = tuple(np.linspace(-1, 1, 7))
+    data = encode_target(q, [0.1] * 7, seq=7, t=2.5)
+    assert len(data) == TARGET_SIZE == 136 and data[:4] == b"LBRT"
+    t = decode_target(data)
+    assert t.q == q and t.v == (0.1,) * 7 and t.seq == 7 and t.t == 2.5
+    assert decode_target(encode_target(q)).v is None
+    # the documented offsets: q at 24, v at 80
+    assert struct.unpack_from("<7d", data, 24) == q and struct.unpack_from("<7d", data, 80) == (0.1,) * 7
+    j = decode_target(json.dumps({"q": list(q), "v": [0] * 7, "seq": 3}).encode())
+    assert j.q == q and j.v == (0.0,) * 7 and j.seq == 3
+
+
+@pytest.mark.parametrize(
+    "data, words",
+    [
+        (encode_target([0] * 7)[:-1], "136 bytes"),
+        (b"LBRT" + bytes([2]) + encode_target([0] * 7)[5:], "version 2"),
+        (encode_target([0, 0, 0, math.nan, 0, 0, 0]), "not finite"),
+        (b'{"q": [1, 2, 3]}', "7 numbers"),
+        (b'{"v": [0, 0, 0, 0, 0, 0, 0]}', '"q"'),
+        (b"{not json", "JSON"),
+        (b"\x00\x01garbage", "neither"),
+    ],
+)
+def test_bad_targets_are_refused_with_a_reason(data, words):
+    with pytest.raises(BadTarget, match=words):
+        decode_target(data)
+
+
+def test_state_round_trip():
+    data = encode_state(4, True, True, 9, 8, 1.25, 3.5, [0.1] * 7, [0.2] * 7, [0.3] * 7)
+    assert len(data) == STATE_SIZE == 200
+    s = decode_state(data)
+    assert s.session_state == 4 and s.braking and s.following and (s.seq, s.target_seq) == (9, 8)
+    assert s.target_t == 1.25 and s.t == 3.5 and s.commanded == (0.2,) * 7 and s.external_torque == (0.3,) * 7
+
+
+# -- the bridge on the simulator ----------------------------------------------------------------------------------
+def _serve(tmp_path, listen_port: int, *extra: str) -> subprocess.Popen:
+    return subprocess.Popen(
+        [sys.executable, "-m", "lbrcli", "serve", "--listen", f"127.0.0.1:{listen_port}", "--port", "0",
+         "--sim-lenient", "--log", str(tmp_path / "serve.csv"), "--json", *extra],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+
+
+def _wave(t: float) -> np.ndarray:
+    q = Q0.copy()
+    q[0] += 0.3 * math.sin(2 * math.pi * 0.5 * t)
+    q[3] += 0.2 * (1 - math.cos(2 * math.pi * 0.5 * t))
+    return q
+
+
+def _stream(client: BridgeClient, rate_hz: float, seconds: float, states: list | None = None) -> list[np.ndarray]:
+    """Send the wave at ``rate_hz`` for ``seconds`` (after the bridge answered); the targets sent."""
+    sent = []
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < seconds:
+        t = time.monotonic() - t0
+        q = _wave(t)
+        client.send_joint(q, t=t)
+        sent.append(q)
+        if states is not None:
+            client.sock.setblocking(False)
+            try:
+                while True:
+                    states.append(decode_state(client.sock.recv(512)))
+            except (BlockingIOError, OSError):
+                pass
+            client.sock.setblocking(True)
+        time.sleep(max(0.0, t0 + len(sent) / rate_hz - time.monotonic()))
+    return sent
+
+
+def _log(tmp_path):
+    return read_table(tmp_path / "serve.csv", LOG_COLUMNS, time="increasing")
+
+
+def _ratios(tab, dt=1e-3, following_only=False) -> tuple[float, float, float]:
+    """Largest step / velocity limit, second difference / acceleration limit, third / jerk limit of the commands
+    in COMMANDING_ACTIVE (with ``following_only`` those before the braking stop)."""
+    keep = tab.column("state") == 4
+    if following_only:
+        keep &= np.cumsum(tab.column("phase") == PHASE_BRAKE) == 0
+    q = np.column_stack([tab.column(f"cmd_q{j}") for j in range(1, 8)])[keep]
+    return tuple(float((np.abs(np.diff(q, k, axis=0)) / dt**k / lim).max())
+                 for k, lim in ((1, LIM.velocity), (2, LIM.acceleration), (3, LIM.jerk)))  # fmt: skip
+
+
+@pytest.mark.parametrize("rate_hz", [1000.0, 30.0])
+def test_a_source_streaming_targets_is_followed_within_the_limits_and_gets_the_state(tmp_path, rate_hz):
+    port = free_port()
+    proc = _serve(tmp_path, port, "--speed-scale", "0.5")
+    client = BridgeClient("127.0.0.1", port)
+    try:
+        time.sleep(1.0)  # the simulator starting
+        states: list = []
+        sent = _stream(client, rate_hz, 3.0, states)
+        client.end()
+        out, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+        client.close()
+    assert proc.returncode == 0, err
+    f = json.loads(out)
+    assert f["reason"] == "finished" and f["targets_accepted"] >= 0.9 * len(sent) and f["targets_bad"] == 0
+    tab = _log(tmp_path)
+    v, a, j = _ratios(tab, following_only=True)
+    assert v <= 0.5 + 1e-6 and a <= 0.5 + 1e-6 and j <= 0.5 + 1e-6  # ruckig at --speed-scale 0.5
+    v, a, j = _ratios(tab)
+    assert v <= 0.5 + 1e-6 and a <= 1.0 + 1e-6 and j <= 1.0 + 1e-6  # the braking stop at the end: the full limits
+    # the robot followed the wave: commanded within a few degrees of the targets while streaming
+    active = tab.column("state") == 4
+    cmd = np.column_stack([tab.column(f"cmd_q{k}") for k in range(1, 8)])[active]
+    assert np.abs(cmd[:, 0] - Q0[0]).max() > 0.2  # A1 really swung ±0.3 rad
+    # the state came back: the measured position is what was commanded a cycle before (the simulator follows)
+    assert len(states) > 100 and all(s.session_state in (1, 2, 3, 4) for s in states)
+    act = [s for s in states if s.session_state == 4]
+    assert act and max(np.abs(np.subtract(s.measured, s.commanded)).max() for s in act) < 0.01
+    assert act[-1].target_t > 2.0  # the source's time is echoed
+
+
+def test_dead_man_brakes_when_targets_stop(tmp_path):
+    port = free_port()
+    proc = _serve(tmp_path, port, "--timeout", "0.05")
+    client = BridgeClient("127.0.0.1", port)
+    try:
+        time.sleep(1.0)
+        _stream(client, 200.0, 2.0)  # then silence, mid-motion
+        out, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+        client.close()
+    assert proc.returncode == 1 and "dead-man" in err and "50 ms" in err
+    f = json.loads(out)
+    assert f["reason"] == "client_refused" and f["braking_cycles"] > 5
+    tab = _log(tmp_path)
+    v, a, j = _ratios(tab)
+    assert v <= 0.5 + 1e-6 and a <= 1.0 + 1e-6 and j <= 1.0 + 1e-6  # the braking stop at the full limits at most
+    braked = np.flatnonzero(tab.column("phase") == PHASE_BRAKE)
+    assert len(braked) == f["braking_cycles"]
+
+
+def test_garbage_from_the_source_brakes_and_a_second_source_is_ignored(tmp_path):
+    port = free_port()
+    proc = _serve(tmp_path, port)
+    client = BridgeClient("127.0.0.1", port)
+    intruder = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        time.sleep(1.0)
+        stop = threading.Event()
+
+        def intrude():
+            while not stop.is_set():
+                intruder.sendto(encode_target(Q0 + 0.5), ("127.0.0.1", port))  # far away: must never be followed
+                time.sleep(0.005)
+
+        th = threading.Thread(target=intrude, daemon=True)
+        _stream(client, 200.0, 0.5)  # the owner first
+        th.start()
+        _stream(client, 200.0, 1.5)
+        client.sock.sendto(b"\x00garbage", ("127.0.0.1", port))
+        out, err = proc.communicate(timeout=60)
+        stop.set()
+    finally:
+        proc.kill()
+        client.close()
+        intruder.close()
+    assert proc.returncode == 1 and "not a target" in err
+    f = json.loads(out)
+    assert f["targets_foreign"] > 50 and f["targets_bad"] == 1
+    cmd = np.column_stack([_log(tmp_path).column(f"cmd_q{k}") for k in range(1, 8)])
+    assert np.abs(cmd[:, 1] - Q0[1]).max() < 1e-9  # A2 never moved: the intruder's target (+0.5 rad) was ignored
+
+
+def test_a_json_target_outside_the_limits_is_refused(tmp_path):
+    port = free_port()
+    proc = _serve(tmp_path, port)
+    try:
+        time.sleep(1.0)
+        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        bad = list(Q0)
+        bad[0] = 3.5  # beyond A1's 170°
+        for _ in range(100):
+            s.sendto(json.dumps({"q": bad}).encode(), ("127.0.0.1", port))
+            time.sleep(0.01)
+            if proc.poll() is not None:
+                break
+        out, err = proc.communicate(timeout=60)
+        s.close()
+    finally:
+        proc.kill()
+    assert proc.returncode == 1 and "A1" in err and "outside its position limits" in err
+    cmd = np.column_stack([_log(tmp_path).column(f"cmd_q{k}") for k in range(1, 8)])
+    assert np.abs(cmd[:, 0] - Q0[0]).max() < 1e-9  # nothing moved towards it
+
+
+@pytest.mark.parametrize(
+    "argv, option",
+    [(("--listen", "nowhere"), "--listen"), (("--timeout", "0"), "--timeout"), (("--speed-scale", "2"), "--speed-scale"),
+     (("--state-every", "-1"), "--state-every"), (("--length", "0.3", "--robot", "127.0.0.1"), "--length")],
+)
+def test_serve_options_are_validated(argv, option):
+    proc = run_lbr("serve", "--port", "0", *argv)
+    assert proc.returncode == 2 and option in proc.stderr and len(proc.stderr.strip().splitlines()) == 1, proc.stderr

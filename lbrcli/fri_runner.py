@@ -33,8 +33,10 @@ def realtime_scheduling(rep, wanted: bool):
 
 
 def simulator_kwargs(*, length: float | None, default_length: float, period_ms: int, sim_start: str | None,
-                     default_start: str, flange: str, tool: str | None, max_runtime_s: float, limits=None) -> dict[str, Any]:  # fmt: skip
-    """The embedded simulator's settings from the commands' simulator options (OptionError on a bad --length)."""
+                     default_start: str | Sequence[float], flange: str, tool: str | None, max_runtime_s: float,
+                     limits=None) -> dict[str, Any]:  # fmt: skip
+    """The embedded simulator's settings from the commands' simulator options: --length [m] (``default_length`` if
+    None), --sim-start (``default_start``: text, or joint positions [rad]); OptionError on a bad one."""
     from trajectories.errors import OptionError
     from trajectories.robot import parse_tool
 
@@ -45,7 +47,9 @@ def simulator_kwargs(*, length: float | None, default_length: float, period_ms: 
         raise OptionError(f"--length must be 0..5 m, got {ball:g}")
     return dict(
         period_ms=period_ms,
-        q0=tuple(float(v) for v in parse_joint_vector(sim_start or default_start, "--sim-start")),
+        q0=tuple(float(v) for v in (parse_joint_vector(sim_start, "--sim-start") if sim_start is not None
+                                    else parse_joint_vector(default_start, "--sim-start") if isinstance(default_start, str)
+                                    else default_start)),  # fmt: skip
         flange=flange,
         tool=parse_tool(tool),
         ball_length=ball if ball > 0 else None,

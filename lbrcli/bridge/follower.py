@@ -46,7 +46,7 @@ class TargetFollower(LBRClient):
         self._inp.max_velocity = lim.velocity.tolist()
         self._inp.max_acceleration = lim.acceleration.tolist()
         self._inp.max_jerk = lim.jerk.tolist()
-        self._t_start = time.monotonic()
+        self._t_start = 0.0  # [s] time.monotonic() at activation
         self._count = 0
         self._seq = 0
         self._q: Sequence[float] | None = None
@@ -62,7 +62,7 @@ class TargetFollower(LBRClient):
             raise StopSession("the source ended the session", completed=True)
         if src.latest is None:
             if now - self._t_start > self.first_target_s:
-                raise StopSession(f"no target arrived within {self.first_target_s:g} s", completed=False)
+                raise StopSession(f"no target arrived within {self.first_target_s:g} s of commanding", completed=False)
         elif now - src.latest_time > self.timeout_s:
             raise StopSession(f"dead-man: no target for {(now - src.latest_time) * 1e3:.0f} ms "
                               f"(more than {self.timeout_s * 1e3:g} ms)", completed=False)  # fmt: skip
@@ -92,9 +92,9 @@ class TargetFollower(LBRClient):
 
     def command(self, state: LBRState) -> Sequence[float]:
         now = time.monotonic()
-        self._check_source(now)
         inp = self._inp
         if self._otg is None:  # activation: start from where the controller holds the robot, at rest
+            self._t_start = now
             self._otg = Ruckig(7, state.sample_time * state.receive_multiplier)
             inp.current_position = list(state.ipo_joint_position)
             inp.current_velocity = list(_ZERO7)
@@ -102,6 +102,7 @@ class TargetFollower(LBRClient):
             inp.target_position = list(state.ipo_joint_position)
             inp.target_velocity = list(_ZERO7)
             self._q = state.ipo_joint_position
+        self._check_source(now)
         if not self.reply_due:
             return self._q  # type: ignore[return-value]
         if self.skipped:  # the controller extrapolated our last command at its velocity: continue from there

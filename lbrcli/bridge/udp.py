@@ -58,7 +58,7 @@ class UdpTargets:
             self._handle(data, addr)
 
     def _handle(self, data: bytes, addr: tuple[str, int]) -> None:
-        if self.owner is not None and addr != self.owner or self.allowed is not None and addr[0] not in self.allowed:
+        if (self.owner is not None and addr != self.owner) or (self.allowed is not None and addr[0] not in self.allowed):
             self.foreign += 1
             return
         if _is_end(data):

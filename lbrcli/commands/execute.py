@@ -136,8 +136,6 @@ def execute(
     file are jerk-limited braking stops; a safety stop, drives off, POOR quality or the session leaving
     COMMANDING_ACTIVE end the stream at once. Exit 0 completed, 1 refused or stopped, 2 bad input, 130 Ctrl-C.
     """
-    import numpy as np
-
     from lbrcli.fri import TrajectoryPlayer
     from lbrcli.lab.attach import LabOptions
     from trajectories.csvio import read_joint_csv
@@ -145,9 +143,8 @@ def execute(
 
     from ..console import Reporter
     from ..fri_options import validate_period, validate_port, validate_tracking_error, validate_version, validate_wait
-    from ..fri_runner import exit_for, plot_log, print_summary, run_client
+    from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import check_margin, limits_from, make_robot
-    from ..parsing import parse_joint_vector
 
     rep = Reporter(json_out)
     validate_version(fri_version)
@@ -232,20 +229,10 @@ def execute(
 
     sim_kwargs: dict[str, Any] = {}
     if robot is None:
-        from trajectories.robot import parse_tool
-
-        q0 = traj.q[0] if sim_start is None else parse_joint_vector(sim_start, "--sim-start")
-        sim_kwargs = dict(
-            period_ms=int(period),
-            receive_multiplier=receive_multiplier,
-            q0=tuple(float(v) for v in np.asarray(q0)),
-            flange=flange,
-            tool=parse_tool(tool),
-            ball_length=ball if ball > 0 else None,
-            ball_damping=damping,
-            limits_path=str(limits) if limits is not None else None,
-            max_runtime_s=traj.duration + settle + sway_wait + 120.0,
-        )
+        sim_kwargs = simulator_kwargs(length=ball, default_length=DEFAULT_BALL_LENGTH, period_ms=int(period),
+                                      sim_start=sim_start, default_start=traj.q[0], flange=flange, tool=tool,
+                                      max_runtime_s=traj.duration + settle + sway_wait + 120.0, limits=limits)  # fmt: skip
+        sim_kwargs.update(receive_multiplier=receive_multiplier, ball_damping=damping)
     result, sim_stats, lab_figures = run_client(
         rep, player, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
         sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, max_tracking_error=max_tracking_error, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),

@@ -47,8 +47,8 @@ def ptp(
 
     from ..console import Reporter
     from ..fri_options import validate_period, validate_port, validate_tracking_error, validate_version, validate_wait
-    from ..fri_runner import exit_for, plot_log, print_summary, run_client
-    from ..options import THESIS_Q_START, limits_from
+    from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
+    from ..options import DEFAULT_FLANGE, THESIS_Q_START, limits_from
     from ..parsing import parse_joint_vector
 
     rep = Reporter(json_out)
@@ -104,16 +104,9 @@ def ptp(
     )  # fmt: skip
     sim_kwargs: dict[str, Any] = {}
     if robot is None:
-        ball = 0.0 if length is None else length
-        if not (math.isfinite(ball) and 0 <= ball <= 5):
-            raise OptionError(f"--length must be 0..5 m, got {ball:g}")
-        sim_kwargs = dict(
-            period_ms=period or 1,
-            q0=tuple(float(v) for v in parse_joint_vector(sim_start or THESIS_Q_START, "--sim-start")),
-            ball_length=ball if ball > 0 else None,
-            limits_path=str(limits) if limits is not None else None,
-            max_runtime_s=time_s + settle + 120.0,
-        )
+        sim_kwargs = simulator_kwargs(length=length, default_length=0.0, period_ms=period or 1, sim_start=sim_start,
+                                      default_start=THESIS_Q_START, flange=DEFAULT_FLANGE, tool=None,
+                                      max_runtime_s=time_s + settle + 120.0, limits=limits)  # fmt: skip
     result, sim_stats, lab_figures = run_client(
         rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
         sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, max_tracking_error=max_tracking_error,

@@ -116,7 +116,6 @@ def serve(
         result, sim_stats, _ = run_client(
             rep, follower, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
             sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, duration_s=duration, realtime=realtime,
-            commanding_timeout_s=None,
         )  # fmt: skip
     finally:
         targets.close()

@@ -113,7 +113,7 @@ class ShapedMove:
         moving = v_from is not None and any(v != 0.0 for v in v_from)
         traj = _plan_to_rest(self._otg, self._inp, q_from, q_to, v_from if moving else None)
         self._traj = traj
-        self._terms = ((1.0, 0.0),) if moving else self.shaper
+        self._terms = ((1.0, 0.0),) if moving or traj.duration == 0.0 else self.shaper  # nothing to shape: no delay
         self._end = traj.duration + self._terms[-1][1]
         self._k = 0
         self.target = tuple(q_to)

@@ -85,7 +85,7 @@ class TrajectoryPlayer(LBRClient):
         # figures
         self.move_rows = self.trajectory_rows = self.settle_rows = 0
         self.start_sway: float | None = None  # [rad] largest |sway| over the window before the first row
-        self.sway_timed_out = False  # the rows started above the sway threshold (the wait ran out)
+        self.started_above_threshold = False  # the rows started above the sway threshold (no wait, or it ran out)
         self.skipped_rows = 0  # commands the controller bridged by extrapolation (its messages were lost)
         self.start_distance = 0.0  # [rad] largest |first row − measured| at the first message
         self.operation_mode: str | None = None  # T1, T2 or AUT as reported at the first message
@@ -240,7 +240,7 @@ class TrajectoryPlayer(LBRClient):
         self._started = True
         if sway is not None and sway.readings:
             self.start_sway = sway.amplitude
-            self.sway_timed_out = not sway.calm
+            self.started_above_threshold = not sway.calm
         return False
 
     def figures(self) -> dict[str, float | int]:
@@ -256,6 +256,6 @@ class TrajectoryPlayer(LBRClient):
             "sway_wait_s": self._waited * self._period,
             "start_sway_rad": start,
             "start_sway_deg": None if start is None else math.degrees(start),
-            "start_sway_above_threshold": self.sway_timed_out if start is not None else None,
+            "start_sway_above_threshold": self.started_above_threshold if start is not None else None,
             "sway_threshold_deg": math.degrees(self.sway.threshold) if self.sway is not None else None,
         }

@@ -227,6 +227,16 @@ def test_a_json_target_outside_the_limits_is_refused(tmp_path):
     assert np.abs(cmd[:, 0] - Q0[0]).max() < 1e-9  # nothing moved towards it
 
 
+def test_no_target_within_first_target_of_commanding_ends_the_session(tmp_path):
+    proc = _serve(tmp_path, free_port(), "--first-target", "0.5")
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 1 and "no target arrived within 0.5 s of commanding" in err
+    f = json.loads(out)
+    assert f["active_cycles"] >= 400  # the clock ran from activation, not from the command's start
+    cmd = np.column_stack([_log(tmp_path).column(f"cmd_q{k}") for k in range(1, 8)])
+    assert np.abs(cmd - Q0).max() < 1e-9  # held where it stood
+
+
 @pytest.mark.parametrize(
     "argv, option",
     [(("--listen", "nowhere"), "--listen"), (("--timeout", "0"), "--timeout"), (("--speed-scale", "2"), "--speed-scale"),
@@ -235,3 +245,37 @@ def test_a_json_target_outside_the_limits_is_refused(tmp_path):
 def test_serve_options_are_validated(argv, option):
     proc = run_lbr("serve", "--port", "0", *argv)
     assert proc.returncode == 2 and option in proc.stderr and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+
+
+def test_the_follower_against_a_controller_that_loses_and_garbles_messages():
+    """Lost monitoring messages (the controller extrapolates) and a malformed datagram mid-motion: every command
+    within the limits against what the robot executed, the targets still followed."""
+    from types import SimpleNamespace
+
+    from fri_scripted_controller import CA, Cycle
+    from test_fri_application import preamble, run
+
+    from lbrcli.bridge import Target, TargetFollower
+
+    class Source(SimpleNamespace):  # a source that has a new target every poll: a ramp on A1
+        def poll(self):
+            self.k += 1
+            self.latest = Target(tuple(Q0 + np.array([min(0.2, 2e-4 * self.k), 0, 0, 0, 0, 0, 0])), seq=self.k)
+            self.latest_time, self.fresh = time.monotonic(), True
+
+        def send(self, data):
+            pass
+
+        def figures(self):
+            return {}
+
+    src = Source(k=0, latest=None, latest_time=0.0, fresh=False, error=None, ended=False, owner=None)
+    follower = TargetFollower(src, LIM, timeout_s=1.0, speed_scale=1.0)
+    script = preamble()
+    script += [Cycle(state=CA)] * 300 + [Cycle(state=CA, seq_jump=3)] + [Cycle(state=CA)] * 200
+    script += [Cycle(raw=b"\x00garbled")] + [Cycle(state=CA)] * 1500
+    res, ctl, _, err = run(script, follower, q_start=tuple(Q0))
+    assert err is None and res.extrapolated_cycles == 3 and res.malformed == 1
+    assert max(ctl.command_ratios(LIM.velocity, LIM.acceleration)) <= 1.0
+    sent = np.array([r.position for r in ctl.replies if r.state == CA and r.position is not None])
+    assert abs(sent[-1][0] - (Q0[0] + 0.2)) < 1e-6  # reached the end of the ramp

@@ -75,3 +75,10 @@ def test_a_restart_from_motion_is_unshaped_and_continues_the_velocity(robot):
     assert np.all(np.abs(first - v) <= 0.2 * LIM.acceleration * DT + 1e-9)  # no velocity jump
     plain = _play(OnlineMove(LIM, DT, 0.2), a, b, v)
     assert len(q) == pytest.approx(len(plain), abs=2)  # not lengthened by the shaper
+
+
+def test_a_shaped_move_of_nothing_takes_no_time(robot):
+    shaper = make_shaper("zvd", natural_period(0.5))
+    move = ShapedMove(LIM, DT, 0.2, shaper.amplitudes, shaper.times, robot=robot)
+    assert move.start(HOME, HOME) == 0.0  # not the shaper's second: nothing swings
+    assert move.next() == tuple(HOME) and move.done

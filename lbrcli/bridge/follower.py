@@ -1,11 +1,15 @@
-"""The FRI client that follows targets from a source: ruckig online between targets, the dead-man rule.
+"""The FRI client that follows targets from a source: online IK for poses, ruckig between targets, the dead-man rule.
 
-Every cycle it drains the source, retargets ruckig (position interface, at ``speed_scale`` of the velocity,
-acceleration and jerk limits) on the newest target [rad] with its velocity feed-forward [rad/s], and commands
-ruckig's next position — so a 30 Hz or jittery source still gives a smooth stream at the FRI period, and the
+Every cycle it drains the source. A joint target [rad] goes to ruckig as it is; a TCP pose goes through the online
+IK (:class:`trajectories.ik_online.OnlineIk`, warm-started from the previous solution, a few Gauss–Newton steps
+within the cycle, continued on the next cycles until it converges, the redundancy pulled toward the posture at
+activation) and its twist feed-forward through the Jacobian's damped pseudo-inverse. The state goes back after the
+FRI reply (:meth:`after_reply`). Ruckig (position interface, at ``speed_scale`` of the velocity, acceleration and jerk limits)
+then gives the next position — so a 30 Hz or jittery source still gives a smooth stream at the FRI period, and the
 application's guard checks every command. It ends with :class:`~lbrcli.fri.StopSession` (the application brakes
 within the limits): when no target arrived for ``timeout_s`` after the first (or none within ``first_target_s``),
-when the owning source sends something that is not a target, or when it sends the end message (completed).
+when the owning source sends something that is not a target or a joint target outside the position limits, or
+when it sends the end message (completed).
 """
 
 from __future__ import annotations
@@ -13,22 +17,28 @@ from __future__ import annotations
 import time
 from typing import Sequence
 
+import numpy as np
+import pinocchio as pin
 from ruckig import InputParameter, OutputParameter, Result, Ruckig
 
 from lbrcli.fri import LBRClient, LBRState, StopSession
+from trajectories.ik_online import OnlineIk, OnlineIkOptions, fixed_angles_to_matrix, quaternion_to_matrix
 from trajectories.limits import JointLimits
+from trajectories.robot import Robot
 
-from .protocol import encode_state
-from .udp import UdpTargets
+from .inbox import TargetInbox
+from .protocol import KIND_JOINT, KIND_POSE, State, Target
 
 _ZERO7 = [0.0] * 7
+REFINE_CYCLES = 50  # cycles a pose that has not converged is refined further before it counts as unreached
 
 
 class TargetFollower(LBRClient):
     """Follows ``source``'s targets; sends the state back every ``state_every`` messages (0: never)."""
 
-    def __init__(self, source: UdpTargets, limits: JointLimits, *, timeout_s: float = 0.1, first_target_s: float = 30.0,
-                 speed_scale: float = 0.5, state_every: int = 1) -> None:  # fmt: skip
+    def __init__(self, source: TargetInbox, limits: JointLimits, *, robot: Robot | None = None,
+                 timeout_s: float = 0.1, first_target_s: float = 30.0, speed_scale: float = 0.5,
+                 state_every: int = 1, ik_options: OnlineIkOptions = OnlineIkOptions()) -> None:  # fmt: skip
         if not (0 < speed_scale <= 1):
             raise ValueError(f"speed_scale must be in (0, 1], got {speed_scale}")
         self.source = source
@@ -36,6 +46,7 @@ class TargetFollower(LBRClient):
         self.timeout_s = timeout_s
         self.first_target_s = first_target_s
         self.state_every = state_every
+        self.ik = OnlineIk(robot or Robot(), limits, ik_options)
         lim = limits.scaled(speed_scale)
         self._vmax = [0.99 * v for v in lim.velocity.tolist()]  # feed-forward within what ruckig may reach
         self._upper = limits.position.tolist()  # [rad] symmetric: |q| ≤ position
@@ -50,8 +61,18 @@ class TargetFollower(LBRClient):
         self._count = 0
         self._seq = 0
         self._q: Sequence[float] | None = None
+        self._pending: tuple[LBRState, Sequence[float]] | None = None  # the state to send after the reply
+        self._pose: tuple[np.ndarray, np.ndarray, Target] | None = None  # a pose still being refined
+        self._ik_q: np.ndarray | None = None  # [rad] the last IK solution (the next seed)
+        self._posture: np.ndarray | None = None  # [rad] where the arm stood at activation: the IK's redundancy pull
+        self._refine_left = 0
+        self.unreached = False  # the last pose target was not reached (closest configuration followed)
         # figures
         self.targets_followed = 0
+        self.pose_targets = 0
+        self.poses_unreached = 0
+        self.max_ik_position_error = 0.0  # [m] over the poses that did not converge
+        self.ik_time_max = 0.0  # [s] longest IK work in one cycle
 
     def _check_source(self, now: float) -> None:
         src = self.source
@@ -67,19 +88,30 @@ class TargetFollower(LBRClient):
             raise StopSession(f"dead-man: no target for {(now - src.latest_time) * 1e3:.0f} ms "
                               f"(more than {self.timeout_s * 1e3:g} ms)", completed=False)  # fmt: skip
 
-    def _send_state(self, state: LBRState, q: Sequence[float], braking: bool = False) -> None:
+    def _send_state(self, state: LBRState, q: Sequence[float]) -> None:
+        """Note the state to send back (every ``state_every`` messages); :meth:`after_reply` sends it."""
         self._count += 1
-        if not self.state_every or self._count % self.state_every:
+        if self.state_every and not self._count % self.state_every and self.source.owner is not None:
+            self._pending = (state, q)
+
+    def after_reply(self) -> None:
+        """Send the noted state back to the source once the FRI reply is on its way (it never delays a command);
+        while the application brakes, the state with the ipo position and the braking flag."""
+        if self.braking:
+            self._send_state(self.robot_state, self.robot_state.ipo_joint_position)
+        if self._pending is None:
             return
-        src = self.source
-        if src.owner is None:
-            return
+        state, q = self._pending
+        self._pending = None
         msg = state.message
-        tgt = src.latest
+        tgt = self.source.latest
         self._seq += 1
-        src.send(encode_state(msg.connectionInfo.sessionState, braking, self._otg is not None, self._seq,
-                              (tgt.seq or 0) if tgt else 0, tgt.t if tgt else 0.0, state.timestamp,
-                              msg.monitorData.measuredJointPosition.value, q, msg.monitorData.externalTorque.value))  # fmt: skip
+        pos, rot = self.ik.tcp(np.asarray(q, dtype=float))
+        x, y, z, w = pin.Quaternion(rot).coeffs()
+        self.source.send(State(msg.connectionInfo.sessionState, self.braking, self._otg is not None, self.unreached,
+                               self._seq, (tgt.seq or 0) if tgt else 0, tgt.t if tgt else 0.0, state.timestamp,
+                               tuple(msg.monitorData.measuredJointPosition.value), tuple(q),
+                               tuple(msg.monitorData.externalTorque.value), (*pos.tolist(), w, x, y, z)))  # fmt: skip
 
     def monitor(self, state: LBRState) -> None:
         self.source.poll()
@@ -89,6 +121,50 @@ class TargetFollower(LBRClient):
         self.source.poll()
         self.hold_ipo(state)
         self._send_state(state, state.ipo_joint_position)
+
+    def _joint_target(self, tgt: Target) -> None:
+        q = tgt.values
+        for j in range(7):
+            if not self._lower[j] <= q[j] <= self._upper[j]:
+                raise StopSession(f"the target for A{j + 1} ({q[j]:.4f} rad) is outside its position limits "
+                                  f"[{self._lower[j]:g}, {self._upper[j]:g}]", completed=False)  # fmt: skip
+        self._pose = None
+        self._ik_q = None
+        self.unreached = False
+        self._set_target(q, tgt.v)
+
+    def _set_target(self, q: Sequence[float], v: Sequence[float] | None) -> None:
+        self._inp.target_position = list(q)
+        self._inp.target_velocity = [max(-m, min(m, x)) for x, m in zip(v, self._vmax)] if v is not None else list(_ZERO7)
+
+    def _pose_target(self, tgt: Target) -> None:
+        vals = tgt.values
+        position = np.array(vals[:3])
+        rot = quaternion_to_matrix(*vals[3:7]) if tgt.kind == KIND_POSE else fixed_angles_to_matrix(*vals[3:6])
+        self._pose = (position, rot, tgt)
+        self._refine_left = REFINE_CYCLES
+        self.pose_targets += 1
+        self._refine_pose()
+
+    def _refine_pose(self) -> None:
+        position, rot, tgt = self._pose  # type: ignore[misc]
+        t0 = time.perf_counter()
+        seed = self._ik_q if self._ik_q is not None else np.array(self._inp.current_position)
+        res = self.ik.solve(seed, position, rot, posture=self._posture)
+        self._ik_q = res.q
+        v = None
+        if tgt.v is not None:  # q̇ = J⁺·twist (damped) at the solution
+            jac = self.ik.jacobian(res.q)
+            v = (jac.T @ np.linalg.solve(jac @ jac.T + 1e-4 * np.eye(6), np.array(tgt.v[:6]))).tolist()
+        self._set_target(res.q.tolist(), v)
+        self._refine_left -= 1
+        if res.converged or self._refine_left <= 0:
+            self._pose = None
+            self.unreached = not res.converged
+            if not res.converged:
+                self.poses_unreached += 1
+                self.max_ik_position_error = max(self.max_ik_position_error, res.position_error)
+        self.ik_time_max = max(self.ik_time_max, time.perf_counter() - t0)
 
     def command(self, state: LBRState) -> Sequence[float]:
         now = time.monotonic()
@@ -102,6 +178,7 @@ class TargetFollower(LBRClient):
             inp.target_position = list(state.ipo_joint_position)
             inp.target_velocity = list(_ZERO7)
             self._q = state.ipo_joint_position
+            self._posture = np.array(state.ipo_joint_position)
         self._check_source(now)
         if not self.reply_due:
             return self._q  # type: ignore[return-value]
@@ -113,15 +190,13 @@ class TargetFollower(LBRClient):
         if src.fresh:
             src.fresh = False
             tgt = src.latest
-            q = tgt.q  # type: ignore[union-attr]
-            for j in range(7):
-                if not self._lower[j] <= q[j] <= self._upper[j]:
-                    raise StopSession(f"the target for A{j + 1} ({q[j]:.4f} rad) is outside its position limits "
-                                      f"[{self._lower[j]:g}, {self._upper[j]:g}]", completed=False)  # fmt: skip
-            inp.target_position = list(q)
-            v = tgt.v  # type: ignore[union-attr]
-            inp.target_velocity = [max(-m, min(m, x)) for x, m in zip(v, self._vmax)] if v is not None else list(_ZERO7)
+            if tgt.kind == KIND_JOINT:  # type: ignore[union-attr]
+                self._joint_target(tgt)  # type: ignore[arg-type]
+            else:
+                self._pose_target(tgt)  # type: ignore[arg-type]
             self.targets_followed += 1
+        elif self._pose is not None:
+            self._refine_pose()
         res = self._otg.update(inp, self._out)
         if res not in (Result.Working, Result.Finished):
             raise StopSession(f"ruckig could not follow the target ({res.name})", completed=False)
@@ -134,4 +209,7 @@ class TargetFollower(LBRClient):
     def figures(self) -> dict:
         f = dict(self.source.figures())
         f["targets_followed"] = self.targets_followed
+        if self.pose_targets:
+            f.update(pose_targets=self.pose_targets, poses_unreached=self.poses_unreached,
+                     max_ik_position_error_m=self.max_ik_position_error, ik_time_max_ms=self.ik_time_max * 1e3)  # fmt: skip
         return f

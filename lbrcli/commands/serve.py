@@ -1,8 +1,10 @@
-"""`lbr serve`: the FRI session driven from other processes — joint targets over UDP, the state sent back."""
+"""`lbr serve`: the FRI session driven from other processes — joint or pose targets over UDP and MQTT, the state
+sent back."""
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Annotated, Any, Optional
 
 import typer
@@ -26,8 +28,17 @@ from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
 
 def serve(
     listen: Annotated[
-        str, typer.Option("--listen", help="HOST:PORT where targets arrive (UDP; the state goes back to the source).")
+        str, typer.Option("--listen", help="HOST:PORT where targets arrive over UDP (the state goes back to the source); 'off': no UDP.")
     ] = "127.0.0.1:30300",
+    mqtt: Annotated[
+        Optional[str], typer.Option("--mqtt", help="Also take targets from this MQTT topic: mqtt://[USER:PASSWORD@]HOST:PORT/TOPIC (mqtts:// for TLS); the state is published on TOPIC/state.")
+    ] = None,
+    mqtt_state_hz: Annotated[
+        float, typer.Option("--mqtt-state-hz", help="Publish the state on MQTT at most this often \\[Hz] (0: never).")
+    ] = 50.0,
+    secret: Annotated[
+        Optional[Path], typer.Option("--secret", help="File with a shared secret (>= 16 bytes): every target must end with its HMAC-SHA256 tag; others are ignored.")
+    ] = None,
     source: Annotated[
         Optional[str], typer.Option("--source", help="Comma-separated hosts that may command (default: any; the first owns the session).")
     ] = None,
@@ -62,31 +73,43 @@ def serve(
     limits: LimitsOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
-    """Run an FRI session that follows joint targets sent by another process (Simulink, MATLAB, ROS 2, a script).
+    """Run an FRI session that follows targets sent by another process (Simulink, MATLAB, ROS 2, a teleoperation
+    station, a script).
 
-    Targets arrive over UDP at --listen, binary (136 bytes, magic LBRT, version 1) or JSON {"q": [...], "v": [...]}
-    (layout in the README and lbrcli.bridge.protocol); ruckig follows the newest one within --speed-scale of the
-    limits at every FRI cycle and the guard checks every command. The state (200 bytes, magic LBRS) goes back to the
-    source every --state-every messages. The first source owns the session; others are ignored. A braking stop
-    within the limits ends it when targets stop for --timeout (dead-man), the source sends garbage or a target
-    outside the position limits (exit 1), the source sends {"end": true} or --duration elapses (exit 0), or Ctrl-C.
+    Targets arrive over UDP at --listen and/or on the --mqtt topic, binary (136 bytes, magic LBRT, version 1) or
+    JSON: joints {"q": \\[7 rad]}, a TCP pose {"pose": \\[x, y, z m, qw, qx, qy, qz]} or {"pose_zyx": \\[x, y, z m,
+    alpha, beta, gamma rad]}, with optional feed-forward "v" / "twist" (layout in the README and
+    lbrcli.bridge.protocol). Poses go through the online IK; ruckig follows the newest target within --speed-scale
+    of the limits at every FRI cycle and the guard checks every command. The state (256 bytes, magic LBRS, or JSON
+    for JSON sources) goes back over UDP every --state-every messages and on TOPIC/state at --mqtt-state-hz. The
+    first source owns the session; others are ignored. A braking stop within the limits ends it when targets stop
+    for --timeout (dead-man), the owner sends garbage or a joint target outside the position limits (exit 1), it
+    sends {"end": true} or --duration elapses (exit 0), or Ctrl-C.
     """
-    from lbrcli.bridge import TargetFollower, UdpTargets
+    from lbrcli.bridge import MqttTransport, MqttUnavailable, TargetFollower, TargetInbox, UdpTransport
+    from lbrcli.lab.telemetry import parse_mqtt_url
     from trajectories.errors import OptionError
 
     from ..console import Reporter
     from ..fri_options import validate_period, validate_port, validate_version, validate_wait
     from ..fri_runner import exit_for, print_summary, run_client, simulator_kwargs
-    from ..options import THESIS_Q_START, limits_from
+    from ..options import THESIS_Q_START, limits_from, make_robot
 
     rep = Reporter(json_out)
     validate_version(fri_version)
     validate_port(port)
     validate_wait(wait)
     validate_period(period)
+    udp = listen.strip().lower() != "off"
     host, _, lport = listen.rpartition(":")
-    if not host or not lport.isdigit() or not 0 <= int(lport) <= 65535:
-        raise OptionError(f"--listen must be HOST:PORT, got {listen!r}")
+    if udp and (not host or not lport.isdigit() or not 0 <= int(lport) <= 65535):
+        raise OptionError(f"--listen must be HOST:PORT or off, got {listen!r}")
+    if not udp and mqtt is None:
+        raise OptionError("--listen off needs --mqtt: targets must come from somewhere")
+    mqtt_target = parse_mqtt_url(mqtt) if mqtt is not None else None
+    if not (math.isfinite(mqtt_state_hz) and 0 <= mqtt_state_hz <= 1000):
+        raise OptionError(f"--mqtt-state-hz must be 0..1000, got {mqtt_state_hz:g}")
+    key = _read_secret(secret) if secret is not None else None
     for name, value, lo, hi in (("--timeout", timeout, 0.005, 10.0), ("--first-target", first_target, 0.1, 3600.0)):
         if not (math.isfinite(value) and lo <= value <= hi):
             raise OptionError(f"{name} must be {lo:g}..{hi:g} s, got {value:g}")
@@ -105,13 +128,29 @@ def serve(
         sim_kwargs = simulator_kwargs(length=length, default_length=DEFAULT_BALL_LENGTH, period_ms=period or 1,
                                       sim_start=sim_start, default_start=THESIS_Q_START, flange=flange, tool=tool,
                                       max_runtime_s=(duration or 86400.0) + 120.0, limits=limits)  # fmt: skip
+    if allowed and not udp:
+        raise OptionError("--source restricts UDP senders; with --listen off use the broker's ACL or --secret")
+    transports: list = []
     try:
-        targets = UdpTargets(int(lport), host, allowed)
+        if udp:
+            transports.append(UdpTransport(int(lport), host, allowed))
+            rep.print(f"targets on udp://{host}:{transports[-1].port}"
+                      + (f" from {', '.join(sorted(allowed))}" if allowed else ""))  # fmt: skip
+        if mqtt_target is not None:
+            transports.append(MqttTransport(mqtt_target, state_rate_hz=mqtt_state_hz).start())
+            rep.print(f"targets on mqtt://{mqtt_target.host}:{mqtt_target.port}/{mqtt_target.topic} "
+                      f"(state on {transports[-1].state_topic})")  # fmt: skip
     except OSError as exc:
+        for tr in transports:
+            tr.close()
         raise OptionError(f"--listen {listen}: cannot bind ({exc.strerror})") from None
-    rep.print(f"targets on udp://{host}:{targets.port}" + (f" from {', '.join(sorted(allowed))}" if allowed else ""))
-    follower = TargetFollower(targets, lim, timeout_s=timeout, first_target_s=first_target, speed_scale=speed_scale,
-                              state_every=state_every)  # fmt: skip
+    except MqttUnavailable as exc:
+        for tr in transports:
+            tr.close()
+        raise OptionError(f"--mqtt: {exc}") from None
+    targets = TargetInbox(transports, key)
+    follower = TargetFollower(targets, lim, robot=make_robot(flange, tool), timeout_s=timeout,
+                              first_target_s=first_target, speed_scale=speed_scale, state_every=state_every)  # fmt: skip
     try:
         result, sim_stats, _ = run_client(
             rep, follower, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
@@ -122,10 +161,28 @@ def serve(
     figures = print_summary(rep, result, sim_stats, log)
     f = result.figures
     rep.print(f"targets: {f.get('targets_accepted', 0)} accepted, {f.get('targets_bad', 0)} bad, "
-              f"{f.get('targets_foreign', 0)} from other sources, {f.get('targets_stale', 0)} stale")  # fmt: skip
-    figures.update(listen=f"{host}:{targets.port}", robot=robot or "simulator")
+              f"{f.get('targets_foreign', 0)} from other sources, {f.get('targets_stale', 0)} stale"
+              + (f", {f.get('targets_unauthenticated', 0)} unauthenticated" if key is not None else ""))  # fmt: skip
+    if f.get("pose_targets"):
+        rep.print(f"pose targets: {f['pose_targets']}, {f['poses_unreached']} not reached "
+                  f"(closest configuration followed; max TCP error {f['max_ik_position_error_m'] * 1e3:.1f} mm), "
+                  f"IK at most {f['ik_time_max_ms']:.2f} ms in a cycle")  # fmt: skip
+    figures.update(listen=f"{host}:{transports[0].port}" if udp else None, mqtt=mqtt_target.topic if mqtt_target else None,
+                   robot=robot or "simulator")  # fmt: skip
     rep.emit(figures)
     exit_for(result)
+
+
+def _read_secret(path: Path) -> bytes:
+    from trajectories.errors import OptionError
+
+    try:
+        key = path.read_bytes().rstrip(b"\r\n")
+    except OSError as exc:
+        raise OptionError(f"--secret {path}: cannot read ({exc.strerror})") from None
+    if len(key) < 16:
+        raise OptionError(f"--secret {path}: the secret has {len(key)} bytes, at least 16 are needed")
+    return key
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -343,6 +343,7 @@ class ClientApplication:
         cmd = self._cmd
         cmd.reset()  # type: ignore[union-attr]
         braking = self._motion is not None and self._motion.braking
+        self.client.braking = braking
         if self._stop is not None and not braking:
             # a stop requested outside COMMANDING_ACTIVE (or before anything moved): end without answering
             self._finish(*self._stop, observe=True)
@@ -387,6 +388,12 @@ class ClientApplication:
             self._finish(Outcome.STOPPED, EndReason.SILENT, f"cannot send to the controller: {exc.strerror}", observe=True)
             return False
         self._latencies.append(time.perf_counter_ns() - t_rx)
+        try:
+            self.client.after_reply()
+        except StopSession as s:
+            self._client_stop(s)
+        except Exception as exc:  # noqa: BLE001
+            self._client_failed(exc, "after_reply")
         if sup is not None:
             sup.sent(self._client_seq, seq)
         if not self._answered_any:

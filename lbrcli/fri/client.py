@@ -5,6 +5,7 @@ monitoring message, ``on_state_change(old, new)`` when the session state changed
 (MONITORING_WAIT/READY), ``wait_for_command`` (COMMANDING_WAIT) or ``command`` (COMMANDING_ACTIVE). In the
 commanding states set the joint position (always, as KUKA requires) through ``self.robot_command``, plus torques in
 TORQUE mode or a wrench in WRENCH mode. ``command`` may instead return the joint position [rad] (7 values).
+``after_reply`` runs once the reply is on its way, for work that should not delay it.
 To end the session raise :class:`~lbrcli.fri.errors.StopSession`; the application then brakes within the limits.
 """
 
@@ -29,6 +30,7 @@ class LBRClient:
     reply_due: bool = True  # set by the application: this cycle's command is sent (every k-th message)
     skipped: int = 0  # set by the application: command periods the controller bridged since the last command
     # (its messages to us were lost; it extrapolated) — a client that follows time should advance by them
+    braking: bool = False  # set by the application: it brakes to a stop this cycle (the callbacks are not called)
     phase: int = 0  # free for the client: logged per cycle (e.g. which part of a trajectory is playing)
     row: int = -1
 
@@ -46,6 +48,11 @@ class LBRClient:
         """COMMANDING_ACTIVE: set this cycle's command (or return the joint position [rad])."""
         self.hold_ipo(state)
         return None
+
+    def after_reply(self) -> None:
+        """This cycle's reply has gone out: work that must not delay the command (publishing the state, say).
+        Called every answered cycle, also while the application brakes (``braking``). A :class:`StopSession` here
+        ends the session from the next cycle."""
 
     def hold_ipo(self, state: LBRState) -> None:
         """Command the ipo position, and zero torque / wrench in TORQUE / WRENCH mode (KUKA's default)."""

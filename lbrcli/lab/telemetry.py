@@ -12,38 +12,50 @@ import threading
 import time
 from dataclasses import dataclass
 from typing import Any, Callable
-from urllib.parse import urlsplit
+from urllib.parse import unquote, urlsplit
 
 from trajectories.errors import OptionError
 
 
 @dataclass(frozen=True)
 class MqttTarget:
+    """A broker, a topic and how to log in: user name and password (the broker authenticates), TLS (mqtts)."""
+
     host: str
     port: int
     topic: str
+    username: str | None = None
+    password: str | None = None
+    tls: bool = False
 
 
 def parse_mqtt_url(url: str, option: str = "--mqtt") -> MqttTarget:
-    """'mqtt://HOST:PORT/TOPIC' (port 1883 by default; the topic may contain '/')."""
+    """'mqtt://[USER:PASSWORD@]HOST:PORT/TOPIC' (port 1883 by default; 'mqtts://' for TLS, port 8883 by default;
+    the topic may contain '/')."""
     parts = urlsplit(url)
-    if parts.scheme != "mqtt" or not parts.hostname:
-        raise OptionError(f"{option}: expected mqtt://HOST:PORT/TOPIC, got {url!r}")
+    if parts.scheme not in ("mqtt", "mqtts") or not parts.hostname:
+        raise OptionError(f"{option}: expected mqtt://[USER:PASSWORD@]HOST:PORT/TOPIC, got {url!r}")
     topic = parts.path.lstrip("/")
     if not topic or "#" in url or "+" in topic:
         raise OptionError(f"{option}: a topic without wildcards is needed, e.g. mqtt://localhost:1883/lbr/state")
     try:
-        port = parts.port or 1883
+        port = parts.port or (8883 if parts.scheme == "mqtts" else 1883)
     except ValueError:
         raise OptionError(f"{option}: bad port in {url!r}") from None
-    return MqttTarget(parts.hostname, port, topic)
+    user = unquote(parts.username) if parts.username else None
+    password = unquote(parts.password) if parts.password is not None else None
+    return MqttTarget(parts.hostname, port, topic, user, password, parts.scheme == "mqtts")
 
 
-def _client(client_id: str):
+def _client(client_id: str, target: MqttTarget | None = None):
     import paho.mqtt.client as mqtt
 
     client = mqtt.Client(mqtt.CallbackAPIVersion.VERSION2, client_id=client_id)
     client.reconnect_delay_set(min_delay=1, max_delay=5)
+    if target is not None and target.username is not None:
+        client.username_pw_set(target.username, target.password)
+    if target is not None and target.tls:
+        client.tls_set()  # the system's certificate authorities
     return client
 
 
@@ -59,7 +71,7 @@ class TelemetryPublisher:
         self._pending: tuple[float, Any] | None = None
         self._wake = threading.Event()
         self._stop = threading.Event()
-        self._client = _client(f"lbr-{id(self):x}")
+        self._client = _client(f"lbr-{id(self):x}", target)
         self._thread: threading.Thread | None = None
 
     def start(self) -> "TelemetryPublisher":
@@ -121,7 +133,7 @@ class TelemetryListener:
         self.received = 0
         self.malformed = 0
         self.connected = threading.Event()
-        self._client = _client(f"lbr-listen-{id(self):x}")
+        self._client = _client(f"lbr-listen-{id(self):x}", target)
         self._client.on_connect = self._on_connect
         self._client.on_message = self._on_message
 

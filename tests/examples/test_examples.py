@@ -95,3 +95,19 @@ def test_io_access_writes_the_clock_and_reads_it_back():
     hits = sum(1 for w, r in zip(client.written, later) if w[0] == r[0] and abs(w[1] - r[1]) < 1e-12)
     assert hits >= 0.5 * len(later)  # a reply that reached the controller late is read back a cycle later
     assert set(later) <= set(client.written) | {(0, 0.0)}  # never anything that was not written
+
+
+def test_bridge_pose_source_draws_the_circle_and_ends_the_session():
+    import bridge_pose_source
+
+    from trajectories.robot import Robot
+
+    result, follower, sent = bridge_pose_source.main(["--sim-lenient"])
+    assert result.ok, result.detail
+    assert "ended" in result.detail and follower.pose_targets > 300 and follower.poses_unreached == 0
+    circle, tcp_back = np.array(sent[:-1]), sent[-1]
+    assert np.ptp(circle[:, 1]) > 0.09  # the source drew the 5 cm circle
+    # the state that came back: the commanded TCP is where the last targets (the circle's end) put it
+    assert tcp_back is not None and np.linalg.norm(tcp_back - circle[-1]) < 1e-4
+    end = Robot().fk(np.array(follower._q)).translation
+    assert np.linalg.norm(end - circle[-1]) < 1e-4

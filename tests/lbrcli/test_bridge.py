@@ -15,10 +15,20 @@ import time
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 from conftest import run_lbr
 from test_execute_cli import free_port
 
-from lbrcli.bridge import BadTarget, BridgeClient, decode_state, decode_target, encode_state, encode_target
+from lbrcli.bridge import (
+    BadTarget,
+    BridgeClient,
+    State,
+    decode_state,
+    decode_target,
+    encode_state,
+    encode_state_json,
+    encode_target,
+)
 from lbrcli.bridge.protocol import STATE_SIZE, TARGET_SIZE
 from lbrcli.fri.log import LOG_COLUMNS, PHASE_BRAKE
 from trajectories.csvio import read_table
@@ -34,12 +44,12 @@ def test_target_round_trip_binary_and_json():
     data = encode_target(q, [0.1] * 7, seq=7, t=2.5)
     assert len(data) == TARGET_SIZE == 136 and data[:4] == b"LBRT"
     t = decode_target(data)
-    assert t.q == q and t.v == (0.1,) * 7 and t.seq == 7 and t.t == 2.5
+    assert t.values == q and t.v == (0.1,) * 7 and t.seq == 7 and t.t == 2.5
     assert decode_target(encode_target(q)).v is None
     # the documented offsets: q at 24, v at 80
     assert struct.unpack_from("<7d", data, 24) == q and struct.unpack_from("<7d", data, 80) == (0.1,) * 7
     j = decode_target(json.dumps({"q": list(q), "v": [0] * 7, "seq": 3}).encode())
-    assert j.q == q and j.v == (0.0,) * 7 and j.seq == 3
+    assert j.values == q and j.v == (0.0,) * 7 and j.seq == 3
 
 
 @pytest.mark.parametrize(
@@ -59,12 +69,13 @@ def test_bad_targets_are_refused_with_a_reason(data, words):
         decode_target(data)
 
 
-def test_state_round_trip():
-    data = encode_state(4, True, True, 9, 8, 1.25, 3.5, [0.1] * 7, [0.2] * 7, [0.3] * 7)
-    assert len(data) == STATE_SIZE == 200
-    s = decode_state(data)
-    assert s.session_state == 4 and s.braking and s.following and (s.seq, s.target_seq) == (9, 8)
-    assert s.target_t == 1.25 and s.t == 3.5 and s.commanded == (0.2,) * 7 and s.external_torque == (0.3,) * 7
+def test_state_round_trip_binary_and_json():
+    state = State(4, True, True, False, 9, 8, 1.25, 3.5, (0.1,) * 7, (0.2,) * 7, (0.3,) * 7, (0.4, 0, 0.5, 1, 0, 0, 0))
+    data = encode_state(state)
+    assert len(data) == STATE_SIZE == 256 and data[:4] == b"LBRS"
+    assert decode_state(data) == state == decode_state(encode_state_json(state))
+    # the documented offsets: commanded q at 88, the TCP pose at 200
+    assert struct.unpack_from("<7d", data, 88) == (0.2,) * 7 and struct.unpack_from("<7d", data, 200)[:3] == (0.4, 0, 0.5)
 
 
 # -- the bridge on the simulator ----------------------------------------------------------------------------------
@@ -96,7 +107,7 @@ def _stream(client: BridgeClient, rate_hz: float, seconds: float, states: list |
             client.sock.setblocking(False)
             try:
                 while True:
-                    states.append(decode_state(client.sock.recv(512)))
+                    states.append(decode_state(client.sock.recv(4096)))
             except (BlockingIOError, OSError):
                 pass
             client.sock.setblocking(True)
@@ -240,7 +251,9 @@ def test_no_target_within_first_target_of_commanding_ends_the_session(tmp_path):
 @pytest.mark.parametrize(
     "argv, option",
     [(("--listen", "nowhere"), "--listen"), (("--timeout", "0"), "--timeout"), (("--speed-scale", "2"), "--speed-scale"),
-     (("--state-every", "-1"), "--state-every"), (("--length", "0.3", "--robot", "127.0.0.1"), "--length")],
+     (("--state-every", "-1"), "--state-every"), (("--length", "0.3", "--robot", "127.0.0.1"), "--length"),
+     (("--listen", "off"), "--mqtt"), (("--mqtt", "http://host/topic"), "--mqtt"), (("--secret", "/nonexistent"), "--secret"),
+     (("--mqtt-state-hz", "-1"), "--mqtt-state-hz"), (("--mqtt", "mqtt://127.0.0.1:1/lbr/cmd"), "--mqtt")],
 )
 def test_serve_options_are_validated(argv, option):
     proc = run_lbr("serve", "--port", "0", *argv)
@@ -279,3 +292,77 @@ def test_the_follower_against_a_controller_that_loses_and_garbles_messages():
     assert max(ctl.command_ratios(LIM.velocity, LIM.acceleration)) <= 1.0
     sent = np.array([r.position for r in ctl.replies if r.state == CA and r.position is not None])
     assert abs(sent[-1][0] - (Q0[0] + 0.2)) < 1e-6  # reached the end of the ramp
+
+
+def _scripted_source(targets_by_poll):
+    """A source whose ``poll`` k delivers ``targets_by_poll(k)`` (None: nothing new) and stays alive."""
+    from types import SimpleNamespace
+
+    class Source(SimpleNamespace):
+        def poll(self):
+            self.k += 1
+            tgt = targets_by_poll(self.k)
+            self.latest_time = time.monotonic()
+            if tgt is not None:
+                self.latest, self.fresh = tgt, True
+
+        def send(self, data):
+            self.sent.append(data)
+
+        def figures(self):
+            return {}
+
+    return Source(k=0, latest=None, latest_time=0.0, fresh=False, error=None, ended=False, owner="me", sent=[])
+
+
+@pytest.mark.parametrize("kind", ["quaternion", "fixed angles"])
+def test_a_pose_target_is_reached_through_the_online_ik_within_the_limits(kind):
+    from fri_scripted_controller import CA, Cycle
+    from test_fri_application import preamble, run
+
+    from lbrcli.bridge import KIND_POSE, KIND_POSE_ZYX, Target, TargetFollower
+    from trajectories.robot import Robot
+
+    robot = Robot()
+    start = robot.fk(Q0)
+    goal_p = start.translation + np.array([0.05, -0.08, 0.04])  # [m]
+    goal_r = start.rotation @ Rotation.from_rotvec([0.0, 0.2, 0.1]).as_matrix()
+    if kind == "quaternion":
+        w, x, y, z = Rotation.from_matrix(goal_r).as_quat(scalar_first=True)
+        tgt = Target((*goal_p, w, x, y, z), kind=KIND_POSE)
+    else:
+        gamma, beta, alpha = Rotation.from_matrix(goal_r).as_euler("xyz")  # fixed X, Y, Z = Rz(α)Ry(β)Rx(γ)
+        tgt = Target((*goal_p, alpha, beta, gamma, 0.0), kind=KIND_POSE_ZYX)
+    src = _scripted_source(lambda k: tgt if k in (1, 500) else None)
+    follower = TargetFollower(src, LIM, robot=robot, timeout_s=10.0, speed_scale=0.5)
+    script = preamble() + [Cycle(state=CA)] * 2500
+    res, ctl, _, err = run(script, follower, q_start=tuple(Q0))
+    assert err is None
+    assert max(ctl.command_ratios(LIM.velocity, LIM.acceleration)) <= 0.5 + 1e-6
+    sent = np.array([r.position for r in ctl.replies if r.state == CA and r.position is not None])
+    end = robot.fk(sent[-1])
+    assert np.linalg.norm(end.translation - goal_p) < 1e-5
+    assert np.linalg.norm(Rotation.from_matrix(end.rotation.T @ goal_r).as_rotvec()) < 1e-4
+    assert follower.pose_targets == 2 and follower.poses_unreached == 0 and not follower.unreached
+    assert follower.ik_time_max < 0.005  # [s] IK work in one cycle (≈ 0.1 ms typical; bound for a loaded VM)
+    tcp = src.sent[-1].tcp  # the state carries the commanded TCP pose
+    assert np.allclose(tcp[:3], end.translation, atol=1e-9)
+
+
+def test_an_unreachable_pose_is_followed_to_the_closest_configuration_and_flagged():
+    from fri_scripted_controller import CA, Cycle
+    from test_fri_application import preamble, run
+
+    from lbrcli.bridge import KIND_POSE, Target, TargetFollower
+
+    tgt = Target((1.6, 0.0, 0.3, 1.0, 0.0, 0.0, 0.0), kind=KIND_POSE)  # 1.6 m out: beyond the 0.8 m reach
+    src = _scripted_source(lambda k: tgt if k == 1 else None)
+    follower = TargetFollower(src, LIM, timeout_s=10.0, speed_scale=0.5)
+    script = preamble() + [Cycle(state=CA)] * 3000
+    res, ctl, _, err = run(script, follower, q_start=tuple(Q0))
+    assert err is None
+    assert max(ctl.command_ratios(LIM.velocity, LIM.acceleration)) <= 0.5 + 1e-6
+    sent = np.array([r.position for r in ctl.replies if r.state == CA and r.position is not None])
+    assert np.all(np.abs(sent) <= LIM.position)
+    assert follower.unreached and follower.poses_unreached == 1 and follower.max_ik_position_error > 0.5
+    assert src.sent[-1].unreached  # the source is told

@@ -2,6 +2,7 @@
 
 import json
 import math
+import os
 import shutil
 import socket
 import subprocess
@@ -79,10 +80,19 @@ def _free_port():
 class Broker:
     """A real Mosquitto broker on a loopback port; ``restart()`` brings a fresh one up on the same port."""
 
-    def __init__(self, exe: str, conf_dir, port: int) -> None:
+    def __init__(self, exe: str, conf_dir, port: int, users: dict[str, str] | None = None) -> None:
         self.exe, self.port = exe, port
         self.conf = conf_dir / "mosquitto.conf"
-        self.conf.write_text(f"listener {port} 127.0.0.1\nallow_anonymous true\npersistence false\n")
+        auth = "allow_anonymous true\n"
+        if users:  # only these users may connect (mosquitto_passwd hashes the passwords)
+            pw = conf_dir / "passwd"
+            pw.write_text("".join(f"{u}:{p}\n" for u, p in users.items()))
+            pw.chmod(0o600)
+            subprocess.run([shutil.which("mosquitto_passwd") or "/usr/bin/mosquitto_passwd", "-U", str(pw)], check=True)
+            auth = f"allow_anonymous false\npassword_file {pw}\n"
+            if os.geteuid() == 0:  # as root mosquitto drops to its own user, which cannot read the test's files
+                auth += "user root\n"
+        self.conf.write_text(f"listener {port} 127.0.0.1\n{auth}persistence false\n")
         self.proc = None
         self.start()
 

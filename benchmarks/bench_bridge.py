@@ -1,0 +1,244 @@
+"""The command bridge (`lbr serve`, issue #18) on the simulator at a 1 ms FRI period, sources in other processes.
+
+1. UDP, 1 kHz joint targets: added latency from a target's send (a conservative stand-in for its arrival: loopback
+   transit included) to the FRI command that first carries it (the reply on the wire: an application observer,
+   which runs after the send), split into the wait for the next FRI cycle (the controller asks once per period;
+   nothing can answer sooner) and the bridge's own work from the FRI message to the reply; the commands' peak
+   ratios to the limits.
+2. MQTT over a real Mosquitto broker, 30 Hz ± 10 ms TCP-pose targets (a 6 cm circle, teleoperation): the jerk of
+   the 1 kHz stream, the TCP's distance from the drawn path, the state rate back at the source, latency.
+3. Source loss mid-motion: from the last target to the braking stop (dead-man 0.1 s), how long the stop takes and
+   its peak ratios.
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing as mp
+import struct
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+Q0 = (0.0, 0.5, 0.0, -1.2, 0.0, 0.8, 0.0)  # [rad] away from the wrist singularity of the thesis start
+
+
+def _wave(t: float) -> list[float]:
+    q = list(Q0)
+    q[0] += 0.3 * math.sin(2 * math.pi * 0.5 * t)
+    q[3] += 0.2 * (1 - math.cos(2 * math.pi * 0.5 * t))
+    return q
+
+
+def _pace(next_t: float) -> None:
+    """Sleep until time.monotonic() reaches next_t (no spinning: the machine has 2 cores for the simulator, the
+    bridge and the source; late wake-ups catch up, as a Simulink model's UDP block does)."""
+    left = next_t - time.monotonic()
+    if left > 0:
+        time.sleep(left)
+
+
+def _udp_source(port: int, delay_s: float, seconds: float, rate_hz: float, end: bool) -> None:
+    from lbrcli.bridge import BridgeClient
+
+    c = BridgeClient("127.0.0.1", port)
+    time.sleep(delay_s)
+    t0 = time.monotonic()
+    k = 0
+    while (now := time.monotonic()) - t0 < seconds:
+        c.send_joint(_wave(now - t0), t=time.monotonic())
+        k += 1
+        _pace(t0 + k / rate_hz)
+    if end:
+        c.end()
+    c.close()
+
+
+def _mqtt_source(url: str, delay_s: float, seconds: float, out) -> None:
+    from lbrcli.bridge import MqttBridgeClient
+    from trajectories.robot import Robot
+
+    home = Robot().fk(np.array(Q0))
+    r = home.rotation
+    angles = (math.atan2(r[1, 0], r[0, 0]), -math.asin(r[2, 0]), math.atan2(r[2, 1], r[2, 2]))
+    c = MqttBridgeClient(url, source_id=3)
+    rng = np.random.default_rng(0)
+    time.sleep(delay_s)
+    t0 = time.monotonic()
+    path = []
+    while (now := time.monotonic()) - t0 < seconds:
+        phi = 2 * math.pi * 0.25 * (now - t0)
+        p = home.translation + 0.06 * np.array([math.cos(phi) - 1, math.sin(phi), 0.0])
+        c.send_pose_zyx(p, angles, t=time.monotonic())
+        path.append(p)
+        time.sleep(max(0.0, 1 / 30 + rng.uniform(-0.01, 0.01)))
+    n_states = len(c.states)
+    c.end()
+    time.sleep(0.3)
+    c.close()
+    out.put((np.array(path), n_states, seconds))
+
+
+class _Stamped:
+    """Wraps a transport; notes the source time of every binary target it delivers."""
+
+    def __init__(self, inner, stamps: list) -> None:
+        self.inner, self.stamps, self.name = inner, stamps, inner.name
+
+    def receive(self):
+        for data, sender in self.inner.receive():
+            if data[:4] == b"LBRT":
+                self.stamps.append(struct.unpack_from("<d", data, 16)[0])
+            yield data, sender
+
+    def __getattr__(self, name):
+        return getattr(self.inner, name)
+
+
+class _Latency:
+    """Application observer (runs after the reply went out): the age of every target taken in this cycle."""
+
+    name = "latency"
+
+    def __init__(self, stamps: list, follower) -> None:
+        self.stamps, self.follower = stamps, follower
+        self.latency: list[float] = []  # [s] source send → reply sent
+        self.work: list[float] = []  # [s] FRI message in → reply sent (the bridge's own part)
+
+    def on_cycle(self, app) -> None:
+        now = time.monotonic()
+        if app.cycle.state == 4 and not app.cycle.braking:
+            self.latency.extend(now - t for t in self.stamps)
+            if self.stamps and app._latencies:  # a cycle that took a target: FRI message in → reply out [ns]
+                self.work.append(app._latencies[-1] * 1e-9)
+        self.stamps.clear()
+
+
+def _session(transport, source_proc, duration_s: float, tmp: Path, timeout_s: float = 0.1):
+    """Run the follower on ``transport`` against the simulator; (result, latency observer, log table)."""
+    from lbrcli.bridge import TargetFollower, TargetInbox
+    from lbrcli.fri import ClientApplication, ExecutionLog, LogObserver
+    from lbrcli.fri.log import LOG_COLUMNS
+    from lbrcli.fri.sim import SimConfig, SimulatorProcess, lenient_quality
+    from trajectories.csvio import read_table
+    from trajectories.limits import default_limits
+
+    lim = default_limits()
+    stamps: list[float] = []
+    inbox = TargetInbox([_Stamped(transport, stamps)])
+    follower = TargetFollower(inbox, lim, timeout_s=timeout_s, first_target_s=30.0, speed_scale=0.5)
+    lat = _Latency(stamps, follower)
+    log_path = tmp / f"bridge-{time.monotonic_ns()}.csv"
+    with ExecutionLog(log_path) as log:
+        with ClientApplication(follower, "127.0.0.1", 0, bind_host="127.0.0.1", limits=lim, first_message_timeout_s=20,
+                               observers=[lat, LogObserver(log)]) as app:  # fmt: skip
+            config = SimConfig(client_port=app.port, period_ms=1, q0=Q0, **lenient_quality(1))
+            with SimulatorProcess(config):
+                source_proc.start()
+                result = app.run(duration_s)
+    source_proc.join(30)
+    inbox.close()
+    return result, lat, read_table(log_path, LOG_COLUMNS, time="increasing"), lim
+
+
+def _ratios(tab, lim, keep) -> tuple[float, float, float]:
+    q = np.column_stack([tab.column(f"cmd_q{j}") for j in range(1, 8)])[keep]
+    return tuple(float((np.abs(np.diff(q, k, axis=0)) / 1e-3**k / lim_k).max())
+                 for k, lim_k in ((1, lim.velocity), (2, lim.acceleration), (3, lim.jerk)))  # fmt: skip
+
+
+def run(quick: bool = False) -> list[tuple[str, float, str]]:
+    from bench_lab import _broker  # a Mosquitto on a free loopback port (benchmarks/ is on the path)
+
+    from lbrcli.bridge import MqttTransport, UdpTransport
+    from lbrcli.fri.log import PHASE_BRAKE
+    from lbrcli.lab.telemetry import parse_mqtt_url
+    from trajectories.robot import Robot
+
+    ctx = mp.get_context("spawn")
+    seconds = 4.0 if quick else 20.0
+    rows: list[tuple[str, float, str]] = []
+    with tempfile.TemporaryDirectory() as tmpdir:
+        tmp = Path(tmpdir)
+        # 1. UDP at 1 kHz, ended by the source
+        udp = UdpTransport(0)
+        src = ctx.Process(target=_udp_source, args=(udp.port, 2.0, seconds, 1000.0, True), daemon=True)
+        result, lat, tab, lim = _session(udp, src, seconds + 30, tmp)
+        ms = np.array(lat.latency) * 1e3
+        active = (tab.column("state") == 4) & (np.cumsum(tab.column("phase") == PHASE_BRAKE) == 0)
+        v, a, j = _ratios(tab, lim, tab.column("state") == 4)
+        rows += [
+            ("udp 1 kHz: targets measured", len(ms), ""),
+            ("udp 1 kHz: send -> FRI command p50", float(np.percentile(ms, 50)), "ms"),
+            ("udp 1 kHz: send -> FRI command p99", float(np.percentile(ms, 99)), "ms"),
+            ("udp 1 kHz: send -> FRI command max", float(ms.max()), "ms"),
+            ("udp 1 kHz: share under 1 ms", float(np.mean(ms < 1.0) * 100), "%"),
+            ("udp 1 kHz: bridge work (FRI message -> reply) p50", float(np.percentile(lat.work, 50) * 1e3), "ms"),
+            ("udp 1 kHz: bridge work (FRI message -> reply) p99", float(np.percentile(lat.work, 99) * 1e3), "ms"),
+            ("udp 1 kHz: commands over the limits", float(np.sum(_over(tab, lim, tab.column("state") == 4))), ""),
+            ("udp 1 kHz: peak velocity / limit", v, ""),
+            ("udp 1 kHz: peak acceleration / limit", a, ""),
+            ("udp 1 kHz: peak jerk / limit", j, ""),
+            ("udp 1 kHz: following cycles", float(active.sum()), ""),
+            ("udp 1 kHz: session ended", 1.0 if result.ok else 0.0, "(1 = by the source's end message)"),
+        ]
+        # 2. MQTT over Mosquitto, 30 Hz poses
+        broker, port = _broker(tmp)
+        if broker is None:
+            rows.append(("mqtt: not measured (no mosquitto)", 0.0, ""))
+        else:
+            try:
+                url = f"mqtt://127.0.0.1:{port}/bench/iiwa/cmd"
+                mq = MqttTransport(parse_mqtt_url(url), state_rate_hz=50.0).start()
+                out = ctx.Queue()
+                src = ctx.Process(target=_mqtt_source, args=(url, 2.0, seconds, out), daemon=True)
+                result, lat, tab, lim = _session(mq, src, seconds + 30, tmp)
+                path, n_states, dur = out.get(timeout=30)
+                keep = (tab.column("state") == 4) & (np.cumsum(tab.column("phase") == PHASE_BRAKE) == 0)
+                v, a, j = _ratios(tab, lim, keep)
+                q = np.column_stack([tab.column(f"cmd_q{k}") for k in range(1, 8)])[keep]
+                tcp, _ = Robot().fk_path(q[::10])
+                dist = np.linalg.norm(tcp[:, None, :] - path[None, :, :], axis=2).min(axis=1) * 1e3
+                ms = np.array(lat.latency) * 1e3
+                rows += [
+                    ("mqtt 30 Hz poses: targets", float(len(path)), ""),
+                    ("mqtt 30 Hz poses: peak jerk / limit (following)", j, ""),
+                    ("mqtt 30 Hz poses: peak acceleration / limit (following)", a, ""),
+                    ("mqtt 30 Hz poses: TCP distance from the drawn path max", float(dist.max()), "mm"),
+                    ("mqtt 30 Hz poses: TCP distance from the drawn path p50", float(np.median(dist)), "mm"),
+                    ("mqtt 30 Hz poses: send -> FRI command p50 (via broker)", float(np.percentile(ms, 50)), "ms"),
+                    ("mqtt 30 Hz poses: send -> FRI command p99 (via broker)", float(np.percentile(ms, 99)), "ms"),
+                    ("mqtt 30 Hz poses: states received per second", n_states / dur, "Hz"),
+                ]
+            finally:
+                broker.terminate()
+                broker.wait(5)
+        # 3. source loss mid-motion: the dead-man (0.1 s)
+        udp = UdpTransport(0)
+        src = ctx.Process(target=_udp_source, args=(udp.port, 2.0, 1.6, 1000.0, False), daemon=True)
+        result, lat, tab, lim = _session(udp, src, 30.0, tmp)
+        brake = tab.column("phase") == PHASE_BRAKE
+        v, a, j = _ratios(tab, lim, tab.column("state") == 4)
+        q = np.column_stack([tab.column(f"cmd_q{k}") for k in range(1, 8)])
+        b0, b1 = np.flatnonzero(brake)[[0, -1]]
+        speed0 = np.abs(q[b0] - q[b0 - 1]).max() / 1e-3 if b0 > 0 else 0.0
+        rows += [
+            ("source loss: ended by the dead-man", 1.0 if "dead-man" in result.detail else 0.0, ""),
+            ("source loss: braking stop", (b1 - b0 + 1) * 1.0, "ms"),
+            ("source loss: joint speed at the loss (fastest joint)", speed0, "rad/s"),
+            ("source loss: peak velocity / limit", v, ""),
+            ("source loss: peak acceleration / limit", a, ""),
+            ("source loss: peak jerk / limit", j, ""),
+        ]
+    return rows
+
+
+def _over(tab, lim, keep) -> np.ndarray:
+    q = np.column_stack([tab.column(f"cmd_q{j}") for j in range(1, 8)])[keep]
+    over = np.zeros(len(q), dtype=bool)
+    for k, lim_k in ((1, lim.velocity), (2, lim.acceleration), (3, lim.jerk)):
+        d = np.abs(np.diff(q, k, axis=0)) / 1e-3**k > lim_k * (1 + 1e-6)
+        over[k:] |= d.any(axis=1)
+    return over

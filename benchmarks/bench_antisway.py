@@ -20,7 +20,7 @@ def _best(fn, repeats: int) -> tuple[float, object]:
 
 def run(quick: bool = False) -> list[tuple[str, float, str]]:
     from lbrcli.commands.check import run_check
-    from lbrcli.commands.plan_antisway import ANTISWAY_Q0, _joints_of, predict_sway
+    from lbrcli.antisway import ANTISWAY_Q0, _joints_of, predict_sway
     from lbrcli.parsing import parse_joint_vector
     from planners.antisway import DEFAULT_LAYOUT, DEFAULT_Z, AntiSwayOptions, plan_layout
     from trajectories.limits import default_limits

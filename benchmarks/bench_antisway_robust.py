@@ -45,7 +45,7 @@ def layouts(n: int, seed: int = 17) -> list[tuple[np.ndarray, float, float]]:
 
 
 def run(quick: bool = False) -> list[tuple[str, float, str]]:
-    from lbrcli.commands.plan_antisway import plan_anti_sway_files
+    from lbrcli.antisway import plan_anti_sway_files
     from planners.sway_judge import judge_sway as judge
     from trajectories.csvio import read_joint_csv
     from trajectories.errors import PlanningError

@@ -26,19 +26,21 @@ from typing import Any, Callable, Sequence
 from trajectories.limits import JointLimits, default_limits
 
 from .client import LBRClient
+from .clock import SessionClock
 from .codec import FriCodec, detect_version
 from .command import LBRCommand
 from .cycle import Cycle, Observer
+from .ending import SessionEnding
 from .constants import DEFAULT_PORT, ClientCommandMode, SessionState
-from .errors import FriDecodeError, FriError, FriTimeout, StopSession
+from .errors import FriDecodeError, FriError
 from .guard import DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT
 from .messages import FriVersion
 from .motion import ExecutedMotion, Refused
-from .outcome import EndReason, Outcome, SessionResult, session_result
+from .outcome import EndReason, Outcome, SessionResult
 from .reply import ReplyMessage
 from .state import LBRState
 from .supervision import Supervisor, consistent, robot_side_end
-from .transport import UdpTransport, no_message_text
+from .transport import UdpTransport
 
 IDLE, MON_WAIT, MON_READY, CMD_WAIT, CMD_ACTIVE = 0, 1, 2, 3, 4
 _POSITION = int(ClientCommandMode.POSITION)
@@ -46,7 +48,7 @@ _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
 
 
-class ClientApplication:
+class ClientApplication(SessionEnding):
     """Runs one FRI session for ``client`` against the controller at ``robot`` (IPv4 address or name)."""
 
     def __init__(
@@ -132,20 +134,12 @@ class ClientApplication:
         self._stop: tuple[Outcome, EndReason, str] | None = None  # a stop the client side requested
         self._ended = False
         self._started = False
-        self._t_open = 0.0
-        self._t_first: float | None = None
-        self._t_last_rx = 0.0
-        self._duration_s: float | None = None
+        self._clock = SessionClock(self.first_message_timeout_s, self.silence_timeout_s, None)
         self._last_seq = -1
-        self._tick = 0
-        self._t_per_tick = 0.0
-        self._local_clock: float | None = None
         self._last_state = IDLE
         self._seen_session = False
         self._commanding = False
         self._was_active = False
-        self._period_key: tuple[int, int] | None = None
-        self._period_s: float | None = None
         self._send_counter = 0
         self._client_seq = 0
         self._answered_any = False
@@ -179,7 +173,7 @@ class ClientApplication:
     @property
     def period_s(self) -> float | None:
         """Command period [s] (send period × receive multiplier), known from the first session message."""
-        return self._period_s
+        return self._clock.period_s
 
     # -- the loop --------------------------------------------------------------------------------------------
     def run(self, duration_s: float | None = None) -> SessionResult:
@@ -201,17 +195,15 @@ class ClientApplication:
         """Prepare a session (``step`` calls it if needed): bind, reset counters, tell the observers."""
         self.connect()
         self._reset()
-        self._duration_s = duration_s
+        self._clock = SessionClock(self.first_message_timeout_s, self.silence_timeout_s, duration_s)
         self._started = True
-        self._t_open = time.monotonic()
-        self._t_last_rx = self._t_open
         for o in list(self.observers):
             self._call_observer(o, "on_start", self)
 
     def step(self) -> bool:  # noqa: C901 - one cycle, in order
         """Process one datagram (or a receive timeout). False once the session has ended."""
         if not self._started:
-            self.start(self._duration_s)
+            self.start(self._clock.duration_s)
         if self._ended:
             return False
         if self._interrupt is not None and self._stop is None:
@@ -253,9 +245,12 @@ class ClientApplication:
             self.malformed += 1
             return self._check_clocks(now)
         skipped = 0
+        ci = mon.connectionInfo
+        clock = self._clock
+        first = clock.t_first is None
+        clock.received(now, 0 if self._last_seq < 0 else d, ci.sendPeriod)
         if self._last_seq >= 0:
             self.missed += d - 1
-            self._tick += d
             if d > 1 and self._moving():
                 if self._sup is not None and d - 1 > self._sup.max_reply_gap:
                     # longer than any controller bridges: where the robot is, is unknown — it stopped it itself
@@ -263,45 +258,30 @@ class ClientApplication:
                     self._finish(Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {d - 1} messages of the "
                                  "controller were lost in a row: no command is safe from here", observe=False)  # fmt: skip
                     return False
-                skipped = self._motion.extrapolate((d - 1) // (self._period_key[1] if self._period_key else 1))  # type: ignore[union-attr]
+                skipped = self._motion.extrapolate((d - 1) // (clock.period_key[1] if clock.period_key else 1))  # type: ignore[union-attr]
         self._last_seq = seq
         self.cycles += 1
-        self._t_last_rx = now
-        ci = mon.connectionInfo
         state = ci.sessionState
         cyc = self.cycle
-        # ---- time base and period -------------------------------------------------------------------------
-        if self._t_first is None:
-            self._t_first = now
-            if ci.sendPeriod:
-                self._t_per_tick = ci.sendPeriod * 1e-3
-            else:
-                self._local_clock = time.perf_counter()
+        if first:
             cyc.command = tuple(mon.monitorData.measuredJointPosition.value)
             self._cpu0 = time.thread_time()
             self._cycles0 = 1
-        cyc.t = (time.perf_counter() - self._local_clock) if self._local_clock is not None else self._tick * self._t_per_tick
+        cyc.t = clock.t
         cyc.state = state
         cyc.answered = cyc.sent_position = cyc.braking = False
         cyc.torque = cyc.wrench = None
-        if self._period_key is None and state != IDLE:
-            k = ci.receiveMultiplier or 1
-            self._period_key = (ci.sendPeriod, k)
-            if ci.sendPeriod:
-                self._period_s = ci.sendPeriod * 1e-3 * k
-                self._motion = ExecutedMotion(self.limits, self._period_s, self.max_force, self.max_moment,
-                                              self.hold_cycles, mon.monitorData.measuredJointPosition.value)  # fmt: skip
-                self._sup = Supervisor.from_limits(self.limits.velocity, ci.sendPeriod * 1e-3, k,
-                                                   self.max_tracking_error, self.reply_gap_s)  # fmt: skip
+        if state != IDLE and clock.learn_period(ci):
+            self._motion = ExecutedMotion(self.limits, clock.period_s, self.max_force, self.max_moment,  # type: ignore[arg-type]
+                                          self.hold_cycles, mon.monitorData.measuredJointPosition.value)  # fmt: skip
+            self._sup = Supervisor.from_limits(self.limits.velocity, ci.sendPeriod * 1e-3, clock.period_key[1],  # type: ignore[index]
+                                               self.max_tracking_error, self.reply_gap_s)  # fmt: skip
         sup = self._sup
         if sup is not None and state != IDLE and self._stop is None:
-            ts = mon.monitorData.timestamp
-            problem = sup.clock(seq, ts.sec, ts.nanosec)
             motion = self._motion
-            if problem is None and state == CMD_ACTIVE and motion is not None and not motion.braking:
-                problem = sup.replies(seq, mon.header.reflectedSequenceCounter, self.client_sequence)
-                if problem is None and motion.moving and mon.ipoData.clientCommandMode == _POSITION:
-                    problem = sup.tracking(mon.monitorData.measuredJointPosition.value, motion.prev)
+            problem = sup.check(mon, seq, state == CMD_ACTIVE and motion is not None and not motion.braking,
+                                motion is not None and motion.moving, mon.ipoData.clientCommandMode == _POSITION,
+                                motion.prev if motion is not None else (), self.client_sequence)  # fmt: skip
             if problem is not None:
                 self._stop_braking(Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {problem}")
         # ---- state change and robot-side ends --------------------------------------------------------------
@@ -309,14 +289,9 @@ class ClientApplication:
             self.states_seen.append(state)
         if state != self._last_state:
             old, self._last_state = self._last_state, state
-            try:
-                self.client.on_state_change(SessionState(old), SessionState(state))
-            except StopSession as s:
-                self._client_stop(s)
-            except Exception as exc:  # noqa: BLE001 - a client bug ends the session, reported
-                self._client_failed(exc, "on_state_change")
+            self._call_client("on_state_change", SessionState(old), SessionState(state))
         end = robot_side_end(mon, state, seen_session=self._seen_session, commanding=self._commanding,
-                             was_active=self._was_active, period_key=self._period_key, waited_s=now - self._t_first,
+                             was_active=self._was_active, period_key=clock.period_key, waited_s=now - clock.t_first,  # type: ignore[operator]
                              commanding_timeout_s=self.commanding_timeout_s)  # fmt: skip
         if end is not None:
             self._finish(*end, observe=True)
@@ -353,19 +328,12 @@ class ClientApplication:
                 self._finish(*self._stop, observe=True)  # type: ignore[misc]
                 return False
         else:
-            try:
-                if state == CMD_ACTIVE:
-                    q = self.client.command(self.state)  # type: ignore[arg-type]
-                    if q is not None:
-                        cmd.set_joint_position(q)  # type: ignore[union-attr]
-                elif state == CMD_WAIT:
-                    self.client.wait_for_command(self.state)  # type: ignore[arg-type]
-                else:
-                    self.client.monitor(self.state)  # type: ignore[arg-type]
-            except StopSession as s:
-                self._client_stop(s)
-            except Exception as exc:  # noqa: BLE001
-                self._client_failed(exc, "callback")
+            if state == CMD_ACTIVE:
+                q = self._call_client("command", self.state)
+                if q is not None:
+                    cmd.set_joint_position(q)  # type: ignore[union-attr]
+            else:
+                self._call_client("wait_for_command" if state == CMD_WAIT else "monitor", self.state)
             if self._stop is not None and not (self._motion is not None and self._motion.braking):
                 self._finish(*self._stop, observe=True)
                 return False
@@ -388,12 +356,7 @@ class ClientApplication:
             self._finish(Outcome.STOPPED, EndReason.SILENT, f"cannot send to the controller: {exc.strerror}", observe=True)
             return False
         self._latencies.append(time.perf_counter_ns() - t_rx)
-        try:
-            self.client.after_reply()
-        except StopSession as s:
-            self._client_stop(s)
-        except Exception as exc:  # noqa: BLE001
-            self._client_failed(exc, "after_reply")
+        self._call_client("after_reply")
         if sup is not None:
             sup.sent(self._client_seq, seq)
         if not self._answered_any:
@@ -448,109 +411,3 @@ class ClientApplication:
         cyc.command = q
         cyc.sent_position = True
         return True
-
-    # -- stops -----------------------------------------------------------------------------------------------
-    def _stop_braking(self, outcome: Outcome, reason: EndReason, text: str) -> None:
-        """Remember the first stop of the session; brake when commanding (else it ends before the next answer)."""
-        if self._stop is not None:
-            return
-        self._stop = (outcome, reason, text)
-        if self._moving():
-            self._motion.begin_braking()  # type: ignore[union-attr]
-
-    def _request_stop(self, outcome: Outcome, reason: EndReason, text: str) -> bool:
-        """Remember a client-side stop; brake when commanding. True if the session ended at once."""
-        self._stop = (outcome, reason, text)
-        if self._moving():
-            self._motion.begin_braking()  # type: ignore[union-attr]
-            return False
-        self._finish(outcome, reason, text)
-        return True
-
-    def _client_stop(self, s: StopSession) -> None:
-        if self._stop is not None:
-            return
-        outcome = Outcome.COMPLETED if s.completed else Outcome.REFUSED
-        reason = EndReason.FINISHED if s.completed else (EndReason.BAD_INPUT if s.bad_input else EndReason.CLIENT_REFUSED)
-        self._stop_braking(outcome, reason, s.reason)
-
-    def _client_failed(self, exc: BaseException, where: str) -> None:
-        if self._stop is not None:
-            return
-        self.error = exc
-        text = f"the client's {where} raised {type(exc).__name__}: {exc}"
-        self._stop_braking(Outcome.FAILED, EndReason.CLIENT_ERROR, text)
-
-    def _check_clocks(self, now: float) -> bool:
-        """Time-outs and the monitoring duration; False once the session ended."""
-        if self._ended:
-            return False
-        if self._t_first is None:
-            waited = now - self._t_open
-            if waited > self.first_message_timeout_s:
-                self._ended = True
-                raise FriTimeout(self._no_message_text(waited))
-            return True
-        if now - self._t_last_rx > self.silence_timeout_s:
-            self._finish(Outcome.STOPPED, EndReason.SILENT, f"the controller was silent for {now - self._t_last_rx:.2f} s")
-            return False
-        if self._duration_s is not None and now - self._t_first >= self._duration_s and self._stop is None:
-            text = f"monitored for {self._duration_s:g} s"
-            if self._request_stop(Outcome.COMPLETED, EndReason.DURATION, text):
-                return False
-        return True
-
-    def _no_message_text(self, waited: float) -> str:
-        version = f"FRI {self.version.value}" if self.version else "any FRI version"
-        return no_message_text(self.transport, waited, self.malformed, version)  # type: ignore[arg-type]
-
-    # -- observers and the end -------------------------------------------------------------------------------
-    def _call_observer(self, o: Observer, method: str, *args: Any) -> None:
-        fn = getattr(o, method, None)
-        if fn is not None:
-            try:
-                fn(*args)
-            except Exception as exc:  # noqa: BLE001 - e.g. the log's disk is full: stop safely, say why
-                self._observer_failed(o, exc, ending=method == "on_end")
-
-    def _observe(self) -> None:
-        for o in self.observers:
-            fn = getattr(o, "on_cycle", None)
-            if fn is not None:
-                try:
-                    fn(self)
-                except Exception as exc:  # noqa: BLE001
-                    self._observer_failed(o, exc)
-                    break
-
-    def _observer_failed(self, o: Observer, exc: BaseException, ending: bool = False) -> None:
-        """Drop the observer; unless the session is ending anyway, stop (braking when commanding) and say why."""
-        if o in self.observers:
-            self.observers.remove(o)
-        if ending or self._stop is not None or self._ended:
-            return
-        self.error = exc
-        self._request_stop(Outcome.FAILED, EndReason.OBSERVER_FAILED, f"{getattr(o, 'name', type(o).__name__)} failed: {exc}")
-
-    def _finish(self, outcome: Outcome, reason: EndReason, text: str, observe: bool = False) -> None:
-        """End the session; with ``observe`` the observers see this cycle first (its log row, its figures)."""
-        if self._ended:
-            return
-        self._ended = True
-        if observe:
-            self._observe()
-        figures: dict[str, Any] = {}
-        for o in list(self.observers):
-            fn = getattr(o, "figures", None)
-            if fn is not None:
-                try:
-                    figures.update(fn())
-                except Exception:  # noqa: BLE001 - a figure less, the session's end is what matters
-                    pass
-        cpu = time.thread_time() - self._cpu0 if self._t_first is not None else 0.0
-        self.result = session_result(
-            self, outcome, reason, text, figures, cpu_s=cpu, cpu_cycles=self.cycles - self._cycles0,
-            unanswered_at_start=self._unanswered_at_start if self._answered_any else 0,
-        )  # fmt: skip
-        for o in list(self.observers):
-            self._call_observer(o, "on_end", self, self.result)

@@ -182,3 +182,15 @@ class Supervisor:
         if worst > self.largest_tracking_error:
             self.largest_tracking_error = worst
         return None
+
+    def check(self, mon: Any, seq: int, commanding: bool, moving: bool, position_mode: bool,
+              command: Sequence[float], last_sent: int) -> str | None:  # fmt: skip
+        """All checks due for this message: the clock always; with ``commanding`` (COMMANDING_ACTIVE, not braking)
+        the replies, and with ``moving`` in position mode the tracking of ``command`` [rad]. The first problem."""
+        ts = mon.monitorData.timestamp
+        problem = self.clock(seq, ts.sec, ts.nanosec)
+        if problem is None and commanding:
+            problem = self.replies(seq, mon.header.reflectedSequenceCounter, last_sent)
+            if problem is None and moving and position_mode:
+                problem = self.tracking(mon.monitorData.measuredJointPosition.value, command)
+        return problem

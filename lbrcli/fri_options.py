@@ -139,3 +139,23 @@ def validate_period(period: int | None) -> None:
 
     if period is not None and not 1 <= period <= 100:
         raise OptionError(f"--period must be 1..100 ms, got {period}")
+
+
+def validate_session(version: str | None, port: int, wait: float | None, period: int | None,
+                     max_tracking_error: float | None = None) -> None:  # fmt: skip
+    """The session options every FRI command shares (OptionError naming the first bad one)."""
+    validate_version(version)
+    validate_port(port)
+    validate_wait(wait)
+    validate_tracking_error(max_tracking_error)
+    validate_period(period)
+
+
+def check_simulator_only(robot: str | None, options: dict[str, bool]) -> None:
+    """OptionError when a simulator-only option (name → whether it was given) is used with --robot; the text names
+    all of the command's simulator-only options."""
+    from trajectories.errors import OptionError
+
+    if robot is not None and any(options.values()):
+        names = list(options)
+        raise OptionError(f"{', '.join(names[:-1])} and {names[-1]} apply to the simulator only, not with --robot")

@@ -81,13 +81,19 @@ class OnlineIk:
         self._w = limits.velocity / limits.velocity.max()  # joint step weights: slow joints move less
         self._jac = np.zeros((6, 7))
 
-    def _error(self, q: np.ndarray, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
-        pin.framesForwardKinematics(self._model, self._data, q)
+    def _kinematics(self, q: np.ndarray, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+        """One pass at ``q``: the joint Jacobians and frame placements (kept in the data), and the pose error."""
+        pin.computeJointJacobians(self._model, self._data, q)  # includes the forward kinematics
+        pin.updateFramePlacements(self._model, self._data)
         m = self._data.oMf[self._fid]
         err = np.empty(6)
         err[:3] = position - m.translation
         err[3:] = pin.log3(rotation @ m.rotation.T)
         return err
+
+    def _frame_jacobian(self) -> np.ndarray:
+        """The TCP Jacobian of the last :meth:`_kinematics` pass."""
+        return pin.getFrameJacobian(self._model, self._data, self._fid, pin.LOCAL_WORLD_ALIGNED)
 
     def solve(self, seed: np.ndarray, position: np.ndarray, rotation: np.ndarray,
               posture: np.ndarray | None = None) -> OnlineIkResult:  # fmt: skip
@@ -97,12 +103,11 @@ class OnlineIk:
         source going round in circles does not let the elbow drift."""
         o = self.options
         q = np.clip(np.asarray(seed, dtype=float), self._lo, self._hi)
-        err = self._error(q, position, rotation)
+        err = self._kinematics(q, position, rotation)
         it = 0
         while it < o.max_iterations and not _small(err, o):
             it += 1
-            pin.computeJointJacobians(self._model, self._data, q)
-            jac = pin.getFrameJacobian(self._model, self._data, self._fid, pin.LOCAL_WORLD_ALIGNED)
+            jac = self._frame_jacobian()
             jw = jac * self._w  # step in weighted joints z: dq = w·z
             dz = jw.T @ np.linalg.solve(jw @ jw.T + o.damping * np.eye(6), err)
             dq = self._w * dz
@@ -115,14 +120,13 @@ class OnlineIk:
                 dq = solve_box_qp(h, jac.T @ err, np.maximum(self._lo - q, -o.max_step),
                                   np.minimum(self._hi - q, o.max_step)).x  # fmt: skip
             q = np.clip(q + dq, self._lo, self._hi)
-            err = self._error(q, position, rotation)
+            err = self._kinematics(q, position, rotation)
         if posture is not None and o.posture_gain > 0:  # first order: leaves the TCP where it is
-            pin.computeJointJacobians(self._model, self._data, q)
-            jw = pin.getFrameJacobian(self._model, self._data, self._fid, pin.LOCAL_WORLD_ALIGNED) * self._w
+            jw = self._frame_jacobian() * self._w
             pull = o.posture_gain * (np.asarray(posture) - q) / self._w
             pull -= jw.T @ np.linalg.solve(jw @ jw.T + o.damping * np.eye(6), jw @ pull)
             q = np.clip(q + self._w * pull, self._lo, self._hi)
-            err = self._error(q, position, rotation)
+            err = self._kinematics(q, position, rotation)
         return OnlineIkResult(q, float(np.linalg.norm(err[:3])), float(np.linalg.norm(err[3:])), it, _small(err, o))
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:

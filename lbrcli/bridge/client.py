@@ -77,13 +77,13 @@ class MqttBridgeClient(_Source):
     ``url`` is ``mqtt://[USER:PASSWORD@]HOST:PORT/TOPIC`` (mqtts:// for TLS); ``source_id`` tells sources apart."""
 
     def __init__(self, url: str, source_id: int = 1, secret: bytes | None = None, timeout_s: float = 5.0) -> None:
-        from lbrcli.lab.telemetry import _client, parse_mqtt_url
+        from lbrcli.lab.telemetry import paho_client, parse_mqtt_url
 
         super().__init__(source_id, secret)
         self.target = parse_mqtt_url(url, "url")
         self.states: collections.deque[State] = collections.deque(maxlen=10000)
         self._ready = threading.Event()
-        self._client = _client(f"lbr-source-{id(self):x}", self.target)
+        self._client = paho_client(f"lbr-source-{id(self):x}", self.target)
         self._client.on_connect = lambda c, u, f, rc, p: c.subscribe(f"{self.target.topic}/state", qos=0)
         self._client.on_subscribe = lambda c, u, mid, rcs, p: self._ready.set()
         self._client.on_message = lambda c, u, m: self.states.append(decode_state(m.payload))

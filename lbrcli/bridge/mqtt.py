@@ -13,7 +13,7 @@ import threading
 import time
 from typing import Hashable, Iterator
 
-from lbrcli.lab.telemetry import MqttTarget, _client
+from lbrcli.lab.telemetry import MqttTarget, paho_client
 
 
 class MqttUnavailable(RuntimeError):
@@ -36,7 +36,7 @@ class MqttTransport:
         self._next_state = 0.0
         self._ready = threading.Event()
         self._refused: str | None = None
-        self._client = _client(f"lbr-serve-{id(self):x}", target)
+        self._client = paho_client(f"lbr-serve-{id(self):x}", target)
         self._client.on_connect = self._on_connect
         self._client.on_subscribe = self._on_subscribe
         self._client.on_message = self._on_message

@@ -142,16 +142,12 @@ def execute(
     from trajectories.errors import InputError, OptionError
 
     from ..console import Reporter
-    from ..fri_options import validate_period, validate_port, validate_tracking_error, validate_version, validate_wait
+    from ..fri_options import check_simulator_only, validate_session
     from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import check_margin, limits_from, make_robot
 
     rep = Reporter(json_out)
-    validate_version(fri_version)
-    validate_port(port)
-    validate_wait(wait)
-    validate_tracking_error(max_tracking_error)
-    validate_period(period)
+    validate_session(fri_version, port, wait, period, max_tracking_error)
     check_margin(margin)
     if not (math.isfinite(start_tolerance) and 0 <= start_tolerance <= 0.1):
         raise OptionError(f"--start-tolerance must be 0..0.1 rad, got {start_tolerance:g}")
@@ -159,8 +155,8 @@ def execute(
         raise OptionError(f"--settle must be 0..600 s, got {settle:g}")
     if not 1 <= receive_multiplier <= 100:
         raise OptionError(f"--receive-multiplier must be 1..100, got {receive_multiplier}")
-    if robot is not None and (sim_start is not None or damping != 0.0 or receive_multiplier != 1 or sim_lenient):
-        raise OptionError("--sim-start, --damping, --receive-multiplier and --sim-lenient apply to the simulator only, not with --robot")
+    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--damping": damping != 0.0,
+                                 "--receive-multiplier": receive_multiplier != 1, "--sim-lenient": sim_lenient})  # fmt: skip
     if not (math.isfinite(start_sway) and 0 < start_sway <= 45):
         raise OptionError(f"--start-sway must be in (0, 45] deg, got {start_sway:g}")
     if not (math.isfinite(sway_wait) and 0 <= sway_wait <= 3600):

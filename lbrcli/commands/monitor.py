@@ -67,19 +67,16 @@ def monitor(
     from trajectories.robot import FLANGE_FRAME
 
     from ..console import Reporter
-    from ..fri_options import validate_period, validate_port, validate_version, validate_wait
+    from ..fri_options import check_simulator_only, validate_session
     from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import THESIS_Q_START, make_robot
 
     rep = Reporter(json_out)
-    validate_version(fri_version)
-    validate_port(port)
-    validate_wait(wait)
-    validate_period(period)
+    validate_session(fri_version, port, wait, period)
     if not (math.isfinite(duration) and 0 < duration <= 86400):
         raise OptionError(f"--duration must be in (0, 86400] s, got {duration:g}")
-    if robot is not None and (sim_start is not None or length is not None or sim_lenient):
-        raise OptionError("--sim-start, --length and --sim-lenient apply to the simulator only, not with --robot")
+    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
+                                 "--sim-lenient": sim_lenient})  # fmt: skip
     model = make_robot(flange, tool)
     fid = model.model.getFrameId(FLANGE_FRAME)
     mdl, data = model.model, model.data

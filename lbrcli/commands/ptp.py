@@ -46,17 +46,13 @@ def ptp(
     from trajectories.errors import CheckFailed, OptionError
 
     from ..console import Reporter
-    from ..fri_options import validate_period, validate_port, validate_tracking_error, validate_version, validate_wait
+    from ..fri_options import check_simulator_only, validate_session
     from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import DEFAULT_FLANGE, THESIS_Q_START, limits_from
     from ..parsing import parse_joint_vector
 
     rep = Reporter(json_out)
-    validate_version(fri_version)
-    validate_port(port)
-    validate_wait(wait)
-    validate_tracking_error(max_tracking_error)
-    validate_period(period)
+    validate_session(fri_version, port, wait, period, max_tracking_error)
     goal = parse_joint_vector(q, "Q")
     if not (math.isfinite(time_s) and 0 < time_s <= 600):
         raise OptionError(f"--time must be in (0, 600] s, got {time_s:g}")
@@ -64,8 +60,8 @@ def ptp(
         raise OptionError(f"--speed-scale must be in (0, 0.5], got {speed_scale:g}")
     if not (math.isfinite(settle) and 0 <= settle <= 60):
         raise OptionError(f"--settle must be 0..60 s, got {settle:g}")
-    if robot is not None and (sim_start is not None or length is not None or sim_lenient):
-        raise OptionError("--sim-start, --length and --sim-lenient apply to the simulator only, not with --robot")
+    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
+                                 "--sim-lenient": sim_lenient})  # fmt: skip
     lim = limits_from(limits)
     over = np.flatnonzero(np.abs(goal) > lim.position)
     if over.size:

@@ -91,15 +91,12 @@ def serve(
     from trajectories.errors import OptionError
 
     from ..console import Reporter
-    from ..fri_options import validate_period, validate_port, validate_version, validate_wait
+    from ..fri_options import check_simulator_only, validate_session
     from ..fri_runner import exit_for, print_summary, run_client, simulator_kwargs
     from ..options import THESIS_Q_START, limits_from, make_robot
 
     rep = Reporter(json_out)
-    validate_version(fri_version)
-    validate_port(port)
-    validate_wait(wait)
-    validate_period(period)
+    validate_session(fri_version, port, wait, period)
     udp = listen.strip().lower() != "off"
     host, _, lport = listen.rpartition(":")
     if udp and (not host or not lport.isdigit() or not 0 <= int(lport) <= 65535):
@@ -119,8 +116,8 @@ def serve(
         raise OptionError(f"--state-every must be 0..1000, got {state_every}")
     if duration is not None and not (math.isfinite(duration) and 0 < duration <= 86400):
         raise OptionError(f"--duration must be in (0, 86400] s, got {duration:g}")
-    if robot is not None and (sim_start is not None or length is not None or sim_lenient):
-        raise OptionError("--sim-start, --length and --sim-lenient apply to the simulator only, not with --robot")
+    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
+                                 "--sim-lenient": sim_lenient})  # fmt: skip
     lim = limits_from(limits)
     allowed = {h.strip() for h in source.split(",") if h.strip()} if source else None
     sim_kwargs: dict[str, Any] = {}

@@ -61,10 +61,9 @@ class SessionEnding:
         try:
             return getattr(self.client, method)(*args)
         except StopSession as s:
-            if self._stop is None:
-                outcome = Outcome.COMPLETED if s.completed else Outcome.REFUSED
-                reason = EndReason.FINISHED if s.completed else (EndReason.BAD_INPUT if s.bad_input else EndReason.CLIENT_REFUSED)
-                self._stop_braking(outcome, reason, s.reason)
+            outcome = Outcome.COMPLETED if s.completed else Outcome.REFUSED
+            reason = EndReason.FINISHED if s.completed else (EndReason.BAD_INPUT if s.bad_input else EndReason.CLIENT_REFUSED)
+            self._stop_braking(outcome, reason, s.reason)  # the first stop of the session counts
         except Exception as exc:  # noqa: BLE001 - a client bug ends the session, reported
             if self._stop is None:
                 self.error = exc

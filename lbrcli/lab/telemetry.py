@@ -47,7 +47,8 @@ def parse_mqtt_url(url: str, option: str = "--mqtt") -> MqttTarget:
     return MqttTarget(parts.hostname, port, topic, user, password, parts.scheme == "mqtts")
 
 
-def _client(client_id: str, target: MqttTarget | None = None):
+def paho_client(client_id: str, target: MqttTarget | None = None):
+    """A paho client (callback API 2) that reconnects by itself, logging in as ``target`` says (user, TLS)."""
     import paho.mqtt.client as mqtt
 
     client = mqtt.Client(mqtt.CallbackAPIVersion.VERSION2, client_id=client_id)
@@ -71,7 +72,7 @@ class TelemetryPublisher:
         self._pending: tuple[float, Any] | None = None
         self._wake = threading.Event()
         self._stop = threading.Event()
-        self._client = _client(f"lbr-{id(self):x}", target)
+        self._client = paho_client(f"lbr-{id(self):x}", target)
         self._thread: threading.Thread | None = None
 
     def start(self) -> "TelemetryPublisher":
@@ -133,7 +134,7 @@ class TelemetryListener:
         self.received = 0
         self.malformed = 0
         self.connected = threading.Event()
-        self._client = _client(f"lbr-listen-{id(self):x}", target)
+        self._client = paho_client(f"lbr-listen-{id(self):x}", target)
         self._client.on_connect = self._on_connect
         self._client.on_message = self._on_message
 

@@ -168,6 +168,11 @@ def serve(
                    robot=robot or "simulator")  # fmt: skip
     rep.emit(figures)
     exit_for(result)
+    if not f.get("targets_accepted"):  # the session ended as asked, but nothing was served
+        import sys
+
+        sys.stderr.write("lbr: failed: no target arrived during the session (is the source sending to --listen?)\n")
+        raise typer.Exit(1)
 
 
 def _read_secret(path: Path) -> bytes:

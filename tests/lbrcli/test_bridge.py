@@ -366,3 +366,10 @@ def test_an_unreachable_pose_is_followed_to_the_closest_configuration_and_flagge
     assert np.all(np.abs(sent) <= LIM.position)
     assert follower.unreached and follower.poses_unreached == 1 and follower.max_ik_position_error > 0.5
     assert src.sent[-1].unreached  # the source is told
+
+
+def test_a_session_that_ends_by_duration_without_any_target_exits_1(tmp_path):
+    proc = _serve(tmp_path, free_port(), "--duration", "1")
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 1 and err.strip().splitlines()[-1].startswith("lbr: failed: no target arrived")
+    assert json.loads(out)["targets_accepted"] == 0

@@ -9,7 +9,11 @@ internal receive → send latency (from its --json). 1 ms is measured twice: wit
 `--realtime` (SCHED_FIFO; needs root or CAP_SYS_NICE, else the client warns and runs normally).
 Full: 60 s of streaming per run; quick: 5 s.
 
-Run: `python benchmarks/run_all.py fri [--quick]` or `python benchmarks/bench_fri.py [--quick]`.
+Floors on this machine, measured the same way: a C UDP echo (compiled here with cc) and a Python one. With
+`--kuka=PATH` (repeatable) a KUKA example client built from KUKA's FRI client SDK (e.g. lbr-stack/fri's
+LBRJointSineOverlayApp; it binds port 30200, so that port must be free) is measured the same way at 1 ms.
+
+Run: `python benchmarks/run_all.py fri [--quick]` or `python benchmarks/bench_fri.py [--quick] [--kuka=PATH ...]`.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
@@ -51,12 +56,13 @@ def _trajectory(path: Path, period_s: float, duration_s: float) -> int:
 
 
 class _Controller:
-    """A paced FRI 1.15 controller on loopback with an ideal robot (ipo = measured = last command)."""
+    """A paced FRI controller on loopback running PositionHold (ipo constant) with an ideal robot (measured = last
+    command)."""
 
-    def __init__(self, client_port: int, period_ms: int) -> None:
+    def __init__(self, client_port: int, period_ms: int, version: str = "1.15") -> None:
         from lbrcli.fri.codec import FriCodec
 
-        self.codec = FriCodec("1.15")
+        self.codec = FriCodec(version)
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.sock.bind(("127.0.0.1", 0))
         self.sock.setblocking(False)
@@ -71,8 +77,10 @@ class _Controller:
         m.robotInfo.numberOfJoints, m.robotInfo.safetyState = 7, 0
         m.robotInfo.driveState.extend([2] * 7)
         md = m.monitorData
+        self.has_commanded = "commandedJointPosition" in md.DESCRIPTOR.fields_by_name  # 1.15 only
         for f in ("measuredJointPosition", "measuredTorque", "externalTorque", "commandedTorque", "commandedJointPosition"):
-            getattr(md, f).value.extend(Q0.tolist() if "Position" in f else [0.0] * 7)
+            if f in md.DESCRIPTOR.fields_by_name:
+                getattr(md, f).value.extend(Q0.tolist() if "Position" in f else [0.0] * 7)
         for name in ("ball_theta", "ball_phi", "ball_theta_x", "ball_theta_y"):
             io = md.readIORequest.add()
             io.name, io.type, io.direction, io.analogValue = name, 2, 0, 0.0
@@ -88,8 +96,8 @@ class _Controller:
         m.connectionInfo.sessionState = state
         m.ipoData.trackingPerformance = 1.0 if state == 4 else 0.0
         m.monitorData.measuredJointPosition.value[:] = self.q
-        m.ipoData.jointPosition.value[:] = self.q
-        m.monitorData.commandedJointPosition.value[:] = self.q
+        if self.has_commanded:
+            m.monitorData.commandedJointPosition.value[:] = self.q
         m.monitorData.timestamp.sec = int(time.time())
         m.monitorData.timestamp.nanosec = 0
         return self.codec.encode(m)
@@ -137,18 +145,24 @@ class _Controller:
 
 
 def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = False, extra_args: tuple[str, ...] = (),
-             tag: str | None = None) -> list[tuple[str, float, str]]:
+             tag: str | None = None, kuka: str | None = None) -> list[tuple[str, float, str]]:
+    """One run against ``lbr execute`` — or, with ``kuka``, against that KUKA example client binary (FRI version
+    from its path: 2.7 if it contains "2.7"), which binds the default port 30200."""
     traj = workdir / f"traj_{period_ms}ms.csv"
     log = workdir / f"log_{period_ms}ms.csv"
     n_rows = _trajectory(traj, period_ms * 1e-3, duration_s)
-    port = _free_port()
-    client = subprocess.Popen(
-        [sys.executable, "-m", "lbrcli", "execute", str(traj), "--robot", "127.0.0.1", "--port", str(port),
-         "--log", str(log), "--settle", str(SETTLE_S), "--json", "--wait", "60"] + (["--realtime"] if realtime else [])
-        + list(extra_args),
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    ctl = _Controller(port, period_ms)
+    if kuka is not None:
+        port, version = 30200, ("2.7" if "2.7" in kuka else "1.15")
+        client = subprocess.Popen([kuka], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, text=True, cwd=workdir)
+    else:
+        port, version = _free_port(), "1.15"
+        client = subprocess.Popen(
+            [sys.executable, "-m", "lbrcli", "execute", str(traj), "--robot", "127.0.0.1", "--port", str(port),
+             "--log", str(log), "--settle", str(SETTLE_S), "--json", "--wait", "60"] + (["--realtime"] if realtime else [])
+            + list(extra_args),
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )  # fmt: skip
+    ctl = _Controller(port, period_ms, version)
     period = period_ms * 1e-3
     deadline = time.perf_counter() + period
     t_wait = time.monotonic()
@@ -172,9 +186,15 @@ def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = 
     # the client stops answering after the settle rows; let it finish
     for _ in range(5):
         deadline = max(deadline + period, time.perf_counter())
-        ctl.cycle(4, deadline)
+        ctl.cycle(4 if kuka is None else 0, deadline)  # KUKA's clients leave at IDLE
+    if kuka is not None:
+        try:
+            client.wait(2.0)
+        except subprocess.TimeoutExpired:
+            client.kill()
     out, err = client.communicate(timeout=60)
-    figures = json.loads(out) if out.strip() else {}
+    ctl.sock.close()
+    figures = json.loads(out) if out and out.strip() else {}
     arr = np.sort(np.array(lat)) * 1e3
     total = len(lat) + missed
     tag = tag or f"{period_ms} ms" + (" --realtime" if realtime else "")
@@ -184,11 +204,14 @@ def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = 
         (f"{tag}: reply latency max (controller side)", float(arr[-1]), "ms"),
         (f"{tag}: answered within the period", len(lat) / total, "fraction"),
         (f"{tag}: missed replies of {total}", float(missed), "cycles"),
-        (f"{tag}: trajectory rows commanded of {n_rows}", float(figures.get("trajectory_rows", -1)), "rows"),
     ]
+    if kuka is None:
+        rows.append((f"{tag}: trajectory rows commanded of {n_rows}", float(figures.get("trajectory_rows", -1)), "rows"))
     if figures.get("cpu_us_per_cycle") is not None:
         rows += [
             (f"{tag}: client CPU per cycle (decode, guard, reply, log row)", figures["cpu_us_per_cycle"], "µs"),
+            (f"{tag}: messages left unanswered at session start", figures.get("unanswered_at_start", -1), "messages"),
+            (f"{tag}: client-internal receive→send p50", figures["latency_p50_ms"], "ms"),
             (f"{tag}: client-internal receive→send p99", figures["latency_p99_ms"], "ms"),
             (f"{tag}: client-internal receive→send max", figures["latency_max_ms"], "ms"),
         ]
@@ -222,7 +245,6 @@ def _processing_cost(n: int = 20000) -> list[tuple[str, float, str]]:
     execution log to /dev/null) with the socket calls replaced by memory: the Python work of one FRI cycle."""
     from lbrcli.fri import ClientApplication, ExecutionLog, LogObserver, SessionFigures, TrajectoryPlayer
     from trajectories.limits import default_limits
-    from trajectories.trajectory import JointTrajectory
 
     ctl = _Controller(9, 1)
     ctl.sock.close()
@@ -250,7 +272,6 @@ def _processing_cost(n: int = 20000) -> list[tuple[str, float, str]]:
                 app.step()
             k0 = app.transport.i
             t0 = time.perf_counter()
-            c0 = time.thread_time()
             while app.transport.i < len(app.transport.datagrams) - 10 and app.step():
                 pass
             k = app.transport.i - k0
@@ -265,62 +286,128 @@ def _processing_cost(n: int = 20000) -> list[tuple[str, float, str]]:
     ]  # fmt: skip
 
 
-def _echo(port: int) -> None:
-    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    s.bind(("127.0.0.1", port))
-    s.settimeout(2.0)
-    try:
-        while True:
-            data, addr = s.recvfrom(2048)
-            s.sendto(data, addr)
-    except OSError:
-        pass
+_C_ECHO = r"""
+#include <stdlib.h>
+#include <arpa/inet.h>
+#include <sys/select.h>
+#include <sys/socket.h>
+int main(int argc, char **argv) {
+  int s = socket(AF_INET, SOCK_DGRAM, 0);
+  struct sockaddr_in a = {0}, from;
+  a.sin_family = AF_INET; a.sin_port = htons(atoi(argv[1])); a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (bind(s, (struct sockaddr *)&a, sizeof a) != 0) return 1;
+  char buf[2048];
+  for (;;) {  /* as KUKA's client: select, receive, answer */
+    fd_set f; FD_ZERO(&f); FD_SET(s, &f);
+    struct timeval tv = {3, 0};
+    if (select(s + 1, &f, 0, 0, &tv) <= 0) return 0;
+    socklen_t fl = sizeof from;
+    int n = recvfrom(s, buf, sizeof buf, 0, (struct sockaddr *)&from, &fl);
+    if (n > 0) sendto(s, buf, n, 0, (struct sockaddr *)&from, fl);
+  }
+}
+"""
+
+_PY_ECHO = """
+import socket, sys
+s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+s.bind(("127.0.0.1", int(sys.argv[1])))
+s.settimeout(3.0)
+try:
+    while True:
+        d, a = s.recvfrom(2048)
+        s.sendto(d, a)
+except OSError:
+    pass
+"""
 
 
-def _machine_floor(n: int = 3000) -> list[tuple[str, float, str]]:
-    """What this machine allows any Python client: round trip of a 400-byte datagram to an echoing process, one per
-    millisecond (the controller side of the figures above, without any FRI work)."""
-    import multiprocessing
+def _echo_floor(kind: str, workdir: Path, n: int) -> list[tuple[str, float, str]]:
+    """Reply latency of an echo process (``kind`` "C": compiled here with cc, skipped without one; "Python"), with
+    the controller's pacing and kernel receive timestamps of the FRI runs: the floor of any client on this machine
+    (a C echo does less than KUKA's C++ client, which also decodes and encodes)."""
+    import shutil
 
     port = _free_port()
-    echo = multiprocessing.get_context("spawn").Process(target=_echo, args=(port,), daemon=True)
-    echo.start()
-    time.sleep(1.0)
-    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    s.settimeout(1.0)
-    lat = []
-    deadline = time.perf_counter()
-    for _ in range(n):
-        deadline += 1e-3
-        while time.perf_counter() < deadline:
-            pass
-        t0 = time.perf_counter()
-        s.sendto(b"x" * 400, ("127.0.0.1", port))
-        try:
-            s.recvfrom(2048)
-        except OSError:
-            continue
-        lat.append(time.perf_counter() - t0)
-    s.close()
-    echo.join(5.0)
-    arr = np.array(lat) * 1e3
+    if kind == "C":
+        cc = shutil.which("cc") or shutil.which("gcc")
+        if cc is None:
+            return []
+        src, exe = workdir / "echo.c", workdir / "echo"
+        src.write_text(_C_ECHO)
+        if subprocess.run([cc, "-O2", "-o", str(exe), str(src)], capture_output=True).returncode != 0:
+            return []
+        cmd = [str(exe), str(port)]
+    else:
+        cmd = [sys.executable, "-c", _PY_ECHO, str(port)]
+    proc = subprocess.Popen(cmd)
+    ctl = _Controller(port, 1)
+    data = [ctl._fill(4)]
+    lat: list[float] = []
+    missed = 0
+    try:
+        time.sleep(1.0)
+        deadline = time.perf_counter()
+        for i in range(n + 200):
+            deadline = max(deadline + 1e-3, time.perf_counter())
+            ctl.seq = i
+            data = ctl._fill(4)
+            now = time.perf_counter()
+            if deadline - now > 3e-4:
+                time.sleep(deadline - now - 3e-4)
+            while time.perf_counter() < deadline:
+                pass
+            t_send = time.time_ns()
+            ctl.sock.sendto(data, ctl.dest)
+            while True:
+                left = deadline + 0.9e-3 - time.perf_counter()
+                if left > 0:
+                    select.select([ctl.sock], [], [], left)
+                try:
+                    reply, anc, _, _ = ctl.sock.recvmsg(2048, 64)
+                except BlockingIOError:
+                    if left > 0:
+                        continue
+                    missed += i >= 200
+                    break
+                if reply != data:
+                    continue  # a late echo of an earlier message
+                t_rx = next(int.from_bytes(d[:8], "little") * 10**9 + int.from_bytes(d[8:16], "little")
+                            for lvl, typ, d in anc if lvl == socket.SOL_SOCKET and typ == _SO_TIMESTAMPNS)  # fmt: skip
+                if i >= 200:  # after the start
+                    lat.append((t_rx - t_send) * 1e-6)
+                break
+    finally:
+        proc.kill()
+        proc.wait()
+        ctl.sock.close()
+    arr = np.array(lat)
     return [
-        ("machine floor: Python UDP echo round trip p50", float(np.percentile(arr, 50)), "ms"),
-        ("machine floor: Python UDP echo round trip p99", float(np.percentile(arr, 99)), "ms"),
+        (f"floor: {kind} UDP echo, reply latency p50", float(np.percentile(arr, 50)), "ms"),
+        (f"floor: {kind} UDP echo, reply latency p99", float(np.percentile(arr, 99)), "ms"),
+        (f"floor: {kind} UDP echo, missed of {n}", float(missed), "cycles"),
     ]
 
 
-def run(quick: bool = False) -> list[tuple[str, float, str]]:
+def run(quick: bool = False, kuka: Sequence[str] = ()) -> list[tuple[str, float, str]]:
+    """The figures; ``kuka``: paths of KUKA example clients (built from KUKA's FRI client SDK, e.g. lbr-stack/fri)
+    to measure the same way, for the comparison with a C++ client on this machine."""
     duration = 5.0 if quick else 60.0
-    rows: list[tuple[str, float, str]] = _machine_floor() + _processing_cost()
+    rows: list[tuple[str, float, str]] = _processing_cost()
     with tempfile.TemporaryDirectory() as tmp:
-        for period_ms, realtime in ((1, False), (1, True), (5, False)):
-            rows += _measure(period_ms, duration, Path(tmp), realtime)
+        for kind in ("C", "Python"):
+            rows += _echo_floor(kind, Path(tmp), int(duration * 1000))
+        for period_ms, realtime, extra in ((1, False, ()), (1, False, ("--busy-wait", "0")), (1, True, ()), (5, False, ())):
+            tag = f"{period_ms} ms" + (" --realtime" if realtime else "") + (" " + " ".join(extra) if extra else "")
+            rows += _measure(period_ms, duration, Path(tmp), realtime, extra, tag)
+        for path in kuka:
+            rows += _measure(1, duration, Path(tmp), tag=f"1 ms KUKA {Path(path).name} ({path})", kuka=path)
     return rows
 
 
 if __name__ == "__main__":
-    for name, value, unit in run(quick="--quick" in sys.argv):
+    kuka_clients = [a.split("=", 1)[1] for a in sys.argv[1:] if a.startswith("--kuka=")]
+    for name, value, unit in run(quick="--quick" in sys.argv, kuka=kuka_clients):
         print(f"  {name:<62} {value:>12.4g} {unit}")
     sys.stdout.flush()
     os._exit(0)

@@ -4,6 +4,8 @@
 
 The robot application needs the FRI IO channels FRI.In_Bool_Clock_Enabled (boolean in),
 FRI.Out_Integer_Seconds (digital out) and FRI.Out_Analog_Deci_Seconds (analog out); the robot is held still.
+Unlike KUKA's client, which answers until IDLE, the run ends when the session leaves COMMANDING_ACTIVE (if the
+application has an overlay: lbrcli.fri's robot-side end) or after --duration.
 """
 
 from __future__ import annotations

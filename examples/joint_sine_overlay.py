@@ -1,6 +1,9 @@
-"""KUKA's LBRJointSineOverlay on lbrcli.fri: command = ipo + A·sin(2π·f·t) on one joint, low-pass filtered.
+"""KUKA's LBRJointSineOverlay on lbrcli.fri: command = ipo + A·sin(2π·f·t) on the masked joints, low-pass filtered.
 
-    python examples/joint_sine_overlay.py [--robot 192.170.10.2] [--duration 10]
+    python examples/joint_sine_overlay.py [--robot 192.170.10.2] [--duration 10] [--freq 0.25] [--amplitude 0.04]
+
+Defaults are KUKA's: joint mask 0x8 (A4), 0.25 Hz, 0.04 rad, filter coefficient 0.99. Unlike KUKA's client, which
+answers until IDLE, the run ends when the session leaves COMMANDING_ACTIVE (lbrcli.fri's robot-side end).
 """
 
 from __future__ import annotations
@@ -13,8 +16,9 @@ from lbrcli.fri import LBRClient, SessionState
 
 
 class JointSineOverlay(LBRClient):
-    def __init__(self, joint: int = 3, freq_hz: float = 0.25, amplitude: float = 0.04, filter_coeff: float = 0.99):
-        self.joint, self.freq_hz, self.amplitude, self.filter_coeff = joint, freq_hz, amplitude, filter_coeff
+    def __init__(self, joint_mask: int = 0x8, freq_hz: float = 0.25, amplitude: float = 0.04, filter_coeff=0.99):
+        self.mask, self.freq_hz, self.amplitude = joint_mask, freq_hz, amplitude  # bit j = A(j+1), [Hz], [rad]
+        self.filter_coeff = filter_coeff  # 0 (off) to 1
         self.offset = self.phi = self.step = 0.0  # [rad], [rad], [rad per cycle]
         self.history: list[tuple[tuple[float, ...], tuple[float, ...]]] = []  # (measured, commanded) per cycle
 
@@ -26,15 +30,19 @@ class JointSineOverlay(LBRClient):
     def command(self, state):
         self.offset = self.offset * self.filter_coeff + self.amplitude * math.sin(self.phi) * (1 - self.filter_coeff)
         self.phi = (self.phi + self.step) % (2 * math.pi)
-        q = list(state.ipo_joint_position)
-        q[self.joint] += self.offset
+        q = [x + self.offset if self.mask & (1 << j) else x for j, x in enumerate(state.ipo_joint_position)]
         self.history.append((state.measured_joint_position, tuple(q)))
         return q
 
 
 def main(argv=None):
-    args = arguments(__doc__.splitlines()[0], duration_s=10.0).parse_args(argv)
-    client = JointSineOverlay(freq_hz=1.0)
+    p = arguments(__doc__.splitlines()[0], duration_s=10.0)
+    p.add_argument("--joint-mask", type=lambda x: int(x, 0), default=0x8, help="joints overlaid, bit j = A(j+1)")
+    p.add_argument("--freq", type=float, default=0.25, help="sine frequency [Hz]")
+    p.add_argument("--amplitude", type=float, default=0.04, help="sine amplitude [rad]")
+    p.add_argument("--filter-coeff", type=float, default=0.99, help="low-pass coefficient, 0 (off) to 1")
+    args = p.parse_args(argv)
+    client = JointSineOverlay(args.joint_mask, args.freq, args.amplitude, args.filter_coeff)
     result = run(client, args)
     print(f"{result.outcome.value}: {result.detail}; {len(client.history)} commands")
     return result, client

@@ -1,6 +1,9 @@
 """Watch a session and log everything the controller reports (KUKA's default client never moves the robot).
 
     python examples/monitor_to_file.py --log mon.csv --duration 10 [--robot IP]
+
+Unlike KUKA's client, which answers until IDLE, the run ends when the session leaves COMMANDING_ACTIVE (if the
+application has an overlay: lbrcli.fri's robot-side end) or after --duration.
 """
 
 from __future__ import annotations

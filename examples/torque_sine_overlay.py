@@ -1,6 +1,9 @@
 """KUKA's LBRTorqueSineOverlay on lbrcli.fri: TORQUE mode, the ipo position plus a torque sine on joints.
 
     python examples/torque_sine_overlay.py [--robot IP]      # the robot application must use TORQUE mode
+
+Unlike KUKA's client, which answers until IDLE, the run ends when the session leaves COMMANDING_ACTIVE
+(lbrcli.fri's robot-side end) or after --duration.
 """
 
 from __future__ import annotations

@@ -1,6 +1,9 @@
 """KUKA's LBRWrenchSineOverlay on lbrcli.fri: WRENCH mode, the ipo position plus a force sine along x and y.
 
     python examples/wrench_sine_overlay.py [--robot IP]      # the robot application must use WRENCH mode
+
+Unlike KUKA's client, which answers until IDLE, the run ends when the session leaves COMMANDING_ACTIVE
+(lbrcli.fri's robot-side end) or after --duration.
 """
 
 from __future__ import annotations

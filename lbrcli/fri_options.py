@@ -66,6 +66,15 @@ RealtimeOpt = Annotated[
         help="Run the FRI loop with real-time scheduling (SCHED_FIFO, needs CAP_SYS_NICE or root); steadier 1 ms under load.",
     ),
 ]
+BusyWaitOpt = Annotated[
+    Optional[float],
+    typer.Option(
+        "--busy-wait",
+        help="Poll the socket for this long before each controller message is due instead of sleeping \\[ms] "
+        "(default 0.2 with --robot, 0 with the embedded simulator): replies no longer wait for the scheduler to wake "
+        "the client; costs that much CPU per period. 0: always sleep.",
+    ),
+]
 SimLenientOpt = Annotated[
     bool,
     typer.Option(
@@ -141,9 +150,23 @@ def validate_period(period: int | None) -> None:
         raise OptionError(f"--period must be 1..100 ms, got {period}")
 
 
+def busy_wait_seconds(busy_wait_ms: float | None) -> float | None:
+    """--busy-wait [ms] in seconds (None: the default for the session); OptionError outside 0..5 ms."""
+    import math
+
+    from trajectories.errors import OptionError
+
+    if busy_wait_ms is None:
+        return None
+    if not (math.isfinite(busy_wait_ms) and 0 <= busy_wait_ms <= 5):
+        raise OptionError(f"--busy-wait must be 0..5 ms, got {busy_wait_ms:g}")
+    return busy_wait_ms * 1e-3
+
+
 def validate_session(version: str | None, port: int, wait: float | None, period: int | None,
-                     max_tracking_error: float | None = None) -> None:  # fmt: skip
+                     max_tracking_error: float | None = None, busy_wait: float | None = None) -> None:  # fmt: skip
     """The session options every FRI command shares (OptionError naming the first bad one)."""
+    busy_wait_seconds(busy_wait)
     validate_version(version)
     validate_port(port)
     validate_wait(wait)

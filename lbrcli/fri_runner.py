@@ -93,10 +93,12 @@ def run_client(
     lab=None,
     observers: Sequence[Any] = (),
     max_tracking_error: float | None = None,
+    busy_wait_s: float | None = None,
 ):
     """Bind, start the simulator if no robot was named, attach the log, the pendulum module and telemetry, run the
     session with Ctrl-C/SIGTERM braking, stop everything; (result, simulator stats or None, lab figures)."""
     from lbrcli.fri import ClientApplication, ExecutionLog, LogObserver, SessionFigures, interrupts_brake
+    from lbrcli.fri.transport import DEFAULT_BUSY_WAIT_S
 
     embedded = robot is None
     app = ClientApplication(
@@ -111,6 +113,7 @@ def run_client(
         commanding_timeout_s=commanding_timeout_s if commanding_timeout_s is not None else (20.0 if embedded else None),
         max_tracking_error=max_tracking_error,
         reply_gap_s=LENIENT_REPLY_GAP_S if embedded and sim_lenient else None,
+        busy_wait_s=busy_wait_s if busy_wait_s is not None else (0.0 if embedded else DEFAULT_BUSY_WAIT_S),
     )
     if lab is not None:
         lab.validate(embedded)

@@ -26,6 +26,7 @@ from ..fri_options import (
     PlotOpt,
     PortOpt,
     RealtimeOpt,
+    BusyWaitOpt,
     SimLenientOpt,
     TrackingErrorOpt,
     RobotOpt,
@@ -112,6 +113,7 @@ def execute(
     wait: WaitOpt = None,
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
+    busy_wait: BusyWaitOpt = None,
     sim_lenient: SimLenientOpt = False,
     max_tracking_error: TrackingErrorOpt = None,
     pendulum: PendulumOpt = None,
@@ -142,12 +144,12 @@ def execute(
     from trajectories.errors import InputError, OptionError
 
     from ..console import Reporter
-    from ..fri_options import check_simulator_only, validate_session
+    from ..fri_options import busy_wait_seconds, check_simulator_only, validate_session
     from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import check_margin, limits_from, make_robot
 
     rep = Reporter(json_out)
-    validate_session(fri_version, port, wait, period, max_tracking_error)
+    validate_session(fri_version, port, wait, period, max_tracking_error, busy_wait=busy_wait)
     check_margin(margin)
     if not (math.isfinite(start_tolerance) and 0 <= start_tolerance <= 0.1):
         raise OptionError(f"--start-tolerance must be 0..0.1 rad, got {start_tolerance:g}")
@@ -231,7 +233,7 @@ def execute(
         sim_kwargs.update(receive_multiplier=receive_multiplier, ball_damping=damping)
     result, sim_stats, lab_figures = run_client(
         rep, player, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, max_tracking_error=max_tracking_error, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
+        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), max_tracking_error=max_tracking_error, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
     )  # fmt: skip
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)

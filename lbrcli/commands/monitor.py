@@ -21,6 +21,7 @@ from ..fri_options import (
     PlotOpt,
     PortOpt,
     RealtimeOpt,
+    BusyWaitOpt,
     SimLenientOpt,
     RobotOpt,
     SimStartOpt,
@@ -43,6 +44,7 @@ def monitor(
     wait: WaitOpt = None,
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
+    busy_wait: BusyWaitOpt = None,
     sim_lenient: SimLenientOpt = False,
     pendulum: PendulumOpt = None,
     baud: BaudOpt = 115200,
@@ -67,12 +69,12 @@ def monitor(
     from trajectories.robot import FLANGE_FRAME
 
     from ..console import Reporter
-    from ..fri_options import check_simulator_only, validate_session
+    from ..fri_options import busy_wait_seconds, check_simulator_only, validate_session
     from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import THESIS_Q_START, make_robot
 
     rep = Reporter(json_out)
-    validate_session(fri_version, port, wait, period)
+    validate_session(fri_version, port, wait, period, busy_wait=busy_wait)
     if not (math.isfinite(duration) and 0 < duration <= 86400):
         raise OptionError(f"--duration must be in (0, 86400] s, got {duration:g}")
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
@@ -103,7 +105,7 @@ def monitor(
     result, sim_stats, lab_figures = run_client(
         rep, Watcher(), robot=robot, port=port, bind=bind, version=fri_version, limits=None, log_path=log, wait=wait,
         sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, duration_s=duration, extra_names=("flange_x", "flange_y", "flange_z"), extra=flange_xyz,
-        realtime=realtime, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
+        realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
     )  # fmt: skip
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)

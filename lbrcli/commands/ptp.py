@@ -7,7 +7,7 @@ from typing import Annotated, Any
 
 import typer
 
-from ..fri_options import BindOpt, LengthOpt, LogOpt, PeriodOpt, PlotOpt, PortOpt, RealtimeOpt, RobotOpt, SimLenientOpt, SimStartOpt, TrackingErrorOpt, VersionOpt, WaitOpt
+from ..fri_options import BindOpt, LengthOpt, LogOpt, PeriodOpt, PlotOpt, PortOpt, RealtimeOpt, RobotOpt, BusyWaitOpt, SimLenientOpt, SimStartOpt, TrackingErrorOpt, VersionOpt, WaitOpt
 from ..options import JsonOpt, LimitsOpt
 
 
@@ -29,6 +29,7 @@ def ptp(
     wait: WaitOpt = None,
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
+    busy_wait: BusyWaitOpt = None,
     sim_lenient: SimLenientOpt = False,
     max_tracking_error: TrackingErrorOpt = None,
     limits: LimitsOpt = None,
@@ -46,13 +47,13 @@ def ptp(
     from trajectories.errors import CheckFailed, OptionError
 
     from ..console import Reporter
-    from ..fri_options import check_simulator_only, validate_session
+    from ..fri_options import busy_wait_seconds, check_simulator_only, validate_session
     from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import DEFAULT_FLANGE, THESIS_Q_START, limits_from
     from ..parsing import parse_joint_vector
 
     rep = Reporter(json_out)
-    validate_session(fri_version, port, wait, period, max_tracking_error)
+    validate_session(fri_version, port, wait, period, max_tracking_error, busy_wait=busy_wait)
     goal = parse_joint_vector(q, "Q")
     if not (math.isfinite(time_s) and 0 < time_s <= 600):
         raise OptionError(f"--time must be in (0, 600] s, got {time_s:g}")
@@ -105,7 +106,7 @@ def ptp(
                                       max_runtime_s=time_s + settle + 120.0, limits=limits)  # fmt: skip
     result, sim_stats, lab_figures = run_client(
         rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, max_tracking_error=max_tracking_error,
+        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), max_tracking_error=max_tracking_error,
     )  # fmt: skip
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)

@@ -17,6 +17,7 @@ from ..fri_options import (
     PeriodOpt,
     PortOpt,
     RealtimeOpt,
+    BusyWaitOpt,
     RobotOpt,
     SimLenientOpt,
     SimStartOpt,
@@ -67,6 +68,7 @@ def serve(
     length: LengthOpt = None,
     wait: WaitOpt = None,
     realtime: RealtimeOpt = False,
+    busy_wait: BusyWaitOpt = None,
     sim_lenient: SimLenientOpt = False,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
@@ -91,12 +93,12 @@ def serve(
     from trajectories.errors import OptionError
 
     from ..console import Reporter
-    from ..fri_options import check_simulator_only, validate_session
+    from ..fri_options import busy_wait_seconds, check_simulator_only, validate_session
     from ..fri_runner import exit_for, print_summary, run_client, simulator_kwargs
     from ..options import THESIS_Q_START, limits_from, make_robot
 
     rep = Reporter(json_out)
-    validate_session(fri_version, port, wait, period)
+    validate_session(fri_version, port, wait, period, busy_wait=busy_wait)
     udp = listen.strip().lower() != "off"
     host, _, lport = listen.rpartition(":")
     if udp and (not host or not lport.isdigit() or not 0 <= int(lport) <= 65535):
@@ -151,7 +153,7 @@ def serve(
     try:
         result, sim_stats, _ = run_client(
             rep, follower, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-            sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, duration_s=duration, realtime=realtime,
+            sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, duration_s=duration, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait),
         )  # fmt: skip
     finally:
         targets.close()

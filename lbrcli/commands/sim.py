@@ -46,9 +46,9 @@ def sim(
     damping: Annotated[float, typer.Option("--damping", help="Damping of the simulated ball \\[1/s].")] = 0.0,
     fri_version: Annotated[str, typer.Option("--fri-version", help="Wire format: 1.15 (bare protobuf) or 2.7 (length + CRC-32 framing).")] = "1.15",
     receive_multiplier: Annotated[int, typer.Option("--receive-multiplier", help="The client answers every k-th message.")] = 1,
-    duration: Annotated[Optional[float], typer.Option("--duration", help="COMMANDING_ACTIVE time \\[s] after which the robot application ends the session (default: until the client stops).")] = None,
-    timeout: Annotated[Optional[float], typer.Option("--timeout", help="Stop the simulator after this wall time \\[s].")] = None,
-    commanding_after: Annotated[float, typer.Option("--commanding-after", help="Time \\[s] in MONITORING_READY before the overlay starts.")] = 0.2,
+    duration: Annotated[Optional[float], typer.Option("--duration", help="COMMANDING_ACTIVE time \\[s] after which the robot application ends the session (default: until the client stops); with --no-overlay the time from the first MONITORING_READY.")] = None,
+    timeout: Annotated[Optional[float], typer.Option("--timeout", help="Stop the simulator after this wall time \\[s] (it closes the session: IDLE).")] = None,
+    commanding_after: Annotated[float, typer.Option("--commanding-after", help="Time \\[s] from the first MONITORING_READY until the overlay starts (at quality GOOD).")] = 0.2,
     quality_window: Annotated[int, typer.Option("--quality-window", help="Cycles in the sliding window of the connection quality.")] = 50,
     quality_good: Annotated[float, typer.Option("--quality-good", help="Share of timely cycles in the window for GOOD (commanding allowed), 0..1; FAIR from 0.5, EXCELLENT from 0.98.")] = 0.9,
     operation_mode: Annotated[str, typer.Option("--operation-mode", help="Reported operation mode: T1, T2 or AUT.")] = "T1",
@@ -59,7 +59,7 @@ def sim(
     seed: Annotated[int, typer.Option("--seed", help="Seed of the fault injection.")] = 0,
     realtime: Annotated[bool, typer.Option("--realtime", help="Run the loop with real-time scheduling (SCHED_FIFO) if permitted: steadier 1 ms under load.")] = False,
     pendulum_pty: Annotated[bool, typer.Option("--pendulum-pty", help="Also emulate the thesis's pendulum module: the ball's planar angle θy as AS5600 lines on a pseudo-terminal (its path is printed; read it with --pendulum PATH). Needs --length.")] = False,
-    no_overlay: Annotated[bool, typer.Option("--no-overlay", help="The application only monitors the session (stays in MONITORING_READY, --duration counts there), e.g. for KUKA's IOAccess example, which mirrors no positions.")] = False,
+    no_overlay: Annotated[bool, typer.Option("--no-overlay", help="The application only monitors the session (never commands; --duration counts from the first MONITORING_READY), e.g. for KUKA's IOAccess example, which mirrors no positions.")] = False,
     mode: Annotated[str, typer.Option("--mode", help="Client command mode of the simulated FRI overlay: position (joint position, position control), torque (joint impedance + commanded torque) or wrench (Cartesian impedance + commanded wrench).")] = "position",
     stiffness: Annotated[float, typer.Option("--stiffness", help="Joint impedance stiffness \\[Nm/rad] (--mode torque), every joint.")] = 1000.0,
     cartesian_stiffness: Annotated[str, typer.Option("--cartesian-stiffness", help="Cartesian impedance stiffness TRANS,ROT \\[N/m, Nm/rad] along the TCP axes (--mode wrench).")] = "2000,200",
@@ -80,7 +80,8 @@ def sim(
     MONITORING_WAIT → MONITORING_READY (quality GOOD) → COMMANDING_WAIT (client mirrors the ipo position) →
     COMMANDING_ACTIVE (commands executed within the velocity/acceleration limits); late or missing replies fall
     back to monitoring, a command outside the position limits is a safety stop. Runs until the session ends
-    (IDLE), --timeout, or Ctrl-C; prints the states as they change and the session statistics.
+    (IDLE), --timeout, or Ctrl-C/SIGTERM, each of which closes the session with IDLE messages (a second Ctrl-C
+    quits at once); prints the states as they change and the session statistics.
 
     The robot application holds the robot (PositionHold): the ipo position stays where the robot stood when the
     overlay started, the measured position follows the client's commands (KUKA's LBRJointSineOverlay commands
@@ -125,7 +126,7 @@ def sim(
         torque_noise=torque_noise, **extra,
     )
     config.validate()
-    interrupted = []
+    interrupted: list[int] = []  # signals received (SIGINT, SIGTERM)
 
     def on_state(state: SessionState, quality: ConnectionQuality, t: float) -> None:
         rep.print(f"{t:8.3f} s  {SessionState(state).name:<18} quality {ConnectionQuality(quality).name}")
@@ -138,11 +139,17 @@ def sim(
         rep.print(f"pendulum module emulated on {sim_.pendulum_path}")
     import signal
 
-    previous = signal.signal(signal.SIGINT, lambda *_: interrupted.append(True))
+    def on_signal(signum: int, frame: object) -> None:
+        if interrupted and signum == signal.SIGINT:
+            raise KeyboardInterrupt  # a second Ctrl-C: do not wait for the closing IDLE messages
+        interrupted.append(signum)
+
+    previous = signal.signal(signal.SIGINT, on_signal), signal.signal(signal.SIGTERM, on_signal)
     try:
         stats = sim_.run()
     finally:
-        signal.signal(signal.SIGINT, previous)
+        signal.signal(signal.SIGINT, previous[0])
+        signal.signal(signal.SIGTERM, previous[1])
     if realtime and not stats.realtime:
         rep.warn("real-time scheduling was not granted (needs CAP_SYS_NICE); ran with normal priority")
     figures = stats.to_dict()

@@ -69,6 +69,7 @@ class ClientApplication(SessionEnding):
         hold_cycles: int = 5,
         max_tracking_error: float | None = None,
         reply_gap_s: float | None = None,
+        busy_wait_s: float = 0.0,
     ) -> None:
         self.client = client
         self.robot = robot
@@ -85,6 +86,7 @@ class ClientApplication(SessionEnding):
         self.hold_cycles = max(1, hold_cycles)
         self.max_tracking_error = max_tracking_error  # [rad] None: velocity limit × max(20 ms, 8 periods) per joint
         self.reply_gap_s = reply_gap_s  # [s] None: 50 ms
+        self.busy_wait_s = busy_wait_s  # [s] the receive polls this long before each message is due (transport)
         self.transport: UdpTransport | None = None
         self.cycle = Cycle()
         self.state: LBRState | None = None  # view of the last accepted message
@@ -98,7 +100,7 @@ class ClientApplication(SessionEnding):
     def connect(self) -> "ClientApplication":
         """Bind the local port (``port`` tells which; 0 binds a free one)."""
         if self.transport is None:
-            self.transport = UdpTransport(self.robot, self.port_requested, self.bind_host)
+            self.transport = UdpTransport(self.robot, self.port_requested, self.bind_host, busy_wait_s=self.busy_wait_s)
         return self
 
     @property
@@ -276,6 +278,8 @@ class ClientApplication(SessionEnding):
                                           self.hold_cycles, mon.monitorData.measuredJointPosition.value)  # fmt: skip
             self._sup = Supervisor.from_limits(self.limits.velocity, ci.sendPeriod * 1e-3, clock.period_key[1],  # type: ignore[index]
                                                self.max_tracking_error, self.reply_gap_s)  # fmt: skip
+            if self.busy_wait_s > 0.0:
+                transport.expect_period(ci.sendPeriod * 1e-3)  # type: ignore[union-attr]
         sup = self._sup
         if sup is not None and state != IDLE and self._stop is None:
             motion = self._motion

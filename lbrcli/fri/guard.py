@@ -29,6 +29,7 @@ class CommandGuard:
     max_step: tuple[float, ...]  # [rad] velocity limit × period
     max_second: tuple[float, ...]  # [rad] acceleration limit × period²
     stop_k: tuple[tuple[float, float], ...]  # per joint (acceleration limit, jerk limit): for stopping distances
+    free: tuple[float, ...]  # [rad] |q| ≤ free: any stop within the velocity/acceleration limits ends inside
     max_torque: tuple[float, ...]  # [Nm]
     max_force: float  # [N] per axis
     max_moment: float  # [Nm] per axis
@@ -43,11 +44,18 @@ class CommandGuard:
         max_moment: float = DEFAULT_MAX_MOMENT,
     ) -> "CommandGuard":
         k = 1.0 + REL_TOL
+        upper = tuple(float(p) * k for p in limits.position)
+        stop_k = tuple((float(a), float(j)) for a, j in zip(limits.acceleration, limits.jerk))
+        # the longest stop a command inside the step and second-difference bounds can need (stopping_distance grows
+        # with |v| and with a in the direction of motion), with 1 % to spare: closer to a limit, computed per command
+        worst = tuple(1.01 * stopping_distance(float(v) * k, float(a) * k, float(a), float(j))
+                      for v, a, j in zip(limits.velocity, limits.acceleration, limits.jerk))  # fmt: skip
         return cls(
-            upper=tuple(float(p) * k for p in limits.position),
+            upper=upper,
             max_step=tuple(float(v) * period_s * k for v in limits.velocity),
             max_second=tuple(float(a) * period_s * period_s * k for a in limits.acceleration),
-            stop_k=tuple((float(a), float(j)) for a, j in zip(limits.acceleration, limits.jerk)),
+            stop_k=stop_k,
+            free=tuple(u - w for u, w in zip(upper, worst)),
             max_torque=tuple(float(t) * k for t in limits.torque),
             max_force=max_force,
             max_moment=max_moment,
@@ -61,31 +69,35 @@ class CommandGuard:
         ``room_to_stop``: also a jerk-limited stop from there must end inside the position limits."""
         if q is None or len(q) != 7:
             return f"the joint position command has {0 if q is None else len(q)} values, not 7"
+        # most commands are far from every limit: one chained comparison per joint, the full check only near one
+        j = 0
+        for x, p1, p2, free, max_step, max_second in zip(q, prev, prev2, self.free, self.max_step, self.max_second):
+            step = x - p1
+            second = step - (p1 - p2)
+            if not (-free <= x <= free and -max_step <= step <= max_step and -max_second <= second <= max_second):
+                problem = self._joint_problem(j, x, step, second, room_to_stop)  # also NaN
+                if problem is not None:
+                    return problem
+            j += 1
+        return None
+
+    def _joint_problem(self, j: int, x: float, step: float, second: float, room_to_stop: bool) -> str | None:
+        """The full check of joint ``j`` (index) at ``x`` [rad] after ``step`` [rad] and ``second`` difference [rad]."""
         dt = self.period_s
-        for j in range(7):
-            x = q[j]
-            if not (-self.upper[j] <= x <= self.upper[j]):  # also NaN
-                return f"A{j + 1} command {x:.6f} rad outside the position limit ±{self.upper[j]:.6f} rad"
-            step = x - prev[j]
-            if step > self.max_step[j] or -step > self.max_step[j]:
-                return (
-                    f"A{j + 1} step {step:+.6f} rad in {dt * 1e3:g} ms = {step / dt:+.4f} rad/s exceeds the "
-                    f"velocity limit {self.max_step[j] / dt:.4f} rad/s"
-                )
-            second = step - (prev[j] - prev2[j])
-            if second > self.max_second[j] or -second > self.max_second[j]:
-                return (
-                    f"A{j + 1} second difference {second:+.3e} rad = {second / (dt * dt):+.2f} rad/s² exceeds the "
-                    f"acceleration limit {self.max_second[j] / (dt * dt):.2f} rad/s²"
-                )
-            if room_to_stop and step != 0.0:
-                a_max, j_max = self.stop_k[j]
-                stop = x + stopping_distance(step / dt, second / (dt * dt), a_max, j_max)
-                if not (-self.upper[j] <= stop <= self.upper[j]):
-                    return (
-                        f"A{j + 1} at {x:.6f} rad moving {step / dt:+.4f} rad/s cannot stop before the position limit "
-                        f"±{self.upper[j]:.6f} rad (it needs to {stop:.6f} rad)"
-                    )
+        if not (-self.upper[j] <= x <= self.upper[j]):  # also NaN
+            return f"A{j + 1} command {x:.6f} rad outside the position limit ±{self.upper[j]:.6f} rad"
+        if not (-self.max_step[j] <= step <= self.max_step[j]):
+            return (f"A{j + 1} step {step:+.6f} rad in {dt * 1e3:g} ms = {step / dt:+.4f} rad/s exceeds the "
+                    f"velocity limit {self.max_step[j] / dt:.4f} rad/s")  # fmt: skip
+        if not (-self.max_second[j] <= second <= self.max_second[j]):
+            return (f"A{j + 1} second difference {second:+.3e} rad = {second / (dt * dt):+.2f} rad/s² exceeds the "
+                    f"acceleration limit {self.max_second[j] / (dt * dt):.2f} rad/s²")  # fmt: skip
+        if room_to_stop and step != 0.0:
+            a_max, j_max = self.stop_k[j]
+            stop = x + stopping_distance(step / dt, second / (dt * dt), a_max, j_max)
+            if not (-self.upper[j] <= stop <= self.upper[j]):
+                return (f"A{j + 1} at {x:.6f} rad moving {step / dt:+.4f} rad/s cannot stop before the position limit "
+                        f"±{self.upper[j]:.6f} rad (it needs to {stop:.6f} rad)")  # fmt: skip
         return None
 
     def refuse_torque(self, tau: Sequence[float] | None) -> str | None:

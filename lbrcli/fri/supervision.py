@@ -5,6 +5,8 @@ the session still hold (``Supervisor``: the controller's clock, our replies reac
 from __future__ import annotations
 
 import math
+from operator import le as _le
+from operator import sub as _sub
 from typing import Any, Sequence
 
 from .constants import ConnectionQuality, DriveState, SafetyState, SessionState
@@ -20,13 +22,10 @@ End = tuple[Outcome, EndReason, str]
 
 def joints_ok(values: Sequence[float], position_limit: Sequence[float]) -> bool:
     """7 finite joint values [rad] within the position limits (plus a small slack)."""
-    if len(values) != 7:
-        return False
-    for j in range(7):
-        x = values[j]
-        if not (-position_limit[j] - POSITION_SLACK <= x <= position_limit[j] + POSITION_SLACK):  # also NaN, inf
-            return False
-    return True
+    # C-level loops over a tuple (map, min, sum): a third of a Python loop's time; the sum is not finite with NaN or inf
+    values = tuple(values)
+    return (len(values) == 7 and math.isfinite(sum(values))
+            and min(map(_sub, position_limit, map(abs, values))) >= -POSITION_SLACK)  # fmt: skip
 
 
 def consistent(mon: Any, position_limit: Sequence[float]) -> bool:
@@ -167,18 +166,14 @@ class Supervisor:
 
     def tracking(self, measured: Sequence[float], command: Sequence[float]) -> str | None:
         """None while every joint's measured position [rad] is within the bound of the command in force."""
-        bound = self.max_tracking_error
-        worst = 0.0
-        for j in range(7):
-            e = measured[j] - command[j]
-            if e < 0.0:
-                e = -e
-            if e > worst:
-                worst = e
-            if e > bound[j]:
-                self.largest_tracking_error = max(self.largest_tracking_error, e)
-                return (f"A{j + 1} measured {measured[j]:.4f} rad is {e:.4f} rad from the command {command[j]:.4f} "
-                        f"rad (bound {bound[j]:.4f} rad): the robot does not follow, or was pushed")  # fmt: skip
+        errors = tuple(map(abs, map(_sub, measured, command)))  # C-level: the hot path of every message
+        worst = max(errors)
+        if not all(map(_le, errors, self.max_tracking_error)):  # NaN too
+            for j, (e, bound) in enumerate(zip(errors, self.max_tracking_error)):
+                if not e <= bound:
+                    self.largest_tracking_error = max(self.largest_tracking_error, e)
+                    return (f"A{j + 1} measured {measured[j]:.4f} rad is {e:.4f} rad from the command {command[j]:.4f} "
+                            f"rad (bound {bound:.4f} rad): the robot does not follow, or was pushed")  # fmt: skip
         if worst > self.largest_tracking_error:
             self.largest_tracking_error = worst
         return None

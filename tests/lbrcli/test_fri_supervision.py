@@ -74,3 +74,32 @@ def test_replies_that_stop_reaching_the_controller_end_the_stream():
         app.close()
     assert res.reason is EndReason.SUPERVISION and "replies lost" in res.detail
     assert 50 <= res.largest_reply_gap <= 52  # tripped as the gap passed 50 ms
+
+
+def test_joint_values_outside_the_limits_or_not_finite_are_not_a_robots() -> None:
+    from lbrcli.fri.supervision import POSITION_SLACK, joints_ok
+    from trajectories.limits import default_limits
+
+    lim = tuple(default_limits().position)
+    assert joints_ok((0.0,) * 7, lim) and joints_ok(lim, lim)
+    assert not joints_ok((0.0,) * 6, lim)
+    for bad in (float("nan"), float("inf"), -float("inf")):
+        for j in range(7):
+            assert not joints_ok(tuple(bad if i == j else 0.0 for i in range(7)), lim)
+    assert not joints_ok((float("inf"), -float("inf")) + (0.0,) * 5, lim)  # inf - inf is NaN, still refused
+    for j in range(7):
+        near = tuple(lim[i] + (0.9 if i == j else 0.0) * POSITION_SLACK for i in range(7))
+        beyond = tuple(-lim[i] - (1.1 if i == j else 0.0) * POSITION_SLACK for i in range(7))
+        assert joints_ok(near, lim) and not joints_ok(beyond, lim)
+
+
+def test_tracking_names_the_joint_that_left_its_bound_even_as_nan() -> None:
+    s = Supervisor((0.01,) * 7, 50, 1e-3)
+    q = (0.1,) * 7
+    assert s.tracking(q, q) is None and s.largest_tracking_error == 0.0
+    near = tuple(0.1 + (0.009 if j == 6 else 0.0) for j in range(7))
+    assert s.tracking(near, q) is None and abs(s.largest_tracking_error - 0.009) < 1e-12
+    for j in range(7):
+        for bad in (0.1 + 0.02, float("nan")):
+            m = tuple(bad if i == j else 0.1 for i in range(7))
+            assert f"A{j + 1} " in s.tracking(m, q)

@@ -212,5 +212,5 @@ def test_torque_mode_wait_needs_a_torque():
             stats = sim.wait(5.0) or sim.stop()
     finally:
         client.close()
-    assert stats.states_seen[-1] == 3 and 4 not in stats.states_seen  # stuck in COMMANDING_WAIT
+    assert stats.states_seen[-2:] == (3, 0) and 4 not in stats.states_seen  # stuck in COMMANDING_WAIT, then closed
     assert stats.incomplete_commands > 10 and run.messages

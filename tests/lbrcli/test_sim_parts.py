@@ -175,6 +175,53 @@ def test_session_machine_without_overlay_only_monitors_then_ends():
     assert t == pytest.approx(0.01 + 0.3 + 0.05, abs=0.021)
 
 
+def _flipping(k: int) -> Q:
+    """Quality under load at 1 ms: GOOD and FAIR in turns of 7 cycles."""
+    return Q.GOOD if (k // 7) % 2 == 0 else Q.FAIR
+
+
+def test_without_overlay_quality_flips_do_not_restart_the_duration():
+    """The duration is the application's run time from the first MONITORING_READY, not unbroken READY time."""
+    m = SessionMachine(SessionTiming(session_duration_s=0.3, end_delay_s=0.05, overlay=False))
+    t, k, flips, last, ready = 0.0, 0, 0, None, None
+    while m.state is not S.IDLE and k < 5000:
+        k += 1
+        t = k * 1e-3
+        s = m.advance(t, _flipping(k) if k > 20 else Q.FAIR, None, False)
+        flips += last is not None and s is not last
+        last = s
+        ready = t if ready is None and s is S.MONITORING_READY else ready
+    assert m.state is S.IDLE and m.end_reason == "duration" and flips > 40
+    assert t - ready == pytest.approx(0.3 + 0.05, abs=0.0025)
+
+
+def test_with_overlay_quality_flips_do_not_restart_the_overlay_start_nor_the_active_time():
+    m = SessionMachine(SessionTiming(commanding_after_s=0.1, wait_cycles=3, session_duration_s=0.2, end_delay_s=0.05))
+    t, k, seen = 0.0, 0, []
+    while m.state is not S.IDLE and k < 5000:
+        k += 1
+        t = k * 1e-3
+        active = m.state in (S.COMMANDING_WAIT, S.COMMANDING_ACTIVE)
+        s = m.advance(t, Q.GOOD if active or m.end_reason else _flipping(k), True if active else None, False)
+        if not seen or seen[-1][0] is not s:
+            seen.append((s, t))
+    states = [s for s, _ in seen]
+    assert states[-4:] == [S.COMMANDING_WAIT, S.COMMANDING_ACTIVE, S.MONITORING_READY, S.IDLE]
+    t_wait = seen[-4][1]
+    assert 0.1 <= t_wait - 0.001 <= 0.1 + 0.015  # from the first READY, at the next GOOD cycle
+    assert seen[-2][1] - seen[-3][1] == pytest.approx(0.2, abs=0.0015) and m.end_reason == "duration"
+
+
+def test_close_sends_the_idle_messages_of_a_normal_ending():
+    m = _machine()
+    m.state = S.COMMANDING_ACTIVE
+    m.close()
+    assert m.advance(1.0, Q.EXCELLENT, None, False) is S.IDLE and not m.finished and m.end_reason == ""
+    m.note_idle_sent()
+    m.note_idle_sent()
+    assert m.finished
+
+
 def test_the_sim_package_imports_no_cli_planners_or_lab():
     """lbrcli.fri.sim is a library: a controller without plants pulls in neither the CLI, nor planners, nor lab."""
     import subprocess

@@ -97,9 +97,9 @@ class SimConfig:
     q0: tuple[float, ...] = THESIS_Q0  # [rad], robot standing here at start
     flange: str = "touch-electric"
     tool: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [m] in the flange frame: the TCP (Cartesian pose, plants)
-    commanding_after_s: float = 0.2  # time in MONITORING_READY before the overlay starts
-    session_duration_s: float | None = None  # COMMANDING_ACTIVE length before the app ends the session
-    max_runtime_s: float | None = None  # hard stop of the simulator
+    commanding_after_s: float = 0.2  # [s] from the first MONITORING_READY until the overlay starts
+    session_duration_s: float | None = None  # [s] COMMANDING_ACTIVE length (no overlay: from the first READY)
+    max_runtime_s: float | None = None  # [s] hard stop of the simulator (it closes the session: IDLE)
     loss: float = 0.0  # probability of dropping an outgoing monitoring message
     delay_ms: float = 0.0  # [ms] added to every outgoing message
     jitter_ms: float = 0.0  # [ms] extra uniform random delay 0..jitter

@@ -25,9 +25,17 @@ def _child_main(config: SimConfig, conn, stop_event) -> None:
     try:
         stats = sim.run()
     except BaseException as exc:  # noqa: BLE001
-        conn.send(("error", f"simulator failed: {type(exc).__name__}: {exc}"))
+        _send(conn, ("error", f"simulator failed: {type(exc).__name__}: {exc}"))
         return
-    conn.send(("stats", stats))
+    _send(conn, ("stats", stats))
+
+
+def _send(conn, message: tuple) -> None:
+    """Report to the parent; nothing if it is gone (the loop ended as ``parent_exited``)."""
+    try:
+        conn.send(message)
+    except OSError:
+        pass
 
 
 @dataclass

@@ -67,22 +67,30 @@ class EndReason:
 class SessionTiming:
     """When the simulated robot application moves between states [s] and how many cycles it waits."""
 
-    commanding_after_s: float = 0.2  # time in MONITORING_READY before the overlay starts
+    commanding_after_s: float = 0.2  # from the first MONITORING_READY until the overlay starts (needs quality GOOD)
     wait_cycles: int = 10  # consistent (mirroring) commands in COMMANDING_WAIT before ACTIVE
-    session_duration_s: float | None = None  # COMMANDING_ACTIVE length (None: until the client stops)
+    session_duration_s: float | None = None  # COMMANDING_ACTIVE length (None: until the client stops); without
+    # the overlay: the application's run time from the first MONITORING_READY (quality changes do not restart it)
     end_delay_s: float = 0.1  # monitoring after the overlay ended, before IDLE
-    idle_messages: int = 3  # IDLE messages sent before the simulator stops
-    overlay: bool = True  # False: the application only monitors (stays in MONITORING_READY; the duration counts there)
+    idle_messages: int = 3  # IDLE messages sent before the simulator stops (also when it is stopped: ``close``)
+    overlay: bool = True  # False: the application only monitors (no COMMANDING states)
 
 
 class SessionMachine:
-    """The controller's FRI session state, advanced once per cycle at time ``now`` [s]."""
+    """The controller's FRI session state, advanced once per cycle at time ``now`` [s].
+
+    The robot application's time line starts when the session first reaches MONITORING_READY (KUKA's
+    ``FRISession.await()`` returns): the overlay start and, without an overlay, the session's end count from there,
+    not from the latest MONITORING_WAIT → MONITORING_READY change (the quality flips under load). With an overlay
+    the duration is COMMANDING_ACTIVE time, which happens once: leaving it ends the session.
+    """
 
     def __init__(self, timing: SessionTiming = SessionTiming()) -> None:
         self.timing = timing
         self.state = SessionState.MONITORING_WAIT
         self.end_reason = EndReason.NONE
-        self._since = 0.0  # time the current phase started [s]
+        self._opened: float | None = None  # first MONITORING_READY [s]
+        self._since = 0.0  # COMMANDING_ACTIVE started [s]
         self._consistent = 0
         self._ending_since: float | None = None
         self._idle_sent = 0
@@ -94,6 +102,12 @@ class SessionMachine:
 
     def note_idle_sent(self) -> None:
         self._idle_sent += 1
+
+    def close(self) -> None:
+        """The robot application ends now (stopped, timed out): IDLE from the next cycle on, ``finished`` after the
+        ``idle_messages`` of a normal ending. Keeps ``end_reason`` (the caller knows why)."""
+        self.state = SessionState.IDLE
+        self._ending_since = None
 
     def _end(self, now: float, reason: str, state: SessionState) -> None:
         self.end_reason = reason
@@ -111,17 +125,16 @@ class SessionMachine:
             if now - self._ending_since >= self.timing.end_delay_s:
                 self.state = SessionState.IDLE
             return self.state
-        if s is SessionState.MONITORING_WAIT:
-            if good:
-                self.state, self._since = SessionState.MONITORING_READY, now
-        elif s is SessionState.MONITORING_READY:
-            if not good:
-                self.state = SessionState.MONITORING_WAIT
-            elif not self.timing.overlay:
-                if self.timing.session_duration_s is not None and now - self._since >= self.timing.session_duration_s:
-                    self._end(now, EndReason.DURATION, SessionState.MONITORING_READY)
-            elif now - self._since >= self.timing.commanding_after_s:
-                self.state, self._since, self._consistent = SessionState.COMMANDING_WAIT, now, 0
+        if s is SessionState.MONITORING_WAIT or s is SessionState.MONITORING_READY:
+            if good and self._opened is None:
+                self._opened = now
+            self.state = SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT
+            run = -1.0 if self._opened is None else now - self._opened  # the application's run time [s]
+            if not self.timing.overlay:
+                if self.timing.session_duration_s is not None and run >= self.timing.session_duration_s:
+                    self._end(now, EndReason.DURATION, self.state)
+            elif s is SessionState.MONITORING_READY and good and run >= self.timing.commanding_after_s:
+                self.state, self._consistent = SessionState.COMMANDING_WAIT, 0
         elif s is SessionState.COMMANDING_WAIT:
             if not good:
                 self._end(now, EndReason.QUALITY, SessionState.MONITORING_WAIT)

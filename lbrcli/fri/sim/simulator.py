@@ -4,7 +4,8 @@ Every send period the loop sends a monitoring message and collects the client's 
 send. A cycle counts as timely when a reply to the message just sent arrives before the next send (with
 receiveMultiplier k: one such reply within k cycles). The loop sleeps in select and busy-waits the last
 ``spin_us`` before each send (steadier than a sleep-only rate limiter at 1 ms), re-synchronises after an overrun,
-and can run with SCHED_FIFO (``realtime``).
+and can run with SCHED_FIFO (``realtime``). However the loop stops (session end, stop(), timeout, parent gone), the
+last messages carry IDLE, as when a robot application ends and its FRI session closes.
 """
 
 from __future__ import annotations
@@ -21,6 +22,9 @@ from .config import SimConfig
 from .controller import Controller
 from .link import RING, Faults, Link
 from .stats import SimStats, percentiles
+
+
+CLOSE_BUDGET_S = 0.5  # [s] at most this long sending the closing IDLE messages after a stop or timeout
 
 
 class Simulator:
@@ -48,6 +52,8 @@ class Simulator:
         self._cycle_time = np.empty(RING)  # send instant of each cycle (perf_counter) [s]
         self._work = np.empty(RING)  # computation time of each cycle [s]
         self.overruns = 0
+        self._n_states = 0  # states reported to on_state so far
+        self._ppid = os.getppid()  # taken here: a parent may exit right after start-up, before run()
 
     @property
     def address(self) -> tuple[str, int]:
@@ -76,7 +82,9 @@ class Simulator:
             return False
 
     def run(self) -> SimStats:
-        """Drive the session until it ends (IDLE sent), ``stop()`` says so, or max_runtime_s elapses."""
+        """Drive the session until it ends (IDLE sent), ``stop()`` says so, max_runtime_s elapses or the parent
+        process is gone; the last three close the FRI session first (``_close_session``). A KeyboardInterrupt
+        closes it too and is raised again (a second one during the close ends at once)."""
         period, cfg, ctl, link = self.period, self.cfg, self.controller, self.link
         on_datagram = ctl.on_datagram
         spin = cfg.spin_us * 1e-6
@@ -86,52 +94,86 @@ class Simulator:
         t0 = time.perf_counter()
         cpu0 = time.process_time()
         next_t = t0
-        ppid = os.getppid()
+        ppid = self._ppid
         end_reason = ""
+        forced = interrupted = False  # the simulator stops before the session ended by itself
         k = 0
-        n_states = 0
         try:
-            while True:
-                now = time.perf_counter()
-                if now - next_t > period:  # fell behind by more than a cycle: re-synchronise
-                    self.overruns += 1
-                    next_t = now
-                rel = next_t - t0
-                link.drain(on_datagram)  # replies waiting now arrived before the next send, even if we are late
-                data = ctl.cycle(rel)
-                self._cycle_time[k % RING] = time.perf_counter()  # the send instant of this cycle
-                link.send(data, ctl.seq)
-                self._work[k % RING] = time.perf_counter() - now
-                state = ctl.state
-                if len(ctl.states_seen) != n_states:
-                    n_states = len(ctl.states_seen)
-                    if self._on_state is not None:
-                        self._on_state(state, ctl.quality, rel)
-                if state is SessionState.IDLE:
-                    ctl.machine.note_idle_sent()
-                    if ctl.machine.finished:
-                        end_reason = ctl.machine.end_reason or "idle"
+            try:
+                while True:
+                    now = time.perf_counter()
+                    if now - next_t > period:  # fell behind by more than a cycle: re-synchronise
+                        self.overruns += 1
+                        next_t = now
+                    rel = next_t - t0
+                    if self._cycle(k, rel, now) is SessionState.IDLE:
+                        ctl.machine.note_idle_sent()
+                        if ctl.machine.finished:
+                            end_reason = ctl.machine.end_reason or "idle"
+                            break
+                    if self._stop():
+                        end_reason = "stopped"
+                    elif cfg.max_runtime_s is not None and rel >= cfg.max_runtime_s:
+                        end_reason = "max_runtime"
+                    elif k % 512 == 0 and os.getppid() != ppid:
+                        end_reason = "parent_exited"
+                    k += 1
+                    next_t += period
+                    if end_reason:
+                        forced = True
                         break
-                if self._stop():
-                    end_reason = "stopped"
-                    break
-                if cfg.max_runtime_s is not None and rel >= cfg.max_runtime_s:
-                    end_reason = "max_runtime"
-                    break
-                if k % 512 == 0 and os.getppid() != ppid:
-                    end_reason = "parent_exited"
-                    break
-                k += 1
-                next_t += period
-                link.wait_until(next_t, on_datagram, spin)
+                    link.wait_until(next_t, on_datagram, spin)
+            except KeyboardInterrupt:
+                end_reason, forced, interrupted = "stopped", True, True  # slot k is free or reused
+                next_t = max(next_t, time.perf_counter())
+            if forced:
+                k = self._close_session(k, next_t, t0)
             link.flush(on_datagram)  # let in-flight delayed datagrams go out
         finally:
             link.close()
             ctl.close()
             gc.unfreeze()
+        if interrupted:
+            raise KeyboardInterrupt
         wall = time.perf_counter() - t0
         cpu = (time.process_time() - cpu0) / wall if wall > 0 else 0.0
         return self._stats(k + 1, end_reason, cpu, realtime)
+
+    def _cycle(self, k: int, rel: float, now: float) -> SessionState:
+        """Cycle ``k`` at ``rel`` [s] since the start (``now``: perf_counter [s]): take the replies that arrived,
+        advance the controller, send its message; the state sent."""
+        ctl = self.controller
+        self.link.drain(ctl.on_datagram)  # replies waiting now arrived before the next send, even if we are late
+        data = ctl.cycle(rel)
+        self._cycle_time[k % RING] = time.perf_counter()  # the send instant of this cycle
+        self.link.send(data, ctl.seq)
+        self._work[k % RING] = time.perf_counter() - now
+        if len(ctl.states_seen) != self._n_states:
+            self._n_states = len(ctl.states_seen)
+            if self._on_state is not None:
+                self._on_state(ctl.state, ctl.quality, rel)
+        return ctl.state
+
+    def _close_session(self, k: int, next_t: float, t0: float) -> int:
+        """The robot application ends early (stop, timeout, parent gone): send the IDLE messages of a normal ending,
+        one per period from ``next_t`` (perf_counter [s]), within ``CLOSE_BUDGET_S`` [s] — KUKA's clients leave
+        their loop only on IDLE. ``k``: the first free cycle index; returns the last one used."""
+        ctl, link = self.controller, self.link
+        machine = ctl.machine
+        if machine.finished:
+            return k - 1
+        machine.close()
+        deadline = time.perf_counter() + CLOSE_BUDGET_S
+        spin = self.cfg.spin_us * 1e-6
+        while True:
+            link.wait_until(next_t, ctl.on_datagram, spin)
+            now = time.perf_counter()
+            self._cycle(k, next_t - t0, now)
+            machine.note_idle_sent()
+            if machine.finished or now + self.period > deadline:
+                return k
+            k += 1
+            next_t = max(next_t + self.period, now)
 
     def _stats(self, ncycles: int, end_reason: str, cpu_fraction: float, realtime: bool) -> SimStats:
         ctl, link = self.controller, self.link

@@ -1,0 +1,74 @@
+"""The client's UDP transport: the peer filter, the receive timeout, and the busy-wait window before each message."""
+
+from __future__ import annotations
+
+import socket
+import threading
+import time
+
+from lbrcli.fri.transport import UdpTransport
+
+
+def _sender(port: int, n: int, period_s: float, host: str = "127.0.0.1") -> threading.Thread:
+    def run() -> None:
+        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        s.bind((host, 0))
+        t = time.perf_counter()
+        for i in range(n):
+            t += period_s
+            while time.perf_counter() < t:
+                time.sleep(min(2e-4, max(0.0, t - time.perf_counter())))
+            s.sendto(i.to_bytes(4, "little"), ("127.0.0.1", port))
+        s.close()
+
+    th = threading.Thread(target=run, daemon=True)
+    th.start()
+    return th
+
+
+def test_receive_times_out_with_none_and_takes_datagrams_in_order() -> None:
+    tr = UdpTransport("127.0.0.1", 0, "127.0.0.1", timeout_s=0.05)
+    try:
+        t0 = time.perf_counter()
+        assert tr.receive() is None
+        assert 0.04 <= time.perf_counter() - t0 < 0.5
+        th = _sender(tr.port, 20, 2e-3)
+        got = [tr.receive() for _ in range(20)]
+        th.join()
+        assert [int.from_bytes(d, "little") for d in got] == list(range(20))  # type: ignore[arg-type]
+        assert tr.polled == 0  # no busy-wait without a period
+    finally:
+        tr.close()
+
+
+def test_busy_wait_takes_the_messages_that_arrive_in_its_window() -> None:
+    tr = UdpTransport("127.0.0.1", 0, "127.0.0.1", timeout_s=0.05, busy_wait_s=1.5e-3)
+    tr.expect_period(2e-3)
+    try:
+        th = _sender(tr.port, 200, 2e-3)
+        got = []
+        while len(got) < 200:
+            d = tr.receive()
+            assert d is not None
+            got.append(int.from_bytes(d, "little"))
+        th.join()
+        assert got == list(range(200))
+        # the sender keeps its 2 ms grid: nearly every message lands in the 1.5 ms before and after it is due
+        assert tr.polled >= 150
+        t0 = time.perf_counter()
+        assert tr.receive() is None  # the sender stopped: the window passes, then the plain time-out
+        assert time.perf_counter() - t0 < 0.5
+    finally:
+        tr.close()
+
+
+def test_datagrams_from_other_hosts_are_counted_and_ignored() -> None:
+    tr = UdpTransport("127.0.0.2", 0, "127.0.0.1", timeout_s=0.05)
+    try:
+        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        s.bind(("127.0.0.1", 0))
+        s.sendto(b"x", ("127.0.0.1", tr.port))
+        assert tr.receive() is None and tr.foreign == 1
+        s.close()
+    finally:
+        tr.close()

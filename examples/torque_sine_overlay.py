@@ -3,7 +3,8 @@
     python examples/torque_sine_overlay.py [--robot IP]      # the robot application must use TORQUE mode
 
 Unlike KUKA's client, which answers until IDLE, the run ends when the session leaves COMMANDING_ACTIVE
-(lbrcli.fri's robot-side end) or after --duration.
+(lbrcli.fri's robot-side end) or after --duration. KUKA's defaults are 0.25 Hz and 15 Nm; 1 Hz and 5 Nm here
+show whole periods in a short run.
 """
 
 from __future__ import annotations

@@ -3,7 +3,8 @@
     python examples/wrench_sine_overlay.py [--robot IP]      # the robot application must use WRENCH mode
 
 Unlike KUKA's client, which answers until IDLE, the run ends when the session leaves COMMANDING_ACTIVE
-(lbrcli.fri's robot-side end) or after --duration.
+(lbrcli.fri's robot-side end) or after --duration. KUKA's default is 0.25 Hz on both axes; 0.5 and 1 Hz here
+show whole periods in a short run.
 """
 
 from __future__ import annotations

@@ -134,12 +134,33 @@ def _joints_of(plan, robot, q0, lim, progress=None):
     """IK of the pivot plan with the flange pointing down → (JointTrajectory, max position error [m])."""
     import numpy as np
 
-    from trajectories.ik import solve_ik_path
+    from trajectories.ik import IkOptions, solve_ik_path
     from trajectories.trajectory import JointTrajectory
 
-    rot = np.broadcast_to(flange_down_rotation(), (len(plan.t), 3, 3))
-    res = solve_ik_path(robot, plan.position, rot, q0, lim, times=plan.t, progress=progress)
-    return JointTrajectory(t=plan.t, q=res.q), res.max_position_error
+    t, pos = plan.t, plan.position
+    res = solve_ik_path(robot, pos, np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)), q0, lim, times=t,
+                        progress=progress)  # fmt: skip
+    # the redundancy pull toward q0 may still move the elbow when the pivot has stopped: the file must end at rest
+    # (a step ≤ acceleration limit × dt), so hold the last pivot position until that motion has decayed
+    if len(t) < 2:
+        return JointTrajectory(t=t, q=res.q), res.max_position_error
+    dt = float(t[-1] - t[-2])
+    rest = 0.5 * np.asarray(lim.acceleration) * dt * dt  # [rad] per step
+    options = IkOptions()
+    # the pull's fraction per sample of the (coarse) sequential pass → its decay per dt
+    per_dt = (options.nullspace_gain or 0.02) * dt / max(dt, options.coarse_dt)
+    n_plan = len(t)
+    for _ in range(4):
+        end_step = np.abs(res.q[-1] - res.q[-2])
+        if (end_step <= rest).all():
+            break
+        need = math.log(float((rest / np.maximum(end_step, 1e-300)).min())) / math.log(1.0 - per_dt)
+        extra = max(int(math.ceil(need)) + 20, len(t) - n_plan)  # at least double what was added before
+        t = np.concatenate([t, t[-1] + dt * np.arange(1, extra + 1)])
+        pos = np.concatenate([pos, np.repeat(pos[-1:], extra, axis=0)])
+        res = solve_ik_path(robot, pos, np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)), q0, lim, times=t,
+                            progress=progress)  # fmt: skip
+    return JointTrajectory(t=t, q=res.q), res.max_position_error
 
 
 def predict_sway(joints, robot, string_length: float, stop_time: float, settle_periods: float = SETTLE_PERIODS):
@@ -412,9 +433,10 @@ def write_outputs(result: AntiSwayResult, out: Path, task_out: Path | None = Non
 
     write_joint_csv(out, result.joints)
     if task_out is not None:
-        plan = result.plan
-        quat = quaternions_from_matrices(np.broadcast_to(flange_down_rotation(), (len(plan.t), 3, 3)))
-        write_task_csv(task_out, TaskTrajectory(t=plan.t, position=plan.position, quaternion=quat))
+        plan, t = result.plan, result.joints.t  # the joints may hold the last pivot position longer (rest)
+        position = np.concatenate([plan.position, np.repeat(plan.position[-1:], len(t) - len(plan.t), axis=0)])
+        quat = quaternions_from_matrices(np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)))
+        write_task_csv(task_out, TaskTrajectory(t=t, position=position, quaternion=quat))
     if prediction is not None:
         r = result.run
         data = np.column_stack([r.t, r.theta, r.phi, r.theta_x, r.theta_y])

@@ -204,3 +204,21 @@ def test_bad_input_exits_2_with_one_line(tmp_path, lbr, args, word):
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and word in lines[0] and "Traceback" not in proc.stderr
+
+
+def test_the_elbow_settles_before_the_file_ends(tmp_path):
+    """The redundancy pull may still move the elbow once the pivot has stopped: the file holds the last pivot
+    position until the joints are at rest (this layout's plan ended with A1 at 0.054 rad/s, refused by the check)."""
+    from lbrcli.antisway import plan_anti_sway_files
+    from trajectories.csvio import read_joint_csv, read_task_csv
+    from trajectories.limits import default_limits
+
+    pts = [[0.4939, -0.1612], [0.4939, -0.2763], [0.401, -0.2763]]
+    out, task = tmp_path / "j.csv", tmp_path / "t.csv"
+    figs = plan_anti_sway_files(pts, 0.26, 2.1136, None, "auto", 0.005, out, task_out=task)
+    assert figs["fallback"] is None  # the default design itself plans
+    q = read_joint_csv(out).q
+    last_step = np.abs(q[-1] - q[-2])
+    assert (last_step <= np.asarray(default_limits().acceleration) * 0.005**2).all()
+    tt = read_task_csv(task)
+    assert len(tt.position) == len(q) and np.allclose(tt.position[-1], tt.position[-2])

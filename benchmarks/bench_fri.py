@@ -27,7 +27,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -102,25 +102,20 @@ class _Controller:
         m.monitorData.timestamp.nanosec = 0
         return self.codec.encode(m)
 
-    def cycle(self, state: int, deadline: float) -> float | None:
-        """Send one message at ``deadline`` [perf_counter s] and return the latency [s] of the reply reflecting it,
-        or None if no reply arrived within the period. Arrival times are the kernel's receive timestamps
-        (SO_TIMESTAMPNS), so a stall of this controller process after the arrival does not count against the
-        client."""
+    def exchange(self, data: bytes, deadline: float, accept: Callable[[bytes], bool]) -> tuple[int, int] | None:
+        """Send ``data`` at ``deadline`` [perf_counter s]; (send, arrival) [ns, time.time_ns clock] of the first
+        reply ``accept`` takes before the next send is due, or None. Arrival times are the kernel's receive
+        timestamps (SO_TIMESTAMPNS), so a stall of this controller process after the arrival does not count against
+        the client."""
         now = time.perf_counter()
         if deadline - now > 3e-4:
             time.sleep(deadline - now - 3e-4)
         while time.perf_counter() < deadline:
             pass
-        data = self._fill(state)
-        seq = self.seq
-        self.seq += 1
         t_send = time.time_ns()
         self.sock.sendto(data, self.dest)
-        limit_ns = t_send + int(self.period * 1e9)
-        next_deadline = deadline + self.period
         while True:
-            left = next_deadline - time.perf_counter() - 1e-4
+            left = deadline + self.period - time.perf_counter() - 1e-4
             if left > 0:
                 select.select([self.sock], [], [], left)
             try:
@@ -129,19 +124,35 @@ class _Controller:
                 if left > 0:
                     continue
                 return None
-            t_rx = next((int.from_bytes(d[:8], "little") * 10**9 + int.from_bytes(d[8:16], "little")
-                         for lvl, typ, d in anc if lvl == socket.SOL_SOCKET and typ == _SO_TIMESTAMPNS), time.time_ns())  # fmt: skip
-            try:
-                c = self.codec.decode_command(reply, self.cmd)
-            except Exception:  # noqa: BLE001
-                continue
-            if c.header.reflectedSequenceCounter != seq:
-                continue  # a late reply to an earlier message
-            self.msg.header.reflectedSequenceCounter = c.header.sequenceCounter
-            pos = c.commandData.jointPosition.value
-            if state >= 3 and len(pos) == 7:
-                self.q = list(pos)
-            return (t_rx - t_send) * 1e-9 if t_rx <= limit_ns else None
+            if accept(reply):
+                t_rx = next((int.from_bytes(d[:8], "little") * 10**9 + int.from_bytes(d[8:16], "little")
+                             for lvl, typ, d in anc if lvl == socket.SOL_SOCKET and typ == _SO_TIMESTAMPNS), time.time_ns())  # fmt: skip
+                return t_send, t_rx
+
+    def _reflects(self, reply: bytes, seq: int) -> bool:
+        """``reply`` is a command message answering monitoring message ``seq`` (decoded into ``self.cmd``)."""
+        try:
+            c = self.codec.decode_command(reply, self.cmd)
+        except Exception:  # noqa: BLE001
+            return False
+        return c.header.reflectedSequenceCounter == seq  # else a late reply to an earlier message
+
+    def cycle(self, state: int, deadline: float) -> float | None:
+        """Send one message at ``deadline`` [perf_counter s] and return the latency [s] of the reply reflecting it,
+        or None if no reply arrived within the period."""
+        data = self._fill(state)
+        seq = self.seq
+        self.seq += 1
+        got = self.exchange(data, deadline, lambda reply: self._reflects(reply, seq))
+        if got is None:
+            return None
+        t_send, t_rx = got
+        c = self.cmd
+        self.msg.header.reflectedSequenceCounter = c.header.sequenceCounter
+        pos = c.commandData.jointPosition.value
+        if state >= 3 and len(pos) == 7:
+            self.q = list(pos)
+        return (t_rx - t_send) * 1e-9 if t_rx <= t_send + int(self.period * 1e9) else None
 
 
 def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = False, extra_args: tuple[str, ...] = (),
@@ -342,7 +353,6 @@ def _echo_floor(kind: str, workdir: Path, n: int) -> list[tuple[str, float, str]
         cmd = [sys.executable, "-c", _PY_ECHO, str(port)]
     proc = subprocess.Popen(cmd)
     ctl = _Controller(port, 1)
-    data = [ctl._fill(4)]
     lat: list[float] = []
     missed = 0
     try:
@@ -352,31 +362,13 @@ def _echo_floor(kind: str, workdir: Path, n: int) -> list[tuple[str, float, str]
             deadline = max(deadline + 1e-3, time.perf_counter())
             ctl.seq = i
             data = ctl._fill(4)
-            now = time.perf_counter()
-            if deadline - now > 3e-4:
-                time.sleep(deadline - now - 3e-4)
-            while time.perf_counter() < deadline:
-                pass
-            t_send = time.time_ns()
-            ctl.sock.sendto(data, ctl.dest)
-            while True:
-                left = deadline + 0.9e-3 - time.perf_counter()
-                if left > 0:
-                    select.select([ctl.sock], [], [], left)
-                try:
-                    reply, anc, _, _ = ctl.sock.recvmsg(2048, 64)
-                except BlockingIOError:
-                    if left > 0:
-                        continue
-                    missed += i >= 200
-                    break
-                if reply != data:
-                    continue  # a late echo of an earlier message
-                t_rx = next(int.from_bytes(d[:8], "little") * 10**9 + int.from_bytes(d[8:16], "little")
-                            for lvl, typ, d in anc if lvl == socket.SOL_SOCKET and typ == _SO_TIMESTAMPNS)  # fmt: skip
-                if i >= 200:  # after the start
-                    lat.append((t_rx - t_send) * 1e-6)
-                break
+            got = ctl.exchange(data, deadline, lambda reply: reply == data)  # (a late echo of an earlier message)
+            if i < 200:  # the start
+                continue
+            if got is None:
+                missed += 1
+            else:
+                lat.append((got[1] - got[0]) * 1e-6)
     finally:
         proc.kill()
         proc.wait()

@@ -137,9 +137,12 @@ def _joints_of(plan, robot, q0, lim, progress=None):
     from trajectories.ik import IkOptions, solve_ik_path
     from trajectories.trajectory import JointTrajectory
 
+    def solve(t, pos):
+        return solve_ik_path(robot, pos, np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)), q0, lim, times=t,
+                             progress=progress)  # fmt: skip
+
     t, pos = plan.t, plan.position
-    res = solve_ik_path(robot, pos, np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)), q0, lim, times=t,
-                        progress=progress)  # fmt: skip
+    res = solve(t, pos)
     # the redundancy pull toward q0 may still move the elbow when the pivot has stopped: the file must end at rest
     # (a step ≤ acceleration limit × dt), so hold the last pivot position until that motion has decayed
     if len(t) < 2:
@@ -155,11 +158,10 @@ def _joints_of(plan, robot, q0, lim, progress=None):
         if (end_step <= rest).all():
             break
         need = math.log(float((rest / np.maximum(end_step, 1e-300)).min())) / math.log(1.0 - per_dt)
-        extra = max(int(math.ceil(need)) + 20, len(t) - n_plan)  # at least double what was added before
+        extra = max(int(math.ceil(need)) + 20, len(t) - n_plan)  # at least as many as added before: doubling
         t = np.concatenate([t, t[-1] + dt * np.arange(1, extra + 1)])
         pos = np.concatenate([pos, np.repeat(pos[-1:], extra, axis=0)])
-        res = solve_ik_path(robot, pos, np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)), q0, lim, times=t,
-                            progress=progress)  # fmt: skip
+        res = solve(t, pos)
     return JointTrajectory(t=t, q=res.q), res.max_position_error
 
 

@@ -46,6 +46,7 @@ class UdpTransport:
             raise FriError(f"cannot bind the FRI port {bind_host or '*'}:{port}: {exc.strerror}") from None
         sock.setblocking(False)
         self.sock = sock
+        self._rlist = (sock,)  # for select, built once
         self.port: int = sock.getsockname()[1]
         self.timeout_s = timeout_s
         self.busy_wait_s = max(0.0, busy_wait_s)  # [s]
@@ -63,7 +64,7 @@ class UdpTransport:
         """The next datagram from the controller, or None after the receive timeout."""
         recvfrom = self.sock.recvfrom
         robot = self.robot_ip
-        sock = [self.sock]
+        sock = self._rlist
         busy = self.busy_wait_s if self.period_s is not None else 0.0
         if busy > 0.0:
             due = self._t_last + self.period_s  # type: ignore[operator]

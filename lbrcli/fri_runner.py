@@ -94,9 +94,12 @@ def run_client(
     observers: Sequence[Any] = (),
     max_tracking_error: float | None = None,
     busy_wait_s: float | None = None,
+    plants: Sequence[Any] | None = None,
 ):
     """Bind, start the simulator if no robot was named, attach the log, the pendulum module and telemetry, run the
-    session with Ctrl-C/SIGTERM braking, stop everything; (result, simulator stats or None, lab figures)."""
+    session with Ctrl-C/SIGTERM braking, stop everything; (result, simulator stats or None, lab figures).
+    ``plants``: the simulator's plant specs instead of the ball (and ball-driven module) of ``sim_kwargs``; a client
+    with a ``reader`` attribute gets the pendulum module's reader."""
     from lbrcli.fri import ClientApplication, ExecutionLog, LogObserver, SessionFigures, interrupts_brake
     from lbrcli.fri.transport import DEFAULT_BUSY_WAIT_S
 
@@ -135,9 +138,10 @@ def run_client(
                 from .fri.sim import lenient_quality
 
                 kw.update(lenient_quality(kw.get("period_ms", 1), kw.get("receive_multiplier", 1)))
-            plants = default_plants(kw.pop("ball_length", None), kw.pop("ball_damping", 0.0),
-                                    pendulum_pty=lab is not None and lab.pendulum == "sim")
-            sim = SimulatorProcess(SimConfig(client_port=app.port, version=version or "1.15", plants=plants, **kw))
+            ball_length, ball_damping = kw.pop("ball_length", None), kw.pop("ball_damping", 0.0)
+            specs = tuple(plants) if plants is not None else default_plants(
+                ball_length, ball_damping, pendulum_pty=lab is not None and lab.pendulum == "sim")
+            sim = SimulatorProcess(SimConfig(client_port=app.port, version=version or "1.15", plants=specs, **kw))
             sim.start()
             rep.print(f"simulator on {sim.address[0]}:{sim.address[1]} → client on 127.0.0.1:{app.port}")
         else:
@@ -151,6 +155,8 @@ def run_client(
                 rep.print(f"pendulum module on {path}")
                 if getattr(client, "sway", None) is not None:  # the module's angle is the sway to wait for
                     client.sway.source = attached.pendulum_sway
+                if hasattr(client, "reader"):  # a feedback client reads the module itself
+                    client.reader = attached.pendulum
                 base_names, base_extra = extra_names, extra
                 extra_names = base_names + attached.extra_names
                 extra = (lambda s: (*base_extra(s), *attached.extra(s))) if base_extra else attached.extra

@@ -143,18 +143,25 @@ class PendulumEmulator:
         self.zero_count = zero_count
         self._next = -math.inf
         self.sent = 0
+        self.dropped = 0
 
     def feed(self, t: float, theta: float, omega: float) -> None:
         if t < self._next:
             return
         self._next = t + self.period
+        self.send(format_line(theta, omega, self.zero_count))
+
+    def send(self, line: bytes) -> bool:
+        """Write one line now, non-blocking; False (counted in ``dropped``) if the buffer is full."""
         import os
 
         try:
-            os.write(self.master, format_line(theta, omega, self.zero_count))
+            os.write(self.master, line)
             self.sent += 1
+            return True
         except (BlockingIOError, OSError):
-            pass
+            self.dropped += 1
+            return False
 
     def write_raw(self, data: bytes) -> None:
         import os

@@ -211,7 +211,8 @@ class Controller:
         if self.plants:
             tcp = pose.translation.tolist()
             for plant, entries in zip(self.plants, self._plant_io):
-                for io, v in zip(entries, plant.step(t, tcp)):
+                values = plant.step(t, tcp, pose.rotation) if getattr(plant, "uses_rotation", False) else plant.step(t, tcp)
+                for io, v in zip(entries, values):
                     io.analogValue = v
         self.seq += 1
         target = self._target if state is CA else self.interp.q

@@ -3,7 +3,7 @@
 A ``PlantSpec`` is a small picklable description (frozen dataclass) that crosses into the simulator process and
 builds its ``Plant`` there (``build(context)``). Every cycle the simulator calls ``plant.step(t, tcp)`` with the
 simulated time t [s] and the TCP position [m] (base frame) of the robot's MEASURED pose after that cycle's
-motion; the plant answers the values of its analog input channels (``inputs``, in order), which the controller
+motion (a plant with ``uses_rotation = True`` also gets the TCP's rotation matrix, base frame); the plant answers the values of its analog input channels (``inputs``, in order), which the controller
 reports in the monitoring message's readIORequest like any other configured input.
 """
 

@@ -1,0 +1,101 @@
+"""Swing a rigid pendulum up from hanging and balance it upright with a cart (the arm on its rail).
+
+Modes: ``SWING_UP`` pumps energy (Åström–Furuta): the cart acceleration a = −sat(k_E·(E_top − E)·φ̇·cos φ) − k_x·x
+− k_v·v, so Ė = −a·φ̇·cos φ raises the swing energy E toward the upright's; ``BALANCE`` once the rod is within
+``catch_angle`` of upright with less than ``catch_rate``
+and the cart within ``catch_travel`` of the rail's centre — LQR state feedback on (x, v, a, φ − π, φ̇) with the jerk
+as input; back to ``SWING_UP`` if it falls beyond ``drop_angle``. ``PARK`` (after :meth:`park`) stops balancing and
+brings the cart back to the rail's centre and to rest. Every mode drives the :class:`~.cart.Cart`, whose governor
+keeps the rail's bounds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+
+from ..rigid_pendulum import swing_energy, wrap_angle
+from ..pendulum import G
+from .cart import Cart
+from .lqr import lqr_gain
+
+
+class Mode(IntEnum):
+    SWING_UP = 0
+    BALANCE = 1
+    PARK = 2
+
+
+@dataclass(frozen=True)
+class UprightOptions:
+    """Gains of the swing-up and the balance."""
+
+    swing_accel: float = 0.7  # share of the cart's acceleration bound the pumping may use [-]
+    energy_gain: float = 8.0  # k_E [s²/m²·…]: pumping saturates once (E_top − E)·|φ̇| is above swing accel / k_E
+    centre_gain: float = 4.0  # k_x [1/s²] keeps the swing near the rail's centre
+    centre_damping: float = 3.0  # k_v [1/s]
+    start_rate: float = 0.3  # [rad/s] below this (hanging half) the swing is started by a kick
+    accel_lag: float = 0.03  # [s] how fast the cart follows the swing-up's acceleration
+    catch_angle: float = 0.35  # [rad] from upright
+    catch_rate: float = 3.0  # [rad/s]
+    catch_travel: float = 0.6  # share of the rail's travel the cart may be off-centre at the catch [-]
+    drop_angle: float = 0.7  # [rad] from upright
+    weights: tuple[float, float, float, float, float] = (30.0, 10.0, 0.1, 200.0, 5.0)  # (x, v, a, θ, θ̇)
+    jerk_weight: float = 1e-3
+
+
+def balance_gain(length: float, options: UprightOptions = UprightOptions()) -> tuple[float, ...]:
+    """The balance's LQR gain K (5,) for a rod of equivalent ``length`` [m] (scipy; compute it before a session)."""
+    return tuple(float(k) for k in lqr_gain(length, True, options.weights, options.jerk_weight))
+
+
+class UprightController:
+    """Drives ``cart`` from the estimate (φ, φ̇) of a pendulum of equivalent length ``length`` [m]."""
+
+    def __init__(self, length: float, cart: Cart, options: UprightOptions = UprightOptions(),
+                 gain: tuple[float, ...] | None = None) -> None:
+        self.length = length
+        self.cart = cart
+        self.o = options
+        self.gain = gain if gain is not None else balance_gain(length, options)
+        self.mode = Mode.SWING_UP
+        self.catches = 0
+        self.falls = 0
+
+    def park(self) -> None:
+        """Stop balancing: bring the cart to the centre and to rest."""
+        self.mode = Mode.PARK
+
+    def update(self, phi: float, omega: float) -> None:
+        """One cycle with the estimate φ [rad] (0 hanging, π upright), φ̇ [rad/s]: step the cart."""
+        o, cart = self.o, self.cart
+        theta = wrap_angle(phi - math.pi)
+        if (self.mode is Mode.SWING_UP and abs(theta) < o.catch_angle and abs(omega) < o.catch_rate
+                and abs(cart.x) < o.catch_travel * cart.limits.travel):
+            self.mode = Mode.BALANCE
+            self.catches += 1
+        elif self.mode is Mode.BALANCE and abs(theta) > o.drop_angle:
+            self.mode = Mode.SWING_UP
+            self.falls += 1
+        if self.mode is Mode.BALANCE:
+            k = self.gain
+            cart.step(-(k[0] * cart.x + k[1] * cart.v + k[2] * cart.a + k[3] * theta + k[4] * omega))
+        elif self.mode is Mode.SWING_UP:
+            e_top = G
+            e = swing_energy(phi, omega, self.length)
+            cap = o.swing_accel * cart.acceleration_bound
+            if abs(omega) < o.start_rate and math.cos(phi) > 0.0:  # (nearly) at rest below: kick it outward
+                pump = cap if phi >= 0.0 else -cap
+            else:
+                pump = o.energy_gain * (e_top - e) * omega * math.cos(phi)
+            a = -max(-cap, min(cap, pump)) - o.centre_gain * cart.x - o.centre_damping * cart.v
+            cart.track(a, o.accel_lag)
+        else:
+            cart.track(-o.centre_gain * cart.x - o.centre_damping * cart.v, o.accel_lag)
+
+    @property
+    def at_rest(self) -> bool:
+        """The cart is back at the centre and still (after :meth:`park`)."""
+        c = self.cart
+        return abs(c.x) < 1e-3 and abs(c.v) < 1e-3 and abs(c.a) < 1e-2

@@ -45,12 +45,7 @@ class Rail:
 
     def joints(self, x: float) -> np.ndarray:
         """Joint positions (7,) [rad] with the cart at x [m] (clamped to the rail)."""
-        k = self.x
-        x = min(max(x, k[0]), k[-1])
-        i = min(int((x - k[0]) / (k[1] - k[0])), len(k) - 2)
-        s = x - k[i]
-        c = self.coeffs
-        return ((c[0, i] * s + c[1, i]) * s + c[2, i]) * s + c[3, i]
+        return np.array(self.joints_list(x))
 
     def _segment(self, x: float) -> tuple[tuple[list[float], ...], float]:
         """The spline segment's coefficients at x [m] (clamped to the rail) and the offset into it [m]."""

@@ -14,6 +14,8 @@ from typing import Sequence
 
 from trajectories.errors import OptionError
 
+from .tcp_acceleration import TcpAcceleration
+
 BALL_IO_NAMES = ("ball_theta", "ball_phi", "ball_theta_x", "ball_theta_y")  # [rad], analog inputs
 
 
@@ -46,7 +48,7 @@ class Ball:
 
         self._rk4 = rk4_step_floats
         self.length, self.damping, self.h = spec.length, spec.damping, period_s
-        self._p0 = self._p1 = list(tcp0)  # TCP positions at the last two cycles [m] (at rest before the start)
+        self._tcp_acc = TcpAcceleration(period_s, tcp0)
         self._acc_prev = (0.0, 0.0, 0.0)  # TCP acceleration at the sample before [m/s²]
         self.s = (0.0, 0.0, -1.0)  # string direction (hanging)
         self.sdot = (0.0, 0.0, 0.0)  # [1/s]
@@ -54,13 +56,8 @@ class Ball:
         self.max_theta = 0.0  # [rad]
 
     def step(self, t: float, tcp: Sequence[float]) -> list[float]:
-        h = self.h
-        p0, p1, p2 = tcp, self._p0, self._p1
-        ih2 = 1.0 / (h * h)
-        acc = ((p0[0] - 2.0 * p1[0] + p2[0]) * ih2, (p0[1] - 2.0 * p1[1] + p2[1]) * ih2,
-               (p0[2] - 2.0 * p1[2] + p2[2]) * ih2)  # TCP acceleration at the previous sample [m/s²]
-        self._p0, self._p1 = list(p0), p1
-        self.s, self.sdot = self._rk4(self.s, self.sdot, self._acc_prev, acc, h, self.length, self.damping)
+        acc = self._tcp_acc.push(tcp)  # at the previous sample [m/s²]
+        self.s, self.sdot = self._rk4(self.s, self.sdot, self._acc_prev, acc, self.h, self.length, self.damping)
         self._acc_prev = acc
         sx, sy, sz = self.s
         theta = math.acos(max(-1.0, min(1.0, -sz)))

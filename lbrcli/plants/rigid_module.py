@@ -23,11 +23,14 @@ from typing import Sequence
 
 import numpy as np
 
+from lbrcli.lab.pendulum_serial import COUNTS_PER_TURN as COUNTS
+from lbrcli.lab.pendulum_serial import format_line
 from planners.rigid_pendulum import RigidPendulum, rk4_step, wrap_angle
 from trajectories.errors import OptionError
 
+from .tcp_acceleration import TcpAcceleration
+
 MODULE_IO_NAMES = ("pendulum_phi", "pendulum_omega")  # [rad], [rad/s]
-COUNTS = 4096  # AS5600, 12 bit
 
 
 @dataclass(frozen=True)
@@ -93,7 +96,7 @@ class RigidModule:
         self._n = n.tolist()  # axis, TCP frame
         self._u = (rotation0.T @ u).tolist()  # encoder zero, TCP frame
         self.phi, self.omega = spec.phi0, spec.omega0
-        self._p0 = self._p1 = list(tcp0)
+        self._tcp_acc = TcpAcceleration(period_s, tcp0)
         self._a_prev = (0.0, 0.0)  # (a_h, a_v) at the previous sample [m/s²]
         self._t = 0.0
         self._pushes = sorted(spec.pushes)
@@ -121,15 +124,9 @@ class RigidModule:
         return -g_e, g_u - 9.81
 
     def step(self, t: float, tcp: Sequence[float], rotation: np.ndarray) -> list[float]:
-        h = self.h
-        self._t += h
-        p0, p1, p2 = tcp, self._p0, self._p1
-        ih2 = 1.0 / (h * h)
-        acc = ((p0[0] - 2.0 * p1[0] + p2[0]) * ih2, (p0[1] - 2.0 * p1[1] + p2[1]) * ih2,
-               (p0[2] - 2.0 * p1[2] + p2[2]) * ih2)  # at the previous sample [m/s²]
-        self._p0, self._p1 = list(p0), p1
-        a = self._in_plane(acc, rotation)
-        self.phi, self.omega = rk4_step(self.p, self.phi, self.omega, self._a_prev, a, h)
+        self._t += self.h
+        a = self._in_plane(self._tcp_acc.push(tcp), rotation)
+        self.phi, self.omega = rk4_step(self.p, self.phi, self.omega, self._a_prev, a, self.h)
         self._a_prev = a
         while self._pushes and self._pushes[0][0] <= self._t:
             self.phi += self._pushes.pop(0)[1]
@@ -160,7 +157,7 @@ class RigidModule:
         due = t + (s.delay_ms + self._rng.uniform(0.0, s.jitter_ms)) * 1e-3
         due = max(due, self._last_delivery)  # a serial line keeps the order
         self._last_delivery = due
-        self._queue.append((due, f"{(count + s.zero_count) % COUNTS},{omega:.4f}\n".encode("ascii")))
+        self._queue.append((due, format_line(self.phi, omega, s.zero_count)))
 
     def _deliver(self) -> None:
         q, t = self._queue, self._t

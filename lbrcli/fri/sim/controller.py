@@ -102,6 +102,7 @@ class Controller:
                 else:
                     entries.append(self.io.entry(name))
             self._plant_io.append(entries)
+        self._plant_rotation = [bool(getattr(p, "uses_rotation", False)) for p in self.plants]  # step(t, tcp, rotation)
 
     # -- setup -----------------------------------------------------------------------------------------------
     def _init_state(self, q0: np.ndarray) -> None:
@@ -210,8 +211,8 @@ class Controller:
         pose = self.arm.tcp_pose()
         if self.plants:
             tcp = pose.translation.tolist()
-            for plant, entries in zip(self.plants, self._plant_io):
-                values = plant.step(t, tcp, pose.rotation) if getattr(plant, "uses_rotation", False) else plant.step(t, tcp)
+            for plant, entries, rotation in zip(self.plants, self._plant_io, self._plant_rotation):
+                values = plant.step(t, tcp, pose.rotation) if rotation else plant.step(t, tcp)
                 for io, v in zip(entries, values):
                     io.analogValue = v
         self.seq += 1

@@ -4,6 +4,10 @@
 (thesis ch. 6's module; :mod:`lbrcli.fri.upright`). Without --robot the simulator models the module as a rigid rod
 on the flange whose 12-bit encoder reaches the client over an emulated serial port with --sim-delay and jitter.
 Exit 0 when the rod was balanced for --hold and the arm parked; 1 when it was not; 2 on bad options.
+
+``lbr control damp FILE``: stream a joint CSV (an anti-sway move, or any) while the measured sway of the ball
+corrects the TCP's horizontal path (:mod:`lbrcli.fri.damping`): the sway a wrong string length leaves decays within
+a period or two. Exit 0 when the file was streamed, damped and the arm returned to its last row.
 """
 
 from __future__ import annotations
@@ -16,7 +20,7 @@ import typer
 
 from ..fri_options import (BaudOpt, BindOpt, BusyWaitOpt, LogOpt, PendZeroOpt, PeriodOpt, PlotOpt, PortOpt,
                            RealtimeOpt, RobotOpt, SimLenientOpt, VersionOpt, WaitOpt)  # fmt: skip
-from ..options import DEFAULT_FLANGE, THESIS_Q_START, JsonOpt, LimitsOpt
+from ..options import DEFAULT_FLANGE, THESIS_Q_START, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
 
 
 def _pushes(texts: list[str] | None) -> tuple[tuple[float, float], ...]:
@@ -171,5 +175,163 @@ def upright(
     exit_for(result, lab_figures)
 
 
+def damp(
+    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad]; its step must be the FRI period.")],
+    length: Annotated[Optional[float], typer.Option("--length", help="String length the damper assumes (pivot to ball centre) \\[m]; default the simulated ball's.")] = None,
+    damp_time: Annotated[Optional[float], typer.Option("--damp-time", help="Keep damping this long after the last row \\[s] (default 3 swing periods).")] = None,
+    sensor: Annotated[str, typer.Option("--sensor", help="Where the sway comes from: io (the controller's analog inputs --io-names) or module (the pendulum module on --pendulum; one axis).")] = "io",
+    io_names: Annotated[str, typer.Option("--io-names", help="Analog inputs with θx, θy \\[rad] (atan2(s_x, −s_z), atan2(s_y, −s_z) of the string direction s).")] = "ball_theta_x,ball_theta_y",
+    module_axis: Annotated[str, typer.Option("--module-axis", help="With --sensor module: the base axis the module swings along (x or y).")] = "y",
+    sensor_delay: Annotated[Optional[float], typer.Option("--sensor-delay", help="Age of a reading when it arrives \\[ms] (default: --sim-delay + one period; one period with --robot).")] = None,
+    sensor_rate: Annotated[float, typer.Option("--sensor-rate", help="With --sensor module: readings per second \\[Hz].")] = 200.0,
+    open_loop: Annotated[bool, typer.Option("--open-loop", help="Estimate and log the sway but do not correct (the plan alone, for comparison).")] = False,
+    move_to_start: Annotated[bool, typer.Option("--move-to-start", help="If the robot stands elsewhere, first move there (jerk-limited, input-shaped for the swing).")] = False,
+    start_tolerance: Annotated[float, typer.Option("--start-tolerance", help="Largest |first row − measured position| accepted \\[rad].")] = 1e-3,
+    start_sway: Annotated[float, typer.Option("--start-sway", help="With --move-to-start, hold the first row until the sway stayed below this \\[deg].")] = 0.2,
+    sway_wait: Annotated[float, typer.Option("--sway-wait", help="Hold it at most this long \\[s].")] = 30.0,
+    sim_length: Annotated[Optional[float], typer.Option("--sim-length", help="Simulator: the ball's true string length \\[m] (default --length, else 0.25).")] = None,
+    sim_delay: Annotated[float, typer.Option("--sim-delay", help="Simulator: the ball IO shows the ball this much later \\[ms] (camera/encoder link).")] = 0.0,
+    sim_start: Annotated[Optional[str], typer.Option("--sim-start", help="Simulator: where the robot stands at start (7 angles); default the first row.")] = None,
+    pendulum: Annotated[Optional[str], typer.Option("--pendulum", help="Serial port of the pendulum module (--sensor module with --robot); default: the simulator's.")] = None,
+    baud: BaudOpt = 115200,
+    pendulum_zero: PendZeroOpt = 0,
+    robot: RobotOpt = None,
+    port: PortOpt = 30200,
+    bind: BindOpt = None,
+    log: LogOpt = None,
+    fri_version: VersionOpt = None,
+    wait: WaitOpt = None,
+    plot: PlotOpt = None,
+    realtime: RealtimeOpt = False,
+    busy_wait: BusyWaitOpt = None,
+    sim_lenient: SimLenientOpt = False,
+    flange: FlangeOpt = DEFAULT_FLANGE,
+    tool: ToolOpt = None,
+    limits: LimitsOpt = None,
+    dt: DtOpt = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Stream a joint CSV with active sway damping: the measured ball angle corrects the TCP's path every cycle.
+
+    The file must pass `lbr check` and its step must be the FRI period. From the first row on, an LQR on the
+    deviation of the measured sway from the sway the plan itself intends (model with --length) moves the TCP
+    horizontally by a few millimetres, inside the joints' velocity and acceleration headroom the file leaves; a
+    delay-compensating observer bridges --sensor-delay. After the last row it damps for --damp-time, then a
+    jerk-limited move returns the arm to the last row. Log columns as `lbr execute` plus damp_x, damp_y [m] (the
+    offset), est_theta_x/y and ref_theta_x/y [rad].
+    """
+    from lbrcli.fri.damping import LOG_COLUMNS, DampingClient
+    from lbrcli.fri.sway import IoSway, SwayWatch, window_for_length
+    from lbrcli.lab.attach import LabOptions
+    from lbrcli.plants.ball import BallSpec
+    from lbrcli.plants.pendulum_module import PendulumModuleSpec
+    from planners.feedback.correction import correction_plan
+    from planners.pendulum import natural_period
+    from planners.shapers import make_shaper
+    from trajectories.csvio import read_joint_csv
+    from trajectories.errors import InputError, OptionError
+
+    from ..console import Reporter
+    from ..fri_options import DEFAULT_BALL_LENGTH, busy_wait_seconds, check_simulator_only, validate_session
+    from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
+    from ..options import check_number, limits_from, make_robot
+    from .execute import check_or_fail
+
+    rep = Reporter(json_out)
+    validate_session(fri_version, port, wait, None, None, busy_wait=busy_wait)
+    if sensor not in ("io", "module"):
+        raise OptionError(f"--sensor must be io or module, got {sensor!r}")
+    if module_axis not in ("x", "y"):
+        raise OptionError(f"--module-axis must be x or y, got {module_axis!r}")
+    names = tuple(n.strip() for n in io_names.split(","))
+    if len(names) != 2 or not all(names):
+        raise OptionError(f"--io-names: expected two analog input names 'theta_x,theta_y', got {io_names!r}")
+    if robot is not None and length is None:
+        raise OptionError("--length is needed with --robot (the string length the damper assumes)")
+    model_len = length if length is not None else (sim_length if sim_length is not None else DEFAULT_BALL_LENGTH)
+    check_number("--length", model_len, 0.02, 5.0, unit="m")
+    true_len = sim_length if sim_length is not None else model_len
+    check_number("--sim-length", true_len, 0.02, 5.0, unit="m")
+    check_number("--sim-delay", sim_delay, 0.0, 200.0, unit="ms")
+    check_number("--sensor-rate", sensor_rate, 10.0, 10000.0, unit="Hz")
+    check_number("--start-tolerance", start_tolerance, 0.0, 0.1, unit="rad")
+    check_number("--start-sway", start_sway, 1e-3, 45.0, unit="deg")
+    check_number("--sway-wait", sway_wait, 0.0, 3600.0, unit="s")
+    if sensor_delay is not None:
+        check_number("--sensor-delay", sensor_delay, 0.0, 500.0, unit="ms")
+    period_T = natural_period(model_len)
+    damp_s = 3.0 * period_T if damp_time is None else damp_time
+    check_number("--damp-time", damp_s, 0.0, 600.0, unit="s")
+    check_simulator_only(robot, {"--sim-length": sim_length is not None, "--sim-delay": sim_delay != 0.0,
+                                 "--sim-start": sim_start is not None, "--sim-lenient": sim_lenient})  # fmt: skip
+    if sensor == "module" and robot is not None and not pendulum:
+        raise OptionError("--pendulum PORT is needed with --sensor module and --robot")
+    if robot is None and pendulum not in (None, "sim"):
+        raise OptionError("--pendulum: without --robot the simulator's module is used; give --robot to use a real one")
+    if log is not None and log.resolve() == joint_csv.resolve():
+        raise OptionError(f"--log {log} is the trajectory file itself; choose another name")
+    lim = limits_from(limits)
+    name = str(joint_csv)
+    traj = read_joint_csv(joint_csv, dt)
+    model = make_robot(flange, tool)
+    check_or_fail(rep, traj, lim, 0.0, False, None, name)
+    if len(traj) < 2:
+        raise InputError("needs at least 2 rows", file=name)
+    send_ms = traj.dt * 1e3
+    if abs(send_ms - round(send_ms)) > 1e-6 or not 1 <= round(send_ms) <= 100:
+        raise InputError(f"time step {send_ms:g} ms is not a whole FRI send period of 1..100 ms; resample it "
+                         "(lbr retime) first", file=name)  # fmt: skip
+    period_ms = int(round(send_ms))
+    period_s = period_ms * 1e-3
+    plan = correction_plan(model, traj.q, lim, period_s)
+    assumed_ms = sensor_delay if sensor_delay is not None else (
+        sim_delay + period_ms if robot is None or sensor == "io" else 6.0 + period_ms)  # fmt: skip
+    axis = 0 if module_axis == "x" else 1
+    client = DampingClient(
+        traj.q, lim, period_s, model_len, plan, damp_s=damp_s, sensor_delay_s=assumed_ms * 1e-3,
+        io_names=names if sensor == "io" else None, module_axis=axis, sensor_rate_hz=sensor_rate, active=not open_loop,
+        start_tolerance=start_tolerance, move_to_start=move_to_start,
+        move_shaper=make_shaper("zvd", period_T), move_robot=model,
+        sway=SwayWatch(IoSway("ball_theta"), math.radians(start_sway), window_for_length(model_len), sway_wait)
+        if sensor == "io" else None,
+    )  # fmt: skip
+    rep.print(f"{name}: {len(traj)} rows, step {period_ms} ms, {traj.duration:.3f} s — within the limits; "
+              f"string {model_len:g} m (period {period_T:.3f} s), damping {damp_s:.2f} s after the last row"
+              + (" (open loop: no correction)" if open_loop else ""))  # fmt: skip
+    rep.print(f"offset room: up to {plan.travel * 1e3:.0f} mm, {float(plan.bounds[:, 2].min()):.2f}–"
+              f"{float(plan.bounds[:, 2].max()):.2f} m/s² along the file (the joints' headroom)")
+    sim_kwargs: dict[str, Any] = {}
+    plants = None
+    if robot is None:
+        sim_kwargs = simulator_kwargs(length=0.0, default_length=0.0, period_ms=period_ms, sim_start=sim_start,
+                                      default_start=traj.q[0], flange=flange, tool=tool,
+                                      max_runtime_s=traj.duration + damp_s + sway_wait + 120.0, limits=limits)  # fmt: skip
+        if sensor == "io":
+            plants = (BallSpec(true_len, 0.0, io_delay_ms=sim_delay),)
+        else:  # the module reads the ball's θy and delivers it over the emulated serial link --sim-delay late
+            plants = (BallSpec(true_len), PendulumModuleSpec(sensor_rate, delay_ms=sim_delay))
+    lab = LabOptions(pendulum or "sim", baud, pendulum_zero) if sensor == "module" else None
+    result, sim_stats, lab_figures = run_client(
+        rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
+        sim_kwargs=sim_kwargs, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), sim_lenient=sim_lenient,
+        lab=lab, plants=plants, extra_names=LOG_COLUMNS, extra=client.log_values,
+    )  # fmt: skip
+    figures = print_summary(rep, result, sim_stats, log)
+    figures.update(lab_figures)
+    f = client.figures()
+    rep.print(f"offset: largest {f['max_offset_m'] * 1e3:.1f} mm, trimmed to the headroom in {f['offset_trimmed_cycles']} "
+              f"cycles; return to the last row {f['return_rows']} commands")  # fmt: skip
+    if f["measured_residual_deg"] is not None:
+        rep.print(f"measured sway in the last swing period of the damping time: {f['measured_residual_deg']:.3f}°")
+    if f["controller_us_p50"] is not None:
+        rep.print(f"damper per cycle: p50 {f['controller_us_p50']:.1f} µs, p99 {f['controller_us_p99']:.1f} µs")
+    figures.update(file=name, rows=len(traj), duration_s=traj.duration, string_length_m=model_len,
+                   damp_s=damp_s, robot=robot or "simulator", sim_length_m=true_len if robot is None else None)  # fmt: skip
+    plot_log(plot, log, rep, joint_csv.name)
+    rep.emit(figures)
+    exit_for(result, lab_figures)
+
+
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
     groups["control"].command("upright")(upright)
+    groups["control"].command("damp")(damp)

@@ -131,9 +131,12 @@ class PendulumEmulator:
     as a radio link would).
     """
 
-    def __init__(self, rate_hz: float = 200.0, zero_count: int = 0) -> None:
+    def __init__(self, rate_hz: float = 200.0, zero_count: int = 0, delay_s: float = 0.0, jitter_s: float = 0.0,
+                 seed: int = 0) -> None:  # fmt: skip
         import os
+        import random
         import tty
+        from collections import deque
 
         self.master, self.slave = os.openpty()
         tty.setraw(self.slave)
@@ -144,12 +147,33 @@ class PendulumEmulator:
         self._next = -math.inf
         self.sent = 0
         self.dropped = 0
+        self.delay_s, self.jitter_s = delay_s, jitter_s  # [s] sample → line on the port, + uniform [0, jitter]
+        self._rng = random.Random(seed)
+        self._queue: deque[tuple[float, bytes]] = deque()
+        self._last_due = -math.inf
 
     def feed(self, t: float, theta: float, omega: float) -> None:
-        if t < self._next:
+        """The angle θ [rad] and rate ω [rad/s] at time t [s]: a line every 1/rate_hz, on the port after the delay
+        (call every cycle: it also delivers the lines that are due)."""
+        if t >= self._next:
+            self._next = t + self.period
+            self.queue(t, format_line(theta, omega, self.zero_count))
+        self.deliver(t)
+
+    def queue(self, t: float, line: bytes) -> None:
+        """A line sampled at t [s], written once ``deliver`` reaches t + delay (+ jitter); the order is kept."""
+        if self.delay_s <= 0.0 and self.jitter_s <= 0.0:
+            self.send(line)
             return
-        self._next = t + self.period
-        self.send(format_line(theta, omega, self.zero_count))
+        due = max(t + self.delay_s + self._rng.uniform(0.0, self.jitter_s), self._last_due)
+        self._last_due = due
+        self._queue.append((due, line))
+
+    def deliver(self, t: float) -> None:
+        """Write the queued lines due by t [s]."""
+        q = self._queue
+        while q and q[0][0] <= t + 1e-9:
+            self.send(q.popleft()[1])
 
     def send(self, line: bytes) -> bool:
         """Write one line now, non-blocking; False (counted in ``dropped``) if the buffer is full."""

@@ -16,8 +16,6 @@ encoder zero, wrapped to (−π, π]) and ``pendulum_omega`` [rad/s]. ``pushes``
 from __future__ import annotations
 
 import math
-import random
-from collections import deque
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -100,14 +98,12 @@ class RigidModule:
         self._a_prev = (0.0, 0.0)  # (a_h, a_v) at the previous sample [m/s²]
         self._t = 0.0
         self._pushes = sorted(spec.pushes)
-        self._rng = random.Random(spec.seed)
-        self._emu = PendulumEmulator(rate_hz=spec.rate_hz, zero_count=spec.zero_count)
+        self._emu = PendulumEmulator(rate_hz=spec.rate_hz, zero_count=spec.zero_count, delay_s=spec.delay_ms * 1e-3,
+                                     jitter_s=spec.jitter_ms * 1e-3, seed=spec.seed)  # fmt: skip
         self._sample_every = 1.0 / spec.rate_hz
         self._next_sample = 0.0
         self._last_count: int | None = None
         self._last_sample_t = 0.0
-        self._queue: deque[tuple[float, bytes]] = deque()
-        self._last_delivery = -math.inf
         self.values = [self.phi, self.omega]
         self.max_abs_phi = abs(self.phi)
 
@@ -132,7 +128,7 @@ class RigidModule:
             self.phi += self._pushes.pop(0)[1]
         self.phi = wrap_angle(self.phi)
         self._sample()
-        self._deliver()
+        self._emu.deliver(self._t)
         if abs(self.phi) > self.max_abs_phi:
             self.max_abs_phi = abs(self.phi)
         v = self.values
@@ -153,16 +149,7 @@ class RigidModule:
             d = (count - self._last_count + COUNTS // 2) % COUNTS - COUNTS // 2
             omega = d * 2 * math.pi / COUNTS / max(t - self._last_sample_t, 1e-9)
         self._last_count, self._last_sample_t = count, t
-        s = self.spec
-        due = t + (s.delay_ms + self._rng.uniform(0.0, s.jitter_ms)) * 1e-3
-        due = max(due, self._last_delivery)  # a serial line keeps the order
-        self._last_delivery = due
-        self._queue.append((due, format_line(self.phi, omega, s.zero_count)))
-
-    def _deliver(self) -> None:
-        q, t = self._queue, self._t
-        while q and q[0][0] <= t + 1e-9:
-            self._emu.send(q.popleft()[1])
+        self._emu.queue(t, format_line(self.phi, omega, self.spec.zero_count))
 
     def info(self) -> dict:
         return {"pendulum_path": self._emu.path}

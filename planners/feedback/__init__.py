@@ -3,7 +3,10 @@ delay-compensating observer, LQR gains, the swing-up and balance of the rigid pe
 Pure algorithms: no FRI, no I/O."""
 
 from .cart import Cart
+from .correction import CorrectionPlan, correction_plan
+from .damping import DampingOptions, SwayDamper, simulate_damping, sway_reference
 from .observer import DelayedObserver
 from .upright import Mode, UprightController, UprightOptions
 
-__all__ = ["Cart", "DelayedObserver", "Mode", "UprightController", "UprightOptions"]
+__all__ = ["Cart", "CorrectionPlan", "DampingOptions", "DelayedObserver", "Mode", "SwayDamper", "UprightController",
+           "UprightOptions", "correction_plan", "simulate_damping", "sway_reference"]

@@ -19,9 +19,12 @@ from ..rail import CartLimits
 Bounds = Callable[[float, float, float], "tuple[float, float, float, float, float]"]
 
 
-def _ramp_cap(dv: float, jerk: float) -> float:
-    """Acceleration [m/s²] from which ramping to zero at ``jerk`` changes the velocity by exactly dv [m/s] (signed)."""
-    return math.sqrt(2.0 * jerk * dv) if dv >= 0.0 else -math.sqrt(-2.0 * jerk * dv)
+def _ramp_cap(dv: float, jerk: float, dt: float = 0.0) -> float:
+    """Acceleration a [m/s²] from which ramping to zero at ``jerk`` in steps of ``dt`` [s] changes the velocity by
+    exactly dv [m/s] (signed): a²/(2·jerk) + a·dt/2 = |dv|."""
+    h = 0.5 * jerk * dt
+    a = math.sqrt(h * h + 2.0 * jerk * abs(dv)) - h
+    return a if dv >= 0.0 else -a
 
 
 def _stop_speed(room: float, brake: float, jerk: float) -> float:
@@ -67,8 +70,8 @@ class Cart:
         brake = 0.5 * max(min(-a_lo, a_hi), 1e-3)
         v_hi = min(speed, _stop_speed(travel - self.x, brake, ramp))
         v_lo = -min(speed, _stop_speed(travel + self.x, brake, ramp))
-        a_hi = min(a_hi, _ramp_cap(v_hi - self.v, ramp))
-        a_lo = max(a_lo, -_ramp_cap(self.v - v_lo, ramp))
+        a_hi = min(a_hi, _ramp_cap(v_hi - self.v, ramp, dt))
+        a_lo = max(a_lo, -_ramp_cap(self.v - v_lo, ramp, dt))
         j = jerk
         top = min(j_hi, (a_hi - self.a) / dt)
         bottom = max(j_lo, (a_lo - self.a) / dt)

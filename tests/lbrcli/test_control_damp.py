@@ -1,0 +1,139 @@
+"""`lbr control damp` on the simulator: a joint file that leaves the ball swinging, streamed with active damping."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+from conftest import run_lbr
+from planners.pendulum import natural_period
+
+DT = 0.005
+Q0 = np.array([0.0, 0.6, 0.0, -1.4, 0.0, 1.14, 0.0])  # flange pointing down: the ball hangs below the TCP
+
+
+def _min_jerk(n: int) -> np.ndarray:
+    s = np.linspace(0.0, 1.0, n)
+    return 10 * s**3 - 15 * s**4 + 6 * s**5
+
+
+def _write_moves(path, moves=((np.array([0.3, 0, 0, 0, 0, 0, 0]), 1.0), (np.array([0, 0.12, 0, 0.15, 0, 0, 0]), 0.9)),
+                 hold: float = 0.4) -> float:  # fmt: skip
+    """Unshaped joint moves (Δq [rad], duration [s]) with holds; returns the time the last move ends [s]."""
+    q = Q0.copy()
+    rows = [np.repeat(q[None], int(hold / DT), axis=0)]
+    for dq, dur in moves:
+        seg = q + _min_jerk(int(round(dur / DT)))[:, None] * dq
+        rows.append(seg)
+        q = seg[-1]
+        end = sum(len(r) for r in rows) * DT
+        rows.append(np.repeat(q[None], int(hold / DT), axis=0))
+    q_all = np.vstack(rows)
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["t", *(f"q{j}" for j in range(1, 8))])
+        for k, r in enumerate(q_all):
+            w.writerow([f"{k * DT:.6f}", *(f"{v:.10f}" for v in r)])
+    return end
+
+
+def _log(path) -> dict[str, np.ndarray]:
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    data = np.array([[float(x) if x else math.nan for x in r] for r in rows[1:]])
+    return {n: data[:, i] for i, n in enumerate(rows[0])}
+
+
+def _sway_after(log: dict, move_end: float, periods: float, true_length: float, column: str = "ball_theta") -> float:
+    t, phase = log["t"], log["phase"]
+    t0 = t[np.flatnonzero(phase == 2)[0]]  # the first row
+    m = (t >= t0 + move_end + periods * natural_period(true_length)) & (phase >= 2)
+    assert m.sum() > 20
+    return float(np.degrees(np.abs(log[column][m]).max()))
+
+
+@pytest.mark.parametrize("sensor, true_length, delay", [("io", 0.30, 10.0), ("module", 0.20, 5.0)])
+def test_damping_removes_the_sway_a_wrong_string_length_leaves(tmp_path, sensor, true_length, delay):
+    traj = tmp_path / "moves.csv"
+    if sensor == "io":
+        move_end = _write_moves(traj)
+    else:  # a one-axis module: a move in its plane (A1 turns the TCP along base y), there and back
+        a1 = np.array([0.25, 0, 0, 0, 0, 0, 0])
+        move_end = _write_moves(traj, ((a1, 0.8), (-a1, 0.7)))
+    logs = {}
+    for mode in ("closed", "open"):
+        log = tmp_path / f"{mode}.csv"
+        args = ["control", "damp", traj, "--length", "0.25", "--sim-length", true_length, "--sim-delay", delay,
+                "--sensor", sensor, "--log", log, "--port", "0", "--sim-lenient", "--json"]  # fmt: skip
+        if mode == "open":
+            args.append("--open-loop")
+        p = run_lbr(*args, timeout=180)
+        assert p.returncode == 0, p.stderr[-2000:]
+        fig = json.loads(p.stdout)
+        assert fig["outcome"] == "completed"
+        logs[mode] = (_log(log), fig)
+    closed, fig = logs["closed"]
+    open_, fig_open = logs["open"]
+    column = "ball_theta" if sensor == "io" else "ball_theta_y"  # the module swings along base y only
+    sway_open = _sway_after(open_, move_end, 2, true_length, column)
+    sway_closed = _sway_after(closed, move_end, 2, true_length, column)
+    assert sway_open > 1.0  # the unshaped moves leave the ball swinging
+    assert sway_closed <= 0.5
+    assert sway_closed < 0.25 * sway_open
+    # the correction is small, within its bounds, and the arm ends exactly on the file's last row
+    assert 0.0005 < fig["max_offset_m"] < 0.08
+    assert fig_open["max_offset_m"] == 0.0
+    with open(traj, newline="") as f:
+        last = [float(v) for v in list(csv.reader(f))[-1][1:]]
+    active = closed["state"] == 4
+    cmd = np.column_stack([closed[f"cmd_q{j}"] for j in range(1, 8)])[active]
+    assert np.allclose(cmd[-1], last, atol=1e-9)
+    # within the joint limits, as the guard would also have enforced
+    from trajectories.limits import default_limits
+
+    lim = default_limits()
+    assert np.all(np.abs(np.diff(cmd, axis=0)) / DT <= lim.velocity * (1 + 1e-6))
+    assert np.all(np.abs(np.diff(cmd, 2, axis=0)) / DT**2 <= lim.acceleration * (1 + 1e-6))
+    # the log carries the damper's own view
+    assert np.nanmax(np.abs(closed["damp_x"])) > 0 or np.nanmax(np.abs(closed["damp_y"])) > 0
+    assert fig["controller_us_p50"] is not None and fig["measured_residual_deg"] is not None
+
+
+@pytest.mark.parametrize(
+    "extra, needle",
+    [
+        (["--sensor", "camera"], "--sensor"),
+        (["--io-names", "only_one"], "--io-names"),
+        (["--module-axis", "z"], "--module-axis"),
+        (["--sim-delay", "-1"], "--sim-delay"),
+        (["--robot", "192.170.10.2", "--sim-length", "0.3"], "--length"),
+    ],
+)
+def test_bad_options_are_one_line_errors(tmp_path, extra, needle):
+    traj = tmp_path / "moves.csv"
+    _write_moves(traj)
+    p = run_lbr("control", "damp", traj, *extra)
+    assert p.returncode == 2, p.stderr
+    assert needle in p.stderr and "Traceback" not in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1
+
+
+def test_a_file_off_the_fri_period_or_over_the_limits_is_refused_before_anything_is_sent(tmp_path):
+    traj = tmp_path / "odd.csv"
+    with open(traj, "w") as f:
+        f.write("t,q1,q2,q3,q4,q5,q6,q7\n")
+        for k in range(50):
+            f.write(f"{k * 0.0025:.6f},0,0.6,0,-1.4,0,1.14,0\n")
+    p = run_lbr("control", "damp", traj, "--port", "0")
+    assert p.returncode == 2 and "odd.csv" in p.stderr and "2.5 ms" in p.stderr
+    jump = tmp_path / "jump.csv"
+    with open(jump, "w") as f:
+        f.write("t,q1,q2,q3,q4,q5,q6,q7\n")
+        for k in range(50):
+            f.write(f"{k * 0.005:.6f},{0.5 if k > 25 else 0},0.6,0,-1.4,0,1.14,0\n")
+    p = run_lbr("control", "damp", jump, "--port", "0")
+    assert p.returncode == 1 and "refused" in p.stderr and "simulator on" not in p.stderr

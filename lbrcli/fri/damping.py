@@ -101,7 +101,10 @@ class DampingClient(TrajectoryPlayer):
         self._bound = self._bounds[row]
         m = len(self._ref) - 1
         kk = k if k < m else m
-        self.damper.step(self._ref[kk], self._ref_rate[kk], self._acc[kk])
+        if self._queue:  # rejoining the rows after lost messages: that segment has the headroom to itself
+            self.damper.coast(self._acc[kk])
+        else:
+            self.damper.step(self._ref[kk], self._ref_rate[kk], self._acc[kk])
         cx, cy = self.damper.carts
         dx, dy = cx.x, cy.x
         mx, my = self._maps[row]
@@ -117,9 +120,10 @@ class DampingClient(TrajectoryPlayer):
             return self._returning()
         if self._k >= 0 and self.reply_due:
             self._read(state)
-            if self.skipped:  # the controller extrapolated our command: the offsets coast as it did
-                for c in self.damper.carts:
+            if self.skipped:  # the controller extrapolated our command: the offsets coast as it did, and resume
+                for c in self.damper.carts:  # without acceleration (the rows' rejoin has the headroom to itself)
                     c.x += c.v * self._period * self.skipped
+                    c.a = 0.0
         try:
             q = super().command(state)
         except StopSession as stop:

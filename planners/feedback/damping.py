@@ -126,6 +126,14 @@ class SwayDamper:
             cart.step(jerk)
             obs.predict(planned_accel[i] + cart.a)
 
+    def coast(self, planned_accel: Sequence[float]) -> None:
+        """One cycle without feedback: the offsets move on at constant velocity (no acceleration of their own), the
+        observers are predicted with the planned acceleration [m/s²]."""
+        for i, (cart, obs) in enumerate(zip(self.carts, self.observers)):
+            cart.a = 0.0
+            cart.x += cart.v * self.dt
+            obs.predict(planned_accel[i])
+
     @property
     def offset(self) -> tuple[float, ...]:
         """Δp per axis [m]."""

@@ -149,7 +149,7 @@ def upright(
     )  # fmt: skip
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)
-    f = client.figures()
+    f = figures  # the client's figures are merged into the session's
     if f["swing_up_s"] is not None:
         rep.print(f"swing-up {f['swing_up_s']:.2f} s; balanced {f['balanced_s']:.1f} s (longest {f['longest_balance_s']:.1f} s), "
                   f"falls {f['falls']}, max |angle from upright| {f['max_theta_balanced_deg']:.2f}° (estimate)")  # fmt: skip
@@ -318,7 +318,7 @@ def damp(
     )  # fmt: skip
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)
-    f = client.figures()
+    f = figures  # the client's figures are merged into the session's
     rep.print(f"offset: largest {f['max_offset_m'] * 1e3:.1f} mm, trimmed to the headroom in {f['offset_trimmed_cycles']} "
               f"cycles; return to the last row {f['return_rows']} commands")  # fmt: skip
     if f["measured_residual_deg"] is not None:

@@ -15,17 +15,20 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 from typing import Sequence
 
 import numpy as np
 
 from planners.feedback.correction import CorrectionPlan
 from planners.feedback.damping import DampingOptions, SwayDamper, sway_reference
+from planners.pendulum import natural_period
 from trajectories.limits import JointLimits
 
 from .constants import Phase
 from .errors import StopSession
 from .moves import OnlineMove
+from .outcome import cost_figures_us
 from .players import TrajectoryPlayer
 from .state import LBRState
 
@@ -45,7 +48,6 @@ class DampingClient(TrajectoryPlayer):
         self.length, self.plan, self.options = length, plan, options
         self.io_names, self.module_axis = io_names, module_axis
         self.reader = None  # PendulumReader (set by the runner when the module is attached; used without io_names)
-        self.active = active
         n_total = len(self.rows) + int(round(damp_s / period_s)) + 2
         acc = np.zeros((n_total, 2))
         acc[: len(plan)] = plan.planned_accel
@@ -55,7 +57,7 @@ class DampingClient(TrajectoryPlayer):
         self._bounds = [tuple(b) for b in plan.bounds.tolist()]
         self._bound = self._bounds[0]
         interval = period_s if io_names is not None else 1.0 / (sensor_rate_hz or 200.0)
-        opts = DampingOptions(**{**options.__dict__, "travel": plan.travel})
+        opts = replace(options, travel=plan.travel)
         self.damper = SwayDamper(length, period_s, sensor_delay_s, interval, opts, actuation_delay=actuation_delay,
                                  bounds=lambda x, v, a: self._bound)  # fmt: skip
         self.damper.active = active
@@ -71,8 +73,8 @@ class DampingClient(TrajectoryPlayer):
         self.max_offset = 0.0  # [m]
         self.return_rows = 0
         self.readings = 0
-        self._tail_from = len(self.rows) + max(0, int(round(damp_s / period_s)) - int(round(
-            2 * math.pi * math.sqrt(length / 9.81) / period_s)))  # the last swing period of the damping time
+        # the last swing period of the damping time
+        self._tail_from = len(self.rows) + max(0, int(round((damp_s - natural_period(length)) / period_s)))
         self.residual = 0.0  # [rad] largest measured sway in that period
 
     # -- the per-cycle correction ----------------------------------------------------------------------------------
@@ -173,17 +175,13 @@ class DampingClient(TrajectoryPlayer):
 
     def figures(self) -> dict:
         f = super().figures()
-        cost = sorted(self.cost_ns)
-        pick = (lambda p: cost[min(len(cost) - 1, int(p * len(cost)))] / 1e3) if cost else (lambda p: None)
         f.update(
-            damping_active=self.active,
+            damping_active=self.damper.active,
             max_offset_m=self.max_offset,
             offset_trimmed_cycles=sum(c.trimmed for c in self.damper.carts),
             return_rows=self.return_rows,
             sway_readings=self.readings,
             measured_residual_deg=math.degrees(self.residual) if self._k >= self._tail_from else None,
-            controller_us_p50=pick(0.5),
-            controller_us_p99=pick(0.99),
-            controller_us_max=pick(1.0),
+            **cost_figures_us(self.cost_ns),
         )
         return f

@@ -27,6 +27,7 @@ from .client import LBRClient
 from .constants import Phase
 from .errors import StopSession
 from .moves import OnlineMove
+from .outcome import cost_figures_us
 from .state import LBRState
 
 LOG_COLUMNS = ("mode", "est_phi", "est_omega", "cart_x", "cart_v", "cart_a")  # -, [rad], [rad/s], [m], [m/s], [m/s²]
@@ -177,8 +178,6 @@ class UprightClient(LBRClient):
         return (float(self.ctl.mode), self.obs.phi, self.obs.omega, c.x, c.v, c.a)
 
     def figures(self) -> dict:
-        cost = sorted(self.cost_ns)
-        pick = (lambda f: cost[min(len(cost) - 1, int(f * len(cost)))] / 1e3) if cost else (lambda f: None)
         return {
             "swing_up_s": self.swing_up_s,
             "balanced_s": self.balanced_s,
@@ -188,7 +187,5 @@ class UprightClient(LBRClient):
             "max_theta_balanced_deg": math.degrees(self.max_theta_balanced),
             "pendulum_readings": self.readings,
             "cart_trimmed_cycles": self.cart.trimmed if self.cart else 0,
-            "controller_us_p50": pick(0.5),
-            "controller_us_p99": pick(0.99),
-            "controller_us_max": pick(1.0),
+            **cost_figures_us(self.cost_ns),
         }

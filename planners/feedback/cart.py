@@ -19,7 +19,7 @@ from ..rail import CartLimits
 Bounds = Callable[[float, float, float], "tuple[float, float, float, float, float]"]
 
 
-def _ramp_cap(dv: float, jerk: float, dt: float = 0.0) -> float:
+def _ramp_cap(dv: float, jerk: float, dt: float) -> float:
     """Acceleration a [m/s²] from which ramping to zero at ``jerk`` in steps of ``dt`` [s] changes the velocity by
     exactly dv [m/s] (signed): a²/(2·jerk) + a·dt/2 = |dv|."""
     h = 0.5 * jerk * dt

@@ -103,6 +103,9 @@ class Rail:
         return float(robot.fk(self.joints(x)).translation[1])
 
 
+_OVERRUN = 0.1  # of the travel
+
+
 def build_rail(robot: Robot, q_start, limits: JointLimits, travel: float = 0.3, orientation: str = "follow",
                margin: float = 0.1, step: float = 0.005) -> Rail:  # fmt: skip
     """IK of the rail |x| ≤ ``travel`` [m] along base y from the TCP at ``q_start`` (``orientation``: "fixed" keeps
@@ -113,10 +116,15 @@ def build_rail(robot: Robot, q_start, limits: JointLimits, travel: float = 0.3, 
     if not (math.isfinite(travel) and 0.01 <= travel <= 1.0):
         raise ValueError(f"rail travel must be 0.01..1 m, got {travel:g}")
     setup = ArmSetup(tuple(float(v) for v in q_start), orientation)
-    n = int(math.ceil(travel / step))
-    half = np.linspace(0.0, n * step, n + 1)
-    up, _ = joint_path(robot, setup, half, half, limits)
-    down, _ = joint_path(robot, setup, half, -half, limits)
+    # the spline runs on past ±travel by an overrun where the arm reaches it: a cart that coasted past the end (the
+    # controller extrapolated through lost messages) then brakes on the rail instead of against a clamped end
+    for reach in (1.0 + _OVERRUN, 1.0):
+        n = int(math.ceil(reach * travel / step))
+        half = np.linspace(0.0, n * step, n + 1)
+        up, e_up = joint_path(robot, setup, half, half, limits)
+        down, e_down = joint_path(robot, setup, half, -half, limits)
+        if max(e_up, e_down) <= 1e-6:
+            break
     x = np.concatenate([-half[::-1], half[1:]])
     q = np.vstack([down.q[::-1], up.q[1:]])
     spline = CubicSpline(x, q, axis=0, bc_type="natural")

@@ -1,12 +1,12 @@
 """`lbr control ...`: feedback controllers at the FRI rate, on the simulator (default) or a named robot.
 
 ``lbr control upright``: swing the pendulum module's rod up from hanging and balance it upright for --hold seconds
-(thesis ch. 6's module; :mod:`lbrcli.fri.upright`). Without --robot the simulator models the module as a rigid rod
+(thesis ch. 6's module; :mod:`lbrcli.control.upright`). Without --robot the simulator models the module as a rigid rod
 on the flange whose 12-bit encoder reaches the client over an emulated serial port with --sim-delay and jitter.
 Exit 0 when the rod was balanced for --hold and the arm parked; 1 when it was not; 2 on bad options.
 
 ``lbr control damp FILE``: stream a joint CSV (an anti-sway move, or any) while the measured sway of the ball
-corrects the TCP's horizontal path (:mod:`lbrcli.fri.damping`): the sway a wrong string length leaves decays within
+corrects the TCP's horizontal path (:mod:`lbrcli.control.damping`): the sway a wrong string length leaves decays within
 a period or two. Exit 0 when the file was streamed, damped and the arm returned to its last row.
 """
 
@@ -84,7 +84,7 @@ def upright(
     so the rod swings in the y–z plane) within the joints' velocity, acceleration and jerk limits. The encoder angle
     is 0 with the rod hanging (--pendulum-zero) and grows toward base +y.
     """
-    from lbrcli.fri.upright import LOG_COLUMNS, UprightClient
+    from lbrcli.control.upright import LOG_COLUMNS, UprightClient
     from lbrcli.lab.attach import LabOptions
     from lbrcli.plants.rigid_module import RigidModuleSpec
     from planners.rail import build_rail
@@ -220,7 +220,7 @@ def damp(
     jerk-limited move returns the arm to the last row. Log columns as `lbr execute` plus damp_x, damp_y [m] (the
     offset), est_theta_x/y and ref_theta_x/y [rad].
     """
-    from lbrcli.fri.damping import LOG_COLUMNS, DampingClient
+    from lbrcli.control.damping import LOG_COLUMNS, DampingClient
     from lbrcli.fri.sway import IoSway, SwayWatch, window_for_length
     from lbrcli.lab.attach import LabOptions
     from lbrcli.plants.ball import BallSpec

@@ -48,7 +48,7 @@ class ExecutedMotion:
 
     def extrapolate(self, n: int) -> int:
         """The controller bridged ``n`` command periods without our commands: continue the history as it did (at the
-        last commands' velocity, within the velocity limit); ``n`` (≤ 64)."""
+        last commands' velocity, within the velocity limit); ``n`` (≤ 64). A braking stop goes on from there."""
         n = min(n, 64)
         cap = self.guard.max_step
         for _ in range(n):
@@ -56,6 +56,8 @@ class ExecutedMotion:
             nxt = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(prev, prev2, cap))
             self.prev3, self.prev2, self.prev = prev2, prev, nxt
         self.extrapolated_cycles += n
+        if self.braking and n:  # the stop's profile no longer starts where the robot is: re-plan it from there
+            self.brake.start(self.prev, self.prev2, self.prev3)
         return n
 
     def begin_braking(self) -> None:

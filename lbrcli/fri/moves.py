@@ -159,16 +159,18 @@ class ShapedMove:
 
 
 def rejoin(limits: JointLimits, period_s: float, q: Sequence[float], v: Sequence[float], rows: Sequence[Sequence[float]],
-           first: int, max_tries: int = 20) -> tuple[list[tuple[float, ...]], int]:
+           first: int, max_tries: int = 20, share: float = 1.0) -> tuple[list[tuple[float, ...]], int]:
     """The commands that bring the robot from ``q`` [rad] moving at ``v`` [rad/s] (where the controller's
     extrapolation left it) back onto ``rows`` in step: jerk-limited (ruckig, at the limits), ``m`` commands for rows
     ``first`` … ``first + m − 1``, the last one exactly that row (with its velocity and acceleration). Returns (the
-    commands, the next row). Towards the end of the rows: to the last row at rest, taking the time it needs."""
+    commands, the next row). Towards the end of the rows: to the last row at rest, taking the time it needs.
+    ``share`` < 1 plans within that share of the velocity/acceleration/jerk limits (never below what the rows
+    themselves need where they are rejoined)."""
     otg = Ruckig(7, period_s)
     inp = InputParameter(7)
-    inp.max_velocity = limits.velocity.tolist()
-    inp.max_acceleration = limits.acceleration.tolist()
-    inp.max_jerk = limits.jerk.tolist()
+    vmax, amax = limits.velocity * share, limits.acceleration * share
+    inp.max_velocity, inp.max_acceleration = vmax.tolist(), amax.tolist()
+    inp.max_jerk = (limits.jerk * share).tolist()
     inp.current_position = list(q)
     inp.current_velocity = list(v)
     inp.current_acceleration = [0.0] * 7  # the controller extrapolates at constant velocity
@@ -192,6 +194,9 @@ def rejoin(limits: JointLimits, period_s: float, q: Sequence[float], v: Sequence
         inp.target_position = list(b)
         inp.target_velocity = [(z - x) / (2.0 * dt) for x, z in zip(a, c)]
         inp.target_acceleration = [(x - 2.0 * y + z) / (dt * dt) for x, y, z in zip(a, b, c)]
+        if share < 1.0:  # the rows' own state where they are rejoined stays admissible
+            inp.max_velocity = np.maximum(vmax, np.abs(inp.target_velocity) * 1.001).tolist()
+            inp.max_acceleration = np.maximum(amax, np.abs(inp.target_acceleration) * 1.001).tolist()
         inp.minimum_duration = m * dt
         res = otg.calculate(inp, traj)
         if res in (Result.Working, Result.Finished) and traj.duration <= m * dt * (1 + 1e-12):

@@ -52,6 +52,7 @@ class TrajectoryPlayer(LBRClient):
         move_shaper: Any = None,
         move_robot: Any = None,
         sway: SwayWatch | None = None,
+        rejoin_share: float = 1.0,
     ) -> None:
         rows = np.asarray(rows, dtype=float)
         if rows.ndim != 2 or rows.shape[1] != 7 or len(rows) == 0:
@@ -70,6 +71,8 @@ class TrajectoryPlayer(LBRClient):
         self.move_shaper = move_shaper  # .amplitudes, .times [s] (planners.shapers.Shaper): the move is shaped
         self.move_robot = move_robot  # trajectories.robot.Robot: ... for the TCP's path (the ball hangs there)
         self.sway = sway
+        self.rejoin_share = rejoin_share  # of the limits a rejoin after lost messages may use (a client adding its own
+        # corrections to the rows keeps the rest for them)
         self._started = False  # the first row was commanded
         self._waited = 0  # commands holding the first row for the sway
         self._max_wait = 0  # commands (from the period at activation)
@@ -192,7 +195,8 @@ class TrajectoryPlayer(LBRClient):
             move.start(q, self.rows[0], vel)
         elif self._queue or self._i < len(self.rows):
             first = self._i + n - len(self._queue)  # the row due now (a rejoin in progress: its rows)
-            self._queue, self._i = rejoin(self.limits, dt, q, vel, self.rows, min(first, len(self.rows)))
+            self._queue, self._i = rejoin(self.limits, dt, q, vel, self.rows, min(first, len(self.rows)),
+                                          share=self.rejoin_share)
             self._queue.reverse()  # popped from the end
 
     def _advance(self) -> bool:

@@ -7,7 +7,8 @@ offset (Δx, Δy) [m] with unchanged height and orientation is Δq ≈ maps[k]·
 plus those of the offset stay within ``share`` of the limits (the rest is left for the terms of the moving map), the
 jerk within half the joint jerk limits; a window around each row takes the smallest bound, so that the offset has
 time to ramp its acceleration down before a row that leaves little room. ``travel`` [m]: the offset all rows allow
-(joint position limits with a margin).
+(joint position limits with a margin). ``rejoin_bounds[k]``: the same while the joints do not follow the rows but
+a rejoin after lost FRI messages that uses up to ``rejoin_share`` of the limits (never more than ``bounds[k]``).
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ class CorrectionPlan:
     bounds: np.ndarray  # (n, 5) speed [m/s], a_lo, a_hi [m/s²], j_lo, j_hi [m/s³]
     planned_accel: np.ndarray  # (n, 2) TCP acceleration along base x, y [m/s²] (second differences)
     travel: float  # [m]
+    rejoin_bounds: np.ndarray  # (n, 5) as bounds, while a rejoin moves the joints
+    rejoin_share: float  # of the velocity/acceleration/jerk limits a rejoin may use
 
     def __len__(self) -> int:
         return len(self.maps)
@@ -42,7 +45,7 @@ def _window_min(x: np.ndarray, half: int) -> np.ndarray:
 
 
 def correction_plan(robot, q: np.ndarray, limits, dt: float, options: DampingOptions = DampingOptions(),
-                    share: float = 0.95) -> CorrectionPlan:  # fmt: skip
+                    share: float = 0.95, rejoin_share: float = 0.8) -> CorrectionPlan:  # fmt: skip
     """The tables for the joint path ``q`` (n, 7) [rad] sampled every ``dt`` [s] on ``robot``
     (:class:`trajectories.robot.Robot`, its TCP is the pivot); ``limits`` the joint limits."""
     import pinocchio as pin
@@ -70,11 +73,22 @@ def correction_plan(robot, q: np.ndarray, limits, dt: float, options: DampingOpt
     a_room = np.clip(share * np.asarray(limits.acceleration) - acc, 0.0, None) / spread
     j_room = 0.5 * np.asarray(limits.jerk) / spread
     half = int(math.ceil(options.acceleration / options.jerk / dt)) + 2
-    speed = np.minimum(_window_min(v_room.min(axis=1), half), options.velocity)
-    a = np.minimum(_window_min(a_room.min(axis=1), half), options.acceleration)
-    j = np.minimum(_window_min(j_room.min(axis=1), half), options.jerk)
-    bounds = np.column_stack([speed, -a, a, -j, j])
+    bounds = _bounds(v_room, a_room, j_room, half, options)
+    spare = max(0.0, share - rejoin_share)
+    v_spare = spare * np.asarray(limits.velocity) / spread
+    a_spare = spare * np.asarray(limits.acceleration) / spread
+    j_spare = 0.5 * (1.0 - rejoin_share) * np.asarray(limits.jerk) / spread
+    rejoin_bounds = _bounds(np.minimum(v_room, v_spare), np.minimum(a_room, a_spare), np.minimum(j_room, j_spare),
+                            half, options)  # fmt: skip
     upper = np.asarray(limits.position)
     p_room = ((0.98 * upper - np.abs(q)) / spread).min()
     travel = float(max(0.0, min(options.travel, p_room)))
-    return CorrectionPlan(dt, maps, bounds, pivot_acceleration(pos[:, :2], dt), travel)
+    return CorrectionPlan(dt, maps, bounds, pivot_acceleration(pos[:, :2], dt), travel, rejoin_bounds, rejoin_share)
+
+
+def _bounds(v_room: np.ndarray, a_room: np.ndarray, j_room: np.ndarray, half: int, options: DampingOptions) -> np.ndarray:
+    """(n, 5) offset bounds from per-joint room (n, 7) in offset units, the smallest over a window of ±half rows."""
+    speed = np.minimum(_window_min(v_room.min(axis=1), half), options.velocity)
+    a = np.minimum(_window_min(a_room.min(axis=1), half), options.acceleration)
+    j = np.minimum(_window_min(j_room.min(axis=1), half), options.jerk)
+    return np.column_stack([speed, -a, a, -j, j])

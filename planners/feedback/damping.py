@@ -128,7 +128,7 @@ class SwayDamper:
 
     def coast(self, planned_accel: Sequence[float]) -> None:
         """One cycle without feedback: the offsets move on at constant velocity (no acceleration of their own), the
-        observers are predicted with the planned acceleration [m/s²]."""
+        observers are predicted with the pivot acceleration ``planned_accel`` [m/s²]."""
         for i, (cart, obs) in enumerate(zip(self.carts, self.observers)):
             cart.a = 0.0
             cart.x += cart.v * self.dt

@@ -137,3 +137,34 @@ def test_a_file_off_the_fri_period_or_over_the_limits_is_refused_before_anything
             f.write(f"{k * 0.005:.6f},{0.5 if k > 25 else 0},0.6,0,-1.4,0,1.14,0\n")
     p = run_lbr("control", "damp", jump, "--port", "0")
     assert p.returncode == 1 and "refused" in p.stderr and "simulator on" not in p.stderr
+
+
+def test_damping_rides_through_lost_and_malformed_messages(tmp_path):
+    """3 % of the controller's messages lost and 1 % malformed: the controller extrapolates, the rows are rejoined
+    within their share of the limits, the offsets keep the rest; the run completes and the sway is still damped."""
+    from lbrcli.console import Reporter
+    from lbrcli.control import DampingClient
+    from lbrcli.control.damping import LOG_COLUMNS
+    from lbrcli.fri_runner import run_client, simulator_kwargs
+    from lbrcli.plants.ball import BallSpec
+    from planners.feedback.correction import correction_plan
+    from trajectories.csvio import read_joint_csv
+    from trajectories.limits import default_limits
+    from trajectories.robot import Flange, Robot, RobotConfig
+
+    path = tmp_path / "moves.csv"  # moves that leave ≈ 5° of sway (the damper's bounds are not saturated)
+    move_end = _write_moves(path, ((np.array([0.12, 0, 0, 0, 0, 0, 0]), 1.2), (np.array([0, 0.05, 0, 0.06, 0, 0, 0]), 1.0)))
+    lim, traj = default_limits(), read_joint_csv(path, None)
+    plan = correction_plan(Robot(RobotConfig(flange=Flange("touch-electric"))), traj.q, lim, DT)  # the simulator's
+    client = DampingClient(traj.q, lim, DT, 0.25, plan, damp_s=3 * natural_period(0.25), sensor_delay_s=0.015)
+    kw = simulator_kwargs(length=0.0, default_length=0.0, period_ms=5, sim_start=None, default_start=traj.q[0],
+                          flange="touch-electric", tool=None, max_runtime_s=60)  # fmt: skip
+    kw.update(loss=0.03, malformed=0.01, seed=6)
+    log = tmp_path / "run.csv"
+    result, _, _ = run_client(Reporter(True), client, robot=None, port=0, bind=None, version=None, limits=lim,
+                              log_path=log, wait=None, sim_kwargs=kw, plants=(BallSpec(0.30, 0.0, io_delay_ms=10),),
+                              extra_names=LOG_COLUMNS, extra=client.log_values, sim_lenient=True)  # fmt: skip
+    assert result.outcome.value == "completed", result.detail
+    assert result.missed > 10 and client.skipped_rows > 10  # the faults happened and were bridged
+    assert _sway_after(_log(log), move_end, 2, 0.30) <= 0.5
+    assert 0.0 < client.max_offset < plan.travel

@@ -30,6 +30,16 @@ def test_the_spline_puts_the_tcp_on_the_rail(rail, robot, q_start):
         assert rail.joints_list(x) == pytest.approx(rail.joints(x).tolist(), abs=1e-12)
 
 
+def test_the_rail_runs_on_past_its_travel_where_the_arm_reaches(rail, robot, q_start):
+    """A cart that coasted a little past ±travel (the controller extrapolated through lost messages) is still on the
+    rail, not held at a clamped end — a clamp would stop the joints within one cycle."""
+    p0 = robot.fk(q_start).translation
+    for x in (0.305, 0.32, -0.305, -0.32):
+        p = robot.fk(rail.joints(x)).translation
+        assert p[1] == pytest.approx(p0[1] + x, abs=2e-5) and p[2] == pytest.approx(p0[2], abs=2e-5)
+    assert rail.limits.travel == 0.3  # the cart's own bound is unchanged
+
+
 def test_local_bounds_keep_every_joint_inside_its_limits(rail, limits):
     """Random cart states at the edge of the local bounds: the joint rates they give sit at, never above, 0.9 of the
     limits (the rail's margin); and the constant bounds are inside the local ones everywhere."""

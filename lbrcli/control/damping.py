@@ -25,12 +25,8 @@ from planners.feedback.damping import DampingOptions, SwayDamper, sway_reference
 from planners.pendulum import natural_period
 from trajectories.limits import JointLimits
 
-from .constants import Phase
-from .errors import StopSession
-from .moves import OnlineMove
-from .outcome import cost_figures_us
-from .players import TrajectoryPlayer
-from .state import LBRState
+from lbrcli.fri import LBRState, OnlineMove, Phase, StopSession, TrajectoryPlayer
+from lbrcli.fri.outcome import cost_figures_us
 
 LOG_COLUMNS = ("damp_x", "damp_y", "est_theta_x", "est_theta_y", "ref_theta_x", "ref_theta_y")  # [m] ×2, [rad] ×4
 
@@ -42,6 +38,7 @@ class DampingClient(TrajectoryPlayer):
                  damp_s: float, sensor_delay_s: float, io_names: tuple[str, str] | None = ("ball_theta_x", "ball_theta_y"),
                  module_axis: int = 1, sensor_rate_hz: float | None = None, options: DampingOptions = DampingOptions(),
                  active: bool = True, actuation_delay: int = 1, **player) -> None:  # fmt: skip
+        player.setdefault("rejoin_share", plan.rejoin_share)  # a rejoin leaves the offsets the rest (rejoin_bounds)
         super().__init__(rows, limits, period_s=period_s, settle_s=damp_s, **player)
         if len(plan) != len(self.rows):
             raise ValueError("the correction plan must have one entry per row")
@@ -55,6 +52,7 @@ class DampingClient(TrajectoryPlayer):
         self._acc = acc.tolist()
         self._maps = [tuple(tuple(r) for r in m.T.tolist()) for m in plan.maps]  # per row: (x column, y column)
         self._bounds = [tuple(b) for b in plan.bounds.tolist()]
+        self._rejoin_bounds = [tuple(b) for b in plan.rejoin_bounds.tolist()]
         self._bound = self._bounds[0]
         interval = period_s if io_names is not None else 1.0 / (sensor_rate_hz or 200.0)
         opts = replace(options, travel=plan.travel)
@@ -100,13 +98,11 @@ class DampingClient(TrajectoryPlayer):
         t0 = time.perf_counter_ns()
         n = len(self._bounds)
         row = k if k < n else n - 1
-        self._bound = self._bounds[row]
+        # rejoining the rows after lost messages: the joints' motion is the rejoin's, the offsets get what it leaves
+        self._bound = self._rejoin_bounds[row] if self._queue else self._bounds[row]
         m = len(self._ref) - 1
         kk = k if k < m else m
-        if self._queue:  # rejoining the rows after lost messages: that segment has the headroom to itself
-            self.damper.coast(self._acc[kk])
-        else:
-            self.damper.step(self._ref[kk], self._ref_rate[kk], self._acc[kk])
+        self.damper.step(self._ref[kk], self._ref_rate[kk], self._acc[kk])
         cx, cy = self.damper.carts
         dx, dy = cx.x, cy.x
         mx, my = self._maps[row]
@@ -121,11 +117,9 @@ class DampingClient(TrajectoryPlayer):
         if self._return is not None:
             return self._returning()
         if self._k >= 0 and self.reply_due:
+            for _ in range(self.skipped):  # the controller extrapolated our command: the offsets moved on as it did
+                self.damper.coast((0.0, 0.0))  # (constant joint velocity: about no pivot acceleration)
             self._read(state)
-            if self.skipped:  # the controller extrapolated our command: the offsets coast as it did, and resume
-                for c in self.damper.carts:  # without acceleration (the rows' rejoin has the headroom to itself)
-                    c.x += c.v * self._period * self.skipped
-                    c.a = 0.0
         try:
             q = super().command(state)
         except StopSession as stop:
@@ -143,23 +137,32 @@ class DampingClient(TrajectoryPlayer):
     def _start_return(self, stop: StopSession) -> Sequence[float]:
         """The damping time is over: a jerk-limited move from the last command (and its velocity) to the last row."""
         self._finish = stop
-        q, prev = self._cmd, self._cmd_prev or self._cmd
-        vel = [(a - b) / self._period for a, b in zip(q, prev)]
         self._return = OnlineMove(self.limits, self._period, self.move_scale)
-        self._return.start(q, self.rows[-1], vel)
-        return self._returning()
+        self._replan_return()
+        return self._returning(replanned=True)
 
-    def _returning(self) -> Sequence[float]:
+    def _replan_return(self) -> None:
+        """(Re)start the return from where the controller's extrapolation of our last two commands puts the arm."""
+        q, prev, n, dt = self._cmd, self._cmd_prev or self._cmd, self.skipped, self._period
+        vel = [(a - b) / dt for a, b in zip(q, prev)]
+        q = tuple(a + n * v * dt for a, v in zip(q, vel))
+        self._cmd_prev, self._cmd = tuple(a - v * dt for a, v in zip(q, vel)), q
+        self._return.start(q, self.rows[-1], vel)
+        self._held = 0
+
+    def _returning(self, replanned: bool = False) -> Sequence[float]:
         move = self._return
         if not self.reply_due:
             return self._cmd
+        if self.skipped and not replanned:  # messages were lost during the return: continue from the extrapolation
+            self._replan_return()
         if move.done:
             if self._held < 2:  # at rest on the last row before the session's stop: it starts with zero velocity
                 self._held += 1
-                self._cmd = move.target
+                self._cmd_prev, self._cmd = self._cmd, move.target
                 return self._cmd
             raise self._finish
-        self._cmd = move.next()
+        self._cmd_prev, self._cmd = self._cmd, move.next()
         self.phase = Phase.SETTLE
         self.return_rows += 1
         return self._cmd

@@ -23,16 +23,13 @@ from planners.rail import Rail
 from planners.rigid_pendulum import wrap_angle
 from trajectories.limits import JointLimits
 
-from .client import LBRClient
-from .constants import Phase
-from .errors import StopSession
-from .moves import OnlineMove
-from .outcome import cost_figures_us
-from .state import LBRState
+from lbrcli.fri import LBRClient, LBRState, OnlineMove, Phase, StopSession
+from lbrcli.fri.outcome import cost_figures_us
 
 LOG_COLUMNS = ("mode", "est_phi", "est_omega", "cart_x", "cart_v", "cart_a")  # -, [rad], [rad/s], [m], [m/s], [m/s²]
 _CALM = math.radians(3.0)  # [rad] the rod counts as hanging still below this …
 _CALM_RATE = 0.2  # [rad/s] … and this
+_FADE = 0.98  # per cycle: how fast commands return onto the rail after the controller extrapolated them
 
 
 class UprightClient(LBRClient):
@@ -52,6 +49,9 @@ class UprightClient(LBRClient):
         self._q_start = tuple(rail.q_start)
         self._move: OnlineMove | None = None
         self._last: Sequence[float] | None = None
+        self._last2: Sequence[float] | None = None  # the command before _last
+        self._off: list[float] | None = None  # [rad] commands − rail after an extrapolation (fading), and …
+        self._off_prev: list[float] = []  # … one cycle earlier
         self._reading = None
         self._calm = 0  # commands in a row with the rod hanging still
         self._waited = 0
@@ -97,22 +97,60 @@ class UprightClient(LBRClient):
             self._last = state.ipo_joint_position
         if not self.reply_due:
             return self._last
+        if self.skipped:
+            self._bridged(self.skipped)
         move = self._move
         if not move.done:
-            self._last = move.next()
+            self._last2, self._last = self._last, move.next()
             self.phase = Phase.MOVE
             return self._last
         if self.ctl is None:
             self._wait_for_readings()
-            self._last = self._q_start
+            self._last2 = self._last = self._q_start
             self.phase = Phase.WAIT
             return self._last
         t0 = time.perf_counter_ns()
         q = self._control()
+        if self._off is not None:
+            q = self._offset(q)
         self.cost_ns.append(time.perf_counter_ns() - t0)
-        self._last = q
+        self._last2, self._last = self._last, q
         self.phase = Phase.TRAJECTORY
         return q
+
+    def _bridged(self, n: int) -> None:
+        """The controller extrapolated our last command at constant joint velocity for ``n`` periods (its messages
+        were lost): a move is re-planned from there; the cart (nearly straight on its rail over a few periods) coasts
+        as the joints did and the observer is predicted through the gap."""
+        if self._last2 is None:
+            return
+        dt = self._period
+        vel = [(a - b) / dt for a, b in zip(self._last, self._last2)]  # [rad/s]
+        q = tuple(a + n * v * dt for a, v in zip(self._last, vel))
+        self._last, self._last2 = q, tuple(a - v * dt for a, v in zip(q, vel))
+        if not self._move.done:
+            self._move.start(q, self._move.target, vel)
+        elif self.cart is not None:
+            cart = self.cart  # its acceleration resumes where it was: ramping it up from 0 again would starve the
+            for _ in range(n):  # balance of acceleration at every gap (the extrapolation's own jump is the controller's)
+                cart.x += cart.v * dt
+                self.obs.predict(0.0)
+            self._t += n * dt
+            # the extrapolation left the rail's curve along its tangent: the commands carry that offset on, and fade
+            # it, so that the next command's second difference is the rail's own (no doubled curvature term)
+            on_rail = self.rail.joints_list(cart.x)
+            before = self.rail.joints_list(cart.x - cart.v * dt)
+            self._off = [a - b for a, b in zip(q, on_rail)]
+            self._off_prev = [a - b for a, b in zip(self._last2, before)]
+
+    def _offset(self, q: Sequence[float]) -> tuple[float, ...]:
+        """``q`` plus the off-rail offset of an extrapolation, decaying with a double pole at ``_FADE`` per cycle."""
+        off, prev = self._off, self._off_prev
+        nxt = [2.0 * _FADE * a - _FADE * _FADE * b for a, b in zip(off, prev)]
+        self._off_prev, self._off = off, nxt
+        if max(abs(v) for v in nxt) < 1e-15 and max(abs(v) for v in off) < 1e-15:
+            self._off = None
+        return tuple(a + b for a, b in zip(q, nxt))
 
     def _wait_for_readings(self) -> None:
         """Hold the start until the rod has hung still for 0.5 s of readings; then start the controller."""
@@ -139,7 +177,7 @@ class UprightClient(LBRClient):
 
     def _control(self) -> Sequence[float]:
         obs, ctl, cart = self.obs, self.ctl, self.cart
-        dt = self._period * (1 + self.skipped)
+        dt = self._period
         r = self.reader.latest
         if r is not self._reading:
             self._reading = r

@@ -18,6 +18,7 @@ from .ik import IkResult, PathSolver, _Stall
 
 SCORE_DT = 0.1  # [s] sample spacing of the scoring pass
 DISTINCT = 0.05  # [rad] candidates closer than this (all joints) count as one
+EXTRA_TRIES = 24  # further candidates tried (coarse pass) when the best-scored ones stall
 PER_CLASS = 1  # candidates scored per configuration class (signs of A2, A4, A6), most comfortable first
 SEEDS = (
     (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0),  # thesis start
@@ -141,8 +142,11 @@ def solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] | 
     )
     first: _Stall | None = None
     tries = order[: solver.options.start_attempts]
-    # the coarse pass of each candidate first; the (slower) pass on every sample only for the best two
-    for fallback, ranks in ((False, tries), (True, tries[:2])):
+    # the coarse pass of each candidate first — the best-scored ones, then the others (the scoring pass is coarser
+    # still and cannot tell apart starts on one self-motion manifold whose speeds differ along the path); the
+    # (slower) pass on every sample only for the best two
+    more = order[solver.options.start_attempts : solver.options.start_attempts + EXTRA_TRIES]
+    for fallback, ranks in ((False, tries), (False, more), (True, tries[:2])):
         for i in ranks:
             try:
                 res = solver.solve(candidates[i], candidates[i], progress, fallback=fallback)

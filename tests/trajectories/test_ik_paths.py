@@ -34,3 +34,20 @@ def test_cartesian_shapes_are_what_they_say(robot):
     tilted = cartesian_path("figure8", 0.005, tilt_deg=45.0)
     tilt = np.degrees(np.arccos(-tilted.rotation[:, 2, 2]))
     assert np.allclose(tilt, 45.0)
+
+
+def test_a_start_on_the_right_part_of_the_self_motion_is_found_when_the_best_scored_ones_stall(robot, limits):
+    """Two FK-built paths (so reachable within the speed limits) whose best-scored start candidates all stall on a
+    joint's speed limit: the solver goes on to the other candidates and solves them."""
+    from trajectories.ik import IkOptions, solve_ik_path
+
+    suite = {p.name: p for p in build_suite(robot, limits)}
+    options = IkOptions(nullspace_gain=None, speed_limits=True)
+    for name in ("joint-c1-v0.9-1ms", "singular-elbow-0.03-1ms"):
+        path = suite[name]
+        res = solve_ik_path(robot, path.position, path.rotation, None, limits, options, times=path.t)
+        check = verify_joint_path(robot, path, res.q, limits)
+        assert check.ok(1e-6, 1e-5), name
+        assert check.velocity_ratio <= 1.0 + 1e-9 and res.start.startswith("auto (candidate")
+        rank = int(res.start.split("candidate ")[1].split(" ")[0])
+        assert rank > options.start_attempts  # found beyond the best-scored ones

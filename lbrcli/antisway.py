@@ -31,7 +31,8 @@ def flange_down_rotation():
     return np.diag([-1.0, 1.0, -1.0])
 
 
-FALLBACK_DESIGNS = ("robust-slow", "box-zvd", "zvd", "ei", "accel")  # tried at the same a_max by auto
+FALLBACK_DESIGNS = ("robust-slow", "robust-gentle", "box-zvd", "zvd", "ei", "accel")  # tried by auto
+GENTLE_STEP, GENTLE_TRIES = 0.85, 6  # robust-gentle: a_max × 0.85 on the failing segments only, up to 6 times
 FALLBACK_RESIDUAL = math.radians(0.5)  # a fallback must leave at most this swing across the length band [rad]
 DEFAULT_BALL_RADIUS = 0.02  # [m]
 
@@ -221,7 +222,33 @@ class _Setup:
     ball_radius: float
 
 
-def _attempt(setup: _Setup, a_max: float, options, progress=None) -> AntiSwayResult:
+def _accel_text(a_max) -> str:
+    """One a_max [m/s²], or one per segment."""
+    import numpy as np
+
+    a = np.atleast_1d(np.asarray(a_max, dtype=float))
+    return f"{a[0]:g}" if len(a) == 1 or np.all(a == a[0]) else "/".join(f"{v:.3g}" for v in a)
+
+
+def _gentle(setup: _Setup, a_max: float, options, failed: AntiSwayResult) -> tuple[AntiSwayResult, tuple] | None:
+    """The failed design again with a_max lowered step by step on the segments that break a joint limit only (the
+    others keep the user's a_max); the first that plans (and its a_max per segment), or None."""
+    import numpy as np
+
+    res = failed
+    accels = np.full(len(failed.plan.segments), float(a_max))
+    for _ in range(GENTLE_TRIES):
+        segs = _failing_segments(res.plan, res.report) if not res.report.ok else []
+        if not segs:
+            return None  # it failed on something a lower acceleration does not cure here
+        accels[[k - 1 for k in segs]] *= GENTLE_STEP
+        res = _attempt(setup, tuple(accels), options)
+        if res.failure is None:
+            return res, tuple(accels)
+    return None
+
+
+def _attempt(setup: _Setup, a_max, options, progress=None) -> AntiSwayResult:
     """Plan, IK, check, predict across the band; ``failure`` says why the plan cannot be used (or None)."""
     from planners.antisway import band_lengths, plan_layout
 
@@ -252,7 +279,7 @@ def _attempt(setup: _Setup, a_max: float, options, progress=None) -> AntiSwayRes
         first = next(v for v in report.failing if plan.segment_of(v.t) == failing[0])
         others = f" (segments {', '.join(map(str, failing))} exceed the limits)" if len(failing) > 1 else ""
         failure = (
-            f"a_max = {a_max:g} m/s² does not fit the joint limits at segment {failing[0]}{others} "
+            f"a_max = {_accel_text(a_max)} m/s² does not fit the joint limits at segment {failing[0]}{others} "
             f"({seg.start[0]:.3f},{seg.start[1]:.3f})→({seg.end[0]:.3f},{seg.end[1]:.3f}): {first.describe()}"
         )
     elif setup.max_sway is not None and max(band.peak) > setup.max_sway:
@@ -373,16 +400,25 @@ def plan_anti_sway(
         tried = []
         peak_speed = float(np.abs(np.diff(result.plan.position, axis=0)).max() / dt) * math.sqrt(2)
         for design in FALLBACK_DESIGNS:
-            # robust-slow: the robust design with the pivot speed capped at 3/4 of the failed plan's peak
+            # robust-slow: the robust design with the pivot speed capped at 3/4 of the failed plan's peak;
+            # robust-gentle: the robust design at a lower a_max (a joint's acceleration limit is often what fails,
+            # and the robust design stays quicker than the baseline at a little less acceleration)
+            if design == "robust-gentle":
+                found = _gentle(setup, a_max, options, result) if not result.report.ok else None
+                if found is not None and (tol == 0 or max(found[0].band.residual) <= FALLBACK_RESIDUAL):
+                    alt = replace(found[0], baseline_duration=result.baseline_duration)  # at the user's a_max
+                    tried.append((alt, f" (a_max {_accel_text(found[1])} m/s² per segment)"))
+                continue
             alt_opts = (replace(options, shaper="robust", v_max=min(options.v_max, 0.75 * peak_speed))
                         if design == "robust-slow" else replace(options, shaper=design))
             alt = _attempt(setup, a_max, alt_opts)
             if alt.failure is None and (tol == 0 or max(alt.band.residual) <= FALLBACK_RESIDUAL):
-                tried.append(alt)
+                tried.append((alt, ""))
         if tried:
-            alt = min(tried, key=lambda r: r.stop_time)
+            alt, note = min(tried, key=lambda r: r[0].stop_time)
             to = alt.plan.shaper if math.isinf(alt.plan.options.v_max) else (
                 f"{alt.plan.shaper} (pivot speed ≤ {alt.plan.options.v_max:.2f} m/s)")
+            to += note
             return replace(alt, fallback={"from": shaper, "to": to, "reason": result.failure})
     msg = result.failure
     if fallback and shaper == "auto":

@@ -125,6 +125,23 @@ def test_default_falls_back_to_another_design_before_giving_up(tmp_path):
     assert figs["worst_residual_sway_deg"] <= 0.5
 
 
+def test_a_layout_whose_middle_segments_break_a_joint_limit_lowers_a_max_there_only(tmp_path):
+    """A generated layout where the robust design at a_max breaks A4's acceleration limit on two of four segments:
+    the fallback keeps a_max on the others and lowers it on those, which stays quicker than the thesis baseline
+    (a single lower a_max, or the box-zvd design, would not), with the residual still ≤ 0.5° across the band."""
+    pts = np.array([[0.4084, -0.2578], [0.4084, 0.0506], [0.6703, 0.0506], [0.6703, 0.3132], [0.4786, 0.3132]])
+    length, a_max = 0.13517, 2.3442
+    base = plan_anti_sway_files(pts, length, a_max, None, "accel", 0.005, tmp_path / "b.csv")
+    figs = plan_anti_sway_files(pts, length, a_max, None, "auto", 0.005, tmp_path / "g.csv")
+    assert figs["limits_ok"] and "per segment" in figs["fallback"]["to"]
+    per_segment = [float(v) for v in figs["fallback"]["to"].split("a_max ")[1].split(" m/s²")[0].split("/")]
+    assert len(per_segment) == 4 and max(per_segment) == pytest.approx(a_max, abs=0.006) and min(per_segment) < a_max
+    assert figs["motion_s"] <= base["motion_s"]
+    pos = Robot().fk_path(read_joint_csv(tmp_path / "g.csv").q)[0]  # judged independently of the planner
+    for e in (-0.1, 0.0, 0.1):
+        assert judge_sway(pos, 0.005, length * (1 + e), figs["motion_s"])[0] <= 0.5  # [deg]
+
+
 def test_max_sway_bounds_the_swing_for_every_length_in_the_band(tmp_path, lbr):
     proc = lbr("plan", "anti-sway", "--length", L, "--a-max", 2, "--max-sway", 3, "-o", tmp_path / "m.csv",
                "--points", "0.40,-0.30;0.62,-0.30;0.62,0.05", "--json")

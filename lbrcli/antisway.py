@@ -404,7 +404,7 @@ def plan_anti_sway(
             # robust-gentle: the robust design at a lower a_max (a joint's acceleration limit is often what fails,
             # and the robust design stays quicker than the baseline at a little less acceleration)
             if design == "robust-gentle":
-                found = _gentle(setup, a_max, options, result) if not result.report.ok else None
+                found = _gentle(setup, a_max, options, result)
                 if found is not None and (tol == 0 or max(found[0].band.residual) <= FALLBACK_RESIDUAL):
                     alt = replace(found[0], baseline_duration=result.baseline_duration)  # at the user's a_max
                     tried.append((alt, f" (a_max {_accel_text(found[1])} m/s² per segment)"))

@@ -26,6 +26,7 @@ from planners.pendulum import natural_period
 from trajectories.limits import JointLimits
 
 from lbrcli.fri import LBRState, OnlineMove, Phase, StopSession, TrajectoryPlayer
+from lbrcli.fri.moves import extrapolated
 from lbrcli.fri.outcome import cost_figures_us
 
 LOG_COLUMNS = ("damp_x", "damp_y", "est_theta_x", "est_theta_y", "ref_theta_x", "ref_theta_y")  # [m] ×2, [rad] ×4
@@ -143,11 +144,9 @@ class DampingClient(TrajectoryPlayer):
 
     def _replan_return(self) -> None:
         """(Re)start the return from where the controller's extrapolation of our last two commands puts the arm."""
-        q, prev, n, dt = self._cmd, self._cmd_prev or self._cmd, self.skipped, self._period
-        vel = [(a - b) / dt for a, b in zip(q, prev)]
-        q = tuple(a + n * v * dt for a, v in zip(q, vel))
-        self._cmd_prev, self._cmd = tuple(a - v * dt for a, v in zip(q, vel)), q
-        self._return.start(q, self.rows[-1], vel)
+        prev = self._cmd_prev or self._cmd
+        self._cmd, self._cmd_prev, vel = extrapolated(self._cmd, prev, self.skipped, self._period)
+        self._return.start(self._cmd, self.rows[-1], vel)
         self._held = 0
 
     def _returning(self, replanned: bool = False) -> Sequence[float]:

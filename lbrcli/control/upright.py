@@ -24,6 +24,7 @@ from planners.rigid_pendulum import wrap_angle
 from trajectories.limits import JointLimits
 
 from lbrcli.fri import LBRClient, LBRState, OnlineMove, Phase, StopSession
+from lbrcli.fri.moves import extrapolated
 from lbrcli.fri.outcome import cost_figures_us
 
 LOG_COLUMNS = ("mode", "est_phi", "est_omega", "cart_x", "cart_v", "cart_a")  # -, [rad], [rad/s], [m], [m/s], [m/s²]
@@ -125,14 +126,15 @@ class UprightClient(LBRClient):
         if self._last2 is None:
             return
         dt = self._period
-        vel = [(a - b) / dt for a, b in zip(self._last, self._last2)]  # [rad/s]
-        q = tuple(a + n * v * dt for a, v in zip(self._last, vel))
-        self._last, self._last2 = q, tuple(a - v * dt for a, v in zip(q, vel))
+        q, self._last2, vel = extrapolated(self._last, self._last2, n, dt)
+        self._last = q
         if not self._move.done:
             self._move.start(q, self._move.target, vel)
         elif self.cart is not None:
-            cart = self.cart  # its acceleration resumes where it was: ramping it up from 0 again would starve the
-            for _ in range(n):  # balance of acceleration at every gap (the extrapolation's own jump is the controller's)
+            # the cart's acceleration resumes where it was: ramping it up from 0 again would starve the balance of
+            # acceleration at every gap (the extrapolation's own jump is the controller's)
+            cart = self.cart
+            for _ in range(n):
                 cart.x += cart.v * dt
                 self.obs.predict(0.0)
             self._t += n * dt

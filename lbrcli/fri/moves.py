@@ -158,6 +158,16 @@ class ShapedMove:
         return tuple(q.tolist())
 
 
+def extrapolated(last: Sequence[float], before: Sequence[float], n: int, period_s: float
+                 ) -> tuple[tuple[float, ...], tuple[float, ...], list[float]]:  # fmt: skip
+    """Where the controller's constant-velocity extrapolation of our last two commands ``before``, ``last`` [rad]
+    puts the arm after ``n`` lost periods of ``period_s`` [s]: (that command, the one a period before it, the
+    velocity [rad/s])."""
+    vel = [(a - b) / period_s for a, b in zip(last, before)]
+    q = tuple(a + n * v * period_s for a, v in zip(last, vel))
+    return q, tuple(a - v * period_s for a, v in zip(q, vel)), vel
+
+
 def rejoin(limits: JointLimits, period_s: float, q: Sequence[float], v: Sequence[float], rows: Sequence[Sequence[float]],
            first: int, max_tries: int = 20, share: float = 1.0) -> tuple[list[tuple[float, ...]], int]:
     """The commands that bring the robot from ``q`` [rad] moving at ``v`` [rad/s] (where the controller's

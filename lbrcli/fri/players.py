@@ -24,7 +24,7 @@ from trajectories.limits import JointLimits
 from .client import LBRClient
 from .constants import Phase
 from .errors import StopSession
-from .moves import OnlineMove, ShapedMove, rejoin
+from .moves import OnlineMove, ShapedMove, extrapolated, rejoin
 from .state import LBRState
 from .sway import SwayWatch
 
@@ -186,9 +186,8 @@ class TrajectoryPlayer(LBRClient):
         """The controller extrapolated our last command for ``n`` periods (its messages were lost): continue from
         there — the move re-planned, the rows rejoined in step (never rows behind), the settle unchanged."""
         dt = self._period
-        vel = [(a - b) / dt for a, b in zip(self._last, self._last2)]  # [rad/s]
-        q = tuple(a + n * v * dt for a, v in zip(self._last, vel))
-        self._last, self._last2 = q, tuple(a - v * dt for a, v in zip(q, vel))
+        q, self._last2, vel = extrapolated(self._last, self._last2, n, dt)
+        self._last = q
         self.skipped_rows += n
         move = self._move
         if move is not None and (not move.done or not self._started):  # moving to, or waiting at, the start

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .linsolve import solve_spd
+
 
 @dataclass(frozen=True)
 class BoxQpSolution:
@@ -29,39 +31,41 @@ def solve_box_qp(
     wrong sign. Exact after finitely many steps; ``max_iter`` only guards against cycling.
     """
     m = len(g)
-    x = np.clip(np.zeros(m) if x0 is None else np.asarray(x0, dtype=float), lo, hi)
-    active = np.where(x <= lo, -1, np.where(x >= hi, 1, 0))
-    active[lo >= hi] = -1
+    x = np.minimum(np.maximum(np.zeros(m) if x0 is None else np.asarray(x0, dtype=float), lo), hi)
+    pinned = lo >= hi
+    active = np.zeros(m, dtype=np.int8)
+    active[x <= lo] = -1
+    active[x >= hi] = 1
+    active[pinned] = -1
+    tol = 1e-14 * (1.0 + float(np.abs(g).max()))
     for _ in range(max_iter):
-        free = active == 0
-        target = x.copy()
-        if free.any():
-            fixed = ~free
-            rhs = g[free] - H[np.ix_(free, fixed)] @ x[fixed]
-            target[free] = np.linalg.solve(H[np.ix_(free, free)], rhs)
-        step = target - x
-        # largest feasible fraction of the step
-        alpha, block = 1.0, -1
-        for i in np.flatnonzero(free):
-            if step[i] > 0 and x[i] + step[i] > hi[i]:
-                a = (hi[i] - x[i]) / step[i]
-            elif step[i] < 0 and x[i] + step[i] < lo[i]:
-                a = (lo[i] - x[i]) / step[i]
-            else:
+        free = np.flatnonzero(active == 0)
+        if len(free):
+            fixed = np.flatnonzero(active)
+            rows = H[free]
+            rhs = g[free] - rows[:, fixed] @ x[fixed] if len(fixed) else g[free]
+            xf = x[free]
+            step = solve_spd(rows[:, free], rhs) - xf
+            # largest feasible fraction of the step: the first bound it meets blocks it
+            end = xf + step
+            ratio = np.ones(len(free))
+            up, down = end > hi[free], end < lo[free]
+            ratio[up] = (hi[free][up] - xf[up]) / step[up]
+            ratio[down] = (lo[free][down] - xf[down]) / step[down]
+            b = int(np.argmin(ratio))
+            if ratio[b] < 1.0:
+                x[free] = xf + ratio[b] * step
+                i = free[b]
+                active[i] = 1 if step[b] > 0 else -1
+                x[i] = hi[i] if step[b] > 0 else lo[i]
                 continue
-            if a < alpha:
-                alpha, block = a, i
-        x = x + alpha * step
-        if block >= 0:
-            active[block] = 1 if step[block] > 0 else -1
-            x[block] = hi[block] if step[block] > 0 else lo[block]
-            continue
+            x[free] = end
         # optimal on the free set: check the multipliers of the fixed variables (gradient of the objective)
         grad = H @ x - g
         wrong = np.where(active == -1, -grad, np.where(active == 1, grad, 0.0))
-        wrong[lo >= hi] = 0.0
+        wrong[pinned] = 0.0
         worst = int(np.argmax(wrong))
-        if wrong[worst] <= 1e-14 * (1.0 + np.abs(g).max()):
+        if wrong[worst] <= tol:
             break
         active[worst] = 0
-    return BoxQpSolution(x=x, active=active)
+    return BoxQpSolution(x=x, active=active.astype(int))

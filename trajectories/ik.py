@@ -37,12 +37,17 @@ from .boxqp import solve_box_qp
 from .chain import Chain, pose_errors
 from .errors import IkError
 from .limits import JointLimits
+from .linsolve import solve_spd
 from .robot import Robot
 
 NO_TIMES_DT = 1e-3  # [s] sample period assumed for the null-space pull when a path has no times
 REPAIR_BACK = (0.1, 0.3, 1.0)  # [s] how far a repair goes back before a sample too fast to reach, per try
 REPAIR_RATE = 10.0  # [1/s] null-space pull toward the configuration the stalled sample needs
 MAX_REPAIRS = 6  # backtracks per pass at most
+SPLINE_ACCELERATION = 1.5  # interpolated peak acceleration accepted, × the coarse samples' own (when relaxed)
+COARSE_REFINE = 4  # a coarse pass whose interpolation misses is retried at 1/4 of its spacing
+STAGNATION = 0.9  # a box-bound Newton step that keeps this share of the error counts as stalled
+STALL_STEPS, STALL_STEPS_FIRST = 3, 12  # such steps in a row that end a Newton loop (the first pose: a far start)
 
 
 @dataclass(frozen=True)
@@ -181,6 +186,9 @@ class PathSolver:
         q = np.minimum(np.maximum(q, lo), hi)
         null_pending = gain > 0.0
         it = 0
+        worse = 0  # box-bound steps in a row that barely reduced the error
+        last = math.inf
+        boxed = False
         while True:
             pin.computeJointJacobians(model, data, q)
             dM = target.actInv(pin.updateFramePlacement(model, data, fid))
@@ -189,13 +197,19 @@ class PathSolver:
             er = math.sqrt(err[3:] @ err[3:])
             if (ep <= tol_p and er <= tol_r and not null_pending) or it >= budget:
                 return q, ep, er, it
+            size = ep + 0.1 * er  # [m]
+            # pinned by the box at a constrained minimum above the tolerance: more steps cannot reach the target
+            worse = worse + 1 if boxed and size > STAGNATION * last else 0
+            if worse >= (STALL_STEPS_FIRST if first else STALL_STEPS):
+                return q, ep, er, it
+            last = size
             J = pin.Jlog6(dM) @ pin.getFrameJacobian(model, data, fid, pin.LOCAL)
             Jw = J * w  # speed-weighted: the step minimises Σ (dq_j / q̇max_j)²
             JJt = Jw @ Jw.T + damp6
-            dq = -w * (Jw.T @ np.linalg.solve(JJt, err))
+            dq = -w * (Jw.T @ solve_spd(JJt, err))
             pull = None
             if null_pending:
-                pinv = w[:, None] * np.linalg.solve(JJt, Jw).T
+                pinv = w[:, None] * solve_spd(JJt, Jw).T
                 pull = gain * ((eye7 - pinv @ J) @ (q_ref - q))
                 dq += pull
                 null_pending = first and it < 20  # converge the first pose to the q_ref-closest solution
@@ -210,6 +224,9 @@ class PathSolver:
                     H += 1e-6 * w_inv2
                     g += 1e-6 * w_inv2 @ pull
                 new = q + solve_box_qp(H, g, lo - q, hi - q).x
+                boxed = True
+            else:
+                boxed = False
             q = new
             it += 1
 
@@ -289,29 +306,33 @@ class PathSolver:
         return out, ep_all, er_all, steps, relaxed
 
     def refine(self, q: np.ndarray, iterations: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Vectorised Newton iterations on every sample → (q, position errors [m], rotation errors [rad])."""
+        """Vectorised Newton iterations on the samples still missing the tolerance (q clipped into the limits
+        first) → (q, position errors [m], rotation errors [rad])."""
         opt = self.options
-        q = np.array(q, dtype=float)
+        q = np.clip(q, self.lower, self.upper)
         damp = opt.damping * np.eye(6)
+        ep, er = np.empty(self.n), np.empty(self.n)
+        todo = np.arange(self.n)
         for it in range(iterations + 1):
-            pos, rot, jac = self.chain.kinematics(q)
-            err = pose_errors(pos, rot, self.positions, self.rotations)
-            ep = np.linalg.norm(err[:, :3], axis=1)
-            er = np.linalg.norm(err[:, 3:], axis=1)
-            todo = np.flatnonzero((ep > opt.position_tolerance) | (er > opt.rotation_tolerance))
+            pos, rot, jac = self.chain.kinematics(q[todo])
+            err = pose_errors(pos, rot, self.positions[todo], self.rotations[todo])
+            ep[todo] = e_p = np.linalg.norm(err[:, :3], axis=1)
+            er[todo] = e_r = np.linalg.norm(err[:, 3:], axis=1)
+            miss = (e_p > opt.position_tolerance) | (e_r > opt.rotation_tolerance)
+            todo = todo[miss]
             if len(todo) == 0 or it == iterations:
                 break
-            J = jac[todo]
-            x = np.linalg.solve(J @ J.transpose(0, 2, 1) + damp, err[todo, :, None])
-            q[todo] += (J.transpose(0, 2, 1) @ x)[:, :, 0]
-            np.clip(q, self.lower, self.upper, out=q)
+            J = jac[miss]
+            x = np.linalg.solve(J @ J.transpose(0, 2, 1) + damp, err[miss, :, None])
+            q[todo] = np.clip(q[todo] + (J.transpose(0, 2, 1) @ x)[:, :, 0], self.lower, self.upper)
         return q, ep, er
 
-    def rates(self, q: np.ndarray) -> tuple[float, float]:
-        """Peak |q̇| and |q̈| over the path relative to the limits (backward and second differences)."""
+    def rates(self, q: np.ndarray, idx: np.ndarray | None = None) -> tuple[float, float]:
+        """Peak |q̇| and |q̈| over the path (or its samples ``idx``) relative to the limits (backward and second
+        differences)."""
         if self.times is None or len(q) < 2:
             return 0.0, 0.0
-        dt = np.diff(self.times)[:, None]
+        dt = np.diff(self.times if idx is None else self.times[idx])[:, None]
         vel = np.diff(q, axis=0) / dt
         v = float((np.abs(vel) / self.limits.velocity).max())
         if len(q) < 3:
@@ -329,7 +350,7 @@ class PathSolver:
             dM = target.actInv(pin.updateFramePlacement(model, data, fid))
             err = pin.log6(dM).vector
             J = pin.Jlog6(dM) @ pin.getFrameJacobian(model, data, fid, pin.LOCAL)
-            dq = -J.T @ np.linalg.solve(J @ J.T + 1e-10 * self._eye6, err)
+            dq = -J.T @ solve_spd(J @ J.T + 1e-10 * self._eye6, err)
             size = np.abs(dq).max()
             q = q + dq * min(1.0, 0.3 / max(size, 1e-300))
             if size < 1e-13:
@@ -378,15 +399,41 @@ class PathSolver:
                 )
         return IkError(f"{where} did not converge inside the joint limits: {remaining}", **kw)
 
-    def coarse_indices(self) -> np.ndarray:
+    def coarse_indices(self, spacing: float | None = None) -> np.ndarray:
+        """Samples of a sequential pass every ``spacing`` [s] (default ``coarse_dt``), first and last included."""
         if self.times is None or self.n < 3 or self.options.nullspace_gain is not None:
             return np.arange(self.n)
         dt = float(np.median(np.diff(self.times)))
-        stride = max(1, int(round(self.options.coarse_dt / dt))) if dt > 0 else 1
+        spacing = self.options.coarse_dt if spacing is None else spacing
+        stride = max(1, int(round(spacing / dt))) if dt > 0 else 1
         idx = np.arange(0, self.n, stride)
         if idx[-1] != self.n - 1:
             idx = np.append(idx, self.n - 1)
         return idx
+
+    def interpolated(
+        self, idx: np.ndarray, q_start: np.ndarray, q_ref: np.ndarray, progress: Callable[[int], None] | None
+    ) -> IkResult | None:
+        """Sequential pass on the samples ``idx``, spline to every sample and vectorised refinement → the result,
+        or None when the refined path misses a tolerance or limit. Raises _Stall."""
+        opt = self.options
+        qc, _, _, steps_c, relaxed = self.sequential(idx, q_start, q_ref, progress, loose=True)
+        spline = CubicSpline(self.times[idx], qc, axis=0)
+        q, ep, er = self.refine(spline(self.times), opt.refine_iterations)
+        vel, acc = self.rates(q)
+        # where the pass had to drop an acceleration bound, the knots' own acceleration is what the path needs;
+        # the interpolation may add a little to it, not more (a spike between knots is refined at finer spacing)
+        acc_allowed = max(1.0, SPLINE_ACCELERATION * self.rates(qc, idx)[1]) if relaxed else 1.0
+        if (
+            (np.abs(q) <= self.upper + 1e-12).all()
+            and ep.max() <= max(opt.position_tolerance, 1e-7)
+            and er.max() <= max(opt.rotation_tolerance, 1e-6)
+            and (not self.speed or (vel <= 1.0 and acc <= acc_allowed))
+        ):
+            steps = np.zeros(self.n, dtype=np.int32)
+            steps[idx] = steps_c
+            return IkResult(q, ep, er, steps, velocity_ratio=vel, acceleration_ratio=acc, acceleration_relaxed=relaxed)
+        return None
 
     def solve(
         self,
@@ -395,32 +442,23 @@ class PathSolver:
         progress: Callable[[int], None] | None = None,
         fallback: bool = True,
     ) -> IkResult:
-        """Coarse sequential pass, spline + vectorised refinement, then (``fallback``) the sequential pass on
-        every sample if the coarse one stalled or its refined path misses a tolerance or limit. Raises _Stall."""
-        opt = self.options
+        """Coarse sequential pass, spline + vectorised refinement; when the refined path misses a tolerance or
+        limit (fast self-motion near a singularity between knots), the same at a quarter of the spacing; then
+        (``fallback``) the sequential pass on every sample if a coarse pass stalled or missed. Raises _Stall."""
         idx = self.coarse_indices()
         if len(idx) < self.n:
             try:
-                qc, _, _, steps_c, relaxed = self.sequential(idx, q_start, q_ref, progress, loose=True)
+                res = self.interpolated(idx, q_start, q_ref, progress)
+                if res is not None:
+                    return res
+                finer = self.coarse_indices(self.options.coarse_dt / COARSE_REFINE)
+                if len(finer) < self.n:
+                    res = self.interpolated(finer, q_start, q_ref, progress)
+                    if res is not None:
+                        return res
             except _Stall:
                 if not fallback:
                     raise
-                qc = None
-            if qc is not None:
-                spline = CubicSpline(self.times[idx], qc, axis=0)
-                q, ep, er = self.refine(spline(self.times), opt.refine_iterations)
-                vel, acc = self.rates(q)
-                inside = (np.abs(q) <= self.upper + 1e-12).all()
-                if (
-                    inside
-                    and ep.max() <= max(opt.position_tolerance, 1e-7)
-                    and er.max() <= max(opt.rotation_tolerance, 1e-6)
-                    and (not self.speed or (vel <= 1.0 and (relaxed > 0 or acc <= 1.0)))
-                ):
-                    steps = np.zeros(self.n, dtype=np.int32)
-                    steps[idx] = steps_c
-                    return IkResult(q, ep, er, steps, velocity_ratio=vel, acceleration_ratio=acc,
-                                    acceleration_relaxed=relaxed)
         q, ep, er, steps, relaxed = self.sequential(np.arange(self.n), q_start, q_ref, progress)
         vel, acc = self.rates(q)
         return IkResult(q, ep, er, steps, velocity_ratio=vel, acceleration_ratio=acc, acceleration_relaxed=relaxed)

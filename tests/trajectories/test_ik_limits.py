@@ -98,3 +98,22 @@ def test_null_space_pull_is_per_second_not_per_sample(robot, limits):
 
     assert paths(IkOptions(nullspace_gain=None, nullspace_rate=2.0)) < 1e-3
     assert paths(IkOptions(nullspace_gain=0.002)) > 1e-2  # a per-sample gain pulls 5× harder at 1 ms
+
+
+def test_newton_steps_pinned_by_the_box_stop_early(robot, limits):
+    """A target the joints cannot reach inside their box: the Newton loop ends once the box-bound steps stop
+    reducing the error, well before its budget, and reports the remaining error (above the tolerance)."""
+    from trajectories.ik import IkOptions, PathSolver
+
+    q = np.array([0.0, 0.5, 0.0, -1.2, 0.0, 0.9, 0.0])
+    pos, rot = robot.fk_path(q[None])
+    far = pos + np.array([0.05, 0.0, 0.0])  # 5 cm away, with every joint allowed only ±0.01 rad
+    solver = PathSolver(robot, far, rot, limits, IkOptions(nullspace_gain=None))
+    out, ep, er, steps = solver.track(0, q, q - 0.01, q + 0.01, q, 0.0, 200)
+    assert steps < 20
+    assert ep > 0.01 and np.all(np.abs(out - q) <= 0.01 + 1e-12)
+    # a reachable target inside a wide box still converges
+    near = pos + np.array([0.002, 0.0, 0.0])
+    solver = PathSolver(robot, near, rot, limits, IkOptions(nullspace_gain=None))
+    out, ep, er, steps = solver.track(0, q, q - 0.5, q + 0.5, q, 0.0, 200)
+    assert ep <= 1e-9 and er <= 1e-8

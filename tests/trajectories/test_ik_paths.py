@@ -51,3 +51,17 @@ def test_a_start_on_the_right_part_of_the_self_motion_is_found_when_the_best_sco
         assert check.velocity_ratio <= 1.0 + 1e-9 and res.start.startswith("auto (candidate")
         rank = int(res.start.split("candidate ")[1].split(" ")[0])
         assert rank > options.start_attempts  # found beyond the best-scored ones
+
+
+def test_interpolated_path_keeps_the_acceleration_the_samples_need(robot, limits):
+    """An FK-built fast path whose coarse samples needed one acceleration bound dropped: accepting any spline
+    after a dropped bound let one through at 28× the acceleration limit; only what the samples themselves need
+    (× 1.5) passes, and a finer pass finds the path inside the acceleration limit (its witness shows it exists)."""
+    from trajectories.ik import IkOptions, solve_ik_path
+
+    path = next(p for p in build_suite(robot, limits) if p.name == "joint-c4-v0.9-1ms")
+    res = solve_ik_path(robot, path.position, path.rotation, None, limits,
+                        IkOptions(nullspace_gain=None, speed_limits=True), times=path.t)
+    check = verify_joint_path(robot, path, res.q, limits)
+    assert check.ok(1e-6, 1e-5, acceleration=True)
+    assert res.acceleration_ratio <= 1.0 + 1e-6

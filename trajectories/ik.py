@@ -44,6 +44,7 @@ NO_TIMES_DT = 1e-3  # [s] sample period assumed for the null-space pull when a p
 REPAIR_BACK = (0.1, 0.3, 1.0)  # [s] how far a repair goes back before a sample too fast to reach, per try
 REPAIR_RATE = 10.0  # [1/s] null-space pull toward the configuration the stalled sample needs
 MAX_REPAIRS = 6  # backtracks per pass at most
+GUIDE_RATE = 5.0  # [1/s] null-space pull toward a reference path (an arm-angle plan)
 SPLINE_ACCELERATION = 1.5  # interpolated peak acceleration accepted, × the coarse samples' own (when relaxed)
 COARSE_REFINE = 4  # a coarse pass whose interpolation misses is retried at 1/4 of its spacing
 STAGNATION = 0.9  # a box-bound Newton step that keeps this share of the error counts as stalled
@@ -240,6 +241,7 @@ class PathSolver:
         loose: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
         """Solve the samples ``indices`` in order → (q (m, 7), position errors, rotation errors, steps, relaxed).
+        ``q_ref``: the redundancy target (7,), or one per path sample (n, 7) followed at ``GUIDE_RATE``.
 
         Raises _Stall at the first sample missing the tolerance, or (``margin_floor`` [rad] given) coming
         closer than that to a position limit."""
@@ -255,10 +257,11 @@ class PathSolver:
         q = np.asarray(q_start, dtype=float)
         repairs: dict[int, int] = {}  # stalled sample → backtracks tried
         goal, goal_end = q_ref, -1  # pull target of a repair window, and where the window ends
+        guided = q_ref.ndim == 2  # a reference configuration per sample (an arm-angle plan) instead of one
         i = 0
         while i < m:
             k = indices[i]
-            ref = goal if i <= goal_end else q_ref
+            ref = goal if i <= goal_end else (q_ref[k] if guided else q_ref)
             if i == 0:
                 dt = NO_TIMES_DT
                 lo, hi, _ = self.box(None, None, dt, dt)
@@ -271,7 +274,8 @@ class PathSolver:
                 relaxed += clash
                 q = 2.0 * q1 - q2
                 budget, first = opt.max_iterations, False
-                gain = 1.0 - math.exp(-REPAIR_RATE * dt) if i <= goal_end else self.null_gain(dt)
+                rate = REPAIR_RATE if i <= goal_end else GUIDE_RATE if guided else None
+                gain = self.null_gain(dt) if rate is None else 1.0 - math.exp(-rate * dt)
             q, ep, er, it = self.track(k, q, lo, hi, ref, gain, budget, first, loose)
             if (ep > tol_p or er > tol_r) and i >= 1 and self.speed:
                 # the acceleration bound may be what stops it: retry with position and speed bounds only
@@ -416,8 +420,16 @@ class PathSolver:
     ) -> IkResult | None:
         """Sequential pass on the samples ``idx``, spline to every sample and vectorised refinement → the result,
         or None when the refined path misses a tolerance or limit. Raises _Stall."""
-        opt = self.options
         qc, _, _, steps_c, relaxed = self.sequential(idx, q_start, q_ref, progress, loose=True)
+        return self.through(idx, qc, relaxed, steps_c)
+
+    def through(
+        self, idx: np.ndarray, qc: np.ndarray, relaxed: int, steps_c: np.ndarray | None = None
+    ) -> IkResult | None:
+        """The path through solutions ``qc`` (m, 7) [rad] of the samples ``idx``: cubic spline to every sample and
+        vectorised refinement → the result, or None when it misses a tolerance or limit. ``relaxed``: samples
+        whose acceleration bound had to be dropped (the knots' own acceleration then sets what is accepted)."""
+        opt = self.options
         spline = CubicSpline(self.times[idx], qc, axis=0)
         q, ep, er = self.refine(spline(self.times), opt.refine_iterations)
         vel, acc = self.rates(q)
@@ -431,7 +443,8 @@ class PathSolver:
             and (not self.speed or (vel <= 1.0 and acc <= acc_allowed))
         ):
             steps = np.zeros(self.n, dtype=np.int32)
-            steps[idx] = steps_c
+            if steps_c is not None:
+                steps[idx] = steps_c
             return IkResult(q, ep, er, steps, velocity_ratio=vel, acceleration_ratio=acc, acceleration_relaxed=relaxed)
         return None
 

@@ -14,6 +14,7 @@ from typing import Callable
 
 import numpy as np
 
+from .errors import IkError
 from .ik import IkResult, PathSolver, _Stall
 
 SCORE_DT = 0.1  # [s] sample spacing of the scoring pass
@@ -146,7 +147,13 @@ def solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] | 
     # still and cannot tell apart starts on one self-motion manifold whose speeds differ along the path); the
     # (slower) pass on every sample only for the best two
     more = order[solver.options.start_attempts : solver.options.start_attempts + EXTRA_TRIES]
+    reachable, beyond = True, None
     for fallback, ranks in ((False, tries), (False, more), (True, tries[:2])):
+        if ranks is more and solver.times is not None:
+            beyond = _unreachable(solver)
+            if beyond is not None:
+                reachable = False  # some pose fits no arm angle: the best candidates' stall says where and why
+                break
         for i in ranks:
             try:
                 res = solver.solve(candidates[i], candidates[i], progress, fallback=fallback)
@@ -158,4 +165,60 @@ def solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] | 
             label = f"auto (candidate {rank} of {len(candidates)}, margin {math.degrees(scores[i][1]):.1f}°)"
             return replace(res, start=label, candidates=notes)
     assert first is not None
-    raise solver.diagnose(first)
+    # the redundancy led every start into a part of the self-motion too fast somewhere: plan the arm angle over
+    # the whole path and follow that plan
+    plan = _arm_angle_plan(solver) if solver.speed and reachable else None
+    if plan is not None:
+        label = f"auto (arm-angle plan, peak {plan.peak_speed:.2f} of the speed limits between its stages)"
+        # the plan's configurations are exact solutions: through them directly, else follow it from its start
+        res = solver.through(plan.indices, plan.q, int(solver.rates(plan.q, plan.indices)[1] > 1.0))
+        if res is not None:
+            return replace(res, start=label, candidates=notes)
+        try:
+            res = solver.solve(plan.q[0], plan.reference(solver.times), progress)
+        except _Stall as stall:
+            if stall.k > first.k:
+                first = stall
+        else:
+            return replace(res, start=label, candidates=notes)
+    error = solver.diagnose(first)
+    if not reachable:
+        t = solver.time(beyond)
+        raise _noted(error, f"; pose {beyond} (t = {t:.4f} s) fits no arm angle of any branch inside the position limits")
+    if plan is not None and error.reason == "velocity limit":
+        j = plan.peak_joint
+        raise _noted(
+            error,
+            f" (from where the redundancy led: lbr's whole-path arm-angle search found none below "
+            f"×{plan.peak_speed:.2f} of A{j + 1}'s speed limit, at t = {solver.time(plan.indices[plan.peak_stage]):.2f} s)"
+            if plan.peak_speed > 1.0
+            else " (from where the redundancy led; lbr's whole-path arm-angle plan stays inside the speed limits "
+            "between its stages but its interpolation was not)",
+        )
+    raise error
+
+
+def _noted(error: IkError, note: str) -> IkError:
+    """The same error with ``note`` appended to its message."""
+    return IkError(
+        str(error) + note, index=error.index, t=error.t, position_error=error.position_error,
+        rotation_error=error.rotation_error, reason=error.reason, joint=error.joint, needed=error.needed,
+    )
+
+
+def _unreachable(solver: PathSolver) -> int | None:
+    from .arm_angle import ArmGeometry
+    from .ik_plan import unreachable_sample
+
+    geometry = ArmGeometry.of(solver.robot)
+    return unreachable_sample(
+        geometry, solver.positions, solver.rotations, solver.times, solver.limits, solver.options.limit_margin
+    )
+
+
+def _arm_angle_plan(solver: PathSolver):
+    from .arm_angle import ArmGeometry
+    from .ik_plan import best_plan
+
+    geometry = ArmGeometry.of(solver.robot)
+    return best_plan(geometry, solver.positions, solver.rotations, solver.times, solver.limits)

@@ -15,6 +15,7 @@ import time
 import numpy as np
 
 PINK_ITERATIONS = 10  # QP steps per pose at most
+TIMING_REPEATS = 3  # lbr's timing over the suite: best and median of this many runs
 DEBUG = False
 POSITION_TOL, ROTATION_TOL = 1e-6, 1e-5  # [m], [rad]
 
@@ -138,6 +139,16 @@ def _run(quick: bool) -> list[tuple[str, float, str]]:
                 pink_over_acc += pink_good and check.acceleration_ratio > 1.0 + 1e-6
         ok_pink.append(pink_good)
         witness.append(path.witness is not None or good or pink_good)
+    # the suite's timing again (results already checked above): machine noise on a shared VM is ±10 %
+    runs = [lbr_time]
+    for _ in range(0 if quick else TIMING_REPEATS - 1):
+        t0 = time.perf_counter()
+        for path in suite:
+            try:
+                solve_ik_path(robot, path.position, path.rotation, None, limits, options, times=path.t)
+            except IkError:
+                pass
+        runs.append(time.perf_counter() - t0)
     reachable = int(sum(witness))
     if not quick:
         for line in failures:
@@ -150,7 +161,8 @@ def _run(quick: bool) -> list[tuple[str, float, str]]:
         ("IK suite: lbr ik solved of the reachable", int(sum(o for o, w in zip(ok_lbr, witness) if w)), "paths"),
         ("IK suite: lbr ik outputs above the speed limit", lbr_over_speed, "paths"),
         ("IK suite: lbr ik solved paths above the acceleration limit", lbr_over_acc, "paths"),
-        ("IK suite: lbr ik throughput on one core (auto start included)", lbr_poses / lbr_time, "poses/s"),
+        ("IK suite: lbr ik throughput on one core, best run (auto start included)", lbr_poses / min(runs), "poses/s"),
+        ("IK suite: lbr ik throughput on one core, median run", lbr_poses / float(np.median(runs)), "poses/s"),
         ("IK suite: lbr ik worst position error", worst_p, "m"),
         ("IK suite: lbr ik worst rotation error", worst_r, "rad"),
         ("IK suite: pink solved", int(sum(ok_pink)) if has_pink else -1, "paths"),

@@ -58,6 +58,17 @@ def _rz_rx(q: np.ndarray, sin_alpha: float) -> np.ndarray:
     )
 
 
+def _reference(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Axes (v, w) of the elbow circle's plane for S–W directions u (..., 3): v is the base vertical projected
+    normal to u (the base x axis when u is vertical) — ψ = 0 —, w = u × v."""
+    v = np.array([0.0, 0.0, 1.0]) - u * u[..., 2:3]
+    flat = np.linalg.norm(v, axis=-1) < 1e-9
+    if flat.any():
+        v = np.where(flat[..., None], np.array([1.0, 0.0, 0.0]) - u * u[..., 0:1], v)
+    v = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    return v, np.cross(u, v)
+
+
 def _mt_v(m: np.ndarray, v: np.ndarray) -> np.ndarray:
     """mᵀ·v for stacks of 3×3 matrices and 3-vectors."""
     return np.einsum("...ji,...j->...i", m, v)
@@ -87,13 +98,7 @@ def inverse(
     reach = (cos_b >= -1.0) & (cos_b <= 1.0) & (length > 1e-9)
     cos_b = np.clip(cos_b, -1.0, 1.0)
     sin_b = np.sqrt(1.0 - cos_b * cos_b)
-    # reference direction: the base vertical projected normal to S–W (the base x axis when S–W is vertical)
-    v = np.array([0.0, 0.0, 1.0]) - u * u[..., 2:3]
-    flat = np.linalg.norm(v, axis=-1) < 1e-9
-    if flat.any():
-        v = np.where(flat[..., None], np.array([1.0, 0.0, 0.0]) - u * u[..., 0:1], v)
-    v = v / np.linalg.norm(v, axis=-1, keepdims=True)
-    w = np.cross(u, v)
+    v, w = _reference(u)
     elbow_dir = cos_b[..., None] * u + sin_b[..., None] * (np.cos(psi)[..., None] * v + np.sin(psi)[..., None] * w)
     elbow = np.array([0.0, 0.0, d1]) + d3 * elbow_dir
     # shoulder: z2 = elbow direction = (c1 s2, s1 s2, c2)
@@ -132,13 +137,7 @@ def arm_angle(geometry: ArmGeometry, q: np.ndarray) -> np.ndarray:
     r04 = r02 @ _rz_rx(q[..., 2], 1.0) @ _rz_rx(q[..., 3], -1.0)
     wrist = np.array([0.0, 0.0, d1]) + d3 * elbow_dir + d5 * r04[..., :, 2]
     sw = wrist - np.array([0.0, 0.0, d1])
-    u = sw / np.linalg.norm(sw, axis=-1, keepdims=True)
-    v = np.array([0.0, 0.0, 1.0]) - u * u[..., 2:3]
-    flat = np.linalg.norm(v, axis=-1) < 1e-9
-    if flat.any():
-        v = np.where(flat[..., None], np.array([1.0, 0.0, 0.0]) - u * u[..., 0:1], v)
-    v = v / np.linalg.norm(v, axis=-1, keepdims=True)
-    w = np.cross(u, v)
+    v, w = _reference(sw / np.linalg.norm(sw, axis=-1, keepdims=True))
     return np.arctan2(np.einsum("...i,...i", elbow_dir, w), np.einsum("...i,...i", elbow_dir, v))
 
 

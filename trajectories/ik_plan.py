@@ -35,6 +35,22 @@ MARGIN = np.radians(1.0)  # [rad] grid states closer than this to a position lim
 
 
 @dataclass(frozen=True)
+class PlanTargets:
+    """What a plan is for: the arm, TCP targets (n, 3) [m] and (n, 3, 3) at ``times`` (n,) [s], the limits."""
+
+    geometry: ArmGeometry
+    positions: np.ndarray
+    rotations: np.ndarray
+    times: np.ndarray
+    limits: JointLimits
+
+    def configurations(self, idx, psi: np.ndarray, branch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Closed-form configurations [rad] of the samples ``idx`` at arm angles ``psi`` [rad] and branches,
+        and whether each pose is within reach (shapes broadcast as in :func:`.arm_angle.inverse`)."""
+        return inverse(self.geometry, self.rotations[idx], self.positions[idx], psi, branch)
+
+
+@dataclass(frozen=True)
 class ArmAnglePlan:
     """Configurations (K, 7) [rad] at path samples ``indices`` (K,), their arm angles [rad] and branches, and the
     plan's peak stage-to-stage speed ratio with the joint and stage where it occurs."""
@@ -54,26 +70,22 @@ class ArmAnglePlan:
 
 
 def unreachable_sample(
-    geometry: ArmGeometry,
-    positions: np.ndarray,
-    rotations: np.ndarray,
-    times: np.ndarray,
-    limits: JointLimits,
+    path: PlanTargets,
     margin: float = 1e-4,
     n_psi: int = CHECK_PSI,
 ) -> int | None:
     """The first path sample among the plan's stages whose pose has no configuration ``margin`` [rad] inside
     the position limits at any arm angle of a 0.1° grid in any branch (out of reach or beyond a limit), or None."""
-    idx = stage_indices(times)
+    idx = stage_indices(path.times)
     psi = np.linspace(-np.pi, np.pi, N_PSI, endpoint=False)
-    q, reach = inverse(geometry, rotations[idx][:, None, None], positions[idx][:, None, None], psi[None, None, :],
-                       BRANCHES[None, :, None, :])
-    inside = reach & (np.abs(q) <= limits.position - margin).all(axis=-1)
+    bound = path.limits.position - margin
+    q, reach = path.configurations(idx[:, None, None], psi[None, None, :], BRANCHES[None, :, None, :])
+    inside = reach & (np.abs(q) <= bound).all(axis=-1)
     fine = np.linspace(-np.pi, np.pi, n_psi, endpoint=False)
-    for k in np.flatnonzero(~inside.any(axis=(1, 2))):  # empty on the coarse grid: look closer
-        q, reach = inverse(geometry, rotations[idx[k]], positions[idx[k]], fine[None, :], BRANCHES[:, None, :])
-        if not (reach & (np.abs(q) <= limits.position - margin).all(axis=-1)).any():
-            return int(idx[k])
+    for k in idx[~inside.any(axis=(1, 2))]:  # empty on the coarse grid: look closer
+        q, reach = path.configurations(k, fine[None, :], BRANCHES[:, None, :])
+        if not (reach & (np.abs(q) <= bound).all(axis=-1)).any():
+            return int(k)
     return None
 
 
@@ -89,27 +101,18 @@ def stage_indices(times: np.ndarray, spacing: float = PLAN_DT) -> np.ndarray:
 
 
 def plan_arm_angle(
-    geometry: ArmGeometry,
-    positions: np.ndarray,
-    rotations: np.ndarray,
-    times: np.ndarray,
-    limits: JointLimits,
+    path: PlanTargets,
     n_psi: int = N_PSI,
     spacing: float = PLAN_DT,
 ) -> list[ArmAnglePlan]:
     """Plans of the arm angle and branch along TCP targets (n, 3) [m], (n, 3, 3) at ``times`` (n,) [s] on the
     grid — the best ending in each branch, best first; none when some stage has no configuration inside the
     position limits (the pose is out of reach or beyond a limit for every arm angle and branch)."""
+    times, limits = path.times, path.limits
     idx = stage_indices(times, spacing)
     psi = np.linspace(-np.pi, np.pi, n_psi, endpoint=False)
     # (K, 8, M, 7) configurations of every stage, branch and arm angle
-    q, reach = inverse(
-        geometry,
-        rotations[idx][:, None, None],
-        positions[idx][:, None, None],
-        psi[None, None, :],
-        BRANCHES[None, :, None, :],
-    )
+    q, reach = path.configurations(idx[:, None, None], psi[None, None, :], BRANCHES[None, :, None, :])
     valid = reach & (np.abs(q) <= limits.position - MARGIN).all(axis=-1)
     if not valid.any(axis=(1, 2)).all():
         return []
@@ -145,12 +148,12 @@ def plan_arm_angle(
         states.reverse()
         bs = np.array([s[0] for s in states])
         ms = np.array([s[1] for s in states])
-        plans.append(_plan(idx, q[np.arange(K), bs, ms], psi[ms], BRANCHES[bs], times, limits))
+        plans.append(_plan(path, idx, q[np.arange(K), bs, ms], psi[ms], BRANCHES[bs]))
     return plans
 
 
-def _plan(idx, q, psi, branch, times, limits) -> ArmAnglePlan:
-    speed = np.abs(np.diff(q, axis=0)) / (np.diff(times[idx])[:, None] * limits.velocity)
+def _plan(path: PlanTargets, idx: np.ndarray, q: np.ndarray, psi: np.ndarray, branch: np.ndarray) -> ArmAnglePlan:
+    speed = np.abs(np.diff(q, axis=0)) / (np.diff(path.times[idx])[:, None] * path.limits.velocity)
     stage, joint = np.unravel_index(int(np.argmax(speed)), speed.shape) if len(speed) else (0, 0)
     return ArmAnglePlan(
         indices=idx, q=q, psi=psi, branch=branch,
@@ -171,11 +174,7 @@ def _terms(q: np.ndarray, dt: np.ndarray, limits: JointLimits) -> tuple[np.ndarr
 
 
 def refine_plan(
-    geometry: ArmGeometry,
-    positions: np.ndarray,
-    rotations: np.ndarray,
-    times: np.ndarray,
-    limits: JointLimits,
+    path: PlanTargets,
     plan: ArmAnglePlan,
     max_iterations: int = 200,
     stop_speed: float = PEAK_GOAL,
@@ -185,15 +184,13 @@ def refine_plan(
     ψ_k touches only the terms of stages k−2…k+2)."""
     from scipy.optimize import minimize
 
-    idx = plan.indices
+    idx, branch, limits = plan.indices, plan.branch, path.limits
     K = len(idx)
-    rot, pos = rotations[idx], positions[idx]
-    dt = np.diff(times[idx])
-    branch = plan.branch
+    dt = np.diff(path.times[idx])
     eps = 1e-6  # [rad]
 
     def joints(psi: np.ndarray) -> np.ndarray:  # (..., K) → (..., K, 7)
-        return inverse(geometry, rot, pos, psi, branch)[0]
+        return path.configurations(idx, psi, branch)[0]
 
     def cost(psi: np.ndarray) -> float:
         return float(sum(t.sum() for t in _terms(joints(psi), dt, limits)))
@@ -226,31 +223,26 @@ def refine_plan(
     res = minimize(cost, plan.psi, jac=grad, method="L-BFGS-B", callback=good_enough,
                    options={"maxiter": max_iterations})
     psi = res.x if res.fun <= cost(plan.psi) else plan.psi
-    return _plan(idx, joints(psi), psi, branch, times, limits)
+    return _plan(path, idx, joints(psi), psi, branch)
 
 
 def best_plan(
-    geometry: ArmGeometry,
-    positions: np.ndarray,
-    rotations: np.ndarray,
-    times: np.ndarray,
-    limits: JointLimits,
+    path: PlanTargets,
     goal: float = PEAK_GOAL,
 ) -> ArmAnglePlan | None:
     """Grid plans refined off the grid, best grid plan first, until one peaks at ≤ ``goal`` × the speed limits;
     the lowest-peak one found, or None when no plan exists (some pose is beyond reach or the position limits
     for every arm angle and branch)."""
     coarse = []
-    for plan in plan_arm_angle(geometry, positions, rotations, times, limits):
-        coarse.append(refine_plan(geometry, positions, rotations, times, limits, plan, COARSE_ITERATIONS))
+    for plan in plan_arm_angle(path):
+        coarse.append(refine_plan(path, plan, COARSE_ITERATIONS))
         if coarse[-1].peak_speed <= goal:
             break
     best = None
     # between the stages the self-motion may turn faster than their averages show: refine the best ones at finer
     # stages
     for plan in sorted(coarse, key=lambda p: p.peak_speed)[:FINE_PLANS]:
-        fine = densify(geometry, positions, rotations, times, limits, plan)
-        plan = refine_plan(geometry, positions, rotations, times, limits, fine)
+        plan = refine_plan(path, densify(path, plan))
         if best is None or plan.peak_speed < best.peak_speed:
             best = plan
         if best.peak_speed <= goal:
@@ -259,25 +251,21 @@ def best_plan(
 
 
 def densify(
-    geometry: ArmGeometry,
-    positions: np.ndarray,
-    rotations: np.ndarray,
-    times: np.ndarray,
-    limits: JointLimits,
+    path: PlanTargets,
     plan: ArmAnglePlan,
     spacing: float = FINE_DT,
 ) -> ArmAnglePlan:
     """The plan at stages ``spacing`` [s] apart: at each, the arm angle of the plan's joint-space interpolation,
     in whichever branch of the two neighbouring plan stages lands nearer to it."""
+    times = path.times
     idx = stage_indices(times, spacing)
     q_lin = plan.reference(times)[idx]
-    psi = arm_angle(geometry, q_lin)
+    psi = arm_angle(path.geometry, q_lin)
     k = np.clip(np.searchsorted(times[plan.indices], times[idx], side="right") - 1, 0, len(plan.indices) - 1)
     k1 = np.minimum(k + 1, len(plan.indices) - 1)
-    rot, pos = rotations[idx], positions[idx]
-    q_a, _ = inverse(geometry, rot, pos, psi, plan.branch[k])
-    q_b, _ = inverse(geometry, rot, pos, psi, plan.branch[k1])
+    q_a, _ = path.configurations(idx, psi, plan.branch[k])
+    q_b, _ = path.configurations(idx, psi, plan.branch[k1])
     nearer_b = np.abs(q_b - q_lin).max(axis=-1) < np.abs(q_a - q_lin).max(axis=-1)
     q = np.where(nearer_b[:, None], q_b, q_a)
     branch = np.where(nearer_b[:, None], plan.branch[k1], plan.branch[k])
-    return _plan(idx, q, psi, branch, times, limits)
+    return _plan(path, idx, q, psi, branch)

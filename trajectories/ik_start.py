@@ -206,19 +206,21 @@ def _noted(error: IkError, note: str) -> IkError:
     )
 
 
-def _unreachable(solver: PathSolver) -> int | None:
+def _targets(solver: PathSolver):
     from .arm_angle import ArmGeometry
-    from .ik_plan import unreachable_sample
+    from .ik_plan import PlanTargets
 
     geometry = ArmGeometry.of(solver.robot)
-    return unreachable_sample(
-        geometry, solver.positions, solver.rotations, solver.times, solver.limits, solver.options.limit_margin
-    )
+    return PlanTargets(geometry, solver.positions, solver.rotations, solver.times, solver.limits)
+
+
+def _unreachable(solver: PathSolver) -> int | None:
+    from .ik_plan import unreachable_sample
+
+    return unreachable_sample(_targets(solver), solver.options.limit_margin)
 
 
 def _arm_angle_plan(solver: PathSolver):
-    from .arm_angle import ArmGeometry
     from .ik_plan import best_plan
 
-    geometry = ArmGeometry.of(solver.robot)
-    return best_plan(geometry, solver.positions, solver.rotations, solver.times, solver.limits)
+    return best_plan(_targets(solver))

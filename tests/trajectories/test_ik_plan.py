@@ -7,7 +7,7 @@ from trajectories.arm_angle import ArmGeometry
 from trajectories.errors import IkError
 from trajectories.ik import IkOptions, solve_ik_path
 from trajectories.ik_paths import build_suite, verify_joint_path
-from trajectories.ik_plan import best_plan, unreachable_sample
+from trajectories.ik_plan import PlanTargets, best_plan, unreachable_sample
 
 BOUNDED = IkOptions(nullspace_gain=None, speed_limits=True)
 
@@ -18,12 +18,12 @@ def test_no_reachable_pose_is_called_unreachable(robot, limits):
     for seed in (0, 3):
         for path in build_suite(robot, limits, seed=seed):
             if path.witness is not None:
-                assert unreachable_sample(geometry, path.position, path.rotation, path.t, limits) is None, path.name
+                assert unreachable_sample(PlanTargets(geometry, path.position, path.rotation, path.t, limits)) is None, path.name
 
 
 def test_a_pose_needing_a_joint_past_its_limit_is_found_and_named(robot, limits):
     path = next(p for p in build_suite(robot, limits) if p.name == "circle-xy-tilt45-yaw60-smooth-5ms")
-    k = unreachable_sample(ArmGeometry.of(robot), path.position, path.rotation, path.t, limits)
+    k = unreachable_sample(PlanTargets(ArmGeometry.of(robot), path.position, path.rotation, path.t, limits))
     assert k is not None and 150 <= k <= 260  # the local solver stalls at pose 212 with A6 at its limit
     try:
         solve_ik_path(robot, path.position, path.rotation, None, limits, BOUNDED, times=path.t)
@@ -36,7 +36,7 @@ def test_a_pose_needing_a_joint_past_its_limit_is_found_and_named(robot, limits)
 
 def test_plan_along_a_fast_joint_path_is_exact_and_inside_the_limits(robot, limits):
     path = next(p for p in build_suite(robot, limits, seed=2) if p.name == "joint-c0-v0.9-1ms")
-    plan = best_plan(ArmGeometry.of(robot), path.position, path.rotation, path.t, limits)
+    plan = best_plan(PlanTargets(ArmGeometry.of(robot), path.position, path.rotation, path.t, limits))
     assert plan is not None
     pos, rot = robot.fk_path(plan.q)
     assert np.abs(pos - path.position[plan.indices]).max() < 1e-9

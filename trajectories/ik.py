@@ -424,11 +424,13 @@ class PathSolver:
         return self.through(idx, qc, relaxed, steps_c)
 
     def through(
-        self, idx: np.ndarray, qc: np.ndarray, relaxed: int, steps_c: np.ndarray | None = None
+        self, idx: np.ndarray, qc: np.ndarray, relaxed: int, steps_c: np.ndarray | None = None,
+        any_acceleration: bool = False,
     ) -> IkResult | None:
         """The path through solutions ``qc`` (m, 7) [rad] of the samples ``idx``: cubic spline to every sample and
         vectorised refinement → the result, or None when it misses a tolerance or limit. ``relaxed``: samples
-        whose acceleration bound had to be dropped (the knots' own acceleration then sets what is accepted)."""
+        whose acceleration bound had to be dropped (the knots' own acceleration then sets what is accepted);
+        ``any_acceleration``: accept whatever acceleration, reporting the samples above the limit as relaxed."""
         opt = self.options
         spline = CubicSpline(self.times[idx], qc, axis=0)
         q, ep, er = self.refine(spline(self.times), opt.refine_iterations)
@@ -436,6 +438,10 @@ class PathSolver:
         # where the pass had to drop an acceleration bound, the knots' own acceleration is what the path needs;
         # the interpolation may add a little to it, not more (a spike between knots is refined at finer spacing)
         acc_allowed = max(1.0, SPLINE_ACCELERATION * self.rates(qc, idx)[1]) if relaxed else 1.0
+        if any_acceleration and self.speed:
+            acc_allowed = math.inf
+            step = np.diff(q, 2, axis=0) / (np.diff(self.times)[1:, None] ** 2)
+            relaxed = int((np.abs(step) > self.limits.acceleration).any(axis=1).sum())
         if (
             (np.abs(q) <= self.upper + 1e-12).all()
             and ep.max() <= max(opt.position_tolerance, 1e-7)

@@ -181,6 +181,10 @@ def solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] | 
                 first = stall
         else:
             return replace(res, start=label, candidates=notes)
+        # last: the plan's path if it keeps the speed limits, its accelerations reported (warned) as elsewhere
+        res = solver.through(plan.indices, plan.q, 1, any_acceleration=True)
+        if res is not None:
+            return replace(res, start=label, candidates=notes)
     error = solver.diagnose(first)
     if not reachable:
         t = solver.time(beyond)

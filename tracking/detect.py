@@ -105,8 +105,8 @@ def ellipse_fit(contour: np.ndarray) -> float:
     det = c20 * c02 - c11 * c11
     if det <= 1e-9:
         return 0.0
-    ys, xs = np.ogrid[0 : fill.shape[0], 0 : fill.shape[1]]
-    dx, dy = xs - m["m10"] / m["m00"], ys - m["m01"] / m["m00"]
+    dx = np.arange(fill.shape[1], dtype=float)[None, :] - m["m10"] / m["m00"]
+    dy = np.arange(fill.shape[0], dtype=float)[:, None] - m["m01"] / m["m00"]
     inside = (c02 * dx * dx - 2.0 * c11 * dx * dy + c20 * dy * dy) <= 4.0 * det
     blob = fill.astype(bool)
     union = np.count_nonzero(blob | inside)
@@ -173,19 +173,38 @@ def coarse_factor(width_px: int) -> int:
     return 2 if width_px >= 960 else 1
 
 
-def find_blobs_coarse(bgr: np.ndarray, spec: ColorSpec, gates: BlobGates, factor: int) -> list[Blob]:
-    """:func:`find_blobs` on a whole frame in two passes: the colour's pixels on the frame shrunk by factor
-    (area averaging, no morphology, so a ball of 2 px radius still shows), then the exact detection at full
-    resolution in a window around each region found, skipping regions longer than the largest ball. Same result as one full-resolution pass at a fraction
-    of the cost; falls back to it when the coarse pass finds very many regions or a blob is cut by a window.
+def coarse_hsv(bgr: np.ndarray, factor: int) -> np.ndarray:
+    """The image shrunk by ``factor`` (area averaging) in HSV: the first pass of :func:`find_blobs_coarse`."""
+    import cv2
+
+    h, w = bgr.shape[:2]
+    return cv2.cvtColor(cv2.resize(bgr, (w // factor, h // factor), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2HSV)
+
+
+def find_blobs_coarse(
+    bgr: np.ndarray,
+    spec: ColorSpec,
+    gates: BlobGates,
+    factor: int,
+    origin: tuple[int, int] = (0, 0),
+    frame_size: tuple[int, int] | None = None,
+    small_hsv: np.ndarray | None = None,
+) -> list[Blob]:
+    """:func:`find_blobs` on a whole frame (or a large window of one: ``origin``, ``frame_size`` as there) in two
+    passes: the colour's pixels on the image shrunk by factor (area averaging, no morphology, so a ball of 2 px
+    radius still shows), then the exact detection at full resolution in a window around each region found,
+    skipping regions longer than the largest ball. Same result as one full-resolution pass at a fraction of the
+    cost; falls back to it when the coarse pass finds very many regions or a blob is cut by a window.
+    ``small_hsv``: :func:`coarse_hsv` of the image already (several colour thresholds on one image).
     """
     import cv2
 
-    if factor <= 1:
-        return find_blobs(bgr, spec, gates)
     h, w = bgr.shape[:2]
-    small = cv2.resize(bgr, (w // factor, h // factor), interpolation=cv2.INTER_AREA)
-    mask = color_mask(cv2.cvtColor(small, cv2.COLOR_BGR2HSV), spec)
+    ox, oy = origin
+    size = frame_size or (w, h)
+    if factor <= 1:
+        return find_blobs(bgr, spec, gates, origin, size)
+    mask = color_mask(coarse_hsv(bgr, factor) if small_hsv is None else small_hsv, spec)
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     # regions longer than the largest ball (a cable, a big box) cannot hold one apart from them; tiny ones are noise
     longest = 1.5 * 2.0 * math.sqrt(gates.max_area_px / math.pi) / factor + 2.0
@@ -195,15 +214,15 @@ def find_blobs_coarse(bgr: np.ndarray, spec: ColorSpec, gates: BlobGates, factor
         if max(r[2], r[3]) <= longest and max(cv2.contourArea(c), 1.0) >= least
     ]
     if len(boxes) > _COARSE_MAX_REGIONS:
-        return find_blobs(bgr, spec, gates)
+        return find_blobs(bgr, spec, gates, origin, size)
     out: list[Blob] = []
     for x, y, bw, bh in boxes:
         pad = 4 + max(bw, bh) // 2
         x0, y0 = max((x - pad) * factor, 0), max((y - pad) * factor, 0)
         x1, y1 = min((x + bw + pad) * factor, w), min((y + bh + pad) * factor, h)
-        for b in find_blobs(bgr[y0:y1, x0:x1], spec, gates, (x0, y0), (w, h)):
-            if b.clipped:
-                return find_blobs(bgr, spec, gates)
+        for b in find_blobs(bgr[y0:y1, x0:x1], spec, gates, (x0 + ox, y0 + oy), size):
+            if b.clipped:  # cut by a coarse window (or by the outer window, which the caller handles)
+                return find_blobs(bgr, spec, gates, origin, size)
             if all(abs(b.u - o.u) > 0.5 or abs(b.v - o.v) > 0.5 for o in out):
                 out.append(b)
     return out

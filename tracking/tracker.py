@@ -30,7 +30,9 @@ import numpy as np
 
 from .ambiguity import choose_pendulum
 from .color import ColorSpec, with_min_saturation
-from .detect import Blob, BlobGates, coarse_factor, find_blobs, find_blobs_coarse, to_hsv
+from .detect import Blob, BlobGates, coarse_factor, coarse_hsv, find_blobs, find_blobs_coarse, to_hsv
+
+COARSE_WINDOW_PX = 250_000  # search windows larger than this [px²] get the coarse first pass of whole frames
 
 
 @dataclass(frozen=True)
@@ -217,9 +219,14 @@ class _Follower:
             max_area_px=o.gates.max_area_px * self._smear(pred),
         )
         sub = frame[y0:y1, x0:x1]
-        hsv = to_hsv(sub)
+        factor = coarse_factor(w) if (x1 - x0) * (y1 - y0) > COARSE_WINDOW_PX else 1  # the frame sets the ball size
+        hsv = to_hsv(sub) if factor == 1 else coarse_hsv(sub, factor)
         for spec in self._specs(pred):
-            blob = self.choose(find_blobs(sub, spec, gates, (x0, y0), (w, h), hsv), pred)
+            if factor > 1:  # a large window (a fast ball, or the first frames after a fix): coarse pass first
+                found = find_blobs_coarse(sub, spec, gates, factor, (x0, y0), (w, h), hsv)
+            else:
+                found = find_blobs(sub, spec, gates, (x0, y0), (w, h), hsv)
+            blob = self.choose(found, pred)
             if blob is not None:
                 return (None, False) if blob.clipped else (blob, True)  # clipped: measure it on the whole frame
         return None, True
@@ -263,6 +270,7 @@ class BallTracker:
         self._n = 0  # updates so far
         self._revision: list[tuple[int, Blob | None]] = []
         self.full_frame_searches = 0  # how often the window failed and the whole frame was searched
+        self._coarse: tuple[np.ndarray, np.ndarray] | None = None  # (frame, its coarse HSV) of the last search
         self.notes: list[str] = []  # ambiguities met and how they were resolved (for the user)
         self._started = False  # a first fix was made (start_uv only applies before it)
         self._acquire_spec = with_min_saturation(spec, self.options.acquire_min_saturation)
@@ -314,8 +322,13 @@ class BallTracker:
     # ------------------------------------------------------------------ internals
 
     def _whole(self, frame: np.ndarray, spec: ColorSpec) -> list[Blob]:
-        """Blobs passing the strict gates on the whole frame (a coarse pass first on large frames)."""
-        return find_blobs_coarse(frame, spec, self.options.gates, coarse_factor(frame.shape[1]))
+        """Blobs passing the strict gates on the whole frame (a coarse pass first on large frames, its shrunk
+        image kept for further colour thresholds on the same frame)."""
+        factor = coarse_factor(frame.shape[1])
+        if factor > 1 and (self._coarse is None or self._coarse[0] is not frame):
+            self._coarse = (frame, coarse_hsv(frame, factor))
+        small = self._coarse[1] if factor > 1 else None
+        return find_blobs_coarse(frame, spec, self.options.gates, factor, small_hsv=small)
 
     def _current(self) -> _Follower | None:
         if self._hyp is not None:

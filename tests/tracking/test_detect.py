@@ -100,3 +100,52 @@ def test_colour_names_and_hue_ranges():
     for bad in ("purple-ish", "10-200", "x-y", ""):
         with pytest.raises(OptionError):
             color_spec(bad)
+
+
+def _wide_scene(rng):
+    """A 1920×1080 frame with five red balls (radius 5–25 px), a long red bar and speckle noise."""
+    img = canvas(1920, 1080, 150)
+    img += rng.integers(0, 12, img.shape, dtype=np.uint8)
+    balls = [(rng.uniform(60, 1860), rng.uniform(60, 1020), r) for r in (5.0, 8.0, 12.0, 18.0, 25.0)]
+    for cx, cy, r in balls:
+        x0, y0 = int(cx - r - 2), int(cy - r - 2)
+        draw_disc(img[y0 : y0 + int(2 * r + 5), x0 : x0 + int(2 * r + 5)], cx - x0, cy - y0, r, (35, 30, 205))
+    img[500:512, 100:700] = (35, 30, 205)  # a red bar: no ball
+    return img, balls
+
+
+def _same(a, b):
+    key = lambda x: (round(x.u), round(x.v))  # noqa: E731
+    a, b = sorted(a, key=key), sorted(b, key=key)
+    assert len(a) == len(b)
+    for p, q in zip(a, b):
+        assert abs(p.u - q.u) < 1e-9 and abs(p.v - q.v) < 1e-9 and p.area_px == q.area_px and p.clipped == q.clipped
+
+
+def test_coarse_whole_frame_search_finds_what_the_full_resolution_pass_finds():
+    from tracking.detect import coarse_factor, find_blobs_coarse
+
+    rng = np.random.default_rng(11)
+    gates = BlobGates(min_area_px=40.0, max_area_px=4000.0)
+    for _ in range(3):
+        img, balls = _wide_scene(rng)
+        full = find_blobs(img, RED, gates)
+        assert len(full) == len(balls)
+        _same(find_blobs_coarse(img, RED, gates, coarse_factor(1920)), full)
+
+
+def test_coarse_search_of_a_window_keeps_frame_coordinates_and_flags_a_ball_cut_by_its_edge():
+    from tracking.detect import coarse_hsv, find_blobs_coarse
+
+    rng = np.random.default_rng(12)
+    gates = BlobGates(min_area_px=40.0, max_area_px=4000.0)
+    img, balls = _wide_scene(rng)
+    cx, cy, r = balls[-1]  # the largest ball, cut by the window's right edge
+    x0, y0, x1, y1 = max(int(cx) - 700, 0), max(int(cy) - 300, 0), int(cx + r) - 2, min(int(cy) + 300, 1080)
+    sub = img[y0:y1, x0:x1]
+    full = find_blobs(sub, RED, gates, (x0, y0), (1920, 1080))
+    coarse = find_blobs_coarse(sub, RED, gates, 2, (x0, y0), (1920, 1080), coarse_hsv(sub, 2))
+    assert any(b.clipped for b in full)
+    assert any(b.clipped for b in coarse)  # the caller then measures it on the whole frame
+    inside = [b for b in full if not b.clipped]
+    assert all(x0 <= b.u < x1 and y0 <= b.v < y1 for b in inside)

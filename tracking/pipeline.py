@@ -23,7 +23,7 @@ from .calibration import CameraCalibration, to_plane, undistort_points
 from .color import ColorSpec
 from .detect import Blob
 from .tracker import BallTracker, TrackerOptions
-from .video import VideoInfo, iter_frames, probe_video
+from .video import VideoInfo, iter_frames, prefetched, probe_video
 
 
 @dataclass(frozen=True)
@@ -127,7 +127,7 @@ def track_video(
             if radii is not None:
                 radii[k] = blob.radius_px if blob is not None else math.nan
 
-    for k, t, frame in iter_frames(path, fps):
+    for k, t, frame in prefetched(iter_frames(path, fps)):  # decoding overlaps the tracking
         p: tuple[float, float] | None = fixed
         if pivot_tracker is not None:
             pb = pivot_tracker.update(frame, t)

@@ -93,6 +93,7 @@ class _Follower:
         self.options = options
         self.fixes: list[_Fix] = [_Fix(t, blob.u, blob.v)]
         self.areas: deque[float] = deque([blob.area_px], maxlen=options.area_history)
+        self._area: float | None = None  # median of ``areas``, None after they change
         self.area_misses = 0
         self.fit = blob.ellipse_fit
         self.sats: deque[float] = deque([blob.saturation], maxlen=options.area_history)
@@ -128,7 +129,10 @@ class _Follower:
 
     @property
     def area(self) -> float:
-        return float(median(self.areas))
+        """Median of the learned areas [px²] (cached: asked for many times per frame)."""
+        if self._area is None:
+            self._area = float(median(self.areas))
+        return self._area
 
     def radius(self) -> float:
         return math.sqrt(self.area / math.pi)
@@ -188,6 +192,7 @@ class _Follower:
             if self.area_misses >= self.options.area_reset_misses:  # the learned area was wrong: relearn
                 self.areas.clear()
                 self.areas.append(round_[0].area_px)
+                self._area = None
                 self.area_misses = 0
                 return round_[0]
         return None
@@ -239,6 +244,7 @@ class _Follower:
         if pred is not None and pred.frame_step_px > self.options.blur_min_step_radii * self.radius():
             return
         self.areas.append(blob.area_px)
+        self._area = None
         self.sats.append(blob.saturation)
 
 

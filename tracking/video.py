@@ -116,3 +116,52 @@ def iter_frames(path: str | Path, fps: float | None = None) -> Iterator[tuple[in
             raise InputError("video has no decodable frames", file=spath)
     finally:
         cap.release()
+
+
+def prefetched(items: Iterator, depth: int = 8) -> Iterator:
+    """The items of an iterator (frames from :func:`iter_frames`) produced by a background thread up to ``depth``
+    ahead, so that decoding (OpenCV releases the GIL) overlaps the consumer's work on a second core. An
+    exception of the producer is raised in the consumer; a consumer that stops early stops the producer and
+    closes its iterator (the video file)."""
+    import queue
+    import threading
+
+    q: queue.Queue = queue.Queue(maxsize=depth)
+    stop = threading.Event()
+    end = object()
+
+    def put(entry) -> bool:
+        while not stop.is_set():
+            try:
+                q.put(entry, timeout=0.05)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def produce() -> None:
+        try:
+            for item in items:
+                if not put((None, item)):
+                    return
+            put((None, end))
+        except BaseException as exc:  # handed to the consumer, which raises it
+            put((exc, None))
+        finally:
+            close = getattr(items, "close", None)
+            if close is not None:
+                close()
+
+    thread = threading.Thread(target=produce, name="frame-prefetch", daemon=True)
+    thread.start()
+    try:
+        while True:
+            exc, item = q.get()
+            if exc is not None:
+                raise exc
+            if item is end:
+                return
+            yield item
+    finally:
+        stop.set()
+        thread.join(timeout=5.0)

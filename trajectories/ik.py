@@ -70,6 +70,9 @@ class IkOptions:
     coarse_dt: float = 0.02  # [s] sample spacing of the sequential pass on dense paths
     refine_iterations: int = 5  # vectorised Newton iterations on every sample after the coarse pass
     start_attempts: int = 4  # with q0 = None: best-scored start candidates tried on the full path
+    # with q0 = None: when the result exceeds the acceleration limit, also plan the arm angle over the whole path
+    # (0.5–4 s more) and keep the path with the lower peak acceleration
+    smooth: bool = False
 
 
 @dataclass(frozen=True)

@@ -126,7 +126,25 @@ def score_candidates(solver: PathSolver, candidates: list[np.ndarray]) -> list[t
 
 
 def solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] | None = None) -> IkResult:
-    """Solve the path from the best-scored start candidate, trying the next ones if it stalls."""
+    """Solve the path from the best-scored start candidate, trying the next ones if it stalls; with
+    ``options.smooth``, a result above the acceleration limit is compared with the arm-angle plan's path."""
+    res = _solve_with_auto_start(solver, progress)
+    if not (solver.options.smooth and solver.speed and res.acceleration_ratio > 1.0 and "arm-angle" not in res.start):
+        return res
+    from dataclasses import replace
+
+    plan = _arm_angle_plan(solver)
+    alt = solver.through(plan.indices, plan.q, 1, any_acceleration=True) if plan is not None else None
+    if alt is None or alt.velocity_ratio > 1.0 or alt.acceleration_ratio >= res.acceleration_ratio:
+        return res
+    label = (
+        f"auto (arm-angle plan: peak acceleration {alt.acceleration_ratio:.2f} of the limit instead of "
+        f"{res.acceleration_ratio:.2f} from the start chosen first)"
+    )
+    return replace(alt, start=label, candidates=res.candidates)
+
+
+def _solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] | None = None) -> IkResult:
     from dataclasses import replace
 
     candidates = start_candidates(solver)

@@ -59,6 +59,14 @@ def ik(
     no_speed_limits: Annotated[
         bool, typer.Option("--no-speed-limits", help="Bound joint positions only, not joint speeds and accelerations.")
     ] = False,
+    smooth: Annotated[
+        bool,
+        typer.Option(
+            "--smooth",
+            help="Without --q0: when the joint accelerations exceed the limit, also plan the arm angle over the "
+            "whole path (0.5–4 s more) and keep the path with the lower peak acceleration.",
+        ),
+    ] = False,
     json_out: JsonOpt = False,
 ) -> None:
     """Inverse kinematics of a whole path inside the joint position, speed and acceleration limits.
@@ -89,7 +97,9 @@ def ik(
     lim = limits_from(limits)
     task = read_task_csv(task_csv)
     rot = matrices_from_quaternions(task.quaternion)
-    options = IkOptions(nullspace_rate=nullspace_rate, nullspace_gain=None, speed_limits=not no_speed_limits)
+    options = IkOptions(
+        nullspace_rate=nullspace_rate, nullspace_gain=None, speed_limits=not no_speed_limits, smooth=smooth
+    )
     t0 = time.perf_counter()
     with rep.progress("IK", len(task)) as update:
         res = solve_ik_path(robot, task.position, rot, q_ref, lim, options, times=task.t, progress=update)

@@ -55,3 +55,22 @@ def test_bad_nullspace_rate_is_exit_2(lbr, tmp_path):
     task = _write(path, tmp_path / "c.csv")
     res = lbr("ik", task, "-o", tmp_path / "q.csv", "--nullspace-rate", "-1")
     assert res.returncode == 2 and "--nullspace-rate" in res.stderr
+
+
+def test_smooth_keeps_the_arm_angle_plan_when_its_accelerations_are_lower(lbr, tmp_path, robot, limits):
+    """A fast FK-built 5 ms path whose locally resolved output reaches ≈ 26× the acceleration limit: --smooth
+    compares it with the whole-path arm-angle plan's path and keeps that (≈ 2×), speeds still inside the limits."""
+    from trajectories.ik_paths import build_suite
+
+    path = next(p for p in build_suite(robot, limits) if p.name == "joint-c5-v0.9-5ms")
+    task = _write(path, tmp_path / "fast.csv")
+    plain = json.loads(lbr("ik", task, "-o", tmp_path / "a.csv", "--json").stdout)
+    res = lbr("ik", task, "-o", tmp_path / "b.csv", "--json", "--smooth")
+    assert res.returncode == 0, res.stderr
+    smooth = json.loads(res.stdout)
+    assert plain["peak_acceleration_ratio"] > 5.0
+    assert smooth["peak_acceleration_ratio"] < 0.5 * plain["peak_acceleration_ratio"]
+    assert "arm-angle plan" in smooth["start"] and smooth["peak_velocity_ratio"] <= 1.0
+    check = verify_joint_path(robot, path, read_joint_csv(tmp_path / "b.csv").q, limits)
+    assert check.ok(1e-6, 1e-5)
+    assert abs(check.acceleration_ratio - smooth["peak_acceleration_ratio"]) < 0.05 * smooth["peak_acceleration_ratio"]

@@ -14,8 +14,8 @@ Two passes:
    Library default (``nullspace_gain`` set): the legacy per-sample pull, every sample solved sequentially,
    speed bounds only with ``speed_limits=True``.
 2. The coarse solution is interpolated (cubic spline) to every sample and refined by a few vectorised Newton
-   iterations (:mod:`.chain`); if the refined path misses the tolerance or a limit, the sequential pass runs
-   again on every sample.
+   iterations (:mod:`.chain`); if the refined path misses the tolerance or a limit, the same at a quarter of
+   the spacing, then the sequential pass on every sample.
 
 When ``q0`` is ``None`` the start is chosen for the whole path among the inverse solutions of the first pose
 (:mod:`.ik_start`). A pose that cannot be reached raises :class:`IkError` saying why: out of reach (by how
@@ -38,6 +38,7 @@ from .chain import Chain, pose_errors
 from .errors import IkError
 from .limits import JointLimits
 from .linsolve import solve_spd
+from .resample import spaced_indices
 from .robot import Robot
 
 NO_TIMES_DT = 1e-3  # [s] sample period assumed for the null-space pull when a path has no times
@@ -410,13 +411,7 @@ class PathSolver:
         """Samples of a sequential pass every ``spacing`` [s] (default ``coarse_dt``), first and last included."""
         if self.times is None or self.n < 3 or self.options.nullspace_gain is not None:
             return np.arange(self.n)
-        dt = float(np.median(np.diff(self.times)))
-        spacing = self.options.coarse_dt if spacing is None else spacing
-        stride = max(1, int(round(spacing / dt))) if dt > 0 else 1
-        idx = np.arange(0, self.n, stride)
-        if idx[-1] != self.n - 1:
-            idx = np.append(idx, self.n - 1)
-        return idx
+        return spaced_indices(self.times, self.options.coarse_dt if spacing is None else spacing)
 
     def interpolated(
         self, idx: np.ndarray, q_start: np.ndarray, q_ref: np.ndarray, progress: Callable[[int], None] | None
@@ -440,11 +435,12 @@ class PathSolver:
         vel, acc = self.rates(q)
         # where the pass had to drop an acceleration bound, the knots' own acceleration is what the path needs;
         # the interpolation may add a little to it, not more (a spike between knots is refined at finer spacing)
-        acc_allowed = max(1.0, SPLINE_ACCELERATION * self.rates(qc, idx)[1]) if relaxed else 1.0
         if any_acceleration and self.speed:
             acc_allowed = math.inf
             step = np.diff(q, 2, axis=0) / (np.diff(self.times)[1:, None] ** 2)
             relaxed = int((np.abs(step) > self.limits.acceleration).any(axis=1).sum())
+        else:
+            acc_allowed = max(1.0, SPLINE_ACCELERATION * self.rates(qc, idx)[1]) if relaxed else 1.0
         if (
             (np.abs(q) <= self.upper + 1e-12).all()
             and ep.max() <= max(opt.position_tolerance, 1e-7)

@@ -18,12 +18,12 @@ import numpy as np
 
 from .arm_angle import BRANCHES, ArmGeometry, arm_angle, branch_of, inverse
 from .limits import JointLimits
+from .resample import spaced_indices
 
 PLAN_DT = 0.1  # [s] stage spacing of the grid search
 FINE_DT = 0.02  # [s] stage spacing of the final refinement
 N_PSI = 72  # arm-angle grid: 5° apart (the plans are refined off the grid)
 CHECK_PSI = 3600  # arm-angle grid (0.1°) of the check that a pose has no configuration inside the limits
-REACH: int | None = None  # grid steps ψ may move per stage; None: any (near a straight elbow ψ turns fast)
 PEAK_POWER = 8  # exponent of the speed ratio in the cost: large → the peak dominates
 # predecessors of each branch: itself and the three branches one sign away (one singularity crossed)
 PRED = np.array([np.flatnonzero(np.abs(BRANCHES - b).sum(axis=-1) <= 2.0) for b in BRANCHES])  # (8, 4)
@@ -76,7 +76,7 @@ def unreachable_sample(
 ) -> int | None:
     """The first path sample among the plan's stages whose pose has no configuration ``margin`` [rad] inside
     the position limits at any arm angle of a 0.1° grid in any branch (out of reach or beyond a limit), or None."""
-    idx = stage_indices(path.times)
+    idx = spaced_indices(path.times, PLAN_DT)
     psi = np.linspace(-np.pi, np.pi, N_PSI, endpoint=False)
     bound = path.limits.position - margin
     q, reach = path.configurations(idx[:, None, None], psi[None, None, :], BRANCHES[None, :, None, :])
@@ -89,17 +89,6 @@ def unreachable_sample(
     return None
 
 
-def stage_indices(times: np.ndarray, spacing: float = PLAN_DT) -> np.ndarray:
-    """Samples about ``spacing`` [s] apart, first and last included."""
-    n = len(times)
-    dt = float(np.median(np.diff(times))) if n > 1 else spacing
-    stride = max(1, int(round(spacing / dt))) if dt > 0 else 1
-    idx = np.arange(0, n, stride)
-    if idx[-1] != n - 1:
-        idx = np.append(idx, n - 1)
-    return idx
-
-
 def plan_arm_angle(
     path: PlanTargets,
     n_psi: int = N_PSI,
@@ -109,7 +98,7 @@ def plan_arm_angle(
     grid — the best ending in each branch, best first; none when some stage has no configuration inside the
     position limits (the pose is out of reach or beyond a limit for every arm angle and branch)."""
     times, limits = path.times, path.limits
-    idx = stage_indices(times, spacing)
+    idx = spaced_indices(times, spacing)
     psi = np.linspace(-np.pi, np.pi, n_psi, endpoint=False)
     # (K, 8, M, 7) configurations of every stage, branch and arm angle
     q, reach = path.configurations(idx[:, None, None], psi[None, None, :], BRANCHES[None, :, None, :])
@@ -118,8 +107,7 @@ def plan_arm_angle(
         return []
     K, B, M = valid.shape
     vmax = limits.velocity
-    reach = M // 2 if REACH is None else REACH
-    shifts = np.arange(-reach, reach + (1 if 2 * reach < M else 0))
+    shifts = np.arange(-(M // 2), M - M // 2)  # every ψ step: near a straight elbow ψ turns fast
     cost = np.where(valid[0], 0.0, np.inf)  # (B, M)
     back = np.zeros((K, B, M, 2), dtype=np.int32)  # predecessor (branch, ψ index) of each state
     S = len(shifts)
@@ -258,7 +246,7 @@ def densify(
     """The plan at stages ``spacing`` [s] apart: at each, the arm angle of the plan's joint-space interpolation,
     in whichever branch of the two neighbouring plan stages lands nearer to it."""
     times = path.times
-    idx = stage_indices(times, spacing)
+    idx = spaced_indices(times, spacing)
     q_lin = plan.reference(times)[idx]
     psi = arm_angle(path.geometry, q_lin)
     k = np.clip(np.searchsorted(times[plan.indices], times[idx], side="right") - 1, 0, len(plan.indices) - 1)

@@ -16,6 +16,7 @@ import numpy as np
 
 from .errors import IkError
 from .ik import IkResult, PathSolver, _Stall
+from .resample import spaced_indices
 
 SCORE_DT = 0.1  # [s] sample spacing of the scoring pass
 DISTINCT = 0.05  # [rad] candidates closer than this (all joints) count as one
@@ -91,14 +92,7 @@ def start_candidates(solver: PathSolver, seeds=SEEDS) -> list[np.ndarray]:
 def _score(solver: PathSolver, q: np.ndarray, floor: float | None) -> tuple[float, float]:
     """(fraction of the path solved in the scoring pass, smallest position-limit margin [rad]); the pass stops
     early once the margin drops below ``floor`` (such a candidate cannot win)."""
-    if solver.times is None or solver.n < 2:
-        idx = np.arange(solver.n)
-    else:
-        dt = float(np.median(np.diff(solver.times)))
-        stride = max(1, int(round(SCORE_DT / dt))) if dt > 0 else 1
-        idx = np.arange(0, solver.n, stride)
-        if idx[-1] != solver.n - 1:
-            idx = np.append(idx, solver.n - 1)
+    idx = np.arange(solver.n) if solver.times is None or solver.n < 2 else spaced_indices(solver.times, SCORE_DT)
     try:
         out, *_ = solver.sequential(idx, q, q, margin_floor=floor, loose=True)
     except _Stall as stall:

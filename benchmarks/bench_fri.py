@@ -5,7 +5,8 @@ This process plays the controller: every send period (1 ms, then 5 ms) it sends 
 (MONITORING_READY → COMMANDING_WAIT → COMMANDING_ACTIVE, ideal position tracking) and waits for the reply
 reflecting it. A reply that has not arrived when the next message is due counts as missed. Figures: send → reply
 latency p50/p99/max [ms], answered fraction, missed replies, and the client's own CPU time per cycle [µs] and
-internal receive → send latency (from its --json). 1 ms is measured twice: with normal scheduling and with
+internal receive → send latency (from its --json), and the share of replies it prepared a cycle ahead (the rows are
+known: the reply goes out once the message is decoded and checked). 1 ms is measured twice: with normal scheduling and with
 `--realtime` (SCHED_FIFO; needs root or CAP_SYS_NICE, else the client warns and runs normally).
 Full: 60 s of streaming per run; quick: 5 s.
 
@@ -218,6 +219,9 @@ def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = 
     ]
     if kuka is None:
         rows.append((f"{tag}: trajectory rows commanded of {n_rows}", float(figures.get("trajectory_rows", -1)), "rows"))
+        if figures.get("answered"):
+            rows.append((f"{tag}: replies prepared a cycle ahead (TrajectoryPlayer.prepare_command)",
+                         figures.get("prepared_replies", 0) / figures["answered"], "fraction"))  # fmt: skip
     if figures.get("cpu_us_per_cycle") is not None:
         rows += [
             (f"{tag}: client CPU per cycle (decode, guard, reply, log row)", figures["cpu_us_per_cycle"], "µs"),

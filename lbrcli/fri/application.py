@@ -25,6 +25,7 @@ from typing import Any, Callable, Sequence
 
 from trajectories.limits import JointLimits, default_limits
 
+from .replying import Prepared, Replying
 from .client import LBRClient
 from .clock import SessionClock
 from .codec import FriCodec, detect_version
@@ -35,20 +36,18 @@ from .constants import DEFAULT_PORT, ClientCommandMode, SessionState
 from .errors import FriDecodeError, FriError
 from .guard import DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT
 from .messages import FriVersion
-from .motion import ExecutedMotion, Refused
+from .motion import ExecutedMotion
 from .outcome import EndReason, Outcome, SessionResult
 from .reply import ReplyMessage
 from .state import LBRState
-from .supervision import Supervisor, consistent, robot_side_end
+from .supervision import Supervisor, consistent, joint_bound, robot_side_end
 from .transport import UdpTransport
 
 IDLE, MON_WAIT, MON_READY, CMD_WAIT, CMD_ACTIVE = 0, 1, 2, 3, 4
 _POSITION = int(ClientCommandMode.POSITION)
-_TORQUE = int(ClientCommandMode.TORQUE)
-_WRENCH = int(ClientCommandMode.WRENCH)
 
 
-class ClientApplication(SessionEnding):
+class ClientApplication(Replying, SessionEnding):
     """Runs one FRI session for ``client`` against the controller at ``robot`` (IPv4 address or name)."""
 
     def __init__(
@@ -70,13 +69,16 @@ class ClientApplication(SessionEnding):
         max_tracking_error: float | None = None,
         reply_gap_s: float | None = None,
         busy_wait_s: float = 0.0,
+        prepare: bool = True,
     ) -> None:
         self.client = client
+        self.prepares = prepare and type(client).prepare_command is not LBRClient.prepare_command
         self.robot = robot
         self.port_requested = port
         self.bind_host = bind_host
         self.version: FriVersion | None = FriVersion(version) if version is not None else None
         self.limits = limits if limits is not None else default_limits()
+        self._bound = joint_bound(self.limits.position)  # [rad] |joint value| a real robot reports at most
         self.observers: list[Observer] = list(observers)
         self.first_message_timeout_s = first_message_timeout_s
         self.silence_timeout_s = silence_timeout_s
@@ -130,6 +132,7 @@ class ClientApplication(SessionEnding):
         self._codec: FriCodec | None = None
         self._mon: Any = None
         self._reply: ReplyMessage | None = None
+        self._prepared: Prepared | None = None  # the reply to the next message, if the client prepared it
         self._cmd: LBRCommand | None = None
         self._motion: ExecutedMotion | None = None  # built when the period is known
         self._sup: Supervisor | None = None
@@ -152,6 +155,7 @@ class ClientApplication(SessionEnding):
         self.cycles = self.answered = self.position_commands = 0
         self.missed = self.stale = self.malformed = 0
         self.active_cycles = 0
+        self.prepared_replies = 0  # cycles answered with the reply prepared after the previous one
         self.states_seen: list[int] = []
         self._latencies: list[int] = []  # [ns]
 
@@ -203,7 +207,13 @@ class ClientApplication(SessionEnding):
             self._call_observer(o, "on_start", self)
 
     def step(self) -> bool:  # noqa: C901 - one cycle, in order
-        """Process one datagram (or a receive timeout). False once the session has ended."""
+        """Process one datagram (or a receive timeout). False once the session has ended.
+
+        Before the reply only what decides it: decoding, the sequence, self-consistency, the robot side's ends, the
+        client's command and the guard — or, when the client prepared this cycle's command (``prepare_command``)
+        and the message is the expected next one, the reply prepared and guarded after the previous cycle. The
+        supervision of the session's trends (clock, replies, tracking), the client's confirming ``command`` call of
+        a prepared cycle and the observers run after it; a problem found there brakes from the next command."""
         if not self._started:
             self.start(self._clock.duration_s)
         if self._ended:
@@ -216,6 +226,7 @@ class ClientApplication(SessionEnding):
         data = transport.receive()  # type: ignore[union-attr]
         now = time.monotonic()
         if data is None:
+            self._prepared = None
             if self.watchdog is not None:
                 problem = self.watchdog()
                 if problem:
@@ -243,11 +254,19 @@ class ClientApplication(SessionEnding):
             if d == 0 or d > 0x7FFFFFFF:
                 self.stale += 1
                 return self._check_clocks(now)
-        if not consistent(mon, self.limits.position):
+        if not consistent(mon, self._bound):
             self.malformed += 1
             return self._check_clocks(now)
-        skipped = 0
         ci = mon.connectionInfo
+        state = ci.sessionState
+        prepared = self._prepared
+        if prepared is not None:
+            self._prepared = None
+            if seq == prepared[0] and state == CMD_ACTIVE and self._stop is None and self._interrupt is None:
+                going_on = self._send_prepared(prepared, mon, seq, now, t_rx)
+                if going_on is not None:
+                    return going_on
+        skipped = 0
         clock = self._clock
         first = clock.t_first is None
         clock.received(now, 0 if self._last_seq < 0 else d, ci.sendPeriod)
@@ -263,7 +282,6 @@ class ClientApplication(SessionEnding):
                 skipped = self._motion.extrapolate((d - 1) // (clock.period_key[1] if clock.period_key else 1))  # type: ignore[union-attr]
         self._last_seq = seq
         self.cycles += 1
-        state = ci.sessionState
         cyc = self.cycle
         if first:
             cyc.command = tuple(mon.monitorData.measuredJointPosition.value)
@@ -280,14 +298,11 @@ class ClientApplication(SessionEnding):
                                                self.max_tracking_error, self.reply_gap_s)  # fmt: skip
             if self.busy_wait_s > 0.0:
                 transport.expect_period(ci.sendPeriod * 1e-3)  # type: ignore[union-attr]
-        sup = self._sup
-        if sup is not None and state != IDLE and self._stop is None:
-            motion = self._motion
-            problem = sup.check(mon, seq, state == CMD_ACTIVE and motion is not None and not motion.braking,
-                                motion is not None and motion.moving, mon.ipoData.clientCommandMode == _POSITION,
-                                motion.prev if motion is not None else (), self.client_sequence)  # fmt: skip
-            if problem is not None:
-                self._stop_braking(Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {problem}")
+        # what the supervision after the reply judges this message against: the command in force when it was sent
+        motion = self._motion
+        supervised = (state == CMD_ACTIVE and motion is not None and not motion.braking,
+                      motion is not None and motion.moving, motion.prev if motion is not None else (),
+                      self.client_sequence)  # fmt: skip
         # ---- state change and robot-side ends --------------------------------------------------------------
         if not self.states_seen or state != self.states_seen[-1]:
             self.states_seen.append(state)
@@ -321,7 +336,7 @@ class ClientApplication(SessionEnding):
         # ---- the client's answer ---------------------------------------------------------------------------
         cmd = self._cmd
         cmd.reset()  # type: ignore[union-attr]
-        braking = self._motion is not None and self._motion.braking
+        braking = motion is not None and motion.braking
         self.client.braking = braking
         if self._stop is not None and not braking:
             # a stop requested outside COMMANDING_ACTIVE (or before anything moved): end without answering
@@ -338,14 +353,13 @@ class ClientApplication(SessionEnding):
                     cmd.set_joint_position(q)  # type: ignore[union-attr]
             else:
                 self._call_client("wait_for_command" if state == CMD_WAIT else "monitor", self.state)
-            if self._stop is not None and not (self._motion is not None and self._motion.braking):
+            if self._stop is not None and not (motion is not None and motion.braking):
                 self._finish(*self._stop, observe=True)
                 return False
         cyc.phase = self.client.phase
         cyc.row = self.client.row
         if not due:
-            self._observe()
-            return self._check_clocks(now)
+            return self._after(now, mon, seq, supervised, answered=False)
         # ---- build, guard, send ----------------------------------------------------------------------------
         reply = self._reply
         if state >= CMD_WAIT:
@@ -360,22 +374,7 @@ class ClientApplication(SessionEnding):
             self._finish(Outcome.STOPPED, EndReason.SILENT, f"cannot send to the controller: {exc.strerror}", observe=True)
             return False
         self._latencies.append(time.perf_counter_ns() - t_rx)
-        self._call_client("after_reply")
-        if sup is not None:
-            sup.sent(self._client_seq, seq)
-        if not self._answered_any:
-            self._answered_any = True
-            self._unanswered_at_start = self.missed  # messages that went by before the first reply
-        self._client_seq = (self._client_seq + 1) & 0xFFFFFFFF
-        self.answered += 1
-        cyc.answered = True
-        if cyc.sent_position:
-            self.position_commands += 1
-        if self._motion is not None and self._motion.held_long_enough():
-            self._finish(*self._stop, observe=True)  # type: ignore[misc]
-            return False
-        self._observe()
-        return self._check_clocks(now)
+        return self._after(now, mon, seq, supervised, answered=True)
 
     # -- pieces of a cycle -----------------------------------------------------------------------------------
     def _open_codec(self, version: FriVersion) -> None:
@@ -388,30 +387,3 @@ class ClientApplication(SessionEnding):
         self.client.robot_state = self.state
         self.client.robot_command = self._cmd
         self._reply = ReplyMessage(codec)
-
-    def _build_motion(self, mon: Any, state: int, cmd: LBRCommand) -> bool:
-        """Guard the client's joint position (or take the braking stop's) and write it into the message; False if
-        the session ended instead (a refusal, nothing sent)."""
-        motion = self._motion
-        if motion is None:
-            self._finish(Outcome.REFUSED, EndReason.GUARD, "the controller did not send its send period; no command is safe", observe=True)
-            return False
-        mode = mon.ipoData.clientCommandMode
-        try:
-            q, tau, wrench, refused = motion.next_command(mon.monitorData.measuredJointPosition.value, state, mode,
-                                                          cmd.joint_position, cmd.torque, cmd.wrench)  # fmt: skip
-        except Refused as exc:
-            self._finish(Outcome.REFUSED, EndReason.GUARD, str(exc), observe=True)
-            return False
-        if refused is not None and self._stop is None:
-            self._stop = (Outcome.REFUSED, EndReason.GUARD, refused)
-        cyc = self.cycle
-        cyc.braking = motion.braking
-        self._reply.set_motion(mode, q, tau, wrench)  # type: ignore[union-attr]
-        cyc.torque = tau if mode == _TORQUE else None
-        cyc.wrench = wrench if mode == _WRENCH else None
-        q = tuple(q)
-        motion.sent(q, state)
-        cyc.command = q
-        cyc.sent_position = True
-        return True

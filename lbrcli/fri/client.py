@@ -5,7 +5,9 @@ monitoring message, ``on_state_change(old, new)`` when the session state changed
 (MONITORING_WAIT/READY), ``wait_for_command`` (COMMANDING_WAIT) or ``command`` (COMMANDING_ACTIVE). In the
 commanding states set the joint position (always, as KUKA requires) through ``self.robot_command``, plus torques in
 TORQUE mode or a wrench in WRENCH mode. ``command`` may instead return the joint position [rad] (7 values).
-``after_reply`` runs once the reply is on its way, for work that should not delay it.
+``after_reply`` runs once the reply is on its way, for work that should not delay it. A client whose next command does
+not depend on the next message (a stream of precomputed positions) may say so in ``prepare_command``: its reply then
+goes out as soon as the message is checked.
 To end the session raise :class:`~lbrcli.fri.errors.StopSession`; the application then brakes within the limits.
 """
 
@@ -47,6 +49,15 @@ class LBRClient:
     def command(self, state: LBRState) -> Sequence[float] | None:
         """COMMANDING_ACTIVE: set this cycle's command (or return the joint position [rad])."""
         self.hold_ipo(state)
+        return None
+
+    def prepare_command(self) -> Sequence[float] | None:
+        """Optional, for lower latency: the joint position [rad] the next ``command`` call will set if the next
+        message is the expected one (no lost messages, still COMMANDING_ACTIVE, POSITION mode, receive multiplier 1)
+        — whatever that message says — or None (the default: ``command`` decides when the message is there). Called
+        after each reply; the application guards the prepared position then and sends it as soon as the message
+        arrives, before calling ``command`` with it, which must set exactly that position and nothing else (else
+        the session ends with a braking stop). A stream of precomputed positions prepares; a closed loop cannot."""
         return None
 
     def after_reply(self) -> None:

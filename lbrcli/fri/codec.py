@@ -67,17 +67,17 @@ class FriCodec:
 
     def _decode(self, data: bytes, into: Any, expected_id: int, kind: str) -> Any:
         payload = self.unframe(data)
-        into.Clear()
         try:
-            into.ParseFromString(payload)
+            into.ParseFromString(payload)  # (clears the message first)
         except DecodeError as exc:
             raise FriDecodeError(f"not an FRI {self.version.value} {kind} message ({exc})") from None
-        if not into.HasField("header"):
+        complete = into.IsInitialized()  # every required field, the header's included (the common case: one call)
+        if not complete and not into.HasField("header"):
             raise FriDecodeError(f"FRI {self.version.value} {kind} message without a header")
         ident = into.header.messageIdentifier
         if ident != expected_id:
             raise FriForeignMessage(f"{kind} message identifier 0x{ident:x}, expected 0x{expected_id:x}")
-        if not into.IsInitialized():
+        if not complete:
             missing = ", ".join(into.FindInitializationErrors())
             raise FriDecodeError(f"FRI {self.version.value} {kind} message lacks required fields: {missing}")
         return into

@@ -66,6 +66,7 @@ class SessionResult:
     extrapolated_cycles: int = 0  # command periods the controller bridged because its messages were lost
     largest_tracking_error_rad: float | None = None  # max |measured − commanded| in COMMANDING_ACTIVE (position)
     largest_reply_gap: int | None = None  # most controller messages between two replies of ours it received
+    prepared_replies: int = 0  # answered with the reply prepared after the previous cycle (LBRClient.prepare_command)
     figures: dict[str, Any] = field(default_factory=dict)  # from the observers
 
     @property
@@ -130,5 +131,6 @@ def session_result(app: Any, outcome: Outcome, reason: EndReason, text: str, fig
         extrapolated_cycles=app.extrapolated_cycles,
         largest_tracking_error_rad=sup.largest_tracking_error if sup is not None else None,
         largest_reply_gap=sup.largest_reply_gap if sup is not None else None,
+        prepared_replies=app.prepared_replies,
         figures=figures,
     )

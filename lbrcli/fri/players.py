@@ -182,6 +182,25 @@ class TrajectoryPlayer(LBRClient):
             return self._last
         raise StopSession(self.finish_text)
 
+    def prepare_command(self) -> Sequence[float] | None:
+        """The next row, rejoin or settle command [rad] once the rows are streaming (None during the move to the start,
+        a wait for the sway, the message after lost ones and at the end: those are decided per message). A subclass
+        that overrides ``command`` (corrections from the measured state) prepares nothing unless it overrides this."""
+        if type(self).command is not TrajectoryPlayer.command:
+            return None
+        if self._last is None or not self._started:
+            return None
+        if self._queue:
+            return self._queue[-1]
+        move = self._move
+        if move is not None and not move.done:
+            return None
+        if self._i < len(self.rows):
+            return self.rows[self._i]
+        if self._settled < self.settle_cycles:
+            return self._last
+        return None
+
     def _bridged(self, n: int) -> None:
         """The controller extrapolated our last command for ``n`` periods (its messages were lost): continue from
         there — the move re-planned, the rows rejoined in step (never rows behind), the settle unchanged."""

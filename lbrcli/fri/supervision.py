@@ -20,55 +20,68 @@ POSITION_SLACK = 0.05  # [rad] a reported position beyond the limits by more tha
 End = tuple[Outcome, EndReason, str]
 
 
+def joint_bound(position_limit: Sequence[float]) -> tuple[float, ...]:
+    """The largest |joint value| [rad] a real robot reports: the position limits plus a small slack."""
+    return tuple(float(p) + POSITION_SLACK for p in position_limit)
+
+
 def joints_ok(values: Sequence[float], position_limit: Sequence[float]) -> bool:
     """7 finite joint values [rad] within the position limits (plus a small slack)."""
-    # C-level loops over a tuple (map, min, sum): a third of a Python loop's time; the sum is not finite with NaN or inf
-    values = tuple(values)
-    return (len(values) == 7 and math.isfinite(sum(values))
-            and min(map(_sub, position_limit, map(abs, values))) >= -POSITION_SLACK)  # fmt: skip
+    return len(values) == 7 and all(map(_le, map(abs, values), joint_bound(position_limit)))
 
 
-def consistent(mon: Any, position_limit: Sequence[float]) -> bool:
+def consistent(mon: Any, bound: Sequence[float]) -> bool:
     """A message a real controller could have sent: connection info, 7 finite joint values where the state needs
-    them, positions near the limits at most."""
+    them, |positions| ≤ ``bound`` (:func:`joint_bound`)."""
+    # hot path, before every reply: C-level loops straight over the message's values (NaN and inf compare False)
     if not mon.HasField("connectionInfo"):
         return False
     state = mon.connectionInfo.sessionState
     if state == IDLE:
         return True
-    if not joints_ok(mon.monitorData.measuredJointPosition.value, position_limit):
+    v = mon.monitorData.measuredJointPosition.value
+    if len(v) != 7 or not all(map(_le, map(abs, v), bound)):
         return False
-    return state < CMD_WAIT or joints_ok(mon.ipoData.jointPosition.value, position_limit)
+    if state < CMD_WAIT:
+        return True
+    v = mon.ipoData.jointPosition.value
+    return len(v) == 7 and all(map(_le, map(abs, v), bound))
 
 
 def robot_side_end(mon: Any, state: int, *, seen_session: bool, commanding: bool, was_active: bool,
                    period_key: tuple[int, int] | None, waited_s: float, commanding_timeout_s: float | None) -> End | None:
     """Why the robot side ended the session with this message (None: it did not). ``waited_s`` [s] since the
     first message, for ``commanding_timeout_s``."""
-    ci = mon.connectionInfo
-    ri = mon.robotInfo
     if state == IDLE:
         if seen_session:
             return Outcome.STOPPED, EndReason.IDLE, "the robot application closed the FRI session (IDLE)"
         return None
     if commanding or state >= CMD_WAIT:
-        if (ci.sendPeriod, ci.receiveMultiplier or 1) != period_key:
-            pk = period_key or (0, 1)
-            return (Outcome.STOPPED, EndReason.PERIOD_CHANGED, f"the controller changed its period from {pk[0]} ms × "
-                    f"{pk[1]} to {ci.sendPeriod} ms × {ci.receiveMultiplier or 1}")  # fmt: skip
-        if ri.safetyState != 0:
-            return Outcome.STOPPED, EndReason.SAFETY_STOP, f"safety stop ({SafetyState(ri.safetyState).name})"
-        drives = ri.driveState
-        if drives and min(drives) != _DRIVE_ACTIVE:
-            return Outcome.STOPPED, EndReason.DRIVES_OFF, "drives not active"
-        if ci.quality == _POOR:
-            return Outcome.STOPPED, EndReason.QUALITY_POOR, "connection quality POOR"
-        if was_active and state != CMD_ACTIVE:
-            return (Outcome.STOPPED, EndReason.LEFT_COMMANDING,
-                    f"the session left COMMANDING_ACTIVE ({SessionState(state).name})")  # fmt: skip
-    elif commanding_timeout_s is not None and waited_s > commanding_timeout_s:
+        return commanding_end(mon, state, was_active, period_key)
+    if commanding_timeout_s is not None and waited_s > commanding_timeout_s:
         return (Outcome.STOPPED, EndReason.NO_COMMANDING, f"the robot application did not start commanding within "
                 f"{commanding_timeout_s:g} s (session state {SessionState(state).name})")  # fmt: skip
+    return None
+
+
+def commanding_end(mon: Any, state: int, was_active: bool, period_key: tuple[int, int] | None) -> End | None:
+    """Why the robot side ended a commanding session with this message (state not IDLE), or None."""
+    ci = mon.connectionInfo
+    ri = mon.robotInfo
+    if (ci.sendPeriod, ci.receiveMultiplier or 1) != period_key:
+        pk = period_key or (0, 1)
+        return (Outcome.STOPPED, EndReason.PERIOD_CHANGED, f"the controller changed its period from {pk[0]} ms × "
+                f"{pk[1]} to {ci.sendPeriod} ms × {ci.receiveMultiplier or 1}")  # fmt: skip
+    if ri.safetyState != 0:
+        return Outcome.STOPPED, EndReason.SAFETY_STOP, f"safety stop ({SafetyState(ri.safetyState).name})"
+    drives = ri.driveState
+    if drives and min(drives) != _DRIVE_ACTIVE:
+        return Outcome.STOPPED, EndReason.DRIVES_OFF, "drives not active"
+    if ci.quality == _POOR:
+        return Outcome.STOPPED, EndReason.QUALITY_POOR, "connection quality POOR"
+    if was_active and state != CMD_ACTIVE:
+        return (Outcome.STOPPED, EndReason.LEFT_COMMANDING,
+                f"the session left COMMANDING_ACTIVE ({SessionState(state).name})")  # fmt: skip
     return None
 
 

@@ -54,11 +54,11 @@ def preamble(k: int = 1, **kw) -> list[Cycle]:
 
 
 def run(script, client, *, version="1.15", detect=False, tmp_path=None, on_cycle=None, q_start=Q0, duration=None,
-        observers=(), **controller):  # fmt: skip
+        observers=(), prepare=True, **controller):  # fmt: skip
     fig = SessionFigures()
     app = ClientApplication(client, "127.0.0.1", 0, bind_host="127.0.0.1", version=None if detect else version,
                             limits=LIM, first_message_timeout_s=10, silence_timeout_s=3,
-                            observers=[fig, *observers])  # fmt: skip
+                            observers=[fig, *observers], prepare=prepare)  # fmt: skip
     app.connect()
     ctl = ScriptedController(app.port, script, q_start, version=version, **controller)
     if on_cycle is not None:

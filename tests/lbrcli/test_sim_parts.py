@@ -75,6 +75,23 @@ def test_tracking_performance_is_the_achieved_fraction_of_the_step(limits):
     assert ip.q[3] == pytest.approx(limits.acceleration[3] * DT * DT)
 
 
+
+def test_a_joint_that_overshoots_a_sudden_stop_does_not_report_perfect_tracking(limits):
+    ip = _interp(limits)
+    v = 0.5 * limits.velocity[3]  # [rad/s] moving; then the target stops dead half a step ahead
+    for k in range(1, 2000):
+        target = np.zeros(7)
+        target[3] = min(v, limits.acceleration[3] * k * DT) * DT + ip.q[3]
+        ip.step(target)
+    assert ip.v[3] == pytest.approx(v)
+    target = ip.q.copy()
+    asked = 0.5 * v * DT  # [rad] braking to half the speed in one cycle is beyond the acceleration limit
+    target[3] += asked
+    tp = ip.step(target)
+    overshoot = ip.q[3] - target[3]
+    assert overshoot > 0.0
+    assert tp < 1.0 and tp == pytest.approx(1.0 - overshoot / asked)
+
 def test_quality_from_the_share_of_timely_cycles():
     qm = QualityMonitor(QualityThresholds(window=10, fair=0.5, good=0.8, excellent=1.0))
     assert qm.quality is Q.POOR

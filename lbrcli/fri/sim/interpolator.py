@@ -5,7 +5,7 @@ every joint within its velocity [rad/s] and acceleration [rad/s²] limits, the r
 (tracking performance 1). Otherwise the step is clipped per joint — a braking bound on the speed relative to
 the target's own velocity (the discrete √(2·a_max·|e|)) so that the target is caught up with without overshoot,
 the velocity limit, and the acceleration window around the current velocity — and the tracking performance is
-the achieved fraction of the requested step of the worst joint (0..1). A joint that was catching up lands on
+the achieved fraction of the requested step of the worst joint (0..1; an overshoot by x % counts as 1 − x %). A joint that was catching up lands on
 the target only once it can also keep to the target's velocity. All arrays are preallocated; ``step`` allocates only numpy temporaries of 7 elements.
 """
 
@@ -76,8 +76,10 @@ class Interpolator:
         step = v_new * dt
         clipped = ~exact
         e_c = err[clipped]
-        # achieved fraction of the requested step (0 where a joint was asked to stop dead and could not)
+        # achieved fraction of the requested step (0 where a joint was asked to stop dead and could not); a joint that
+        # could not brake hard enough overshoots (fraction > 1) and counts as far off: 1 − |1 − fraction|
         frac = np.divide(step[clipped], e_c, out=np.zeros_like(e_c), where=np.abs(e_c) > 1e-15)
+        frac = 1.0 - np.abs(1.0 - frac)
         self.a[:] = (v_new - self.v) / dt
         self.v[:] = v_new
         self.q += step

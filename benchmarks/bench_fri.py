@@ -12,9 +12,11 @@ Full: 60 s of streaming per run; quick: 5 s.
 
 Floors on this machine, measured the same way: a C UDP echo (compiled here with cc) and a Python one. With
 `--kuka=PATH` (repeatable) a KUKA example client built from KUKA's FRI client SDK (e.g. lbr-stack/fri's
-LBRJointSineOverlayApp; it binds port 30200, so that port must be free) is measured the same way at 1 ms.
+LBRJointSineOverlayApp; it binds port 30200, so that port must be free) is measured the same way at 1 ms, in rounds
+interleaved with `lbr execute` (6 × 10 s each; the VM's noise comes and goes over minutes, so the comparison is made
+round by round and reported as medians).
 
-Run: `python benchmarks/run_all.py fri [--quick]` or `python benchmarks/bench_fri.py [--quick] [--kuka=PATH ...]`.
+Run: `python benchmarks/run_all.py fri [--quick] [--kuka PATH ...]` or `python benchmarks/bench_fri.py [--quick] [--kuka=PATH ...]`.
 """
 
 from __future__ import annotations
@@ -396,9 +398,39 @@ def run(quick: bool = False, kuka: Sequence[str] = ()) -> list[tuple[str, float,
         for period_ms, realtime, extra in ((1, False, ()), (1, False, ("--busy-wait", "0")), (1, True, ()), (5, False, ())):
             tag = f"{period_ms} ms" + (" --realtime" if realtime else "") + (" " + " ".join(extra) if extra else "")
             rows += _measure(period_ms, duration, Path(tmp), realtime, extra, tag)
-        for path in kuka:
-            rows += _measure(1, duration, Path(tmp), tag=f"1 ms KUKA {Path(path).name} ({path})", kuka=path)
+        if kuka:
+            rows += _interleaved(kuka, Path(tmp), rounds=2 if quick else 6, round_s=3.0 if quick else 10.0)
     return rows
+
+
+def _interleaved(kuka: Sequence[str], workdir: Path, rounds: int, round_s: float) -> list[tuple[str, float, str]]:
+    """``lbr execute`` (defaults) and each KUKA client in turn, ``rounds`` times for ``round_s`` [s] each at 1 ms:
+    on a shared VM the noise comes and goes over minutes, so each comparison is made within a round and the
+    figures are medians over the rounds."""
+    def figures(rows: list[tuple[str, float, str]]) -> tuple[float, float, float]:
+        get = {name.rsplit(": ", 1)[1]: value for name, value, _ in rows}
+        missed = next(v for k, v in get.items() if k.startswith("missed replies"))
+        return get["reply latency p50 (controller side)"], get["reply latency p99 (controller side)"], missed
+
+    names = ["lbr execute"] + [f"KUKA {Path(p).name} ({'2.7' if '2.7' in p else '1.15'})" for p in kuka]
+    per: dict[str, list[tuple[float, float, float]]] = {n: [] for n in names}
+    for _ in range(rounds):
+        per[names[0]].append(figures(_measure(1, round_s, workdir, tag="x")))
+        for name, path in zip(names[1:], kuka):
+            per[name].append(figures(_measure(1, round_s, workdir, tag="x", kuka=path)))
+    out: list[tuple[str, float, str]] = []
+    for name in names:
+        f = np.array(per[name])
+        out += [
+            (f"interleaved 1 ms, {rounds}×{round_s:g} s, {name}: reply p50 (median of rounds)", float(np.median(f[:, 0])), "ms"),
+            (f"interleaved 1 ms, {rounds}×{round_s:g} s, {name}: reply p99 (median of rounds)", float(np.median(f[:, 1])), "ms"),
+            (f"interleaved 1 ms, {rounds}×{round_s:g} s, {name}: missed replies (sum)", float(f[:, 2].sum()), "cycles"),
+        ]  # fmt: skip
+        if name != names[0]:
+            ratio = np.array(per[names[0]])[:, 1] / f[:, 1]
+            out.append((f"interleaved 1 ms: p99 of lbr execute / p99 of {name}, median of rounds (range "
+                        f"{ratio.min():.2f}–{ratio.max():.2f})", float(np.median(ratio)), "×"))  # fmt: skip
+    return out
 
 
 if __name__ == "__main__":

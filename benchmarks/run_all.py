@@ -1,4 +1,5 @@
-"""Run every benchmark in this folder and print its figures: `python benchmarks/run_all.py [--quick] [--json]`.
+"""Run every benchmark in this folder and print its figures: `python benchmarks/run_all.py [--quick] [--json]
+[--kuka PATH ...] [NAME ...]`.
 
 Each ``bench_*.py`` module exposes ``run(quick: bool) -> list[tuple[str, float, str]]`` (name, value, unit).
 """
@@ -17,6 +18,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="shorter runs (smoke test)")
     parser.add_argument("--json", action="store_true", help="print all figures as one JSON object")
+    parser.add_argument("--kuka", action="append", default=[], metavar="PATH",
+                        help="fri: also measure this KUKA example client (built from KUKA's FRI client SDK)")
     parser.add_argument("only", nargs="*", help="names of benchmarks to run (e.g. ik fri)")
     args = parser.parse_args()
     here = Path(__file__).parent
@@ -31,7 +34,7 @@ def main() -> int:
         sys.modules[path.stem] = module  # functions handed to worker processes pickle by module name
         spec.loader.exec_module(module)  # type: ignore[union-attr]
         t0 = time.perf_counter()
-        rows = module.run(quick=args.quick)
+        rows = module.run(quick=args.quick, kuka=args.kuka) if name == "fri" else module.run(quick=args.quick)
         figures[name] = {k: {"value": v, "unit": u} for k, v, u in rows}
         if not args.json:
             print(f"== {name} ({time.perf_counter() - t0:.1f} s)")

@@ -78,6 +78,7 @@ class TrajectoryPlayer(LBRClient):
         self._max_wait = 0  # commands (from the period at activation)
         self._rest_mark = 0  # move commands when the sway was last judged from rest
         self._move: OnlineMove | None = None
+        self._ahead: tuple[tuple[float, ...], bool] | None = None  # the move's next step and whether it ends it
         self._checked = False
         self._i = 0  # next row
         self._settled = 0
@@ -183,17 +184,23 @@ class TrajectoryPlayer(LBRClient):
         raise StopSession(self.finish_text)
 
     def prepare_command(self) -> Sequence[float] | None:
-        """The next row, rejoin or settle command [rad] once the rows are streaming (None during the move to the start,
-        a wait for the sway, the message after lost ones and at the end: those are decided per message). A subclass
+        """The next move, row, rejoin or settle command [rad] (None at activation, on arrival at the first row, during a
+        wait for the sway, after lost messages and at the end: those are decided per message). A subclass
         that overrides ``command`` (corrections from the measured state) prepares nothing unless it overrides this."""
         if type(self).command is not TrajectoryPlayer.command:
             return None
-        if self._last is None or not self._started:
+        if self._last is None:
             return None
         if self._queue:
             return self._queue[-1]
         move = self._move
-        if move is not None and not move.done:
+        if move is not None and (not move.done or self._ahead is not None):
+            if self._ahead is None:  # the move's next step, computed now and taken by the next _advance
+                q = move.next()
+                self._ahead = (q, move.done)
+            q, done = self._ahead
+            return q if not done or q != self.rows[0] else None  # arrived: the sway and the rows decide
+        if not self._started:
             return None
         if self._i < len(self.rows):
             return self.rows[self._i]
@@ -204,6 +211,7 @@ class TrajectoryPlayer(LBRClient):
     def _bridged(self, n: int) -> None:
         """The controller extrapolated our last command for ``n`` periods (its messages were lost): continue from
         there — the move re-planned, the rows rejoined in step (never rows behind), the settle unchanged."""
+        self._ahead = None  # a move's step computed ahead belongs to the old plan
         dt = self._period
         q, self._last2, vel = extrapolated(self._last, self._last2, n, dt)
         self._last = q
@@ -225,9 +233,15 @@ class TrajectoryPlayer(LBRClient):
             self.trajectory_rows += 1
             return True
         move = self._move
-        if move is not None and not move.done:
-            q = move.next()
-            if not move.done or q != self.rows[0]:
+        ahead = self._ahead
+        if ahead is not None or (move is not None and not move.done):
+            if ahead is not None:  # computed by prepare_command
+                self._ahead = None
+                q, done = ahead
+            else:
+                q = move.next()  # type: ignore[union-attr]
+                done = move.done  # type: ignore[union-attr]
+            if not done or q != self.rows[0]:
                 self.phase, self.row = PHASE_MOVE, -1
                 self.move_rows += 1
                 self._last = q

@@ -150,3 +150,23 @@ def test_supervision_brakes_from_the_command_after_the_message_it_judged():
         np.testing.assert_array_equal(sent[: k + 1], traj[: k + 1])
     assert replies(ctl) == replies(ctl0)
     assert all(r.state != IDLE for r in ctl.replies)
+
+
+@pytest.mark.parametrize("shaped", [False, True], ids=["ruckig", "shaped"])
+@pytest.mark.parametrize("gap_at", [None, 40, 150], ids=["no-gap", "gap-in-move", "gap-in-rows"])
+def test_moves_to_the_start_are_prepared_step_by_step_and_change_nothing(shaped, gap_at):
+    from types import SimpleNamespace
+
+    traj = min_jerk(120) + np.array([0, 0, 0, 0.02, 0, 0, 0.01])
+    shaper = SimpleNamespace(amplitudes=(0.5, 0.5), times=(0.0, 0.05)) if shaped else None
+    active = [Cycle(state=CA)] * 1500
+    if gap_at is not None:
+        active[gap_at] = Cycle(state=CA, seq_jump=2)
+    (res, ctl), (res0, ctl0) = both(preamble() + active, lambda: TrajectoryPlayer(
+        traj, LIM, period_s=1e-3, move_to_start=True, move_shaper=shaper))  # fmt: skip
+    assert res.outcome is Outcome.COMPLETED and res0.outcome is Outcome.COMPLETED
+    assert replies(ctl) == replies(ctl0)
+    moved = sent_positions(ctl)
+    assert 10 < len(moved) and res.prepared_replies > 0.9 * (len(moved) - res.braking_cycles)
+    if gap_at is None:
+        assert_within_limits(moved, 1e-3, before=np.array([Q0, Q0]))

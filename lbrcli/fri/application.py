@@ -12,7 +12,10 @@ failed observer) is a jerk-limited braking stop (``BrakingStop``) when the robot
 robot side (safety stop, drives off, POOR quality, the session leaving COMMANDING_ACTIVE, IDLE, a period change, a
 silent controller) end the session at once (the controller stops the robot itself). Supervision (``Supervisor``) ends
 the stream with a braking stop when the controller's timestamps disagree with its period, when our replies stop
-reaching it (its reflected counter) or when the measured position leaves the command (position mode). Lost
+reaching it (its reflected counter) or when the measured position leaves the command (position mode); it judges each
+message after its reply, so its stop brakes from the next command. A client that prepares its next command
+(``LBRClient.prepare_command``) is answered from a reply guarded and encoded after the previous cycle as soon as the
+expected message is decoded and checked (:mod:`~lbrcli.fri.replying`). Lost
 monitoring messages were bridged by the controller's extrapolation: the guard's reference and the braking stop
 continue from there, and the client is told how many command periods it missed (``LBRClient.skipped``).
 """

@@ -1,5 +1,8 @@
 """Stream a joint CSV (t,q1..q7 at the FRI period) with the TrajectoryPlayer client, logging every cycle.
 
+The player knows its next command, so each reply is prepared a cycle ahead (LBRClient.prepare_command) and goes
+out as soon as the controller's message is decoded and checked.
+
     python examples/stream_csv.py move.csv --log run.csv [--robot IP]
 """
 
@@ -22,7 +25,8 @@ def main(argv=None):
     player = TrajectoryPlayer(traj.q, default_limits(), period_s=traj.dt, settle_s=0.2)
     with ExecutionLog(args.log) as log:
         result = run(player, args, observers=[LogObserver(log)], q0=tuple(traj.q[0]))
-    print(f"{result.outcome.value}: {result.detail}; {player.trajectory_rows} rows streamed")
+    print(f"{result.outcome.value}: {result.detail}; {player.trajectory_rows} rows streamed, "
+          f"{result.prepared_replies} of {result.answered} replies prepared a cycle ahead")
     return result, player
 
 

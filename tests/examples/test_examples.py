@@ -65,6 +65,7 @@ def test_stream_csv_and_monitor_write_logs_the_project_reads(tmp_path):
     result, player = stream_csv.main([str(csv), "--log", str(tmp_path / "run.csv"), "--sim-lenient"])
     assert result.ok, result.detail
     assert player.trajectory_rows == len(t)
+    assert result.prepared_replies > 0.5 * len(t)  # over UDP with the simulator: the rows go out prepared
     assert len(read_table(tmp_path / "run.csv", LOG_COLUMNS, time="increasing").data) == result.cycles
     result, rows = monitor_to_file.main(["--log", str(tmp_path / "mon.csv"), "--duration", "0.5", "--sim-lenient"])
     assert result.ok and rows == len(read_table(tmp_path / "mon.csv", LOG_COLUMNS, time="increasing").data) > 50

@@ -28,26 +28,25 @@ from typing import Any, Callable, Sequence
 
 from trajectories.limits import JointLimits, default_limits
 
-from .replying import Prepared, Replying
 from .client import LBRClient
 from .clock import SessionClock
 from .codec import FriCodec, detect_version
 from .command import LBRCommand
 from .cycle import Cycle, Observer
 from .ending import SessionEnding
-from .constants import DEFAULT_PORT, ClientCommandMode, SessionState
+from .constants import DEFAULT_PORT, SessionState
 from .errors import FriDecodeError, FriError
 from .guard import DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT
 from .messages import FriVersion
 from .motion import ExecutedMotion
 from .outcome import EndReason, Outcome, SessionResult
 from .reply import ReplyMessage
+from .replying import Prepared, Replying
 from .state import LBRState
 from .supervision import Supervisor, consistent, joint_bound, robot_side_end
 from .transport import UdpTransport
 
 IDLE, MON_WAIT, MON_READY, CMD_WAIT, CMD_ACTIVE = 0, 1, 2, 3, 4
-_POSITION = int(ClientCommandMode.POSITION)
 
 
 class ClientApplication(Replying, SessionEnding):

@@ -71,7 +71,7 @@ class Replying:
         self._latencies.append(time.perf_counter_ns() - t_rx)
         return self._after_prepared(now, mon, seq, prepared[2])
 
-    def _after(self, now: float, mon: Any, seq: int, supervised: tuple[bool, bool, Any, int], answered: bool) -> bool:
+    def _after(self, now: float, mon: Any, seq: int, supervised: Supervised, answered: bool) -> bool:
         """The cycle after its reply went out (or was not due): counters, supervision, the hold, observers, and
         the next cycle's prepared reply."""
         sup = self._sup

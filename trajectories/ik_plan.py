@@ -13,10 +13,11 @@ how fast the path must be at best (to the grid's resolution).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
-from .arm_angle import BRANCHES, ArmGeometry, arm_angle, branch_of, inverse
+from .arm_angle import BRANCHES, ArmGeometry, arm_angle, inverse
 from .limits import JointLimits
 from .resample import spaced_indices
 
@@ -43,6 +44,16 @@ class PlanTargets:
     rotations: np.ndarray
     times: np.ndarray
     limits: JointLimits
+
+    @cached_property
+    def stages(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The grid search's stages every ``PLAN_DT``: indices (K,), arm angles (N_PSI,) [rad], configurations
+        (K, 8, N_PSI, 7) [rad] of every branch and arm angle, and whether each is within reach — computed once for
+        the reachability check and the plan."""
+        idx = spaced_indices(self.times, PLAN_DT)
+        psi = np.linspace(-np.pi, np.pi, N_PSI, endpoint=False)
+        q, reach = self.configurations(idx[:, None, None], psi[None, None, :], BRANCHES[None, :, None, :])
+        return idx, psi, q, reach
 
     def configurations(self, idx, psi: np.ndarray, branch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Closed-form configurations [rad] of the samples ``idx`` at arm angles ``psi`` [rad] and branches,
@@ -76,10 +87,8 @@ def unreachable_sample(
 ) -> int | None:
     """The first path sample among the plan's stages whose pose has no configuration ``margin`` [rad] inside
     the position limits at any arm angle of a 0.1° grid in any branch (out of reach or beyond a limit), or None."""
-    idx = spaced_indices(path.times, PLAN_DT)
-    psi = np.linspace(-np.pi, np.pi, N_PSI, endpoint=False)
+    idx, _, q, reach = path.stages
     bound = path.limits.position - margin
-    q, reach = path.configurations(idx[:, None, None], psi[None, None, :], BRANCHES[None, :, None, :])
     inside = reach & (np.abs(q) <= bound).all(axis=-1)
     fine = np.linspace(-np.pi, np.pi, n_psi, endpoint=False)
     for k in idx[~inside.any(axis=(1, 2))]:  # empty on the coarse grid: look closer
@@ -89,19 +98,12 @@ def unreachable_sample(
     return None
 
 
-def plan_arm_angle(
-    path: PlanTargets,
-    n_psi: int = N_PSI,
-    spacing: float = PLAN_DT,
-) -> list[ArmAnglePlan]:
+def plan_arm_angle(path: PlanTargets) -> list[ArmAnglePlan]:
     """Plans of the arm angle and branch along TCP targets (n, 3) [m], (n, 3, 3) at ``times`` (n,) [s] on the
-    grid — the best ending in each branch, best first; none when some stage has no configuration inside the
-    position limits (the pose is out of reach or beyond a limit for every arm angle and branch)."""
+    grid (``path.stages``) — the best ending in each branch, best first; none when some stage has no configuration
+    inside the position limits (the pose is out of reach or beyond a limit for every arm angle and branch)."""
     times, limits = path.times, path.limits
-    idx = spaced_indices(times, spacing)
-    psi = np.linspace(-np.pi, np.pi, n_psi, endpoint=False)
-    # (K, 8, M, 7) configurations of every stage, branch and arm angle
-    q, reach = path.configurations(idx[:, None, None], psi[None, None, :], BRANCHES[None, :, None, :])
+    idx, psi, q, reach = path.stages  # (K, 8, M, 7) configurations of every stage, branch and arm angle
     valid = reach & (np.abs(q) <= limits.position - MARGIN).all(axis=-1)
     if not valid.any(axis=(1, 2)).all():
         return []

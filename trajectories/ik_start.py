@@ -14,8 +14,10 @@ from typing import Callable
 
 import numpy as np
 
+from .arm_angle import ArmGeometry
 from .errors import IkError
 from .ik import IkResult, PathSolver, _Stall
+from .ik_plan import PlanTargets, best_plan, unreachable_sample
 from .resample import spaced_indices
 
 SCORE_DT = 0.1  # [s] sample spacing of the scoring pass
@@ -127,7 +129,7 @@ def solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] | 
         return res
     from dataclasses import replace
 
-    plan = _arm_angle_plan(solver)
+    plan = best_plan(_targets(solver))
     alt = solver.through(plan.indices, plan.q, 1, any_acceleration=True) if plan is not None else None
     if alt is None or alt.velocity_ratio > 1.0 or alt.acceleration_ratio >= res.acceleration_ratio:
         return res
@@ -159,10 +161,11 @@ def _solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] |
     # still and cannot tell apart starts on one self-motion manifold whose speeds differ along the path); the
     # (slower) pass on every sample only for the best two
     more = order[solver.options.start_attempts : solver.options.start_attempts + EXTRA_TRIES]
-    reachable, beyond = True, None
+    reachable, beyond, targets = True, None, None
     for fallback, ranks in ((False, tries), (False, more), (True, tries[:2])):
         if ranks is more and solver.times is not None:
-            beyond = _unreachable(solver)
+            targets = _targets(solver)
+            beyond = unreachable_sample(targets, solver.options.limit_margin)
             if beyond is not None:
                 reachable = False  # some pose fits no arm angle: the best candidates' stall says where and why
                 break
@@ -179,7 +182,7 @@ def _solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] |
     assert first is not None
     # the redundancy led every start into a part of the self-motion too fast somewhere: plan the arm angle over
     # the whole path and follow that plan
-    plan = _arm_angle_plan(solver) if solver.speed and reachable else None
+    plan = best_plan(targets or _targets(solver)) if solver.speed and reachable else None
     if plan is not None:
         label = f"auto (arm-angle plan, peak {plan.peak_speed:.2f} of the speed limits between its stages)"
         # the plan's configurations are exact solutions: through them directly, else follow it from its start
@@ -222,21 +225,6 @@ def _noted(error: IkError, note: str) -> IkError:
     )
 
 
-def _targets(solver: PathSolver):
-    from .arm_angle import ArmGeometry
-    from .ik_plan import PlanTargets
-
-    geometry = ArmGeometry.of(solver.robot)
-    return PlanTargets(geometry, solver.positions, solver.rotations, solver.times, solver.limits)
-
-
-def _unreachable(solver: PathSolver) -> int | None:
-    from .ik_plan import unreachable_sample
-
-    return unreachable_sample(_targets(solver), solver.options.limit_margin)
-
-
-def _arm_angle_plan(solver: PathSolver):
-    from .ik_plan import best_plan
-
-    return best_plan(_targets(solver))
+def _targets(solver: PathSolver) -> PlanTargets:
+    """What the arm-angle check and plan need of the solver's path (their stage grid is computed once)."""
+    return PlanTargets(ArmGeometry.of(solver.robot), solver.positions, solver.rotations, solver.times, solver.limits)

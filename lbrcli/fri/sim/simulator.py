@@ -4,7 +4,10 @@ Every send period the loop sends a monitoring message and collects the client's 
 send. A cycle counts as timely when a reply to the message just sent arrives before the next send (with
 receiveMultiplier k: one such reply within k cycles). The loop sleeps in select and busy-waits the last
 ``spin_us`` before each send (steadier than a sleep-only rate limiter at 1 ms), re-synchronises after an overrun,
-and can run with SCHED_FIFO (``realtime``). However the loop stops (session end, stop(), timeout, parent gone), the
+and can run with SCHED_FIFO (``realtime``). A real controller sends strictly periodically; when this process sent
+late (its own scheduling), the next message still waits ``MIN_SPACING`` periods after it, so the client keeps
+(almost) a whole period to answer and is not judged late for the simulator's delay; the schedule catches up over
+the following cycles. However the loop stops (session end, stop(), timeout, parent gone), the
 last messages carry IDLE, as when a robot application ends and its FRI session closes.
 """
 
@@ -24,6 +27,7 @@ from .link import RING, Faults, Link
 from .stats import SimStats, percentiles
 
 
+MIN_SPACING = 0.9  # [periods] least time between two sends (after a late one, the schedule catches up gradually)
 CLOSE_BUDGET_S = 0.5  # [s] at most this long sending the closing IDLE messages after a stop or timeout
 
 
@@ -52,6 +56,7 @@ class Simulator:
         self._cycle_time = np.empty(RING)  # send instant of each cycle (perf_counter) [s]
         self._work = np.empty(RING)  # computation time of each cycle [s]
         self.overruns = 0
+        self._sent_by = 0.0  # [s] perf_counter right after the last send
         self._n_states = 0  # states reported to on_state so far
         self._ppid = os.getppid()  # taken here: a parent may exit right after start-up, before run()
 
@@ -88,6 +93,7 @@ class Simulator:
         period, cfg, ctl, link = self.period, self.cfg, self.controller, self.link
         on_datagram = ctl.on_datagram
         spin = cfg.spin_us * 1e-6
+        spacing = MIN_SPACING * period  # [s]
         realtime = self._enter_realtime() if cfg.realtime else False
         gc.collect()
         gc.freeze()  # the objects built so far are never collected again: short collections in the loop
@@ -117,8 +123,9 @@ class Simulator:
                         end_reason = "max_runtime"
                     elif k % 512 == 0 and os.getppid() != ppid:
                         end_reason = "parent_exited"
+                    # the client gets (almost) its whole period even when this message went out late
+                    next_t = max(next_t + period, self._sent_by + spacing)
                     k += 1
-                    next_t += period
                     if end_reason:
                         forced = True
                         break
@@ -147,6 +154,7 @@ class Simulator:
         data = ctl.cycle(rel)
         self._cycle_time[k % RING] = time.perf_counter()  # the send instant of this cycle
         self.link.send(data, ctl.seq)
+        self._sent_by = time.perf_counter()  # the datagram is out by now (even if this process was preempted)
         self._work[k % RING] = time.perf_counter() - now
         if len(ctl.states_seen) != self._n_states:
             self._n_states = len(ctl.states_seen)
@@ -173,7 +181,7 @@ class Simulator:
             if machine.finished or now + self.period > deadline:
                 return k
             k += 1
-            next_t = max(next_t + self.period, now)
+            next_t = max(next_t + self.period, now, self._sent_by + MIN_SPACING * self.period)
 
     def _stats(self, ncycles: int, end_reason: str, cpu_fraction: float, realtime: bool) -> SimStats:
         ctl, link = self.controller, self.link

@@ -31,6 +31,15 @@ def realtime_scheduling(rep, wanted: bool):
     finally:
         os.sched_setscheduler(0, old[0], old[1])
 
+def default_busy_wait_s(embedded: bool, realtime: bool) -> float:
+    """[s] polled before each message when --busy-wait is not given: none with the embedded simulator (it shares
+    the cores), a short window under SCHED_FIFO (the kernel throttles a real-time loop that never sleeps), else
+    all of a 1 ms period."""
+    from lbrcli.fri.transport import DEFAULT_BUSY_WAIT_REALTIME_S, DEFAULT_BUSY_WAIT_S
+
+    return 0.0 if embedded else DEFAULT_BUSY_WAIT_REALTIME_S if realtime else DEFAULT_BUSY_WAIT_S
+
+
 LENIENT_REPLY_GAP_S = 0.5  # [s] replies the simulator may miss in a row on a loaded PC (--sim-lenient; robot: 50 ms)
 
 
@@ -101,7 +110,6 @@ def run_client(
     ``plants``: the simulator's plant specs instead of the ball (and ball-driven module) of ``sim_kwargs``; a client
     with a ``reader`` attribute gets the pendulum module's reader."""
     from lbrcli.fri import ClientApplication, ExecutionLog, LogObserver, SessionFigures, interrupts_brake
-    from lbrcli.fri.transport import DEFAULT_BUSY_WAIT_S
 
     embedded = robot is None
     app = ClientApplication(
@@ -116,7 +124,7 @@ def run_client(
         commanding_timeout_s=commanding_timeout_s if commanding_timeout_s is not None else (20.0 if embedded else None),
         max_tracking_error=max_tracking_error,
         reply_gap_s=LENIENT_REPLY_GAP_S if embedded and sim_lenient else None,
-        busy_wait_s=busy_wait_s if busy_wait_s is not None else (0.0 if embedded else DEFAULT_BUSY_WAIT_S),
+        busy_wait_s=busy_wait_s if busy_wait_s is not None else default_busy_wait_s(embedded, realtime),
     )
     if lab is not None:
         lab.validate(embedded)

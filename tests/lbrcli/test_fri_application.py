@@ -392,3 +392,66 @@ def test_a_log_that_cannot_be_written_brakes_and_ends(tmp_path):
     res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * (n + 300), player, observers=[LogObserver(log)])
     assert err is None and res.outcome is Outcome.FAILED and res.reason is EndReason.OBSERVER_FAILED
     assert "log" in res.detail
+
+
+class _Memory:
+    """The transport's interface over a scripted controller's messages built on demand (reflecting our last reply
+    as a controller that received it); the replies are kept."""
+
+    def __init__(self, ctl: ScriptedController) -> None:
+        self.ctl, self.i, self.sent, self.port, self.robot_ip, self.foreign, self.warm = ctl, 0, [], 0, "127.0.0.1", 0, None
+
+    def receive(self) -> bytes | None:
+        if self.i >= len(self.ctl.script):
+            return None
+        c = self.ctl.script[self.i]
+        self.ctl.clock_ns = self.i * 1_000_000  # [ns] the controller's clock at 1 ms
+        self.i += 1
+        return c.raw if c.raw is not None else self.ctl._message(c, self.i - 1, max(len(self.sent) - 1, 0))
+
+    def send(self, data: bytes) -> None:
+        self.sent.append(data)
+
+    def expect_period(self, period_s) -> None:
+        pass
+
+    def drain(self) -> int:
+        return 0
+
+    def close(self) -> None:
+        pass
+
+
+@pytest.mark.parametrize("version", ["1.15", "2.7"])
+def test_warming_between_messages_changes_nothing(version):
+    """The busy-wait's warming (the last good message decoded again into the same message, the checks run again)
+    leaves the state and every reply as they were; a garbage datagram in between is not what gets warmed."""
+    n = 120
+    traj = np.tile(Q0, (n, 1)) + 1e-7 * np.arange(n)[:, None]  # [rad] (the scripted robot stays where it is)
+    script = preamble() + [Cycle(state=CA)] * 50 + [Cycle(raw=b"\x00garbage")] + [Cycle(state=CA)] * (n + 20)
+    sent, warmed = [], 0
+    for warm in (False, True):
+        ctl = ScriptedController(0, script, Q0, version=version)
+        ctl.sock.close()
+        ctl.foreign_sock.close()
+        app = ClientApplication(TrajectoryPlayer(traj, LIM, period_s=1e-3), "127.0.0.1", 0, version=version, limits=LIM,
+                                busy_wait_s=1e-4)  # fmt: skip
+        app.transport = _Memory(ctl)
+        app.start()
+        last_good = None
+        while app.step():
+            if warm and app.transport.warm is not None:
+                mon = app._mon
+                if mon.IsInitialized():  # a message as decoded: warming keeps it as it is
+                    before = (mon.SerializeToString(), app.state.measured_joint_position, app.state.session_state)
+                    app.transport.warm()
+                    assert (mon.SerializeToString(), app.state.measured_joint_position, app.state.session_state) == before
+                    last_good = before[0]
+                else:  # what the garbage left: warming restores the last good message
+                    app.transport.warm()
+                    assert mon.SerializeToString() == last_good
+                warmed += 1
+        assert app.result.outcome is Outcome.COMPLETED and app.result.malformed == 1, app.result.detail
+        assert app.result.prepared_replies > n - 10
+        sent.append(app.transport.sent)
+    assert warmed > n and sent[0] == sent[1] and len(sent[0]) > n

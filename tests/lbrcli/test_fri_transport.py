@@ -85,3 +85,30 @@ def test_datagrams_from_other_hosts_are_counted_and_ignored() -> None:
         s.close()
     finally:
         tr.close()
+
+
+def test_warm_is_called_while_busy_waiting_and_never_while_sleeping() -> None:
+    calls: list[float] = []
+    tr = UdpTransport("127.0.0.1", 0, "127.0.0.1", timeout_s=0.05, busy_wait_s=1.5e-3)
+    tr.warm = lambda: calls.append(time.perf_counter())
+    try:
+        th = _sender(tr.port, 100, 2e-3)
+        _first(tr)
+        assert calls == []  # no period known yet: a plain wait
+        tr.expect_period(2e-3)
+        for _ in range(99):
+            assert tr.receive() is not None
+        th.wait(10)
+        assert tr.polled >= 50
+        # every polled message was preceded by warming, at most every WARM_EVERY_S while polling
+        assert len(calls) >= tr.polled
+        from lbrcli.fri.transport import WARM_EVERY_S
+
+        gaps = [b - a for a, b in zip(calls, calls[1:])]
+        assert min(gaps) >= WARM_EVERY_S * 0.9  # (times taken inside the calls)
+        n = len(calls)
+        tr.expect_period(None)
+        assert tr.receive() is None  # sleeping in select: no warming
+        assert len(calls) == n
+    finally:
+        tr.close()

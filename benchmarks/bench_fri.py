@@ -6,15 +6,18 @@ This process plays the controller: every send period (1 ms, then 5 ms) it sends 
 reflecting it. A reply that has not arrived when the next message is due counts as missed. Figures: send → reply
 latency p50/p99/max [ms], answered fraction, missed replies, and the client's own CPU time per cycle [µs] and
 internal receive → send latency (from its --json), and the share of replies it prepared a cycle ahead (the rows are
-known: the reply goes out once the message is decoded and checked). 1 ms is measured twice: with normal scheduling and with
-`--realtime` (SCHED_FIFO; needs root or CAP_SYS_NICE, else the client warns and runs normally).
+known: the reply goes out once the message is decoded and checked). 1 ms is measured with the defaults (`--busy-wait`
+0.9 ms with --robot: at 1 ms the client polls the whole period and keeps the checks of its next reply in the CPU's
+caches), with `--busy-wait 0.2` (the default before 24 Nov 2026), `--busy-wait 0` (always sleep) and `--realtime`
+(SCHED_FIFO; needs root or CAP_SYS_NICE, else the client warns and runs normally).
 Full: 60 s of streaming per run; quick: 5 s.
 
 Floors on this machine, measured the same way: a C UDP echo (compiled here with cc) and a Python one. With
 `--kuka=PATH` (repeatable) a KUKA example client built from KUKA's FRI client SDK (e.g. lbr-stack/fri's
 LBRJointSineOverlayApp; it binds port 30200, so that port must be free) is measured the same way at 1 ms, in rounds
 interleaved with `lbr execute` (6 × 10 s each; the VM's noise comes and goes over minutes, so the comparison is made
-round by round and reported as medians).
+round by round and reported as medians). With root, the same clients are also compared on the wire against
+`lbr sim` with a loopback packet sniffer, as issue #12's figures were taken (``fri_sniff.py``).
 
 Run: `python benchmarks/run_all.py fri [--quick] [--kuka PATH ...]` or `python benchmarks/bench_fri.py [--quick] [--kuka=PATH ...]`.
 """
@@ -402,11 +405,19 @@ def run(quick: bool = False, kuka: Sequence[str] = ()) -> list[tuple[str, float,
     with tempfile.TemporaryDirectory() as tmp:
         for kind in ("C", "Python"):
             rows += _echo_floor(kind, Path(tmp), int(duration * 1000))
-        for period_ms, realtime, extra in ((1, False, ()), (1, False, ("--busy-wait", "0")), (1, True, ()), (5, False, ())):
+        for period_ms, realtime, extra in ((1, False, ()), (1, False, ("--busy-wait", "0.2")), (1, False, ("--busy-wait", "0")),
+                                           (1, True, ()), (5, False, ())):
             tag = f"{period_ms} ms" + (" --realtime" if realtime else "") + (" " + " ".join(extra) if extra else "")
             rows += _measure(period_ms, duration, Path(tmp), realtime, extra, tag)
         if kuka:
             rows += _interleaved(kuka, Path(tmp), rounds=2 if quick else 6, round_s=3.0 if quick else 10.0)
+    if kuka:
+        import fri_sniff
+
+        if fri_sniff.available():
+            rows += fri_sniff.interleaved(kuka, rounds=2 if quick else 3, seconds=3.0 if quick else 10.0)
+        else:
+            print("  (skipped the on-the-wire comparison: a packet socket on lo needs root or CAP_NET_RAW)")
     return rows
 
 

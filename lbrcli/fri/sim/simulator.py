@@ -4,10 +4,10 @@ Every send period the loop sends a monitoring message and collects the client's 
 send. A cycle counts as timely when a reply to the message just sent arrives before the next send (with
 receiveMultiplier k: one such reply within k cycles). The loop sleeps in select and busy-waits the last
 ``spin_us`` before each send (steadier than a sleep-only rate limiter at 1 ms), re-synchronises after an overrun,
-and can run with SCHED_FIFO (``realtime``). A real controller sends strictly periodically; when this process sent
-late (its own scheduling), the next message still waits ``MIN_SPACING`` periods after it, so the client keeps
-(almost) a whole period to answer and is not judged late for the simulator's delay; the schedule catches up over
-the following cycles. However the loop stops (session end, stop(), timeout, parent gone), the
+and can run with SCHED_FIFO (``realtime``). A real controller sends strictly periodically; when this process started a
+cycle late (its own scheduling), the next cycle still starts ``MIN_SPACING`` periods after it (and at least
+``MIN_SEND_SPACING`` after a send delayed within its cycle), so the client keeps (almost) a whole period to answer
+and is not judged late for the simulator's delay; the cycles return to their grid over the following periods. However the loop stops (session end, stop(), timeout, parent gone), the
 last messages carry IDLE, as when a robot application ends and its FRI session closes.
 """
 
@@ -27,7 +27,8 @@ from .link import RING, Faults, Link
 from .stats import SimStats, percentiles
 
 
-MIN_SPACING = 0.9  # [periods] least time between two sends (after a late one, the schedule catches up gradually)
+MIN_SPACING = 0.9  # [periods] least time between the starts of two cycles (a late start is followed by a full one)
+MIN_SEND_SPACING = 0.5  # [periods] least time from a send to the next cycle's start (a send delayed inside a cycle)
 CLOSE_BUDGET_S = 0.5  # [s] at most this long sending the closing IDLE messages after a stop or timeout
 
 
@@ -93,13 +94,13 @@ class Simulator:
         period, cfg, ctl, link = self.period, self.cfg, self.controller, self.link
         on_datagram = ctl.on_datagram
         spin = cfg.spin_us * 1e-6
-        spacing = MIN_SPACING * period  # [s]
+        spacing, send_spacing = MIN_SPACING * period, MIN_SEND_SPACING * period  # [s]
         realtime = self._enter_realtime() if cfg.realtime else False
         gc.collect()
         gc.freeze()  # the objects built so far are never collected again: short collections in the loop
         t0 = time.perf_counter()
         cpu0 = time.process_time()
-        next_t = t0
+        grid = send_at = t0  # [s] the cycle's nominal time, and when its message may go out (≥ grid)
         ppid = self._ppid
         end_reason = ""
         forced = interrupted = False  # the simulator stops before the session ended by itself
@@ -108,10 +109,10 @@ class Simulator:
             try:
                 while True:
                     now = time.perf_counter()
-                    if now - next_t > period:  # fell behind by more than a cycle: re-synchronise
+                    if now - grid > period:  # fell behind by more than a cycle: re-synchronise
                         self.overruns += 1
-                        next_t = now
-                    rel = next_t - t0
+                        grid = now
+                    rel = grid - t0
                     if self._cycle(k, rel, now) is SessionState.IDLE:
                         ctl.machine.note_idle_sent()
                         if ctl.machine.finished:
@@ -123,18 +124,20 @@ class Simulator:
                         end_reason = "max_runtime"
                     elif k % 512 == 0 and os.getppid() != ppid:
                         end_reason = "parent_exited"
-                    # the client gets (almost) its whole period even when this message went out late
-                    next_t = max(next_t + period, self._sent_by + spacing)
+                    grid += period
+                    # the client gets (almost) its whole period even when this message went out late; the sends
+                    # return to the grid over the following cycles
+                    send_at = max(grid, now + spacing, self._sent_by + send_spacing)
                     k += 1
                     if end_reason:
                         forced = True
                         break
-                    link.wait_until(next_t, on_datagram, spin)
+                    link.wait_until(send_at, on_datagram, spin)
             except KeyboardInterrupt:
                 end_reason, forced, interrupted = "stopped", True, True  # slot k is free or reused
-                next_t = max(next_t, time.perf_counter())
+                send_at = max(send_at, time.perf_counter())
             if forced:
-                k = self._close_session(k, next_t, t0)
+                k = self._close_session(k, send_at, t0)
             link.flush(on_datagram)  # let in-flight delayed datagrams go out
         finally:
             link.close()
@@ -181,7 +184,7 @@ class Simulator:
             if machine.finished or now + self.period > deadline:
                 return k
             k += 1
-            next_t = max(next_t + self.period, now, self._sent_by + MIN_SPACING * self.period)
+            next_t = max(next_t + self.period, now + MIN_SPACING * self.period, self._sent_by + MIN_SEND_SPACING * self.period)
 
     def _stats(self, ncycles: int, end_reason: str, cpu_fraction: float, realtime: bool) -> SimStats:
         ctl, link = self.controller, self.link

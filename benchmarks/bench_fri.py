@@ -42,6 +42,17 @@ SETTLE_S = 0.05
 _SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)  # Linux; the kernel's receive time of each datagram
 
 
+def kernel_time_ns(anc: list[tuple[int, int, bytes]]) -> int | None:
+    """The kernel's receive time [ns, time.time_ns clock] in a ``recvmsg`` ancillary list (SO_TIMESTAMPNS), if any."""
+    return next((int.from_bytes(d[:8], "little") * 10**9 + int.from_bytes(d[8:16], "little")
+                 for lvl, typ, d in anc if lvl == socket.SOL_SOCKET and typ == _SO_TIMESTAMPNS), None)  # fmt: skip
+
+
+def kuka_version(path: str) -> str:
+    """The FRI version of a KUKA example client, from its path (built from the SDK of that version)."""
+    return "2.7" if "2.7" in path else "1.15"
+
+
 def _free_port() -> int:
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     s.bind(("127.0.0.1", 0))
@@ -131,8 +142,7 @@ class _Controller:
                     continue
                 return None
             if accept(reply):
-                t_rx = next((int.from_bytes(d[:8], "little") * 10**9 + int.from_bytes(d[8:16], "little")
-                             for lvl, typ, d in anc if lvl == socket.SOL_SOCKET and typ == _SO_TIMESTAMPNS), time.time_ns())  # fmt: skip
+                t_rx = kernel_time_ns(anc) or time.time_ns()
                 return t_send, t_rx
 
     def _reflects(self, reply: bytes, seq: int) -> bool:
@@ -169,7 +179,7 @@ def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = 
     log = workdir / f"log_{period_ms}ms.csv"
     n_rows = _trajectory(traj, period_ms * 1e-3, duration_s)
     if kuka is not None:
-        port, version = 30200, ("2.7" if "2.7" in kuka else "1.15")
+        port, version = 30200, kuka_version(kuka)
         client = subprocess.Popen([kuka], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, text=True, cwd=workdir)
     else:
         port, version = _free_port(), "1.15"
@@ -430,7 +440,7 @@ def _interleaved(kuka: Sequence[str], workdir: Path, rounds: int, round_s: float
         missed = next(v for k, v in get.items() if k.startswith("missed replies"))
         return get["reply latency p50 (controller side)"], get["reply latency p99 (controller side)"], missed
 
-    names = ["lbr execute"] + [f"KUKA {Path(p).name} ({'2.7' if '2.7' in p else '1.15'})" for p in kuka]
+    names = ["lbr execute"] + [f"KUKA {Path(p).name} ({kuka_version(p)})" for p in kuka]
     per: dict[str, list[tuple[float, float, float]]] = {n: [] for n in names}
     for _ in range(rounds):
         per[names[0]].append(figures(_measure(1, round_s, workdir, tag="x")))

@@ -18,11 +18,11 @@ from pathlib import Path
 from typing import Sequence
 
 import numpy as np
+from bench_fri import _SO_TIMESTAMPNS, _trajectory, kernel_time_ns, kuka_version
 
 FRI_PORT = 30200
 _ETH_P_ALL = 0x0003
 _PACKET_OUTGOING = 4  # lo shows each packet twice (outgoing and incoming): one copy is enough
-_SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)
 
 
 def available() -> bool:
@@ -80,9 +80,7 @@ class LoopbackSniffer:
             sport, dport = struct.unpack_from("!HH", ip, ihl)
             if port not in (sport, dport):
                 continue
-            t = next((int.from_bytes(d[:8], "little") * 10**9 + int.from_bytes(d[8:16], "little")
-                      for lvl, typ, d in anc if lvl == socket.SOL_SOCKET and typ == _SO_TIMESTAMPNS), 0)  # fmt: skip
-            out.append((t, sport, dport, bytes(ip[ihl + 8:])))
+            out.append((kernel_time_ns(anc) or 0, sport, dport, bytes(ip[ihl + 8:])))
 
 
 def latencies(records: Sequence[tuple[int, int, int, bytes]], version: str, port: int = FRI_PORT) -> tuple[np.ndarray, int]:
@@ -143,15 +141,12 @@ def _round(client: list[str] | None, version: str, seconds: float, workdir: Path
 def interleaved(kuka: Sequence[str], rounds: int = 3, seconds: float = 10.0) -> list[tuple[str, float, str]]:
     """For each KUKA client (its FRI version from its path), ``rounds`` × (that client, then ``lbr execute``
     with its defaults) against ``lbr sim`` at 1 ms: medians of the per-round p50/p99 and of the p99 ratios."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from bench_fri import _trajectory
-
     rows: list[tuple[str, float, str]] = []
     with tempfile.TemporaryDirectory() as tmp:
         workdir = Path(tmp)
         _trajectory(workdir / "traj.csv", 1e-3, seconds)
         for path in kuka:
-            version = "2.7" if "2.7" in path else "1.15"
+            version = kuka_version(path)
             per: dict[str, list[tuple[float, float, bool]]] = {"KUKA": [], "lbr": []}
             for _ in range(rounds):
                 per["KUKA"].append(_round([path], version, seconds, workdir))

@@ -31,6 +31,7 @@ def realtime_scheduling(rep, wanted: bool):
     finally:
         os.sched_setscheduler(0, old[0], old[1])
 
+
 def default_busy_wait_s(embedded: bool, realtime: bool) -> float:
     """[s] polled before each message when --busy-wait is not given: none with the embedded simulator (it shares
     the cores), a short window under SCHED_FIFO (the kernel throttles a real-time loop that never sleeps), else

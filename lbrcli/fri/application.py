@@ -291,10 +291,7 @@ class ClientApplication(Replying, SessionEnding):
             cyc.command = tuple(mon.monitorData.measuredJointPosition.value)
             self._cpu0 = time.thread_time()
             self._cycles0 = 1
-        cyc.t = clock.t
-        cyc.state = state
-        cyc.answered = cyc.sent_position = cyc.braking = False
-        cyc.torque = cyc.wrench = None
+        cyc.begin(clock.t, state)
         if state != IDLE and clock.learn_period(ci):
             self._motion = ExecutedMotion(self.limits, clock.period_s, self.max_force, self.max_moment,  # type: ignore[arg-type]
                                           self.hold_cycles, mon.monitorData.measuredJointPosition.value)  # fmt: skip

@@ -39,3 +39,10 @@ class Cycle:
         self.braking = False  # the command came from the braking stop
         self.phase = 0  # the client's phase / row (logged)
         self.row = -1
+
+    def begin(self, t: float, state: int) -> None:
+        """A new cycle at controller time ``t`` [s] in session ``state``: nothing sent yet."""
+        self.t = t
+        self.state = state
+        self.answered = self.sent_position = self.braking = False
+        self.torque = self.wrench = None

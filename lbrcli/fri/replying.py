@@ -113,10 +113,7 @@ class Replying:
         motion = self._motion
         supervised = (True, motion.moving, motion.prev, self.client_sequence)  # type: ignore[union-attr]
         cyc = self.cycle
-        cyc.t = clock.t
-        cyc.answered = cyc.braking = False
-        cyc.torque = cyc.wrench = None
-        cyc.state = CMD_ACTIVE
+        cyc.begin(clock.t, CMD_ACTIVE)
         motion.sent(q, CMD_ACTIVE)  # type: ignore[union-attr]  # before the client's call: a stop brakes from q
         client = self.client
         client.reply_due = True

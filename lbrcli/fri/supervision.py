@@ -25,27 +25,28 @@ def joint_bound(position_limit: Sequence[float]) -> tuple[float, ...]:
     return tuple(float(p) + POSITION_SLACK for p in position_limit)
 
 
+def within(values: Sequence[float], bound: Sequence[float]) -> bool:
+    """7 joint values with |value| ≤ ``bound`` [rad] (:func:`joint_bound`); NaN and inf compare False."""
+    # hot path, before every reply: C-level loops straight over the message's values
+    return len(values) == 7 and all(map(_le, map(abs, values), bound))
+
+
 def joints_ok(values: Sequence[float], position_limit: Sequence[float]) -> bool:
     """7 finite joint values [rad] within the position limits (plus a small slack)."""
-    return len(values) == 7 and all(map(_le, map(abs, values), joint_bound(position_limit)))
+    return within(values, joint_bound(position_limit))
 
 
 def consistent(mon: Any, bound: Sequence[float]) -> bool:
     """A message a real controller could have sent: connection info, 7 finite joint values where the state needs
     them, |positions| ≤ ``bound`` (:func:`joint_bound`)."""
-    # hot path, before every reply: C-level loops straight over the message's values (NaN and inf compare False)
     if not mon.HasField("connectionInfo"):
         return False
     state = mon.connectionInfo.sessionState
     if state == IDLE:
         return True
-    v = mon.monitorData.measuredJointPosition.value
-    if len(v) != 7 or not all(map(_le, map(abs, v), bound)):
+    if not within(mon.monitorData.measuredJointPosition.value, bound):
         return False
-    if state < CMD_WAIT:
-        return True
-    v = mon.ipoData.jointPosition.value
-    return len(v) == 7 and all(map(_le, map(abs, v), bound))
+    return state < CMD_WAIT or within(mon.ipoData.jointPosition.value, bound)
 
 
 def robot_side_end(mon: Any, state: int, *, seen_session: bool, commanding: bool, was_active: bool,

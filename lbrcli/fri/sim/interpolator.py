@@ -5,8 +5,9 @@ every joint within its velocity [rad/s] and acceleration [rad/s²] limits, the r
 (tracking performance 1). Otherwise the step is clipped per joint — a braking bound on the speed relative to
 the target's own velocity (the discrete √(2·a_max·|e|)) so that the target is caught up with without overshoot,
 the velocity limit, and the acceleration window around the current velocity — and the tracking performance is
-the achieved fraction of the requested step of the worst joint (0..1; an overshoot by x % counts as 1 − x %). A joint that was catching up lands on
-the target only once it can also keep to the target's velocity. All arrays are preallocated; ``step`` allocates only numpy temporaries of 7 elements.
+the achieved fraction of the requested step of the worst joint (0..1; an overshoot by x % counts as 1 − x %). A
+joint that was catching up lands on the target only once it can also keep to the target's velocity. All arrays are
+preallocated; ``step`` allocates only numpy temporaries of 7 elements.
 """
 
 from __future__ import annotations

@@ -4,11 +4,12 @@ Every send period the loop sends a monitoring message and collects the client's 
 send. A cycle counts as timely when a reply to the message just sent arrives before the next send (with
 receiveMultiplier k: one such reply within k cycles). The loop sleeps in select and busy-waits the last
 ``spin_us`` before each send (steadier than a sleep-only rate limiter at 1 ms), re-synchronises after an overrun,
-and can run with SCHED_FIFO (``realtime``). A real controller sends strictly periodically; when this process started a
-cycle late (its own scheduling), the next cycle still starts ``MIN_SPACING`` periods after it (and at least
-``MIN_SEND_SPACING`` after a send delayed within its cycle), so the client keeps (almost) a whole period to answer
-and is not judged late for the simulator's delay; the cycles return to their grid over the following periods. However the loop stops (session end, stop(), timeout, parent gone), the
-last messages carry IDLE, as when a robot application ends and its FRI session closes.
+and can run with SCHED_FIFO (``realtime``). A real controller sends strictly periodically; when this process
+started a cycle late (its own scheduling), the next cycle still starts ``MIN_SPACING`` periods after it (and at
+least ``MIN_SEND_SPACING`` after a send delayed within its cycle), so the client keeps (almost) a whole period to
+answer and is not judged late for the simulator's delay; the cycles return to their grid over the following
+periods. However the loop stops (session end, stop(), timeout, parent gone), the last messages carry IDLE, as when
+a robot application ends and its FRI session closes.
 """
 
 from __future__ import annotations
@@ -94,7 +95,6 @@ class Simulator:
         period, cfg, ctl, link = self.period, self.cfg, self.controller, self.link
         on_datagram = ctl.on_datagram
         spin = cfg.spin_us * 1e-6
-        spacing, send_spacing = MIN_SPACING * period, MIN_SEND_SPACING * period  # [s]
         realtime = self._enter_realtime() if cfg.realtime else False
         gc.collect()
         gc.freeze()  # the objects built so far are never collected again: short collections in the loop
@@ -127,7 +127,7 @@ class Simulator:
                     grid += period
                     # the client gets (almost) its whole period even when this message went out late; the sends
                     # return to the grid over the following cycles
-                    send_at = max(grid, now + spacing, self._sent_by + send_spacing)
+                    send_at = max(grid, self._earliest_start(now))
                     k += 1
                     if end_reason:
                         forced = True
@@ -157,13 +157,18 @@ class Simulator:
         data = ctl.cycle(rel)
         self._cycle_time[k % RING] = time.perf_counter()  # the send instant of this cycle
         self.link.send(data, ctl.seq)
-        self._sent_by = time.perf_counter()  # the datagram is out by now (even if this process was preempted)
-        self._work[k % RING] = time.perf_counter() - now
+        self._sent_by = t = time.perf_counter()  # the datagram is out by now (even if this process was preempted)
+        self._work[k % RING] = t - now
         if len(ctl.states_seen) != self._n_states:
             self._n_states = len(ctl.states_seen)
             if self._on_state is not None:
                 self._on_state(ctl.state, ctl.quality, rel)
         return ctl.state
+
+    def _earliest_start(self, started: float) -> float:
+        """perf_counter [s] before which the next cycle must not start, the current one having started at
+        ``started``: the client keeps (almost) its period after a late start or a send delayed within the cycle."""
+        return max(started + MIN_SPACING * self.period, self._sent_by + MIN_SEND_SPACING * self.period)
 
     def _close_session(self, k: int, next_t: float, t0: float) -> int:
         """The robot application ends early (stop, timeout, parent gone): send the IDLE messages of a normal ending,
@@ -184,7 +189,7 @@ class Simulator:
             if machine.finished or now + self.period > deadline:
                 return k
             k += 1
-            next_t = max(next_t + self.period, now + MIN_SPACING * self.period, self._sent_by + MIN_SEND_SPACING * self.period)
+            next_t = max(next_t + self.period, self._earliest_start(now))
 
     def _stats(self, ncycles: int, end_reason: str, cpu_fraction: float, realtime: bool) -> SimStats:
         ctl, link = self.controller, self.link

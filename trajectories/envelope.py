@@ -210,6 +210,59 @@ class BrakingEnvelope:
                     worst, worst_j = d, j
         return Admission(tuple(q) if out is None else tuple(out), worst, worst_j, None)
 
+    def admit_either(self, q: Sequence[float], histories: Sequence[tuple], jerk: bool = False) -> Admission:
+        """As :meth:`admit`, but admissible after each of ``histories`` ((q1, q2, q3) each): when it is not known
+        which the controller executed (a reply it may have bridged). Per joint the command is clamped into the
+        intersection of the intervals — the velocity and acceleration bounds after every history, the jerk bound
+        after the first one as far as it fits (the bridged history's jump in acceleration is the controller's);
+        where they do not meet, into the first history's."""
+        first = self.admit(q, *histories[0], jerk)
+        if first.reason is not None or len(histories) == 1:
+            return first
+        if all(self.admit(first.q, *h, False).clamped == 0.0 for h in histories[1:]):
+            return first
+        out = list(first.q)
+        worst, worst_j = first.clamped, first.joint
+        for j in range(7):
+            lo = hi = math.nan
+            for with_jerk in ((True, False) if jerk else (False,)):
+                lo, hi = -math.inf, math.inf
+                for k, h in enumerate(histories):
+                    iv = self._interval(j, h[0][j], h[1][j], h[2][j], with_jerk and k == 0)
+                    if iv is not None:
+                        lo, hi = max(lo, iv[0]), min(hi, iv[1])
+                if lo <= hi:
+                    break
+            if lo <= hi:
+                y = min(max(q[j], lo), hi)
+                if y != out[j]:
+                    out[j] = y
+                    d = abs(y - q[j])
+                    if d > worst:
+                        worst, worst_j = d, j
+        return Admission(tuple(out), worst, worst_j, None)
+
+    def _interval(self, j: int, p1: float, p2: float, p3: float, jerk: bool) -> tuple[float, float] | None:
+        """The commands [rad] of joint ``j`` admissible after (p1, p2, p3), with the clamp's margins; None: none."""
+        dt = self.dt
+        v1 = (p1 - p2) / dt
+        a1 = (p1 - 2.0 * p2 + p3) / (dt * dt)
+        lo, hi = self._bounds(j, v1, a1, p1, p2, jerk)
+        if lo > hi:
+            return None
+        if not self._position_ok(j, p1, v1, hi):
+            b = self._position_bound(j, p1, v1, math.inf, lo, hi, True)
+            if b is None:
+                return None
+            hi = b
+        if not self._position_ok(j, p1, v1, lo):
+            b = self._position_bound(j, p1, v1, -math.inf, lo, hi, True)
+            if b is None:
+                return None
+            lo = b
+        base = 2.0 * p1 - p2
+        return base + lo * dt * dt, base + hi * dt * dt
+
     def _fast_ok(self, j: int, x: float, v1: float, a: float, a1: float, jerk: bool) -> bool:
         """Most commands: inside every bound and far from the position limit (a few float operations)."""
         k = 1.0 + REL_TOL

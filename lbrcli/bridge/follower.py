@@ -188,8 +188,8 @@ class TargetFollower(LBRClient):
         if not self.reply_due:
             return self._q  # type: ignore[return-value]
         ex = self.executed
-        if (self.skipped or self.replies_lost or self.clamped) and ex is not None:
-            # the controller extrapolated our last commands (lost messages or replies), or the safety core clamped one:
+        if (self.skipped or self.clamped) and ex is not None:
+            # the controller extrapolated our last commands (lost messages), or the safety core clamped one:
             # re-plan from what it executed
             inp.current_position = list(ex.position)
             inp.current_velocity = list(ex.velocity)

@@ -324,7 +324,7 @@ class Encoder:
     """The module's encoder as the controller reads it: 12 bits at 200 Hz, 6 ms late; ``fault`` from ``at`` on."""
 
     fault: str | None = None  # noise, frozen, reversed, jump, dropout, offset
-    at: int = 1500
+    at: int = 6500
     rod: float = 0.4  # [m] the real rod (the controller assumes 0.4 m)
 
 
@@ -379,23 +379,41 @@ def _module(encoder: Encoder):
     return hook
 
 
+_FITTER: Any = None
+
+
+def _fitter():
+    """One identification worker for the whole campaign (spawned once)."""
+    global _FITTER
+    if _FITTER is None:
+        from lbrcli.control.fitter import ProcessFitter
+
+        _FITTER = ProcessFitter()
+    return _FITTER
+
+
 def upright_surface() -> Surface:
-    """``lbr control upright`` (rod 0.4 m, 2 s balanced, 4 s to catch) on a simulated module."""
+    """``lbr control upright`` (rod 0.4 m: identified, swung up within 4 s, balanced 2 s, lowered) on a simulated
+    module."""
     from lbrcli.control.upright import LOG_COLUMNS, UprightClient
+    from planners.feedback.session import SessionOptions
     from planners.rigid_pendulum import RigidPendulum
 
     def make() -> LBRClient:
         rail, _ = _rail()
-        return UprightClient(rail, RigidPendulum(rod_length=0.4).equivalent_length, LIM, hold_s=2.0,
-                             swing_timeout_s=4.0, sensor_delay_s=0.006, wait_s=2.0)  # fmt: skip
+        opts = SessionOptions(hold_s=2.0, swing_timeout_s=6.0, recatch_s=4.0, wait_s=2.0, lower_ramp_s=3.0,
+                              lower_timeout_s=8.0)  # fmt: skip
+        return UprightClient(rail, RigidPendulum(rod_length=0.4).equivalent_length, LIM, session=opts,
+                             fitter=_fitter())  # fmt: skip
 
     def extra(client: Any):
         return LOG_COLUMNS, lambda state: client.log_values()
 
     ends = (EndReason.FINISHED, EndReason.CLIENT_REFUSED)
-    s = Surface("upright", make, 9000, 1500, ends, on_cycle=_module(Encoder()), log_extra=extra)
+    n = 26000  # the move, the wait, the identification (≈ 5 s), the swing-up, the hold, the lowering and the park
+    s = Surface("upright", make, n, 6500, ends, on_cycle=_module(Encoder()), log_extra=extra)
     s.own = [
-        _case(s, f"encoder {name}", "sensors", preamble() + active(9000), ends, on_cycle=_module(enc))
+        _case(s, f"encoder {name}", "sensors", preamble() + active(n), ends, on_cycle=_module(enc))
         for name, enc in [
             ("noise ±2 counts", Encoder("noise2")),
             ("freezes while swinging", Encoder("frozen")),

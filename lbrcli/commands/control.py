@@ -51,8 +51,11 @@ def upright(
     rod_length: Annotated[float, typer.Option("--rod-length", help="Length of the module's rod \\[m] (uniform rod).")] = 0.5,
     rod_mass: Annotated[float, typer.Option("--rod-mass", help="Mass of the rod \\[kg].")] = 0.1,
     tip_mass: Annotated[float, typer.Option("--tip-mass", help="Mass at the rod's end \\[kg].")] = 0.0,
-    hold: Annotated[float, typer.Option("--hold", help="Balance upright this long after the first catch \\[s].")] = 60.0,
-    swing_timeout: Annotated[float, typer.Option("--swing-timeout", help="Give up if not caught upright by then \\[s].")] = 30.0,
+    hold: Annotated[float, typer.Option("--hold", help="Balance upright this long in one run without a fall: the goal \\[s].")] = 60.0,
+    swing_timeout: Annotated[float, typer.Option("--swing-timeout", help="Give up if not caught upright within this long of swinging \\[s].")] = 30.0,
+    recatch: Annotated[float, typer.Option("--recatch", help="After a fall, give up if not caught again within this long \\[s].")] = 20.0,
+    identify: Annotated[bool, typer.Option("--identify/--no-identify", help="Identify the rod (length, friction, the encoder's offset and sign, the delay) from a short push before the swing-up (default), or trust --rod-length and --sensor-delay.")] = True,
+    encoder_sign: Annotated[int, typer.Option("--encoder-sign", help="The sign the module's encoder counts with: 1, or -1 for one mounted reversed (the identification refuses to go on when they disagree).")] = 1,
     travel: Annotated[float, typer.Option("--travel", help="The cart's travel along base y either side of the start \\[m].")] = 0.3,
     q_start: Annotated[str, typer.Option("--q-start", help="The rail's centre pose: 7 joint angles (deg/rad).")] = THESIS_Q_START,
     move_to_start: Annotated[bool, typer.Option("--move-to-start", help="Reach --q-start first by a jerk-limited move.")] = False,
@@ -64,6 +67,10 @@ def upright(
     sim_delay: Annotated[float, typer.Option("--sim-delay", help="Simulator: encoder-to-serial delay \\[ms] (radio + USB).")] = 5.0,
     sim_jitter: Annotated[float, typer.Option("--sim-jitter", help="Simulator: extra delay, uniform in \\[0, jitter] \\[ms].")] = 1.0,
     push: Annotated[Optional[list[str]], typer.Option("--push", help="Simulator: knock the rod by ANGLE at SECONDS after the start, e.g. 10deg@20 (repeatable).")] = None,
+    sim_rod_length: Annotated[Optional[float], typer.Option("--sim-rod-length", help="Simulator: the simulated rod's length \\[m] (default: --rod-length) — a rod the controller does not know.")] = None,
+    sim_friction: Annotated[float, typer.Option("--sim-friction", help="Simulator: the bearing's dry friction as a share of the rod's peak gravity torque.")] = 0.0,
+    sim_noise: Annotated[int, typer.Option("--sim-noise", help="Simulator: encoder noise, up to ± this many counts per reading.")] = 0,
+    sim_encoder_sign: Annotated[int, typer.Option("--sim-encoder-sign", help="Simulator: -1 mounts the simulated encoder reversed.")] = 1,
     robot: RobotOpt = None,
     port: PortOpt = 30200,
     bind: BindOpt = None,
@@ -82,9 +89,14 @@ def upright(
 
     The arm moves the module's bearing along base y through --q-start (the thesis start pose: flange along base +x,
     so the rod swings in the y–z plane) within the joints' velocity, acceleration and jerk limits. The encoder angle
-    is 0 with the rod hanging (--pendulum-zero) and grows toward base +y.
+    is 0 with the rod hanging (--pendulum-zero) and grows toward base +y. First the rod must hang still; then a short
+    push identifies it (its length, friction, the encoder's offset and sign, the delay), the swing-up brings it up,
+    the balance holds it for --hold in one run (a fall is caught again within --recatch), and it is lowered gently in
+    ever smaller swings before the arm parks. Exit 0 only when the hold was met; 1 otherwise (the reason on stderr).
     """
+    from lbrcli.control.fitter import ProcessFitter
     from lbrcli.control.upright import LOG_COLUMNS, UprightClient
+    from planners.feedback.session import SessionOptions
     from lbrcli.lab.attach import LabOptions
     from lbrcli.plants.rigid_module import RigidModuleSpec
     from planners.rail import build_rail
@@ -128,9 +140,21 @@ def upright(
         rail = build_rail(robot_model, q0, lim, travel)
     except ValueError as exc:
         raise CheckFailed(f"--q-start/--travel: no rail along base y fits the joint limits: {exc}") from None
+    check_number("--recatch", recatch, 1.0, 600.0, unit="s")
+    check_number("--sim-friction", sim_friction, 0.0, 0.5)
+    if encoder_sign not in (1, -1) or sim_encoder_sign not in (1, -1):
+        raise OptionError("--encoder-sign and --sim-encoder-sign must be 1 or -1")
+    if not 0 <= sim_noise <= 100:
+        raise OptionError(f"--sim-noise must be 0..100 counts, got {sim_noise}")
+    if sim_rod_length is not None:
+        check_number("--sim-rod-length", sim_rod_length, 0.1, 1.5, unit="m")
+    check_simulator_only(robot, {"--sim-rod-length": sim_rod_length is not None, "--sim-friction": sim_friction != 0.0,
+                                 "--sim-noise": sim_noise != 0, "--sim-encoder-sign": sim_encoder_sign != 1})  # fmt: skip
     assumed_ms = sensor_delay if sensor_delay is not None else (sim_delay + 0.5 * sim_jitter if robot is None else 6.0)
-    client = UprightClient(rail, model.equivalent_length, lim, hold_s=hold, swing_timeout_s=swing_timeout,
-                           sensor_delay_s=assumed_ms * 1e-3, sensor_rate_hz=sensor_rate, move_to_start=move_to_start)
+    session = SessionOptions(hold_s=hold, swing_timeout_s=swing_timeout, recatch_s=recatch, identify=identify,
+                             encoder_sign=encoder_sign, sensor_delay_s=assumed_ms * 1e-3)  # fmt: skip
+    client = UprightClient(rail, model.equivalent_length, lim, session=session, sensor_rate_hz=sensor_rate,
+                           move_to_start=move_to_start)  # fmt: skip
     rep.print(f"rod {rod_length:g} m (equivalent length {model.equivalent_length:.3f} m, period {model.natural_period:.3f} s); "
               f"rail ±{travel:g} m, up to {rail.limits.velocity:.2f} m/s, {rail.limits.acceleration:.2f} m/s² anywhere "
               "(more where the joints allow)")  # fmt: skip
@@ -139,20 +163,36 @@ def upright(
     if robot is None:
         sim_kwargs = simulator_kwargs(length=0.0, default_length=0.0, period_ms=period or 1, sim_start=None,
                                       default_start=tuple(float(v) for v in q0), flange=DEFAULT_FLANGE, tool=None,
-                                      max_runtime_s=hold + swing_timeout + 120.0, limits=limits)  # fmt: skip
-        plants = (RigidModuleSpec(model, sensor_rate, sim_delay, sim_jitter, pushes=pushes, zero_count=pendulum_zero),)
+                                      max_runtime_s=hold + swing_timeout + 3 * recatch + 180.0, limits=limits)  # fmt: skip
+        rod = model if sim_rod_length is None else RigidPendulum(rod_length=sim_rod_length, rod_mass=rod_mass,
+                                                                 tip_mass=tip_mass)  # fmt: skip
+        from dataclasses import replace
+
+        rod = replace(rod, coulomb=max(rod.coulomb, sim_friction * rod.mass * rod.com * 9.81))
+        plants = (RigidModuleSpec(rod, sensor_rate, sim_delay, sim_jitter, pushes=pushes, zero_count=pendulum_zero,
+                                  noise_counts=sim_noise, sign=sim_encoder_sign),)  # fmt: skip
     lab = LabOptions(pendulum or "sim", baud, pendulum_zero)
-    result, sim_stats, lab_figures = run_client(
-        rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-        sim_kwargs=sim_kwargs, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), sim_lenient=sim_lenient,
-        lab=lab, plants=plants, extra_names=LOG_COLUMNS, extra=client.log_values,
-    )  # fmt: skip
+    fitter = ProcessFitter() if identify else None
+    client.fitter = fitter
+    try:
+        result, sim_stats, lab_figures = run_client(
+            rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
+            sim_kwargs=sim_kwargs, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), sim_lenient=sim_lenient,
+            lab=lab, plants=plants, extra_names=LOG_COLUMNS, extra=client.log_values,
+        )  # fmt: skip
+    finally:
+        if fitter is not None:
+            fitter.close()
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)
     f = figures  # the client's figures are merged into the session's
-    if f["swing_up_s"] is not None:
-        rep.print(f"swing-up {f['swing_up_s']:.2f} s; balanced {f['balanced_s']:.1f} s (longest {f['longest_balance_s']:.1f} s), "
-                  f"falls {f['falls']}, max |angle from upright| {f['max_theta_balanced_deg']:.2f}° (estimate)")  # fmt: skip
+    if f.get("identified_length_m") is not None:
+        rep.print(f"identified: equivalent length {f['identified_length_m']:.3f} m (model {model.equivalent_length:.3f} m), "
+                  f"dry friction {100 * f['identified_coulomb_share']:.1f} % of its gravity torque, encoder offset "
+                  f"{f['encoder_offset_deg']:.2f}°, delay {f['identified_delay_ms']:.1f} ms")  # fmt: skip
+    if f.get("swing_up_s") is not None:
+        rep.print(f"swing-up {f['swing_up_s']:.2f} s; balanced {f['balanced_s']:.1f} s (longest run {f['longest_balance_s']:.1f} s), "
+                  f"catches {f['catches']}, falls {f['falls']}, max |angle from upright| {f['max_theta_balanced_deg']:.2f}° (estimate)")  # fmt: skip
     if f["controller_us_p50"] is not None:
         rep.print(f"controller per cycle: p50 {f['controller_us_p50']:.1f} µs, p99 {f['controller_us_p99']:.1f} µs")
     if sim_stats is not None:

@@ -298,7 +298,7 @@ class ClientApplication(Replying, SessionEnding):
                 skipped = self._motion.extrapolate((d - 1) // (clock.period_key[1] if clock.period_key else 1))  # type: ignore[union-attr]
         if lost_reply and self._moving():
             self._motion.reply_lost()  # type: ignore[union-attr]
-            self.lost_replies += 1
+            self.lost_replies += 1  # (late replies: the controller had not received it when it sent this message)
         self.client.replies_lost = 1 if lost_reply else 0
         self._last_seq = seq
         self.cycles += 1

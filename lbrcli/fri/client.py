@@ -34,8 +34,9 @@ class LBRClient:
     reply_due: bool = True  # set by the application: this cycle's command is sent (every k-th message)
     skipped: int = 0  # set by the application: command periods the controller bridged since the last command
     # (its messages to us were lost; it extrapolated) — a client that follows time should advance by them
-    replies_lost: int = 0  # set by the application: our last command never reached the controller (its reflected
-    # counter says so); it bridged that period instead — ``executed`` holds where that left the robot
+    replies_lost: int = 0  # set by the application: our last command had not reached the controller when it sent
+    # this message (its reflected counter says so): it bridged that period, or executes the command late; the
+    # motion-safety core admits the next commands only if they suit either
     braking: bool = False  # set by the application: it brakes to a stop this cycle (the callbacks are not called)
     phase: int = 0  # free for the client: logged per cycle (e.g. which part of a trajectory is playing)
     row: int = -1

@@ -28,6 +28,7 @@ _ZERO6 = (0.0,) * 6
 _ZERO7 = (0.0,) * 7
 _CMD_ACTIVE = 4
 CLAMP_TOL = 1e-12  # [rad] a change below this is rounding, not a clamp
+ALT_CYCLES = 3  # commands judged also against the bridged history after a reply the controller reported missing
 EFFORT_RAMP_MIN_S = 0.05  # [s] the shortest effort ramp of a stop
 EFFORT_RANGE_S = 0.25  # [s] a stop ramps an effort down at most at its whole range (torque limit, wrench bound) per this
 
@@ -91,6 +92,8 @@ class ExecutedMotion:
         self.last_torque: tuple[float, ...] | None = None  # the effort last sent (TORQUE / WRENCH mode)
         self.last_wrench: tuple[float, ...] | None = None
         self._ramp: EffortRamp | None = None
+        self._alt: tuple | None = None  # the history had the controller bridged a reply it reported missing
+        self._alt_left = 0
 
     @property
     def moving(self) -> bool:
@@ -131,13 +134,15 @@ class ExecutedMotion:
         return n
 
     def reply_lost(self) -> None:
-        """The controller did not receive our last command: it bridged that period by extrapolating the two commands
-        before it (at their velocity, within the velocity limit). A braking stop goes on from there."""
+        """The controller's reflected counter says our last command had not reached it when it sent its message. A
+        controller may have bridged that period by extrapolating the two commands before it, or may still execute
+        the command late (our simulator carries a late command forward): for the next ``ALT_CYCLES`` commands the
+        envelope admits only what is admissible after either history."""
         cap = self.guard.max_step
-        self.prev = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(self.prev2, self.prev3, cap))
-        self.extrapolated_cycles += 1
-        if self.braking:
-            self.brake.start(self.prev, self.prev2, self.prev3)
+        base = self._alt if self._alt is not None else (self.prev, self.prev2, self.prev3)  # losses in a row: its own
+        bridged = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(base[1], base[2], cap))
+        self._alt = (bridged, base[1], base[2])
+        self._alt_left = ALT_CYCLES
 
     def retime(self, period_s: float) -> None:
         """The controller executes each command in ``period_s`` [s], faster than its period says: plan the braking
@@ -163,7 +168,11 @@ class ExecutedMotion:
         """The position to send for the client's ``q`` [rad] in COMMANDING_ACTIVE: (q or its clamp, None), or
         (None, why) when it cannot be sent (not 7 finite values, no admissible command, or ``exact`` and a clamp
         would change it)."""
-        adm = self.envelope.admit(q, self.prev, self.prev2, self.prev3, jerk)
+        env = self.envelope
+        if self._alt is None:
+            adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk)
+        else:  # after a reply that may be lost: admissible after the bridged history too
+            adm = env.admit_either(q, ((self.prev, self.prev2, self.prev3), self._alt), jerk)
         if adm.reason is not None:
             return None, adm.reason
         if adm.clamped > CLAMP_TOL:
@@ -236,5 +245,11 @@ class ExecutedMotion:
         if state == _CMD_ACTIVE:
             self.prev3, self.prev2, self.prev = self.prev2, self.prev, q
             self.active_sent += 1
+            if self._alt is not None:
+                a = self._alt
+                self._alt = (q, a[0], a[1])
+                self._alt_left -= 1
+                if self._alt_left <= 0:
+                    self._alt = None
         else:
             self.prev = self.prev2 = self.prev3 = q

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import math
 
-from fault_campaign import LIM, Q0, active, preamble, ramp
+from lbrcli.campaign.execute import LIM, Q0, ramp
+from lbrcli.fri.testing import active, preamble
 from lbrcli.fri.testing import CA, Cycle, ScriptedController
 
 from lbrcli.fri import ClientApplication, EndReason, TrajectoryPlayer

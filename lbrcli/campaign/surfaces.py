@@ -288,21 +288,21 @@ def damp_surface() -> Surface:
 
     def make() -> LBRClient:
         rows, plan, _ = _damp_plan()
-        return DampingClient(rows, LIM, 1e-3, 0.3, plan, damp_s=1.0, sensor_delay_s=0.002, start_tolerance=1e-3)
+        return DampingClient(rows, LIM, 1e-3, 0.3, plan, damp_s=3.3, sensor_delay_s=0.002, start_tolerance=1e-3)
 
     def extra(client: Any):
         return LOG_COLUMNS, lambda state: client.log_values()
 
-    s = Surface("damp", make, 3800, 900, (EndReason.FINISHED,), inputs=_ball_inputs(Sensor()), log_extra=extra)
+    s = Surface("damp", make, 9000, 900, (EndReason.FINISHED,), inputs=_ball_inputs(Sensor()), log_extra=extra)
     s.own = [
-        _case(s, f"sensor {name}", "sensors", preamble() + active(3800), ends, inputs=_ball_inputs(sensor))
+        _case(s, f"sensor {name}", "sensors", preamble() + active(9000), ends, inputs=_ball_inputs(sensor))
         for name, sensor, ends in [
-            ("reads 0 (the ball hangs still for it)", Sensor("still"), (EndReason.FINISHED,)),
+            ("reads 0 (the ball hangs still for it)", Sensor("still"), (EndReason.CLIENT_REFUSED,)),
             ("noise 0.6°", Sensor("noise"), (EndReason.FINISHED,)),
-            ("freezes mid-move", Sensor("frozen"), (EndReason.FINISHED,)),
-            ("jumps 20°", Sensor("jump"), (EndReason.FINISHED,)),
-            ("NaN", Sensor("nan"), (EndReason.FINISHED,) + REFUSED),
-            ("reversed sign", Sensor("reversed"), (EndReason.FINISHED,)),
+            ("freezes mid-move", Sensor("frozen"), (EndReason.CLIENT_REFUSED,)),
+            ("jumps 20°", Sensor("jump"), (EndReason.CLIENT_REFUSED,)),
+            ("NaN", Sensor("nan"), REFUSED),
+            ("reversed sign", Sensor("reversed"), (EndReason.CLIENT_REFUSED,)),
             ("30 ms late", Sensor("late"), (EndReason.FINISHED,)),
             ("string 20 % shorter", Sensor(length=0.24), (EndReason.FINISHED,)),
         ]

@@ -220,6 +220,7 @@ def damp(
     sensor_delay: Annotated[Optional[float], typer.Option("--sensor-delay", help="Age of a reading when it arrives \\[ms] (default: --sim-delay + one period; one period with --robot).")] = None,
     sensor_rate: Annotated[float, typer.Option("--sensor-rate", help="With --sensor module: readings per second \\[Hz].")] = 200.0,
     open_loop: Annotated[bool, typer.Option("--open-loop", help="Estimate and log the sway but do not correct (the plan alone, for comparison).")] = False,
+    target: Annotated[float, typer.Option("--target", help="The goal: residual sway at most this, fitted over the last swing period of --damp-time \\[deg]; exit 1 above it.")] = 0.3,
     move_to_start: Annotated[bool, typer.Option("--move-to-start", help="If the robot stands elsewhere, first move there (jerk-limited, input-shaped for the swing).")] = False,
     start_tolerance: Annotated[float, typer.Option("--start-tolerance", help="Largest |first row − measured position| accepted \\[rad].")] = 1e-3,
     start_sway: Annotated[float, typer.Option("--start-sway", help="With --move-to-start, hold the first row until the sway stayed below this \\[deg].")] = 0.2,
@@ -264,7 +265,7 @@ def damp(
     from planners.pendulum import natural_period
     from planners.shapers import make_shaper
     from trajectories.csvio import read_joint_csv
-    from trajectories.errors import InputError, OptionError
+    from trajectories.errors import CheckFailed, InputError, OptionError
 
     from ..console import Reporter
     from ..fri_options import DEFAULT_BALL_LENGTH, busy_wait_seconds, check_simulator_only, validate_session
@@ -294,6 +295,7 @@ def damp(
     check_number("--sway-wait", sway_wait, 0.0, 3600.0, unit="s")
     if sensor_delay is not None:
         check_number("--sensor-delay", sensor_delay, 0.0, 500.0, unit="ms")
+    check_number("--target", target, 0.001, 45.0, unit="deg")
     period_T = natural_period(model_len)
     damp_s = 3.0 * period_T if damp_time is None else damp_time
     check_number("--damp-time", damp_s, 0.0, 600.0, unit="s")
@@ -318,6 +320,16 @@ def damp(
                          "(lbr retime) first", file=name)  # fmt: skip
     period_ms = int(round(send_ms))
     period_s = period_ms * 1e-3
+    if sensor == "module":  # the module's rod swings about its bearing axis (the flange's z): it must lie along the
+        from planners.feedback.geometry import module_axis_error  # base axis across the sway it is to measure
+
+        row, err = module_axis_error(model, traj.q, 1 - ("xy".index(module_axis)))
+        if err > math.radians(20.0):
+            raise CheckFailed(f"--sensor module: the module's bearing axis is {math.degrees(err):.0f}° off base "
+                              f"{'xy'[1 - 'xy'.index(module_axis)]} at row {row + 1} (t = {traj.t[row]:.3f} s): its rod "
+                              f"cannot swing with the ball's sway along {module_axis} there (a flange pointing down "
+                              "keeps it vertical); use --sensor io or a camera, or a move with the flange horizontal "
+                              "(e.g. the thesis start pose)")  # fmt: skip
     plan = correction_plan(model, traj.q, lim, period_s)
     assumed_ms = sensor_delay if sensor_delay is not None else (
         sim_delay + period_ms if robot is None or sensor == "io" else 6.0 + period_ms)  # fmt: skip
@@ -325,6 +337,7 @@ def damp(
     client = DampingClient(
         traj.q, lim, period_s, model_len, plan, damp_s=damp_s, sensor_delay_s=assumed_ms * 1e-3,
         io_names=names if sensor == "io" else None, module_axis=axis, sensor_rate_hz=sensor_rate, active=not open_loop,
+        target=math.radians(target),
         start_tolerance=start_tolerance, move_to_start=move_to_start,
         move_shaper=make_shaper("zvd", period_T), move_robot=model,
         sway=SwayWatch(IoSway("ball_theta"), math.radians(start_sway), window_for_length(model_len), sway_wait)
@@ -356,8 +369,11 @@ def damp(
     f = figures  # the client's figures are merged into the session's
     rep.print(f"offset: largest {f['max_offset_m'] * 1e3:.1f} mm, trimmed to the headroom in {f['offset_trimmed_cycles']} "
               f"cycles; return to the last row {f['return_rows']} commands")  # fmt: skip
+    if f.get("sensor_fault"):
+        rep.warn(f"the sway sensor failed a check: {f['sensor_fault']}")
     if f["measured_residual_deg"] is not None:
-        rep.print(f"measured sway in the last swing period of the damping time: {f['measured_residual_deg']:.3f}°")
+        rep.print(f"residual sway (fitted over the last swing period of the damping time): {f['measured_residual_deg']:.3f}° "
+                  f"(target {target:g}°; largest single reading {f['peak_residual_reading_deg']:.3f}°)")  # fmt: skip
     if f["controller_us_p50"] is not None:
         rep.print(f"damper per cycle: p50 {f['controller_us_p50']:.1f} µs, p99 {f['controller_us_p99']:.1f} µs")
     figures.update(file=name, rows=len(traj), duration_s=traj.duration, string_length_m=model_len,

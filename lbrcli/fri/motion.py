@@ -169,18 +169,20 @@ class ExecutedMotion:
         (None, why) when it cannot be sent (not 7 finite values, no admissible command, or ``exact`` and a clamp
         would change it)."""
         env = self.envelope
-        if self._alt is None:
-            adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk)
-        else:  # after a reply that may be lost: admissible after the bridged history too
-            adm = env.admit_either(q, ((self.prev, self.prev2, self.prev3), self._alt), jerk)
+        adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk)
         if adm.reason is not None:
             return None, adm.reason
+        if exact and adm.clamped > CLAMP_TOL:  # the client's own command leaves the envelope: refuse, never bend it
+            j = adm.joint
+            dt = self.period_s
+            p1, p2 = self.prev[j], self.prev2[j]
+            return None, self.envelope.explain(j, q[j], (q[j] - p1) / dt, (q[j] - 2.0 * p1 + p2) / (dt * dt))
+        if self._alt is not None:  # after a reply that may be lost: admissible after the bridged history too (a
+            # clamp of the controller's making, ≈ acceleration × period², also for exact clients)
+            adm = env.admit_either(q, ((self.prev, self.prev2, self.prev3), self._alt), jerk)
+            if adm.reason is not None:
+                return None, adm.reason
         if adm.clamped > CLAMP_TOL:
-            if exact:
-                j = adm.joint
-                dt = self.period_s
-                p1, p2 = self.prev[j], self.prev2[j]
-                return None, self.envelope.explain(j, q[j], (q[j] - p1) / dt, (q[j] - 2.0 * p1 + p2) / (dt * dt))
             self.clamped_cycles += 1
             if adm.clamped > self.largest_clamp:
                 self.largest_clamp = adm.clamped

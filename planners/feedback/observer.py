@@ -53,6 +53,11 @@ class DelayedObserver:
         self._at = (self._at + 1) % len(self._hist)
         self._hist[self._at] = self.phi
 
+    def predicted_reading(self) -> float:
+        """The estimate [rad] for the moment a reading arriving now shows (``delay`` ago)."""
+        h = self._hist
+        return h[(self._at + 1) % len(h)]
+
     def correct(self, reading: float) -> None:
         """A reading [rad] (the angle ``delay`` ago) arrived this cycle."""
         h = self._hist

@@ -27,7 +27,7 @@ class HealthOptions:
     still_s: float = 0.6  # [s] readings within ``still_range`` this long …
     still_range: float = math.radians(0.02)  # [rad]
     moving_range: float = math.radians(2.0)  # [rad] … while the prediction spans more …
-    drive: float = 0.2  # [m/s²] … or the pivot accelerates more: stuck
+    drive: float = 0.08  # [m/s] … or the pivot's speed changes more within the window: stuck
     window_s: float = 1.0  # [s] the correlation of readings and predictions over this window …
     against: float = -0.5  # … below this, with the prediction spanning ``moving_range``: reversed
     diverged: float = math.radians(25.0)  # [rad] an estimate beyond this: the feedback runs away
@@ -40,7 +40,8 @@ class SensorHealth:
         self.name, self.o = name, options
         self.fault: str | None = None
         self._jumps = 0
-        self._recent: deque[tuple[float, float, float, float]] = deque()  # (t, reading, prediction, |drive|)
+        self._sign_judged = False
+        self._recent: deque[tuple[float, float, float, float]] = deque()  # (t, reading, prediction, drive)
 
     def reading(self, t: float, value: float, predicted: float, reference: float | None = None,
                 drive: float = 0.0) -> str | None:  # fmt: skip
@@ -48,7 +49,7 @@ class SensorHealth:
         (jumps) and the plan's open-loop sway ``reference`` [rad] for that moment (a still or reversed sensor: the
         observer follows whatever the sensor says, the plan's swing does not); the fault text the first time one is
         found, else None. ``drive`` [m/s²]: the pivot's acceleration along the axis now — a ball that does not move
-        at all while the pivot accelerates is not being seen."""
+        at all while the pivot's speed changes is not being seen."""
         if self.fault is not None:
             return None
         o = self.o
@@ -62,21 +63,31 @@ class SensorHealth:
         else:
             self._jumps = 0
         rec = self._recent
-        rec.append((t, value, predicted if reference is None else reference, abs(drive)))
+        rec.append((t, value, predicted if reference is None else reference, drive))
         while rec and rec[0][0] < t - max(o.still_s, o.window_s):
             rec.popleft()
         if rec[-1][0] - rec[0][0] < 0.9 * min(o.still_s, o.window_s):
             return None
         vals = np.array([r[1] for r in rec])
         pred = np.array([r[2] for r in rec])
-        still = [r[1] for r in rec if r[0] >= t - o.still_s]
-        pushed = max(r[3] for r in rec if r[0] >= t - o.still_s)
-        if max(still) - min(still) <= o.still_range and (np.ptp(pred) > o.moving_range or pushed > o.drive):
-            return self._set(f"{self.name} stood still ({math.degrees(max(still) - min(still)):.3f}° over "
+        still = [r for r in rec if r[0] >= t - o.still_s]
+        vals_still = [r[1] for r in still]
+        # the pivot's velocity change over the window (its acceleration integrated): a change of Δv swings a ball on
+        # any string by about Δv/√(g·l) — several degrees for the threshold at lab lengths
+        dv, lo_v, hi_v = 0.0, 0.0, 0.0
+        for (t0, *_), (t1, _, _, a1) in zip(still, still[1:]):
+            dv += a1 * (t1 - t0)
+            lo_v, hi_v = min(lo_v, dv), max(hi_v, dv)
+        pushed = hi_v - lo_v
+        if max(vals_still) - min(vals_still) <= o.still_range and (np.ptp(pred) > o.moving_range or pushed > o.drive):
+            return self._set(f"{self.name} stood still ({math.degrees(max(vals_still) - min(vals_still)):.3f}° over "
                              f"{o.still_s:g} s) while the move must have swung the ball (the model: "
-                             f"{math.degrees(np.ptp(pred)):.1f}°, the pivot accelerated up to {pushed:.2f} m/s²): stuck, "
+                             f"{math.degrees(np.ptp(pred)):.1f}°; the pivot's speed changed {pushed:.3f} m/s): stuck, "
                              "frozen, or not seeing the ball")  # fmt: skip
-        if np.ptp(pred) > o.moving_range and np.std(vals) > 0 and np.std(pred) > 0:
+        if not self._sign_judged and np.ptp(pred) > o.moving_range and np.std(vals) > 0 and np.std(pred) > 0:
+            # judged once, over the first window the plan swings the ball in: later a string of another length drifts
+            # out of phase with the model (that is what the damper corrects), which says nothing of the sign
+            self._sign_judged = True
             c = float(np.corrcoef(vals, pred)[0, 1])
             if c < o.against:
                 return self._set(f"{self.name} swings against the move's swing (correlation {c:.2f}): its sign is "

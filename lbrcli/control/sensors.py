@@ -67,5 +67,5 @@ class CameraSensor:
         self._last = r
         for axis in self.axes:
             value = r.theta_x if axis == 0 else r.theta_y
-            if value is not None:
+            if value is not None and value == value:  # NaN: this view does not give that component
                 yield axis, value

@@ -28,6 +28,8 @@ _ZERO6 = (0.0,) * 6
 _ZERO7 = (0.0,) * 7
 _CMD_ACTIVE = 4
 CLAMP_TOL = 1e-12  # [rad] a change below this is rounding, not a clamp
+BENT_CYCLES = 50  # after a clamp of the bridged history's making, an exact client's rows are clamped back onto
+# the path (not refused) for this many commands
 ALT_CYCLES = 3  # commands judged also against the bridged history after a reply the controller reported missing
 EFFORT_RAMP_MIN_S = 0.05  # [s] the shortest effort ramp of a stop
 EFFORT_RANGE_S = 0.25  # [s] a stop ramps an effort down at most at its whole range (torque limit, wrench bound) per this
@@ -89,11 +91,14 @@ class ExecutedMotion:
         self.extrapolated_cycles = 0
         self.clamped_cycles = 0  # commands the core changed to keep a braking stop available
         self.largest_clamp = 0.0  # [rad]
+        self.last_clamp = 0.0  # [rad] the change the last admitted command needed
         self.last_torque: tuple[float, ...] | None = None  # the effort last sent (TORQUE / WRENCH mode)
         self.last_wrench: tuple[float, ...] | None = None
         self._ramp: EffortRamp | None = None
         self._alt: tuple | None = None  # the history had the controller bridged a reply it reported missing
         self._alt_left = 0
+        self.loss_refused = False  # the last refusal came from replies the controller reported missing
+        self._bent = 0  # cycles left in which an exact client's rows may be clamped back onto the path
 
     @property
     def moving(self) -> bool:
@@ -169,10 +174,12 @@ class ExecutedMotion:
         (None, why) when it cannot be sent (not 7 finite values, no admissible command, or ``exact`` and a clamp
         would change it)."""
         env = self.envelope
+        self.loss_refused = False
         adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk)
         if adm.reason is not None:
             return None, adm.reason
-        if exact and adm.clamped > CLAMP_TOL:  # the client's own command leaves the envelope: refuse, never bend it
+        if exact and adm.clamped > CLAMP_TOL and not self._bent:  # the client's own command leaves the envelope:
+            # refuse, never bend it (unless we bent the path just before, after a reply the controller may have bridged)
             j = adm.joint
             dt = self.period_s
             p1, p2 = self.prev[j], self.prev2[j]
@@ -180,8 +187,13 @@ class ExecutedMotion:
         if self._alt is not None:  # after a reply that may be lost: admissible after the bridged history too (a
             # clamp of the controller's making, ≈ acceleration × period², also for exact clients)
             adm = env.admit_either(q, ((self.prev, self.prev2, self.prev3), self._alt), jerk)
+            if adm.clamped > CLAMP_TOL:
+                self._bent = BENT_CYCLES
             if adm.reason is not None:
-                return None, adm.reason
+                self.loss_refused = True
+                return None, (f"replies lost: no command suits both what the controller executed and what it "
+                              f"bridged ({adm.reason})")  # fmt: skip
+        self.last_clamp = adm.clamped
         if adm.clamped > CLAMP_TOL:
             self.clamped_cycles += 1
             if adm.clamped > self.largest_clamp:
@@ -218,7 +230,7 @@ class ExecutedMotion:
             elif mode == _WRENCH:
                 self.last_wrench = tuple(wrench)  # type: ignore[arg-type]
             return q, tau, wrench, None
-        text = f"guard refused the command: {reason}"
+        text = reason if self.loss_refused else f"guard refused the command: {reason}"
         if state != _CMD_ACTIVE or not self.moving:
             raise Refused(text)
         self.begin_braking()
@@ -247,6 +259,8 @@ class ExecutedMotion:
         if state == _CMD_ACTIVE:
             self.prev3, self.prev2, self.prev = self.prev2, self.prev, q
             self.active_sent += 1
+            if self._bent:
+                self._bent -= 1
             if self._alt is not None:
                 a = self._alt
                 self._alt = (q, a[0], a[1])

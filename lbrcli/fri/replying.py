@@ -22,6 +22,7 @@ from .outcome import EndReason, Outcome
 from .supervision import Supervisor, commanding_end
 
 CMD_ACTIVE = 4
+CLIENT_CLAMP = 1e-4  # [rad] a clamp the client is told about (``LBRClient.clamped``)
 _POSITION = int(ClientCommandMode.POSITION)
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
@@ -184,9 +185,13 @@ class Replying:
         except Refused as exc:
             self._finish(Outcome.REFUSED, EndReason.GUARD, str(exc), observe=True)
             return False
-        client.clamped = motion.clamped_cycles != clamps
+        # (a clamp of a few µrad — after a reply the controller may have bridged — is no reason to re-plan)
+        client.clamped = motion.clamped_cycles != clamps and motion.last_clamp > CLIENT_CLAMP
         if refused is not None and self._stop is None:
-            self._stop = (Outcome.REFUSED, EndReason.GUARD, refused)
+            if motion.loss_refused:  # not the client's command: the link lost it
+                self._stop = (Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {refused}")
+            else:
+                self._stop = (Outcome.REFUSED, EndReason.GUARD, refused)
         cyc = self.cycle
         cyc.braking = motion.braking
         self._reply.set_motion(mode, q, tau, wrench)  # type: ignore[union-attr]

@@ -200,8 +200,8 @@ class Supervisor:
         if n > 4:  # from the 5th message on
             for what, now, ring, window, ratio in (("timestamps", ts, self._ring_ts, FAST_WINDOW, FAST_RATIO),
                                                    ("messages", rx, self._ring_rx, RX_WINDOW, RX_RATIO)):  # fmt: skip
-                if now is None or (what == "timestamps" and (self._coarse or self._ts0 < 0)):
-                    continue
+                if now is None or (what == "timestamps" and (self._coarse or self._ts0 < 0 or self._frozen)):
+                    continue  # a timestamp standing still is judged as frozen, not as a fast clock
                 w = min(n - 1, window)
                 k = (n - 1 - w) % _RING
                 then = ring[k]

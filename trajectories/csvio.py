@@ -6,6 +6,7 @@ Every malformed input raises :class:`CsvFormatError` naming file, row (1-based l
 from __future__ import annotations
 
 import csv
+import io
 import math
 import re
 from dataclasses import dataclass
@@ -16,6 +17,8 @@ import numpy as np
 
 from .atomic import atomic_path
 from .errors import CsvFormatError
+from .inputs import MAX_CSV_BYTES, read_input
+from .numbers import DECIMAL, NAN_WORDS, NotANumber, plain_float
 from .trajectory import N_JOINTS, JointTrajectory, TaskTrajectory
 
 JOINT_COLUMNS = ("t",) + tuple(f"q{i}" for i in range(1, N_JOINTS + 1))
@@ -52,13 +55,12 @@ def _parse_float(cell: str, *, path: str, row: int, col: int, name: str, allow_n
         if allow_nan:
             return math.nan
         raise CsvFormatError("empty cell", file=path, row=row, column=col, column_name=name)
+    if allow_nan and text.lower() in NAN_WORDS:
+        return math.nan
     try:
-        value = float(text)
-    except ValueError:
-        raise CsvFormatError(f"not a number: {text!r}", file=path, row=row, column=col, column_name=name) from None
-    if not math.isfinite(value) and not (allow_nan and math.isnan(value)):
-        raise CsvFormatError(f"not a finite number: {text!r}", file=path, row=row, column=col, column_name=name)
-    return value
+        return plain_float(text)
+    except NotANumber as exc:
+        raise CsvFormatError(str(exc), file=path, row=row, column=col, column_name=name) from None
 
 
 def _looks_numeric(cells: Sequence[str]) -> bool:
@@ -100,15 +102,8 @@ def _check_time(t: np.ndarray, path: str, rule: TimeRule, first_row: int) -> Non
 
 
 def _read_bytes(path: str | Path, spath: str) -> bytes:
-    """The whole file (a leading UTF-8 byte-order mark dropped)."""
-    try:
-        raw = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise CsvFormatError("file not found", file=spath) from None
-    except IsADirectoryError:
-        raise CsvFormatError("is a directory, not a CSV file", file=spath) from None
-    except OSError as exc:
-        raise CsvFormatError(f"cannot open: {exc.strerror}", file=spath) from None
+    """The whole file, bounded (:func:`trajectories.inputs.read_input`), a leading UTF-8 byte-order mark dropped."""
+    raw = read_input(path, MAX_CSV_BYTES, error=CsvFormatError)
     return raw[3:] if raw.startswith(b"\xef\xbb\xbf") else raw
 
 
@@ -135,10 +130,8 @@ def _first_line(raw: bytes) -> tuple[int, int, int, int]:
     return 0, len(raw), len(raw), len(raw)
 
 
-def _fast_body(path: str | Path, raw: bytes, start: int, skip_lines: int, width: int,
-               nan_ok: set[int]) -> np.ndarray | None:
-    """Parse the data rows (raw[start:], after the first ``skip_lines`` lines of the file) with numpy's C reader
-    straight from the file; None when anything is unusual (blank lines, quotes, empty or malformed cells, a wrong
+def _fast_body(raw: bytes, start: int, width: int, nan_ok: set[int]) -> np.ndarray | None:
+    """Parse the data rows (raw[start:]) with numpy's C reader; None when anything is unusual (blank lines, quotes, empty or malformed cells, a wrong
     number of cells, a non-finite value outside ``nan_ok``, not UTF-8): the strict per-cell reader then finds and
     names the fault."""
     import warnings
@@ -152,8 +145,8 @@ def _fast_body(path: str | Path, raw: bytes, start: int, skip_lines: int, width:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # e.g. "input contained no data"
-            data = np.loadtxt(path, delimiter=",", comments=None, dtype=float, ndmin=2, skiprows=skip_lines,
-                              max_rows=lines, encoding="utf-8-sig")
+            data = np.loadtxt(io.BytesIO(raw[start:end]), delimiter=",", comments=None, dtype=float, ndmin=2,
+                              encoding="utf-8")
     except (ValueError, UserWarning):  # UnicodeDecodeError is a ValueError
         return None
     if data.shape != (lines, width):  # blank lines were skipped, or the column count differs
@@ -181,6 +174,9 @@ def _parse_rows(rows: list[tuple[int, list[str]]], width: int, names: Sequence[s
                 values = np.array(cells, dtype=float)
             except ValueError:
                 values = None
+            if values is not None and not all(DECIMAL.match(c.strip()) or c.strip().lower() in NAN_WORDS
+                                              for r in cells for c in r):  # fmt: skip
+                values = None  # e.g. '1_0', which numpy reads as 10: the cell-by-cell reader names it
             if values is not None:
                 finite = np.isfinite(values)
                 if finite.all() or not (~finite & ~allowed).any() and not np.isinf(values).any():
@@ -200,8 +196,6 @@ def _parse_rows(rows: list[tuple[int, list[str]]], width: int, names: Sequence[s
 
 def _csv_rows(text: str, spath: str, first_line: int = 1) -> list[tuple[int, list[str]]]:
     """Non-blank CSV rows with their 1-based line numbers."""
-    import io
-
     try:
         rows = list(csv.reader(io.StringIO(text, newline="")))
     except csv.Error as exc:
@@ -271,7 +265,7 @@ def read_table(
 
     width = len(names)
     nan_ok = {names.index(c) for c in nan_columns if c in names}
-    data = _fast_body(path, raw, body_start, body_line - 1, width, nan_ok)
+    data = _fast_body(raw, body_start, width, nan_ok)
     if data is None:
         rows = _csv_rows(_decode(raw, body_start, len(raw), spath), spath, body_line)
         if not rows:

@@ -7,15 +7,15 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..options import JsonOpt
+from ..options import JsonOpt, number
 
 
 def compare(
     prediction: Annotated[Path, typer.Argument(help="Prediction t,theta \\[s, rad] (`lbr plan ... --prediction`), or a simulated execution log with --column.")],
     track: Annotated[Path, typer.Argument(help="Track CSV from `lbr track video` with a theta column.")],
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG overlaying model and experiment θ \\[deg] over time, and their difference.")] = None,
-    lag: Annotated[Optional[float], typer.Option("--lag", help="Track time − prediction time \\[s]; estimated by cross-correlation when omitted.")] = None,
-    max_lag: Annotated[Optional[float], typer.Option("--max-lag", help="Search the lag only within ± this \\[s] (default: half the longer of the two series, at least 2 s).")] = None,
+    lag: Annotated[Optional[float], number("--lag", low=-86400, high=86400, unit="s", help="Track time − prediction time \\[s]; estimated by cross-correlation when omitted.")] = None,
+    max_lag: Annotated[Optional[float], number("--max-lag", low=0, high=86400, low_open=True, unit="s", help="Search the lag only within ± this \\[s] (default: half the longer of the two series, at least 2 s).")] = None,
     flip: Annotated[bool, typer.Option("--flip", help="Negate the track's θ (camera looking at the plane of motion from the other side).")] = False,
     column: Annotated[str, typer.Option("--column", help="Angle column \\[rad] of the prediction file (e.g. ball_theta in an execution log).")] = "theta",
     json_out: JsonOpt = False,
@@ -39,10 +39,6 @@ def compare(
     from ..console import Reporter
 
     rep = Reporter(json_out)
-    if max_lag is not None and not (max_lag > 0 and math.isfinite(max_lag)):
-        raise OptionError(f"--max-lag must be a positive number of seconds, got {max_lag:g}")
-    if lag is not None and not math.isfinite(lag):
-        raise OptionError(f"--lag must be a finite number of seconds, got {lag:g}")
     for p, name in ((plot, "--plot"),):
         if p is not None and not p.resolve().parent.is_dir():
             raise OptionError(f"{name}: folder does not exist: {p.parent}")

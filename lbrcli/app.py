@@ -19,6 +19,11 @@ import typer
 from . import commands
 from .outputs import guarded
 
+# OpenCV and FFmpeg print warnings of their own on stderr (e.g. one per frame a full disk refused); lbr reports the
+# outcome in one line instead.
+os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+
 app = typer.Typer(
     name="lbr",
     help="Dynamic-control experiments with the KUKA LBR iiwa 7 R800: plan, check, execute over FRI, track, compare.",

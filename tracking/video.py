@@ -39,11 +39,10 @@ class VideoInfo:
 def _open(path: str | Path):
     import cv2
 
+    from trajectories.inputs import require_regular
+
     spath = str(path)
-    if not os.path.exists(spath):
-        raise InputError("file not found", file=spath)
-    if os.path.isdir(spath):
-        raise InputError("is a directory, not a video file", file=spath)
+    require_regular(spath)  # a device or a FIFO would block the decoder or never end
     os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # FFmpeg's own messages (e.g. "moov atom not found") off
     cap = cv2.VideoCapture(spath)
     if not cap.isOpened():
@@ -66,6 +65,24 @@ def _info(cap, spath: str) -> VideoInfo:
         fps=fps,
         frame_count=max(count, 0),
     )
+
+
+def check_written(path: str | Path, frames: int, target: str | Path | None = None) -> None:
+    """OutputError (exit 1, naming ``target``) unless the video just written at ``path`` opens and holds ``frames``
+    frames: OpenCV's writer does not report a full disk or a failed encoder, it leaves a short or unreadable file."""
+    import cv2
+
+    from trajectories.errors import OutputError
+
+    cap = cv2.VideoCapture(str(path))
+    try:
+        got = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0) if cap.isOpened() else 0
+    finally:
+        cap.release()
+    if got < frames:
+        raise OutputError(f"the video could not be written ({got} of {frames} frames readable: a full disk, a quota "
+                          "or a codec missing?); nothing was written under this name",
+                          file=target if target is not None else path)  # fmt: skip
 
 
 def probe_video(path: str | Path) -> VideoInfo:

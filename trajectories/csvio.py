@@ -288,11 +288,35 @@ def write_table(path: str | Path, names: Sequence[str], data: np.ndarray, fmt: s
         np.savetxt(tmp, np.asarray(data, dtype=float), delimiter=",", header=",".join(names), comments="", fmt=fmt)
 
 
+# What a joint or task file can plausibly hold; beyond it the file is wrong (units, a corrupted cell), and the
+# arithmetic downstream would overflow.
+MAX_JOINT_ANGLE = 2 * math.pi  # [rad] every iiwa joint stays within ±175°
+MAX_TASK_POSITION = 10.0  # [m] the arm reaches 0.8 m; millimetres read as metres land here
+STEP_RANGE = (1e-5, 60.0)  # [s] sample step of a trajectory file
+
+
+def _check_plausible(table: Table, first: int, width: int, bound: float, what: str) -> None:
+    """CsvFormatError naming row and column of the first |value| > bound in columns first..first+width-1."""
+    block = table.data[:, first : first + width]
+    bad = np.argwhere(np.abs(block) > bound)
+    if bad.size:
+        k, j = (int(v) for v in bad[0])
+        raise CsvFormatError(f"{what} {block[k, j]:g} is beyond ±{bound:g}", file=table.path, row=k + 2,
+                             column=first + j + 1, column_name=table.names[first + j])  # fmt: skip
+    t = table.data[:, 0]
+    if len(t) > 1:
+        step = (t[-1] - t[0]) / (len(t) - 1)
+        if not STEP_RANGE[0] <= step <= STEP_RANGE[1]:
+            raise CsvFormatError(f"time step {step:g} s is outside {STEP_RANGE[0]:g}..{STEP_RANGE[1]:g} s",
+                                 file=table.path, row=3, column=1, column_name="t")  # fmt: skip
+
+
 def read_joint_csv(path: str | Path, dt: float | None = None) -> JointTrajectory:
     """Read a joint trajectory (``t,q1..q7`` [s, rad]); a headerless 7-column file needs ``dt`` [s]."""
     table = read_table(path, JOINT_COLUMNS, headerless_dt=dt, headerless_width=N_JOINTS)
     if len(table.data) < 1:
         raise CsvFormatError("no samples", file=table.path)
+    _check_plausible(table, 1, N_JOINTS, MAX_JOINT_ANGLE, "joint angle [rad]")
     return JointTrajectory(t=table.data[:, 0].copy(), q=np.ascontiguousarray(table.data[:, 1 : 1 + N_JOINTS]))
 
 
@@ -304,6 +328,7 @@ def write_joint_csv(path: str | Path, traj: JointTrajectory) -> None:
 def read_task_csv(path: str | Path) -> TaskTrajectory:
     """Read a task trajectory (``t,x,y,z,qw,qx,qy,qz`` [s, m]); quaternions must be unit (within 1e-3)."""
     table = read_table(path, TASK_COLUMNS)
+    _check_plausible(table, 1, 3, MAX_TASK_POSITION, "position [m]")
     quat = table.data[:, 4:8]
     norms = np.linalg.norm(quat, axis=1)
     bad = np.flatnonzero(np.abs(norms - 1.0) > 1e-3)

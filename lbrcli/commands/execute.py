@@ -138,7 +138,9 @@ def execute(
     it leaves the ball at rest); then, while the simulated ball (or the --pendulum module) sways more than
     --start-sway, the first row is held, at most --sway-wait. The sway the rows start with is reported. Every command passes the guard. Ctrl-C, SIGTERM, a guard refusal and the end of the
     file are jerk-limited braking stops; a safety stop, drives off, POOR quality or the session leaving
-    COMMANDING_ACTIVE end the stream at once. Exit 0 completed, 1 refused or stopped, 2 bad input, 130 Ctrl-C.
+    COMMANDING_ACTIVE end the stream at once. The log's file_rows column (the rows streamed) lets `lbr track film` and
+    `lbr compare` tell a completed session from one that stopped early. Exit 0 completed, 1 refused or stopped, 2 bad
+    input, 130 Ctrl-C.
     """
     from lbrcli.fri import TrajectoryPlayer
     from lbrcli.lab.attach import LabOptions
@@ -149,6 +151,7 @@ def execute(
     from ..fri_options import busy_wait_seconds, check_simulator_only
     from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import limits_from, make_robot, within_limits
+    from ..session_end import FILE_ROWS_COLUMN
 
     rep = Reporter(json_out)
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--damping": damping != 0.0,
@@ -221,6 +224,7 @@ def execute(
     result, sim_stats, lab_figures = run_client(
         rep, player, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
         sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), max_tracking_error=max_tracking_error, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
+        extra_names=(FILE_ROWS_COLUMN,), extra=lambda state: (len(player.rows),),  # the log tells when it completed
     )  # fmt: skip
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)

@@ -19,13 +19,17 @@ def film(
     size: Annotated[tuple, grid("--size", low=64, high=7680, metavar="WIDTHxHEIGHT", help="Frame size WIDTHxHEIGHT \\[px] (height at most 4320); the scale follows the width (1300 px/m at 1280).")] = "1280x720",
     fps: Annotated[float, number("--fps", low=1, high=1000, unit="1/s", help="Frame rate \\[1/s].")] = 60.0,
     truth: Annotated[Optional[Path], typer.Option("--truth", help="Write what was drawn per frame: t,u,v,pivot_u,pivot_v,theta \\[s, px, rad].")] = None,
+    partial: Annotated[bool, typer.Option("--partial", help="Film a log whose session stopped early too (refused otherwise: the film would not show the experiment).")] = False,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
     """Film the simulated ball of an execution log: a camera on +x looking at the base y–z plane (image u = base +y,
     θ positive toward the image's right, as `lbr track video` measures it), a green marker on the pivot for
-    `--pivot-color green`. Stands in for the experiment video when there is no camera (the README's example)."""
+    `--pivot-color green`. Stands in for the experiment video when there is no camera (the README's example).
+
+    A log whose session did not complete (stopped early: see its file_rows/phase columns) is refused unless --partial.
+    Exit 1 when the video could not be written whole (nothing is left under its name)."""
     import numpy as np
 
     from trajectories.csvio import write_table
@@ -33,7 +37,10 @@ def film(
     from trajectories.robot import parse_tool
 
     from ..console import Reporter
-    from ..demo.render import Camera, film_execution_log
+    from tracking.video import check_written
+
+    from ..demo.render import Camera, film_execution_log, read_film_log
+    from ..session_end import require_complete
     from ..outputs import atomic_path, guard_outputs
 
     rep = Reporter(json_out)
@@ -43,9 +50,12 @@ def film(
     guard_outputs({"LOG": log}, {"-o": out, "--truth": truth})
     k = w / 1280.0
     camera = Camera(px_per_m=1300.0 * k, pivot0_uv=(w / 2.0, 260.0 * h / 720.0), size=(w, h), fps=fps)
+    table = read_film_log(log)
+    require_complete(table, partial, rep)
     with atomic_path(out) as tmp, rep.progress("film", None) as update:
-        footage = film_execution_log(log, tmp, length, camera, flange=flange, tool=parse_tool(tool),
+        footage = film_execution_log(table, tmp, length, camera, flange=flange, tool=parse_tool(tool),
                                      progress=update)
+        check_written(tmp, len(footage.truth.t), out)  # OpenCV does not report a full disk
     gt = footage.truth
     if truth is not None:
         write_table(truth, TRUTH_COLUMNS, np.column_stack([gt.t, gt.ball_uv, gt.pivot_uv, gt.theta]), fmt="%.6f")

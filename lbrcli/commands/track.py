@@ -49,6 +49,7 @@ def video(
     instead. Exit 1 if the ball is found in fewer than --min-found percent of the frames, or the pivot
     marker in none.
     """
+    import contextlib
     import math
     import time
 
@@ -61,9 +62,10 @@ def video(
     from tracking.pipeline import track_video
     from tracking.tracker import TrackerOptions
     from tracking.trackfile import write_track_csv
-    from tracking.video import probe_video
+    from tracking.video import check_written, probe_video
 
     from ..console import Reporter
+    from ..outputs import atomic_path
 
     rep = Reporter(json_out)
     if pivot is not None and pivot_color is not None:
@@ -89,28 +91,30 @@ def video(
                 f"{name} {point[0]:g},{point[1]:g} is outside the {info.width}x{info.height} px image of {video_path}"
             )
 
-    writer = None
-    on_frame = None
-    if preview is not None:
-        import cv2
-
-        from tracking.overlay import draw_overlay
-
-        writer = cv2.VideoWriter(str(preview), cv2.VideoWriter_fourcc(*"mp4v"), fps or info.fps, info.size)
-        if not writer.isOpened():
-            raise OptionError(f"--preview: cannot write a video to {preview}")
-
-        def on_frame(frame, res):  # noqa: ANN001
-            b = res.ball
-            draw_overlay(frame, res.t, (b.u, b.v) if b else None, b.radius_px if b else None, res.pivot_uv, res.theta)
-            writer.write(frame)
-
     if candidates is not None:
         n_cand = _write_candidates(video_path, ball_spec, gates, candidates)
         rep.print(f"candidates: {n_cand} ball-like blobs in the first frame, drawn in {candidates}")
 
     t0 = time.perf_counter()
-    try:
+    with contextlib.ExitStack() as stack:  # the preview appears under its name only when complete and readable
+        on_frame, writer, written = None, None, [0]
+        if preview is not None:
+            import cv2
+
+            from tracking.overlay import draw_overlay
+
+            preview_tmp = stack.enter_context(atomic_path(preview))
+            writer = cv2.VideoWriter(str(preview_tmp), cv2.VideoWriter_fourcc(*"mp4v"), fps or info.fps, info.size)
+            stack.callback(writer.release)
+            if not writer.isOpened():
+                raise OptionError(f"--preview {preview}: cannot write an mp4 video there")
+
+            def on_frame(frame, res):  # noqa: ANN001
+                b = res.ball
+                draw_overlay(frame, res.t, (b.u, b.v) if b else None, b.radius_px if b else None, res.pivot_uv, res.theta)
+                writer.write(frame)
+                written[0] += 1
+
         with rep.progress(f"tracking {video_path.name}", info.frame_count or None) as update:
             track = track_video(
                 video_path,
@@ -124,9 +128,9 @@ def video(
                 progress=update,
                 on_frame=on_frame,
             )
-    finally:
         if writer is not None:
             writer.release()
+            check_written(preview_tmp, written[0], preview)
     elapsed = time.perf_counter() - t0
     write_track_csv(out, track)
 
@@ -207,14 +211,18 @@ def _write_candidates(video_path: Path, spec, gates, png: Path) -> int:  # noqa:
 
     from trajectories.errors import OptionError
 
+    from ..outputs import atomic_open
+
     for _, _, frame in iter_frames(video_path):
         blobs = find_blobs_coarse(frame, spec, gates, coarse_factor(frame.shape[1]))
-        try:
-            ok = cv2.imwrite(str(png), draw_candidates(frame, blobs))
+        try:  # encoded in memory, written by Python: a full disk is an OSError, not a libpng message
+            ok, data = cv2.imencode(png.suffix or ".png", draw_candidates(frame, blobs))
         except cv2.error:
             ok = False
         if not ok:
-            raise OptionError(f"--candidates {png}: cannot write an image there (use .png or .jpg)")
+            raise OptionError(f"--candidates {png}: not an image format OpenCV writes (use .png or .jpg)")
+        with atomic_open(png, "wb") as fh:
+            fh.write(data.tobytes())
         return len(blobs)
     return 0
 

@@ -5,10 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Optional
 
-import numpy as np
 import typer
 
-from .options import choice, joints, number
+from .options import JointVector, choice, joints, number
 
 DEFAULT_BALL_LENGTH = 0.25  # [m] string length of the simulated ball without --length
 
@@ -77,7 +76,7 @@ LengthOpt = Annotated[
            help=f"Simulated ball string length \\[m] (default {DEFAULT_BALL_LENGTH}; 0: no ball)."),
 ]
 SimStartOpt = Annotated[
-    Optional[np.ndarray],
+    Optional[JointVector],
     joints("--sim-start", help="Simulator only: where the simulated robot stands at start (7 angles, deg/rad)."),
 ]
 MultiplierOpt = Annotated[

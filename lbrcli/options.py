@@ -160,6 +160,10 @@ class Points:
         return np.array([self.each(p) for p in pts])
 
 
+class JointVector(np.ndarray):
+    """(7,) joint angles [rad]: the type of joint-vector options and arguments (what --help shows)."""
+
+
 class Joints:
     """typer ``parser`` of 7 joint angles (deg/rad suffixes, radians without), each within ±360°; returns a (7,)
     array [rad]. Whether they are inside the joint limits is for the command to check (see :func:`within_limits`)."""

@@ -16,13 +16,12 @@ import math
 from pathlib import Path
 from typing import Annotated, Any, Optional
 
-import numpy as np
 import typer
 
 from ..fri_options import (BaudOpt, BindOpt, BusyWaitOpt, LogOpt, PendZeroOpt, SessionPeriodOpt, PlotOpt, PortOpt,
                            RealtimeOpt, RobotOpt, SimLenientOpt, VersionOpt, WaitOpt)  # fmt: skip
-from ..options import (DEFAULT_FLANGE, THESIS_Q_START, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt, choice, joints,
-                       number)  # fmt: skip
+from ..options import (DEFAULT_FLANGE, THESIS_Q_START, DtOpt, FlangeOpt, JointVector, JsonOpt, LimitsOpt, ToolOpt,
+                       choice, joints, number)  # fmt: skip
 
 
 def _pushes(texts: list[str] | None) -> tuple[tuple[float, float], ...]:
@@ -56,7 +55,7 @@ def upright(
     hold: Annotated[float, number("--hold", low=0, high=3600, unit="s", help="Balance upright this long after the first catch \\[s].")] = 60.0,
     swing_timeout: Annotated[float, number("--swing-timeout", low=1, high=600, unit="s", help="Give up if not caught upright by then \\[s].")] = 30.0,
     travel: Annotated[float, number("--travel", low=0.05, high=0.5, unit="m", help="The cart's travel along base y either side of the start \\[m].")] = 0.3,
-    q_start: Annotated[np.ndarray, joints("--q-start", help="The rail's centre pose: 7 joint angles (deg/rad).")] = THESIS_Q_START,
+    q_start: Annotated[JointVector, joints("--q-start", help="The rail's centre pose: 7 joint angles (deg/rad).")] = THESIS_Q_START,
     move_to_start: Annotated[bool, typer.Option("--move-to-start", help="Reach --q-start first by a jerk-limited move.")] = False,
     sensor_rate: Annotated[float, number("--sensor-rate", low=10, high=10000, unit="Hz", help="Encoder readings per second on the serial line \\[Hz].")] = 200.0,
     sensor_delay: Annotated[Optional[float], number("--sensor-delay", low=0, high=100, unit="ms", help="Delay the observer assumes from the encoder sample to its line \\[ms] (default: --sim-delay + half --sim-jitter; 6 with --robot).")] = None,
@@ -180,7 +179,7 @@ def damp(
     sway_wait: Annotated[float, number("--sway-wait", low=0, high=3600, unit="s", help="Hold it at most this long \\[s].")] = 30.0,
     sim_length: Annotated[Optional[float], number("--sim-length", low=0.02, high=5, unit="m", help="Simulator: the ball's true string length \\[m] (default --length, else 0.25).")] = None,
     sim_delay: Annotated[float, number("--sim-delay", low=0, high=200, unit="ms", help="Simulator: the ball IO shows the ball this much later \\[ms] (camera/encoder link).")] = 0.0,
-    sim_start: Annotated[Optional[np.ndarray], joints("--sim-start", help="Simulator: where the robot stands at start (7 angles); default the first row.")] = None,
+    sim_start: Annotated[Optional[JointVector], joints("--sim-start", help="Simulator: where the robot stands at start (7 angles); default the first row.")] = None,
     pendulum: Annotated[Optional[str], typer.Option("--pendulum", help="Serial port of the pendulum module (--sensor module with --robot); default: the simulator's.")] = None,
     baud: BaudOpt = 115200,
     pendulum_zero: PendZeroOpt = 0,

@@ -37,7 +37,7 @@ def film(
     from trajectories.robot import parse_tool
 
     from ..console import Reporter
-    from tracking.video import check_written
+    from tracking.video import check_video_name, check_written
 
     from ..demo.render import Camera, film_execution_log, read_film_log
     from ..session_end import require_complete
@@ -47,6 +47,7 @@ def film(
     w, h = size
     if h > 4320:
         raise OptionError(f"--size: the height must be at most 4320 px, got {w}x{h}")
+    check_video_name(out, "-o")
     guard_outputs({"LOG": log}, {"-o": out, "--truth": truth})
     k = w / 1280.0
     camera = Camera(px_per_m=1300.0 * k, pivot0_uv=(w / 2.0, 260.0 * h / 720.0), size=(w, h), fps=fps)
@@ -54,7 +55,7 @@ def film(
     require_complete(table, partial, rep)
     with atomic_path(out) as tmp, rep.progress("film", None) as update:
         footage = film_execution_log(table, tmp, length, camera, flange=flange, tool=parse_tool(tool),
-                                     progress=update)
+                                     progress=update, target=out)
         check_written(tmp, len(footage.truth.t), out)  # OpenCV does not report a full disk
     gt = footage.truth
     if truth is not None:

@@ -6,10 +6,9 @@ import time
 from pathlib import Path
 from typing import Annotated, Optional
 
-import numpy as np
 import typer
 
-from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt, joints, number
+from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JointVector, JsonOpt, LimitsOpt, ToolOpt, joints, number
 
 
 def fk(
@@ -43,7 +42,7 @@ def ik(
     task_csv: Annotated[Path, typer.Argument(help="Task trajectory t,x,y,z,qw,qx,qy,qz \\[s, m] of the flange (or tool).")],
     out: Annotated[Path, typer.Option("-o", "--out", help="Joint trajectory to write: t,q1..q7 \\[s, rad].")],
     q0: Annotated[
-        Optional[np.ndarray],
+        Optional[JointVector],
         joints(
             "--q0",
             help="Start guess and redundancy target (7 angles, deg/rad suffixes; inside the position limits). "

@@ -14,7 +14,8 @@ import typer
 import numpy as np
 
 from ..antisway import ANTISWAY_Q0, DEFAULT_BALL_RADIUS, DEFAULT_DT, DEFAULT_POINTS_TEXT, Z_RANGE, plan_anti_sway_files
-from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, LimitsOpt, MarginOpt, Points, ToolOpt, angle, joints, number
+from ..options import (DEFAULT_FLANGE, FlangeOpt, JointVector, JsonOpt, LimitsOpt, MarginOpt, Points, ToolOpt, angle, joints,
+                       number)  # fmt: skip
 
 
 def plan_anti_sway_command(
@@ -44,7 +45,7 @@ def plan_anti_sway_command(
     task_out: Annotated[Optional[Path], typer.Option("--task-out", help="Planned pivot path t,x,y,z,qw,qx,qy,qz \\[s, m].")] = None,
     prediction: Annotated[Optional[Path], typer.Option("--prediction", help="Predicted sway t,theta,phi,theta_x,theta_y \\[s, rad].")] = None,
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: top view, pivot acceleration, predicted sway.")] = None,
-    q0: Annotated[Optional[np.ndarray], joints("--q0", help=f"IK reference configuration (7 angles, deg/rad; inside the position limits); default {ANTISWAY_Q0}.")] = None,
+    q0: Annotated[Optional[JointVector], joints("--q0", help=f"IK reference configuration (7 angles, deg/rad; inside the position limits); default {ANTISWAY_Q0}.")] = None,
     margin: MarginOpt = 0.0,
     jerk: Annotated[bool, typer.Option("--jerk", help="Fail on joint jerk too (always reported).")] = False,
     flange: FlangeOpt = DEFAULT_FLANGE,

@@ -15,7 +15,8 @@ import typer
 
 import numpy as np
 
-from ..options import DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt, angle, choice, joints, number
+from ..options import (DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, JointVector, JsonOpt, LimitsOpt, ToolOpt, angle, choice,
+                       joints, number)  # fmt: skip
 
 PREDICTION_COLUMNS = ("t", "theta", "theta_planned")
 SIDES = {"any": 0, "+y": 1, "-y": -1}
@@ -191,7 +192,7 @@ def swing_up(
     kd: Annotated[float, number("--kd", low=0, high=MAX_GAIN, unit="1/s", help="energy: velocity gain k_d \\[1/s].")] = 0.05,
     duration: Annotated[Optional[float], number("--duration", low=0, high=MAX_DURATION, low_open=True, unit="s", help="Longest pumping time \\[s] (default 60 energy, 10 fast); then the pivot stops.")] = None,
     dt: Annotated[float, number("--dt", low=1e-4, high=0.02, unit="s", help="Sample step \\[s] (FRI period; 0.005 as in the thesis, or 0.001).")] = 0.005,
-    q_start: Annotated[np.ndarray, joints("--q-start", help="Start configuration (7 angles, deg/rad suffixes); thesis pose by default.")] = THESIS_Q_START,
+    q_start: Annotated[JointVector, joints("--q-start", help="Start configuration (7 angles, deg/rad suffixes); thesis pose by default.")] = THESIS_Q_START,
     max_travel: Annotated[float, number("--max-travel", low=0, high=1, low_open=True, unit="m", help="The pivot must stay within ±this along base y \\[m].")] = 0.3,
     taut: Annotated[bool, typer.Option("--taut", help="Keep the string taut (tension/mass ≥ 0.5 m/s²); report the highest such angle.")] = False,
     tolerance: Annotated[float, angle("--tolerance", low_deg=0, high_deg=180, high_open=True, help="θ_d counts as reached at θ_d − tolerance (energy shaping is asymptotic; it aims at θ_d − tolerance/2).")] = "2deg",

@@ -9,11 +9,11 @@ import numpy as np
 import typer
 
 from ..fri_options import BindOpt, LengthOpt, LogOpt, SessionPeriodOpt, PlotOpt, PortOpt, RealtimeOpt, RobotOpt, BusyWaitOpt, SimLenientOpt, SimStartOpt, TrackingErrorOpt, VersionOpt, WaitOpt
-from ..options import JsonOpt, LimitsOpt, joints, number
+from ..options import JointVector, JsonOpt, LimitsOpt, joints, number
 
 
 def ptp(
-    q: Annotated[np.ndarray, joints(metavar="Q", argument=True, help="Target joint position: 7 comma-separated angles (deg/rad suffixes; default rad).")],
+    q: Annotated[JointVector, joints(metavar="Q", argument=True, help="Target joint position: 7 comma-separated angles (deg/rad suffixes; default rad).")],
     time_s: Annotated[float, number("--time", low=0, high=600, low_open=True, unit="s", help="Duration of the move \\[s] (jerk-limited, rest to rest).")],
     robot: RobotOpt = None,
     port: PortOpt = 30200,

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 from typing import Annotated, Optional
 
-import numpy as np
 import typer
 
 from ..fri_options import parse_ip
-from ..options import (DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, Floats, JsonOpt, LimitsOpt, ToolOpt, choice, floats,
-                       joints, number)  # fmt: skip
+from ..options import (DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, Floats, JointVector, JsonOpt, LimitsOpt, ToolOpt,
+                       choice, floats, joints, number)  # fmt: skip
 
 
 def _parse_client(text: str | tuple) -> tuple[str, int]:
@@ -43,7 +42,7 @@ def sim(
     host: Annotated[str, typer.Option("--host", parser=parse_ip, metavar="IP", help="IP address the simulator binds.")] = "127.0.0.1",
     period: Annotated[int, number("--period", low=1, high=100, unit="ms", integer=True, help="Send period \\[ms].")] = 1,
     client: Annotated[tuple, typer.Option("--client", parser=_parse_client, metavar="HOST:PORT", help="Where monitoring messages go: HOST:PORT of the FRI client.")] = "127.0.0.1:30200",
-    q0: Annotated[np.ndarray, joints("--q0", help="Start joint positions q1..q7 \\[rad, or with deg suffix].")] = THESIS_Q_START,
+    q0: Annotated[JointVector, joints("--q0", help="Start joint positions q1..q7 \\[rad, or with deg suffix].")] = THESIS_Q_START,
     length: Annotated[Optional[float], number("--length", low=0, high=5, low_open=True, unit="m", help="Simulate a ball on a string of this length \\[m] hanging from the TCP.")] = None,
     damping: Annotated[float, number("--damping", low=0, high=1000, unit="1/s", help="Damping of the simulated ball \\[1/s].")] = 0.0,
     fri_version: Annotated[str, choice("--fri-version", choices=("1.15", "2.7"), help="Wire format: 1.15 (bare protobuf) or 2.7 (length + CRC-32 framing).")] = "1.15",

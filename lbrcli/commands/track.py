@@ -62,7 +62,7 @@ def video(
     from tracking.pipeline import track_video
     from tracking.tracker import TrackerOptions
     from tracking.trackfile import write_track_csv
-    from tracking.video import check_written, probe_video
+    from tracking.video import check_video_name, check_written, open_writer, probe_video
 
     from ..console import Reporter
     from ..outputs import atomic_path
@@ -79,6 +79,8 @@ def video(
         ball_spec = with_min_saturation(ball_spec, min_saturation)
     for p, name in ((out, "--out"), (plot, "--plot"), (preview, "--preview"), (candidates, "--candidates")):
         _check_out(p, name)
+    if preview is not None:
+        check_video_name(preview, "--preview")
     shape = {"min_circularity": min_circularity, "min_ellipse_fit": min_fit}
     gates = BlobGates.for_radius(radius, **shape) if radius else BlobGates(**shape)
     options = TrackerOptions(gates=gates, start_uv=start_uv)
@@ -99,15 +101,11 @@ def video(
     with contextlib.ExitStack() as stack:  # the preview appears under its name only when complete and readable
         on_frame, writer, written = None, None, [0]
         if preview is not None:
-            import cv2
-
             from tracking.overlay import draw_overlay
 
             preview_tmp = stack.enter_context(atomic_path(preview))
-            writer = cv2.VideoWriter(str(preview_tmp), cv2.VideoWriter_fourcc(*"mp4v"), fps or info.fps, info.size)
+            writer = open_writer(preview_tmp, fps or info.fps, info.size, target=preview)
             stack.callback(writer.release)
-            if not writer.isOpened():
-                raise OptionError(f"--preview {preview}: cannot write an mp4 video there")
 
             def on_frame(frame, res):  # noqa: ANN001
                 b = res.ball

@@ -54,11 +54,12 @@ def read_film_log(log_csv: str | Path):
 
 def film_execution_log(log_csv, video: str | Path, length: float, camera: Camera = Camera(),
                        lead_s: float = 0.3, flange: str = "touch-electric", tool=(0.0, 0.0, 0.0),
-                       progress=None) -> Footage:
+                       progress=None, target: str | Path | None = None) -> Footage:
     """Render ``video`` from an execution log (a path, or the table of :func:`read_film_log`) with the simulator's
     ``ball_theta_y`` [rad] and ``msr_q1..7``.
 
-    Starts ``lead_s`` before the first commanded trajectory row and ends with the log.
+    Starts ``lead_s`` before the first commanded trajectory row and ends with the log; ``target``: the name errors
+    report when ``video`` is a temporary one.
     """
     from tracking.synthetic import render_pendulum_video
     from trajectories.robot import Flange, Robot, RobotConfig
@@ -81,6 +82,6 @@ def film_execution_log(log_csv, video: str | Path, length: float, camera: Camera
     truth = render_pendulum_video(
         video, t - t[0], theta, np.column_stack([u, v]), string_px=camera.px_per_m * length,
         ball_radius_px=camera.px_per_m * camera.ball_radius_m, size=camera.size, fps=camera.fps,
-        pivot_marker="green", progress=progress,
+        pivot_marker="green", progress=progress, target=target,
     )
     return Footage(path=str(video), t0_log=float(t[0]), truth=truth)

@@ -181,10 +181,13 @@ def parse_sources(text: str | None) -> frozenset[str] | None:
 
 
 def _read_secret(path: Path) -> bytes:
-    from trajectories.errors import OptionError
+    from trajectories.errors import InputError, OptionError
     from trajectories.inputs import MAX_SMALL_BYTES, read_input
 
-    key = read_input(path, MAX_SMALL_BYTES, text=False, error=OptionError).rstrip(b"\r\n")
+    try:
+        key = read_input(path, MAX_SMALL_BYTES, text=False).rstrip(b"\r\n")
+    except InputError as exc:
+        raise OptionError(f"--secret {path}: {exc.message}") from None
     if len(key) < 16:
         raise OptionError(f"--secret {path}: the secret has {len(key)} bytes, at least 16 are needed")
     return key

@@ -1,4 +1,4 @@
-"""Parsing of command-line values: angles with deg/rad suffixes, joint vectors, point lists.
+"""Parsing of command-line values: angles with deg/rad suffixes, joint vectors.
 
 Numbers follow :mod:`trajectories.numbers` (plain ASCII decimals: no '1_0', 'nan' or 'inf'). The option parsers
 of :mod:`lbrcli.options` call these at parse time; they also accept values parsed already (idempotent), so code
@@ -52,22 +52,3 @@ def parse_joint_vector(text: str | np.ndarray, option: str) -> np.ndarray:
     if len(parts) != N_JOINTS:
         raise OptionError(f"{_where(option)}expected {N_JOINTS} comma-separated joint angles, got {len(parts)}")
     return np.array([parse_angle(p, option) for p in parts])
-
-
-def parse_floats(text: str, option: str, count: int | None = None) -> np.ndarray:
-    """Comma-separated finite numbers."""
-    try:
-        vals = np.array([plain_float(p) for p in str(text).split(",")])
-    except NotANumber as exc:
-        raise OptionError(f"{_where(option)}expected comma-separated numbers, got {text!r} ({exc})") from None
-    if count is not None and len(vals) != count:
-        raise OptionError(f"{_where(option)}expected {count} numbers, got {len(vals)}")
-    return vals
-
-
-def parse_points(text: str, option: str, dims: int = 2) -> np.ndarray:
-    """'x0,y0;x1,y1;...' → (n, dims) [m]."""
-    pts = [p for p in str(text).split(";") if p.strip()]
-    if not pts:
-        raise OptionError(f"{_where(option)}expected points 'x0,y0;x1,y1;...'")
-    return np.array([parse_floats(p, option, dims) for p in pts])

@@ -27,6 +27,7 @@ from ..options import (DEFAULT_FLANGE, THESIS_Q_START, DtOpt, FlangeOpt, JointVe
 def _pushes(texts: list[str] | None) -> tuple[tuple[float, float], ...]:
     """'10deg@20' → (20.0 s, 0.1745 rad) knocks of the simulated rod."""
     from trajectories.errors import OptionError
+    from trajectories.numbers import NotANumber, plain_float
 
     from ..parsing import parse_angle
 
@@ -36,10 +37,10 @@ def _pushes(texts: list[str] | None) -> tuple[tuple[float, float], ...]:
         if not sep:
             raise OptionError(f"--push: expected ANGLE@SECONDS (e.g. 10deg@20), got {text!r}")
         try:
-            t = float(when)
-        except ValueError:
+            t = plain_float(when)
+        except NotANumber:
             raise OptionError(f"--push: not a time in seconds: {when!r} in {text!r}") from None
-        if not (math.isfinite(t) and t >= 0):
+        if not t >= 0:
             raise OptionError(f"--push: the time must be >= 0 s, got {when!r}")
         d = parse_angle(angle, "--push")
         if abs(d) > math.pi:

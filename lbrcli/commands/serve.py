@@ -99,7 +99,7 @@ def serve(
     rep = Reporter(json_out)
     udp = listen.strip().lower() != "off"
     host, _, lport = listen.rpartition(":")
-    if udp and (not host or not lport.isdigit() or not 0 <= int(lport) <= 65535):
+    if udp and (not host or not (lport.isascii() and lport.isdigit()) or not 0 <= int(lport) <= 65535):
         raise OptionError(f"--listen must be HOST:PORT or off, got {listen!r}")
     if not udp and mqtt is None:
         raise OptionError("--listen off needs --mqtt: targets must come from somewhere")

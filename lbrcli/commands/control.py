@@ -53,8 +53,11 @@ def upright(
     rod_length: Annotated[float, number("--rod-length", low=0.1, high=1.5, unit="m", help="Length of the module's rod \\[m] (uniform rod).")] = 0.5,
     rod_mass: Annotated[float, number("--rod-mass", low=0, high=5, unit="kg", help="Mass of the rod \\[kg].")] = 0.1,
     tip_mass: Annotated[float, number("--tip-mass", low=0, high=5, unit="kg", help="Mass at the rod's end \\[kg].")] = 0.0,
-    hold: Annotated[float, number("--hold", low=0, high=3600, unit="s", help="Balance upright this long after the first catch \\[s].")] = 60.0,
-    swing_timeout: Annotated[float, number("--swing-timeout", low=1, high=600, unit="s", help="Give up if not caught upright by then \\[s].")] = 30.0,
+    hold: Annotated[float, number("--hold", low=0, high=3600, unit="s", help="Balance upright this long in one run without a fall: the goal \\[s].")] = 60.0,
+    swing_timeout: Annotated[float, number("--swing-timeout", low=1, high=600, unit="s", help="Give up if not caught upright within this long of swinging \\[s].")] = 30.0,
+    recatch: Annotated[float, number("--recatch", low=1, high=600, unit="s", help="After a fall, give up if not caught again within this long \\[s].")] = 20.0,
+    identify: Annotated[bool, typer.Option("--identify/--no-identify", help="Identify the rod (length, friction, the encoder's offset and sign, the delay) from a short push before the swing-up (default), or trust --rod-length and --sensor-delay.")] = True,
+    encoder_sign: Annotated[int, number("--encoder-sign", low=-1, high=1, integer=True, help="The sign the module's encoder counts with: 1, or -1 for one mounted reversed (the identification refuses to go on when they disagree).")] = 1,
     travel: Annotated[float, number("--travel", low=0.05, high=0.5, unit="m", help="The cart's travel along base y either side of the start \\[m].")] = 0.3,
     q_start: Annotated[JointVector, joints("--q-start", help="The rail's centre pose: 7 joint angles (deg/rad).")] = THESIS_Q_START,
     move_to_start: Annotated[bool, typer.Option("--move-to-start", help="Reach --q-start first by a jerk-limited move.")] = False,
@@ -66,6 +69,10 @@ def upright(
     sim_delay: Annotated[float, number("--sim-delay", low=0, high=100, unit="ms", help="Simulator: encoder-to-serial delay \\[ms] (radio + USB).")] = 5.0,
     sim_jitter: Annotated[float, number("--sim-jitter", low=0, high=50, unit="ms", help="Simulator: extra delay, uniform in \\[0, jitter] \\[ms].")] = 1.0,
     push: Annotated[Optional[list[str]], typer.Option("--push", metavar="ANGLE@SECONDS", help="Simulator: knock the rod by ANGLE at SECONDS after the start, e.g. 10deg@20 (repeatable).")] = None,
+    sim_rod_length: Annotated[Optional[float], number("--sim-rod-length", low=0.1, high=1.5, unit="m", help="Simulator: the simulated rod's length \\[m] (default: --rod-length) — a rod the controller does not know.")] = None,
+    sim_friction: Annotated[float, number("--sim-friction", low=0, high=0.5, help="Simulator: the bearing's dry friction as a share of the rod's peak gravity torque.")] = 0.0,
+    sim_noise: Annotated[int, number("--sim-noise", low=0, high=100, integer=True, help="Simulator: encoder noise, up to ± this many counts per reading.")] = 0,
+    sim_encoder_sign: Annotated[int, number("--sim-encoder-sign", low=-1, high=1, integer=True, help="Simulator: -1 mounts the simulated encoder reversed.")] = 1,
     robot: RobotOpt = None,
     port: PortOpt = 30200,
     bind: BindOpt = None,
@@ -76,7 +83,7 @@ def upright(
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
     busy_wait: BusyWaitOpt = None,
-    sim_lenient: SimLenientOpt = False,
+    sim_lenient: SimLenientOpt = True,
     limits: LimitsOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
@@ -84,9 +91,14 @@ def upright(
 
     The arm moves the module's bearing along base y through --q-start (the thesis start pose: flange along base +x,
     so the rod swings in the y–z plane) within the joints' velocity, acceleration and jerk limits. The encoder angle
-    is 0 with the rod hanging (--pendulum-zero) and grows toward base +y.
+    is 0 with the rod hanging (--pendulum-zero) and grows toward base +y. First the rod must hang still; then a short
+    push identifies it (its length, friction, the encoder's offset and sign, the delay), the swing-up brings it up,
+    the balance holds it for --hold in one run (a fall is caught again within --recatch), and it is lowered gently in
+    ever smaller swings before the arm parks. Exit 0 only when the hold was met; 1 otherwise (the reason on stderr).
     """
+    from lbrcli.control.fitter import ProcessFitter
     from lbrcli.control.upright import LOG_COLUMNS, UprightClient
+    from planners.feedback.session import SessionOptions
     from lbrcli.lab.attach import LabOptions
     from lbrcli.plants.rigid_module import RigidModuleSpec
     from planners.rail import build_rail
@@ -96,7 +108,7 @@ def upright(
 
     from ..console import Reporter
     from ..fri_options import busy_wait_seconds, check_simulator_only
-    from ..fri_runner import exit_for, print_summary, run_client, simulator_kwargs
+    from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import limits_from, within_limits
 
     rep = Reporter(json_out)
@@ -104,7 +116,7 @@ def upright(
         raise OptionError("--rod-mass and --tip-mass cannot both be 0")
     pushes = _pushes(push)
     check_simulator_only(robot, {"--push": bool(pushes), "--sim-delay": sim_delay != 5.0, "--sim-jitter": sim_jitter != 1.0,
-                                 "--sim-lenient": sim_lenient})  # fmt: skip
+                                 "--sim-strict": not sim_lenient})  # fmt: skip
     if robot is not None and not pendulum:
         raise OptionError("--pendulum PORT is needed with --robot (the module's serial port)")
     if robot is None and pendulum not in (None, "sim"):
@@ -117,9 +129,15 @@ def upright(
         rail = build_rail(robot_model, q0, lim, travel)
     except ValueError as exc:
         raise CheckFailed(f"--q-start/--travel: no rail along base y fits the joint limits: {exc}") from None
+    if 0 in (encoder_sign, sim_encoder_sign):
+        raise OptionError("--encoder-sign and --sim-encoder-sign must be 1 or -1")
+    check_simulator_only(robot, {"--sim-rod-length": sim_rod_length is not None, "--sim-friction": sim_friction != 0.0,
+                                 "--sim-noise": sim_noise != 0, "--sim-encoder-sign": sim_encoder_sign != 1})  # fmt: skip
     assumed_ms = sensor_delay if sensor_delay is not None else (sim_delay + 0.5 * sim_jitter if robot is None else 6.0)
-    client = UprightClient(rail, model.equivalent_length, lim, hold_s=hold, swing_timeout_s=swing_timeout,
-                           sensor_delay_s=assumed_ms * 1e-3, sensor_rate_hz=sensor_rate, move_to_start=move_to_start)
+    session = SessionOptions(hold_s=hold, swing_timeout_s=swing_timeout, recatch_s=recatch, identify=identify,
+                             encoder_sign=encoder_sign, sensor_delay_s=assumed_ms * 1e-3)  # fmt: skip
+    client = UprightClient(rail, model.equivalent_length, lim, session=session, sensor_rate_hz=sensor_rate,
+                           move_to_start=move_to_start)  # fmt: skip
     rep.print(f"rod {rod_length:g} m (equivalent length {model.equivalent_length:.3f} m, period {model.natural_period:.3f} s); "
               f"rail ±{travel:g} m, up to {rail.limits.velocity:.2f} m/s, {rail.limits.acceleration:.2f} m/s² anywhere "
               "(more where the joints allow)")  # fmt: skip
@@ -128,20 +146,36 @@ def upright(
     if robot is None:
         sim_kwargs = simulator_kwargs(length=0.0, default_length=0.0, period_ms=period or 1, sim_start=None,
                                       default_start=tuple(float(v) for v in q0), flange=DEFAULT_FLANGE, tool=None,
-                                      max_runtime_s=hold + swing_timeout + 120.0, limits=limits)  # fmt: skip
-        plants = (RigidModuleSpec(model, sensor_rate, sim_delay, sim_jitter, pushes=pushes, zero_count=pendulum_zero),)
+                                      max_runtime_s=hold + swing_timeout + 3 * recatch + 180.0, limits=limits)  # fmt: skip
+        rod = model if sim_rod_length is None else RigidPendulum(rod_length=sim_rod_length, rod_mass=rod_mass,
+                                                                 tip_mass=tip_mass)  # fmt: skip
+        from dataclasses import replace
+
+        rod = replace(rod, coulomb=max(rod.coulomb, sim_friction * rod.mass * rod.com * 9.81))
+        plants = (RigidModuleSpec(rod, sensor_rate, sim_delay, sim_jitter, pushes=pushes, zero_count=pendulum_zero,
+                                  noise_counts=sim_noise, sign=sim_encoder_sign),)  # fmt: skip
     lab = LabOptions(pendulum or "sim", baud, pendulum_zero)
-    result, sim_stats, lab_figures = run_client(
-        rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-        sim_kwargs=sim_kwargs, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), sim_lenient=sim_lenient,
-        lab=lab, plants=plants, extra_names=LOG_COLUMNS, extra=client.log_values,
-    )  # fmt: skip
+    fitter = ProcessFitter() if identify else None
+    client.fitter = fitter
+    try:
+        result, sim_stats, lab_figures = run_client(
+            rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
+            sim_kwargs=sim_kwargs, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), sim_lenient=sim_lenient,
+            lab=lab, plants=plants, extra_names=LOG_COLUMNS, extra=client.log_values,
+        )  # fmt: skip
+    finally:
+        if fitter is not None:
+            fitter.close()
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)
     f = figures  # the client's figures are merged into the session's
-    if f["swing_up_s"] is not None:
-        rep.print(f"swing-up {f['swing_up_s']:.2f} s; balanced {f['balanced_s']:.1f} s (longest {f['longest_balance_s']:.1f} s), "
-                  f"falls {f['falls']}, max |angle from upright| {f['max_theta_balanced_deg']:.2f}° (estimate)")  # fmt: skip
+    if f.get("identified_length_m") is not None:
+        rep.print(f"identified: equivalent length {f['identified_length_m']:.3f} m (model {model.equivalent_length:.3f} m), "
+                  f"dry friction {100 * f['identified_coulomb_share']:.1f} % of its gravity torque, encoder offset "
+                  f"{f['encoder_offset_deg']:.2f}°, delay {f['identified_delay_ms']:.1f} ms")  # fmt: skip
+    if f.get("swing_up_s") is not None:
+        rep.print(f"swing-up {f['swing_up_s']:.2f} s; balanced {f['balanced_s']:.1f} s (longest run {f['longest_balance_s']:.1f} s), "
+                  f"catches {f['catches']}, falls {f['falls']}, max |angle from upright| {f['max_theta_balanced_deg']:.2f}° (estimate)")  # fmt: skip
     if f["controller_us_p50"] is not None:
         rep.print(f"controller per cycle: p50 {f['controller_us_p50']:.1f} µs, p99 {f['controller_us_p99']:.1f} µs")
     if sim_stats is not None:
@@ -152,16 +186,11 @@ def upright(
     figures.update(rod_length_m=rod_length, equivalent_length_m=model.equivalent_length, hold_s=hold,
                    robot=robot or "simulator", rail_velocity_m_s=rail.limits.velocity,
                    rail_acceleration_m_s2=rail.limits.acceleration)  # fmt: skip
-    if plot is not None:
-        if log is None:
-            rep.warn("--plot needs --log (the plot is drawn from the log); no plot written")
-        else:
-            from ..plots.control import plot_upright
+    from ..plots.control import plot_upright
 
-            plot_upright(Path(log), Path(plot))
-            rep.print(f"plot: {plot}")
+    plot_error = plot_log(plot, log, rep, "upright", figures, draw=plot_upright)
     rep.emit(figures)
-    exit_for(result, lab_figures)
+    exit_for(result, lab_figures, failed=plot_error)
 
 
 def damp(
@@ -174,6 +203,7 @@ def damp(
     sensor_delay: Annotated[Optional[float], number("--sensor-delay", low=0, high=500, unit="ms", help="Age of a reading when it arrives \\[ms] (default: --sim-delay + one period; one period with --robot).")] = None,
     sensor_rate: Annotated[float, number("--sensor-rate", low=10, high=10000, unit="Hz", help="With --sensor module: readings per second \\[Hz].")] = 200.0,
     open_loop: Annotated[bool, typer.Option("--open-loop", help="Estimate and log the sway but do not correct (the plan alone, for comparison).")] = False,
+    target: Annotated[float, number("--target", low=0.001, high=45, unit="deg", help="The goal: residual sway at most this, fitted over the last swing period of --damp-time \\[deg]; exit 1 above it.")] = 0.3,
     move_to_start: Annotated[bool, typer.Option("--move-to-start", help="If the robot stands elsewhere, first move there (jerk-limited, input-shaped for the swing).")] = False,
     start_tolerance: Annotated[float, number("--start-tolerance", low=0, high=0.1, unit="rad", help="Largest |first row − measured position| accepted \\[rad].")] = 1e-3,
     start_sway: Annotated[float, number("--start-sway", low=1e-3, high=45, unit="deg", help="With --move-to-start, hold the first row until the sway stayed below this \\[deg].")] = 0.2,
@@ -193,7 +223,7 @@ def damp(
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
     busy_wait: BusyWaitOpt = None,
-    sim_lenient: SimLenientOpt = False,
+    sim_lenient: SimLenientOpt = True,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -218,7 +248,7 @@ def damp(
     from planners.pendulum import natural_period
     from planners.shapers import make_shaper
     from trajectories.csvio import read_joint_csv
-    from trajectories.errors import InputError, OptionError
+    from trajectories.errors import CheckFailed, InputError, OptionError
 
     from ..console import Reporter
     from ..fri_options import DEFAULT_BALL_LENGTH, busy_wait_seconds, check_simulator_only
@@ -237,7 +267,7 @@ def damp(
     period_T = natural_period(model_len)
     damp_s = 3.0 * period_T if damp_time is None else damp_time
     check_simulator_only(robot, {"--sim-length": sim_length is not None, "--sim-delay": sim_delay != 0.0,
-                                 "--sim-start": sim_start is not None, "--sim-lenient": sim_lenient})  # fmt: skip
+                                 "--sim-start": sim_start is not None, "--sim-strict": not sim_lenient})  # fmt: skip
     if sensor == "module" and robot is not None and not pendulum:
         raise OptionError("--pendulum PORT is needed with --sensor module and --robot")
     if robot is None and pendulum not in (None, "sim"):
@@ -258,6 +288,16 @@ def damp(
                          "(lbr retime) first", file=name)  # fmt: skip
     period_ms = int(round(send_ms))
     period_s = period_ms * 1e-3
+    if sensor == "module":  # the module's rod swings about its bearing axis (the flange's z): it must lie along the
+        from planners.feedback.geometry import module_axis_error  # base axis across the sway it is to measure
+
+        row, err = module_axis_error(model, traj.q, 1 - ("xy".index(module_axis)))
+        if err > math.radians(20.0):
+            raise CheckFailed(f"--sensor module: the module's bearing axis is {math.degrees(err):.0f}° off base "
+                              f"{'xy'[1 - 'xy'.index(module_axis)]} at row {row + 1} (t = {traj.t[row]:.3f} s): its rod "
+                              f"cannot swing with the ball's sway along {module_axis} there (a flange pointing down "
+                              "keeps it vertical); use --sensor io or a camera, or a move with the flange horizontal "
+                              "(e.g. the thesis start pose)")  # fmt: skip
     plan = correction_plan(model, traj.q, lim, period_s)
     assumed_ms = sensor_delay if sensor_delay is not None else (
         sim_delay + period_ms if robot is None or sensor == "io" else 6.0 + period_ms)  # fmt: skip
@@ -265,6 +305,7 @@ def damp(
     client = DampingClient(
         traj.q, lim, period_s, model_len, plan, damp_s=damp_s, sensor_delay_s=assumed_ms * 1e-3,
         io_names=names if sensor == "io" else None, module_axis=axis, sensor_rate_hz=sensor_rate, active=not open_loop,
+        target=math.radians(target),
         start_tolerance=start_tolerance, move_to_start=move_to_start,
         move_shaper=make_shaper("zvd", period_T), move_robot=model,
         sway=SwayWatch(IoSway("ball_theta"), math.radians(start_sway), window_for_length(model_len), sway_wait)
@@ -296,15 +337,18 @@ def damp(
     f = figures  # the client's figures are merged into the session's
     rep.print(f"offset: largest {f['max_offset_m'] * 1e3:.1f} mm, trimmed to the headroom in {f['offset_trimmed_cycles']} "
               f"cycles; return to the last row {f['return_rows']} commands")  # fmt: skip
+    if f.get("sensor_fault"):
+        rep.warn(f"the sway sensor failed a check: {f['sensor_fault']}")
     if f["measured_residual_deg"] is not None:
-        rep.print(f"measured sway in the last swing period of the damping time: {f['measured_residual_deg']:.3f}°")
+        rep.print(f"residual sway (fitted over the last swing period of the damping time): {f['measured_residual_deg']:.3f}° "
+                  f"(target {target:g}°; largest single reading {f['peak_residual_reading_deg']:.3f}°)")  # fmt: skip
     if f["controller_us_p50"] is not None:
         rep.print(f"damper per cycle: p50 {f['controller_us_p50']:.1f} µs, p99 {f['controller_us_p99']:.1f} µs")
     figures.update(file=name, rows=len(traj), duration_s=traj.duration, string_length_m=model_len,
                    damp_s=damp_s, robot=robot or "simulator", sim_length_m=true_len if robot is None else None)  # fmt: skip
-    plot_log(plot, log, rep, joint_csv.name)
+    plot_error = plot_log(plot, log, rep, joint_csv.name, figures)
     rep.emit(figures)
-    exit_for(result, lab_figures)
+    exit_for(result, lab_figures, failed=plot_error)
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -68,7 +68,7 @@ def serve(
     wait: WaitOpt = None,
     realtime: RealtimeOpt = False,
     busy_wait: BusyWaitOpt = None,
-    sim_lenient: SimLenientOpt = False,
+    sim_lenient: SimLenientOpt = True,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -106,7 +106,7 @@ def serve(
     mqtt_target = parse_mqtt_url(mqtt) if mqtt is not None else None
     key = _read_secret(secret) if secret is not None else None
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
-                                 "--sim-lenient": sim_lenient})  # fmt: skip
+                                 "--sim-strict": not sim_lenient})  # fmt: skip
     lim = limits_from(limits)
     within_limits(sim_start, lim, "--sim-start")
     allowed = set(source) if source else None
@@ -135,7 +135,7 @@ def serve(
         for tr in transports:
             tr.close()
         raise OptionError(f"--mqtt: {exc}") from None
-    targets = TargetInbox(transports, key)
+    targets = TargetInbox(transports, key, lim)
     follower = TargetFollower(targets, lim, robot=make_robot(flange, tool), timeout_s=timeout,
                               first_target_s=first_target, speed_scale=speed_scale, state_every=state_every)  # fmt: skip
     try:

@@ -7,8 +7,10 @@ the row's precomputed Jacobian pseudo-inverse (:class:`planners.feedback.correct
 joints' headroom left by the plan. After the last row the damper goes on for ``damp_s`` [s] (the settle), then a
 jerk-limited move takes the arm from wherever the offset left it to the last row, and the session ends.
 
-Angles come from the controller's analog inputs (``io_names``, [rad], the simulator's ball: ``ball_theta_x``,
-``ball_theta_y``) or from the pendulum module's serial reader (one axis, ``module_axis``).
+Angles come from a sensor (:mod:`lbrcli.control.sensors`): the controller's analog inputs (``io_names``, [rad], the
+simulator's ball: ``ball_theta_x``, ``ball_theta_y``), the pendulum module's serial reader (one axis,
+``module_axis``), or a camera tracked live; each reading is checked against the model, and the session completes
+only when the fitted residual sway is within ``target``.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import numpy as np
 
 from planners.feedback.correction import CorrectionPlan
 from planners.feedback.damping import DampingOptions, SwayDamper, sway_reference
+from planners.feedback.health import HealthOptions, SensorHealth, swing_amplitude
 from planners.pendulum import natural_period
 from trajectories.limits import JointLimits
 
@@ -29,23 +32,35 @@ from lbrcli.fri import LBRState, OnlineMove, Phase, StopSession, TrajectoryPlaye
 from lbrcli.fri.moves import extrapolated
 from lbrcli.fri.outcome import cost_figures_us
 
+from .sensors import IoSensor, ModuleSensor
+
 LOG_COLUMNS = ("damp_x", "damp_y", "est_theta_x", "est_theta_y", "ref_theta_x", "ref_theta_y")  # [m] ×2, [rad] ×4
 
 
 class DampingClient(TrajectoryPlayer):
-    """Streams ``rows`` (n, 7) [rad] at ``period_s`` [s] with active sway damping for a string of ``length`` [m]."""
+    """Streams ``rows`` (n, 7) [rad] at ``period_s`` [s] with active sway damping for a string of ``length`` [m].
+
+    ``sensor`` gives the readings (:mod:`lbrcli.control.sensors`; default: the analog inputs ``io_names``, or the
+    pendulum module on ``module_axis`` when ``io_names`` is None). Every reading is checked against the model
+    (:class:`planners.feedback.health.SensorHealth`): a sensor that is not telling the truth stops the correction —
+    the rows finish as planned — and ends the session as failed. The residual sway is the amplitude of the swing
+    fitted to the readings of the last ``tail_periods`` periods of the damping time; the session is completed only
+    when it is at most ``target`` [rad]."""
 
     def __init__(self, rows: np.ndarray, limits: JointLimits, period_s: float, length: float, plan: CorrectionPlan, *,
                  damp_s: float, sensor_delay_s: float, io_names: tuple[str, str] | None = ("ball_theta_x", "ball_theta_y"),
                  module_axis: int = 1, sensor_rate_hz: float | None = None, options: DampingOptions = DampingOptions(),
-                 active: bool = True, actuation_delay: int = 1, **player) -> None:  # fmt: skip
+                 active: bool = True, actuation_delay: int = 1, sensor=None, target: float = math.radians(0.3),
+                 tail_periods: float = 1.0, health: HealthOptions = HealthOptions(), **player) -> None:  # fmt: skip
         player.setdefault("rejoin_share", plan.rejoin_share)  # a rejoin leaves the offsets the rest (rejoin_bounds)
         super().__init__(rows, limits, period_s=period_s, settle_s=damp_s, **player)
         if len(plan) != len(self.rows):
             raise ValueError("the correction plan must have one entry per row")
         self.length, self.plan, self.options = length, plan, options
-        self.io_names, self.module_axis = io_names, module_axis
-        self.reader = None  # PendulumReader (set by the runner when the module is attached; used without io_names)
+        if sensor is None:
+            sensor = IoSensor(io_names) if io_names is not None else ModuleSensor(module_axis, sensor_rate_hz or 200.0)
+        self.sensor = sensor
+        self.target = target
         n_total = len(self.rows) + int(round(damp_s / period_s)) + 2
         acc = np.zeros((n_total, 2))
         acc[: len(plan)] = plan.planned_accel
@@ -55,13 +70,19 @@ class DampingClient(TrajectoryPlayer):
         self._bounds = [tuple(b) for b in plan.bounds.tolist()]
         self._rejoin_bounds = [tuple(b) for b in plan.rejoin_bounds.tolist()]
         self._bound = self._bounds[0]
-        interval = period_s if io_names is not None else 1.0 / (sensor_rate_hz or 200.0)
+        interval = sensor.interval_s or period_s
         opts = replace(options, travel=plan.travel)
         self.damper = SwayDamper(length, period_s, sensor_delay_s, interval, opts, actuation_delay=actuation_delay,
                                  bounds=lambda x, v, a: self._bound)  # fmt: skip
         self.damper.active = active
+        self._lag = int(round(sensor_delay_s / period_s)) + actuation_delay
+        # the plan's own swing may be large (an unshaped move): a runaway is well beyond it
+        peak = float(np.max(np.abs(np.asarray(self._ref)))) if len(self._ref) else 0.0
+        health = replace(health, diverged=max(health.diverged, 1.5 * peak + math.radians(10.0)))
+        self.health = {axis: SensorHealth(sensor.describe(axis), health) for axis in sensor.axes}
+        self.sensor_fault: str | None = None
+        self._fault_at: float | None = None  # [s] after the first row
         self._k = -1  # damper cycles since the first row (index into the tables)
-        self._reading = None
         self._return: OnlineMove | None = None
         self._finish: StopSession | None = None
         self._held = 0  # cycles held on the last row after the return move
@@ -72,28 +93,47 @@ class DampingClient(TrajectoryPlayer):
         self.max_offset = 0.0  # [m]
         self.return_rows = 0
         self.readings = 0
-        # the last swing period of the damping time
-        self._tail_from = len(self.rows) + max(0, int(round((damp_s - natural_period(length)) / period_s)))
-        self.residual = 0.0  # [rad] largest measured sway in that period
+        # the last tail_periods swing periods of the damping time: the readings the residual is fitted to
+        self._period_T = natural_period(length)
+        self._tail_from = len(self.rows) + max(0, int(round((damp_s - tail_periods * self._period_T) / period_s)))
+        self._tail: dict[int, list[tuple[float, float]]] = {axis: [] for axis in sensor.axes}
+        self.residual: float | None = None  # [rad] the fitted residual sway (None: not measured)
+        self.peak_residual = 0.0  # [rad] the largest reading in the tail (noise included)
+
+    @property
+    def reader(self):
+        """The pendulum module's reader (the runner sets it when the module is attached)."""
+        return getattr(self.sensor, "reader", None)
+
+    @reader.setter
+    def reader(self, value) -> None:
+        if hasattr(self.sensor, "reader"):
+            self.sensor.reader = value
 
     # -- the per-cycle correction ----------------------------------------------------------------------------------
     def _read(self, state: LBRState) -> None:
         d = self.damper
-        if self.io_names is not None:
-            tx, ty = state.analog_io(self.io_names[0]), state.analog_io(self.io_names[1])
-            d.correct(0, tx)
-            d.correct(1, ty)
+        t = self._k * self._period
+        seen = max(0, self._k - self._lag)  # the row whose moment a reading arriving now shows
+        ref = self._ref[min(seen, len(self._ref) - 1)]
+        for axis, value in self.sensor.poll(state):
+            obs = d.observers[axis]
+            if self.sensor_fault is None:
+                drive = self._acc[min(self._k, len(self._acc) - 1)][axis] + d.carts[axis].a
+                fault = self.health[axis].reading(t, value, obs.predicted_reading(), ref[axis], drive)
+                if fault is not None:
+                    self._stop_correcting(fault, t)
+                else:  # the estimate follows the readings also open loop (it is logged)
+                    d.correct(axis, value)
             self.readings += 1
-            if self._k >= self._tail_from:
-                self.residual = max(self.residual, math.hypot(tx, ty))
-            return
-        r = self.reader.latest if self.reader is not None else None
-        if r is not None and r is not self._reading:
-            self._reading = r
-            d.correct(self.module_axis, r.theta)
-            self.readings += 1
-            if self._k >= self._tail_from:
-                self.residual = max(self.residual, abs(r.theta))
+            if self._k >= self._tail_from and math.isfinite(value):
+                self._tail[axis].append((t, value))
+                self.peak_residual = max(self.peak_residual, abs(value))
+
+    def _stop_correcting(self, why: str, t: float) -> None:
+        """The sensor is not to be trusted: no more correction (the offsets ride out); the session will fail."""
+        self.sensor_fault, self._fault_at = why, t
+        self.damper.active = False
 
     def _corrected(self, q: Sequence[float], k: int) -> tuple[float, ...]:
         t0 = time.perf_counter_ns()
@@ -104,6 +144,11 @@ class DampingClient(TrajectoryPlayer):
         m = len(self._ref) - 1
         kk = k if k < m else m
         self.damper.step(self._ref[kk], self._ref_rate[kk], self._acc[kk])
+        if self.sensor_fault is None and self.damper.active:  # (open loop there is no feedback to run away)
+            for axis, h in self.health.items():
+                fault = h.estimate(self.damper.observers[axis].phi)
+                if fault is not None:
+                    self._stop_correcting(fault, k * self._period)
         cx, cy = self.damper.carts
         dx, dy = cx.x, cy.x
         mx, my = self._maps[row]
@@ -133,6 +178,7 @@ class DampingClient(TrajectoryPlayer):
         if self._k == 0:
             self._read(state)
         self._cmd_prev, self._cmd = self._cmd, self._corrected(q, self._k)
+        self.exact_command = False  # a row plus the damper's offset: feedback, clamped into the envelope if need be
         return self._cmd
 
     def _start_return(self, stop: StopSession) -> Sequence[float]:
@@ -153,23 +199,44 @@ class DampingClient(TrajectoryPlayer):
         move = self._return
         if not self.reply_due:
             return self._cmd
-        if self.skipped and not replanned:  # messages were lost during the return: continue from the extrapolation
-            self._replan_return()
+        if self.skipped and not replanned:  # messages were lost during the return: it goes on in step with its plan
+            prev = self._cmd_prev or self._cmd
+            self._cmd, self._cmd_prev, _ = extrapolated(self._cmd, prev, self.skipped, self._period)
+            move.skip(self.skipped)
         if move.done:
             if self._held < 2:  # at rest on the last row before the session's stop: it starts with zero velocity
                 self._held += 1
                 self._cmd_prev, self._cmd = self._cmd, move.target
                 return self._cmd
-            raise self._finish
+            raise self._verdict()
         self._cmd_prev, self._cmd = self._cmd, move.next()
         self.phase = Phase.SETTLE
         self.return_rows += 1
         return self._cmd
 
+    def _verdict(self) -> StopSession:
+        """How the session ends: completed only when the sensor held up and the fitted residual is within the target."""
+        amps = [swing_amplitude(np.array([p[0] for p in pts]), np.array([p[1] for p in pts]), self._period_T)
+                for pts in self._tail.values() if len(pts) >= 4]  # fmt: skip
+        self.residual = math.hypot(*amps) if amps else None
+        if self.sensor_fault is not None:
+            return StopSession(f"{self.sensor_fault} — the correction stopped {self._fault_at:.2f} s after the first row "
+                               "and the rows finished as planned; the sway is not known", completed=False)  # fmt: skip
+        if not self.damper.active:
+            return self._finish  # open loop (asked for): the rows were streamed
+        if self.residual is None:
+            return StopSession("no reading arrived in the last period of the damping time: the sway is not known",
+                               completed=False)  # fmt: skip
+        if self.residual > self.target:
+            return StopSession(f"residual sway {math.degrees(self.residual):.3f}° (fitted over the last "
+                               f"{self._period_T:.2f} s) is above the target {math.degrees(self.target):.3f}°",
+                               completed=False)  # fmt: skip
+        return self._finish
+
     # -- log and figures ---------------------------------------------------------------------------------------
     def log_values(self, mon=None) -> tuple[float, ...]:
         if self._k < 0:
-            return (0.0, 0.0, math.nan, math.nan, math.nan, math.nan)
+            return (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # before the first row (phase < TRAJECTORY): nothing estimated yet
         d = self.damper
         kk = min(self._k, len(self._ref) - 1)
         ox, oy = d.observers
@@ -183,7 +250,10 @@ class DampingClient(TrajectoryPlayer):
             offset_trimmed_cycles=sum(c.trimmed for c in self.damper.carts),
             return_rows=self.return_rows,
             sway_readings=self.readings,
-            measured_residual_deg=math.degrees(self.residual) if self._k >= self._tail_from else None,
+            measured_residual_deg=math.degrees(self.residual) if self.residual is not None else None,
+            peak_residual_reading_deg=math.degrees(self.peak_residual) if self._k >= self._tail_from else None,
+            target_deg=math.degrees(self.target),
+            sensor_fault=self.sensor_fault,
             **cost_figures_us(self.cost_ns),
         )
         return f

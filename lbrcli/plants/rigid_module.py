@@ -16,6 +16,7 @@ encoder zero, wrapped to (−π, π]) and ``pendulum_omega`` [rad/s]. ``pushes``
 from __future__ import annotations
 
 import math
+import random
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -45,6 +46,8 @@ class RigidModuleSpec:
     axis: tuple[float, float, float] = (0.0, 0.0, 1.0)  # bearing axis in the TCP frame
     zero_count: int = 0  # encoder count of the hanging rod
     seed: int = 0  # of the jitter
+    noise_counts: int = 0  # the encoder's reading is off by up to ± this many counts (uniform, per reading)
+    sign: int = 1  # −1: the encoder counts the other way (mounted reversed)
 
     def validate(self) -> None:
         try:
@@ -62,6 +65,8 @@ class RigidModuleSpec:
         for t, d in self.pushes:
             if not (math.isfinite(t) and t >= 0 and math.isfinite(d)):
                 raise OptionError(f"--push: need a time >= 0 s and a finite angle, got {t:g} s, {d:g} rad")
+        if not 0 <= self.noise_counts <= 100 or self.sign not in (1, -1):
+            raise OptionError("--sim-noise must be 0..100 counts and --sim-encoder-sign 1 or -1")
         if not 0 <= self.zero_count < COUNTS:
             raise OptionError(f"--pendulum-zero must be an encoder count 0..4095, got {self.zero_count}")
 
@@ -101,6 +106,7 @@ class RigidModule:
         self._emu = PendulumEmulator(rate_hz=spec.rate_hz, zero_count=spec.zero_count, delay_s=spec.delay_ms * 1e-3,
                                      jitter_s=spec.jitter_ms * 1e-3, seed=spec.seed)  # fmt: skip
         self._sample_every = 1.0 / spec.rate_hz
+        self._rng = random.Random(spec.seed + 1)
         self._next_sample = 0.0
         self._last_count: int | None = None
         self._last_sample_t = 0.0
@@ -149,7 +155,11 @@ class RigidModule:
             d = (count - self._last_count + COUNTS // 2) % COUNTS - COUNTS // 2
             omega = d * 2 * math.pi / COUNTS / max(t - self._last_sample_t, 1e-9)
         self._last_count, self._last_sample_t = count, t
-        self._emu.queue(t, format_line(self.phi, omega, self.spec.zero_count))
+        spec = self.spec
+        read = spec.sign * self.phi
+        if spec.noise_counts:
+            read += self._rng.randint(-spec.noise_counts, spec.noise_counts) * 2 * math.pi / COUNTS
+        self._emu.queue(t, format_line(read, spec.sign * omega, spec.zero_count))
 
     def info(self) -> dict:
         return {"pendulum_path": self._emu.path}

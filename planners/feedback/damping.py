@@ -104,7 +104,7 @@ class SwayDamper:
         self.observers = [DelayedObserver(length, dt, delay, reading_interval, options.bandwidth,
                                           actuation_delay=actuation_delay) for _ in range(axes)]  # fmt: skip
         self.deviation = [0.0] * axes  # e [rad] at the last step
-        self.active = True  # False: the offsets only ride out (jerk toward zero acceleration), no feedback
+        self.active = True  # False: no feedback; the offsets return smoothly to the planned path
 
     def correct(self, axis: int, reading: float) -> None:
         """A reading of the angle of ``axis`` [rad] arrived this cycle."""
@@ -120,10 +120,9 @@ class SwayDamper:
             de = obs.omega - ref_rate[i]
             dev[i] = e
             if self.active:
-                jerk = -(k0 * cart.x + k1 * cart.v + k2 * cart.a + k3 * e + k4 * de)
-            else:
-                jerk = -cart.a / (4.0 * self.dt)
-            cart.step(jerk)
+                cart.step(-(k0 * cart.x + k1 * cart.v + k2 * cart.a + k3 * e + k4 * de))
+            else:  # no feedback: the offset returns to the planned path, critically damped (ω = 2 rad/s)
+                cart.track(-4.0 * cart.x - 4.0 * cart.v, 0.05)
             obs.predict(planned_accel[i] + cart.a)
 
     def coast(self, planned_accel: Sequence[float]) -> None:

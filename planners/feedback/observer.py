@@ -1,6 +1,6 @@
 """Estimate of a pendulum's angle and rate now from delayed, quantised angle readings.
 
-Between readings the estimate runs the model φ̈ = −(g·sin φ + a·cos φ)/l − d·φ̇ forward every cycle with the cart
+Between readings the estimate runs the model φ̈ = −(g·sin φ + a·cos φ)/l − d·φ̇ − μ·sgn φ̇ forward every cycle with the cart
 acceleration a the robot actually applied (the command, ``actuation_delay`` cycles late). A reading that arrives
 now is the angle ``delay`` cycles ago: its innovation against the estimate kept for that moment corrects the
 current estimate (and the kept history) with the gains of a second-order observer of bandwidth ``bandwidth``
@@ -21,10 +21,11 @@ class DelayedObserver:
 
     def __init__(self, length: float, dt: float, delay: float, reading_interval: float, bandwidth: float = 30.0,
                  damping_ratio: float = 0.8, actuation_delay: int = 2, friction: float = 0.0,
-                 phi0: float = 0.0) -> None:  # fmt: skip
+                 phi0: float = 0.0, coulomb: float = 0.0) -> None:  # fmt: skip
         if not (length > 0 and dt > 0 and delay >= 0 and reading_interval > 0 and bandwidth > 0):
             raise ValueError("observer: length, step, reading interval and bandwidth must be > 0, the delay >= 0")
         self.length, self.dt, self.friction = length, dt, friction  # [m], [s], [1/s]
+        self.coulomb = coulomb  # [rad/s²] the bearing's dry friction per inertia
         self.phi, self.omega = phi0, 0.0
         self._lag = max(0, int(round(delay / dt)))  # cycles between the reading's moment and now
         self._hist = [phi0] * (self._lag + 1)  # φ̂ of the last lag + 1 cycles (ring)
@@ -45,11 +46,17 @@ class DelayedObserver:
         u[i] = accel_command
         self._u_at = (i + 1) % len(u)
         dt, l = self.dt, self.length
-        alpha = -(G * math.sin(self.phi) + a * math.cos(self.phi)) / l - self.friction * self.omega
+        alpha = (-(G * math.sin(self.phi) + a * math.cos(self.phi)) / l - self.friction * self.omega
+                 - self.coulomb * math.tanh(self.omega / 0.05))  # fmt: skip
         self.omega += alpha * dt
         self.phi += self.omega * dt
         self._at = (self._at + 1) % len(self._hist)
         self._hist[self._at] = self.phi
+
+    def predicted_reading(self) -> float:
+        """The estimate [rad] for the moment a reading arriving now shows (``delay`` ago)."""
+        h = self._hist
+        return h[(self._at + 1) % len(h)]
 
     def correct(self, reading: float) -> None:
         """A reading [rad] (the angle ``delay`` ago) arrived this cycle."""

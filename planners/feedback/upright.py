@@ -5,8 +5,10 @@ Modes: ``SWING_UP`` pumps energy (Åström–Furuta): the cart acceleration a = 
 ``catch_angle`` of upright with less than ``catch_rate``
 and the cart within ``catch_travel`` of the rail's centre — LQR state feedback on (x, v, a, φ − π, φ̇) with the jerk
 as input; back to ``SWING_UP`` if it falls beyond ``drop_angle``. ``PARK`` (after :meth:`park`) stops balancing and
-brings the cart back to the rail's centre and to rest. Every mode drives the :class:`~.cart.Cart`, whose governor
-keeps the rail's bounds.
+brings the cart back to the rail's centre and to rest. ``LOWER`` (after :meth:`lower`) brings a balanced rod down as
+the swing-up brought it up, in reverse: the energy follows a target ramped from the upright's to the hanging rod's
+over ``ramp_s``, so the rod swings down in ever smaller swings instead of falling. Every mode drives the
+:class:`~.cart.Cart`, whose governor keeps the rail's bounds.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ class Mode(IntEnum):
     SWING_UP = 0
     BALANCE = 1
     PARK = 2
+    LOWER = 3
 
 
 @dataclass(frozen=True)
@@ -54,8 +57,9 @@ class UprightController:
     """Drives ``cart`` from the estimate (φ, φ̇) of a pendulum of equivalent length ``length`` [m]."""
 
     def __init__(self, length: float, cart: Cart, options: UprightOptions = UprightOptions(),
-                 gain: tuple[float, ...] | None = None) -> None:
+                 gain: tuple[float, ...] | None = None, friction: float = 0.0) -> None:
         self.length = length
+        self.friction = friction  # μ [rad/s²] the bearing's dry friction per inertia (identified): pumped for
         self.cart = cart
         self.o = options
         self.gain = gain if gain is not None else balance_gain(length, options)
@@ -66,6 +70,12 @@ class UprightController:
     def park(self) -> None:
         """Stop balancing: bring the cart to the centre and to rest."""
         self.mode = Mode.PARK
+
+    def lower(self, ramp_s: float = 6.0) -> None:
+        """Bring the rod down gently: its energy follows a target ramped to the hanging rod's over ``ramp_s`` [s]."""
+        self.mode = Mode.LOWER
+        self._lower_t = 0.0
+        self._lower_ramp = max(ramp_s, 1e-3)
 
     def update(self, phi: float, omega: float) -> None:
         """One cycle with the estimate φ [rad] (0 hanging, π upright), φ̇ [rad/s]: step the cart."""
@@ -82,7 +92,8 @@ class UprightController:
             k = self.gain
             cart.step(-(k[0] * cart.x + k[1] * cart.v + k[2] * cart.a + k[3] * theta + k[4] * omega))
         elif self.mode is Mode.SWING_UP:
-            e_top = G
+            # dry friction takes ≈ μ·l·π/2 of energy over the last quarter swing to the top: pump that much more
+            e_top = G + 0.5 * math.pi * self.friction * self.length
             e = swing_energy(phi, omega, self.length)
             cap = o.swing_accel * cart.acceleration_bound
             if abs(omega) < o.start_rate and math.cos(phi) > 0.0:  # (nearly) at rest below: kick it outward
@@ -90,6 +101,15 @@ class UprightController:
             else:
                 pump = o.energy_gain * (e_top - e) * omega * math.cos(phi)
             a = -max(-cap, min(cap, pump)) - o.centre_gain * cart.x - o.centre_damping * cart.v
+            cart.track(a, o.accel_lag)
+        elif self.mode is Mode.LOWER:
+            self._lower_t += cart.dt
+            share = min(1.0, self._lower_t / self._lower_ramp)
+            target = G * (1.0 - 2.0 * share)  # from the upright's energy to the hanging rod's
+            e = swing_energy(phi, omega, self.length)
+            cap = o.swing_accel * cart.acceleration_bound
+            take = o.energy_gain * (e - target) * omega * math.cos(phi)  # Ė = −a·φ̇·cos φ: a of this sign takes energy
+            a = max(-cap, min(cap, take)) - o.centre_gain * cart.x - o.centre_damping * cart.v
             cart.track(a, o.accel_lag)
         else:
             cart.track(-o.centre_gain * cart.x - o.centre_damping * cart.v, o.accel_lag)

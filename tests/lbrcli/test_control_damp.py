@@ -14,6 +14,7 @@ from planners.pendulum import natural_period
 
 DT = 0.005
 Q0 = np.array([0.0, 0.6, 0.0, -1.4, 0.0, 1.14, 0.0])  # flange pointing down: the ball hangs below the TCP
+THESIS = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # flange along base +x
 
 
 def _min_jerk(n: int) -> np.ndarray:
@@ -22,9 +23,9 @@ def _min_jerk(n: int) -> np.ndarray:
 
 
 def _write_moves(path, moves=((np.array([0.3, 0, 0, 0, 0, 0, 0]), 1.0), (np.array([0, 0.12, 0, 0.15, 0, 0, 0]), 0.9)),
-                 hold: float = 0.4) -> float:  # fmt: skip
+                 hold: float = 0.4, q0: np.ndarray = Q0) -> float:  # fmt: skip
     """Unshaped joint moves (Δq [rad], duration [s]) with holds; returns the time the last move ends [s]."""
-    q = Q0.copy()
+    q = np.array(q0, dtype=float)
     rows = [np.repeat(q[None], int(hold / DT), axis=0)]
     for dq, dur in moves:
         seg = q + _min_jerk(int(round(dur / DT)))[:, None] * dq
@@ -61,9 +62,10 @@ def test_damping_removes_the_sway_a_wrong_string_length_leaves(tmp_path, sensor,
     traj = tmp_path / "moves.csv"
     if sensor == "io":
         move_end = _write_moves(traj)
-    else:  # a one-axis module: a move in its plane (A1 turns the TCP along base y), there and back
-        a1 = np.array([0.25, 0, 0, 0, 0, 0, 0])
-        move_end = _write_moves(traj, ((a1, 0.8), (-a1, 0.7)))
+    else:  # a one-axis module, its bearing (the flange's axis) along base x — the thesis start pose — and a move
+        # across it (A1 turns the TCP along base y), there and back
+        a1 = np.array([0.12, 0, 0, 0, 0, 0, 0])
+        move_end = _write_moves(traj, ((a1, 0.8), (-a1, 0.7)), q0=THESIS)
     logs = {}
     for mode in ("closed", "open"):
         log = tmp_path / f"{mode}.csv"
@@ -168,3 +170,12 @@ def test_damping_rides_through_lost_and_malformed_messages(tmp_path):
     assert result.missed > 10 and client.skipped_rows > 10  # the faults happened and were bridged
     assert _sway_after(_log(log), move_end, 2, 0.30) <= 0.5
     assert 0.0 < client.max_offset < plan.travel
+
+
+def test_a_module_that_cannot_swing_with_the_sway_is_refused(tmp_path):
+    """The flange pointing down keeps the module's bearing vertical: its rod cannot swing — refused, nothing sent."""
+    traj = tmp_path / "down.csv"
+    _write_moves(traj, ((np.array([0.25, 0, 0, 0, 0, 0, 0]), 0.8),))
+    p = run_lbr("control", "damp", traj, "--length", "0.25", "--sensor", "module", "--port", "0", timeout=120)
+    assert p.returncode == 1 and "bearing axis" in p.stderr and "off base x" in p.stderr and "Traceback" not in p.stderr
+    assert "simulator on" not in p.stderr  # refused before a session started

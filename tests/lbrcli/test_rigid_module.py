@@ -82,17 +82,21 @@ def _log(path):
 def test_lbr_control_upright_swings_up_balances_and_survives_a_push(tmp_path):
     log = tmp_path / "up.csv"
     plot = tmp_path / "up.png"
-    p = run_lbr("control", "upright", "--rod-length", "0.4", "--hold", "6", "--push", "-10deg@6.5",
-                "--sim-delay", "8", "--log", log, "--plot", plot, "--json", "--sim-lenient", timeout=120)
+    # a rod 15 % shorter than the model says, some dry friction, encoder noise: the identification finds it
+    p = run_lbr("control", "upright", "--rod-length", "0.4", "--sim-rod-length", "0.34", "--sim-friction", "0.02",
+                "--sim-noise", "1", "--hold", "8", "--push", "-10deg@13.5", "--sim-delay", "8", "--log", log,
+                "--plot", plot, "--json", timeout=180)  # fmt: skip
     assert p.returncode == 0, p.stderr
     fig = json.loads(p.stdout)
-    assert fig["outcome"] == "completed" and fig["falls"] == 0
-    assert 0 < fig["swing_up_s"] < 8 and fig["balanced_s"] >= 6
+    assert fig["outcome"] == "completed" and fig["succeeded"] and fig["falls"] == 0
+    assert abs(fig["identified_length_m"] - 2 / 3 * 0.34) < 0.005  # the simulated rod's, not the model's
+    assert 0 < fig["swing_up_s"] < 8 and fig["longest_balance_s"] >= 8
     d = _log(log)
     up = np.degrees(np.abs(np.angle(np.exp(1j * (d["pendulum_phi"] - np.pi)))))
     t, mode = d["t"], d["mode"]
     bal = np.flatnonzero(mode == 1)
-    push_t = t[0] + 6.5
+    push_t = t[0] + 13.5
+    assert t[bal[0]] < push_t - 2.0  # caught well before the push
     assert up[(t > t[bal[0]] + 1.5) & (t < push_t - 0.05)].max() < 3.0  # balanced (simulated truth)
     assert up[(t > push_t - 0.05) & (t < push_t + 0.5)].max() > 8.0  # the push …
     assert up[(t > push_t + 2.0) & (t <= t[bal[-1]])].max() < 3.0  # … was caught
@@ -103,12 +107,17 @@ def test_lbr_control_upright_swings_up_balances_and_survives_a_push(tmp_path):
     q = np.column_stack([d[f"cmd_q{j}"] for j in range(1, 8)])[d["state"] == 4]
     assert np.all(np.abs(np.diff(q, axis=0)) / 1e-3 <= lim.velocity)
     assert np.all(np.abs(np.diff(q, 2, axis=0)) / 1e-6 <= lim.acceleration)
+    # lowered, not dropped: after the hold the rod comes down in swings that shrink, and ends near hanging
+    low = np.flatnonzero(mode == 3)
+    assert len(low) and abs(np.degrees(np.angle(np.exp(1j * d["pendulum_phi"][-1])))) < 20.0
     assert plot.stat().st_size > 10_000
 
 
 def test_lbr_control_upright_fails_when_it_cannot_catch_and_refuses_bad_input(tmp_path):
-    p = run_lbr("control", "upright", "--swing-timeout", "1", "--hold", "5", "--sim-lenient", timeout=120)
+    p = run_lbr("control", "upright", "--swing-timeout", "1", "--hold", "5", timeout=120)
     assert p.returncode == 1 and "no catch upright within 1 s" in p.stderr
+    p = run_lbr("control", "upright", "--sim-encoder-sign", "-1", "--hold", "5", timeout=120)
+    assert p.returncode == 1 and "--encoder-sign -1" in p.stderr  # detected from the push, not guessed
     for args, text in ((("--rod-length", "0"), "--rod-length"), (("--push", "10deg"), "--push"),
                        (("--robot", "192.0.2.1"), "--pendulum PORT"), (("--push", "10deg@3", "--robot", "192.0.2.1",
                         "--pendulum", "/dev/null"), "--push")):  # fmt: skip
@@ -131,15 +140,20 @@ def test_upright_rides_through_lost_and_malformed_messages(robot):
     lim = default_limits()
     model = RigidPendulum(rod_length=0.5)
     rail = build_rail(robot, Q_START, lim, 0.3)
-    client = UprightClient(rail, model.equivalent_length, lim, hold_s=3.0, sensor_delay_s=0.0055)
+    from lbrcli.control.fitter import ProcessFitter
+    from planners.feedback.session import SessionOptions
+
+    fitter = ProcessFitter()
+    client = UprightClient(rail, model.equivalent_length, lim, session=SessionOptions(hold_s=3.0), fitter=fitter)
     kw = simulator_kwargs(length=0.0, default_length=0.0, period_ms=1, sim_start=None, default_start=tuple(Q_START),
-                          flange="touch-electric", tool=None, max_runtime_s=60)  # fmt: skip
+                          flange="touch-electric", tool=None, max_runtime_s=90)  # fmt: skip
     kw.update(loss=0.02, malformed=0.01, seed=3)
     result, _, lab = run_client(Reporter(True), client, robot=None, port=0, bind=None, version=None, limits=lim,
                                 log_path=None, wait=None, sim_kwargs=kw, lab=LabOptions("sim"),
                                 plants=(RigidModuleSpec(model),), extra_names=LOG_COLUMNS, extra=client.log_values,
                                 sim_lenient=True)  # fmt: skip
+    fitter.close()
     assert result.outcome.value == "completed", result.detail
     assert result.missed > 50  # the faults happened
     f = client.figures()
-    assert f["swing_up_s"] is not None and f["falls"] == 0 and f["balanced_s"] >= 0.9 * 3.0, f
+    assert f["succeeded"] and f["swing_up_s"] is not None and f["falls"] == 0 and f["longest_balance_s"] >= 3.0, f

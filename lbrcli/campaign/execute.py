@@ -1,34 +1,24 @@
-"""The FRI fault campaign: the client application against the scripted (independent) controller under loss,
-bursts, duplicates, reordering, delay, lost replies, malformed and wrong-but-decodable messages, foreign senders,
-robot-side stops, state and period changes, a lying clock, a pushed robot, signals, a full disk and bad files.
-
-For every case: how the session ended, the largest commanded step / (velocity limit × period) and second difference
-/ (acceleration limit × period²) measured against what the robot executed (the controller's extrapolation included),
-whether a traceback escaped, and whether the log reads back with the project's own reader. Used by
-``test_fault_campaign.py`` (every case) and ``benchmarks/bench_faults.py`` (the table)."""
+"""The CSV player (``lbr execute``) against the scripted controller: loss, bursts, duplicates, reordering, delay,
+lost replies, malformed and wrong-but-decodable messages, foreign senders, robot-side stops, state and period changes,
+lying clocks, a pushed robot, signals, a full disk and bad files."""
 
 from __future__ import annotations
 
-import contextlib
 import math
-import resource
-import signal
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
-from fri_scripted_controller import CA, CW, IDLE, MR, MW, Cycle, ScriptedController
 
-from lbrcli.fri import ClientApplication, EndReason, ExecutionLog, LogObserver, TrajectoryPlayer
-from lbrcli.fri.log import LOG_COLUMNS
-from trajectories.csvio import read_table
+from lbrcli.fri import ClientApplication, EndReason, TrajectoryPlayer
+from lbrcli.fri.testing import CA, CW, IDLE, MR, MW, Cycle, active, preamble
+from lbrcli.fri.testing.campaign import Case
 from trajectories.limits import default_limits
+
+from .faults import PREAMBLE, _flip, _mutate
 
 LIM = default_limits()
 Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])
 DIRECTION = np.array([1, 0.5, -0.5, 1, 0.3, -1, 1])
-PREAMBLE = 11  # script cycles before COMMANDING_ACTIVE
 
 
 def ramp(n: int = 700, speed: float = 0.73, ramp_s: float = 0.4, dt: float = 1e-3) -> np.ndarray:
@@ -46,71 +36,6 @@ def swing(n: int = 800, amp: float = 0.3, dt: float = 1e-3) -> np.ndarray:
     return Q0 + amp * p[:, None] * DIRECTION
 
 
-def preamble(**kw: Any) -> list[Cycle]:
-    return ([Cycle(state=IDLE, **kw)] + [Cycle(state=MW, quality=1, **kw)] * 3 + [Cycle(state=MR, **kw)] * 3
-            + [Cycle(state=CW, **kw)] * 4)  # fmt: skip
-
-
-def active(n: int, at: dict[int, Cycle] | None = None, **kw: Any) -> list[Cycle]:
-    """n COMMANDING_ACTIVE cycles; ``at`` replaces (or, for lists, inserts) cycles at those indices."""
-    out: list[Cycle] = [Cycle(state=CA, **kw)] * n
-    for i in sorted(at or {}, reverse=True):
-        c = at[i]
-        out[i : i + 1] = c if isinstance(c, list) else [c]
-    return out
-
-
-@dataclass
-class Case:
-    name: str
-    category: str
-    script: list[Cycle]
-    rows: np.ndarray
-    expect: tuple[EndReason, ...]  # acceptable ends
-    period_s: float = 1e-3
-    on_cycle: Callable[[int, ClientApplication], None] | None = None
-    full_disk_at: int | None = None  # the file system fills at this script cycle (the next log row is cut)
-    move_to_start: bool = False
-    controller: dict[str, Any] = field(default_factory=lambda: dict(tolerate_unanswered=1000, reply_timeout=0.3))
-    q_start: np.ndarray = field(default_factory=lambda: Q0.copy())
-    log: bool = True
-
-
-@dataclass
-class CaseResult:
-    name: str
-    category: str
-    outcome: str
-    reason: str
-    detail: str
-    step_ratio: float  # largest |step| / (velocity limit × period) against the executed positions
-    second_ratio: float  # largest |second difference| / (acceleration limit × period²)
-    traceback: str | None
-    log_readable: bool
-    log_rows: int
-    expected: bool
-
-    @property
-    def ok(self) -> bool:
-        return (self.traceback is None and self.step_ratio <= 1.0 + 1e-9 and self.second_ratio <= 1.0 + 1e-9
-                and self.log_readable and self.expected)  # fmt: skip
-
-
-def _mutate(fn: Callable[[Any], None]) -> Cycle:
-    return Cycle(state=CA, mutate=fn)
-
-
-def _flip(bit: int) -> Callable[[Any], None]:
-    """Flip one bit of the measured position of A1 (a wrong value that still decodes)."""
-
-    def f(m: Any) -> None:
-        v = np.array([m.monitorData.measuredJointPosition.value[0]], dtype=np.float64)
-        v.view(np.uint64)[0] ^= np.uint64(1) << np.uint64(bit)
-        m.monitorData.measuredJointPosition.value[0] = float(v[0])
-
-    return f
-
-
 def _interrupt(at: int, reason: EndReason) -> Callable[[int, ClientApplication], None]:
     def f(i: int, app: ClientApplication) -> None:
         if i == at:
@@ -119,15 +44,24 @@ def _interrupt(at: int, reason: EndReason) -> Callable[[int, ClientApplication],
     return f
 
 
-def cases() -> list[Case]:
-    """The campaign (≥ 60 cases)."""
+def execute_cases() -> list[Case]:
+    """The CSV player (``lbr execute``) under every fault (≥ 70 cases)."""
     R = ramp()  # fast, never at rest at its end
     S = swing()  # rest to rest
     fin, stop = (EndReason.FINISHED,), (EndReason.FINISHED, EndReason.SUPERVISION, EndReason.GUARD)
     out: list[Case] = []
 
-    def add(name, category, script, rows=R, expect=fin, **kw):
-        out.append(Case(name, category, script, rows, expect, **kw))
+    def add(name, category, script, rows=R, expect=fin, period_s=1e-3, move_to_start=False, on_cycle=None,
+            q_start=None, **kw):
+        rows = np.asarray(rows, dtype=float)
+
+        def client(rows=rows, period_s=period_s, move_to_start=move_to_start):
+            return TrajectoryPlayer(rows, LIM, period_s=period_s, move_to_start=move_to_start)
+
+        hook = (lambda i, run, f=on_cycle: f(i, run.app)) if on_cycle is not None else None
+        start = tuple(float(x) for x in (q_start if q_start is not None else Q0))
+        out.append(Case(name, category, script, client, expect, surface="execute", period_s=period_s,
+                        on_cycle=hook, q_start=start, **kw))
 
     full = lambda rows, at=None, **kw: preamble() + active(len(rows) + 300, at, **kw)  # noqa: E731
     # loss of monitoring messages (the controller bridges by extrapolation; the client rejoins in step)
@@ -242,67 +176,3 @@ def cases() -> list[Case]:
     add("file ends moving", "bad files", full(ends_moving), ends_moving, fin)
     add("file starts far away", "bad files", full(far), far, (EndReason.CLIENT_REFUSED,))
     return out
-
-
-@contextlib.contextmanager
-def _disk_full(path: Path, at: int | None, ctl: ScriptedController, app: ClientApplication):
-    """From script cycle ``at`` on, writes beyond the log's size + 50 bytes fail (EFBIG through RLIMIT_FSIZE, with
-    SIGXFSZ ignored): a file system that fills in the middle of a row."""
-    if at is None:
-        yield
-        return
-    old_sig = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
-    before = ctl.on_cycle
-
-    def fill(i: int) -> None:
-        if before is not None:
-            before(i)
-        if i == at:
-            resource.setrlimit(resource.RLIMIT_FSIZE, (path.stat().st_size + 50, hard))
-
-    ctl.on_cycle = fill
-    try:
-        yield
-    finally:
-        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
-        signal.signal(signal.SIGXFSZ, old_sig)
-
-
-def run_case(case: Case, folder: Path) -> CaseResult:
-    """Run one case; its log goes to ``folder``."""
-    period = case.period_s
-    player = TrajectoryPlayer(case.rows, LIM, period_s=period, move_to_start=case.move_to_start)
-    app = ClientApplication(player, "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=LIM,
-                            first_message_timeout_s=10, silence_timeout_s=3)  # fmt: skip
-    app.connect()
-    ctl = ScriptedController(app.port, case.script, tuple(case.q_start), **case.controller)
-    if case.on_cycle is not None:
-        ctl.on_cycle = lambda i: case.on_cycle(i, app)  # type: ignore[misc]
-    path = folder / f"{abs(hash(case.name))}.csv"
-    log = ExecutionLog(path)
-    app.observers.append(LogObserver(log))
-    traceback = None
-    res = None
-    try:
-        with _disk_full(path, case.full_disk_at, ctl, app):
-            ctl.start()
-            res = app.run()
-    except Exception as exc:  # noqa: BLE001 - a traceback is a finding
-        traceback = f"{type(exc).__name__}: {exc}"
-    finally:
-        ctl.client_done.set()
-        ctl.join()
-        app.close()
-        log.close()
-    readable, rows = True, 0
-    if path.exists():
-        try:
-            rows = len(read_table(path, LOG_COLUMNS, time="increasing").column("t"))
-        except Exception:  # noqa: BLE001
-            readable = False
-        path.unlink()
-    step_r, second_r = ctl.command_ratios(LIM.velocity, LIM.acceleration)
-    return CaseResult(case.name, case.category, res.outcome.value if res else "traceback",
-                      res.reason.value if res else "-", res.detail if res else "", step_r, second_r, traceback,
-                      readable, rows, res is not None and res.reason in case.expect)  # fmt: skip

@@ -47,6 +47,9 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
                 p.kill()
                 p.wait()
         out = _outcome(res.stdout)
+        for line in res.stdout.splitlines():
+            if line.startswith(("FAILED", "ERROR")):
+                print(f"{label}: {line}", file=sys.stderr)
         rows += [
             (f"pytest -n 2, {label}: wall time", seconds, "s"),
             (f"pytest -n 2, {label}: passed", out.get("passed", 0), ""),

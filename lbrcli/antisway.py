@@ -35,6 +35,7 @@ FALLBACK_DESIGNS = ("robust-slow", "robust-gentle", "box-zvd", "zvd", "ei", "acc
 GENTLE_STEP, GENTLE_TRIES = 0.85, 6  # robust-gentle: a_max × 0.85 on the failing segments only, up to 6 times
 FALLBACK_RESIDUAL = math.radians(0.5)  # a fallback must leave at most this swing across the length band [rad]
 DEFAULT_BALL_RADIUS = 0.02  # [m]
+Z_RANGE = (-0.5, 1.5)  # [m] flange heights worth planning at (the arm reaches about −0.4..1.3 m)
 
 
 @dataclass(frozen=True)
@@ -374,6 +375,8 @@ def plan_anti_sway(
 
     pts = np.asarray(points, dtype=float)
     z = DEFAULT_Z if z is None else float(z)
+    if not (math.isfinite(z) and Z_RANGE[0] <= z <= Z_RANGE[1]):
+        raise OptionError(f"--z must be a flange height in [{Z_RANGE[0]:g}, {Z_RANGE[1]:g}] m, got {z:g}")
     tol = DEFAULT_LENGTH_TOLERANCE if length_tolerance is None else float(length_tolerance)
     _validate(pts, length, a_max, dt, shaper, tol, margin)
     if max_sway is not None and not (0 < max_sway < math.pi / 2):
@@ -439,7 +442,7 @@ def _validate(pts, length, a_max, dt, shaper, tol, margin) -> None:
     from planners.antisway import SHAPERS
     from trajectories.errors import OptionError
 
-    from .options import check_margin
+    from .options import check_number
 
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2:
         raise OptionError("--points: need a start and at least one turning point 'x0,y0;x1,y1;...'")
@@ -457,7 +460,7 @@ def _validate(pts, length, a_max, dt, shaper, tol, margin) -> None:
         raise OptionError(f"--shaper: unknown {shaper!r}; choose one of {', '.join(SHAPERS)}")
     if not (0.0 <= tol < 0.9):
         raise OptionError(f"--length-tolerance must be in [0, 0.9), got {tol:g}")
-    check_margin(margin)
+    check_number("--margin", margin, 0, 1, high_open=True)
 
 
 def write_outputs(result: AntiSwayResult, out: Path, task_out: Path | None = None, prediction: Path | None = None,

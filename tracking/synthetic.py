@@ -22,7 +22,7 @@ from typing import Callable, Literal, Sequence
 
 import numpy as np
 
-from trajectories.errors import InputError
+from trajectories.errors import OutputError
 
 from .calibration import apply_homography
 
@@ -243,6 +243,7 @@ def render_pendulum_video(
     jpeg_quality: int | None = None,
     seed: int = 0,
     progress: Callable[[int], None] | None = None,
+    target: str | Path | None = None,
 ) -> GroundTruth:
     """Render a pendulum video from θ(t) and return what was drawn.
 
@@ -257,7 +258,8 @@ def render_pendulum_video(
     on every frame after the ball (occluders, a hand); plane_to_image: homography from the plane of motion
     (pivot_uv, string_px and ball_radius_px are then in plane px) to the image (ball radius scaled by the
     local scale); the returned ball and pivot positions are in the image, θ in the plane; jpeg_quality:
-    each frame JPEG-compressed at this quality (1–100) before encoding (heavy compression artifacts).
+    each frame JPEG-compressed at this quality (1–100) before encoding (heavy compression artifacts); target: the
+    name an OutputError reports (the final name when ``path`` is a temporary one).
     """
     import cv2
 
@@ -311,7 +313,9 @@ def render_pendulum_video(
 
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*codec), float(fps), (w, h))
     if not writer.isOpened():
-        raise InputError(f"cannot write a {codec!r} video here", file=str(path))
+        writer.release()
+        raise OutputError(f"cannot start writing a {codec!r} video (a full disk, a quota or no encoder)",
+                          file=str(path) if target is None else target)  # fmt: skip
     noise = np.empty((h, w, 3), np.int16)
     frame16 = np.empty((h, w, 3), np.int16)
     try:

@@ -39,11 +39,10 @@ class VideoInfo:
 def _open(path: str | Path):
     import cv2
 
+    from trajectories.inputs import require_regular
+
     spath = str(path)
-    if not os.path.exists(spath):
-        raise InputError("file not found", file=spath)
-    if os.path.isdir(spath):
-        raise InputError("is a directory, not a video file", file=spath)
+    require_regular(spath)  # a device or a FIFO would block the decoder or never end
     os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # FFmpeg's own messages (e.g. "moov atom not found") off
     cap = cv2.VideoCapture(spath)
     if not cap.isOpened():
@@ -66,6 +65,50 @@ def _info(cap, spath: str) -> VideoInfo:
         fps=fps,
         frame_count=max(count, 0),
     )
+
+
+VIDEO_SUFFIXES = (".mp4", ".m4v", ".mov", ".avi", ".mkv")  # containers the mp4v writer of OpenCV fills
+
+
+def check_video_name(path: str | Path, option: str) -> None:
+    """OptionError (exit 2) unless ``path`` names a video container lbr writes (by its suffix)."""
+    from trajectories.errors import OptionError
+
+    if Path(path).suffix.lower() not in VIDEO_SUFFIXES:
+        raise OptionError(f"{option} {path}: a video name must end in {', '.join(VIDEO_SUFFIXES)}")
+
+
+def open_writer(path: str | Path, fps: float, size: tuple[int, int], target: str | Path | None = None):
+    """An mp4v ``cv2.VideoWriter`` on ``path``; OutputError (exit 1) naming ``target`` when it cannot be opened
+    (a full disk, a quota, no encoder)."""
+    import cv2
+
+    from trajectories.errors import OutputError
+
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), float(fps), tuple(size))
+    if not writer.isOpened():
+        writer.release()
+        raise OutputError("cannot start writing the video (a full disk, a quota or no encoder); nothing was written "
+                          "under this name", file=target if target is not None else path)  # fmt: skip
+    return writer
+
+
+def check_written(path: str | Path, frames: int, target: str | Path | None = None) -> None:
+    """OutputError (exit 1, naming ``target``) unless the video just written at ``path`` opens and holds ``frames``
+    frames: OpenCV's writer does not report a full disk or a failed encoder, it leaves a short or unreadable file."""
+    import cv2
+
+    from trajectories.errors import OutputError
+
+    cap = cv2.VideoCapture(str(path))
+    try:
+        got = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0) if cap.isOpened() else 0
+    finally:
+        cap.release()
+    if got < frames:
+        raise OutputError(f"the video could not be written ({got} of {frames} frames readable: a full disk, a quota "
+                          "or a codec missing?); nothing was written under this name",
+                          file=target if target is not None else path)  # fmt: skip
 
 
 def probe_video(path: str | Path) -> VideoInfo:

@@ -56,6 +56,18 @@ class OptionError(InputError):
     """A command-line option value is malformed or out of range."""
 
 
+class OutputRefused(InputError):
+    """An output path the commands do not replace: a symbolic link, a device, a FIFO or a socket. Exit code 2."""
+
+
+class OutputError(LbrError):
+    """An output could not be written (disk full, quota, I/O error); nothing is left under its name. Exit code 1."""
+
+    def __init__(self, message: str, *, file: str | Path) -> None:
+        self.file = str(file)
+        super().__init__(f"{self.file}: {message}")
+
+
 class CheckFailed(LbrError):
     """A check found violations (limits, start distance, ...). Exit code 1."""
 

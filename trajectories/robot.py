@@ -159,21 +159,24 @@ class Robot:
         return pin.rnea(self.model, self.data, q, v, a).copy()
 
 
-def parse_tool(text: str | None) -> tuple[float, float, float]:
-    """Parse ``--tool x,y,z`` [m]."""
-    if text is None or text.strip() == "":
+MAX_TOOL_OFFSET = 2.0  # [m] a tool (string attachment) this far from the flange is a typo
+
+
+def parse_tool(text: str | tuple | None) -> tuple[float, float, float]:
+    """Parse ``--tool x,y,z`` [m] (a tuple of three numbers is taken as it is); each within ±2 m."""
+    if text is None or (isinstance(text, str) and text.strip() == ""):
         return (0.0, 0.0, 0.0)
-    parts = text.split(",")
+    parts = text.split(",") if isinstance(text, str) else list(text)
     try:
         vals = tuple(float(p) for p in parts)
-    except ValueError:
+    except (TypeError, ValueError):
         raise OptionError(f"--tool: expected x,y,z in metres, got {text!r}") from None
-    if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
-        raise OptionError(f"--tool: expected three finite numbers x,y,z [m], got {text!r}")
+    if len(vals) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_TOOL_OFFSET for v in vals):
+        raise OptionError(f"--tool: expected three numbers x,y,z within ±{MAX_TOOL_OFFSET:g} m, got {text!r}")
     return vals  # type: ignore[return-value]
 
 
-def parse_flange(text: str) -> Flange:
+def parse_flange(text: str | Flange) -> Flange:
     try:
         return Flange(text)
     except ValueError:

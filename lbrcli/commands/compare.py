@@ -7,17 +7,20 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..options import JsonOpt
+from ..options import JsonOpt, number
+
+MIN_COVERAGE = 0.5  # share of the prediction's time span the track must overlap (without --partial)
 
 
 def compare(
     prediction: Annotated[Path, typer.Argument(help="Prediction t,theta \\[s, rad] (`lbr plan ... --prediction`), or a simulated execution log with --column.")],
     track: Annotated[Path, typer.Argument(help="Track CSV from `lbr track video` with a theta column.")],
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG overlaying model and experiment θ \\[deg] over time, and their difference.")] = None,
-    lag: Annotated[Optional[float], typer.Option("--lag", help="Track time − prediction time \\[s]; estimated by cross-correlation when omitted.")] = None,
-    max_lag: Annotated[Optional[float], typer.Option("--max-lag", help="Search the lag only within ± this \\[s] (default: half the longer of the two series, at least 2 s).")] = None,
+    lag: Annotated[Optional[float], number("--lag", low=-86400, high=86400, unit="s", help="Track time − prediction time \\[s]; estimated by cross-correlation when omitted.")] = None,
+    max_lag: Annotated[Optional[float], number("--max-lag", low=0, high=86400, low_open=True, unit="s", help="Search the lag only within ± this \\[s] (default: half the longer of the two series, at least 2 s).")] = None,
     flip: Annotated[bool, typer.Option("--flip", help="Negate the track's θ (camera looking at the plane of motion from the other side).")] = False,
     column: Annotated[str, typer.Option("--column", help="Angle column \\[rad] of the prediction file (e.g. ball_theta in an execution log).")] = "theta",
+    partial: Annotated[bool, typer.Option("--partial", help="Compare even when the track covers less than half of the prediction, or the execution log's session stopped early (refused otherwise).")] = False,
     json_out: JsonOpt = False,
 ) -> None:
     """Compare the model's θ with the tracked θ: align in time, report RMS and max error over the overlap.
@@ -25,24 +28,23 @@ def compare(
     Lag convention: track time = prediction time + lag. The lag is searched within a window (reported) and the
     best other peak of the match score is reported too: when it scores nearly as well (a steady swing matches
     itself one period off) a warning says to give --lag or a tighter --max-lag. Frames where the ball (or
-    pivot) was not found are skipped. Exit 1 when prediction and track do not overlap.
+    pivot) was not found are skipped. Exit 1 when prediction and track do not overlap, or (without --partial) the
+    overlap covers less than half of the prediction — the experiment stopped early, or the files do not belong
+    together; exit 2 for an execution log (--column) whose session did not complete, without --partial.
     """
     import math
 
     import numpy as np
 
     from trajectories.csvio import PREDICTION_COLUMNS, read_table
-    from trajectories.errors import CsvFormatError, OptionError
+    from trajectories.errors import CheckFailed, CsvFormatError, OptionError
     from tracking.compare import compare_angles
     from tracking.trackfile import read_track_csv
 
     from ..console import Reporter
+    from ..session_end import require_complete
 
     rep = Reporter(json_out)
-    if max_lag is not None and not (max_lag > 0 and math.isfinite(max_lag)):
-        raise OptionError(f"--max-lag must be a positive number of seconds, got {max_lag:g}")
-    if lag is not None and not math.isfinite(lag):
-        raise OptionError(f"--lag must be a finite number of seconds, got {lag:g}")
     for p, name in ((plot, "--plot"),):
         if p is not None and not p.resolve().parent.is_dir():
             raise OptionError(f"{name}: folder does not exist: {p.parent}")
@@ -54,6 +56,7 @@ def compare(
         pred = read_table(prediction, ("t",), time="increasing", nan_columns=NAN_COLUMNS)
         if not pred.has(column):
             raise CsvFormatError(f"no column '{column}' (columns: {', '.join(pred.names)})", file=pred.path, row=1)
+        require_complete(pred, partial, rep)
     t_model, theta_model = pred.column("t"), pred.column(column)
     known = np.isfinite(theta_model)  # an execution log's pendulum columns are nan before the first reading
     t_model, theta_model = t_model[known], theta_model[known]
@@ -78,6 +81,11 @@ def compare(
     )
     if cmp.mirrored:
         rep.warn("the track's θ matches the prediction much better negated: the camera sees the motion mirrored — try --flip")
+    span = float(t_model[-1] - t_model[0])
+    coverage = cmp.overlap_s / span if span > 0 else 0.0
+    short = coverage < MIN_COVERAGE
+    if short:
+        rep.warn(f"the track covers {cmp.overlap_s:.2f} s of the {span:.2f} s prediction ({coverage * 100:.0f} %)")
     if plot is not None:
         from ..plots.compare import plot_compare
 
@@ -102,8 +110,14 @@ def compare(
             "flipped": flip,
             "track_frames": int(len(tr.t)),
             "track_theta_frames": int(np.isfinite(tr.theta).sum()),
+            "coverage": coverage,
+            "ok": not short or partial,
         }
     )
+    if short and not partial:
+        raise CheckFailed(f"the track covers only {coverage * 100:.0f} % of the prediction ({cmp.overlap_s:.2f} of "
+                          f"{span:.2f} s): the experiment stopped early or the files do not belong together; "
+                          "--partial compares the overlap anyway")  # fmt: skip
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -8,7 +8,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
+from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JointVector, JsonOpt, LimitsOpt, ToolOpt, joints, number
 
 
 def fk(
@@ -25,11 +25,10 @@ def fk(
     from trajectories.trajectory import TaskTrajectory
 
     from ..console import Reporter
-    from ..options import check_number, make_robot
+    from ..options import make_robot
     from ..outputs import guard_outputs
 
     rep = Reporter(json_out)
-    check_number("--dt", dt, 1e-4, 1.0, unit="s")
     guard_outputs({"JOINT_CSV": joint_csv}, {"-o": out})
     robot = make_robot(flange, tool)
     traj = read_joint_csv(joint_csv, dt)
@@ -43,18 +42,20 @@ def ik(
     task_csv: Annotated[Path, typer.Argument(help="Task trajectory t,x,y,z,qw,qx,qy,qz \\[s, m] of the flange (or tool).")],
     out: Annotated[Path, typer.Option("-o", "--out", help="Joint trajectory to write: t,q1..q7 \\[s, rad].")],
     q0: Annotated[
-        Optional[str],
-        typer.Option(
+        Optional[JointVector],
+        joints(
             "--q0",
-            help="Start guess and redundancy target (7 angles, deg/rad suffixes). Default: chosen for the whole "
-            "path among the inverse solutions of the first pose (the one keeping the path furthest from the limits).",
+            help="Start guess and redundancy target (7 angles, deg/rad suffixes; inside the position limits). "
+            "Default: chosen for the whole path among the inverse solutions of the first pose (the one keeping the "
+            "path furthest from the limits).",
         ),
     ] = None,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
     nullspace_rate: Annotated[
-        float, typer.Option("--nullspace-rate", help="Pull toward the start configuration in the null space \\[1/s].")
+        float, number("--nullspace-rate", low=0, high=1e4, unit="1/s",
+                      help="Pull toward the start configuration in the null space \\[1/s].")
     ] = 1.0,
     no_speed_limits: Annotated[
         bool, typer.Option("--no-speed-limits", help="Bound joint positions only, not joint speeds and accelerations.")
@@ -80,21 +81,17 @@ def ik(
 
     from trajectories.check import check_trajectory
     from trajectories.csvio import read_task_csv, write_joint_csv
-    from trajectories.errors import OptionError
     from trajectories.ik import IkOptions, solve_ik_path
     from trajectories.poses import matrices_from_quaternions
     from trajectories.trajectory import JointTrajectory
 
     from ..console import Reporter
-    from ..options import limits_from, make_robot
-    from ..parsing import parse_joint_vector
+    from ..options import limits_from, make_robot, within_limits
 
     rep = Reporter(json_out)
-    q_ref = parse_joint_vector(q0, "--q0") if q0 is not None else None
-    if not (math.isfinite(nullspace_rate) and nullspace_rate >= 0):
-        raise OptionError(f"--nullspace-rate: expected a rate >= 0 [1/s], got {nullspace_rate}")
     robot = make_robot(flange, tool)
     lim = limits_from(limits)
+    q_ref = within_limits(q0, lim, "--q0")
     task = read_task_csv(task_csv)
     rot = matrices_from_quaternions(task.quaternion)
     options = IkOptions(

@@ -7,7 +7,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..options import JsonOpt
+from ..options import JsonOpt, floats, grid, number
 
 
 def _check_out(path: Path | None, option: str) -> None:
@@ -17,34 +17,20 @@ def _check_out(path: Path | None, option: str) -> None:
         raise OptionError(f"{option}: folder does not exist: {path.parent}")
 
 
-def parse_board(text: str) -> tuple[int, int]:
-    """'9x6' → (9, 6) inner corners (columns, rows)."""
-    from trajectories.errors import OptionError
-
-    parts = str(text).lower().replace("×", "x").split("x")
-    try:
-        cols, rows = (int(p) for p in parts)
-    except ValueError:
-        raise OptionError(f"--board: expected inner corners as COLSxROWS (e.g. 9x6), got {text!r}") from None
-    if cols < 2 or rows < 2:
-        raise OptionError(f"--board: need at least 2x2 inner corners, got {text!r}")
-    return cols, rows
-
-
 def video(
     video_path: Annotated[Path, typer.Argument(metavar="VIDEO", help="Experiment video (any format OpenCV/FFmpeg reads).")],
     out: Annotated[Path, typer.Option("-o", "--out", help="Track CSV to write: t,frame,u,v,found\\[,theta,...] \\[s, -, px, px, 0/1, rad].")],
-    pivot: Annotated[Optional[str], typer.Option("--pivot", help="Fixed pivot (string attachment) U,V \\[px] in the video image.")] = None,
+    pivot: Annotated[Optional[tuple], floats("--pivot", count=2, low=0, high=100_000, unit="px", metavar="U,V", help="Fixed pivot (string attachment) U,V \\[px] in the video image.")] = None,
     pivot_color: Annotated[Optional[str], typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame (e.g. green).")] = None,
     color: Annotated[str, typer.Option("--color", help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or an OpenCV hue range H1-H2 (0–179).")] = "red",
-    radius: Annotated[Optional[float], typer.Option("--radius", help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: 2–62 px radius).")] = None,
-    min_circularity: Annotated[float, typer.Option("--min-circularity", help="Minimum 4π·area/perimeter² of the ball blob (disc ≈ 0.9, cable ≈ 0.1).")] = 0.6,
-    min_fit: Annotated[float, typer.Option("--min-fit", help="Minimum overlap (IoU) of the blob with its moment ellipse (disc ≥ 0.9, any box ≈ 0.83).")] = 0.88,
+    radius: Annotated[Optional[float], number("--radius", low=0, high=10_000, low_open=True, unit="px", help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: 2–62 px radius).")] = None,
+    min_circularity: Annotated[float, number("--min-circularity", low=0, high=1, help="Minimum 4π·area/perimeter² of the ball blob (disc ≈ 0.9, cable ≈ 0.1).")] = 0.6,
+    min_fit: Annotated[float, number("--min-fit", low=0, high=1, help="Minimum overlap (IoU) of the blob with its moment ellipse (disc ≥ 0.9, any box ≈ 0.83).")] = 0.88,
     calibration: Annotated[Optional[Path], typer.Option("--calibration", help="Camera JSON from `lbr track calibrate`: undistort points; with a plane, θ in the plane of motion and x_m,y_m \\[m].")] = None,
-    start: Annotated[Optional[str], typer.Option("--start", help="Where the ball is when first seen, U,V \\[px]: the ball is the candidate nearest to it (names it among round objects of its colour).")] = None,
-    fps: Annotated[Optional[float], typer.Option("--fps", help="Capture frame rate \\[1/s] when the container's is wrong (slow-motion videos state their playback rate): times = frame / fps.")] = None,
-    min_saturation: Annotated[Optional[int], typer.Option("--min-saturation", help="Minimum HSV saturation (0–255) of ball pixels (default 100, or 80 for green, cyan, blue); lowered automatically inside the search window for motion-blurred balls.")] = None,
-    min_found: Annotated[float, typer.Option("--min-found", help="Exit 1 with a warning when the ball is found in fewer than this share of frames \\[%].")] = 90.0,
+    start: Annotated[Optional[tuple], floats("--start", count=2, low=0, high=100_000, unit="px", metavar="U,V", help="Where the ball is when first seen, U,V \\[px]: the ball is the candidate nearest to it (names it among round objects of its colour).")] = None,
+    fps: Annotated[Optional[float], number("--fps", low=0, high=100_000, low_open=True, unit="1/s", help="Capture frame rate \\[1/s] when the container's is wrong (slow-motion videos state their playback rate): times = frame / fps.")] = None,
+    min_saturation: Annotated[Optional[int], number("--min-saturation", low=1, high=255, integer=True, help="Minimum HSV saturation of ball pixels (default 100, or 80 for green, cyan, blue); lowered automatically inside the search window for motion-blurred balls.")] = None,
+    min_found: Annotated[float, number("--min-found", low=0, high=100, unit="%", help="Exit 1 with a warning when the ball is found in fewer than this share of frames \\[%].")] = 90.0,
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of θ \\[deg] and u, v \\[px] over time with lost frames marked.")] = None,
     preview: Annotated[Optional[Path], typer.Option("--preview", help="Video (mp4) with the detection drawn over it: ball circle, pivot, string, θ.")] = None,
     candidates: Annotated[Optional[Path], typer.Option("--candidates", help="PNG of the first frame with every ball-like blob circled and labelled U,V \\[px] (pick one for --start).")] = None,
@@ -63,6 +49,7 @@ def video(
     instead. Exit 1 if the ball is found in fewer than --min-found percent of the frames, or the pivot
     marker in none.
     """
+    import contextlib
     import math
     import time
 
@@ -75,10 +62,10 @@ def video(
     from tracking.pipeline import track_video
     from tracking.tracker import TrackerOptions
     from tracking.trackfile import write_track_csv
-    from tracking.video import probe_video
+    from tracking.video import check_video_name, check_written, open_writer, probe_video
 
     from ..console import Reporter
-    from ..parsing import parse_floats
+    from ..outputs import atomic_path
 
     rep = Reporter(json_out)
     if pivot is not None and pivot_color is not None:
@@ -87,23 +74,13 @@ def video(
     piv_spec = color_spec(pivot_color, "--pivot-color") if pivot_color is not None else None
     if piv_spec is not None and piv_spec.bands == ball_spec.bands:
         raise OptionError("--pivot-color must differ from the ball's --color")
-    piv_uv = tuple(parse_floats(pivot, "--pivot", 2)) if pivot is not None else None
-    start_uv = tuple(parse_floats(start, "--start", 2)) if start is not None else None
-    if fps is not None and not (math.isfinite(fps) and fps > 0):
-        raise OptionError(f"--fps must be a positive frame rate [1/s], got {fps:g}")
-    if min_saturation is not None and not 1 <= min_saturation <= 255:
-        raise OptionError(f"--min-saturation must be in 1–255, got {min_saturation}")
-    if not 0.0 <= min_found <= 100.0:
-        raise OptionError(f"--min-found must be a percentage in [0, 100], got {min_found:g}")
+    piv_uv, start_uv = pivot, start
     if min_saturation is not None:
         ball_spec = with_min_saturation(ball_spec, min_saturation)
-    if radius is not None and not radius > 0:
-        raise OptionError(f"--radius must be positive, got {radius:g}")
-    for value, name in ((min_circularity, "--min-circularity"), (min_fit, "--min-fit")):
-        if not 0.0 <= value <= 1.0:
-            raise OptionError(f"{name} must be in [0, 1], got {value:g}")
     for p, name in ((out, "--out"), (plot, "--plot"), (preview, "--preview"), (candidates, "--candidates")):
         _check_out(p, name)
+    if preview is not None:
+        check_video_name(preview, "--preview")
     shape = {"min_circularity": min_circularity, "min_ellipse_fit": min_fit}
     gates = BlobGates.for_radius(radius, **shape) if radius else BlobGates(**shape)
     options = TrackerOptions(gates=gates, start_uv=start_uv)
@@ -116,28 +93,26 @@ def video(
                 f"{name} {point[0]:g},{point[1]:g} is outside the {info.width}x{info.height} px image of {video_path}"
             )
 
-    writer = None
-    on_frame = None
-    if preview is not None:
-        import cv2
-
-        from tracking.overlay import draw_overlay
-
-        writer = cv2.VideoWriter(str(preview), cv2.VideoWriter_fourcc(*"mp4v"), fps or info.fps, info.size)
-        if not writer.isOpened():
-            raise OptionError(f"--preview: cannot write a video to {preview}")
-
-        def on_frame(frame, res):  # noqa: ANN001
-            b = res.ball
-            draw_overlay(frame, res.t, (b.u, b.v) if b else None, b.radius_px if b else None, res.pivot_uv, res.theta)
-            writer.write(frame)
-
     if candidates is not None:
         n_cand = _write_candidates(video_path, ball_spec, gates, candidates)
         rep.print(f"candidates: {n_cand} ball-like blobs in the first frame, drawn in {candidates}")
 
     t0 = time.perf_counter()
-    try:
+    with contextlib.ExitStack() as stack:  # the preview appears under its name only when complete and readable
+        on_frame, writer, written = None, None, [0]
+        if preview is not None:
+            from tracking.overlay import draw_overlay
+
+            preview_tmp = stack.enter_context(atomic_path(preview))
+            writer = open_writer(preview_tmp, fps or info.fps, info.size, target=preview)
+            stack.callback(writer.release)
+
+            def on_frame(frame, res):  # noqa: ANN001
+                b = res.ball
+                draw_overlay(frame, res.t, (b.u, b.v) if b else None, b.radius_px if b else None, res.pivot_uv, res.theta)
+                writer.write(frame)
+                written[0] += 1
+
         with rep.progress(f"tracking {video_path.name}", info.frame_count or None) as update:
             track = track_video(
                 video_path,
@@ -151,9 +126,9 @@ def video(
                 progress=update,
                 on_frame=on_frame,
             )
-    finally:
         if writer is not None:
             writer.release()
+            check_written(preview_tmp, written[0], preview)
     elapsed = time.perf_counter() - t0
     write_track_csv(out, track)
 
@@ -234,14 +209,18 @@ def _write_candidates(video_path: Path, spec, gates, png: Path) -> int:  # noqa:
 
     from trajectories.errors import OptionError
 
+    from ..outputs import atomic_open
+
     for _, _, frame in iter_frames(video_path):
         blobs = find_blobs_coarse(frame, spec, gates, coarse_factor(frame.shape[1]))
-        try:
-            ok = cv2.imwrite(str(png), draw_candidates(frame, blobs))
+        try:  # encoded in memory, written by Python: a full disk is an OSError, not a libpng message
+            ok, data = cv2.imencode(png.suffix or ".png", draw_candidates(frame, blobs))
         except cv2.error:
             ok = False
         if not ok:
-            raise OptionError(f"--candidates {png}: cannot write an image there (use .png or .jpg)")
+            raise OptionError(f"--candidates {png}: not an image format OpenCV writes (use .png or .jpg)")
+        with atomic_open(png, "wb") as fh:
+            fh.write(data.tobytes())
         return len(blobs)
     return 0
 
@@ -249,11 +228,11 @@ def _write_candidates(video_path: Path, spec, gates, png: Path) -> int:  # noqa:
 def calibrate(
     inputs: Annotated[list[Path], typer.Argument(metavar="IMAGES_OR_VIDEO...", help="Checkerboard images, folders of images, or videos.")],
     out: Annotated[Path, typer.Option("-o", "--out", help="Camera calibration JSON to write.")],
-    board: Annotated[str, typer.Option("--board", help="Inner corners COLSxROWS of the checkerboard (a 10x7-square board is 9x6).")] = "9x6",
-    square: Annotated[float, typer.Option("--square", help="Side of one square \\[m].")] = 0.025,
+    board: Annotated[tuple, grid("--board", low=2, high=1000, metavar="COLSxROWS", help="Inner corners COLSxROWS of the checkerboard (a 10x7-square board is 9x6).")] = "9x6",
+    square: Annotated[float, number("--square", low=0, high=10, low_open=True, unit="m", help="Side of one square \\[m].")] = 0.025,
     plane: Annotated[Optional[Path], typer.Option("--plane", help="Image (or video: first frame with the board) of the board lying in the plane of motion: metres per pixel.")] = None,
-    stride: Annotated[int, typer.Option("--stride", help="Use every N-th frame of videos.")] = 15,
-    max_views: Annotated[int, typer.Option("--max-views", help="At most this many views (evenly chosen) go into the calibration.")] = 40,
+    stride: Annotated[int, number("--stride", low=1, high=100_000, integer=True, help="Use every N-th frame of videos.")] = 15,
+    max_views: Annotated[int, number("--max-views", low=3, high=10_000, integer=True, help="At most this many views (evenly chosen) go into the calibration.")] = 40,
     json_out: JsonOpt = False,
 ) -> None:
     """Camera calibration from checkerboard views (OpenCV findChessboardCorners, cornerSubPix, calibrateCamera).
@@ -263,17 +242,14 @@ def calibrate(
     """
     import numpy as np
 
-    from trajectories.errors import InputError, OptionError
+    from trajectories.errors import InputError
     from tracking.calibration import calibrate_camera, find_board, iter_images, plane_from_corners, save_calibration
 
     from ..console import Reporter
 
     rep = Reporter(json_out)
-    cols_rows = parse_board(board)
-    if not square > 0:
-        raise OptionError(f"--square must be positive [m], got {square:g}")
-    if stride < 1 or max_views < 3:
-        raise OptionError("--stride must be ≥ 1 and --max-views ≥ 3")
+    cols_rows = board
+    board = "x".join(map(str, board))
     _check_out(out, "--out")
     views: list[np.ndarray] = []
     names: list[str] = []

@@ -32,20 +32,41 @@ class Footage:
     truth: object  # tracking.synthetic.GroundTruth
 
 
-def film_execution_log(log_csv: str | Path, video: str | Path, length: float, camera: Camera = Camera(),
-                       lead_s: float = 0.3, flange: str = "touch-electric", tool=(0.0, 0.0, 0.0),
-                       progress=None) -> Footage:
-    """Render ``video`` from an execution log with the simulator's ``ball_theta_y`` [rad] and ``msr_q1..7``.
+FILM_COLUMNS = ("ball_theta_y",) + tuple(f"msr_q{i}" for i in range(1, 8))  # what a film needs from a log
 
-    Starts ``lead_s`` before the first commanded trajectory row and ends with the log.
-    """
-    from tracking.synthetic import render_pendulum_video
+
+def read_film_log(log_csv: str | Path):
+    """The execution log as a table; CsvFormatError (exit 2) when it lacks the simulated ball or the joints."""
     from trajectories.csvio import read_table
-    from trajectories.robot import Flange, Robot, RobotConfig
+    from trajectories.errors import CsvFormatError
 
-    from lbrcli.fri.log import LOG_COLUMNS, NAN_COLUMNS, PHASE_TRAJECTORY
+    from lbrcli.fri.log import LOG_COLUMNS, NAN_COLUMNS
 
     table = read_table(log_csv, LOG_COLUMNS, time="increasing", nan_columns=NAN_COLUMNS)
+    missing = [c for c in FILM_COLUMNS if not table.has(c)]
+    if missing:
+        raise CsvFormatError(f"no column '{missing[0]}': not a log of the simulator with its ball (`lbr execute` "
+                             "without --robot, --length > 0)", file=table.path, row=1)  # fmt: skip
+    if len(table.column("t")) < 2:
+        raise CsvFormatError("need at least 2 rows to film", file=table.path)
+    return table
+
+
+def film_execution_log(log_csv, video: str | Path, length: float, camera: Camera = Camera(),
+                       lead_s: float = 0.3, flange: str = "touch-electric", tool=(0.0, 0.0, 0.0),
+                       progress=None, target: str | Path | None = None) -> Footage:
+    """Render ``video`` from an execution log (a path, or the table of :func:`read_film_log`) with the simulator's
+    ``ball_theta_y`` [rad] and ``msr_q1..7``.
+
+    Starts ``lead_s`` before the first commanded trajectory row and ends with the log; ``target``: the name errors
+    report when ``video`` is a temporary one.
+    """
+    from tracking.synthetic import render_pendulum_video
+    from trajectories.robot import Flange, Robot, RobotConfig
+
+    from lbrcli.fri.log import PHASE_TRAJECTORY
+
+    table = read_film_log(log_csv) if isinstance(log_csv, (str, Path)) else log_csv
     t = table.column("t")
     phase = table.column("phase")
     moving = np.flatnonzero(phase == PHASE_TRAJECTORY)
@@ -61,6 +82,6 @@ def film_execution_log(log_csv: str | Path, video: str | Path, length: float, ca
     truth = render_pendulum_video(
         video, t - t[0], theta, np.column_stack([u, v]), string_px=camera.px_per_m * length,
         ball_radius_px=camera.px_per_m * camera.ball_radius_m, size=camera.size, fps=camera.fps,
-        pivot_marker="green", progress=progress,
+        pivot_marker="green", progress=progress, target=target,
     )
     return Footage(path=str(video), t0_log=float(t[0]), truth=truth)

@@ -113,7 +113,7 @@ def test_retime_cli(lbr, tmp_path):
         (["check", "{bad}"], "row 3, column 4 (q3): not a number"),
         (["check", "{slow}", "--margin", "1.5"], "--margin must be in [0, 1)"),
         (["ik", "{slow}", "-o", "{out}"], "expected 'x'"),
-        (["fk", "{slow}", "-o", "{out}", "--flange", "huge"], "unknown flange 'huge'"),
+        (["fk", "{slow}", "-o", "{out}", "--flange", "huge"], "--flange must be one of touch-electric, standard, touch-pneumatic, got 'huge'"),
         (["fk", "{slow}", "-o", "{out}", "--tool", "0,0"], "--tool"),
         (["ik", "{task}", "-o", "{out}", "--q0", "0,0,0,0,0,0,abc"], "--q0: not an angle"),
         (["check", "{slow}", "--limits", "{missing}"], "limits file not found"),

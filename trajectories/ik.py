@@ -33,9 +33,11 @@ import numpy as np
 import pinocchio as pin
 from scipy.interpolate import CubicSpline
 
+from .arm_angle import ArmGeometry
 from .boxqp import solve_box_qp
 from .chain import Chain, pose_errors
 from .errors import IkError
+from .ik_reach import PathFact, closest_configuration, first_unreachable
 from .limits import JointLimits
 from .linsolve import solve_spd
 from .resample import spaced_indices
@@ -74,6 +76,10 @@ class IkOptions:
     # with q0 = None: when the result exceeds the acceleration limit, also plan the arm angle over the whole path
     # (0.5–4 s more) and keep the path with the lower peak acceleration
     smooth: bool = False
+    # where the task path is at rest at an end, bring the self-motion to rest there too (needs times)
+    rest_at_ends: bool = True
+    # a sample whose acceleration bound had to be dropped is repaired like one too fast to reach (go back, steer)
+    strict_acceleration: bool = False
 
 
 @dataclass(frozen=True)
@@ -89,6 +95,8 @@ class IkResult:
     acceleration_ratio: float = 0.0  # peak |q̈| / limit over the path (second differences)
     acceleration_relaxed: int = 0  # samples whose acceleration bound was dropped because the path demands more
     candidates: tuple[str, ...] = field(default=())  # with q0 = None: what each start candidate scored
+    task_at_rest: tuple[bool, bool] = (False, False)  # the task path lets the joints start / end at rest
+    at_rest: tuple[bool, bool] = (False, False)  # the joint path starts / ends at rest (as `lbr check` asks)
 
     @property
     def max_position_error(self) -> float:
@@ -281,19 +289,23 @@ class PathSolver:
                 rate = REPAIR_RATE if i <= goal_end else GUIDE_RATE if guided else None
                 gain = self.null_gain(dt) if rate is None else 1.0 - math.exp(-rate * dt)
             q, ep, er, it = self.track(k, q, lo, hi, ref, gain, budget, first, loose)
+            braking = clash if i >= 1 else False  # the acceleration bound had to be dropped here
             if (ep > tol_p or er > tol_r) and i >= 1 and self.speed:
                 # the acceleration bound may be what stops it: retry with position and speed bounds only
                 lo, hi, _ = self.box(out[i - 1], None, dt, dt_prev, scale)
                 q, ep, er, it2 = self.track(k, q, lo, hi, ref, 0.0, budget, loose=loose)
                 it += it2
                 relaxed += 1
+                braking = True
+            missed = ep > tol_p or er > tol_r
             if (
-                (ep > tol_p or er > tol_r) and i >= 2 and self.speed
+                (missed or (braking and opt.strict_acceleration)) and i >= 2 and self.speed
                 and repairs.get(i, 0) < len(REPAIR_BACK) and sum(repairs.values()) < MAX_REPAIRS
             ):
                 # too fast here from where the redundancy has led: go back and steer the self-motion early
-                # toward the configuration this pose needs (reached from the previous sample, limits ignored)
-                target_q, gp, gr = self.nearest_solution(k, out[i - 1])
+                # toward the configuration this pose needs (reached from the previous sample, limits ignored; or
+                # where the speed bounds alone took it when only the acceleration bound was in the way)
+                target_q, gp, gr = (q, ep, er) if not missed else self.nearest_solution(k, out[i - 1])
                 if gp <= tol_p and gr <= tol_r and (np.abs(target_q) <= self.upper).all():
                     tries = repairs.get(i, 0)
                     repairs[i] = tries + 1
@@ -313,17 +325,22 @@ class PathSolver:
             i += 1
         return out, ep_all, er_all, steps, relaxed
 
-    def refine(self, q: np.ndarray, iterations: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Vectorised Newton iterations on the samples still missing the tolerance (q clipped into the limits
-        first) → (q, position errors [m], rotation errors [rad])."""
+    def refine(
+        self, q: np.ndarray, iterations: int, idx: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Vectorised Newton iterations on the samples (all, or ``idx``) still missing the tolerance (q clipped into
+        the limits first) → (q, position errors [m], rotation errors [rad] of those samples)."""
         opt = self.options
-        q = np.clip(q, self.lower, self.upper)
+        samples = np.arange(self.n) if idx is None else np.asarray(idx)
+        q = np.array(q, dtype=float)
+        q[samples] = np.clip(q[samples], self.lower, self.upper)
         damp = opt.damping * np.eye(6)
-        ep, er = np.empty(self.n), np.empty(self.n)
-        todo = np.arange(self.n)
+        ep, er = np.empty(len(samples)), np.empty(len(samples))
+        todo = np.arange(len(samples))  # positions in ``samples``
         for it in range(iterations + 1):
-            pos, rot, jac = self.chain.kinematics(q[todo])
-            err = pose_errors(pos, rot, self.positions[todo], self.rotations[todo])
+            rows = samples[todo]
+            pos, rot, jac = self.chain.kinematics(q[rows])
+            err = pose_errors(pos, rot, self.positions[rows], self.rotations[rows])
             ep[todo] = e_p = np.linalg.norm(err[:, :3], axis=1)
             er[todo] = e_r = np.linalg.norm(err[:, 3:], axis=1)
             miss = (e_p > opt.position_tolerance) | (e_r > opt.rotation_tolerance)
@@ -332,7 +349,8 @@ class PathSolver:
                 break
             J = jac[miss]
             x = np.linalg.solve(J @ J.transpose(0, 2, 1) + damp, err[miss, :, None])
-            q[todo] = np.clip(q[todo] + (J.transpose(0, 2, 1) @ x)[:, :, 0], self.lower, self.upper)
+            rows = samples[todo]
+            q[rows] = np.clip(q[rows] + (J.transpose(0, 2, 1) @ x)[:, :, 0], self.lower, self.upper)
         return q, ep, er
 
     def rates(self, q: np.ndarray, idx: np.ndarray | None = None) -> tuple[float, float]:
@@ -367,45 +385,113 @@ class PathSolver:
         dM = target.actInv(data.oMf[fid])
         return q, float(np.linalg.norm(dM.translation)), float(np.linalg.norm(pin.log3(dM.rotation)))
 
-    def diagnose(self, stall: _Stall) -> IkError:
-        """Why sample ``stall.k`` was not reached: out of reach, a position limit or a speed limit."""
+    def diagnose(self, stall: _Stall, origin: str = "from the start given (--q0)") -> IkError:
+        """Why the path followed ``origin`` stalled at sample ``stall.k`` whose pose is reachable inside the limits
+        (:meth:`fact` found nothing there): a joint's position limit or speed limit on the way lbr's redundancy
+        went — a fact of that path, not of the pose."""
         k, t = stall.k, self.time(stall.k)
         # the configuration reaching the pose closest to the previous sample's (or to where it stalled)
         q, ep, er = self.nearest_solution(k, stall.q_prev if stall.q_prev is not None else stall.q)
         where = f"pose {k} (t = {t:.4f} s)"
-        kw = dict(index=k, t=t, position_error=stall.ep, rotation_error=stall.er)
-        if ep > 1e-6 or er > 1e-5:
-            return IkError(
-                f"{where} out of reach by {format_length(ep)}, {format_angle(er)} (remaining error of the "
-                f"closest configuration found, joint limits ignored)",
-                reason="out of reach",
-                **kw,
-            )
+        kw = dict(index=k, t=t, position_error=stall.ep, rotation_error=stall.er, kind="start")
         remaining = f"remaining error {format_length(stall.ep)}, {format_angle(stall.er)}"
+        j_ok, _, psi, branch = closest_configuration(
+            ArmGeometry.of(self.robot), self.positions[k], self.rotations[k], self.upper
+        )
+        signs = "".join("+" if b > 0 else "−" for b in branch)
+        reachable = (
+            f"the pose itself is reachable inside the limits (e.g. at arm angle {math.degrees(psi):.1f}° in branch "
+            f"{signs} of A2/A4/A6)"
+        )
+        hint = "; without --q0 lbr chooses the start for the whole path" if "--q0" in origin else ""
 
         def held(text: str, reason: str, j: int, needed: float) -> IkError:
-            return IkError(f"{where}{text}; {remaining}", reason=reason, joint=j, needed=needed, **kw)
+            return IkError(f"{where}: {text}; {reachable}; {remaining}{hint}", reason=reason, joint=j, needed=needed,
+                           **kw)  # fmt: skip
 
         wrapped = np.where(np.abs(q) > self.limits.position, (q + np.pi) % (2 * np.pi) - np.pi, q)
         over = np.abs(wrapped) - self.limits.position
-        if (over > 0).any():
+        if (ep <= 1e-6 and er <= 1e-5) and (over > 0).any():
             j = int(np.argmax(over))
             return held(
-                f" did not converge: A{j + 1} held at its position limit (the pose needs "
-                f"{math.degrees(wrapped[j]):.2f}°, limit ±{math.degrees(self.limits.position[j]):.2f}°)",
+                f"the path {origin} ran into A{j + 1}'s position limit here (the arm angle it followed would need "
+                f"A{j + 1} at {math.degrees(wrapped[j]):.2f}°, limit ±{math.degrees(self.limits.position[j]):.2f}°)",
                 "position limit", j, float(wrapped[j]),
             )
-        if stall.q_prev is not None and self.speed:
+        if stall.q_prev is not None and self.speed and ep <= 1e-6 and er <= 1e-5:
             speed = np.abs(q - stall.q_prev) / stall.dt
             ratio = speed / self.limits.velocity
             j = int(np.argmax(ratio))
             if ratio[j] > 1.0:
                 return held(
-                    f": the path needs A{j + 1} at {speed[j]:.2f} rad/s, above its limit "
-                    f"{self.limits.velocity[j]:.2f} rad/s (×{ratio[j]:.1f})",
+                    f"the path {origin} needs A{j + 1} at {speed[j]:.2f} rad/s, above its limit "
+                    f"{self.limits.velocity[j]:.2f} rad/s (×{ratio[j]:.1f}) here",
                     "velocity limit", j, float(speed[j]),
                 )
-        return IkError(f"{where} did not converge inside the joint limits: {remaining}", **kw)
+        return IkError(f"{where}: the path {origin} did not converge inside the joint limits here; {reachable}; "
+                       f"{remaining}{hint}", **kw)  # fmt: skip
+
+    def fact(self) -> PathFact | None:
+        """The first sample no joint path reaches inside the position limits (and, with speed bounds, A4's speed
+        limit), exact at every sample (:mod:`.ik_reach`), or None."""
+        return first_unreachable(
+            ArmGeometry.of(self.robot), self.positions, self.rotations, self.times, self.limits,
+            self.options.limit_margin, speed=self.speed,
+        )
+
+    def fact_error(self, fact: PathFact) -> IkError:
+        """The refusal of a path at the sample of ``fact``."""
+        k, t = fact.index, self.time(fact.index)
+        before = (
+            "every pose before it is within reach and has an arm angle inside the position limits"
+            + (", and A4 keeps its speed limit up to it" if self.speed else "")
+            if k else "it is the first pose"
+        )
+        moving = f"from pose {k - 1} it " if fact.reason == "velocity limit" else ""
+        return IkError(
+            f"pose {k} (t = {t:.4f} s) cannot be reached inside the joint limits: {moving}{fact.describe()} "
+            f"({before})",
+            index=k, t=t, position_error=fact.needed if fact.reason == "out of reach" else math.nan,
+            rotation_error=math.nan, reason=fact.reason, joint=fact.joint,
+            needed=fact.needed, kind="pose" if fact.of_pose else "path",
+        )
+
+    def prefix(self, m: int) -> "PathSolver":
+        """The first ``m`` samples of the path."""
+        t = None if self.times is None else self.times[:m]
+        return PathSolver(self.robot, self.positions[:m], self.rotations[:m], self.limits, self.options, t)
+
+    def reversed(self) -> "PathSolver":
+        """The same path backwards in time (times from 0)."""
+        t = None if self.times is None else self.times[-1] - self.times[::-1]
+        return PathSolver(self.robot, self.positions[::-1], self.rotations[::-1], self.limits, self.options, t)
+
+    def finish(self, res: IkResult) -> IkResult:
+        """The result with the self-motion brought to rest where the task path is (``options.rest_at_ends``,
+        :mod:`.ik_rest`), its rates and errors updated, and whether it starts and ends at rest."""
+        from dataclasses import replace
+
+        from .check import rest_violations
+        from .ik_rest import settle_ends, task_at_rest
+        from .trajectory import JointTrajectory
+
+        if self.times is None or self.n < 3:
+            return res
+        task_rest = task_at_rest(self, res.q)
+        q = res.q
+        if self.options.rest_at_ends and any(task_rest):
+            q, _ = settle_ends(self, q, task_rest)
+        ep, er = res.position_error, res.rotation_error
+        changed = np.flatnonzero((q != res.q).any(axis=1))
+        if len(changed):
+            pos, rot, _ = self.chain.kinematics(q[changed])
+            err = pose_errors(pos, rot, self.positions[changed], self.rotations[changed])
+            ep, er = ep.copy(), er.copy()
+            ep[changed], er[changed] = np.linalg.norm(err[:, :3], axis=1), np.linalg.norm(err[:, 3:], axis=1)
+        vel, acc = self.rates(q)
+        moving = {v.note for v in rest_violations(JointTrajectory(t=self.times, q=q), self.limits)}
+        return replace(res, q=q, position_error=ep, rotation_error=er, velocity_ratio=vel, acceleration_ratio=acc,
+                       task_at_rest=task_rest, at_rest=("start" not in moving, "end" not in moving))  # fmt: skip
 
     def coarse_indices(self, spacing: float | None = None) -> np.ndarray:
         """Samples of a sequential pass every ``spacing`` [s] (default ``coarse_dt``), first and last included."""
@@ -503,12 +589,22 @@ def solve_ik_path(
     if solver.n == 0:
         empty = np.empty(0)
         return IkResult(np.empty((0, 7)), empty, empty, np.empty(0, dtype=np.int32))
+    fact = solver.fact()
     if q0 is None:
+        if fact is not None:
+            raise solver.fact_error(fact)
         from .ik_start import solve_with_auto_start
 
-        return solve_with_auto_start(solver, progress)
+        return solver.finish(solve_with_auto_start(solver, progress))
     q_ref = np.clip(np.asarray(q0, dtype=float), solver.lower, solver.upper)
+    # past the first unreachable sample nothing can be solved: the path from q0 up to it tells whether it stops there
+    part = solver if fact is None else solver.prefix(fact.index + 1)
     try:
-        return solver.solve(q_ref, q_ref, progress)
+        res = part.solve(q_ref, q_ref, progress)
     except _Stall as stall:
+        if fact is not None and stall.k >= fact.index:
+            raise solver.fact_error(fact) from None
         raise solver.diagnose(stall) from None
+    if fact is not None:  # reached within the tolerance although a hair beyond the bound: still refused
+        raise solver.fact_error(fact)
+    return solver.finish(res)

@@ -144,6 +144,7 @@ class PathSolver:
         self.upper = limits.position - options.limit_margin
         self.lower = -self.upper
         self.speed = options.speed_limits and self.times is not None and bool((np.diff(self.times) > 0).all())
+        self.acceleration_facts = False  # whether :meth:`fact` looked at A4's acceleration too
         self.chain = Chain.of(robot)
         self.weights = limits.velocity / limits.velocity.max()  # step weights [-]
         self._w_inv2 = np.diag(1.0 / self.weights**2)
@@ -433,24 +434,41 @@ class PathSolver:
 
     def fact(self) -> PathFact | None:
         """The first sample no joint path reaches inside the position limits (and, with speed bounds, A4's speed
-        limit), exact at every sample (:mod:`.ik_reach`), or None."""
+        limit; and its acceleration limit when the task path starts and ends at rest, so the file must pass
+        `lbr check`), exact at every sample (:mod:`.ik_reach`), or None."""
+        self.acceleration_facts = self.speed and all(self.task_rest())
         return first_unreachable(
             ArmGeometry.of(self.robot), self.positions, self.rotations, self.times, self.limits,
-            self.options.limit_margin, speed=self.speed,
+            self.options.limit_margin, speed=self.speed, acceleration=self.acceleration_facts,
         )
+
+    def task_rest(self) -> tuple[bool, bool]:
+        """Whether the task path starts / ends at rest (:func:`.ik_rest.task_at_rest`), judged at configurations
+        of its first and last pose found from the thesis start."""
+        from .ik_rest import task_at_rest
+
+        if self.times is None or self.n < 3 or not self.options.rest_at_ends:
+            return False, False
+        seed = np.array([0.0, 0.6, 0.0, -1.2, 0.0, 0.9, 0.0])
+        return task_at_rest(self, self.nearest_solution(0, seed)[0], self.nearest_solution(self.n - 1, seed)[0])
 
     def fact_error(self, fact: PathFact) -> IkError:
         """The refusal of a path at the sample of ``fact``."""
         k, t = fact.index, self.time(fact.index)
         before = (
             "every pose before it is within reach and has an arm angle inside the position limits"
-            + (", and A4 keeps its speed limit up to it" if self.speed else "")
+            + (f", and A4 keeps its speed{' and acceleration' if self.acceleration_facts else ''} limit up to it"
+               if self.speed else "")
             if k else "it is the first pose"
         )
-        moving = f"from pose {k - 1} it " if fact.reason == "velocity limit" else ""
+        moving = {"velocity limit": f"from pose {k - 1} it ", "acceleration limit": f"from poses {k - 2}, {k - 1} it "}
+        why = (
+            "; the task path starts and ends at rest, so its joint file must keep the acceleration limit to pass "
+            "`lbr check`" if fact.reason == "acceleration limit" else ""
+        )
         return IkError(
-            f"pose {k} (t = {t:.4f} s) cannot be reached inside the joint limits: {moving}{fact.describe()} "
-            f"({before})",
+            f"pose {k} (t = {t:.4f} s) cannot be reached inside the joint limits: {moving.get(fact.reason, '')}"
+            f"{fact.describe()} ({before}){why}",
             index=k, t=t, position_error=fact.needed if fact.reason == "out of reach" else math.nan,
             rotation_error=math.nan, reason=fact.reason, joint=fact.joint,
             needed=fact.needed, kind="pose" if fact.of_pose else "path",
@@ -473,14 +491,19 @@ class PathSolver:
 
         from .check import rest_violations
         from .ik_rest import settle_ends, task_at_rest
+        from .ik_smooth import lower_accelerations
         from .trajectory import JointTrajectory
 
         if self.times is None or self.n < 3:
             return res
-        task_rest = task_at_rest(self, res.q)
+        task_rest = task_at_rest(self, res.q[0], res.q[-1])
         q = res.q
         if self.options.rest_at_ends and any(task_rest):
             q, _ = settle_ends(self, q, task_rest)
+        # a task path at rest at both ends must give a file `lbr check` passes: accelerations too
+        if self.speed and (self.options.smooth or (self.options.rest_at_ends and all(task_rest))):
+            if self.rates(q)[1] > 1.0 or not all(task_rest):
+                q = lower_accelerations(self, q)
         ep, er = res.position_error, res.rotation_error
         changed = np.flatnonzero((q != res.q).any(axis=1))
         if len(changed):

@@ -15,8 +15,10 @@ Facts found here, first sample first:
 - **out of reach**: the wrist is farther from the shoulder than the two arm segments reach;
 - **position limit**: the pose needs a joint beyond its limit at every arm angle of every branch (A4 alone: the
   wrist is so close to the shoulder that the elbow must fold past its limit);
-- **velocity limit**: A4's angle is set by the pose alone, so the speed it needs between two samples is a fact
-  of the path, whatever the redundancy does.
+- **velocity limit** / **acceleration limit**: A4's angle is set by the pose alone up to its sign, so the speed
+  and (asked for when the file must pass `lbr check`) the acceleration it needs are facts of the path, whatever
+  the redundancy does. Where the elbow passes near straight (|A4| within one step's travel of 0) A4 may change
+  sign or turn back: the least of those is found by a 4-state search over the signs.
 """
 
 from __future__ import annotations
@@ -58,8 +60,8 @@ class PathFact:
 
     @property
     def of_pose(self) -> bool:
-        """A fact of the pose alone (out of reach, position limit), not of its neighbours (speed)."""
-        return self.reason != "velocity limit"
+        """A fact of the pose alone (out of reach, position limit), not of its neighbours (speed, acceleration)."""
+        return self.reason not in ("velocity limit", "acceleration limit")
 
     def describe(self) -> str:
         """What makes the sample unreachable, as a sentence fragment."""
@@ -67,8 +69,9 @@ class PathFact:
             return (f"out of reach by {self.needed * 1e3:.1f} mm (the wrist would be {self.limit + self.needed:.3f} m "
                     f"from the shoulder; the arm reaches {self.limit:.3f} m)")
         j = self.joint + 1  # type: ignore[operator]
-        if self.reason == "velocity limit":
-            return (f"needs A{j} at {self.needed:.4g} rad/s, above its limit {self.limit:.4g} rad/s (×"
+        if self.reason in ("velocity limit", "acceleration limit"):
+            unit = "rad/s" if self.reason == "velocity limit" else "rad/s²"
+            return (f"needs A{j} at {self.needed:.4g} {unit}, above its limit {self.limit:.4g} {unit} (×"
                     f"{self.needed / self.limit:.3f}); A4's angle is set by the pose alone (the wrist's distance from "
                     f"the shoulder), whatever the arm angle")
         if self.joint == 3:
@@ -201,6 +204,70 @@ def closest_configuration(
     return j, float(q[b, p, j]), float(psi[p]), BRANCHES[b]
 
 
+def _a4_motion(a4: np.ndarray, times: np.ndarray, limits: JointLimits, acceleration: bool):
+    """The first sample (and why: reason, needed value) where no sign sequence of A4 = ±|A4| (n,) [rad] keeps A4's
+    speed — and with ``acceleration`` its second difference — within the limits, or None. Away from a straight
+    elbow the sign cannot change (it would need |A4| twice within one step's travel), so the differences of |A4|
+    decide; near it, a search over (previous sign, sign) pairs."""
+    n = len(a4)
+    if n < 2:
+        return None
+    dt = np.diff(times)
+    vmax, amax = float(limits.velocity[3]), float(limits.acceleration[3])
+    tol = 1.0 + 1e-9
+    speed = np.abs(np.diff(a4)) / dt  # [rad/s] into sample k + 1
+    acc = np.abs(np.diff(a4, 2)) / dt[1:] ** 2 if n > 2 else np.empty(0)  # into sample k + 2
+    near = a4 <= vmax * float(dt.max()) * tol  # a sign change is possible only between two such samples
+    zone = near.copy()
+    for shift in (1, 2):  # the differences touching a near sample are decided by the search
+        zone[shift:] |= near[:-shift]
+        zone[:-shift] |= near[shift:]
+    firsts = []
+    over_v = np.flatnonzero((speed > vmax * tol) & ~zone[1:])
+    if len(over_v):
+        k = int(over_v[0]) + 1
+        firsts.append((k, "velocity limit", float(speed[k - 1]), vmax))
+    if acceleration and len(acc):
+        over_a = np.flatnonzero((acc > amax * tol) & ~zone[2:])
+        if len(over_a):
+            k = int(over_a[0]) + 2
+            firsts.append((k, "acceleration limit", float(acc[k - 2]), amax))
+    for run in np.split(np.flatnonzero(zone), np.flatnonzero(np.diff(np.flatnonzero(zone)) > 1) + 1):
+        if len(run):
+            found = _a4_signs(a4, times, int(run[0]), int(run[-1]), vmax, amax, acceleration)
+            if found is not None:
+                firsts.append(found)
+    return min(firsts) if firsts else None
+
+
+def _a4_signs(a4, times, first: int, last: int, vmax: float, amax: float, acceleration: bool):
+    """The search of :func:`_a4_motion` over samples first..last (the sign before them taken as +)."""
+    tol = 1.0 + 1e-9
+    states = {(1.0, 1.0): True}  # (sign of sample k − 1, sign of sample k) reachable so far
+    start = max(first, 1)
+    for k in range(start, last + 1):
+        nxt: dict = {}
+        blocked = None
+        h = float(times[k] - times[k - 1])
+        for (sp, sc) in states:
+            for sn in (1.0, -1.0):
+                v = abs(sn * a4[k] - sc * a4[k - 1]) / h
+                if v > vmax * tol:
+                    blocked = blocked or ("velocity limit", v, vmax)
+                    continue
+                if acceleration and k >= 2:
+                    a = abs(sn * a4[k] - 2.0 * sc * a4[k - 1] + sp * a4[k - 2]) / (h * h)
+                    if a > amax * tol:
+                        blocked = ("acceleration limit", a, amax)
+                        continue
+                nxt[(sc, sn)] = True
+        if not nxt:
+            reason, need, lim = blocked
+            return (k, reason, float(need), lim)
+        states = nxt
+    return None
+
+
 def first_unreachable(
     geometry: ArmGeometry,
     positions: np.ndarray,
@@ -209,39 +276,41 @@ def first_unreachable(
     limits: JointLimits,
     margin: float = 1e-4,
     speed: bool = True,
+    acceleration: bool = False,
 ) -> PathFact | None:
     """The first sample of a TCP path (positions (n, 3) [m], rotations (n, 3, 3) at ``times`` (n,) [s]) that no joint
     path reaches with every joint ``margin`` [rad] inside its position limits — or, with ``speed``, with A4 within
-    its speed limit — and why; None when there is none."""
+    its speed limit (and with ``acceleration`` its acceleration limit, second differences) — and why; None when
+    there is none."""
     n = len(positions)
     bound = limits.position - margin
     reach_limit = geometry.shoulder_elbow + geometry.elbow_wrist
-    prev_a4 = None
-    for start in range(0, n, CHUNK):
+    a4_all = np.empty(n)
+    pose_fact = None
+    end = n
+    for start in range(0, n, CHUNK):  # the scan ends with the first block holding a pose no arm angle reaches
         stop = min(n, start + CHUNK)
         ok, length, a4 = pose_feasibility(geometry, positions[start:stop], rotations[start:stop], bound)
-        pose_k = start + int(np.argmin(ok)) if not ok.all() else None
-        speed_k = None
-        if speed and times is not None and n > 1:
-            ext = a4 if prev_a4 is None else np.concatenate([[prev_a4], a4])
-            first = start if prev_a4 is None else start - 1
-            dt = np.diff(times[first:stop])
-            need = np.abs(np.diff(ext)) / np.where(dt > 0, dt, np.inf)
-            over = np.flatnonzero(need > limits.velocity[3] * (1.0 + 1e-9))
-            if len(over):
-                speed_k = first + int(over[0]) + 1
-                speed_need = float(need[over[0]])
-        prev_a4 = float(a4[-1])
-        if pose_k is None and speed_k is None:
-            continue
-        if speed_k is not None and (pose_k is None or speed_k < pose_k):
-            return PathFact(speed_k, "velocity limit", 3, speed_need, float(limits.velocity[3]))
-        i = pose_k - start
-        if length[i] > reach_limit or length[i] <= 1e-9:
-            return PathFact(pose_k, "out of reach", None, float(length[i] - reach_limit), reach_limit)
-        if a4[i] > bound[3]:
-            return PathFact(pose_k, "position limit", 3, float(a4[i]), float(limits.position[3]))
-        j, value, psi, branch = closest_configuration(geometry, positions[pose_k], rotations[pose_k], bound)
-        return PathFact(pose_k, "position limit", j, value, float(limits.position[j]), psi,
-                        tuple(float(b) for b in branch))  # type: ignore[arg-type]
-    return None
+        a4_all[start:stop] = a4
+        if not ok.all():
+            i = int(np.argmin(ok))
+            pose_fact, end = _pose_fact(geometry, positions, rotations, limits, bound, start + i, length[i], a4[i]), stop
+            break
+    motion = _a4_motion(a4_all[:end], times[:end], limits, acceleration) if speed and times is not None else None
+    if motion is not None and (pose_fact is None or motion[0] < pose_fact.index):
+        k, reason, need, lim = motion
+        return PathFact(int(k), reason, 3, need, lim)
+    return pose_fact
+
+
+def _pose_fact(geometry, positions, rotations, limits, bound, k: int, length: float, a4: float) -> PathFact:
+    """Why pose k has no configuration inside ``bound``: beyond the reach, A4, or the closest configuration's
+    worst joint."""
+    reach_limit = geometry.shoulder_elbow + geometry.elbow_wrist
+    if length > reach_limit or length <= 1e-9:
+        return PathFact(k, "out of reach", None, float(length - reach_limit), reach_limit)
+    if a4 > bound[3]:
+        return PathFact(k, "position limit", 3, float(a4), float(limits.position[3]))
+    j, value, psi, branch = closest_configuration(geometry, positions[k], rotations[k], bound)
+    return PathFact(k, "position limit", j, value, float(limits.position[j]), psi,
+                    tuple(float(b) for b in branch))  # type: ignore[arg-type]

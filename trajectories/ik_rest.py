@@ -15,11 +15,12 @@ limits; the start is settled the same way on the reversed path.
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 
 from .chain import pose_errors
 
 MIN_WINDOW = 0.05  # [s] shortest fade-out window
-ADDED_SHARE = 0.2  # the fade may add this share of the acceleration limits at most
+ADDED_SHARE = 0.5  # the fade may add this share of the acceleration limits at most
 RAMP_SLOPE = 1.875  # peak |w'|·T of the quintic ramp
 REST_SHARE = 0.5  # "at rest": the least joint step within this share of acceleration limit × step²
 
@@ -38,15 +39,16 @@ def _null_part(solver, q: np.ndarray, v: np.ndarray) -> np.ndarray:
     return v - _weighted_projection(jac, solver.weights, np.einsum("mij,mj->mi", jac, v))
 
 
-def task_at_rest(solver, q: np.ndarray) -> tuple[bool, bool]:
+def task_at_rest(solver, q_first: np.ndarray, q_last: np.ndarray) -> tuple[bool, bool]:
     """Whether the task path lets the joints start and end at rest: the least (speed-weighted) joint step realising
-    its first and last pose steps within ``REST_SHARE`` × acceleration limit × step² of every joint. ``solver`` is
-    the path's :class:`~trajectories.ik.PathSolver`, q (n, 7) [rad] its solution."""
+    its first and last pose steps within ``REST_SHARE`` × acceleration limit × step² of every joint, at
+    configurations q_first, q_last (7,) [rad] of the first and last pose. ``solver``: the path's
+    :class:`~trajectories.ik.PathSolver`."""
     if solver.times is None or solver.n < 3:
         return False, False
     out = []
-    for a, b in ((1, 0), (solver.n - 2, solver.n - 1)):
-        _, _, jac = solver.chain.kinematics(q[[b]])
+    for (a, b), q in (((1, 0), q_first), ((solver.n - 2, solver.n - 1), q_last)):
+        _, _, jac = solver.chain.kinematics(np.asarray(q, dtype=float)[None])
         twist = pose_errors(solver.positions[[b]], solver.rotations[[b]], solver.positions[[a]], solver.rotations[[a]])
         step = np.abs(_weighted_projection(jac, solver.weights, twist))[0]
         dt = abs(float(solver.times[a] - solver.times[b]))
@@ -72,7 +74,9 @@ def _faded(solver, q: np.ndarray, first: int) -> np.ndarray | None:
         q1, q2 = out[k - 1], out[k - 2]
         dt, dt_prev = t[k] - t[k - 1], t[k - 1] - t[k - 2]
         v = (q1 - q2) * (dt / dt_prev)
-        guess = q1 + v - (1.0 - _ramp((t[k] - t[first]) / span)) * _null_part(solver, q1[None], v[None])[0]
+        jac = pin.computeFrameJacobian(solver.robot.model, solver.robot.data, q1, solver.robot.tcp_id, pin.LOCAL)
+        null = v - _weighted_projection(jac[None], solver.weights, (jac @ v)[None])[0]
+        guess = q1 + v - (1.0 - _ramp((t[k] - t[first]) / span)) * null
         lo, hi, _ = solver.box(q1, q2, dt, dt_prev)
         qk, ep, er, _ = solver.track(k, guess, lo, hi, guess, 0.0, opt.max_iterations)
         if ep > tol_p or er > tol_r:

@@ -298,7 +298,11 @@ def figures(rows: list[dict], prefix: str = "") -> list[tuple[str, float, str]]:
     ]
 
 
-def _table(rows: list[dict], before: list[dict] | None) -> str:
+def _fmt(value, unit: str) -> str:
+    return f"{value:.3g} {unit}" if isinstance(value, float) else f"{value} {unit}"
+
+
+def _table(rows: list[dict], before: list[dict] | None, summary: list[tuple[str, float, str]]) -> str:
     def cell(r: dict) -> str:
         if "refused" in r:
             ok = "confirmed" if r.get("confirmed") else "not confirmed"
@@ -308,10 +312,19 @@ def _table(rows: list[dict], before: list[dict] | None) -> str:
 
     head = "| path | samples | at rest (start, end) | lbr ik now |" + (" before |" if before else "")
     lines = [
-        "# `lbr ik` on the issue-41 suite (generated)",
+        "# `lbr ik` on the path suite of the IK guide (generated)",
         "",
         "Written by `python benchmarks/run_all.py ik_chain` (`benchmarks/bench_ik_chain.py`); do not edit by hand. "
-        "See [the IK guide](ik.md) for what the columns mean.",
+        "See [the IK guide](ik.md) for what the figures mean.",
+        "",
+        "| figure | now |" + (" before |" if before else ""),
+        "|---|---|" + ("---|" if before else ""),
+    ]
+    now = [(k, v, u) for k, v, u in summary if not k.startswith("before: ")]
+    then = {k.removeprefix("before: "): v for k, v, u in summary if k.startswith("before: ")}
+    for k, v, u in now:
+        lines.append(f"| {k.strip()} | {_fmt(v, u)} |" + (f" {_fmt(then[k], u)} |" if k in then else ""))
+    lines += [
         "",
         head,
         "|---|---|---|---|" + ("---|" if before else ""),
@@ -343,5 +356,5 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         RESULTS.write_text(json.dumps({"figures": {k: v for k, v, _ in out}, "paths": rows,
                                        "before": before, "measured_s": time.perf_counter() - t0}, indent=1))  # fmt: skip
         TABLE.parent.mkdir(parents=True, exist_ok=True)
-        TABLE.write_text(_table(rows, before))
+        TABLE.write_text(_table(rows, before, out))
     return out

@@ -73,13 +73,13 @@ class IkOptions:
     coarse_dt: float = 0.02  # [s] sample spacing of the sequential pass on dense paths
     refine_iterations: int = 5  # vectorised Newton iterations on every sample after the coarse pass
     start_attempts: int = 4  # with q0 = None: best-scored start candidates tried on the full path
-    # with q0 = None: when the result exceeds the acceleration limit, also plan the arm angle over the whole path
-    # (0.5–4 s more) and keep the path with the lower peak acceleration
+    # when the result exceeds the acceleration limit: with q0 = None also plan the arm angle over the whole path
+    # (0.5–4 s more) and keep the path with the lower peak acceleration; then lower the accelerations along the
+    # self-motion (:mod:`.ik_smooth`; done anyway for a task path at rest at both ends)
     smooth: bool = False
-    # where the task path is at rest at an end, bring the self-motion to rest there too (needs times)
+    # where the task path is at rest at an end, bring the self-motion to rest there too (needs times); at both
+    # ends, also keep the accelerations inside the limits (the file must pass `lbr check`)
     rest_at_ends: bool = True
-    # a sample whose acceleration bound had to be dropped is repaired like one too fast to reach (go back, steer)
-    strict_acceleration: bool = False
 
 
 @dataclass(frozen=True)
@@ -145,6 +145,7 @@ class PathSolver:
         self.lower = -self.upper
         self.speed = options.speed_limits and self.times is not None and bool((np.diff(self.times) > 0).all())
         self.acceleration_facts = False  # whether :meth:`fact` looked at A4's acceleration too
+        self._full_fact: tuple[PathFact | None] | None = None  # :meth:`fact` at every sample, once found
         self.chain = Chain.of(robot)
         self.weights = limits.velocity / limits.velocity.max()  # step weights [-]
         self._w_inv2 = np.diag(1.0 / self.weights**2)
@@ -290,23 +291,19 @@ class PathSolver:
                 rate = REPAIR_RATE if i <= goal_end else GUIDE_RATE if guided else None
                 gain = self.null_gain(dt) if rate is None else 1.0 - math.exp(-rate * dt)
             q, ep, er, it = self.track(k, q, lo, hi, ref, gain, budget, first, loose)
-            braking = clash if i >= 1 else False  # the acceleration bound had to be dropped here
             if (ep > tol_p or er > tol_r) and i >= 1 and self.speed:
                 # the acceleration bound may be what stops it: retry with position and speed bounds only
                 lo, hi, _ = self.box(out[i - 1], None, dt, dt_prev, scale)
                 q, ep, er, it2 = self.track(k, q, lo, hi, ref, 0.0, budget, loose=loose)
                 it += it2
                 relaxed += 1
-                braking = True
-            missed = ep > tol_p or er > tol_r
             if (
-                (missed or (braking and opt.strict_acceleration)) and i >= 2 and self.speed
+                (ep > tol_p or er > tol_r) and i >= 2 and self.speed
                 and repairs.get(i, 0) < len(REPAIR_BACK) and sum(repairs.values()) < MAX_REPAIRS
             ):
                 # too fast here from where the redundancy has led: go back and steer the self-motion early
-                # toward the configuration this pose needs (reached from the previous sample, limits ignored; or
-                # where the speed bounds alone took it when only the acceleration bound was in the way)
-                target_q, gp, gr = (q, ep, er) if not missed else self.nearest_solution(k, out[i - 1])
+                # toward the configuration this pose needs (reached from the previous sample, limits ignored)
+                target_q, gp, gr = self.nearest_solution(k, out[i - 1])
                 if gp <= tol_p and gr <= tol_r and (np.abs(target_q) <= self.upper).all():
                     tries = repairs.get(i, 0)
                     repairs[i] = tries + 1
@@ -396,7 +393,7 @@ class PathSolver:
         where = f"pose {k} (t = {t:.4f} s)"
         kw = dict(index=k, t=t, position_error=stall.ep, rotation_error=stall.er, kind="start")
         remaining = f"remaining error {format_length(stall.ep)}, {format_angle(stall.er)}"
-        j_ok, _, psi, branch = closest_configuration(
+        _, _, psi, branch = closest_configuration(
             ArmGeometry.of(self.robot), self.positions[k], self.rotations[k], self.upper
         )
         signs = "".join("+" if b > 0 else "−" for b in branch)
@@ -432,15 +429,26 @@ class PathSolver:
         return IkError(f"{where}: the path {origin} did not converge inside the joint limits here; {reachable}; "
                        f"{remaining}{hint}", **kw)  # fmt: skip
 
-    def fact(self) -> PathFact | None:
+    def fact(self, full: bool = True) -> PathFact | None:
         """The first sample no joint path reaches inside the position limits (and, with speed bounds, A4's speed
         limit; and its acceleration limit when the task path starts and ends at rest, so the file must pass
-        `lbr check`), exact at every sample (:mod:`.ik_reach`), or None."""
-        self.acceleration_facts = self.speed and all(self.task_rest())
-        return first_unreachable(
+        `lbr check`), exact at every sample (:mod:`.ik_reach`), or None. Not ``full``: the arm angles only every
+        ``coarse_dt`` (a pose excursion shorter than that can be missed; the solver then stalls there and asks
+        again in full)."""
+        if full and self._full_fact is not None:
+            return self._full_fact[0]
+        if self._full_fact is None:
+            self.acceleration_facts = self.speed and all(self.task_rest())
+        stride = 1
+        if not full and self.times is not None and self.n > 2:
+            stride = max(1, int(round(self.options.coarse_dt / float(np.median(np.diff(self.times))))))
+        found = first_unreachable(
             ArmGeometry.of(self.robot), self.positions, self.rotations, self.times, self.limits,
-            self.options.limit_margin, speed=self.speed, acceleration=self.acceleration_facts,
+            self.options.limit_margin, speed=self.speed, acceleration=self.acceleration_facts, stride=stride,
         )
+        if stride == 1:
+            self._full_fact = (found,)
+        return found
 
     def task_rest(self) -> tuple[bool, bool]:
         """Whether the task path starts / ends at rest (:func:`.ik_rest.task_at_rest`), judged at configurations
@@ -502,8 +510,7 @@ class PathSolver:
             q, _ = settle_ends(self, q, task_rest)
         # a task path at rest at both ends must give a file `lbr check` passes: accelerations too
         if self.speed and (self.options.smooth or (self.options.rest_at_ends and all(task_rest))):
-            if self.rates(q)[1] > 1.0 or not all(task_rest):
-                q = lower_accelerations(self, q)
+            q = lower_accelerations(self, q, task_rest if self.options.rest_at_ends else (False, False))
         ep, er = res.position_error, res.rotation_error
         changed = np.flatnonzero((q != res.q).any(axis=1))
         if len(changed):
@@ -612,7 +619,9 @@ def solve_ik_path(
     if solver.n == 0:
         empty = np.empty(0)
         return IkResult(np.empty((0, 7)), empty, empty, np.empty(0, dtype=np.int32))
-    fact = solver.fact()
+    # facts of the poses and path: before solving (the arm angles on the coarse grid, exact when one is found),
+    # and at every sample once the solver stalls
+    fact = solver.fact(full=False) and solver.fact()
     if q0 is None:
         if fact is not None:
             raise solver.fact_error(fact)
@@ -620,14 +629,25 @@ def solve_ik_path(
 
         return solver.finish(solve_with_auto_start(solver, progress))
     q_ref = np.clip(np.asarray(q0, dtype=float), solver.lower, solver.upper)
-    # past the first unreachable sample nothing can be solved: the path from q0 up to it tells whether it stops there
-    part = solver if fact is None else solver.prefix(fact.index + 1)
-    try:
-        res = part.solve(q_ref, q_ref, progress)
-    except _Stall as stall:
-        if fact is not None and stall.k >= fact.index:
+    if fact is None:
+        try:
+            return solver.finish(solver.solve(q_ref, q_ref, progress))
+        except _Stall as stall:
+            fact = solver.fact()
+            if fact is None or fact.index > stall.k:
+                raise solver.diagnose(stall) from None
             raise solver.fact_error(fact) from None
-        raise solver.diagnose(stall) from None
-    if fact is not None:  # reached within the tolerance although a hair beyond the bound: still refused
-        raise solver.fact_error(fact)
-    return solver.finish(res)
+    # past the first unreachable sample nothing can be solved: whether the path from q0 stops before it — a fact
+    # of that path — the coarse pass tells; where exactly, the pass on every sample (only then)
+    part = solver.prefix(fact.index + 1)
+    try:
+        part.sequential(part.coarse_indices(), q_ref, q_ref, progress, loose=True)
+    except _Stall as stall:
+        if stall.k < fact.index:
+            try:
+                part.solve(q_ref, q_ref, progress)
+            except _Stall as exact:
+                stall = exact
+            if stall.k < fact.index:
+                raise solver.diagnose(stall) from None
+    raise solver.fact_error(fact)

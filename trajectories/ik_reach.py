@@ -163,6 +163,35 @@ def _feasible(forms: np.ndarray, psi: np.ndarray) -> np.ndarray:
     return (mask != 0).any(axis=1)
 
 
+def wrist_geometry(geometry: ArmGeometry, positions: np.ndarray, rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The wrist's distance from the shoulder (n,) [m] and |A4| (n,) [rad] of each pose (clipped where out of reach)."""
+    d1, d3, d5 = geometry.base_shoulder, geometry.shoulder_elbow, geometry.elbow_wrist
+    flange = positions - np.einsum("nij,j->ni", rotations, geometry.tool)
+    wrist = flange - geometry.wrist_flange * rotations[:, :, 2]
+    length = np.linalg.norm(wrist - np.array([0.0, 0.0, d1]), axis=1)
+    cos4 = np.clip((length**2 - d3 * d3 - d5 * d5) / (2.0 * d3 * d5), -1.0, 1.0)
+    return length, np.arccos(cos4)
+
+
+def _within(geometry: ArmGeometry, length: np.ndarray, a4: np.ndarray, bound: np.ndarray) -> np.ndarray:
+    """Within reach and A4 inside ``bound[3]``."""
+    d3, d5 = geometry.shoulder_elbow, geometry.elbow_wrist
+    return (length <= d3 + d5) & (length >= abs(d3 - d5)) & (length > 1e-9) & (a4 <= bound[3])
+
+
+def arm_angle_feasible(
+    geometry: ArmGeometry, positions: np.ndarray, rotations: np.ndarray, bound: np.ndarray
+) -> np.ndarray:
+    """Per pose (m,) within reach: whether some arm angle of some branch keeps A1–A3, A5–A7 inside ``bound``."""
+    forms = _forms(*_fit(geometry, rotations, positions, PSI0), bound)
+    # most poses are inside the limits at one of a few arm angles; the others are decided arc by arc
+    ok = _feasible(forms, np.broadcast_to(QUICK_PHI, (len(forms), len(QUICK_PHI))))
+    rest = np.flatnonzero(~ok)
+    if len(rest):
+        ok[rest] = _feasible(forms[rest], _test_angles(forms[rest]))
+    return ok
+
+
 def pose_feasibility(
     geometry: ArmGeometry, positions: np.ndarray, rotations: np.ndarray, bound: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -170,23 +199,11 @@ def pose_feasibility(
     joints inside ``bound`` (7,) [rad]; also the wrist's distance from the shoulder [m] and |A4| [rad]."""
     positions = np.asarray(positions, dtype=float)
     rotations = np.asarray(rotations, dtype=float)
-    d1, d3, d5 = geometry.base_shoulder, geometry.shoulder_elbow, geometry.elbow_wrist
-    flange = positions - np.einsum("nij,j->ni", rotations, geometry.tool)
-    wrist = flange - geometry.wrist_flange * rotations[:, :, 2]
-    length = np.linalg.norm(wrist - np.array([0.0, 0.0, d1]), axis=1)
-    reach = (length <= d3 + d5) & (length >= abs(d3 - d5)) & (length > 1e-9)
-    cos4 = np.clip((length**2 - d3 * d3 - d5 * d5) / (2.0 * d3 * d5), -1.0, 1.0)
-    a4 = np.arccos(cos4)  # |A4| [rad]
-    ok = reach & (a4 <= bound[3])
+    length, a4 = wrist_geometry(geometry, positions, rotations)
+    ok = _within(geometry, length, a4, bound)
     todo = np.flatnonzero(ok)
     if len(todo):
-        forms = _forms(*_fit(geometry, rotations[todo], positions[todo], PSI0), bound)
-        # most poses are inside the limits at one of a few arm angles; the others are decided arc by arc
-        quick = _feasible(forms, np.broadcast_to(QUICK_PHI, (len(todo), len(QUICK_PHI))))
-        rest = np.flatnonzero(~quick)
-        if len(rest):
-            quick[rest] = _feasible(forms[rest], _test_angles(forms[rest]))
-        ok[todo] = quick
+        ok[todo] = arm_angle_feasible(geometry, positions[todo], rotations[todo], bound)
     return ok, length, a4
 
 
@@ -277,26 +294,41 @@ def first_unreachable(
     margin: float = 1e-4,
     speed: bool = True,
     acceleration: bool = False,
+    stride: int = 1,
 ) -> PathFact | None:
     """The first sample of a TCP path (positions (n, 3) [m], rotations (n, 3, 3) at ``times`` (n,) [s]) that no joint
     path reaches with every joint ``margin`` [rad] inside its position limits — or, with ``speed``, with A4 within
     its speed limit (and with ``acceleration`` its acceleration limit, second differences) — and why; None when
-    there is none."""
+    there is none. Reach and A4 are checked at every sample; the arm angles at every ``stride``-th sample, and at
+    every sample from the last one checked before the first found without (so a pose excursion shorter than the
+    stride can be missed; ``stride`` 1 misses none)."""
+    positions = np.asarray(positions, dtype=float)
+    rotations = np.asarray(rotations, dtype=float)
     n = len(positions)
     bound = limits.position - margin
-    reach_limit = geometry.shoulder_elbow + geometry.elbow_wrist
-    a4_all = np.empty(n)
-    pose_fact = None
-    end = n
-    for start in range(0, n, CHUNK):  # the scan ends with the first block holding a pose no arm angle reaches
-        stop = min(n, start + CHUNK)
-        ok, length, a4 = pose_feasibility(geometry, positions[start:stop], rotations[start:stop], bound)
-        a4_all[start:stop] = a4
+    length, a4 = wrist_geometry(geometry, positions, rotations)
+    within = _within(geometry, length, a4, bound)
+    end = n if within.all() else int(np.argmin(within)) + 1  # up to the first pose beyond reach or A4's limit
+    pose_k = None if within.all() else end - 1
+    # the arm angles before it: on the grid first (block by block, so the scan ends early), then every sample
+    # between the last grid sample that has one and the first that has none
+    grid = np.unique(np.r_[np.arange(0, end, max(1, stride)), end - 1]) if end else np.empty(0, dtype=int)
+    grid = grid[within[grid]]
+    for start in range(0, len(grid), CHUNK):
+        idx = grid[start : start + CHUNK]
+        ok = arm_angle_feasible(geometry, positions[idx], rotations[idx], bound)
         if not ok.all():
-            i = int(np.argmin(ok))
-            pose_fact, end = _pose_fact(geometry, positions, rotations, limits, bound, start + i, length[i], a4[i]), stop
+            bad = int(idx[np.argmin(ok)])
+            lo = int(grid[start + int(np.argmin(ok)) - 1]) + 1 if start + int(np.argmin(ok)) > 0 else 0
+            fine = np.arange(lo, bad + 1)
+            fine_ok = arm_angle_feasible(geometry, positions[fine], rotations[fine], bound)
+            pose_k = int(fine[np.argmin(fine_ok)])
             break
-    motion = _a4_motion(a4_all[:end], times[:end], limits, acceleration) if speed and times is not None else None
+    pose_fact = None
+    if pose_k is not None:
+        pose_fact = _pose_fact(geometry, positions, rotations, limits, bound, pose_k, length[pose_k], a4[pose_k])
+    stop = n if pose_k is None else pose_k + 1
+    motion = _a4_motion(a4[:stop], times[:stop], limits, acceleration) if speed and times is not None else None
     if motion is not None and (pose_fact is None or motion[0] < pose_fact.index):
         k, reason, need, lim = motion
         return PathFact(int(k), reason, 3, need, lim)

@@ -85,13 +85,19 @@ def _faded(solver, q: np.ndarray, first: int) -> np.ndarray | None:
     return out
 
 
+def _still(solver, q: np.ndarray, q_prev: np.ndarray, dt: float) -> bool:
+    """Whether the self-motion of the step q_prev → q (7,) [rad] is within ``REST_SHARE`` of what rest allows."""
+    null = np.abs(_null_part(solver, q[None], (q - q_prev)[None]))[0] / dt
+    return bool((null <= REST_SHARE * solver.limits.acceleration * dt).all())
+
+
 def _settle_end(solver, q: np.ndarray) -> np.ndarray | None:
     """The end of q brought to rest (module docstring), or None when no window up to half the path does it."""
     t, lim = solver.times, solver.limits
     dt = np.diff(t)
-    speed = np.abs(_null_part(solver, q[1:], np.diff(q, axis=0))) / dt[:, None]  # [rad/s] self-motion per step
-    if (speed[-1] <= REST_SHARE * lim.acceleration * dt[-1]).all():
+    if _still(solver, q[-1], q[-2], dt[-1]):
         return q
+    speed = np.abs(_null_part(solver, q[1:], np.diff(q, axis=0))) / dt[:, None]  # [rad/s] self-motion per step
     window, longest = 2 * MIN_WINDOW, 0.5 * (t[-1] - t[0])
     while True:
         window = min(window, longest)
@@ -116,7 +122,7 @@ def settle_ends(solver, q: np.ndarray, ends: tuple[bool, bool]) -> tuple[np.ndar
         out = _settle_end(solver, q)
         if out is not None:
             q, done[1] = out, True
-    if ends[0]:
+    if ends[0] and not _still(solver, q[0], q[1], float(solver.times[1] - solver.times[0])):
         out = _settle_end(solver.reversed(), q[::-1].copy())
         if out is not None:
             q, done[0] = out[::-1].copy(), True

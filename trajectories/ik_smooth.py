@@ -3,15 +3,16 @@
 The iiwa has one redundant degree of freedom: at each sample q_k the null space of the TCP Jacobian is one
 direction n_k (the last right singular vector, its sign kept continuous along the path). Moving sample k by
 α_k·n_k keeps its pose to first order, and the path's steps and second differences are linear in α. Each round
-solves with HiGHS (:func:`scipy.optimize.linprog`)
+solves with HiGHS (:func:`scipy.optimize.linprog`, interior point)
 
-    minimise s  subject to  |Δ²(q + α·n)| ≤ s·q̈max·Δt²,  |Δ(q + α·n)| ≤ q̇max·Δt,  |q + α·n| ≤ position limits,
-                            |α_k| ≤ ``TRUST``
+    minimise s + λ·Σ|Δ²α|  subject to  |Δ²(q + α·n)| ≤ s·q̈max·Δt²,  |Δ(q + α·n)| ≤ 0.99·q̇max·Δt (or no faster
+    than the step already is),  |q + α·n| ≤ position limits,  |α_k| ≤ ``TRUST``
 
-over a window around the samples above the acceleration limit — with the robot at rest before the first and
-after the last sample, as `lbr check` counts the steps a controller executes — then projects the moved samples
-back onto their poses (vectorised Newton steps, :meth:`.PathSolver.refine`). Rounds end when no sample is above
-the limit or a round does not lower the peak.
+on a window around each cluster of samples above the acceleration limit — with the robot at rest before the
+first and after the last sample, as `lbr check` counts the steps a controller executes — then projects the moved
+samples back onto their poses (vectorised Newton steps, :meth:`.PathSolver.refine`). The small cost on Δ²α keeps
+the moves smooth, so the projection changes the accelerations little. Rounds (windows doubled each time) end when
+no sample is above the limit or a round does not lower the peak.
 """
 
 from __future__ import annotations
@@ -23,7 +24,6 @@ from scipy.optimize import linprog
 WINDOW = 0.2  # [s] moved around the samples above the limit, each side (doubled every round)
 TRUST = 0.25  # [rad] largest move of a sample per round (the first-order model holds)
 ROUNDS = 6
-TARGET = 0.98  # rounds stop below this share of the acceleration limit
 SPEED_SHARE = 0.99  # of the speed limits, the LP's bound on the steps
 SMOOTHING = 1e-3  # LP cost of Σ|Δ²α| in units of the smallest acceleration step (keeps the moves smooth)
 
@@ -56,8 +56,16 @@ def _difference_rows(ext_n: np.ndarray, col: np.ndarray, taps: tuple[float, ...]
     return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(7 * count, nvar))
 
 
-def _round(solver, q: np.ndarray, lo: int, hi: int) -> np.ndarray | None:
-    """One LP round on the samples lo..hi → the moved and re-projected path, or None when the LP fails."""
+def _context(q: np.ndarray, end: int, rest: bool) -> np.ndarray:
+    """The row beyond a path end (``end`` 0 or −1): the robot at rest there (a copy of the end sample), or moving on
+    at the speed of the last step (a linear extrapolation)."""
+    inner = 1 if end == 0 else -2
+    return q[end] if rest else 2.0 * q[end] - q[inner]
+
+
+def _round(solver, q: np.ndarray, lo: int, hi: int, rest: tuple[bool, bool]) -> np.ndarray | None:
+    """One LP round on the samples lo..hi → the moved and re-projected path, or None when the LP fails. ``rest``:
+    whether the robot is at rest before the first / after the last sample."""
     n_all = len(q)
     t = solver.times
     h = float(np.median(np.diff(t)))
@@ -65,9 +73,11 @@ def _round(solver, q: np.ndarray, lo: int, hi: int) -> np.ndarray | None:
     idx = np.arange(lo, hi + 1)
     m = len(idx)
     n = _null_directions(solver, q[idx])
-    # the window with one row of context each side: the neighbour outside it (fixed), or at the path's ends the
-    # robot at rest (a copy of the end sample, moving with it)
-    ext = np.vstack([q[lo - 1 : lo] if lo > 0 else q[:1], q[idx], q[hi + 1 : hi + 2] if hi < n_all - 1 else q[-1:]])
+    # the window with one row of context each side: the neighbour outside it (fixed), or beyond a path end the
+    # robot at rest (a copy of the end sample, moving with it) or moving on (a fixed extrapolation)
+    before = q[lo - 1] if lo > 0 else _context(q, 0, rest[0])
+    after = q[hi + 1] if hi < n_all - 1 else _context(q, -1, rest[1])
+    ext = np.vstack([before, q[idx], after])
     ext_n = np.zeros((m + 2, 7))
     ext_n[1:-1] = n
     free = np.ones(m, dtype=bool)
@@ -78,9 +88,9 @@ def _round(solver, q: np.ndarray, lo: int, hi: int) -> np.ndarray | None:
     nf = int(free.sum())
     col = np.full(m + 2, -1)
     col[1:-1][free] = np.arange(nf)
-    if lo == 0:
+    if lo == 0 and rest[0]:
         ext_n[0], col[0] = n[0], col[1]
-    if hi == n_all - 1:
+    if hi == n_all - 1 and rest[1]:
         ext_n[-1], col[-1] = n[-1], col[-2]
     nvar = nf + 1 + max(nf - 2, 0)  # the α of the free samples, s, then u ≥ |Δ²α| (kept smooth: small cost)
     d2 = _difference_rows(ext_n, col, (1.0, -2.0, 1.0), nvar)
@@ -112,8 +122,6 @@ def _round(solver, q: np.ndarray, lo: int, hi: int) -> np.ndarray | None:
     res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs-ipm")
     if res.x is None:
         return None
-    import os
-    if os.environ.get("DBG"): print("   lp", lo, hi, a_ub.shape, "s", res.x[nf], "max|alpha|", np.abs(res.x[:nf]).max())
     alpha = np.zeros(m)
     alpha[free] = res.x[:nf]
     moved = q.copy()
@@ -124,23 +132,25 @@ def _round(solver, q: np.ndarray, lo: int, hi: int) -> np.ndarray | None:
     return out
 
 
-def _ratios(solver, q: np.ndarray) -> tuple[np.ndarray, float]:
-    """Per sample the peak second-difference ratio (robot at rest around the path), and the peak step ratio."""
+def _ratios(solver, q: np.ndarray, rest: tuple[bool, bool]) -> tuple[np.ndarray, float]:
+    """Per sample the peak second-difference ratio (the robot at rest before / after the path where ``rest`` says,
+    else moving on), and the peak step ratio."""
     h = float(np.median(np.diff(solver.times)))
-    padded = np.vstack([q[:1], q, q[-1:]])
+    padded = np.vstack([_context(q, 0, rest[0]), q, _context(q, -1, rest[1])])
     acc = (np.abs(np.diff(padded, 2, axis=0)) / (solver.limits.acceleration * h * h)).max(axis=1)
     vel = float((np.abs(np.diff(q, axis=0)) / (solver.limits.velocity * h)).max(initial=0.0))
     return acc, vel
 
 
-def lower_accelerations(solver, q: np.ndarray) -> np.ndarray:
+def lower_accelerations(solver, q: np.ndarray, rest: tuple[bool, bool] = (True, True)) -> np.ndarray:
     """q (n, 7) [rad] moved along its self-motion until no sample is above the acceleration limit (module
-    docstring), as far as ``ROUNDS`` rounds get; q itself when no round lowers the peak or keeps the speeds."""
+    docstring), as far as ``ROUNDS`` rounds get; q itself when no round lowers the peak or keeps the speeds.
+    ``rest``: whether the robot must be at rest before the first / after the last sample (as `lbr check` asks)."""
     if solver.times is None or solver.n < 4:
         return q
     h = float(np.median(np.diff(solver.times)))
     width = int(round(WINDOW / h))
-    acc, vel = _ratios(solver, q)
+    acc, vel = _ratios(solver, q, rest)
     best, best_peak = q, float(acc.max())
     for _ in range(ROUNDS):
         over = np.flatnonzero(acc > 1.0 + 1e-9)
@@ -150,12 +160,12 @@ def lower_accelerations(solver, q: np.ndarray) -> np.ndarray:
         cuts = np.flatnonzero(np.diff(over) > 2 * width + 2)
         for first, last in zip(np.r_[over[0], over[cuts + 1]], np.r_[over[cuts], over[-1]]):
             lo, hi = max(0, int(first) - width), min(solver.n - 1, int(last) + width)
-            q = _round(solver, q, lo, hi)
+            q = _round(solver, q, lo, hi, rest)
             if q is None:
                 break
         if q is None:
             break
-        acc, vel = _ratios(solver, q)
+        acc, vel = _ratios(solver, q, rest)
         if vel > 1.0 + 1e-9:
             break
         if acc.max() < best_peak:

@@ -168,6 +168,9 @@ def _solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] |
             try:
                 res = solver.solve(candidates[i], candidates[i], progress, fallback=fallback)
             except _Stall as stall:
+                fact = solver.fact()  # checked at every sample now (the coarse check can miss a short excursion)
+                if fact is not None and fact.index <= stall.k:
+                    raise solver.fact_error(fact) from None
                 if fallback and (first is None or stall.k > first.k):
                     first = stall
                 elif not fallback and (coarse is None or stall.k > coarse.k):

@@ -63,8 +63,9 @@ def ik(
         bool,
         typer.Option(
             "--smooth",
-            help="Without --q0: when the joint accelerations exceed the limit, also plan the arm angle over the "
-            "whole path (0.5–4 s more) and keep the path with the lower peak acceleration.",
+            help="When the joint accelerations exceed the limit: without --q0 also plan the arm angle over the "
+            "whole path (0.5–4 s more) and keep the path with the lower peak acceleration; then move the path "
+            "along its self-motion to lower them further (done anyway when the task path starts and ends at rest).",
         ),
     ] = False,
     json_out: JsonOpt = False,

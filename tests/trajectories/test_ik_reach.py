@@ -73,3 +73,22 @@ def test_a4_speed_is_a_fact_of_the_path(robot, limits, q_start):
         err = exc.value
         assert (err.index, err.reason, err.joint, err.kind) == (first, "velocity limit", 3, "path")
         assert err.needed == pytest.approx(speed[first - 1], rel=1e-6)
+
+
+def test_a_short_excursion_missed_by_the_coarse_check_is_found_when_the_solver_stalls(robot, limits):
+    """Three samples (3 ms) of a pose beyond A6's limit at every arm angle inside a path that is otherwise easy: the
+    check before solving looks at the arm angles every 20 ms and misses them; the solver stalls there and the
+    check at every sample names the first of them."""
+    geometry = ArmGeometry.of(robot)
+    good = robot.fk(np.array([0.0, 0.5, 0.0, -1.3, 0.0, 1.0, 0.0]))
+    bad = next(p for p in build_suite(robot, limits) if p.name == "circle-xy-tilt45-yaw60-smooth-1ms")
+    t = np.arange(100) * 0.001
+    pos = np.tile(good.translation, (100, 1))
+    rot = np.tile(good.rotation, (100, 1, 1))
+    pos[41:44], rot[41:44] = bad.position[1200], bad.rotation[1200]  # unreachable (its first is pose 1086)
+    assert not pose_feasibility(geometry, pos[41:42], rot[41:42], limits.position - MARGIN)[0][0]
+    assert first_unreachable(geometry, pos, rot, t, limits, MARGIN, speed=False, stride=20) is None
+    assert first_unreachable(geometry, pos, rot, t, limits, MARGIN, speed=False).index == 41
+    with pytest.raises(IkError) as exc:
+        solve_ik_path(robot, pos, rot, None, limits, IkOptions(nullspace_gain=None), times=t)
+    assert exc.value.index == 41 and exc.value.kind == "pose"

@@ -199,15 +199,17 @@ def judge_refusal(path, robot, limits, result: dict, prefix_witness: bool) -> di
     bound = limits.position - 1e-4
     k = int(result["refused"])
     out: dict = {"index": k}
-    if result.get("reason") == "velocity limit" and result.get("kind") == "path":
-        a_prev, a_k = (_a4(robot, geometry, path.position[i], path.rotation[i]) for i in (k - 1, k))
-        speed = abs(a_k - a_prev) / float(path.t[k] - path.t[k - 1])
-        out["needed_a4_speed"] = speed
-        fact = speed > limits.velocity[3]
-        before_ok = True
-        if k >= 2:
-            a_pp = _a4(robot, geometry, path.position[k - 2], path.rotation[k - 2])
-            before_ok = abs(a_prev - a_pp) / float(path.t[k - 1] - path.t[k - 2]) <= limits.velocity[3] * (1 + 1e-9)
+    if result.get("kind") == "path":  # A4's speed or acceleration: A4 of pinocchio-solved configurations
+        order = 1 if result.get("reason") == "velocity limit" else 2
+        lim = (limits.velocity if order == 1 else limits.acceleration)[3] * (1 + 1e-9)
+        rows = [i for i in range(k - order - 1, k + 1) if i >= 0]
+        a4 = np.array([_a4(robot, geometry, path.position[i], path.rotation[i]) for i in rows])
+        if k - order < 0:  # at the start: the robot at rest before it (as lbr check counts)
+            a4 = np.r_[np.repeat(a4[:1], order + 1 - len(rows) + 1, axis=0), a4]
+        needed = np.abs(np.diff(a4, order)) / float(path.dt) ** order
+        out["needed_a4"] = float(needed[-1])
+        fact = needed[-1] > lim
+        before_ok = len(needed) < 2 or needed[-2] <= lim
     else:
         fact = not pose_reachable(robot, geometry, path.position[k], path.rotation[k], bound)
         before = list(range(max(0, k - 200), k)) + list(range(0, max(0, k - 200), 20))

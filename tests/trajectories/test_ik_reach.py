@@ -31,7 +31,7 @@ def test_feasibility_of_random_poses_agrees_with_a_dense_grid(config, limits):
     """Poses of configurations up to 1.25× the limits (about a third beyond them at every arm angle)."""
     robot = Robot(config)
     geometry = ArmGeometry.of(robot)
-    q = np.random.default_rng(11).uniform(-1.25, 1.25, (160, 7)) * limits.position
+    q = np.random.default_rng(11).uniform(-1.25, 1.25, (96, 7)) * limits.position
     pos, rot = robot.fk_path(q)
     bound = limits.position - MARGIN
     ok, _, _ = pose_feasibility(geometry, pos, rot, bound)

@@ -44,6 +44,7 @@ from .resample import spaced_indices
 from .robot import Robot
 
 NO_TIMES_DT = 1e-3  # [s] sample period assumed for the null-space pull when a path has no times
+NO_TIMES_STRIDE = 20  # samples between the arm-angle checks before solving a path without times
 REPAIR_BACK = (0.1, 0.3, 1.0)  # [s] how far a repair goes back before a sample too fast to reach, per try
 REPAIR_RATE = 10.0  # [1/s] null-space pull toward the configuration the stalled sample needs
 MAX_REPAIRS = 6  # backtracks per pass at most
@@ -434,14 +435,15 @@ class PathSolver:
         limit; and its acceleration limit when the task path starts and ends at rest, so the file must pass
         `lbr check`), exact at every sample (:mod:`.ik_reach`), or None. Not ``full``: the arm angles only every
         ``coarse_dt`` (a pose excursion shorter than that can be missed; the solver then stalls there and asks
-        again in full)."""
+        again in full; the legacy pass on every sample does so too)."""
         if full and self._full_fact is not None:
             return self._full_fact[0]
         if self._full_fact is None:
             self.acceleration_facts = self.speed and all(self.task_rest())
         stride = 1
-        if not full and self.times is not None and self.n > 2:
-            stride = max(1, int(round(self.options.coarse_dt / float(np.median(np.diff(self.times))))))
+        if not full and self.n > 2:  # the coarse pass's spacing (without times: every NO_TIMES_STRIDE-th sample)
+            dt = float(np.median(np.diff(self.times))) if self.times is not None else 0.0
+            stride = max(1, int(round(self.options.coarse_dt / dt))) if dt > 0 else NO_TIMES_STRIDE
         found = first_unreachable(
             ArmGeometry.of(self.robot), self.positions, self.rotations, self.times, self.limits,
             self.options.limit_margin, speed=self.speed, acceleration=self.acceleration_facts, stride=stride,

@@ -39,6 +39,10 @@ TURNING = (0, 2, 4, 6)  # A1, A3, A5, A7: limits below π, the branches turn the
 # parity of the π turn of A1, A3, A5, A7 in each branch (shoulder s, elbow e, wrist w flips): s, s⊕e, e⊕w, w
 _FLIPS = (BRANCHES < 0).astype(int)  # (8, 3): s, e, w
 PARITY = np.stack([_FLIPS[:, 0], _FLIPS[:, 0] ^ _FLIPS[:, 1], _FLIPS[:, 1] ^ _FLIPS[:, 2], _FLIPS[:, 2]], axis=1)
+# bit b of a mask: branch b; per turning joint (A1, A3, A5, A7), the branches turning it by π (odd) and not
+BRANCH_BITS = 1 << np.arange(len(PARITY), dtype=np.uint8)
+_ODD = np.array([int(BRANCH_BITS[PARITY[:, i] == 1].sum()) for i in range(4)], dtype=np.uint8)
+_EVEN = ~_ODD
 
 
 @dataclass(frozen=True)
@@ -131,7 +135,7 @@ def _forms(c03: np.ndarray, c47: np.ndarray, bound: np.ndarray) -> np.ndarray:
 
 
 def _test_angles(forms: np.ndarray) -> np.ndarray:
-    """Arm angles (m, T) [rad], one inside every arc between consecutive zeros of the forms (m, F, 3)."""
+    """Angles φ (m, T) [rad], one inside every arc between consecutive zeros of the forms (m, F, 3) in φ."""
     a, b, c = forms[..., 0], forms[..., 1], forms[..., 2]
     r = np.hypot(a, b)
     ratio = np.where(r > 1e-300, -c / np.where(r > 1e-300, r, 1.0), 2.0)
@@ -144,15 +148,9 @@ def _test_angles(forms: np.ndarray) -> np.ndarray:
     return 0.5 * (roots + nxt)
 
 
-# bit b of a mask: branch b; per turning joint (A1, A3, A5, A7), the branches turning it by π (odd) and not
-BRANCH_BITS = 1 << np.arange(len(PARITY), dtype=np.uint8)
-_ODD = np.array([int(BRANCH_BITS[PARITY[:, i] == 1].sum()) for i in range(4)], dtype=np.uint8)
-_EVEN = ~_ODD
-
-
-def _feasible(forms: np.ndarray, psi: np.ndarray) -> np.ndarray:
-    """Whether some branch keeps every joint but A4 inside its limit at arm angles psi (m, T) → (m,)."""
-    basis = np.stack([np.sin(psi), np.cos(psi), np.ones_like(psi)], axis=-1)  # (m, T, 3)
+def _feasible(forms: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """Whether some branch keeps every joint but A4 inside its limit at some of the angles φ (m, T) [rad] → (m,)."""
+    basis = np.stack([np.sin(phi), np.cos(phi), np.ones_like(phi)], axis=-1)  # (m, T, 3)
     val = np.einsum("mfi,mti->mft", forms, basis)  # (m, F, T)
     nonneg, nonpos = val >= 0.0, val <= 0.0
     mask = np.where(nonneg[:, 0] & nonneg[:, 1], np.uint8(255), np.uint8(0))  # the pivots A2, A6: every branch

@@ -31,7 +31,6 @@ from typing import Callable
 
 import numpy as np
 import pinocchio as pin
-from scipy.interpolate import CubicSpline
 
 from .arm_angle import ArmGeometry
 from .boxqp import solve_box_qp
@@ -547,6 +546,8 @@ class PathSolver:
         vectorised refinement → the result, or None when it misses a tolerance or limit. ``relaxed``: samples
         whose acceleration bound had to be dropped (the knots' own acceleration then sets what is accepted);
         ``any_acceleration``: accept whatever acceleration, reporting the samples above the limit as relaxed."""
+        from scipy.interpolate import CubicSpline  # imported here: a refusal needs no scipy (0.5 s to import)
+
         opt = self.options
         spline = CubicSpline(self.times[idx], qc, axis=0)
         q, ep, er = self.refine(spline(self.times), opt.refine_iterations)

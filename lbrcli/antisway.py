@@ -133,38 +133,56 @@ class AntiSwayResult:
 
 
 def _joints_of(plan, robot, q0, lim, progress=None):
-    """IK of the pivot plan with the flange pointing down → (JointTrajectory, max position error [m])."""
+    """IK of the pivot plan with the flange pointing down → (JointTrajectory, max position error [m]). The plan
+    starts and ends at rest, so does the redundancy (the IK brings the self-motion to rest with the pivot)."""
     import numpy as np
 
-    from trajectories.ik import IkOptions, solve_ik_path
+    from trajectories.ik import solve_ik_path
     from trajectories.trajectory import JointTrajectory
 
-    def solve(t, pos):
-        return solve_ik_path(robot, pos, np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)), q0, lim, times=t,
-                             progress=progress)  # fmt: skip
-
     t, pos = plan.t, plan.position
-    res = solve(t, pos)
-    # the redundancy pull toward q0 may still move the elbow when the pivot has stopped: the file must end at rest
-    # (a step ≤ acceleration limit × dt), so hold the last pivot position until that motion has decayed
-    if len(t) < 2:
-        return JointTrajectory(t=t, q=res.q), res.max_position_error
-    dt = float(t[-1] - t[-2])
-    rest = 0.5 * np.asarray(lim.acceleration) * dt * dt  # [rad] per step
-    options = IkOptions()
-    # the pull's fraction per sample of the (coarse) sequential pass → its decay per dt
-    per_dt = (options.nullspace_gain or 0.02) * dt / max(dt, options.coarse_dt)
-    n_plan = len(t)
-    for _ in range(4):
-        end_step = np.abs(res.q[-1] - res.q[-2])
-        if (end_step <= rest).all():
-            break
-        need = math.log(float((rest / np.maximum(end_step, 1e-300)).min())) / math.log(1.0 - per_dt)
-        extra = max(int(math.ceil(need)) + 20, len(t) - n_plan)  # at least as many as added before: doubling
-        t = np.concatenate([t, t[-1] + dt * np.arange(1, extra + 1)])
-        pos = np.concatenate([pos, np.repeat(pos[-1:], extra, axis=0)])
-        res = solve(t, pos)
+    res = solve_ik_path(robot, pos, np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)), q0, lim, times=t,
+                        progress=progress)  # fmt: skip
     return JointTrajectory(t=t, q=res.q), res.max_position_error
+
+
+REACH_STEP = 0.001  # [m] spacing of the layout's check before planning
+
+
+def check_reach(points, z: float, robot, limits) -> None:
+    """Raise PlanningError naming the first turning point or place on a straight segment between them (1 mm
+    apart) that the flange cannot reach pointing down at height z [m] inside the joint limits: out of reach, or
+    beyond a joint's limit at every arm angle (:mod:`trajectories.ik_reach`)."""
+    import numpy as np
+
+    from trajectories.arm_angle import ArmGeometry
+    from trajectories.errors import PlanningError
+    from trajectories.ik_reach import first_unreachable
+
+    pts = np.asarray(points, dtype=float)
+    places, where = [pts[:1]], [(0, 0.0)]  # (segment, fraction along it); segment 0: the start point
+    for k in range(1, len(pts)):
+        m = max(1, int(np.ceil(np.linalg.norm(pts[k] - pts[k - 1]) / REACH_STEP)))
+        s = np.arange(1, m + 1) / m
+        places.append(pts[k - 1] + s[:, None] * (pts[k] - pts[k - 1]))
+        where += [(k, float(f)) for f in s]
+    xy = np.concatenate(places)
+    pos = np.column_stack([xy, np.full(len(xy), z)])
+    rot = np.broadcast_to(flange_down_rotation(), (len(xy), 3, 3))
+    fact = first_unreachable(ArmGeometry.of(robot), pos, rot, None, limits, speed=False)
+    if fact is None:
+        return
+    seg, frac = where[fact.index]
+    x, y = xy[fact.index]
+    if frac in (0.0, 1.0):
+        place = f"point {seg} ({x:.3f}, {y:.3f})"
+    else:
+        place = (f"first at ({x:.3f}, {y:.3f}) on segment {seg} from point {seg - 1} ({pts[seg - 1][0]:.3f}, "
+                 f"{pts[seg - 1][1]:.3f}) to point {seg} ({pts[seg][0]:.3f}, {pts[seg][1]:.3f})")
+    raise PlanningError(
+        f"the layout is out of reach at z = {z:g} m with the flange pointing down: {place}: {fact.describe()}; "
+        f"move the points or change --z"
+    )
 
 
 def predict_sway(joints, robot, string_length: float, stop_time: float, settle_periods: float = SETTLE_PERIODS):
@@ -392,6 +410,7 @@ def plan_anti_sway(
     q_ref = parse_joint_vector(ANTISWAY_Q0, "--q0") if q0 is None else np.asarray(q0, dtype=float)
     if q_ref.shape != (7,):
         raise OptionError("--q0: expected 7 joint angles")
+    check_reach(pts, z, robot, lim)
     setup = _Setup(pts, float(length), z, float(dt), robot, q_ref, lim, margin, jerk, max_sway, tuple(obstacles),
                    float(ball_radius))
     result = _attempt(setup, a_max, options, progress)
@@ -474,10 +493,9 @@ def write_outputs(result: AntiSwayResult, out: Path, task_out: Path | None = Non
 
     write_joint_csv(out, result.joints)
     if task_out is not None:
-        plan, t = result.plan, result.joints.t  # the joints may hold the last pivot position longer (rest)
-        position = np.concatenate([plan.position, np.repeat(plan.position[-1:], len(t) - len(plan.t), axis=0)])
-        quat = quaternions_from_matrices(np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)))
-        write_task_csv(task_out, TaskTrajectory(t=t, position=position, quaternion=quat))
+        plan = result.plan
+        quat = quaternions_from_matrices(np.broadcast_to(flange_down_rotation(), (len(plan.t), 3, 3)))
+        write_task_csv(task_out, TaskTrajectory(t=plan.t, position=plan.position, quaternion=quat))
     if prediction is not None:
         r = result.run
         data = np.column_stack([r.t, r.theta, r.phi, r.theta_x, r.theta_y])

@@ -64,8 +64,9 @@ def ik(
         bool,
         typer.Option(
             "--smooth",
-            help="Without --q0: when the joint accelerations exceed the limit, also plan the arm angle over the "
-            "whole path (0.5–4 s more) and keep the path with the lower peak acceleration.",
+            help="When the joint accelerations exceed the limit: without --q0 also plan the arm angle over the "
+            "whole path (0.5–4 s more) and keep the path with the lower peak acceleration; then move the path "
+            "along its self-motion to lower them further (done anyway when the task path starts and ends at rest).",
         ),
     ] = False,
     json_out: JsonOpt = False,
@@ -74,13 +75,19 @@ def ik(
 
     Each Newton step is a box-constrained least-squares problem (position limits, q̇max·Δt, q̈max·Δt²), the
     redundancy is pulled toward the start at --nullspace-rate per second. Without --q0 the start is chosen for
-    the whole path and reported. Exits 1 naming the first pose that cannot be reached and why: out of reach
-    (by how much), a joint held at its position limit, or a joint speed the path needs above its limit.
+    the whole path and reported. Where the task path starts or ends at rest, the self-motion is brought to rest
+    with it, so the file passes `lbr check`; when the task starts and ends at rest and the joint path still fails
+    the check, the file is written and the command exits 1 naming the first violation. A path that cannot be
+    followed exits 1 naming its first pose that no joint path reaches inside the limits and why: out of reach (by
+    how much), beyond a joint's position limit at every arm angle, or A4 (set by the pose alone) faster than its
+    limit — found at every sample before anything is solved; with --q0, also where the path from that start runs
+    into a limit while the pose itself is reachable.
     """
     import math
 
     from trajectories.check import check_trajectory
     from trajectories.csvio import read_task_csv, write_joint_csv
+    from trajectories.errors import CheckFailed, IkError
     from trajectories.ik import IkOptions, solve_ik_path
     from trajectories.poses import matrices_from_quaternions
     from trajectories.trajectory import JointTrajectory
@@ -98,8 +105,13 @@ def ik(
         nullspace_rate=nullspace_rate, nullspace_gain=None, speed_limits=not no_speed_limits, smooth=smooth
     )
     t0 = time.perf_counter()
-    with rep.progress("IK", len(task)) as update:
-        res = solve_ik_path(robot, task.position, rot, q_ref, lim, options, times=task.t, progress=update)
+    try:
+        with rep.progress("IK", len(task)) as update:
+            res = solve_ik_path(robot, task.position, rot, q_ref, lim, options, times=task.t, progress=update)
+    except IkError as exc:
+        rep.emit({"ok": False, "exit_code": 1, "error": str(exc), "refusal": exc.figures(),
+                  "solve_time_s": time.perf_counter() - t0})  # fmt: skip
+        raise
     elapsed = time.perf_counter() - t0
     traj = JointTrajectory(t=task.t, q=res.q)
     write_joint_csv(out, traj)
@@ -111,13 +123,25 @@ def ik(
         f"{res.max_rotation_error:.2e} rad; peak speed {res.velocity_ratio * 100:.0f} %, "
         f"acceleration {res.acceleration_ratio * 100:.0f} % of the limits"
     )
-    if res.acceleration_ratio > 1.0 and options.speed_limits:
-        rep.warn(
-            f"joint accelerations reach {res.acceleration_ratio * 100:.0f} % of the limit ({res.acceleration_relaxed} "
-            f"samples could not keep the acceleration bound); see `lbr check {out}`"
-        )
-    if report is not None and not report.ok:
-        rep.warn(f"the joint path violates limits ({len(report.failing)} violations); see `lbr check {out}`")
+    rest_at_ends = all(res.at_rest)
+    contract = all(res.task_at_rest) and options.speed_limits  # the file must pass `lbr check`
+    if report is not None:
+        moving = [end for end, ok in zip(("start", "end"), res.task_at_rest) if not ok]
+        if rest_at_ends:
+            rep.print("at rest at both ends (the self-motion brought to rest with the task)")
+        elif moving:
+            rep.warn(
+                f"the task path moves at its {' and '.join(moving)}: the joint path cannot start and end at rest there, "
+                f"so `lbr check` and `lbr execute` refuse it; let the task path start and end at rest"
+            )
+        if res.acceleration_ratio > 1.0 and options.speed_limits and not contract:
+            rep.warn(
+                f"joint accelerations reach {res.acceleration_ratio * 100:.0f} % of the limit ({res.acceleration_relaxed} "
+                f"samples could not keep the acceleration bound); see `lbr check {out}`"
+            )
+        if not report.ok and not contract:
+            rep.warn(f"the joint path violates limits ({len(report.failing)} violations); see `lbr check {out}`")
+    check_figures = {} if report is None else report.to_dict()
     rep.emit(
         {
             "samples": len(traj),
@@ -129,10 +153,19 @@ def ik(
             "peak_velocity_ratio": res.velocity_ratio,
             "peak_acceleration_ratio": res.acceleration_ratio,
             "acceleration_relaxed_samples": res.acceleration_relaxed,
+            "rest_at_ends": rest_at_ends,
+            "task_at_rest": {"start": res.task_at_rest[0], "end": res.task_at_rest[1]},
             "limits_ok": report.ok if report is not None else True,
+            "check": {k: check_figures[k] for k in ("max_ratio", "violations") if k in check_figures},
+            "jerk_ratio": check_figures.get("max_ratio", {}).get("jerk", 0.0),
             "out": str(out),
         }
     )
+    if contract and report is not None and not report.ok:
+        raise CheckFailed(
+            f"{out}: written, but it fails `lbr check` although the task path starts and ends at rest: "
+            f"{report.failing[0].describe()}"
+        )
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -88,7 +88,7 @@ def test_ik_unreachable_exit_1(lbr, tmp_path, robot):
     task = tmp_path / "far.csv"
     write_task_csv(task, TaskTrajectory(t=np.arange(n) * 0.01, position=pos, quaternion=quat))
     line = one_line_error(lbr("ik", task, "-o", tmp_path / "j.csv"), code=1)
-    assert "pose 10" in line and "remaining error" in line
+    assert "pose 10 " in line and "out of reach by" in line and " mm" in line
 
 
 def test_retime_cli(lbr, tmp_path):

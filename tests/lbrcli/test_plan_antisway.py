@@ -239,3 +239,13 @@ def test_the_elbow_settles_before_the_file_ends(tmp_path):
     assert (last_step <= np.asarray(default_limits().acceleration) * 0.005**2).all()
     tt = read_task_csv(task)
     assert len(tt.position) == len(q) and np.allclose(tt.position[-1], tt.position[-2])
+
+
+def test_a_layout_out_of_reach_says_where(lbr, tmp_path):
+    """At z = 0.65 m the flange pointing down cannot follow the default layout's first segment: one line naming
+    the place on it and the joint, before any planning."""
+    proc = lbr("plan", "anti-sway", "--z", "0.65", "--length", "0.5", "--a-max", "2", "-o", tmp_path / "x.csv")
+    assert proc.returncode == 1 and not (tmp_path / "x.csv").exists()
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "out of reach at z = 0.65 m" in lines[0]
+    assert "segment 1 from point 0 (0.400, -0.300) to point 1 (0.620, -0.300)" in lines[0] and "A6" in lines[0]

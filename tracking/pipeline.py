@@ -55,13 +55,14 @@ class Track:
     theta_in_plane: bool = False  # θ measured in the calibrated plane of motion (else in the image)
     confidence: np.ndarray | None = None  # (n,) 0–1 of the frame's fix (0 when nothing was seen)
     unsure: np.ndarray | None = None  # (n,) bool: a candidate was seen but not trusted (reported not found)
+    extra: tuple[tuple[str, np.ndarray], ...] = ()  # more (name, (n,) values) columns, written last (live: tilt, latency)
 
     @property
     def found_fraction(self) -> float:
         return float(self.found.mean()) if len(self.found) else 0.0
 
 
-class _Angles:
+class ImageAngles:
     """θ [rad] from raw ball and pivot pixels: in the image (undistorted when calibrated) or in the plane."""
 
     def __init__(self, calibration: CameraCalibration | None, size: tuple[int, int]) -> None:
@@ -115,7 +116,7 @@ def track_video(
     pivot_opts = pivot_options or (replace(options, start_uv=None) if options is not None else None)
     pivot_tracker = BallTracker(pivot_color, pivot_opts) if pivot_color is not None else None
     fixed = None if pivot_uv is None else (float(pivot_uv[0]), float(pivot_uv[1]))
-    angle = _Angles(calibration, info.size)
+    angle = ImageAngles(calibration, info.size)
 
     ts: list[float] = []
     uv: list[tuple[float, float]] = []

@@ -176,6 +176,30 @@ def _draw_ball(frame: np.ndarray, centres: np.ndarray, r: float, color: tuple[in
     frame[cy0:cy1, cx0:cx1] = np.clip(patch * (1.0 - a) + ball * a + 0.5, 0, 255).astype(np.uint8)
 
 
+def draw_pendulum(frame: np.ndarray, pivot_uv: np.ndarray, ball_centres: np.ndarray, radius_px: float,
+                  ball_bgr: tuple[int, int, int] = BALL_BGR, pivot_marker: str | None = None,
+                  pivot_marker_radius_px: float = 9.0, ball_uv: np.ndarray | None = None) -> None:
+    """Draw in place the robot's flange above the pivot [px], the pivot marker (a colour name, or None), the string
+    to the ball (at ball_uv [px], default the middle of its centres) and the ball, motion-blurred over its centres
+    during the exposure (m, 2) [px]."""
+    import cv2
+
+    p = np.asarray(pivot_uv, float)
+    fx, fy = int(round(p[0])), int(round(p[1]))
+    cv2.rectangle(frame, (fx - 28, fy - 70), (fx + 28, fy - 8), (90, 90, 95), -1, cv2.LINE_AA)
+    if pivot_marker is not None:
+        _draw_ball(frame, p[None, :], pivot_marker_radius_px, MARKER_BGR.get(pivot_marker, MARKER_BGR["green"]))
+    c = np.asarray(ball_centres, float).reshape(-1, 2)
+    b = c.mean(axis=0) if ball_uv is None else np.asarray(ball_uv, float)
+    cv2.line(frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1, cv2.LINE_AA, 4)
+    _draw_ball(frame, c, radius_px, ball_bgr)
+
+
+def lab_background(size: tuple[int, int], seed: int = 0) -> np.ndarray:
+    """The backdrop of the rendered videos (a light wall, a darker table), (h, w, 3) BGR."""
+    return _background(size, np.random.default_rng(seed))
+
+
 def rod_occluder(p0: Sequence[float], p1: Sequence[float], width_px: float = 6.0,
                  bgr: tuple[int, int, int] = ROD_BGR) -> Foreground:
     """A static rod from p0 to p1 [px] drawn in front of the ball (it hides the ball where they cross)."""
@@ -343,12 +367,6 @@ def render_pendulum_video(
         for k in range(n_frames):
             frame = bg.copy()
             p = piv_f[k]
-            # the robot's flange above the pivot, and the pivot marker
-            fx, fy = int(round(p[0])), int(round(p[1]))
-            cv2.rectangle(frame, (fx - 28, fy - 70), (fx + 28, fy - 8), (90, 90, 95), -1, cv2.LINE_AA)
-            if pivot_marker is not None:
-                col = MARKER_BGR.get(pivot_marker, MARKER_BGR["green"])
-                _draw_ball(frame, p[None, :], pivot_marker_radius_px, col)
             # motion blur: sub-frame positions over the exposure, centred on the frame time
             half = 0.5 * exposure / fps
             m = 1
@@ -360,8 +378,7 @@ def render_pendulum_video(
             rk = r if H is None else r * float(homography_scale(H, centres.mean(axis=0))[0])
             centres = to_image(centres)
             b = ball_f[k]
-            cv2.line(frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1, cv2.LINE_AA, 4)
-            _draw_ball(frame, centres, rk, ball_bgr)
+            draw_pendulum(frame, p, centres, rk, ball_bgr, pivot_marker, pivot_marker_radius_px, b)
             for draw in foreground:
                 draw(frame, float(tf[k] - t[0]), b)
             if gain is not None:

@@ -20,7 +20,7 @@ from trajectories.errors import CsvFormatError
 from .pipeline import Track
 
 TRACK_COLUMNS = ("t", "frame", "u", "v", "found")
-_NAN_COLUMNS = ("u", "v", "theta", "pivot_u", "pivot_v", "x_m", "y_m")
+_NAN_COLUMNS = ("u", "v", "theta", "pivot_u", "pivot_v", "x_m", "y_m", "theta_x", "theta_y", "t_source")
 
 
 @dataclass(frozen=True)
@@ -60,6 +60,10 @@ def track_columns(track: Track) -> tuple[tuple[str, ...], np.ndarray, list[str]]
         names += ["confidence", "unsure"]
         cols += [track.confidence, track.unsure.astype(float)]
         fmt += ["%.3f", "%d"]
+    for name, values in track.extra:
+        names.append(name)
+        cols.append(np.asarray(values, float))
+        fmt.append("%.6g")
     return tuple(names), np.column_stack(cols), fmt
 
 

@@ -506,7 +506,8 @@ class BallTracker:
         moves like a pendulum — and if that is another, the still frames of this lock are withdrawn and the
         object excluded."""
         o = self.options
-        if f.named or not f.at_rest(o.static_lock_s) or t - f.last_recheck < o.recheck_s:
+        every = o.recheck_s if f.confirmed else min(o.recheck_s, 0.1)  # a tentative lock at rest is doubted more often
+        if f.named or not f.at_rest(o.static_lock_s) or t - f.last_recheck < every:
             return blob
         f.last_recheck = t
         r = f.radius()

@@ -42,6 +42,7 @@ class Scenario:
     notes: str = ""
     time_scale: float = 1.0  # true capture time = container time / time_scale (slow-motion videos)
     extra: dict = field(default_factory=dict)
+    lossy: bool = False  # a low-bitrate codec may erase the ball in some frames: count only where it shows (ball_shown)
 
 
 def _swing(duration_s: float, amplitude_deg: float = 30.0, period_s: float = 1.0, lead_s: float = 0.0,
@@ -240,7 +241,7 @@ def clutter(path: Path, size, duration_s: float, seed: int = 11, codec: str = "m
     track = {"pivot_uv": piv}
     if ball_bgr == ORANGE_BGR:
         track["ball"] = color_spec("orange")
-    return Scenario(name, path, gt, track, _visible(gt) & _clear_of_clutter(gt))
+    return Scenario(name, path, gt, track, _visible(gt) & _clear_of_clutter(gt), lossy=bitrate_kbps is not None)
 
 
 def h264(path: Path, size, duration_s: float, seed: int = 12, bitrate_kbps: float = 100.0) -> Scenario:
@@ -248,7 +249,7 @@ def h264(path: Path, size, duration_s: float, seed: int = 12, bitrate_kbps: floa
     piv, L, r = _geometry(size)
     t, th = _swing(duration_s, amplitude_deg=35.0)
     gt = render_pendulum_video(path, t, th, piv, L, r, size, 60.0, codec="h264", bitrate_kbps=bitrate_kbps, seed=seed)
-    return Scenario(f"H.264 {bitrate_kbps:.0f} kbit/s", path, gt, {"pivot_uv": piv}, _visible(gt))
+    return Scenario(f"H.264 {bitrate_kbps:.0f} kbit/s", path, gt, {"pivot_uv": piv}, _visible(gt), lossy=True)
 
 
 def oblique(path: Path, size, duration_s: float, seed: int = 13, tilt=(-30.0, 38.0, -5.0), fps: float = 60.0,
@@ -287,7 +288,8 @@ def tiny_ball(path: Path, size, duration_s: float, seed: int = 15, radius_px: fl
     t, th = _swing(duration_s, amplitude_deg=30.0)
     gt = render_pendulum_video(path, t, th, piv, L, radius_px, size, 60.0, exposure=0.3, defocus_px=0.4, codec=codec,
                                bitrate_kbps=bitrate_kbps, seed=seed)
-    return Scenario(f"ball {2 * radius_px:.0f} px across", path, gt, {"pivot_uv": piv}, _visible(gt))
+    return Scenario(f"ball {2 * radius_px:.1f} px across" + (f", {codec} {bitrate_kbps:.0f} kbit/s" if bitrate_kbps else ""),
+                    path, gt, {"pivot_uv": piv}, _visible(gt), lossy=bitrate_kbps is not None)
 
 
 def big_ball(path: Path, size, duration_s: float, seed: int = 16, share: float = 0.25) -> Scenario:
@@ -337,6 +339,36 @@ HELD_OUT: dict[str, Callable[..., Scenario]] = {
     "oblique_other_side": lambda p, s, d: oblique(p, s, d, seed=26, tilt=(20.0, -42.0, 8.0), fps=30.0,
                                                   name="held-out: oblique from the other side, 30 fps"),
 }
+
+
+def ball_shown(sc: Scenario, min_share: float = 0.3, min_saturation: int = 60) -> np.ndarray:
+    """(n,) bool: the decoded frame shows the ball where it is — at least min_share of its disc in its colour (hue
+    band, saturation ≥ min_saturation). A low-bitrate encoder sometimes skips the blocks of a moving ball or
+    leaves it as a pale smear: those frames cannot count as "visible"."""
+    import cv2
+
+    from .color import with_min_saturation
+    from .video import iter_frames
+
+    spec = with_min_saturation(sc.track_kwargs.get("ball", color_spec("red")), min_saturation)
+    gt = sc.truth
+    r = gt.ball_radius_px
+    out = np.zeros(len(gt.t), bool)
+    for k, _, frame in iter_frames(sc.path):
+        if k >= len(out):
+            break
+        u, v = gt.ball_uv[k]
+        x0, y0 = int(max(0, math.floor(u - r))), int(max(0, math.floor(v - r)))
+        x1, y1 = int(min(frame.shape[1], math.ceil(u + r) + 1)), int(min(frame.shape[0], math.ceil(v + r) + 1))
+        if x1 <= x0 or y1 <= y0:
+            continue
+        from .color import color_mask
+
+        patch = color_mask(cv2.cvtColor(frame[y0:y1, x0:x1], cv2.COLOR_BGR2HSV), spec) > 0
+        ys, xs = np.mgrid[y0:y1, x0:x1]
+        disc = (xs - u) ** 2 + (ys - v) ** 2 <= r * r
+        out[k] = disc.any() and float(patch[disc].mean()) >= min_share
+    return out
 
 
 @dataclass(frozen=True)

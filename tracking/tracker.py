@@ -350,6 +350,8 @@ class BallTracker:
         self._static = StaticMap(spec, self.options.static_time_constant_s)
         self._excluded: list[tuple[float, float, float]] = []  # (u, v, radius) [px] of objects found not to be the ball
         self._string: deque[float] = deque(maxlen=300)  # distances [px] of confident fixes from the pivot
+        self._string_cache: float | None = None
+        self._string_added = 0
         self._sized = False
         self.confidence = 0.0  # of the blob returned by the last update (0 when none)
         self.rejected_string = 0  # fixes rejected for lying beyond the string's reach
@@ -375,10 +377,14 @@ class BallTracker:
 
     @property
     def string_px(self) -> float | None:
-        """The string length learned from confident fixes [px] (their 95th percentile distance from the pivot)."""
+        """The string length learned from confident fixes [px] (their 95th percentile distance from the pivot;
+        recomputed every 10 fixes)."""
         if len(self._string) < self.options.string_min_fixes:
             return None
-        return float(np.percentile(np.fromiter(self._string, float), 95))
+        if self._string_cache is None or self._string_added >= 10:
+            self._string_cache = float(np.percentile(np.fromiter(self._string, float), 95))
+            self._string_added = 0
+        return self._string_cache
 
     def finish(self) -> None:
         """End of the video: choose among candidates still open (revisions via :meth:`pop_revision`)."""
@@ -449,6 +455,7 @@ class BallTracker:
         self._static.update(frame, t, keep)
         if ok and pivot_uv is not None and self._hyp is None:
             self._string.append(math.hypot(blob.u - pivot_uv[0], blob.v - pivot_uv[1]))
+            self._string_added += 1
 
     def _within_string(self, f: _Follower, blob: Blob, pivot_uv) -> bool:
         """False for a fix farther from the pivot than the string reaches; after 3 in a row the lock is dropped."""
@@ -735,8 +742,11 @@ class BallTracker:
         piv = np.array(hyp.pivots, float)
         piv = piv[np.all(np.isfinite(piv), axis=1)]
         last = blobs[-1] if blobs[-1] is not None else next((b for b in reversed(blobs) if b is not None), None)
-        doubtful = still and len(piv) > 0 and last is not None and not self._plumb(last, tuple(piv[-1]))
-        if doubtful and final:  # nothing moved and nothing hangs below the pivot: none of them is the ball
+        hangs = last is not None and len(piv) > 0 and self._plumb(last, tuple(piv[-1]))
+        # confirmed when it moved like a pendulum, or hangs still below the pivot; else (a held ball, an object) it
+        # stays tentative until it moves
+        doubtful = not choice.moving and not (still and hangs) and not (still and len(piv) == 0 and final)
+        if doubtful and final and len(piv) > 0:  # nothing moved and nothing hangs below the pivot: none of them is the ball
             self._abandon()
             return None
         f.confirmed = not doubtful

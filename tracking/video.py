@@ -199,6 +199,8 @@ class VideoSink:
                 stream.bit_rate = int(bitrate_kbps * 1000)
                 if name == "h264":  # a real low-bandwidth stream: rate-controlled, no lookahead tricks
                     stream.options = {"preset": "veryfast", "bf": "0"}
+            if _AV_CODECS[name] == "libx265":
+                stream.options = {**dict(stream.options or {}), "x265-params": "log-level=error"}
             self._stream = stream
         else:
             if bitrate_kbps is not None:

@@ -60,8 +60,10 @@ def video(
     the plane of motion (metric coordinates; the board's edges level and plumb), so an oblique camera does not
     bias it. When several round blobs of the ball's colour are seen at once, each is followed for a moment
     and the one moving like a pendulum about the pivot is kept (said in a warning); --start names the ball
-    instead. Exit 1 if the ball is found in fewer than --min-found percent of the frames, or the pivot
-    marker in none.
+    instead. Every fix has a confidence: a new lock until confirmed by steady motion, candidates being judged, a
+    fix where the ball's colour has been static are unsure — written found = 0, unsure = 1 (columns confidence,
+    unsure) — and a fix beyond the learned string length is rejected. Exit 1 if the ball is found in fewer than
+    --min-found percent of the frames, or the pivot marker in none.
     """
     import math
     import time

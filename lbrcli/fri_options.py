@@ -24,6 +24,24 @@ def parse_ip(text: str | None) -> str | None:
         raise typer.BadParameter(f"expected a local IP address such as 127.0.0.1 or 0.0.0.0, got {text!r}") from None
 
 
+def parse_host_port(text: str | tuple) -> tuple[str, int]:
+    """HOST:PORT (port 1..65535), at parse time (sim --client, track live --udp)."""
+    from trajectories.numbers import NotANumber, plain_int
+
+    if isinstance(text, tuple):
+        return text
+    host, sep, port = str(text).rpartition(":")
+    if not sep or not host.strip():
+        raise typer.BadParameter(f"expected HOST:PORT, got {text!r}")
+    try:
+        number = plain_int(port)
+    except NotANumber:
+        raise typer.BadParameter(f"the port must be a whole number, got {port!r}") from None
+    if not 1 <= number <= 65535:
+        raise typer.BadParameter(f"the port must be 1..65535, got {number}")
+    return host.strip(), number
+
+
 RobotOpt = Annotated[
     Optional[str],
     typer.Option(

@@ -49,7 +49,7 @@ def guard_outputs(inputs: Named, outputs: Named) -> None:
                 raise OptionError(f"{aname} {apath} and {bname} {bpath} are the same file: give each output its own name")
 
 
-INPUT_OPTIONS = frozenset({"limits", "calibration", "plane", "obstacles", "secret"})  # Path options that are read
+INPUT_OPTIONS = frozenset({"limits", "calibration", "plane", "obstacles", "secret", "geometry"})  # Path options that are read
 
 
 def _path_roles(fn) -> dict[str, tuple[str, str]]:

@@ -78,14 +78,15 @@ def check_video_name(path: str | Path, option: str) -> None:
         raise OptionError(f"{option} {path}: a video name must end in {', '.join(VIDEO_SUFFIXES)}")
 
 
-def open_writer(path: str | Path, fps: float, size: tuple[int, int], target: str | Path | None = None):
-    """An mp4v ``cv2.VideoWriter`` on ``path``; OutputError (exit 1) naming ``target`` when it cannot be opened
-    (a full disk, a quota, no encoder)."""
+def open_writer(path: str | Path, fps: float, size: tuple[int, int], target: str | Path | None = None,
+                codec: str = "mp4v"):
+    """A ``cv2.VideoWriter`` (FourCC ``codec``) on ``path``; OutputError (exit 1) naming ``target`` when it cannot be
+    opened (a full disk, a quota, no encoder)."""
     import cv2
 
     from trajectories.errors import OutputError
 
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), float(fps), tuple(size))
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*codec), float(fps), tuple(int(s) for s in size))
     if not writer.isOpened():
         writer.release()
         raise OutputError("cannot start writing the video (a full disk, a quota or no encoder); nothing was written "
@@ -208,3 +209,73 @@ def prefetched(items: Iterator, depth: int = 8) -> Iterator:
     finally:
         stop.set()
         thread.join(timeout=5.0)
+
+
+# PyAV (FFmpeg) encoders for codecs OpenCV's wheels cannot write, by the name a user gives
+_AV_CODECS = {"h264": "libx264", "hevc": "libx265", "h265": "libx265", "vp9": "libvpx-vp9", "av1": "libsvtav1"}
+
+
+class VideoSink:
+    """Writes BGR frames to a video file: OpenCV's VideoWriter for a FourCC ('mp4v', 'MJPG', ...), PyAV (FFmpeg)
+    for 'h264', 'hevc', 'vp9', 'av1' — optionally at a target bitrate [kbit/s] (a phone's or a webcam's
+    low-bandwidth stream: encoder ghosts, blocking, smeared colour). A writer that cannot start (a full disk, a
+    quota, no encoder) is an OutputError naming ``target`` (the user's name when ``path`` is a temporary)."""
+
+    def __init__(self, path: str | Path, codec: str, fps: float, size: tuple[int, int],
+                 bitrate_kbps: float | None = None, target: str | Path | None = None) -> None:
+        from trajectories.errors import OutputError
+
+        self.path = str(path)
+        self._cv = None
+        self._av = None
+        name = codec.lower()
+        if name in _AV_CODECS:
+            from fractions import Fraction
+
+            try:
+                import av
+            except ImportError:
+                raise InputError(f"writing {codec} needs PyAV (pip install av)", file=self.path) from None
+            try:
+                self._av = av.open(self.path, "w")
+            except OSError as exc:  # PyAV's errors are OSErrors (ENOSPC, EACCES, ...)
+                raise OutputError(f"cannot start writing a {codec!r} video: {exc.strerror or exc}",
+                                  file=self.path if target is None else target) from None  # fmt: skip
+            stream = self._av.add_stream(_AV_CODECS[name], rate=Fraction(fps).limit_denominator(1001))
+            stream.width, stream.height = int(size[0]), int(size[1])
+            stream.pix_fmt = "yuv420p"
+            if bitrate_kbps is not None:
+                stream.bit_rate = int(bitrate_kbps * 1000)
+                if name == "h264":  # a real low-bandwidth stream: rate-controlled, no lookahead tricks
+                    stream.options = {"preset": "veryfast", "bf": "0"}
+            if _AV_CODECS[name] == "libx265":
+                stream.options = {**dict(stream.options or {}), "x265-params": "log-level=error"}
+            self._stream = stream
+        else:
+            if bitrate_kbps is not None:
+                raise ValueError(f"a bitrate is supported for {', '.join(_AV_CODECS)}, not {codec!r}")
+            self._cv = open_writer(self.path, fps, size, target, codec)
+
+    def write(self, frame: np.ndarray) -> None:
+        if self._cv is not None:
+            self._cv.write(frame)
+            return
+        import av
+
+        for packet in self._stream.encode(av.VideoFrame.from_ndarray(frame, format="bgr24")):
+            self._av.mux(packet)
+
+    def close(self) -> None:
+        if self._cv is not None:
+            self._cv.release()
+        elif self._av is not None:
+            for packet in self._stream.encode():
+                self._av.mux(packet)
+            self._av.close()
+        self._cv = self._av = None
+
+    def __enter__(self) -> "VideoSink":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -6,27 +6,9 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..fri_options import parse_ip
+from ..fri_options import parse_host_port, parse_ip
 from ..options import (DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, Floats, JointVector, JsonOpt, LimitsOpt, ToolOpt,
                        choice, floats, joints, number)  # fmt: skip
-
-
-def _parse_client(text: str | tuple) -> tuple[str, int]:
-    """--client HOST:PORT (port 1..65535), at parse time."""
-    from trajectories.numbers import NotANumber, plain_int
-
-    if isinstance(text, tuple):
-        return text
-    host, sep, port = str(text).rpartition(":")
-    if not sep or not host.strip():
-        raise typer.BadParameter(f"expected HOST:PORT, got {text!r}")
-    try:
-        number = plain_int(port)
-    except NotANumber:
-        raise typer.BadParameter(f"the port must be a whole number, got {port!r}") from None
-    if not 1 <= number <= 65535:
-        raise typer.BadParameter(f"the port must be 1..65535, got {number}")
-    return host.strip(), number
 
 
 def _cartesian_stiffness(text: str | tuple) -> tuple[float, float]:
@@ -41,7 +23,7 @@ def sim(
     port: Annotated[int, number("--port", low=0, high=65535, integer=True, help="UDP port the simulator sends from and listens on (0: any free port).")] = 0,
     host: Annotated[str, typer.Option("--host", parser=parse_ip, metavar="IP", help="IP address the simulator binds.")] = "127.0.0.1",
     period: Annotated[int, number("--period", low=1, high=100, unit="ms", integer=True, help="Send period \\[ms].")] = 1,
-    client: Annotated[tuple, typer.Option("--client", parser=_parse_client, metavar="HOST:PORT", help="Where monitoring messages go: HOST:PORT of the FRI client.")] = "127.0.0.1:30200",
+    client: Annotated[tuple, typer.Option("--client", parser=parse_host_port, metavar="HOST:PORT", help="Where monitoring messages go: HOST:PORT of the FRI client.")] = "127.0.0.1:30200",
     q0: Annotated[JointVector, joints("--q0", help="Start joint positions q1..q7 \\[rad, or with deg suffix].")] = THESIS_Q_START,
     length: Annotated[Optional[float], number("--length", low=0, high=5, low_open=True, unit="m", help="Simulate a ball on a string of this length \\[m] hanging from the TCP.")] = None,
     damping: Annotated[float, number("--damping", low=0, high=1000, unit="1/s", help="Damping of the simulated ball \\[1/s].")] = 0.0,

@@ -1,4 +1,5 @@
-"""`lbr track video` (ball centre and string angle per frame) and `lbr track calibrate` (checkerboard camera calibration)."""
+"""`lbr track video` (ball centre and string angle per frame), `lbr track calibrate` (checkerboard camera calibration)
+and `lbr track live` (the same tracker on a camera's stream)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,8 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..options import JsonOpt, floats, grid, number
+from ..fri_options import parse_host_port
+from ..options import JsonOpt, choice, floats, grid, number
 
 
 def _check_out(path: Path | None, option: str) -> None:
@@ -23,7 +25,7 @@ def video(
     pivot: Annotated[Optional[tuple], floats("--pivot", count=2, low=0, high=100_000, unit="px", metavar="U,V", help="Fixed pivot (string attachment) U,V \\[px] in the video image.")] = None,
     pivot_color: Annotated[Optional[str], typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame (e.g. green).")] = None,
     color: Annotated[str, typer.Option("--color", help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or an OpenCV hue range H1-H2 (0–179).")] = "red",
-    radius: Annotated[Optional[float], number("--radius", low=0, high=10_000, low_open=True, unit="px", help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: 2–62 px radius).")] = None,
+    radius: Annotated[Optional[float], number("--radius", low=0, high=10_000, low_open=True, unit="px", help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: learned, from a 3 px ball to a radius of 1/6 of the frame height).")] = None,
     min_circularity: Annotated[float, number("--min-circularity", low=0, high=1, help="Minimum 4π·area/perimeter² of the ball blob (disc ≈ 0.9, cable ≈ 0.1).")] = 0.6,
     min_fit: Annotated[float, number("--min-fit", low=0, high=1, help="Minimum overlap (IoU) of the blob with its moment ellipse (disc ≥ 0.9, any box ≈ 0.83).")] = 0.88,
     calibration: Annotated[Optional[Path], typer.Option("--calibration", help="Camera JSON from `lbr track calibrate`: undistort points; with a plane, θ in the plane of motion and x_m,y_m \\[m].")] = None,
@@ -46,8 +48,10 @@ def video(
     the plane of motion (metric coordinates; the board's edges level and plumb), so an oblique camera does not
     bias it. When several round blobs of the ball's colour are seen at once, each is followed for a moment
     and the one moving like a pendulum about the pivot is kept (said in a warning); --start names the ball
-    instead. Exit 1 if the ball is found in fewer than --min-found percent of the frames, or the pivot
-    marker in none.
+    instead. Every fix has a confidence: a new lock until confirmed by steady motion, candidates being judged, a
+    fix where the ball's colour has been static are unsure — written found = 0, unsure = 1 (columns confidence,
+    unsure) — and a fix beyond the learned string length is rejected. Exit 1 if the ball is found in fewer than
+    --min-found percent of the frames, or the pivot marker in none.
     """
     import contextlib
     import math
@@ -81,10 +85,9 @@ def video(
         _check_out(p, name)
     if preview is not None:
         check_video_name(preview, "--preview")
-    shape = {"min_circularity": min_circularity, "min_ellipse_fit": min_fit}
-    gates = BlobGates.for_radius(radius, **shape) if radius else BlobGates(**shape)
-    options = TrackerOptions(gates=gates, start_uv=start_uv)
-    pivot_options = TrackerOptions(gates=BlobGates(**shape))
+    options = _tracker_options(radius, min_circularity, min_fit, start_uv)
+    gates = options.gates
+    pivot_options = TrackerOptions(gates=BlobGates(min_circularity=min_circularity, min_ellipse_fit=min_fit))
     cal = load_calibration(calibration) if calibration is not None else None
     info = probe_video(video_path)
     for point, name in ((piv_uv, "--pivot"), (start_uv, "--start")):
@@ -317,6 +320,178 @@ def calibrate(
     rep.emit(figures)
 
 
+def live(
+    source: Annotated[str, typer.Argument(metavar="SOURCE", help="Camera: a V4L2 device index (0) or path (/dev/video0), a stream URL (http://…/stream.mjpg, rtsp://…), or a video file played at its frame rate.")],
+    out: Annotated[Optional[Path], typer.Option("-o", "--out", help="Track CSV as `track video` writes, plus theta_x,theta_y \\[rad], latency_s, t_source \\[s]; t from the first frame's capture.")] = None,
+    duration: Annotated[Optional[float], number("--duration", low=0, high=86400, low_open=True, unit="s", help="Stop after this long \\[s] (default: when the source ends, or Ctrl-C).")] = None,
+    pivot: Annotated[Optional[tuple], floats("--pivot", count=2, low=0, high=100_000, unit="px", metavar="U,V", help="Fixed pivot U,V \\[px] in the image.")] = None,
+    pivot_color: Annotated[Optional[str], typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame.")] = None,
+    color: Annotated[str, typer.Option("--color", help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or a hue range H1-H2 (0–179).")] = "red",
+    radius: Annotated[Optional[float], number("--radius", low=0, high=10_000, low_open=True, unit="px", help="Approximate ball radius \\[px] (default: learned, 1.5 px to 1/6 of the frame height).")] = None,
+    calibration: Annotated[Optional[Path], typer.Option("--calibration", help="Camera JSON from `lbr track calibrate` (undistortion; θ in the plane of motion).")] = None,
+    geometry: Annotated[Optional[Path], typer.Option("--geometry", help="Camera pose JSON (tracking.camera_geometry: camera_matrix, rotation, centre_m — or position_m, look_at_m, fov_deg — and pivot_m, string_m): adds the tilt components θx, θy in the base frame.")] = None,
+    udp: Annotated[Optional[tuple], typer.Option("--udp", parser=parse_host_port, metavar="HOST:PORT", help="Send every result to HOST:PORT as one UDP datagram (see --udp-format).")] = None,
+    udp_format: Annotated[str, choice("--udp-format", choices=("binary", "json"), help="binary (64 bytes little-endian, layout in docs/guides/camera.md) or json.")] = "binary",
+    mqtt: Annotated[Optional[str], typer.Option("--mqtt", help="Publish results as JSON to mqtt://HOST:PORT/TOPIC (at most --mqtt-rate per second).")] = None,
+    mqtt_rate: Annotated[float, number("--mqtt-rate", low=0, high=1000, low_open=True, unit="Hz", help="MQTT messages per second \\[Hz].")] = 50.0,
+    fps: Annotated[Optional[float], number("--fps", low=0, high=100_000, low_open=True, unit="1/s", help="Playback rate \\[1/s] of a video file SOURCE (default: its own).")] = None,
+    min_found: Annotated[float, number("--min-found", low=0, high=100, unit="%", help="Exit 1 when the ball is found in fewer than this share of the tracked frames \\[%].")] = 50.0,
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of θ and u, v over time, lost frames marked.")] = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Track the ball live in a camera's stream at the camera's rate; print latency and figures, publish results.
+
+    The same tracker as `lbr track video` runs on the newest frame: when it falls behind, frames are dropped (counted),
+    never queued. Each result has the frame's capture time and its latency (capture → result). With --udp every
+    result leaves as one datagram; with --mqtt as JSON. θ comes from --pivot/--pivot-color (or the pivot of
+    --geometry projected into the image); --geometry also gives θx, θy toward base +x, +y. Exit 1 when no frame
+    arrives or the ball is found in fewer than --min-found percent of the tracked frames; 2 when SOURCE cannot be
+    opened.
+    """
+    import math
+    import signal
+    import time
+
+    import numpy as np
+
+    from trajectories.errors import OptionError
+    from tracking.calibration import load_calibration
+    from tracking.camera_geometry import load_geometry
+    from tracking.color import color_spec
+    from tracking.live import LiveTracker, TiltSetup, track_from_results
+    from tracking.trackfile import write_track_csv
+
+    from ..console import Reporter
+
+    rep = Reporter(json_out)
+    if pivot is not None and pivot_color is not None:
+        raise OptionError("give either --pivot or --pivot-color, not both")
+    for p, name in ((out, "--out"), (plot, "--plot")):
+        _check_out(p, name)
+    ball_spec = color_spec(color, "--color")
+    piv_spec = color_spec(pivot_color, "--pivot-color") if pivot_color is not None else None
+    piv_uv = pivot
+    options = _tracker_options(radius, 0.6, 0.88, None)
+    cal = load_calibration(calibration) if calibration is not None else None
+    tilt = None
+    if geometry is not None:
+        geo, d = load_geometry(geometry)
+        if "pivot_m" not in d or "string_m" not in d:
+            raise OptionError(f"--geometry {geometry}: needs pivot_m [x,y,z] and string_m for the tilt")
+        tilt = TiltSetup(geo, tuple(float(x) for x in d["pivot_m"]), float(d["string_m"]))
+    udp_pub = mqtt_pub = None
+    if udp is not None:
+        from ..lab.camera_publish import UdpPublisher
+
+        host, port = udp
+        udp_pub = UdpPublisher(host.strip("[]"), port, udp_format)
+    if mqtt is not None:
+        from ..lab.telemetry import TelemetryPublisher, parse_mqtt_url
+
+        mqtt_pub = TelemetryPublisher(parse_mqtt_url(mqtt), mqtt_rate)
+    results = []
+
+    def on_result(r) -> None:  # noqa: ANN001
+        results.append(r)
+        if udp_pub is not None:
+            udp_pub.publish(r)
+        if mqtt_pub is not None and mqtt_pub.due(r.t_capture):
+            from ..lab.camera_publish import result_dict
+
+            mqtt_pub.offer(r.t_capture, lambda r=r: result_dict(r))
+
+    tracker = LiveTracker(source, ball_spec, options=options, pivot_uv=piv_uv, pivot_color=piv_spec, tilt=tilt,
+                          calibration=cal, on_result=on_result, file_fps=fps)
+    interrupted = False
+
+    def _interrupt(signum, frame) -> None:  # noqa: ANN001
+        nonlocal interrupted
+        interrupted = True
+
+    old_handler = signal.signal(signal.SIGINT, _interrupt)
+    tracker.start()
+    if mqtt_pub is not None:
+        mqtt_pub.start()
+    t0 = time.monotonic()
+    try:
+        while tracker.running and not interrupted and (duration is None or time.monotonic() - t0 < duration):
+            time.sleep(0.02)
+    finally:
+        tracker.stop()
+        signal.signal(signal.SIGINT, old_handler)
+        if udp_pub is not None:
+            udp_pub.close()
+        if mqtt_pub is not None:
+            mqtt_pub.stop()
+    elapsed = time.monotonic() - t0
+    st = tracker.stats
+    lat = np.array(st.latency_s) * 1e3
+    trk = np.array(st.track_s) * 1e3
+
+    def pct(a, q):  # noqa: ANN001
+        return float(np.percentile(a, q)) if len(a) else math.nan
+
+    n = st.tracked
+    figures = {
+        "source": str(source), "frames_read": st.read, "frames_tracked": n, "frames_dropped": st.dropped,
+        "found": st.found, "found_percent": 100.0 * st.found / n if n else 0.0, "duration_s": elapsed,
+        "rate_fps": n / elapsed if elapsed > 0 else math.nan, "source_fps": st.read / elapsed if elapsed > 0 else math.nan,
+        "width": tracker.size[0] if tracker.size else None, "height": tracker.size[1] if tracker.size else None,
+        "latency_ms_p50": pct(lat, 50), "latency_ms_p95": pct(lat, 95), "latency_ms_p99": pct(lat, 99),
+        "latency_ms_max": float(lat.max()) if len(lat) else math.nan,
+        "track_ms_p50": pct(trk, 50), "track_ms_p99": pct(trk, 99), "udp_sent": udp_pub.sent if udp_pub else 0,
+        "mqtt_published": mqtt_pub.published if mqtt_pub else 0, "interrupted": interrupted, "errors": st.errors,
+    }
+    rep.print(
+        f"{source}: {st.read} frames read in {elapsed:.2f} s ({figures['source_fps']:.1f} fps), {n} tracked, "
+        f"{st.dropped} dropped while busy; ball found in {st.found} ({figures['found_percent']:.1f} %)"
+    )
+    if n:
+        rep.print(f"latency capture → result: p50 {figures['latency_ms_p50']:.2f} ms, p95 {figures['latency_ms_p95']:.2f} ms, "
+                  f"max {figures['latency_ms_max']:.2f} ms; tracking p50 {figures['track_ms_p50']:.2f} ms per frame")
+    th = np.array([r.theta for r in results])
+    if np.isfinite(th).any():
+        figures["theta_min_deg"] = float(np.degrees(np.nanmin(th)))
+        figures["theta_max_deg"] = float(np.degrees(np.nanmax(th)))
+        rep.print(f"θ from {figures['theta_min_deg']:.2f}° to {figures['theta_max_deg']:.2f}°")
+    for e in st.errors:
+        rep.warn(e)
+    if results and (out is not None or plot is not None):
+        track = track_from_results(results, source, tracker.size, tracker.fps_nominal,
+                                   piv_uv is not None or piv_spec is not None or tilt is not None)
+        if out is not None:
+            write_track_csv(out, track)
+            figures["out"] = str(out)
+            rep.print(f"wrote {out}")
+        if plot is not None:
+            from ..plots.track import plot_track
+
+            plot_track(track, plot, title=str(source))
+            figures["plot"] = str(plot)
+            rep.print(f"plot: {plot}")
+    rep.emit(figures)
+    if n == 0:
+        rep.warn(f"no frame was tracked from {source}")
+        raise typer.Exit(1)
+    if figures["found_percent"] < min_found:
+        rep.warn(f"the ball was found in only {figures['found_percent']:.1f} % of the frames (--min-found {min_found:g} %)")
+        raise typer.Exit(1)
+
+
+def _tracker_options(radius: float | None, min_circularity: float, min_fit: float, start_uv):  # noqa: ANN001
+    """TrackerOptions from the shared command-line options, checked at parse time (gates for a given radius, or
+    learned)."""
+    from tracking.detect import BlobGates
+    from tracking.tracker import TrackerOptions
+
+    shape = {"min_circularity": min_circularity, "min_ellipse_fit": min_fit}
+    if radius:
+        return TrackerOptions(gates=BlobGates.for_radius(radius, **shape), start_uv=start_uv, max_radius_share=None,
+                              tiny_search=radius < 3.0)
+    return TrackerOptions(gates=BlobGates(**shape), start_uv=start_uv)
+
+
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
     groups["track"].command("video")(video)
     groups["track"].command("calibrate")(calibrate)
+    groups["track"].command("live")(live)

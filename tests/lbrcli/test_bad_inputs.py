@@ -168,6 +168,7 @@ BASE = {
     "track video": ["track", "video", "{ws}/video.mp4", "-o", "{out}/tr.csv"],
     "track calibrate": ["track", "calibrate", "{ws}/noise.png", "-o", "{out}/cal.json"],
     "track film": ["track", "film", "{ws}/log.csv", "-o", "{out}/f.mp4"],
+    "track live": ["track", "live", "{ws}/video.mp4", "--duration", "1"],
     "demo": ["demo", "--out", "{out}/demo"],
     "control upright": ["control", "upright"],
     "control damp": ["control", "damp", "{ws}/joint.csv"],
@@ -320,6 +321,8 @@ BEYOND = "3," + ",".join(map(str, Q_START[1:]))  # A1 3 rad: outside ±170°
         ("track video", ("--pivot", "1000,10"), "is outside the 320x240 px image"),
         ("track video", ("--pivot", "10,10", "--pivot-color", "green"), "either --pivot or --pivot-color"),
         ("track video", ("--color", "plaid"), "--color"),
+        ("track live", ("--pivot", "10,10", "--pivot-color", "green"), "either --pivot or --pivot-color"),
+        ("track live", ("--mqtt", "http://127.0.0.1:1/x"), "--mqtt"),
         ("monitor", ("--robot", "192.0.2.1", "--length", "0.3"), "apply to the simulator only"),
     ],
 )
@@ -595,7 +598,8 @@ OUTPUTS = [
     ("plan swing-up", "--plot"), ("plan swing-up", "--task-out"), ("execute", "--log"), ("execute", "--plot"),
     ("monitor", "--log"), ("ptp", "--log"), ("serve", "--log"), ("listen", "-o"), ("track video", "-o"),
     ("track video", "--plot"), ("track video", "--preview"), ("track video", "--candidates"),
-    ("track calibrate", "-o"), ("track film", "-o"), ("track film", "--truth"), ("demo", "--out"),
+    ("track calibrate", "-o"), ("track film", "-o"), ("track film", "--truth"), ("track live", "-o"),
+    ("track live", "--plot"), ("demo", "--out"),
     ("control upright", "--log"), ("control upright", "--plot"), ("control damp", "--log"),
     ("control damp", "--plot"),
 ]  # fmt: skip

@@ -108,12 +108,7 @@ class SwingUpResult:
             "min_tension_margin": slack.min_margin,  # [m/s²] tension / ball mass
             "min_tension_n": slack.min_margin * r.mass,
             "first_slack_s": slack.t_first_slack,
-            "limits_ok": self.check.ok,
-            "max_ratio": {k: float(v.max()) for k, v in self.check.ratios().items()},
-            "violations": [v.describe() for v in self.check.failing],
-            "duration_s": float(self.trajectory.duration),
-            "samples": len(self.trajectory),
-            "dt_s": float(self.trajectory.dt),
+            **self.check.plan_figures(self.trajectory),
             "t_rest_s": plan.t_rest,
             "max_travel_m": float(np.max(np.abs(plan.x))),
             "bounds": {"v_max_m_s": self.bounds.v_max, "a_max_m_s2": self.bounds.a_max,

@@ -54,13 +54,15 @@ def _rot_z(angle: np.ndarray) -> np.ndarray:
 
 
 def pivot_poses(robot: Robot, setup: ArmSetup, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """TCP positions (n, 3) [m] and rotations (n, 3, 3) for pivot displacements x (n,) [m] along base y."""
+    """TCP positions (n, 3) [m] and rotations (n, 3, 3) for pivot displacements x [m]: (n,) along base y, or
+    (n, 2) along base y and z."""
     start = robot.fk(np.asarray(setup.q_start, dtype=float))
     p0, r0 = start.translation, start.rotation
     x = np.asarray(x, dtype=float)
-    pos = p0[None, :] + x[:, None] * np.array([0.0, 1.0, 0.0])
+    yz = np.column_stack([x, np.zeros_like(x)]) if x.ndim == 1 else x
+    pos = p0[None, :] + np.column_stack([np.zeros(len(yz)), yz])
     if setup.orientation == "fixed":
-        rot = np.broadcast_to(r0, (x.size, 3, 3)).copy()
+        rot = np.broadcast_to(r0, (len(pos), 3, 3)).copy()
     else:
         yaw = np.arctan2(pos[:, 1], pos[:, 0]) - math.atan2(p0[1], p0[0])
         rot = np.einsum("nij,jk->nik", _rot_z(yaw), r0)
@@ -77,8 +79,9 @@ def joint_path(robot: Robot, setup: ArmSetup, t: np.ndarray, x: np.ndarray, limi
 
 
 def axis_bounds(robot: Robot, setup: ArmSetup, limits: JointLimits, travel: float, margin: float = 0.1,
-                samples: int = 41, first_order: bool = False) -> TaskBounds:
-    """Pivot speed, acceleration and jerk along base y that keep every joint within (1 − margin)·limits.
+                samples: int = 41, first_order: bool = False, axis: str = "y") -> TaskBounds:
+    """Pivot speed, acceleration and jerk along base y (``axis`` "z": base z) that keep every joint within
+    (1 − margin)·limits.
 
     q(y) is solved by IK over |y| ≤ travel [m]; with q' = dq/dy, q'' and q''' (finite differences, max over
     the band) the joint rates are q̇ = q'·v, q̈ = q'·a + q''·v², q⃛ = q'·j + 3q''·v·a + q'''·v³, bounded
@@ -87,8 +90,12 @@ def axis_bounds(robot: Robot, setup: ArmSetup, limits: JointLimits, travel: floa
     """
     y = np.linspace(-travel, travel, samples)
     mid = samples // 2
-    up, _ = joint_path(robot, setup, y[mid:], y[mid:], limits)
-    down, _ = joint_path(robot, setup, y[mid::-1], y[mid::-1], limits)
+
+    def disp(d: np.ndarray) -> np.ndarray:
+        return d if axis == "y" else np.column_stack([np.zeros_like(d), d])
+
+    up, _ = joint_path(robot, setup, y[mid:], disp(y[mid:]), limits)
+    down, _ = joint_path(robot, setup, y[mid::-1], disp(y[mid::-1]), limits)
     q = np.vstack([down.q[::-1], up.q[1:]])
     h = y[1] - y[0]
     d1, d2, d3 = derivatives(q, h, 3)

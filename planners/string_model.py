@@ -8,6 +8,7 @@ cycle by cycle in the FRI simulator); ``string_penalty`` is the deliberately dif
   l·s̈ = (I − s sᵀ)(g − p̈) − l|ṡ|²s) plus the tangential part of the air drag. Slack (|b − p| < l or T ≤ 0): free
   flight, b̈ = g − k·|ḃ|·ḃ. Re-tension (|b − p| reaches l while the ball moves away): an impulse along the string,
   the radial velocity relative to the anchor v_r > 0 becomes −e_s·v_r (``retension`` e_s = 0: fully inelastic).
+  An optional viscous damping of the taut swing (−c·ṡ) stands for losses the model does not resolve.
 - Ball: a sphere of radius r and mass m. Air drag k = ½·ρ·C_d·π·r²/m [1/m]; the mass enters the motion only here (the
   robot is position controlled and the string massless).
 - Cup: an open cylinder fixed to the flange, a solid of revolution about its axis a through the anchor: a bottom
@@ -97,12 +98,14 @@ class StringModel:
     restitution: float = 0.5  # ball–cup normal restitution
     friction: float = 0.3  # ball–cup Coulomb friction
     rest_speed: float = 0.05  # [m/s] a ball meeting the bottom slower than this rests in the cup
+    damping: float = 0.0  # [1/s] viscous damping of the taut swing (−damping·ṡ, as ``pendulum.rhs``)
 
     def validate(self) -> None:
         """ValueError naming the first value out of range."""
         checks = [
             (all(math.isfinite(v) for v in (self.length, self.ball.radius, self.ball.mass, self.retension,
-                                            self.restitution, self.friction, self.rest_speed)), "values must be finite"),
+                                            self.restitution, self.friction, self.rest_speed, self.damping)),
+             "values must be finite"),
             (self.length > 0, f"string length must be > 0 m, got {self.length:g}"),
             (self.ball.radius > 0, f"ball radius must be > 0 m, got {self.ball.radius:g}"),
             (self.ball.mass > 0, f"ball mass must be > 0 kg, got {self.ball.mass:g}"),
@@ -111,6 +114,7 @@ class StringModel:
             (0.0 <= self.restitution <= 1.0, f"restitution must be in [0, 1], got {self.restitution:g}"),
             (self.friction >= 0.0, f"friction must be >= 0, got {self.friction:g}"),
             (self.rest_speed >= 0.0, f"rest speed must be >= 0 m/s, got {self.rest_speed:g}"),
+            (self.damping >= 0.0, f"damping must be >= 0 1/s, got {self.damping:g}"),
         ]
         c = self.cup
         if c is not None:
@@ -171,9 +175,11 @@ def drag_accel(v: Vec3, drag: float) -> Vec3:
     return (k * v[0], k * v[1], k * v[2])
 
 
-def taut_accel(s: Vec3, sdot: Vec3, pivot_vel: Vec3, pivot_acc: Vec3, length: float, drag: float) -> Vec3:
-    """s̈ [1/s²] of the taut string: the spherical pendulum (``pendulum.rhs``) plus the tangential drag / l."""
-    sdd = _rhs_floats(s, sdot, pivot_acc, length, 0.0)
+def taut_accel(s: Vec3, sdot: Vec3, pivot_vel: Vec3, pivot_acc: Vec3, length: float, drag: float,
+               damping: float = 0.0) -> Vec3:
+    """s̈ [1/s²] of the taut string: the spherical pendulum (``pendulum.rhs``, viscous ``damping`` [1/s]) plus the
+    tangential drag / l."""
+    sdd = _rhs_floats(s, sdot, pivot_acc, length, damping)
     if drag == 0.0:
         return sdd
     f = drag_accel(axpy(length, sdot, pivot_vel), drag)

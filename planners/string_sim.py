@@ -158,12 +158,12 @@ class _Runner:
     def taut(self, t: float, s: Vec3, sd: Vec3) -> tuple[float, Vec3, Vec3] | None:
         from scipy.integrate import solve_ivp
 
-        l, k, pv = self.l, self.k, self.pv
+        l, k, pv, c = self.l, self.k, self.pv, self.m.damping
 
         def f(tt, y):
             s_, v_ = _as_tuple(y, 0), _as_tuple(y, 3)
             _, pvel, pacc = pv.state(tt)
-            return (*v_, *taut_accel(s_, v_, pvel, pacc, l, k))
+            return (*v_, *taut_accel(s_, v_, pvel, pacc, l, k, c))
 
         def tension(tt, y):
             _, pvel, pacc = pv.state(tt)

@@ -158,11 +158,11 @@ class StringStepper:
             self.b, self.v = axpy(1.0, self.offset, self.p), self._pv
 
     def _taut(self, iv: _Interval, tau: float, h: float) -> float:
-        l, k = self.l, self.k
+        l, k, c = self.l, self.k, self.m.damping
 
         def deriv(tt, s, sd):
             _, pv, pa = iv.at(tt)
-            return taut_accel(s, sd, pv, pa, l, k)
+            return taut_accel(s, sd, pv, pa, l, k, c)
 
         def tension(tt, s, sd):
             _, pv, pa = iv.at(tt)

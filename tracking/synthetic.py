@@ -151,6 +151,18 @@ def _draw_ball(frame: np.ndarray, centres: np.ndarray, r: float, color: tuple[in
     frame[cy0:cy1, cx0:cx1] = np.clip(patch * (1.0 - a) + ball * a + 0.5, 0, 255).astype(np.uint8)
 
 
+def _string_polyline(p: np.ndarray, b: np.ndarray, length: float, n: int = 12) -> np.ndarray:
+    """(n, 2) points of a string of ``length`` [px] from p to b: straight when taut, sagging (a parabola hanging down
+    by the excess length) when the ball is nearer."""
+    d = float(np.hypot(*(b - p)))
+    u = np.linspace(0.0, 1.0, n)[:, None]
+    line = p[None, :] + u * (b - p)[None, :]
+    if d >= 0.99 * length:
+        return line
+    sag = 0.5 * math.sqrt(max(length * length - d * d, 0.0))
+    return line + np.array([0.0, 1.0]) * (4.0 * sag * u * (1.0 - u))
+
+
 def rod_occluder(p0: Sequence[float], p1: Sequence[float], width_px: float = 6.0,
                  bgr: tuple[int, int, int] = ROD_BGR) -> Foreground:
     """A static rod from p0 to p1 [px] drawn in front of the ball (it hides the ball where they cross)."""
@@ -241,6 +253,7 @@ def render_pendulum_video(
     foreground: Sequence[Foreground] = (),
     plane_to_image: np.ndarray | None = None,
     jpeg_quality: int | None = None,
+    ball_path: np.ndarray | None = None,
     seed: int = 0,
     progress: Callable[[int], None] | None = None,
 ) -> GroundTruth:
@@ -257,7 +270,9 @@ def render_pendulum_video(
     on every frame after the ball (occluders, a hand); plane_to_image: homography from the plane of motion
     (pivot_uv, string_px and ball_radius_px are then in plane px) to the image (ball radius scaled by the
     local scale); the returned ball and pivot positions are in the image, θ in the plane; jpeg_quality:
-    each frame JPEG-compressed at this quality (1–100) before encoding (heavy compression artifacts).
+    each frame JPEG-compressed at this quality (1–100) before encoding (heavy compression artifacts); ball_path:
+    (n, 2) ball centres [px] per sample instead of pivot + string_px·(sin θ, cos θ) — a ball that may fly on a slack
+    string (drawn sagging when the ball is nearer than string_px); θ is then the direction pivot → ball.
     """
     import cv2
 
@@ -287,8 +302,11 @@ def render_pendulum_video(
         return out
 
     def state(times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        th = interp(times, theta)
         pv = np.column_stack([interp(times, piv[:, 0]), interp(times, piv[:, 1])])
+        if ball_path is not None:
+            b = np.column_stack([interp(times, ball_path[:, 0]), interp(times, ball_path[:, 1])])
+            return np.arctan2(b[:, 0] - pv[:, 0], b[:, 1] - pv[:, 1]), pv, b
+        th = interp(times, theta)
         return th, pv, pv + L * np.column_stack([np.sin(th), np.cos(th)])
 
     H = None if plane_to_image is None else np.asarray(plane_to_image, float)
@@ -335,7 +353,9 @@ def render_pendulum_video(
             rk = r if H is None else r * float(homography_scale(H, centres.mean(axis=0))[0])
             centres = to_image(centres)
             b = ball_f[k]
-            cv2.line(frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1, cv2.LINE_AA, 4)
+            string = _string_polyline(p, b, L)
+            cv2.polylines(frame, [np.round(string * 16).astype(np.int32).reshape(-1, 1, 2)], False, (45, 45, 50), 1,
+                          cv2.LINE_AA, 4)
             _draw_ball(frame, centres, rk, ball_bgr)
             for draw in foreground:
                 draw(frame, float(tf[k] - t[0]), b)

@@ -25,7 +25,10 @@ def compare(
     Lag convention: track time = prediction time + lag. The lag is searched within a window (reported) and the
     best other peak of the match score is reported too: when it scores nearly as well (a steady swing matches
     itself one period off) a warning says to give --lag or a tighter --max-lag. Frames where the ball (or
-    pivot) was not found are skipped. Exit 1 when prediction and track do not overlap.
+    pivot) was not found are skipped. A cup-and-ball prediction (`lbr plan cup-and-ball --prediction`, with phase,
+    ball and anchor columns) against a track with a pivot marker is also compared by position where its string is
+    slack (the free flight; the track has no θ there): the image scale is the tracked string length over the
+    model's. Exit 1 when prediction and track do not overlap.
     """
     import math
 
@@ -78,6 +81,14 @@ def compare(
     )
     if cmp.mirrored:
         rep.warn("the track's θ matches the prediction much better negated: the camera sees the motion mirrored — try --flip")
+    positions = _slack_positions(pred, tr, cmp.lag_s, flip) if column == "theta" else None
+    if positions is not None:
+        if positions.frames:
+            rep.print(f"slack string (free flight) over {positions.frames} frames: ball position RMS error "
+                      f"{1e3 * positions.rms_m:.1f} mm, max {1e3 * positions.max_m:.1f} mm (scale "
+                      f"{positions.px_per_m:.0f} px/m from the string's length)")
+        else:
+            rep.print("the prediction's slack phase and the track do not overlap: no positions compared")
     if plot is not None:
         from ..plots.compare import plot_compare
 
@@ -102,8 +113,33 @@ def compare(
             "flipped": flip,
             "track_frames": int(len(tr.t)),
             "track_theta_frames": int(np.isfinite(tr.theta).sum()),
+            "slack_position": None if positions is None else {
+                "frames": positions.frames, "rms_m": positions.rms_m, "max_m": positions.max_m,
+                "px_per_m": positions.px_per_m},
         }
     )
+
+
+def _slack_positions(pred, tr, lag: float, flip: bool):
+    """Ball positions where the prediction's string is slack (a cup-and-ball prediction with ball and anchor columns)
+    against the track's ball relative to its pivot marker; None when either lacks them."""
+    import numpy as np
+
+    from tracking.compare_positions import compare_positions
+    from tracking.slack import string_length_px
+
+    needed = ("phase", "ball_y", "ball_z", "anchor_y", "anchor_z")
+    if not all(pred.has(c) for c in needed) or tr.pivot_uv is None:
+        return None
+    phase = pred.column("phase")
+    rel = np.column_stack([pred.column("ball_y") - pred.column("anchor_y"), pred.column("ball_z") - pred.column("anchor_z")])
+    taut = phase == 0
+    if not taut.any() or not (phase == 1).any():
+        return None
+    length = float(np.median(np.hypot(*rel[taut].T)))
+    rel_px = tr.uv - tr.pivot_uv
+    return compare_positions(pred.column("t"), rel, phase == 1, length, tr.t, rel_px,
+                             string_length_px(np.hypot(*rel_px.T)), lag, flip)
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -34,6 +34,7 @@ from ..fri_options import (
     VersionOpt,
     WaitOpt,
 )
+from ..cup_options import CupSpecOpt
 from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
 
 
@@ -96,6 +97,7 @@ def execute(
     damping: Annotated[
         float, typer.Option("--damping", help="Simulator only: damping of the simulated ball \\[1/s] (0: it swings on).")
     ] = 0.0,
+    cup: CupSpecOpt = None,
     start_sway: Annotated[
         float,
         typer.Option(
@@ -157,7 +159,7 @@ def execute(
         raise OptionError(f"--settle must be 0..600 s, got {settle:g}")
     if not 1 <= receive_multiplier <= 100:
         raise OptionError(f"--receive-multiplier must be 1..100, got {receive_multiplier}")
-    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--damping": damping != 0.0,
+    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--damping": damping != 0.0, "--cup": cup is not None,
                                  "--receive-multiplier": receive_multiplier != 1, "--sim-lenient": sim_lenient})  # fmt: skip
     if not (math.isfinite(start_sway) and 0 < start_sway <= 45):
         raise OptionError(f"--start-sway must be in (0, 45] deg, got {start_sway:g}")
@@ -231,6 +233,12 @@ def execute(
                                       sim_start=sim_start, default_start=traj.q[0], flange=flange, tool=tool,
                                       max_runtime_s=traj.duration + settle + sway_wait + 120.0, limits=limits)  # fmt: skip
         sim_kwargs.update(receive_multiplier=receive_multiplier, ball_damping=damping)
+        if cup is not None:
+            from ..cup_options import parse_cup_spec
+
+            if not ball:
+                raise OptionError("--cup needs the simulated ball (--length > 0)")
+            sim_kwargs["ball_model"] = parse_cup_spec(cup, ball)
     result, sim_stats, lab_figures = run_client(
         rep, player, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
         sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), max_tracking_error=max_tracking_error, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
@@ -238,6 +246,17 @@ def execute(
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)
     figures.update(file=name, rows=len(traj), duration_s=traj.duration, robot=robot or "simulator")
+    plant = (figures.get("simulator") or {}).get("plants", {}).get("ball", {}).get("cup")
+    if plant is not None:
+        rep.print("simulated ball: " + ("caught in the cup" if plant["caught"] else f"not caught — {plant['failure']}")
+                  + " (simulator time)")
+    if cup is not None and log is not None:
+        from ..cup_log import cup_summary, describe
+
+        summary = cup_summary(log)
+        if summary is not None:
+            rep.print(describe(summary))
+            figures["cup"] = summary
     if robot is not None and result.figures.get("operation_mode") == "TEST_MODE_1" and not t1:
         rep.warn("the robot is in T1: the controller limits the flange speed to 250 mm/s (check with --t1)")
     plot_log(plot, log, rep, joint_csv.name)

@@ -7,6 +7,7 @@ from typing import Annotated, Optional
 
 import typer
 
+from ..cup_options import CupSpecOpt
 from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, ToolOpt
 
 TRUTH_COLUMNS = ("t", "u", "v", "pivot_u", "pivot_v", "theta")
@@ -19,13 +20,16 @@ def film(
     size: Annotated[str, typer.Option("--size", help="Frame size WIDTHxHEIGHT \\[px]; the scale follows the width (1300 px/m at 1280).")] = "1280x720",
     fps: Annotated[float, typer.Option("--fps", help="Frame rate \\[1/s].")] = 60.0,
     truth: Annotated[Optional[Path], typer.Option("--truth", help="Write what was drawn per frame: t,u,v,pivot_u,pivot_v,theta \\[s, px, rad].")] = None,
+    cup: CupSpecOpt = None,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
     """Film the simulated ball of an execution log: a camera on +x looking at the base y–z plane (image u = base +y,
     θ positive toward the image's right, as `lbr track video` measures it), a green marker on the pivot for
-    `--pivot-color green`. Stands in for the experiment video when there is no camera (the README's example)."""
+    `--pivot-color green`. Stands in for the experiment video when there is no camera (the README's example). With
+    --cup (the spec `lbr execute --cup` simulated) the ball is drawn where the log puts it — flying on a slack string
+    too — and the cup on the pivot (a clear cup: the ball stays visible inside)."""
     import numpy as np
 
     from trajectories.csvio import write_table
@@ -47,12 +51,17 @@ def film(
     if not (64 <= w <= 7680 and 64 <= h <= 4320):
         raise OptionError(f"--size must be between 64x64 and 7680x4320 px, got {size!r}")
     parse_flange(flange)
+    model = None
+    if cup is not None:
+        from ..cup_options import parse_cup_spec
+
+        model = parse_cup_spec(cup, length)
     guard_outputs({"LOG": log}, {"-o": out, "--truth": truth})
     k = w / 1280.0
     camera = Camera(px_per_m=1300.0 * k, pivot0_uv=(w / 2.0, 260.0 * h / 720.0), size=(w, h), fps=fps)
     with atomic_path(out) as tmp, rep.progress("film", None) as update:
         footage = film_execution_log(log, tmp, length, camera, flange=flange, tool=parse_tool(tool),
-                                     progress=update)
+                                     progress=update, cup=model)
     gt = footage.truth
     if truth is not None:
         write_table(truth, TRUTH_COLUMNS, np.column_stack([gt.t, gt.ball_uv, gt.pivot_uv, gt.theta]), fmt="%.6f")

@@ -6,6 +6,7 @@ from typing import Annotated, Optional
 
 import typer
 
+from ..cup_options import CupSpecOpt
 from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt, THESIS_Q_START
 
 
@@ -44,6 +45,7 @@ def sim(
     q0: Annotated[str, typer.Option("--q0", help="Start joint positions q1..q7 \\[rad, or with deg suffix].")] = THESIS_Q_START,
     length: Annotated[Optional[float], typer.Option("--length", help="Simulate a ball on a string of this length \\[m] hanging from the TCP.")] = None,
     damping: Annotated[float, typer.Option("--damping", help="Damping of the simulated ball \\[1/s].")] = 0.0,
+    cup: CupSpecOpt = None,
     fri_version: Annotated[str, typer.Option("--fri-version", help="Wire format: 1.15 (bare protobuf) or 2.7 (length + CRC-32 framing).")] = "1.15",
     receive_multiplier: Annotated[int, typer.Option("--receive-multiplier", help="The client answers every k-th message.")] = 1,
     duration: Annotated[Optional[float], typer.Option("--duration", help="COMMANDING_ACTIVE time \\[s] after which the robot application ends the session (default: until the client stops); with --no-overlay the time from the first MONITORING_READY.")] = None,
@@ -106,6 +108,13 @@ def sim(
         channels = IO_PRESETS[io_preset] + channels
     if length is not None and not length > 0:
         raise OptionError(f"--length: string length must be > 0 m, got {length:g}")
+    cup_model = None
+    if cup is not None:
+        from ..cup_options import parse_cup_spec
+
+        if length is None:
+            raise OptionError("--cup needs the simulated ball (--length)")
+        cup_model = parse_cup_spec(cup, length)
     extra = {}
     for name, text, n in (("external_torque", external_torque, 7), ("external_force", external_force, 6),
                           ("cartesian_stiffness", cartesian_stiffness, 2)):
@@ -116,7 +125,7 @@ def sim(
         receive_multiplier=receive_multiplier, version=fri_version,
         q0=tuple(float(x) for x in parse_joint_vector(q0, "--q0")),
         flange=parse_flange(flange).value, tool=parse_tool(tool),
-        plants=default_plants(length, damping, pendulum_pty=pendulum_pty),
+        plants=default_plants(length, damping, pendulum_pty=pendulum_pty, model=cup_model),
         commanding_after_s=commanding_after, session_duration_s=duration, max_runtime_s=timeout,
         loss=loss, delay_ms=delay, jitter_ms=jitter, malformed=malformed, seed=seed,
         quality_window=quality_window, quality_good=quality_good,
@@ -180,6 +189,9 @@ def sim(
         import math
 
         rep.print(f"ball: max tilt {math.degrees(stats.max_ball_theta):.2f} deg")
+        catch = stats.plants.get("ball", {}).get("cup")
+        if catch is not None:
+            rep.print("ball: " + ("caught in the cup" if catch["caught"] else f"not caught — {catch['failure']}"))
     rep.emit({"address": f"{h}:{p}", "client": f"{client_host}:{client_port}", "period_ms": period,
               "fri_version": fri_version, **figures})
 

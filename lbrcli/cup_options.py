@@ -2,8 +2,8 @@
 
 `lbr plan cup-and-ball` takes them one by one (``--cup-radius`` …); `lbr execute`, `lbr sim` and `lbr track film`
 take the same values as one ``--cup`` spec (``radius=0.035,depth=0.05,...``; ``default`` for the defaults), which
-the plan prints for its rehearsal. Defaults: ``planners.string_model`` (the thesis ball, 13.9 g; the thesis's
-3D-printed cup has no published dimensions, so the cup is a plausible one for a 30 mm ball).
+the plan prints for its rehearsal. Defaults: ``planners.string_model`` (the thesis ball, 13.9 g, taken as 20 mm
+across; the thesis's 3D-printed cup has no published dimensions, so the cup is a plausible one for that ball).
 """
 
 from __future__ import annotations

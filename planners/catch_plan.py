@@ -47,7 +47,9 @@ FLIGHT_ALLOWANCE = 0.3  # [s] the release must come this much before max_time (t
 SETTLE = 0.6  # [s] the pivot rests this long at the end (the ball settles in the cup)
 MAX_AXIS_TILT = math.radians(25.0)
 MOVE_SHARE = 0.75  # the catch move's y and z each get this share of their own bounds (they add up on the joints)
-SEARCH_LENGTHS = 5  # string lengths across the band the catch-move search judges each candidate on  # the cup must open upward within this angle of base +z at the start pose
+SEARCH_LENGTHS = 5
+SPREAD_SHARE = 0.85  # the swing-up aims at landings of the band spread over at most this share of the opening
+SWING_HORIZON = 6.0  # [s] longest pumping without --max-time  # string lengths across the band the catch-move search judges each candidate on  # the cup must open upward within this angle of base +z at the start pose
 
 
 @dataclass(frozen=True)
@@ -57,7 +59,7 @@ class CatchRequest:
     model: StringModel  # string length, ball, cup, coefficients
     q_start: tuple[float, ...] = THESIS_Q_START
     dt: float = 0.005  # [s] FRI period of the joint file
-    max_time: float = 3.0  # [s] from rest to the ball entering the cup
+    max_time: float | None = None  # [s] from rest to the ball entering the cup (None: as soon as the band allows)
     release_apex: float = math.radians(150.0)  # [rad] where the search starts looking for the release energy
     length_tol: float = 0.03  # robustness band: string length ± this share
     mass_tol: float = 0.2  # ball mass ± this share
@@ -125,7 +127,7 @@ class CatchResult:
                 f"{100 * r.min_success:g} %; worst: l = {member.length:.4f} m, m = {1e3 * member.mass:.1f} g, "
                 f"timing {1e3 * member.shift:+.0f} ms: {o.failure or 'caught'}"
             )
-        if self.nominal.t_entry is not None and self.nominal.t_entry > r.max_time:
+        if r.max_time is not None and self.nominal.t_entry is not None and self.nominal.t_entry > r.max_time:
             reasons.append(f"the ball enters the cup at {self.nominal.t_entry:.2f} s, after --max-time {r.max_time:g} s")
         return "; ".join(reasons) or None
 
@@ -188,9 +190,11 @@ def cup_axis_at_start(robot: Robot, model: StringModel, q_start) -> np.ndarray:
 
 def _swing_up(r: CatchRequest, bounds: TaskBounds) -> PivotPlan:
     m = r.model
-    goal = ReleaseGoal(height=m.cup.rim_height, reach=0.06, deadline=r.max_time - FLIGHT_ALLOWANCE)
+    window = 2.0 * (m.cup.inner_radius - m.ball.radius)  # lateral width of the opening the ball centre fits through
+    deadline = math.inf if r.max_time is None else r.max_time - FLIGHT_ALLOWANCE
+    goal = ReleaseGoal(height=m.cup.rim_height, reach=0.06, spread_target=SPREAD_SHARE * window, deadline=deadline)
     problem = FastProblem(length=m.length, theta_d=r.release_apex, bounds=bounds, travel=r.travel, dt=r.dt,
-                          horizon=max(r.max_time, 3.0) + 2.0, release=True,
+                          horizon=SWING_HORIZON if r.max_time is None else r.max_time + 1.0, release=True,
                           band=(1.0 - r.length_tol, 1.0 + r.length_tol) if r.length_tol > 0 else (),
                           scorer=release_score, goal=goal)
     params, _ = optimise(problem, r.search)

@@ -26,13 +26,14 @@ from .tension import tension_margin
 @dataclass(frozen=True)
 class ReleaseGoal:
     """What the release must give: the height [m] above the anchor where landings are measured (the ball centre at
-    the rim plane), how far [m] the cup may travel after the release to meet them, and the weight of the landing
-    spread over the band in the cost [s/m]."""
+    the rim plane), how far [m] the cup may travel after the release to meet them, the landing spread over the band
+    the cup can take [m], and what exceeding it costs [s/m]."""
 
     height: float
     reach: float = 0.05  # [m]
-    spread_weight: float = 100.0  # [s/m]: 10 mm of spread cost as much as 1 s of swing-up
-    deadline: float = math.inf  # [s] a release later than this costs 10 per second late
+    spread_target: float = 0.0  # [m] a spread up to this costs nothing
+    spread_weight: float = 1000.0  # [s/m]: each mm beyond the target costs as much as 1 s of swing-up
+    deadline: float = math.inf  # [s] a release later than this costs 1000 per second late (a hard limit)
     min_apex_clearance: float = 0.03  # [m] the flight's apex must clear the landing height by this
 
 
@@ -71,7 +72,8 @@ def free_swing_landing(theta: float, theta_dot: float, length: float, height: fl
 
 def release_score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
     """``FastProblem.scorer`` of the cup-and-ball swing-up (``goal``: a ReleaseGoal). Cost: the nominal release time
-    [s] + spread_weight × the landing spread over the band [m], + 100 and more when the landings' centre is beyond
+    [s] + spread_weight × the landing spread over the band beyond the target [m], + 1000 per second past the deadline,
+    + 100 and more when the landings' centre is beyond
     the cup's reach, when a string of the band does not fly high enough, or goes slack before the pivot rests, +1000
     and more when the claimed tension drops below ``min_tension`` while the pivot moves."""
     goal: ReleaseGoal = problem.goal  # type: ignore[assignment]
@@ -104,5 +106,6 @@ def release_score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
         penalty += 100.0 + 100.0 * (max_travel - problem.travel)
     after = np.flatnonzero(plan.tension[k:] <= 0.0)
     t_release = float(plan.t[k + after[0]]) if after.size else problem.horizon + 3.0
-    cost = penalty + t_release + goal.spread_weight * spread + 10.0 * max(0.0, t_release - goal.deadline)
+    cost = (penalty + t_release + goal.spread_weight * max(0.0, spread - goal.spread_target)
+            + 1000.0 * max(0.0, t_release - goal.deadline))
     return FastOutcome(t_release if after.size else None, spread, max_travel, min_tension, cost)

@@ -42,7 +42,7 @@ PHASE_NAMES = {TAUT: "taut", SLACK: "slack", IN_CUP: "in the cup"}
 class Ball:
     """A sphere: radius [m], mass [kg], drag coefficient C_d [-] and air density [kg/m³]."""
 
-    radius: float = 0.015  # [m] (assumed: the thesis gives the mass, not the size)
+    radius: float = 0.01  # [m] (assumed: the thesis gives the mass, not the size; see docs/explanations/string-physics.md)
     mass: float = 0.0139  # [kg] thesis §5.2
     drag_coefficient: float = 0.47  # smooth sphere
     air_density: float = 1.2  # [kg/m³]
@@ -61,9 +61,9 @@ class Cup:
     it, ``depth`` the inside depth (bottom thickness rim_height − depth), ``wall`` the wall thickness.
     """
 
-    inner_radius: float = 0.035  # [m]
-    depth: float = 0.05  # [m]
-    rim_height: float = 0.055  # [m]
+    inner_radius: float = 0.03  # [m]
+    depth: float = 0.045  # [m]
+    rim_height: float = 0.05  # [m]
     wall: float = 0.003  # [m]
     axis: tuple[float, float, float] = (-1.0, 0.0, 0.0)  # flange frame; base +z at the thesis start pose
 

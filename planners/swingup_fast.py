@@ -39,10 +39,11 @@ class FastProblem:
     overshoot: float = math.radians(5.0)  # [rad] largest accepted apex above θ_d
     theta0: float = 0.0  # [rad]
     theta_dot0: float = 0.0  # [rad/s]
-    taut: bool = False  # require positive tension (claimed) along the plan
+    taut: bool = False  # require positive tension (claimed) until θ_d is reached (or until the highest angle)
     min_tension: float = 0.5  # [m/s²] tension margin required with ``taut`` or ``release``
     release: bool = False  # cup-and-ball: taut while pumping, then the free swing of energy ≈ θ_d releases the ball
     governor_margin: float = 1.0  # [m/s²] the governor aims this far above min_tension (the jerk limit lags it)
+    governor: bool = False  # cap the acceleration to keep the claimed tension even without ``taut`` (often quicker)
     band: tuple[float, ...] = ()  # string lengths (× length) also driven by the planned pivot path (info["band"])
     scorer: Callable[["FastProblem", PivotPlan], "FastOutcome"] | None = None  # replaces ``score`` (module-level)
     goal: object = None  # what ``scorer`` aims at (a picklable frozen dataclass of its own)
@@ -50,7 +51,7 @@ class FastProblem:
     @property
     def governed(self) -> bool:
         """The pumping acceleration is capped to keep the claimed tension (``taut`` or ``release``)."""
-        return self.taut or self.release
+        return self.taut or self.release or self.governor
 
 
 @dataclass(frozen=True)
@@ -251,7 +252,10 @@ def score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
         return problem.scorer(problem, plan)
     max_theta = plan.max_theta
     max_travel = float(np.max(np.abs(plan.x)))
-    min_tension = float(np.min(plan.tension))
+    # ``taut``: the string must hold until θ_d is reached (or, short of it, until the highest angle): a pivot that then
+    # rests leaves a swing above 90° that goes slack at its next apex whatever the plan does
+    until = plan.t_reach if plan.t_reach is not None else float(plan.t[int(np.argmax(np.abs(plan.theta)))])
+    min_tension = float(np.min(plan.tension[plan.t <= until + 1e-9]))
     penalty = 0.0
     if plan.t_reach is None:
         penalty += 100.0 + 10.0 * (problem.theta_d - max_theta)

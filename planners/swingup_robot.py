@@ -8,7 +8,9 @@ would turn it). The ball only feels the pivot position; ``fixed`` is badly condi
 ≈5 m/s²).
 
 Verification: joint path → FK of the TCP → acceleration realised by position commands at the sample rate
-(``pendulum.SampledAcceleration``) → nonlinear spherical pendulum (``pendulum.simulate``), θ = θ_y.
+(``pendulum.SampledAcceleration``) → the project's string model without the cup (``string_sim``: the spherical
+pendulum while taut, free flight when the string goes slack, the jerk when it tightens again), θ = θ_y of the
+anchor→ball direction.
 """
 
 from __future__ import annotations
@@ -24,14 +26,13 @@ from trajectories.limits import JointLimits
 from trajectories.robot import Robot
 from trajectories.trajectory import JointTrajectory
 
-from .pendulum import PendulumRun, SampledAcceleration, direction_from_angles, simulate
+from .pendulum import SampledAcceleration, direction_from_angles
 from .swingup_plan import TaskBounds
 
 ORIENTATIONS = ("fixed", "follow")
 # Strong null-space pull toward q_start: q becomes (nearly) a function of the pivot position, so the arm
 # rests as soon as the pivot does (the default 0.02/sample leaves a slow self-motion after the stop).
 IK_OPTIONS = IkOptions(nullspace_gain=0.3)
-CONSTRAINT_RATE = 20.0  # [1/s] Baumgarte rate keeping |s| = 1 through slack phases (rigid-string model)
 
 
 @dataclass(frozen=True)
@@ -115,27 +116,49 @@ def axis_bounds(robot: Robot, setup: ArmSetup, limits: JointLimits, travel: floa
 
 @dataclass(frozen=True)
 class Verification:
-    """The nonlinear ball simulation driven by the joint path: θ_y (n,) [rad], tension per mass (n,) [m/s²]."""
+    """The nonlinear ball simulation driven by the joint path: θ_y (n,) [rad] of the anchor→ball direction, tension
+    per mass (n,) [m/s²] (NaN where the string is slack)."""
 
     t: np.ndarray
     theta: np.ndarray
     tension: np.ndarray
     pivot: np.ndarray  # (n, 3) TCP positions [m]
     pivot_acc: np.ndarray  # (n, 3) realised accelerations [m/s²]
-    run: PendulumRun
+    run: object  # string_sim.BallRun
 
     @property
     def max_theta(self) -> float:
         return float(np.max(np.abs(self.theta)))
 
+    @property
+    def slack(self) -> np.ndarray:
+        """(n,) bool: the string is slack at the sample."""
+        return ~np.isfinite(self.tension)
+
+    @property
+    def first_slack(self) -> float | None:
+        """First time the string went slack [s] (None: taut throughout)."""
+        return self.run.first_slack
+
+    @property
+    def max_taut_theta(self) -> float:
+        """Largest |θ| [rad] while the string is taut."""
+        taut = np.isfinite(self.tension)
+        return float(np.max(np.abs(self.theta[taut]))) if taut.any() else 0.0
+
 
 def verify(robot: Robot, traj: JointTrajectory, length: float, theta0: float = 0.0, theta_dot0: float = 0.0,
-           damping: float = 0.0) -> Verification:
-    """Simulate the ball (spherical, nonlinear) under the TCP path the joint trajectory realises."""
+           damping: float = 0.0, mass: float | None = None) -> Verification:
+    """Simulate the ball (the string model, no cup; the default ball, of ``mass`` [kg] if given) under the TCP path
+    the joint trajectory realises."""
+    from .string_model import Ball, StringModel
+    from .string_sim import PivotMotion, simulate_string
+
     pos, _ = robot.fk_path(traj.q)
-    acc = SampledAcceleration(traj.t, pos)
     s0 = direction_from_angles(0.0, theta0)
     sdot0 = np.array([0.0, math.cos(theta0), math.sin(theta0)]) * theta_dot0
-    run = simulate(traj.t, acc, length, s0, sdot0, damping=damping, rtol=1e-9, atol=1e-10, max_step=traj.dt,
-                   constraint_rate=CONSTRAINT_RATE)
-    return Verification(t=traj.t, theta=run.theta_y, tension=run.tension, pivot=pos, pivot_acc=acc.samples(), run=run)
+    ball = Ball() if mass is None else Ball(mass=mass)
+    run = simulate_string(StringModel(length, ball=ball, cup=None, damping=damping), PivotMotion(traj.t, pos),
+                          float(traj.t[-1]), traj.t, s0, sdot0, rtol=1e-9, atol=1e-10)
+    return Verification(t=traj.t, theta=run.theta_y, tension=run.tension, pivot=pos,
+                        pivot_acc=SampledAcceleration(traj.t, pos).samples(), run=run)

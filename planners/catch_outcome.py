@@ -50,7 +50,7 @@ def outcome(events: Sequence[BallEvent], resting: bool, inside: bool) -> CatchOu
     caught = resting and inside
     failure = None
     if not caught:
-        if t_release is None:
+        if t_release is None and first is None:
             failure = "the string never goes slack: the ball does not leave its circle"
         elif retension and t_entry is None:
             failure = f"the string tightens again at t = {retension[0].t:.2f} s before the ball reaches the cup"

@@ -47,6 +47,7 @@ FLIGHT_ALLOWANCE = 0.3  # [s] the release must come this much before max_time (t
 SETTLE = 0.6  # [s] the pivot rests this long at the end (the ball settles in the cup)
 MAX_AXIS_TILT = math.radians(25.0)
 MOVE_SHARE = 0.75  # the catch move's y and z each get this share of their own bounds (they add up on the joints)
+SWING_JERK_SHARE = 0.8  # the swing-up's jerk bound: this share of the first-order one
 SEARCH_LENGTHS = 5
 SPREAD_SHARE = 0.85  # the swing-up aims at landings of the band spread over at most this share of the opening
 SWING_HORIZON = 6.0  # [s] longest pumping without --max-time  # string lengths across the band the catch-move search judges each candidate on  # the cup must open upward within this angle of base +z at the start pose
@@ -334,7 +335,10 @@ def plan_catch(r: CatchRequest, robot: Robot, limits: JointLimits, progress=None
     setup = ArmSetup(q_start=tuple(float(v) for v in r.q_start), orientation="follow")
     p0 = robot.fk(np.asarray(r.q_start, dtype=float)).translation
     try:
+        # first-order bounds for the swing-up, its jerk lowered by what the second-order terms usually add (a swing-up
+        # re-planned after a limit violation is another swing-up: better to fit the first time)
         by = axis_bounds(robot, setup, limits, r.travel, r.limit_margin, first_order=True)
+        by = TaskBounds(by.v_max, by.a_max, SWING_JERK_SHARE * by.j_max)
         # the catch move runs along y and z at once: each gets conservative (second-order) bounds, shared
         my = axis_bounds(robot, setup, limits, r.travel, r.limit_margin).scaled(MOVE_SHARE)
         bz = axis_bounds(robot, setup, limits, r.z_travel, r.limit_margin, axis="z").scaled(MOVE_SHARE)

@@ -65,10 +65,12 @@ def cup_sdf(rel: np.ndarray, axis: np.ndarray, model: StringModel) -> np.ndarray
 
 
 def judge(models: list[StringModel], t: np.ndarray, positions: np.ndarray, axes: np.ndarray, t_end: float,
-          dt: float = 4e-5, shifts: np.ndarray | None = None, sample_every: float = 0.005) -> PenaltyRun:
-    """Simulate each case (a model: length, ball, cup, coefficients) from the ball hanging at rest under the anchor
-    path sampled at times t (n,) [s] with positions (n, 3) [m] and cup axes (n, 3) (base frame), to t_end [s].
-    ``shifts`` (k,) [s]: once a case's string first goes slack its anchor runs that much late (negative: early)."""
+          dt: float = 4e-5, shifts: np.ndarray | None = None, sample_every: float = 0.005,
+          v0: np.ndarray | None = None) -> PenaltyRun:
+    """Simulate each case (a model: length, ball, cup, coefficients) from the ball hanging under the anchor (at rest,
+    or with velocity ``v0`` (k, 3) [m/s]) along the anchor path sampled at times t (n,) [s] with positions (n, 3) [m]
+    and cup axes (n, 3) (base frame), to t_end [s]. ``shifts`` (k,) [s]: once a case's string first goes slack its
+    anchor runs that much late (negative: early)."""
     from scipy.interpolate import CubicSpline
 
     k = len(models)
@@ -92,7 +94,7 @@ def judge(models: list[StringModel], t: np.ndarray, positions: np.ndarray, axes:
     p0 = path_p[0]
     b = np.tile(p0, (k, 1)) - np.outer(length, (0.0, 0.0, 1.0))
     b[:, 2] -= G / w_s**2  # hanging at rest: the spring stretched by its static load
-    v = np.zeros((k, 3))
+    v = np.zeros((k, 3)) if v0 is None else np.array(v0, dtype=float).reshape(k, 3)
     slack_seen = np.zeros(k, bool)
     t_slack = np.full(k, np.nan)
     t_inside = np.full(k, np.nan)

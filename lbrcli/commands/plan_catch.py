@@ -68,6 +68,7 @@ def plan_catch_files(
     guard_outputs({"--limits": limits}, {"-o": out, "--prediction": prediction, "--plot": plot})
     q0 = parse_joint_vector(q_start, "--q-start")
     robot = make_robot(flange, tool)
+    _check_axis(robot, model, q0)
     request = CatchRequest(model=model, q_start=tuple(float(v) for v in q0), dt=dt, max_time=max_time,
                            length_tol=length_tol, mass_tol=mass_tol, timing=timing, min_success=min_success,
                            travel=travel, limit_margin=margin,
@@ -91,6 +92,19 @@ def plan_catch_files(
     failure = result.failure()
     figures["ok"] = failure is None
     return figures
+
+
+def _check_axis(robot, model, q0) -> None:
+    """OptionError when the cup does not open upward at the start pose (--cup-axis, --q-start)."""
+    import math
+
+    from planners.catch_plan import MAX_AXIS_TILT, cup_axis_at_start
+    from trajectories.errors import OptionError
+
+    tilt = math.degrees(math.acos(max(-1.0, min(1.0, float(cup_axis_at_start(robot, model, q0)[2])))))
+    if tilt > math.degrees(MAX_AXIS_TILT):
+        raise OptionError(f"--cup-axis: the cup opens {tilt:.0f}° away from straight up at the start pose; the catch "
+                          f"needs it within {math.degrees(MAX_AXIS_TILT):.0f}° (--cup-axis, --q-start)")
 
 
 def _summary(rep, f: dict) -> None:

@@ -77,6 +77,7 @@ class Ball:
         self._axis_f = self.model.axis_flange
         p0 = tuple(float(x) for x in tcp0)
         self.stepper = StringStepper(self.model, p0, self._axis(rotation0))
+        self.stepper.t = -2.0 * period_s  # the first cycle advances the ball over [−2h, −h]: event times on the TCP's clock
         self._tcp_acc = TcpAcceleration(period_s, tcp0)
         self._acc_prev = (0.0, 0.0, 0.0)  # TCP acceleration at the sample before [m/s²]
         self._p_prev = p0  # TCP position at the sample before [m]

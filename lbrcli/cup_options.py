@@ -1,7 +1,7 @@
 """The cup-and-ball toy on the command line: ball, cup and contact options, and the compact ``--cup`` spec.
 
 `lbr plan cup-and-ball` takes them one by one (``--cup-radius`` …); `lbr execute`, `lbr sim` and `lbr track film`
-take the same values as one ``--cup`` spec (``radius=0.035,depth=0.05,...``; ``default`` for the defaults), which
+take the same values as one ``--cup`` spec (``radius=0.03,depth=0.045,...``; ``default`` for the defaults), which
 the plan prints for its rehearsal. Defaults: ``planners.string_model`` (the thesis ball, 13.9 g, taken as 20 mm
 across; the thesis's 3D-printed cup has no published dimensions, so the cup is a plausible one for that ball).
 """
@@ -16,16 +16,16 @@ from planners.string_model import Ball, Cup, StringModel
 
 _BALL, _CUP, _MODEL = Ball(), Cup(), StringModel(0.25)
 
-BallRadiusOpt = Annotated[float, typer.Option("--ball-radius", help=f"Ball radius \\[m] (default {_BALL.radius:g}).")]
-CupRadiusOpt = Annotated[float, typer.Option("--cup-radius", help=f"Inner radius of the cup \\[m] (default {_CUP.inner_radius:g}).")]
-CupDepthOpt = Annotated[float, typer.Option("--cup-depth", help=f"Inside depth of the cup, bottom to rim \\[m] (default {_CUP.depth:g}).")]
-CupRimOpt = Annotated[float, typer.Option("--cup-rim", help=f"Height of the rim above the string anchor at the cup's bottom \\[m] (default {_CUP.rim_height:g}; ≥ --cup-depth).")]
-CupWallOpt = Annotated[float, typer.Option("--cup-wall", help=f"Wall thickness \\[m] (default {_CUP.wall:g}).")]
-CupAxisOpt = Annotated[str, typer.Option("--cup-axis", help="Opening direction of the cup in the flange frame x,y,z (default -1,0,0: straight up at the thesis start pose).")]
-RestitutionOpt = Annotated[float, typer.Option("--restitution", help=f"Ball–cup restitution, 0..1 (default {_MODEL.restitution:g}).")]
-RetensionOpt = Annotated[float, typer.Option("--retension", help=f"Restitution of the jerk when the slack string tightens, 0 (inelastic) .. 1 (default {_MODEL.retension:g}).")]
-FrictionOpt = Annotated[float, typer.Option("--friction", help=f"Ball–cup Coulomb friction (default {_MODEL.friction:g}).")]
-DragOpt = Annotated[float, typer.Option("--drag", help=f"Drag coefficient C_d of the ball in air (default {_BALL.drag_coefficient:g}; 0: no drag).")]
+BallRadiusOpt = Annotated[float, typer.Option("--ball-radius", help="Ball radius \\[m].")]
+CupRadiusOpt = Annotated[float, typer.Option("--cup-radius", help="Inner radius of the cup \\[m].")]
+CupDepthOpt = Annotated[float, typer.Option("--cup-depth", help="Inside depth of the cup, bottom to rim \\[m].")]
+CupRimOpt = Annotated[float, typer.Option("--cup-rim", help="Height of the rim above the string anchor at the cup's bottom \\[m] (≥ --cup-depth).")]
+CupWallOpt = Annotated[float, typer.Option("--cup-wall", help="Wall thickness \\[m].")]
+CupAxisOpt = Annotated[str, typer.Option("--cup-axis", help="Opening direction of the cup in the flange frame x,y,z (-1,0,0: straight up at the thesis start pose).")]
+RestitutionOpt = Annotated[float, typer.Option("--restitution", help="Ball–cup restitution, 0..1.")]
+RetensionOpt = Annotated[float, typer.Option("--retension", help="Restitution of the jerk when the slack string tightens, 0 (inelastic) .. 1.")]
+FrictionOpt = Annotated[float, typer.Option("--friction", help="Ball–cup Coulomb friction.")]
+DragOpt = Annotated[float, typer.Option("--drag", help="Drag coefficient C_d of the ball in air (0: no drag).")]
 CupSpecOpt = Annotated[
     str | None,
     typer.Option(

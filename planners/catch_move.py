@@ -18,7 +18,7 @@ import numpy as np
 from trajectories.errors import PlanningError
 
 from .catch_outcome import CatchOutcome, outcome
-from .string_model import Ball, StringModel
+from .string_model import StringModel
 from .string_sim import PivotMotion
 from .string_stepper import StringStepper, step_path
 from .swingup_plan import TaskBounds
@@ -161,4 +161,4 @@ def band_score(outcomes: list[CatchOutcome], radius_clearance: float) -> float:
 
 
 __all__ = ["CatchMove", "BandMember", "band_members", "cup_path", "pivot_motion", "prepare_band", "judge_band",
-           "band_score", "Ball"]
+           "band_score"]

@@ -39,10 +39,10 @@ from .string_model import RESTING, StringModel
 from .string_sim import BallRun, PivotMotion, simulate_string
 from .string_stepper import step_path
 from .swingup_fast import FastProblem, SearchSettings, optimise, simulate_fast
+from .swingup import THESIS_Q_START
 from .swingup_plan import PivotPlan, TaskBounds
 from .swingup_robot import ArmSetup, axis_bounds, joint_path
 
-THESIS_Q_START = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)  # [rad], thesis §5.3.2
 FLIGHT_ALLOWANCE = 0.3  # [s] the release must come this much before max_time (the ball's flight into the cup)
 SETTLE = 0.6  # [s] the pivot rests this long at the end (the ball settles in the cup)
 MAX_AXIS_TILT = math.radians(25.0)

@@ -25,8 +25,8 @@ _NUDGE = 1e-9  # [m]
 _BISECT = 30  # halvings of an interval when an event is located (1 ms → 1e-12 s)
 
 
-class _Interval:
-    """The anchor over one interval: p(τ), ṗ(τ), p̈(τ) for 0 ≤ τ ≤ h (acceleration linear)."""
+class Interval:
+    """The anchor over one interval: p(τ), ṗ(τ), p̈(τ) for 0 ≤ τ ≤ h (acceleration linear from a0 to a1)."""
 
     __slots__ = ("p0", "v0", "a0", "j", "h")
 
@@ -139,7 +139,7 @@ class StringStepper:
         linearly from a0 to a1 [m/s²]."""
         if axis is not None:
             self.axis = axis
-        iv = _Interval(p0, v0, a0, a1, h)
+        iv = Interval(p0, v0, a0, a1, h)
         tau = 0.0
         for _ in range(64):  # events within one interval (a chattering ball is cut short)
             if tau >= h - 1e-15:
@@ -157,7 +157,7 @@ class StringStepper:
         elif self.phase == RESTING:
             self.b, self.v = axpy(1.0, self.offset, self.p), self._pv
 
-    def _taut(self, iv: _Interval, tau: float, h: float) -> float:
+    def _taut(self, iv: Interval, tau: float, h: float) -> float:
         l, k, c = self.l, self.k, self.m.damping
 
         def deriv(tt, s, sd):
@@ -188,7 +188,7 @@ class StringStepper:
         self._release(iv, hi)
         return hi
 
-    def _release(self, iv: _Interval, tau: float) -> None:
+    def _release(self, iv: Interval, tau: float) -> None:
         p, pv, _ = iv.at(tau)
         s, sd = self.s, self.sd
         self.b, self.v = axpy(self.l - _NUDGE, s, p), axpy(self.l, sd, pv)
@@ -196,7 +196,7 @@ class StringStepper:
         self.events.append(BallEvent(self.t + tau, "slack", {
             "theta_deg": math.degrees(math.acos(max(-1.0, min(1.0, -s[2])))), "speed_m_s": norm(self.v)}))
 
-    def _slack(self, iv: _Interval, tau: float, h: float) -> float:
+    def _slack(self, iv: Interval, tau: float, h: float) -> float:
         k, l, cup, r = self.k, self.l, self.cup, self.r
 
         def deriv(tt, b, v):
@@ -253,7 +253,7 @@ class StringStepper:
         self.b, self.v = axpy(_NUDGE, n, b), axpy(1.0, v_new, pv)
         return te
 
-    def _rim_crossing(self, iv: _Interval, tau: float, dt: float, state, u_end: float) -> None:
+    def _rim_crossing(self, iv: Interval, tau: float, dt: float, state, u_end: float) -> None:
         """Record a downward crossing of the rim plane before ``u_end`` in the interval (an entry attempt)."""
         cup = self.cup
 
@@ -273,7 +273,7 @@ class StringStepper:
                 "relative_lateral_speed_m_s": norm(axpy(-dot(rel_v, ax), ax, rel_v)),
             }))
 
-    def _rest(self, iv: _Interval, tau: float, h: float) -> float:
+    def _rest(self, iv: Interval, tau: float, h: float) -> float:
         _, _, a1 = iv.at(h)
         if rest_load(a1, self.axis) > 0.0:
             return h

@@ -103,16 +103,13 @@ class Ball:
         if self._sub == 1:
             st.advance(self.h, p0, v0, a0, acc, self._axis_prev)
         else:  # split a long period; the acceleration is linear across it
+            from planners.string_stepper import Interval
+
+            whole = Interval(p0, v0, a0, acc, self.h)
             hs = self.h / self._sub
             for i in range(self._sub):
-                w0, w1 = i / self._sub, (i + 1) / self._sub
-                ai = tuple(a0[k] + w0 * (acc[k] - a0[k]) for k in range(3))
-                aj = tuple(a0[k] + w1 * (acc[k] - a0[k]) for k in range(3))
-                tau = i * hs
-                pi = tuple(p0[k] + v0[k] * tau + a0[k] * tau * tau / 2 + (acc[k] - a0[k]) * tau**3 / (6 * self.h)
-                           for k in range(3))
-                vi = tuple(v0[k] + a0[k] * tau + (acc[k] - a0[k]) * tau * tau / (2 * self.h) for k in range(3))
-                st.advance(hs, pi, vi, ai, aj, self._axis_prev)
+                pi, vi, ai = whole.at(i * hs)
+                st.advance(hs, pi, vi, ai, whole.at((i + 1) * hs)[2], self._axis_prev)
         self._v_prev = tuple(v0[k] + 0.5 * self.h * (a0[k] + acc[k]) for k in range(3))
         self._acc_prev = acc
         self._p_prev = self._tcp_acc.previous

@@ -2,14 +2,12 @@
 by `lbr check`, by the independent penalty-force judge and by the simulator's ball plant — and the exits."""
 
 import json
-import math
 
 import numpy as np
 import pytest
 
 from lbrcli.fri.sim import PlantContext
 from lbrcli.plants import BallSpec
-from planners.catch_outcome import outcome
 from planners.string_model import IN_CUP, SLACK, TAUT, StringModel
 from planners.string_penalty import judge
 from trajectories.csvio import read_joint_csv, read_table

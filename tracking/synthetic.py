@@ -353,9 +353,13 @@ def render_pendulum_video(
             rk = r if H is None else r * float(homography_scale(H, centres.mean(axis=0))[0])
             centres = to_image(centres)
             b = ball_f[k]
-            string = _string_polyline(p, b, L)
-            cv2.polylines(frame, [np.round(string * 16).astype(np.int32).reshape(-1, 1, 2)], False, (45, 45, 50), 1,
-                          cv2.LINE_AA, 4)
+            if ball_path is None or np.hypot(*(b - p)) >= 0.99 * L:  # taut: a straight string
+                cv2.line(frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1,
+                         cv2.LINE_AA, 4)
+            else:
+                string = _string_polyline(p, b, L)
+                cv2.polylines(frame, [np.round(string * 16).astype(np.int32).reshape(-1, 1, 2)], False, (45, 45, 50),
+                              1, cv2.LINE_AA, 4)
             _draw_ball(frame, centres, rk, ball_bgr)
             for draw in foreground:
                 draw(frame, float(tf[k] - t[0]), b)

@@ -62,7 +62,7 @@ def video(
     bias it. When several round blobs of the ball's colour are seen at once, each is followed for a moment
     and the one moving like a pendulum about the pivot is kept (said in a warning); --start names the ball
     instead. Where the string is slack (the ball nearer to the pivot than the string's length) θ is left empty and the
-    position kept (--no-slack: θ everywhere). Exit 1 if the ball is found in fewer than --min-found percent of the frames, or the pivot
+    position kept (--no-slack: θ everywhere; not judged with a plane calibration). Exit 1 if the ball is found in fewer than --min-found percent of the frames, or the pivot
     marker in none.
     """
     import math
@@ -158,7 +158,7 @@ def video(
             writer.release()
     elapsed = time.perf_counter() - t0
     slack_info = None
-    if slack and track.theta is not None:
+    if slack and track.theta is not None and not track.theta_in_plane:  # (distances of an oblique image: not judged)
         from dataclasses import replace
 
         from tracking.slack import slack_frames

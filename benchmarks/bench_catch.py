@@ -62,7 +62,7 @@ def _band_map(csv: str, length: float, n_length: int) -> tuple[np.ndarray, list]
 
 
 def _penalty(csv: str, length: float, variants: dict) -> dict:
-    """Share caught by the penalty judge on the band's lengths for each variant of the model."""
+    """Per variant of the model: caught (5,) by the penalty judge on 5 lengths across the band."""
     from planners.string_model import StringModel
     from planners.string_penalty import judge
     from trajectories.csvio import read_joint_csv
@@ -76,7 +76,7 @@ def _penalty(csv: str, length: float, variants: dict) -> dict:
         models = [dataclasses.replace(base, length=length * f) for f in (0.97, 0.985, 1.0, 1.015, 1.03)]
         axes = rot @ np.asarray(base.axis_flange)
         run = judge(models, traj.t, pos, axes, float(traj.t[-1]))
-        out[name] = float(np.mean(run.caught))
+        out[name] = run.caught.astype(bool)
     return out
 
 
@@ -110,7 +110,7 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
                 rows += [
                     (f"{tag}: caught (nominal)", float(f["caught"]), "-"),
                     (f"{tag}: enters the cup", f["catch_time_s"] if f["catch_time_s"] else math.nan, "s"),
-                    (f"{tag}: band caught (planner's 45 cases)", rob["success_fraction"], "-"),
+                    (f"{tag}: band caught (planner's {rob['members']} cases)", rob["success_fraction"], "-"),
                     (f"{tag}: relative entry speed", f["relative_entry_speed_m_s"] or math.nan, "m/s"),
                     (f"{tag}: limits ok", float(f["limits_ok"]), "-"),
                     (f"{tag}: planning time, one worker", f["wall_s"], "s"),
@@ -129,9 +129,13 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
                                          "success_by_timing": grid.mean(axis=(0, 1)).tolist()}
                     held_out = length == 0.25 and max_time is None and not quick
                     judged = _penalty(f["csv"], length, variants if held_out else {"as planned": variants["as planned"]})
-                    entry["penalty"] = judged
-                    for name, share in judged.items():
-                        rows.append((f"{tag}: penalty judge, {name} (5 lengths)", share, "-"))
+                    entry["penalty"] = {k: v.tolist() for k, v in judged.items()}
+                    for name, caught in judged.items():
+                        rows.append((f"{tag}: penalty judge, {name} (5 lengths)", float(np.mean(caught)), "-"))
+                    same = grid[np.linspace(0, grid.shape[0] - 1, 5).astype(int), 1, 1].astype(bool)
+                    agree = float(np.mean(judged["as planned"] == same))
+                    entry["penalty_agreement"] = agree
+                    rows.append((f"{tag}: penalty judge agrees with the model (5 lengths)", agree, "-"))
                 report["plans"][tag] = entry
     _write(report, rows)
     return rows

@@ -315,7 +315,7 @@ def judge_path(r: CatchRequest, traj: JointTrajectory, robot: Robot, t_start: fl
     run = simulate_string(r.model, pivot, end)
     nominal = outcome(run.events, run.final_phase == RESTING, run.final_inside)
     members = members or band_members(r.model.length, r.model.ball.mass, r.dt, r.length_tol, r.mass_tol,
-                                      n_length=5 if r.length_tol else 1, n_mass=3 if r.mass_tol else 1,
+                                      n_length=BAND_LENGTHS if r.length_tol else 1, n_mass=3 if r.mass_tol else 1,
                                       timing=r.timing)
     band = prepare_band(r.model, members, pivot, min(t_start, end))
     return run, nominal, BandResult(members, tuple(judge_band(r.model, band, pivot, end)))

@@ -20,9 +20,22 @@ from pathlib import Path
 RESULTS = Path(__file__).parent / "results"
 
 
-def save_results(name: str, rows, seconds: float, folder: Path = RESULTS) -> Path:
-    """Write one benchmark's figures as ``folder/NAME.json``: what was measured, when, on how loaded a machine."""
+def own_results(path: Path) -> bool:
+    """True when ``path`` is a results file a benchmark writes itself (its own layout, quoted by its own guide, e.g.
+    bench_catch's catch.json), not one of :func:`save_results`'s records."""
+    try:
+        record = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return False
+    return not (isinstance(record, dict) and "benchmark" in record and "figures" in record)
+
+
+def save_results(name: str, rows, seconds: float, folder: Path = RESULTS) -> Path | None:
+    """Write one benchmark's figures as ``folder/NAME.json``: what was measured, when, on how loaded a machine.
+    None (nothing written) when the benchmark writes its own ``NAME.json`` there."""
     folder.mkdir(exist_ok=True)
+    if own_results(folder / f"{name}.json"):
+        return None
     record = {
         "benchmark": name,
         "command": f"python benchmarks/run_all.py {name}",

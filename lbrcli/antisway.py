@@ -49,6 +49,20 @@ class BandPrediction:
     peak_time: tuple[float, ...]  # [s]
     ball_paths: tuple[Any, ...]  # (n, 3) ball centres [m] per length
     clearance: Any = None  # planners.obstacles.Clearance or None
+    dense_lengths: tuple[float, ...] = ()  # [m] a dense sweep across the band (residual and peak only)
+    dense_residual: tuple[float, ...] = ()  # [rad]
+    dense_peak: tuple[float, ...] = ()  # [rad]
+
+    @property
+    def worst_residual(self) -> tuple[float, float]:
+        """The largest residual over the band [rad] and its string length [m] (the dense sweep included)."""
+        pairs = list(zip(self.residual, self.lengths)) + list(zip(self.dense_residual, self.dense_lengths))
+        return max(pairs)
+
+    @property
+    def worst_peak(self) -> float:
+        """The largest tilt during the move over the band [rad] (the dense sweep included)."""
+        return max((*self.peak, *self.dense_peak))
 
 
 @dataclass(frozen=True)
@@ -91,8 +105,10 @@ class AntiSwayResult:
             "band_lengths_m": list(band.lengths),
             "band_residual_sway_deg": [math.degrees(x) for x in band.residual],
             "band_peak_sway_deg": [math.degrees(x) for x in band.peak],
-            "worst_residual_sway_deg": math.degrees(max(band.residual)),
-            "worst_peak_sway_deg": math.degrees(max(band.peak)),
+            "worst_residual_sway_deg": math.degrees(band.worst_residual[0]),
+            "worst_residual_length_m": band.worst_residual[1],
+            "worst_peak_sway_deg": math.degrees(band.worst_peak),
+            "band_dense_lengths": len(band.dense_lengths),
             "max_sway_deg": None if self.max_sway is None else math.degrees(self.max_sway),
             "max_ik_error_m": self.ik_error,
             "limits_ok": bool(self.report.ok),
@@ -215,8 +231,16 @@ def predict_band(joints, robot, lengths, stop_time: float, obstacles=(), ball_ra
         pivot = pos[np.minimum(np.arange(len(run.t)), len(pos) - 1)]
         paths.append(ball_path(pivot, run.s, float(ln)))
     clear = clearance(runs[0].t, dict(zip(map(float, lengths), paths)), tuple(obstacles), ball_radius) if obstacles else None
+    dense = ()
+    dres = dpeak = np.empty(0)
+    if len(lengths) > 1:  # the residual swings between the simulated lengths: judge the band densely
+        from planners.antisway import DENSE_LENGTHS
+        from planners.sway_prediction import band_sweep
+
+        dense = np.linspace(float(min(lengths)), float(max(lengths)), DENSE_LENGTHS)
+        dres, dpeak = band_sweep(joints.t, pos, dense, stop_time, end, substep=0.0025)
     return BandPrediction(tuple(map(float, lengths)), tuple(runs), tuple(res), tuple(peak), tuple(tpk), tuple(paths),
-                          clear)
+                          clear, tuple(map(float, dense)), tuple(map(float, dres)), tuple(map(float, dpeak)))
 
 
 def _failing_segments(plan, report) -> list[int]:
@@ -300,6 +324,11 @@ def _attempt(setup: _Setup, a_max, options, progress=None) -> AntiSwayResult:
         failure = (
             f"a_max = {_accel_text(a_max)} m/s² does not fit the joint limits at segment {failing[0]}{others} "
             f"({seg.start[0]:.3f},{seg.start[1]:.3f})→({seg.end[0]:.3f},{seg.end[1]:.3f}): {first.describe()}"
+        )
+    elif setup.max_sway is not None and band.worst_peak > setup.max_sway and max(band.peak) <= setup.max_sway:
+        failure = (
+            f"predicted sway {math.degrees(band.worst_peak):.2f}° for a string length between the simulated ones "
+            f"exceeds --max-sway {math.degrees(setup.max_sway):.2f}°"
         )
     elif setup.max_sway is not None and max(band.peak) > setup.max_sway:
         k = max(range(len(band.peak)), key=lambda i: band.peak[i])
@@ -427,14 +456,14 @@ def plan_anti_sway(
             # and the robust design stays quicker than the baseline at a little less acceleration)
             if design == "robust-gentle":
                 found = _gentle(setup, a_max, options, result)
-                if found is not None and (tol == 0 or max(found[0].band.residual) <= FALLBACK_RESIDUAL):
+                if found is not None and (tol == 0 or found[0].band.worst_residual[0] <= FALLBACK_RESIDUAL):
                     alt = replace(found[0], baseline_duration=result.baseline_duration)  # at the user's a_max
                     tried.append((alt, f" (a_max {_accel_text(found[1])} m/s² per segment)"))
                 continue
             alt_opts = (replace(options, shaper="robust", v_max=min(options.v_max, 0.75 * peak_speed))
                         if design == "robust-slow" else replace(options, shaper=design))
             alt = _attempt(setup, a_max, alt_opts)
-            if alt.failure is None and (tol == 0 or max(alt.band.residual) <= FALLBACK_RESIDUAL):
+            if alt.failure is None and (tol == 0 or alt.band.worst_residual[0] <= FALLBACK_RESIDUAL):
                 tried.append((alt, ""))
         if tried:
             alt, note = min(tried, key=lambda r: r[0].stop_time)

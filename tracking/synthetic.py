@@ -177,10 +177,12 @@ def _draw_ball(frame: np.ndarray, centres: np.ndarray, r: float, color: tuple[in
 
 def draw_pendulum(frame: np.ndarray, pivot_uv: np.ndarray, ball_centres: np.ndarray, radius_px: float,
                   ball_bgr: tuple[int, int, int] = BALL_BGR, pivot_marker: str | None = None,
-                  pivot_marker_radius_px: float = 9.0, ball_uv: np.ndarray | None = None) -> None:
+                  pivot_marker_radius_px: float = 9.0, ball_uv: np.ndarray | None = None,
+                  string_px: float | None = None) -> None:
     """Draw in place the robot's flange above the pivot [px], the pivot marker (a colour name, or None), the string
-    to the ball (at ball_uv [px], default the middle of its centres) and the ball, motion-blurred over its centres
-    during the exposure (m, 2) [px]."""
+    to the ball (at ball_uv [px], default the middle of its centres; with string_px, its length [px], drawn sagging
+    when the ball is nearer — a slack string) and the ball, motion-blurred over its centres during the exposure
+    (m, 2) [px]."""
     import cv2
 
     p = np.asarray(pivot_uv, float)
@@ -190,13 +192,31 @@ def draw_pendulum(frame: np.ndarray, pivot_uv: np.ndarray, ball_centres: np.ndar
         _draw_ball(frame, p[None, :], pivot_marker_radius_px, MARKER_BGR.get(pivot_marker, MARKER_BGR["green"]))
     c = np.asarray(ball_centres, float).reshape(-1, 2)
     b = c.mean(axis=0) if ball_uv is None else np.asarray(ball_uv, float)
-    cv2.line(frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1, cv2.LINE_AA, 4)
+    if string_px is None or np.hypot(*(b - p)) >= 0.99 * string_px:  # taut: a straight string
+        cv2.line(frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1,
+                 cv2.LINE_AA, 4)
+    else:
+        string = _string_polyline(p, b, string_px)
+        cv2.polylines(frame, [np.round(string * 16).astype(np.int32).reshape(-1, 1, 2)], False, (45, 45, 50), 1,
+                      cv2.LINE_AA, 4)
     _draw_ball(frame, c, radius_px, ball_bgr)
 
 
 def lab_background(size: tuple[int, int], seed: int = 0) -> np.ndarray:
     """The backdrop of the rendered videos (a light wall, a darker table), (h, w, 3) BGR."""
     return _background(size, np.random.default_rng(seed))
+
+
+def _string_polyline(p: np.ndarray, b: np.ndarray, length: float, n: int = 12) -> np.ndarray:
+    """(n, 2) points of a string of ``length`` [px] from p to b: straight when taut, sagging (a parabola hanging down
+    by the excess length) when the ball is nearer."""
+    d = float(np.hypot(*(b - p)))
+    u = np.linspace(0.0, 1.0, n)[:, None]
+    line = p[None, :] + u * (b - p)[None, :]
+    if d >= 0.99 * length:
+        return line
+    sag = 0.5 * math.sqrt(max(length * length - d * d, 0.0))
+    return line + np.array([0.0, 1.0]) * (4.0 * sag * u * (1.0 - u))
 
 
 def rod_occluder(p0: Sequence[float], p1: Sequence[float], width_px: float = 6.0,
@@ -290,6 +310,7 @@ def render_pendulum_video(
     plane_to_image: np.ndarray | None = None,
     jpeg_quality: int | None = None,
     bitrate_kbps: float | None = None,
+    ball_path: np.ndarray | None = None,
     seed: int = 0,
     progress: Callable[[int], None] | None = None,
     target: str | Path | None = None,
@@ -308,7 +329,9 @@ def render_pendulum_video(
     (pivot_uv, string_px and ball_radius_px are then in plane px) to the image (ball radius scaled by the
     local scale); the returned ball and pivot positions are in the image, θ in the plane; jpeg_quality:
     each frame JPEG-compressed at this quality (1–100) before encoding (heavy compression artifacts);
-    bitrate_kbps: target bitrate [kbit/s] for codec 'h264', 'hevc', 'vp9' or 'av1' (written with PyAV); target: the
+    bitrate_kbps: target bitrate [kbit/s] for codec 'h264', 'hevc', 'vp9' or 'av1' (written with PyAV); ball_path:
+    (n, 2) ball centres [px] per sample instead of pivot + string_px·(sin θ, cos θ) — a ball that may fly on a slack
+    string (drawn sagging when the ball is nearer than string_px); θ is then the direction pivot → ball; target: the
     name an OutputError reports (the final name when ``path`` is a temporary one).
     """
     import cv2
@@ -339,8 +362,11 @@ def render_pendulum_video(
         return out
 
     def state(times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        th = interp(times, theta)
         pv = np.column_stack([interp(times, piv[:, 0]), interp(times, piv[:, 1])])
+        if ball_path is not None:
+            b = np.column_stack([interp(times, ball_path[:, 0]), interp(times, ball_path[:, 1])])
+            return np.arctan2(b[:, 0] - pv[:, 0], b[:, 1] - pv[:, 1]), pv, b
+        th = interp(times, theta)
         return th, pv, pv + L * np.column_stack([np.sin(th), np.cos(th)])
 
     H = None if plane_to_image is None else np.asarray(plane_to_image, float)
@@ -379,7 +405,8 @@ def render_pendulum_video(
             rk = r if H is None else r * float(homography_scale(H, centres.mean(axis=0))[0])
             centres = to_image(centres)
             b = ball_f[k]
-            draw_pendulum(frame, p, centres, rk, ball_bgr, pivot_marker, pivot_marker_radius_px, b)
+            draw_pendulum(frame, p, centres, rk, ball_bgr, pivot_marker, pivot_marker_radius_px, b,
+                          None if ball_path is None else L)
             for draw in foreground:
                 draw(frame, float(tf[k] - t[0]), b)
             if gain is not None:

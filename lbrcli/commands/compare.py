@@ -32,10 +32,13 @@ def compare(
     within 1.5× of the best's, or the best lies on the edge of the window, or a better one lies beyond the
     default window, the lag is ambiguous: the figures are printed and the exit code is 1 — give --lag, or a
     --max-lag that leaves one candidate. Uneven frame times (dropped frames, jitter) and frames without θ are
-    counted and warned about. Frames where the ball (or pivot) was not found are skipped. Exit 1 when
-    prediction and track do not overlap, the lag is ambiguous, or (without --partial) the overlap covers less than
-    half of the prediction — the experiment stopped early, or the files do not belong together; exit 2 for an
-    execution log (--column) whose session did not complete, without --partial.
+    counted and warned about. Frames where the ball (or pivot) was not found are skipped. A cup-and-ball
+    prediction (`lbr plan cup-and-ball --prediction`, with phase, ball and anchor columns) against a track with a
+    pivot marker is also compared by position where its string is slack (the free flight; the track has no θ
+    there): the image scale is the tracked string length over the model's. Exit 1 when prediction and track do
+    not overlap, the lag is ambiguous, or (without --partial) the overlap covers less than half of the prediction —
+    the experiment stopped early, or the files do not belong together; exit 2 for an execution log (--column)
+    whose session did not complete, without --partial.
     """
     import math
 
@@ -110,6 +113,14 @@ def compare(
     short = coverage < MIN_COVERAGE
     if short:
         rep.warn(f"the track covers {cmp.overlap_s:.2f} s of the {span:.2f} s prediction ({coverage * 100:.0f} %)")
+    positions = _slack_positions(pred, tr, cmp.lag_s, flip) if column == "theta" else None
+    if positions is not None:
+        if positions.frames:
+            rep.print(f"slack string (free flight) over {positions.frames} frames: ball position RMS error "
+                      f"{1e3 * positions.rms_m:.1f} mm, max {1e3 * positions.max_m:.1f} mm (scale "
+                      f"{positions.px_per_m:.0f} px/m from the string's length)")
+        else:
+            rep.print("the prediction's slack phase and the track do not overlap: no positions compared")
     if plot is not None:
         from ..plots.compare import plot_compare
 
@@ -143,6 +154,9 @@ def compare(
             "timing_jitter": samples.jitter,
             "frames_without_theta": samples.missing,
             "longest_without_theta_s": samples.longest_missing_s,
+            "slack_position": None if positions is None else {
+                "frames": positions.frames, "rms_m": positions.rms_m, "max_m": positions.max_m,
+                "px_per_m": positions.px_per_m},
             "coverage": coverage,
             "ok": (not short or partial) and ambiguous_why is None,
         }
@@ -153,6 +167,28 @@ def compare(
         raise CheckFailed(f"the track covers only {coverage * 100:.0f} % of the prediction ({cmp.overlap_s:.2f} of "
                           f"{span:.2f} s): the experiment stopped early or the files do not belong together; "
                           "--partial compares the overlap anyway")  # fmt: skip
+
+
+def _slack_positions(pred, tr, lag: float, flip: bool):
+    """Ball positions where the prediction's string is slack (a cup-and-ball prediction with ball and anchor columns)
+    against the track's ball relative to its pivot marker; None when either lacks them."""
+    import numpy as np
+
+    from tracking.compare_positions import compare_positions
+    from tracking.slack import string_length_px
+
+    needed = ("phase", "ball_y", "ball_z", "anchor_y", "anchor_z")
+    if not all(pred.has(c) for c in needed) or tr.pivot_uv is None:
+        return None
+    phase = pred.column("phase")
+    rel = np.column_stack([pred.column("ball_y") - pred.column("anchor_y"), pred.column("ball_z") - pred.column("anchor_z")])
+    taut = phase == 0
+    if not taut.any() or not (phase == 1).any():
+        return None
+    length = float(np.median(np.hypot(*rel[taut].T)))
+    rel_px = tr.uv - tr.pivot_uv
+    return compare_positions(pred.column("t"), rel, phase == 1, length, tr.t, rel_px,
+                             string_length_px(np.hypot(*rel_px.T)), lag, flip)
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -34,6 +34,7 @@ from ..fri_options import (
     VersionOpt,
     WaitOpt,
 )
+from ..cup_options import CupSpecOpt
 from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, MarginOpt, ToolOpt, number
 
 
@@ -98,6 +99,7 @@ def execute(
         float, number("--damping", low=0, high=1000, unit="1/s",
                       help="Simulator only: damping of the simulated ball \\[1/s] (0: it swings on).")
     ] = 0.0,
+    cup: CupSpecOpt = None,
     start_sway: Annotated[
         float,
         number(
@@ -154,7 +156,7 @@ def execute(
     from ..session_end import FILE_ROWS_COLUMN
 
     rep = Reporter(json_out)
-    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--damping": damping != 0.0,
+    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--damping": damping != 0.0, "--cup": cup is not None,
                                  "--receive-multiplier": receive_multiplier != 1, "--sim-strict": not sim_lenient})  # fmt: skip
     ball = DEFAULT_BALL_LENGTH if length is None and robot is None else length
     if log is not None and log.resolve() == joint_csv.resolve():
@@ -221,6 +223,12 @@ def execute(
                                       sim_start=sim_start, default_start=traj.q[0], flange=flange, tool=tool,
                                       max_runtime_s=traj.duration + settle + sway_wait + 120.0, limits=limits)  # fmt: skip
         sim_kwargs.update(receive_multiplier=receive_multiplier, ball_damping=damping)
+        if cup is not None:
+            from ..cup_options import parse_cup_spec
+
+            if not ball:
+                raise OptionError("--cup needs the simulated ball (--length > 0)")
+            sim_kwargs["ball_model"] = parse_cup_spec(cup, ball)
     result, sim_stats, lab_figures = run_client(
         rep, player, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
         sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), max_tracking_error=max_tracking_error, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
@@ -229,6 +237,17 @@ def execute(
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)
     figures.update(file=name, rows=len(traj), duration_s=traj.duration, robot=robot or "simulator")
+    plant = (figures.get("simulator") or {}).get("plants", {}).get("ball", {}).get("cup")
+    if plant is not None:
+        rep.print("simulated ball: " + ("caught in the cup" if plant["caught"] else f"not caught — {plant['failure']}")
+                  + " (simulator time)")
+    if cup is not None and log is not None:
+        from ..cup_log import cup_summary, describe
+
+        summary = cup_summary(log)
+        if summary is not None:
+            rep.print(describe(summary))
+            figures["cup"] = summary
     if robot is not None and result.figures.get("operation_mode") == "TEST_MODE_1" and not t1:
         rep.warn("the robot is in T1: the controller limits the flange speed to 250 mm/s (check with --t1)")
     plot_error = plot_log(plot, log, rep, joint_csv.name, figures)

@@ -7,6 +7,7 @@ from typing import Annotated, Optional
 
 import typer
 
+from ..cup_options import CupSpecOpt
 from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, ToolOpt, grid, number
 
 TRUTH_COLUMNS = ("t", "u", "v", "pivot_u", "pivot_v", "theta")
@@ -20,13 +21,17 @@ def film(
     fps: Annotated[float, number("--fps", low=1, high=1000, unit="1/s", help="Frame rate \\[1/s].")] = 60.0,
     truth: Annotated[Optional[Path], typer.Option("--truth", help="Write what was drawn per frame: t,u,v,pivot_u,pivot_v,theta \\[s, px, rad].")] = None,
     partial: Annotated[bool, typer.Option("--partial", help="Film a log whose session stopped early too (refused otherwise: the film would not show the experiment).")] = False,
+    cup: CupSpecOpt = None,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
     """Film the simulated ball of an execution log: a camera on +x looking at the base y–z plane (image u = base +y,
     θ positive toward the image's right, as `lbr track video` measures it), a green marker on the pivot for
-    `--pivot-color green`. Stands in for the experiment video when there is no camera (the README's example).
+    `--pivot-color green`. Stands in for the experiment video when there is no camera (the README's example). The
+    ball is drawn where the log puts it (the simulator's ball_y, ball_z: flying on a slack string too, the string
+    sagging); with --cup (the spec `lbr execute --cup` simulated) the cup is drawn on the pivot (a clear cup: the
+    ball stays visible inside) and the ball has the spec's radius.
 
     A log whose session did not complete (stopped early: see its file_rows/phase columns) is refused unless --partial.
     Exit 1 when the video could not be written whole (nothing is left under its name)."""
@@ -48,6 +53,11 @@ def film(
     if h > 4320:
         raise OptionError(f"--size: the height must be at most 4320 px, got {w}x{h}")
     check_video_name(out, "-o")
+    model = None
+    if cup is not None:
+        from ..cup_options import parse_cup_spec
+
+        model = parse_cup_spec(cup, length)
     guard_outputs({"LOG": log}, {"-o": out, "--truth": truth})
     k = w / 1280.0
     camera = Camera(px_per_m=1300.0 * k, pivot0_uv=(w / 2.0, 260.0 * h / 720.0), size=(w, h), fps=fps)
@@ -55,7 +65,7 @@ def film(
     require_complete(table, partial, rep)
     with atomic_path(out) as tmp, rep.progress("film", None) as update:
         footage = film_execution_log(table, tmp, length, camera, flange=flange, tool=parse_tool(tool),
-                                     progress=update, target=out)
+                                     progress=update, cup=model, target=out)
         check_written(tmp, len(footage.truth.t), out)  # OpenCV does not report a full disk
     gt = footage.truth
     if truth is not None:

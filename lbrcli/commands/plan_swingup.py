@@ -194,7 +194,7 @@ def swing_up(
     dt: Annotated[float, number("--dt", low=1e-4, high=0.02, unit="s", help="Sample step \\[s] (FRI period; 0.005 as in the thesis, or 0.001).")] = 0.005,
     q_start: Annotated[JointVector, joints("--q-start", help="Start configuration (7 angles, deg/rad suffixes); thesis pose by default.")] = THESIS_Q_START,
     max_travel: Annotated[float, number("--max-travel", low=0, high=1, low_open=True, unit="m", help="The pivot must stay within ±this along base y \\[m].")] = 0.3,
-    taut: Annotated[bool, typer.Option("--taut", help="Keep the string taut (tension/mass ≥ 0.5 m/s²); report the highest such angle.")] = False,
+    taut: Annotated[bool, typer.Option("--taut", help="Keep the string taut (tension/mass ≥ 0.5 m/s²) until θ_d is reached; report the highest angle the string holds taut.")] = False,
     tolerance: Annotated[float, angle("--tolerance", low_deg=0, high_deg=180, high_open=True, help="θ_d counts as reached at θ_d − tolerance (energy shaping is asymptotic; it aims at θ_d − tolerance/2).")] = "2deg",
     margin: Annotated[float, number("--margin", low=0, high=1, high_open=True, help="Pivot bounds keep joints within (1 − margin)·limits.")] = 0.1,
     orientation: Annotated[str, choice("--orientation", choices=("auto", "fixed", "follow"), metavar="auto|fixed|follow", help="Pivot orientation: fixed (thesis T_start), follow (turns with y about the vertical, well conditioned), auto (fixed for energy, follow for fast).")] = "auto",

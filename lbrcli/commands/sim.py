@@ -6,6 +6,7 @@ from typing import Annotated, Optional
 
 import typer
 
+from ..cup_options import CupSpecOpt
 from ..fri_options import parse_host_port, parse_ip
 from ..options import (DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, Floats, JointVector, JsonOpt, LimitsOpt, ToolOpt,
                        choice, floats, joints, number)  # fmt: skip
@@ -27,6 +28,7 @@ def sim(
     q0: Annotated[JointVector, joints("--q0", help="Start joint positions q1..q7 \\[rad, or with deg suffix].")] = THESIS_Q_START,
     length: Annotated[Optional[float], number("--length", low=0, high=5, low_open=True, unit="m", help="Simulate a ball on a string of this length \\[m] hanging from the TCP.")] = None,
     damping: Annotated[float, number("--damping", low=0, high=1000, unit="1/s", help="Damping of the simulated ball \\[1/s].")] = 0.0,
+    cup: CupSpecOpt = None,
     fri_version: Annotated[str, choice("--fri-version", choices=("1.15", "2.7"), help="Wire format: 1.15 (bare protobuf) or 2.7 (length + CRC-32 framing).")] = "1.15",
     receive_multiplier: Annotated[int, number("--receive-multiplier", low=1, high=100, integer=True, help="The client answers every k-th message.")] = 1,
     duration: Annotated[Optional[float], number("--duration", low=0, high=86400 * 365, low_open=True, unit="s", help="COMMANDING_ACTIVE time \\[s] after which the robot application ends the session (default: until the client stops); with --no-overlay the time from the first MONITORING_READY.")] = None,
@@ -87,6 +89,13 @@ def sim(
         if io_preset not in IO_PRESETS:
             raise OptionError(f"--io-preset: one of {', '.join(IO_PRESETS)}, got {io_preset!r}")
         channels = IO_PRESETS[io_preset] + channels
+    cup_model = None
+    if cup is not None:
+        from ..cup_options import parse_cup_spec
+
+        if length is None:
+            raise OptionError("--cup needs the simulated ball (--length)")
+        cup_model = parse_cup_spec(cup, length)
     extra = {name: value for name, value in (("external_torque", external_torque), ("external_force", external_force),
                                              ("cartesian_stiffness", cartesian_stiffness)) if value is not None}
     lim = limits_from(limits)
@@ -96,7 +105,7 @@ def sim(
         receive_multiplier=receive_multiplier, version=fri_version,
         q0=tuple(float(x) for x in q0),
         flange=parse_flange(flange).value, tool=parse_tool(tool),
-        plants=default_plants(length, damping, pendulum_pty=pendulum_pty),
+        plants=default_plants(length, damping, pendulum_pty=pendulum_pty, model=cup_model),
         commanding_after_s=commanding_after, session_duration_s=duration, max_runtime_s=timeout,
         loss=loss, delay_ms=delay, jitter_ms=jitter, malformed=malformed, seed=seed,
         quality_window=quality_window, quality_good=quality_good,
@@ -160,6 +169,9 @@ def sim(
         import math
 
         rep.print(f"ball: max tilt {math.degrees(stats.max_ball_theta):.2f} deg")
+        catch = stats.plants.get("ball", {}).get("cup")
+        if catch is not None:
+            rep.print("ball: " + ("caught in the cup" if catch["caught"] else f"not caught — {catch['failure']}"))
     rep.emit({"address": f"{h}:{p}", "client": f"{client_host}:{client_port}", "period_ms": period,
               "fri_version": fri_version, **figures})
 

@@ -36,6 +36,7 @@ def video(
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of θ \\[deg] and u, v \\[px] over time with lost frames marked.")] = None,
     preview: Annotated[Optional[Path], typer.Option("--preview", help="Video (mp4) with the detection drawn over it: ball circle, pivot, string, θ.")] = None,
     candidates: Annotated[Optional[Path], typer.Option("--candidates", help="PNG of the first frame with every ball-like blob circled and labelled U,V \\[px] (pick one for --start).")] = None,
+    slack: Annotated[bool, typer.Option("--slack/--no-slack", help="With a pivot: frames where the ball is nearer to the pivot than the string's length (estimated from the track) are slack — position kept, θ left empty.")] = True,
     json_out: JsonOpt = False,
 ) -> None:
     """Track a coloured ball in every frame of a video; θ from the pivot when one is known.
@@ -50,8 +51,10 @@ def video(
     and the one moving like a pendulum about the pivot is kept (said in a warning); --start names the ball
     instead. Every fix has a confidence: a new lock until confirmed by steady motion, candidates being judged, a
     fix where the ball's colour has been static are unsure — written found = 0, unsure = 1 (columns confidence,
-    unsure) — and a fix beyond the learned string length is rejected. Exit 1 if the ball is found in fewer than
-    --min-found percent of the frames, or the pivot marker in none.
+    unsure) — and a fix beyond the learned string length is rejected. Where the string is slack (the ball nearer to
+    the pivot than the string's length) θ is left empty and the position kept (--no-slack: θ everywhere; not judged
+    with a plane calibration). Exit 1 if the ball is found in fewer than --min-found percent of the frames, or the
+    pivot marker in none.
     """
     import contextlib
     import math
@@ -133,6 +136,15 @@ def video(
             writer.release()
             check_written(preview_tmp, written[0], preview)
     elapsed = time.perf_counter() - t0
+    slack_info = None
+    if slack and track.theta is not None and not track.theta_in_plane:  # (distances of an oblique image: not judged)
+        from dataclasses import replace
+
+        from tracking.slack import slack_frames
+
+        mask, _, string_px = slack_frames(track.uv, track.pivot_uv if track.pivot_uv is not None else np.array(piv_uv))
+        track = replace(track, theta=np.where(mask, np.nan, track.theta))
+        slack_info = {"slack_frames": int(mask.sum()), "string_px": string_px}
     write_track_csv(out, track)
 
     n = len(track.t)
@@ -173,6 +185,11 @@ def video(
             rep.print(f"θ ({where}) in {len(th)} frames, from {figures['theta_min_deg']:.2f}° to {figures['theta_max_deg']:.2f}°")
         else:
             rep.print("θ in no frame")
+    if slack_info is not None:
+        figures.update(slack_info)
+        if slack_info["slack_frames"]:
+            rep.print(f"string slack in {slack_info['slack_frames']} frames (ball nearer than the string's "
+                      f"{slack_info['string_px']:.1f} px): position only, no θ there")
     if track.pivot_uv is not None:
         figures["pivot_found"] = int(np.all(np.isfinite(track.pivot_uv), axis=1).sum())
         rep.print(f"pivot marker found in {figures['pivot_found']} frames")

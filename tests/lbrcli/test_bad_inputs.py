@@ -159,6 +159,7 @@ BASE = {
     "plan anti-sway": ["plan", "anti-sway", "-o", "{out}/a.csv", "--length", "0.25", "--a-max", "2"],
     "plan swing-up": ["plan", "swing-up", "-o", "{out}/s.csv", "--length", "0.25", "--mass", "0.0139", "--theta-d",
                       "115deg"],
+    "plan cup-and-ball": ["plan", "cup-and-ball", "-o", "{out}/c.csv", "--length", "0.25"],
     "execute": ["execute", "{ws}/joint.csv"],
     "monitor": ["monitor", "--duration", "1"],
     "ptp": ["ptp", ",".join(map(str, Q_START)), "--time", "1"],
@@ -322,6 +323,11 @@ BEYOND = "3," + ",".join(map(str, Q_START[1:]))  # A1 3 rad: outside ±170°
         ("track video", ("--pivot", "10,10", "--pivot-color", "green"), "either --pivot or --pivot-color"),
         ("track video", ("--color", "plaid"), "--color"),
         ("track live", ("--pivot", "10,10", "--pivot-color", "green"), "either --pivot or --pivot-color"),
+        ("plan cup-and-ball", ("--q-start", BEYOND), "--q-start: A1"),
+        ("plan cup-and-ball", ("--length", "0.05"), "exceed the cup's extent"),
+        ("sim", ("--cup", "default"), "--cup needs the simulated ball"),
+        ("execute", ("--cup", "default", "--length", "0"), "--cup needs the simulated ball"),
+        ("track film", ("--cup", "radius=0.03,depth=0.3,rim=0.31", "--length", "0.2"), "--cup"),
         ("track live", ("--mqtt", "http://127.0.0.1:1/x"), "--mqtt"),
         ("monitor", ("--robot", "192.0.2.1", "--length", "0.3"), "apply to the simulator only"),
     ],
@@ -453,8 +459,8 @@ HOSTILE_TOML = [
     ("missing", "MISSING", "limits file not found"),
     ("directory", "DIR", "is a directory"),
 ]
-LIMITS_READERS = ["check", "retime", "ik", "plan anti-sway", "plan swing-up", "execute", "ptp", "sim", "serve",
-                  "control upright", "control damp"]  # fmt: skip
+LIMITS_READERS = ["check", "retime", "ik", "plan anti-sway", "plan swing-up", "plan cup-and-ball", "execute", "ptp",
+                  "sim", "serve", "control upright", "control damp"]  # fmt: skip
 
 
 @pytest.mark.parametrize("command", LIMITS_READERS)
@@ -595,7 +601,8 @@ OUTPUTS = [
     ("fk", "-o"), ("ik", "-o"), ("retime", "-o"), ("check", "--plot"), ("compare", "--plot"),
     ("plan anti-sway", "-o"), ("plan anti-sway", "--task-out"), ("plan anti-sway", "--prediction"),
     ("plan anti-sway", "--plot"), ("plan swing-up", "-o"), ("plan swing-up", "--prediction"),
-    ("plan swing-up", "--plot"), ("plan swing-up", "--task-out"), ("execute", "--log"), ("execute", "--plot"),
+    ("plan swing-up", "--plot"), ("plan swing-up", "--task-out"), ("plan cup-and-ball", "-o"),
+    ("plan cup-and-ball", "--prediction"), ("plan cup-and-ball", "--plot"), ("execute", "--log"), ("execute", "--plot"),
     ("monitor", "--log"), ("ptp", "--log"), ("serve", "--log"), ("listen", "-o"), ("track video", "-o"),
     ("track video", "--plot"), ("track video", "--preview"), ("track video", "--candidates"),
     ("track calibrate", "-o"), ("track film", "-o"), ("track film", "--truth"), ("track live", "-o"),

@@ -123,10 +123,10 @@ def urdf(robot: Robot, limits: JointLimits | None = None, prefix: str = "lbr") -
             inertia = model.inertias[body]
             inertial = ET.SubElement(link, "inertial")
             _origin(inertial, pin.SE3(np.eye(3), inertia.lever).homogeneous)
-            ET.SubElement(inertial, "mass", value=f"{inertia.mass:.9g}")
+            ET.SubElement(inertial, "mass", value=f"{inertia.mass:.17g}")
             i3 = inertia.inertia
-            ET.SubElement(inertial, "inertia", ixx=f"{i3[0, 0]:.9g}", ixy=f"{i3[0, 1]:.9g}", ixz=f"{i3[0, 2]:.9g}",
-                          iyy=f"{i3[1, 1]:.9g}", iyz=f"{i3[1, 2]:.9g}", izz=f"{i3[2, 2]:.9g}")
+            ET.SubElement(inertial, "inertia", ixx=f"{i3[0, 0]:.17g}", ixy=f"{i3[0, 1]:.17g}", ixz=f"{i3[0, 2]:.17g}",
+                          iyy=f"{i3[1, 1]:.17g}", iyz=f"{i3[1, 2]:.17g}", izz=f"{i3[2, 2]:.17g}")
         for shape in shapes:
             if shape.body == body:
                 _visual(link, shape)
@@ -136,8 +136,8 @@ def urdf(robot: Robot, limits: JointLimits | None = None, prefix: str = "lbr") -
         ET.SubElement(joint, "child", link=names[i + 1])
         _origin(joint, model.jointPlacements[i + 1].homogeneous)
         ET.SubElement(joint, "axis", xyz="0 0 1")
-        ET.SubElement(joint, "limit", lower=f"{-lim.position[i]:.9g}", upper=f"{lim.position[i]:.9g}",
-                      velocity=f"{lim.velocity[i]:.9g}", effort=f"{lim.torque[i]:.9g}")
+        ET.SubElement(joint, "limit", lower=f"{-lim.position[i]:.17g}", upper=f"{lim.position[i]:.17g}",
+                      velocity=f"{lim.velocity[i]:.17g}", effort=f"{lim.torque[i]:.17g}")
     for parent, child, fid in ((names[N_JOINTS], names[-2], robot.flange_id), (names[-2], names[-1], robot.tcp_id)):
         joint = ET.SubElement(root, "joint", name=f"{child}_joint", type="fixed")
         ET.SubElement(joint, "parent", link=parent)

@@ -101,8 +101,9 @@ def sample(t_file: np.ndarray, values: np.ndarray, times: np.ndarray, clamp: boo
     return out
 
 
-def turning_points(p: np.ndarray, dt: float, stop_share: float = 0.02) -> np.ndarray:
-    """Where a pivot path (n, 3) [m] sampled every ``dt`` [s] stops or reverses: one point per stop (j, 3)."""
+def turning_points(p: np.ndarray, dt: float, stop_share: float = 0.02, turn_deg: float = 20.0) -> np.ndarray:
+    """Where a pivot path (n, 3) [m] sampled every ``dt`` [s] starts, ends, or stops or reverses and turns by more
+    than ``turn_deg``: one point per stop (j, 3). Stopped: slower than ``stop_share`` of the peak speed."""
     if len(p) < 3:
         return p[:1].copy()
     v = np.diff(p, axis=0) / dt
@@ -117,7 +118,15 @@ def turning_points(p: np.ndarray, dt: float, stop_share: float = 0.02) -> np.nda
     if candidate.size == 0:
         return np.zeros((0, 3))
     groups = np.split(candidate, np.flatnonzero(np.diff(candidate) > 1) + 1)
-    idx = [int(g[np.argmin(speed[g])]) for g in groups]
+    moving = np.flatnonzero(~stopped)
+    idx = []
+    for g in groups:
+        before, after = moving[moving < g[0]], moving[moving > g[-1]]
+        if before.size and after.size:  # a pause on a straight line (a shaper's dwell) is no turning point
+            a, b = v[before[-1]], v[after[0]]
+            if np.dot(a, b) > np.cos(np.radians(turn_deg)) * np.linalg.norm(a) * np.linalg.norm(b):
+                continue
+        idx.append(int(g[np.argmin(speed[g])]))
     return p[idx]
 
 

@@ -52,7 +52,7 @@ def view(
     fps: Annotated[float, typer.Option("--fps", help="Frames per second of the replay \\[1/s]; the files are sampled on this grid.")] = 50.0,
     length: Annotated[float, typer.Option("--length", help="String length \\[m] from the TCP to the ball centre (balls given by angles).")] = 0.25,
     ball_radius: Annotated[float, typer.Option("--ball-radius", help="Radius of the drawn ball \\[m].")] = 0.02,
-    cup: Annotated[Optional[str], typer.Option("--cup", help="Draw a cup on the TCP: RADIUS,DEPTH \\[m] of an open cylinder along the flange's z axis.")] = None,
+    cup: Annotated[Optional[str], typer.Option("--cup", help="Draw a cup on the TCP: RADIUS,DEPTH \\[m] of a translucent cylinder from the TCP along the flange's z axis.")] = None,
     offset: Annotated[Optional[list[str]], typer.Option("--offset", help="FILE=SECONDS: place a file on the time line by hand (view time = file time + SECONDS, before the time line is shifted to start at 0). Repeatable.")] = None,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,

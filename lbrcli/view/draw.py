@@ -22,31 +22,17 @@ PATH_COLOURS = {"planned": (70, 170, 90), "commanded": (50, 120, 235), "measured
 _UNCHANGED = 1e-7  # [m] and quaternion units: a node that moved less is not sent again
 
 
-def _mesh(shapes: list[Shape], sections: int = 32) -> tuple[np.ndarray, np.ndarray]:
-    """One mesh (vertices [m] in the body frame, faces) of a body's primitives (trimesh)."""
-    import trimesh
+def _add_shape(api, name: str, shape: Shape, colour, opacity) -> None:
+    """A primitive (viser's cylinder, its height along z, or icosphere) at its placement in its body's frame."""
+    from scipy.spatial.transform import Rotation
 
-    parts = []
-    for shape in shapes:
-        if shape.kind == "cylinder":
-            part = trimesh.creation.cylinder(radius=shape.radius, height=shape.length, sections=sections)
-        else:
-            part = trimesh.creation.icosphere(subdivisions=2, radius=shape.radius)
-        part.apply_transform(shape.matrix)
-        parts.append(part)
-    mesh = trimesh.util.concatenate(parts)
-    return np.asarray(mesh.vertices, dtype=np.float32), np.asarray(mesh.faces, dtype=np.uint32)
-
-
-def _cup_mesh(radius: float, depth: float, sections: int = 40) -> tuple[np.ndarray, np.ndarray]:
-    """An open cylinder [m]: its bottom disc at z = 0, the wall up to z = depth (the opening)."""
-    import trimesh
-
-    wall = trimesh.creation.annulus(r_min=radius, r_max=radius + 0.003, height=depth, sections=sections)
-    wall.apply_translation((0.0, 0.0, depth / 2))
-    bottom = trimesh.creation.cylinder(radius=radius + 0.003, height=0.003, sections=sections)
-    mesh = trimesh.util.concatenate([wall, bottom])
-    return np.asarray(mesh.vertices, dtype=np.float32), np.asarray(mesh.faces, dtype=np.uint32)
+    m = shape.matrix
+    wxyz = Rotation.from_matrix(m[:3, :3]).as_quat(scalar_first=True)
+    if shape.kind == "cylinder":
+        api.add_cylinder(name, radius=shape.radius, height=shape.length, color=colour, opacity=opacity,
+                         wxyz=wxyz, position=m[:3, 3])
+    else:
+        api.add_icosphere(name, radius=shape.radius, color=colour, opacity=opacity, wxyz=wxyz, position=m[:3, 3])
 
 
 class Drawing:
@@ -58,24 +44,25 @@ class Drawing:
         self._sent: dict[str, np.ndarray] = {}
         shapes = link_shapes(robot)
         api.add_grid("/ground", width=2.0, height=2.0, cell_size=0.1, section_size=0.5)
-        verts, faces = _mesh([s for s in shapes if s.body == BASE_BODY])
-        api.add_mesh_simple("/base", verts, faces, color=(170, 170, 175))
-        bodies = [_mesh([s for s in shapes if s.body == b]) for b in range(1, FLANGE_BODY + 1)]
+        for k, shape in enumerate(s for s in shapes if s.body == BASE_BODY):
+            _add_shape(api, f"/base/{k}", shape, (170, 170, 175), None)
         alone = len(scene.arms) == 1
-        self.bodies: dict[str, list] = {}
+        self.bodies: dict[str, list] = {}  # per arm: the frame nodes of bodies A1..A7 and the flange
         for arm in scene.arms:
             opacity = None if alone else ARM_OPACITY.get(arm.role, 0.5)
             colour = ARM_COLOURS.get(arm.role, (200, 200, 200))
-            self.bodies[arm.key] = [
-                api.add_mesh_simple(f"/arms/{arm.key}/body{b + 1}", v, f, color=colour, opacity=opacity)
-                for b, (v, f) in enumerate(bodies)
-            ]
+            frames = []
+            for b in range(1, FLANGE_BODY + 1):
+                name = f"/arms/{arm.key}/body{b}"
+                frames.append(api.add_frame(name, show_axes=False))
+                for k, shape in enumerate(s for s in shapes if s.body == b):
+                    _add_shape(api, f"{name}/{k}", shape, colour, opacity)
+            self.bodies[arm.key] = frames
         if scene.cup_arm is not None and scene.settings.cup is not None:
-            radius, depth = scene.settings.cup
-            verts, faces = _cup_mesh(radius, depth)
+            radius, depth = scene.settings.cup  # a translucent cylinder on the TCP along the flange's z axis
             tool = np.asarray(robot.config.tool, dtype=float)
-            api.add_mesh_simple(f"/arms/{scene.cup_arm}/body{FLANGE_BODY}/cup", verts, faces, color=(90, 90, 200),
-                                opacity=0.6, side="double", position=tuple(tool))
+            api.add_cylinder(f"/arms/{scene.cup_arm}/body{FLANGE_BODY}/cup", radius=radius, height=depth,
+                             color=(90, 90, 200), opacity=0.45, position=tool + (0.0, 0.0, depth / 2))
         self.balls: dict[str, tuple] = {}
         for ball in scene.balls:
             colour = BALL_COLOURS.get(ball.kind, (200, 0, 200))

@@ -42,7 +42,7 @@ def require_browser() -> str:
 
 
 @contextlib.contextmanager
-def page(viewport=(800, 500)):
+def page(viewport=(640, 400)):
     """A fresh page in headless Chromium; yields (page, console) where console collects (type, text) of every
     console message and page error."""
     from playwright.sync_api import sync_playwright

@@ -178,11 +178,14 @@ def measure_demo(folder: Path) -> dict[str, float]:
 
 
 def run(quick: bool = False) -> list[tuple[str, float, str]]:
+    import os
+
     seconds = 6.0 if quick else 60.0
+    load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         log = make_log(folder, seconds)
-        fig: dict[str, float] = {"log_seconds": seconds}
+        fig: dict[str, float] = {"log_seconds": seconds, "load_average_at_start": load}
         fig.update(measure_view(log, folder))
         fig.update(measure_export(log, folder, 2 if quick else 3))
         fig.update(verify_export(log, folder / "log.mcap"))
@@ -196,7 +199,8 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
 def _table(rows: list[tuple[str, float, str]], quick: bool) -> str:
     f = {k: v for k, v, _ in rows}
     lines = [MARK_BEGIN, "", f"Measured by `python benchmarks/bench_view.py{' --quick' if quick else ''}` on "
-             f"{time.strftime('%d %b %Y')} (2-core VM shared with other work; Chromium renders in software).", "",
+             f"{time.strftime('%d %b %Y')} on the 2-core VM, load average {f['load_average_at_start']:.1f} at the start "
+             "(other work on the machine); Chromium renders in software.", "",
              "| what | figure | goal |", "|---|---|---|"]
 
     def row(what, value, goal):

@@ -49,7 +49,7 @@ def view(
     port: Annotated[int, typer.Option("--port", help="TCP port of the view's server (0: any free port).")] = 8080,
     duration: Annotated[Optional[float], typer.Option("--duration", help="Stop serving after this many seconds \\[s] (default: until Ctrl-C).")] = None,
     open_browser: Annotated[bool, typer.Option("--open", help="Open the view in the default web browser.")] = False,
-    fps: Annotated[float, typer.Option("--fps", help="Frames per second of the replay \\[1/s]; the files are sampled on this grid.")] = 50.0,
+    fps: Annotated[float, typer.Option("--fps", help="Frames per second of the replay \\[1/s]; the files are sampled on this grid.")] = 30.0,
     length: Annotated[float, typer.Option("--length", help="String length \\[m] from the TCP to the ball centre (balls given by angles).")] = 0.25,
     ball_radius: Annotated[float, typer.Option("--ball-radius", help="Radius of the drawn ball \\[m].")] = 0.02,
     cup: Annotated[Optional[str], typer.Option("--cup", help="Draw a cup on the TCP: RADIUS,DEPTH \\[m] of a translucent cylinder from the TCP along the flange's z axis.")] = None,

@@ -25,7 +25,7 @@ class ViewSettings:
     """How to draw: string length [m], frame rate of the replay [1/s], ball radius [m], cup (radius, depth) [m]."""
 
     length: float = 0.25  # [m], flange + tool to the ball centre
-    fps: float = 50.0  # [1/s]
+    fps: float = 30.0  # [1/s]
     ball_radius: float = 0.02  # [m]
     cup: tuple[float, float] | None = None  # (inner radius, depth) [m] of an open cylinder on the TCP
 

@@ -79,6 +79,7 @@ class Player:
         self.playing = True
         self.frames_shown = 0
         self._shown = -1
+        self._gui_updated = 0.0  # [s] monotonic time the slider and the state were last sent
         self._lock = threading.Lock()
         self._stop = threading.Event()
         gui = server.gui
@@ -118,7 +119,8 @@ class Player:
             self.show_time(float(self.slider.value), move_slider=False)
 
     def show_time(self, t: float, move_slider: bool = True) -> None:
-        """Show the frame at time ``t`` [s] (clamped to the time line)."""
+        """Show the frame at time ``t`` [s] (clamped to the time line); the slider and the state panel follow at
+        ≤ 10 Hz while playing (the scene's own label every frame), so the GUI does not crowd the scene's updates."""
         scene = self.scene
         self.t = float(np.clip(t, 0.0, scene.duration))
         k = int(round(self.t * scene.settings.fps))
@@ -127,8 +129,12 @@ class Player:
                 self.drawing.show(k)
             self._shown = k
             self.frames_shown += 1
-            if scene.status:
-                self.state.content = scene.status[min(k, len(scene.status) - 1)]
+        now = time.monotonic()
+        if move_slider and self.playing and now - self._gui_updated < 0.1:
+            return
+        self._gui_updated = now
+        if scene.status:
+            self.state.content = scene.status[min(k, len(scene.status) - 1)]
         if move_slider:
             self.slider.value = round(self.t, 6)
 

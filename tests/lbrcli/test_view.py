@@ -44,6 +44,30 @@ def test_the_track_is_placed_by_its_ball_and_the_plan_at_its_first_commanded_row
     assert given.offsets[str(run.track)] - given.offsets[str(run.log)] == pytest.approx(1.5)
 
 
+@pytest.mark.parametrize("lag, noise_deg, lost, fps", [(-0.8, 0.05, 0.05, 60), (0.15, 0.5, 0.2, 30), (1.3, 0.2, 0.1, 120)])
+def test_tracks_are_placed_within_a_frame_across_lags_noise_and_lost_frames(tmp_path_factory, tmp_path, lag,
+                                                                             noise_deg, lost, fps):
+    """Another camera each time: its own delay (before or after the log), noise, lost frames and frame rate; placed
+    within one video frame or one log period, whichever is longer."""
+    from trajectories.csvio import write_table
+
+    run = run_files(tmp_path_factory)
+    log = read_input(run.log)
+    ball = log.balls[0]
+    rng = np.random.default_rng(int(fps))
+    t = np.arange(0.0, ball.t[-1] - 0.3, 1 / fps)
+    theta = np.interp(t - lag, ball.t, ball.planar) + rng.normal(0.0, np.radians(noise_deg), len(t))
+    found = rng.random(len(t)) > lost
+    theta[~found] = np.nan
+    write_table(tmp_path / "cam.csv", ("t", "frame", "u", "v", "found", "theta"),
+                np.column_stack([t, np.arange(len(t)), np.where(found, 1.0, np.nan), np.where(found, 1.0, np.nan),
+                                 found.astype(float), theta]))
+    al = align([log, read_input(tmp_path / "cam.csv")])
+    placed = al.offsets[str(tmp_path / "cam.csv")] - al.offsets[log.path]
+    period = float(np.median(np.diff(ball.t)))  # the log's 10 ms: the reference is sampled no finer
+    assert placed == pytest.approx(-lag, abs=max(1 / fps, period))
+
+
 @pytest.mark.parametrize("flange, tool", [("touch-electric", (0.0, 0.0, 0.0)), ("standard", (0.02, -0.01, 0.08))])
 def test_drawn_bodies_and_balls_are_where_pinocchio_puts_the_logged_arm(tmp_path_factory, flange, tool):
     from trajectories.robot import Flange

@@ -70,6 +70,8 @@ def view(
     Serves the view on loopback (viser; Ctrl-C to stop) — or, with -o, writes one self-contained HTML file with
     the same replay that a colleague opens in any browser without lbr.
     """
+    import signal
+    import threading
     import time
     import webbrowser
 
@@ -137,19 +139,24 @@ def view(
     sys.stderr.flush()
     if open_browser:
         webbrowser.open(url)
-    interrupted = False
+    stop = threading.Event()
+    interrupted = []  # Ctrl-C or SIGTERM end the wait below (no exception in the middle of stopping the server)
+
+    def _stop(signum, _frame) -> None:
+        interrupted.append(signum)
+        stop.set()
+
+    previous = {sig: signal.signal(sig, _stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
-        deadline = None if duration is None else time.monotonic() + duration
-        while deadline is None or time.monotonic() < deadline:
-            time.sleep(0.1 if deadline is None else max(0.0, min(0.1, deadline - time.monotonic())))
-    except KeyboardInterrupt:
-        interrupted = True
+        stop.wait(duration)
     finally:
         player.close()
         stop_server(server)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     figures.update(frames_shown=player.frames_shown, seconds=time.perf_counter() - t0)
     rep.emit(figures)
-    if interrupted:
+    if signal.SIGINT in interrupted:  # Ctrl-C: 130 as everywhere; SIGTERM ends a server normally
         raise typer.Exit(130)
 
 

@@ -42,7 +42,7 @@ def require_browser() -> str:
 
 
 @contextlib.contextmanager
-def page(viewport=(640, 400)):
+def page(viewport=(480, 320)):
     """A fresh page in headless Chromium; yields (page, console) where console collects (type, text) of every
     console message and page error."""
     from playwright.sync_api import sync_playwright
@@ -55,6 +55,7 @@ def page(viewport=(640, 400)):
             viewport={"width": viewport[0], "height": viewport[1]})
         try:
             pg = context.pages[0] if context.pages else context.new_page()
+            pg.set_default_timeout(120_000)  # [ms]: a software-rendered page on a loaded machine answers late
             pg.on("console", lambda m: console.append((m.type, m.text)))
             pg.on("pageerror", lambda e: console.append(("pageerror", str(e))))
             yield pg, console
@@ -71,7 +72,7 @@ def node_position(pg, name: str) -> np.ndarray | None:
     return None if value is None else np.array(value[:3])
 
 
-def wait_for_scene(pg, node: str, timeout: float = 30.0) -> None:
+def wait_for_scene(pg, node: str, timeout: float = 120.0) -> None:
     """Wait until the page's scene has ``node`` (polled: a software-rendered page starves animation frames)."""
     deadline = time.monotonic() + timeout
     while pg.evaluate(NODE_POSITION_JS, node) is None:

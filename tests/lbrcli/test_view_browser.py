@@ -19,11 +19,10 @@ from lbrcli.fri.log import LOG_COLUMNS
 from trajectories.csvio import read_table
 from trajectories.robot import Robot
 
-from conftest import run_lbr
 from browser import NODE_POSITION_JS, errors, node_position, page, require_browser, status, status_time, wait_for_scene
 from run_files import LENGTH, run_files
 
-FPS = 20.0
+FPS = 10.0  # a coarse replay: fewer messages for the software-rendered page
 
 
 def _expected(log_path: Path, offset: float, tau: float) -> dict[str, np.ndarray]:
@@ -43,7 +42,7 @@ def _expected(log_path: Path, offset: float, tau: float) -> dict[str, np.ndarray
     return out
 
 
-def _settled_status(pg, ui_time, timeout: float = 30.0) -> str:
+def _settled_status(pg, ui_time, timeout: float = 120.0) -> str:
     """The status label once it shows the time the page's controls show (``ui_time()`` [s]) and stopped changing:
     the page has drawn what the slider asked for (software rendering applies messages a few frames later; the field shows 0.1 s)."""
     last, since = None, time.monotonic()
@@ -52,7 +51,7 @@ def _settled_status(pg, ui_time, timeout: float = 30.0) -> str:
         now = status(pg)
         if now != last:
             last, since = now, time.monotonic()
-        elif time.monotonic() - since > 0.5 and now and abs(status_time(now) - ui_time()) <= 0.1:
+        elif time.monotonic() - since > 0.5 and now and abs(status_time(now) - ui_time()) <= 0.5 / FPS + 0.05:
             return now
         time.sleep(0.1)
     raise AssertionError(f"the scene did not settle at the slider's time: {last}, controls at {ui_time()}")
@@ -76,13 +75,18 @@ def _check_scene(pg, key: str, log: Path, offset: float, ui_time) -> float:
     return tau
 
 
-def test_offline_file_draws_the_run_where_the_files_say_and_the_slider_moves_it(tmp_path, tmp_path_factory):
+def test_offline_file_draws_the_run_where_the_files_say_and_the_slider_moves_it(tmp_path, tmp_path_factory, capsys):
     require_browser()
     run = run_files(tmp_path_factory)
     out = tmp_path / "view.html"
-    proc = run_lbr("view", run.plan, run.log, run.track, run.obstacles, "-o", out, "--fps", FPS, "--json")
-    assert proc.returncode == 0, proc.stderr
-    fig = json.loads(proc.stdout)
+    from lbrcli.app import main
+
+    try:  # in this process: the command as a user runs it, without another interpreter's start-up
+        main(["view", *map(str, (run.plan, run.log, run.track, run.obstacles)), "-o", str(out), "--fps", str(FPS),
+              "--json"])
+    except SystemExit as ended:
+        assert not ended.code, capsys.readouterr().err
+    fig = json.loads(capsys.readouterr().out)
     offset = next(f["offset_s"] for f in fig["files"] if f["file"] == str(run.log))
     with page() as (pg, console):
         pg.goto(out.as_uri())
@@ -134,10 +138,10 @@ def test_live_view_serves_on_loopback_and_follows_its_slider(tmp_path_factory):
                 return float(thumb.get_attribute("aria-valuenow") or "nan")
 
             first = _check_scene(pg, "log", run.log, offset, ui_time)
-            for _ in range(25):
+            for _ in range(12):
                 pg.keyboard.press("ArrowRight")
             second = _check_scene(pg, "log", run.log, offset, ui_time)
-            assert second - first == pytest.approx(25 / FPS, abs=1e-6)
+            assert second - first == pytest.approx(12 / FPS, abs=1e-6)
             assert errors(console) == []
     finally:
         proc.send_signal(signal.SIGINT)

@@ -129,14 +129,14 @@ class Bag:
     def write(self, topic: str, short_type: str, times_ns: np.ndarray, data: np.ndarray | list[bytes],
               latched: bool = False) -> None:
         """One message per row of ``data`` ((n, size) bytes) at ``times_ns``."""
-        log = self.channel(topic, short_type, latched).log
+        log = self.channel(topic, short_type, latched).base.log  # bytes straight to the writer's core
         if isinstance(data, list):
             for when, row in zip(times_ns.tolist(), data):
-                log(row, log_time=when)
+                log(row, when, None)
         else:  # one bytes object, sliced per message (C-speed), not a Python object per row first
             blob, size = data.tobytes(), data.shape[1]
             for k, when in enumerate(times_ns.tolist()):
-                log(blob[k * size:(k + 1) * size], log_time=when)
+                log(blob[k * size:(k + 1) * size], when, None)
         self.counts[topic] += len(times_ns)
 
     def close(self) -> None:

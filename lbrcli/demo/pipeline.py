@@ -122,6 +122,9 @@ def demo_steps() -> list[Step]:
         Step("compare", "compare model and experiment",
              ("compare", "swingup_prediction.csv", "swingup_track.csv", "--plot", "swingup_compare.png"),
              needs=("track",)),
+        Step("view", "3D replay of the swing-up (one offline HTML file)",
+             ("view", "swingup.csv", "swingup_log.csv", "swingup_prediction.csv", "swingup_track.csv", "--length", L,
+              "-o", "swingup_view.html"), needs=("track",)),
     ]
     catch = [
         Step("plan_catch", "plan the cup-and-ball catch",

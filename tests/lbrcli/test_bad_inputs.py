@@ -173,6 +173,8 @@ BASE = {
     "demo": ["demo", "--out", "{out}/demo"],
     "control upright": ["control", "upright"],
     "control damp": ["control", "damp", "{ws}/joint.csv"],
+    "view": ["view", "{ws}/joint.csv", "-o", "{out}/v.html"],
+    "export": ["export", "{ws}/log.csv", "-o", "{out}/r.mcap"],
 }
 
 
@@ -324,6 +326,8 @@ BEYOND = "3," + ",".join(map(str, Q_START[1:]))  # A1 3 rad: outside ±170°
         ("track video", ("--color", "plaid"), "--color"),
         ("track live", ("--pivot", "10,10", "--pivot-color", "green"), "either --pivot or --pivot-color"),
         ("plan cup-and-ball", ("--q-start", BEYOND), "--q-start: A1"),
+        ("view", ("--offset", "nofile.csv=1"), "--offset: nofile.csv is none of the files given"),
+        ("export", ("{ws}/stopped.csv",), "at most one execution log"),
         ("plan cup-and-ball", ("--length", "0.05"), "exceed the cup's extent"),
         ("sim", ("--cup", "default"), "--cup needs the simulated ball"),
         ("execute", ("--cup", "default", "--length", "0"), "--cup needs the simulated ball"),
@@ -460,7 +464,7 @@ HOSTILE_TOML = [
     ("directory", "DIR", "is a directory"),
 ]
 LIMITS_READERS = ["check", "retime", "ik", "plan anti-sway", "plan swing-up", "plan cup-and-ball", "execute", "ptp",
-                  "sim", "serve", "control upright", "control damp"]  # fmt: skip
+                  "sim", "serve", "control upright", "control damp", "export"]  # fmt: skip
 
 
 @pytest.mark.parametrize("command", LIMITS_READERS)
@@ -608,7 +612,7 @@ OUTPUTS = [
     ("track calibrate", "-o"), ("track film", "-o"), ("track film", "--truth"), ("track live", "-o"),
     ("track live", "--plot"), ("demo", "--out"),
     ("control upright", "--log"), ("control upright", "--plot"), ("control damp", "--log"),
-    ("control damp", "--plot"),
+    ("control damp", "--plot"), ("view", "-o"), ("export", "-o"),
 ]  # fmt: skip
 
 
@@ -687,6 +691,8 @@ WRITERS = [
     ("plan anti-sway -o", BOTH, ["plan", "anti-sway", "-o", "{full}/a.csv", "--length", "0.25", "--a-max", "1",
                                  "--points", "0.45,-0.1;0.55,-0.1", "--shaper", "zv", "--length-tolerance", "0",
                                  "--no-tune", "--dt", "0.001"]),
+    ("view -o", BOTH, ["view", "{ws}/joint.csv", "-o", "{full}/v.html"]),
+    ("export -o", BOTH, ["export", "{ws}/log.csv", "-o", "{full}/r.mcap"]),
     ("execute --plot", TMPFS, ["execute", "{ws}/joint.csv", "--log", "{out}/log.csv", "--plot", "{full}/p.png",
                                "--sim-lenient"]),
 ]  # fmt: skip

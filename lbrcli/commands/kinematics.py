@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
 from typing import Annotated, Optional
@@ -76,66 +77,77 @@ def ik(
     the whole path and reported. Exits 1 naming the first pose that cannot be reached and why: out of reach
     (by how much), a joint held at its position limit, or a joint speed the path needs above its limit.
     """
-    import math
-
-    from trajectories.check import check_trajectory
     from trajectories.csvio import read_task_csv, write_joint_csv
+
+    from ..console import Reporter
+
+    rep = Reporter(json_out)
+    task = read_task_csv(task_csv)
+    with rep.progress("IK", len(task)) as update:
+        traj, figures = ik_path(task, q0, flange, tool, limits, nullspace_rate, no_speed_limits, smooth, update)
+    write_joint_csv(out, traj)
+    figures["out"] = str(out)
+    start_deg = ", ".join(f"{math.degrees(v):.1f}" for v in figures["q_start_rad"])
+    typer.echo(f"start ({'--q0' if q0 is not None else figures['start']}): [{start_deg}] deg", err=True)
+    rep.print(
+        f"wrote {out}: {len(traj)} poses in {figures['solve_time_s']:.2f} s; max error "
+        f"{figures['max_position_error_m']:.2e} m, {figures['max_rotation_error_rad']:.2e} rad; peak speed "
+        f"{figures['peak_velocity_ratio'] * 100:.0f} %, acceleration {figures['peak_acceleration_ratio'] * 100:.0f} % "
+        "of the limits"
+    )
+    if figures["peak_acceleration_ratio"] > 1.0 and not no_speed_limits:
+        rep.warn(
+            f"joint accelerations reach {figures['peak_acceleration_ratio'] * 100:.0f} % of the limit "
+            f"({figures['acceleration_relaxed_samples']} samples could not keep the acceleration bound); see "
+            f"`lbr check {out}`"
+        )
+    if not figures["limits_ok"]:
+        rep.warn(f"the joint path violates limits ({figures['violations']} violations); see `lbr check {out}`")
+    figures.pop("violations")
+    rep.emit(figures)
+
+
+def ik_path(task, q0: str | None = None, flange: str = DEFAULT_FLANGE, tool: str | None = None,
+            limits: Path | None = None, nullspace_rate: float = 1.0, no_speed_limits: bool = False,
+            smooth: bool = False, progress=None):
+    """`lbr ik` of a read task trajectory without the output file: (JointTrajectory, the JSON figures but ``out``;
+    ``violations`` counts the limit check's findings). ``lbr sweep`` calls it too."""
+    from trajectories.check import check_trajectory
     from trajectories.errors import OptionError
     from trajectories.ik import IkOptions, solve_ik_path
     from trajectories.poses import matrices_from_quaternions
     from trajectories.trajectory import JointTrajectory
 
-    from ..console import Reporter
     from ..options import limits_from, make_robot
     from ..parsing import parse_joint_vector
 
-    rep = Reporter(json_out)
     q_ref = parse_joint_vector(q0, "--q0") if q0 is not None else None
     if not (math.isfinite(nullspace_rate) and nullspace_rate >= 0):
         raise OptionError(f"--nullspace-rate: expected a rate >= 0 [1/s], got {nullspace_rate}")
     robot = make_robot(flange, tool)
     lim = limits_from(limits)
-    task = read_task_csv(task_csv)
     rot = matrices_from_quaternions(task.quaternion)
     options = IkOptions(
         nullspace_rate=nullspace_rate, nullspace_gain=None, speed_limits=not no_speed_limits, smooth=smooth
     )
     t0 = time.perf_counter()
-    with rep.progress("IK", len(task)) as update:
-        res = solve_ik_path(robot, task.position, rot, q_ref, lim, options, times=task.t, progress=update)
+    res = solve_ik_path(robot, task.position, rot, q_ref, lim, options, times=task.t, progress=progress)
     elapsed = time.perf_counter() - t0
     traj = JointTrajectory(t=task.t, q=res.q)
-    write_joint_csv(out, traj)
     report = check_trajectory(traj, lim) if len(traj) > 1 else None
-    start_deg = ", ".join(f"{math.degrees(v):.1f}" for v in res.q[0]) if len(res.q) else ""
-    typer.echo(f"start ({'--q0' if q_ref is not None else res.start}): [{start_deg}] deg", err=True)
-    rep.print(
-        f"wrote {out}: {len(traj)} poses in {elapsed:.2f} s; max error {res.max_position_error:.2e} m, "
-        f"{res.max_rotation_error:.2e} rad; peak speed {res.velocity_ratio * 100:.0f} %, "
-        f"acceleration {res.acceleration_ratio * 100:.0f} % of the limits"
-    )
-    if res.acceleration_ratio > 1.0 and options.speed_limits:
-        rep.warn(
-            f"joint accelerations reach {res.acceleration_ratio * 100:.0f} % of the limit ({res.acceleration_relaxed} "
-            f"samples could not keep the acceleration bound); see `lbr check {out}`"
-        )
-    if report is not None and not report.ok:
-        rep.warn(f"the joint path violates limits ({len(report.failing)} violations); see `lbr check {out}`")
-    rep.emit(
-        {
-            "samples": len(traj),
-            "solve_time_s": elapsed,
-            "max_position_error_m": res.max_position_error,
-            "max_rotation_error_rad": res.max_rotation_error,
-            "start": "q0" if q_ref is not None else res.start,
-            "q_start_rad": res.q[0].tolist() if len(res.q) else [],
-            "peak_velocity_ratio": res.velocity_ratio,
-            "peak_acceleration_ratio": res.acceleration_ratio,
-            "acceleration_relaxed_samples": res.acceleration_relaxed,
-            "limits_ok": report.ok if report is not None else True,
-            "out": str(out),
-        }
-    )
+    return traj, {
+        "samples": len(traj),
+        "solve_time_s": elapsed,
+        "max_position_error_m": res.max_position_error,
+        "max_rotation_error_rad": res.max_rotation_error,
+        "start": "q0" if q_ref is not None else res.start,
+        "q_start_rad": res.q[0].tolist() if len(res.q) else [],
+        "peak_velocity_ratio": res.velocity_ratio,
+        "peak_acceleration_ratio": res.acceleration_ratio,
+        "acceleration_relaxed_samples": res.acceleration_relaxed,
+        "limits_ok": report.ok if report is not None else True,
+        "violations": len(report.failing) if report is not None else 0,
+    }
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -58,29 +58,16 @@ def plan_anti_sway_command(
     is never re-timed.
     """
     from ..console import Reporter
-    from ..obstacle_file import read_obstacles
-    from ..options import check_number, limits_from
-    from ..parsing import parse_joint_vector, parse_points
 
     rep = Reporter(json_out)
-    for opt, v, lo, hi, unit in (("--length", length, 0.01, 5, "m"), ("--a-max", a_max, 0.01, 50, "m/s²"),
-                                 ("--j-max", j_max, 0.1, 1e4, "m/s³"), ("--v-max", v_max, 0.01, 10, "m/s"),
-                                 ("--dt", dt, 1e-4, 0.1, "s")):  # fmt: skip
-        check_number(opt, v, lo, hi, unit=unit)
-    check_number("--length-tolerance", length_tolerance, 0, 0.9)
-    check_number("--margin", margin, 0, 1, high_open=True)
-    pts = parse_points(points, "--points")
-    q_ref = parse_joint_vector(q0, "--q0") if q0 is not None else None
-    lim = limits_from(limits)
-    sway = parse_max_sway(max_sway) if max_sway is not None else None
-    obs = read_obstacles(obstacles) if obstacles is not None else ()
+    inputs = anti_sway_inputs(
+        length, a_max, points, z, shaper, dt, length_tolerance=length_tolerance, max_sway=max_sway,
+        obstacles=obstacles, ball_radius=ball_radius, no_fallback=no_fallback, j_max=j_max, v_max=v_max,
+        no_tune=no_tune, q0=q0, margin=margin, jerk=jerk, flange=flange, tool=tool, limits=limits,
+    )
     with rep.progress("IK", None) as update:
-        figs = plan_anti_sway_files(
-            pts, length, a_max, z, shaper, dt, out, task_out, prediction, plot, flange=flange, tool=tool, q0=q_ref,
-            limits=lim, margin=margin, jerk=jerk, j_max=j_max, v_max=math.inf if v_max is None else v_max,
-            length_tolerance=length_tolerance, tune=not no_tune, max_sway=sway, obstacles=obs,
-            ball_radius=ball_radius, fallback=not no_fallback, progress=update,
-        )
+        figs = plan_anti_sway_files(**inputs, out=out, task_out=task_out, prediction=prediction, plot=plot,
+                                    progress=update)
     if figs["fallback"]:
         fb = figs["fallback"]
         rep.print(f"fallback: {fb['from']} could not plan ({fb['reason']}); used {fb['to']}")
@@ -111,6 +98,53 @@ def plan_anti_sway_command(
         if figs[name] is not None:
             rep.print(f"{name.replace('_', ' ')}: {figs[name]}")
     rep.emit(figs)
+
+
+def anti_sway_inputs(
+    length: float,
+    a_max: float,
+    points: str = DEFAULT_POINTS_TEXT,
+    z: float | None = None,
+    shaper: str = "auto",
+    dt: float = DEFAULT_DT,
+    *,
+    length_tolerance: float = 0.1,
+    max_sway: str | None = None,
+    obstacles: Path | None = None,
+    ball_radius: float = DEFAULT_BALL_RADIUS,
+    no_fallback: bool = False,
+    j_max: float | None = None,
+    v_max: float | None = None,
+    no_tune: bool = False,
+    q0: str | None = None,
+    margin: float = 0.0,
+    jerk: bool = False,
+    flange: str = DEFAULT_FLANGE,
+    tool: str | None = None,
+    limits: Path | None = None,
+) -> dict:
+    """The options of `lbr plan anti-sway` (as typed) checked and parsed → keyword arguments of
+    :func:`lbrcli.antisway.plan_anti_sway`; OptionError/InputError (exit 2) on a bad one. ``lbr sweep`` calls it too,
+    so a study's run plans exactly what the command line would."""
+    from ..obstacle_file import read_obstacles
+    from ..options import check_number, limits_from
+    from ..parsing import parse_joint_vector, parse_points
+
+    for opt, v, lo, hi, unit in (("--length", length, 0.01, 5, "m"), ("--a-max", a_max, 0.01, 50, "m/s²"),
+                                 ("--j-max", j_max, 0.1, 1e4, "m/s³"), ("--v-max", v_max, 0.01, 10, "m/s"),
+                                 ("--dt", dt, 1e-4, 0.1, "s")):  # fmt: skip
+        check_number(opt, v, lo, hi, unit=unit)
+    check_number("--length-tolerance", length_tolerance, 0, 0.9)
+    check_number("--margin", margin, 0, 1, high_open=True)
+    return dict(
+        points=parse_points(points, "--points"), length=length, a_max=a_max, z=z, shaper=shaper, dt=dt,
+        flange=flange, tool=tool, q0=parse_joint_vector(q0, "--q0") if q0 is not None else None,
+        limits=limits_from(limits), margin=margin, jerk=jerk, j_max=j_max,
+        v_max=math.inf if v_max is None else v_max, length_tolerance=length_tolerance, tune=not no_tune,
+        max_sway=parse_max_sway(max_sway) if max_sway is not None else None,
+        obstacles=read_obstacles(obstacles) if obstacles is not None else (), ball_radius=ball_radius,
+        fallback=not no_fallback,
+    )
 
 
 def parse_max_sway(text: str) -> float:

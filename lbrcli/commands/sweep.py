@@ -122,7 +122,9 @@ def sweep(
         kind = get_kind(study.kind)
         rep.print(f"{study.path}: {study.name} — {len(runs)} runs of {study.kind} ({len(cached)} cached in {out})")
         for r in kind_runs:
-            rep.print("  " + " ".join(kind.command_line({k: plain(v) for k, v in r.options})))
+            line = kind.shell_line({k: plain(v) for k, v in r.options})
+            rep.print(f"  {r.index}: " + (line or "(no single lbr command: " + ", ".join(
+                f"{k}={plain(v)}" for k, v in r.options) + ")"), markup=False)
         rep.emit({"runs": len(runs), "cached": len(cached), "kind": study.kind, "study": study.name})
         return
     _prepare_folder(out)

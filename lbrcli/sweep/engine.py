@@ -93,8 +93,13 @@ def run_dask(runs: Sequence[Run], cluster: ClusterSpec, joints: frozenset[str],
         client = Client(local)
         where = f"local cluster ({cluster.workers} worker processes)"
     else:
+        from pathlib import Path
+
         try:
-            client = Client(cluster.scheduler, timeout=CONNECT_TIMEOUT_S)
+            if Path(cluster.scheduler).is_file():  # a scheduler file (dask scheduler --scheduler-file, dask-jobqueue)
+                client = Client(scheduler_file=cluster.scheduler, timeout=CONNECT_TIMEOUT_S)
+            else:
+                client = Client(cluster.scheduler, timeout=CONNECT_TIMEOUT_S)
         except (OSError, TimeoutError) as exc:
             raise CheckFailed(f"--scheduler {cluster.scheduler}: no Dask scheduler answered ({exc})") from None
         where = f"Dask scheduler {cluster.scheduler}"
@@ -111,6 +116,9 @@ def run_dask(runs: Sequence[Run], cluster: ClusterSpec, joints: frozenset[str],
             raise CheckFailed(f"workers {', '.join(stale)} run lbr {versions[stale[0]]}, this is lbr {mine}: install "
                               "the same lbr on every worker")  # fmt: skip
         n_workers = len(versions)
+        from .kinds import warm_up
+
+        client.run(warm_up, runs[0].kind if runs else "probe")
         if on_ready is not None:
             on_ready(where, n_workers)
         startup = time.perf_counter() - t_start

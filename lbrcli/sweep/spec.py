@@ -244,6 +244,8 @@ def _grid(spec: dict, where: str, path: str) -> tuple:
     if log and (lo <= 0 or hi <= 0):
         raise _fail(path, f"{where}: a log grid needs from and to > 0")
     values = np.geomspace(lo, hi, n) if log else np.linspace(lo, hi, n)
+    if isinstance(lo, int) and isinstance(hi, int) and np.all(values == np.round(values)):
+        return tuple(int(v) for v in np.round(values))  # an integer grid stays integers (counts, indices)
     return tuple(canonical(float(v)) for v in values)
 
 

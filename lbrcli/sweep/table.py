@@ -62,16 +62,9 @@ def rows(study: Study, runs: Sequence[Run], records: dict[str, dict]) -> tuple[l
             row[col] = table_cell(figure_value(rec["figures"], f))
         for k in judged:
             row[k] = table_cell(rec.get("judged", {}).get(k))
-        line = kind.command_line({k: plain(v) for k, v in run.options})
-        row["command"] = " ".join(_quote(w) for w in line) if line else None
+        row["command"] = kind.shell_line({k: plain(v) for k, v in run.options})
         out.append(row)
     return columns, out
-
-
-def _quote(word: str) -> str:
-    import shlex
-
-    return shlex.quote(word)
 
 
 def _column(values: list) -> "Any":

@@ -43,15 +43,17 @@ class RunKind:
     paths: tuple[str, ...] = ()  # options naming files: resolved against the study file's folder
     arguments: tuple[str, ...] = ()  # options that are positional arguments on the command line
     repeatable: tuple[str, ...] = ()  # options given once per value of a list (e.g. --push)
+    kind_only: tuple[str, ...] = ()  # options of the kind that no command has: a run using one has no command line
     defaults: Mapping[str, Any] = field(default_factory=dict)  # set unless the study sets them
     judge: Callable[[Outcome, "Judge"], dict] | None = None  # judged figures (string-length band)
     version: int = 1  # bump when a kind's results change: its cached runs are then recomputed
+    warm_up: Callable[[], None] | None = None  # imports and first-use costs, paid by each worker before the runs
 
     def command_line(self, options: Mapping[str, Any]) -> list[str]:
         """The `lbr` command line that does what a run with ``options`` does (outputs left out); [] if none does."""
         import shlex
 
-        if self.command is None:
+        if self.command is None or any(k in options for k in self.kind_only):
             return []
         if self.command:
             words, rest = list(self.command), dict(options)
@@ -62,6 +64,13 @@ class RunKind:
                 args if isinstance(args, (list, tuple)) else [args])]
         words += [cli_text(rest.pop(a)) for a in self.arguments if a in rest]
         return ["lbr", *words, *option_words(rest, self.repeatable)]
+
+    def shell_line(self, options: Mapping[str, Any]) -> str | None:
+        """:meth:`command_line` quoted for a shell; None when no command does what the run does."""
+        import shlex
+
+        line = self.command_line(options)
+        return " ".join(shlex.quote(w) for w in line) if line else None
 
 
 def option_words(options: Mapping[str, Any], repeatable: tuple[str, ...] = ()) -> list[str]:
@@ -103,6 +112,24 @@ def registry() -> dict[str, RunKind]:
         for kind in getattr(module, "KINDS", ()) or ((module.KIND,) if hasattr(module, "KIND") else ()):
             found[kind.name] = kind
     return found
+
+
+def warm_robot() -> None:
+    """Import the planners and build the robot model once (pinocchio, scipy): seconds a worker's first run would
+    otherwise carry."""
+    import lbrcli.antisway  # noqa: F401
+    import planners.swingup  # noqa: F401
+    import trajectories.ik  # noqa: F401
+    from lbrcli.options import DEFAULT_FLANGE, make_robot
+
+    make_robot(DEFAULT_FLANGE, None).fk_path(__import__("numpy").zeros((2, 7)))
+
+
+def warm_up(name: str) -> None:
+    """Run a kind's warm-up in this process (Dask calls it on every worker before the runs)."""
+    kind = get_kind(name)
+    if kind.warm_up is not None:
+        kind.warm_up()
 
 
 def get_kind(name: str) -> RunKind:

@@ -7,7 +7,7 @@ import inspect
 import math
 from typing import Any, Mapping
 
-from . import Judge, Outcome, RunKind, python_args
+from . import Judge, Outcome, RunKind, python_args, warm_robot
 
 
 def run(options: Mapping[str, Any], timeout: float | None = None) -> Outcome:
@@ -60,4 +60,5 @@ KIND = RunKind(
     required=("length", "a-max"),
     paths=("obstacles", "limits"),
     judge=judge,
+    warm_up=warm_robot,
 )

@@ -8,7 +8,7 @@ import tempfile
 from pathlib import Path
 from typing import Any, Mapping
 
-from . import Judge, Outcome, RunKind
+from . import Judge, Outcome, RunKind, warm_robot
 
 # command-line name → keyword of plan_swing_up_files, where they differ; angles are parsed as the command does
 RENAMED = {"ke": "k_e", "kp": "k_p", "kd": "k_d", "max-travel": "travel"}
@@ -67,4 +67,5 @@ KIND = RunKind(
     paths=("limits",),
     defaults={"workers": 1},  # the study is the parallelism: one process per run (same plan as with 2)
     judge=judge,
+    warm_up=warm_robot,
 )

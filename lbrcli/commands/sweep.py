@@ -51,6 +51,11 @@ def parse_selection(text: str, n: int, option: str, words: tuple[str, ...] = ())
     return picked, named
 
 
+def auto_batch(runs: int, workers: int) -> int:
+    """Runs per Dask task: 1 up to 100 tasks per worker, then as many as keep it at ≈ 100 (at most 50 runs)."""
+    return max(1, min(50, runs // (100 * max(workers, 1))))
+
+
 def _prepare_folder(out: Path) -> None:
     """Create RESULTS, or accept it when it holds a study's results (or nothing); a folder of other files is refused."""
     from trajectories.errors import OptionError
@@ -72,13 +77,13 @@ def sweep(
     out: Annotated[Path, typer.Option("-o", "--out", help="Results folder: runs.jsonl (the cache), results.parquet, results.csv, plots/, joints/.")],
     scheduler: Annotated[Optional[str], typer.Option("--scheduler", help="Dask scheduler address (tcp://HOST:8786 or a scheduler file); 'inline' runs in this process without Dask. Default: a local cluster of --workers processes.")] = None,
     workers: Annotated[Optional[int], typer.Option("--workers", help="Worker processes of the local cluster (one run each at a time); default: the CPU count.")] = None,
-    batch: Annotated[int, typer.Option("--batch", help="Runs per Dask task (raise it for runs of a few ms).")] = 1,
+    batch: Annotated[Optional[int], typer.Option("--batch", help="Runs per Dask task; default: 1, or enough for ≈ 100 tasks per worker in large studies (a task costs the scheduler ≈ 1–10 ms).")] = None,
     runs_sel: Annotated[Optional[str], typer.Option("--runs", help="Only these runs of the study, e.g. 0-9,15 (try a study before the cluster).")] = None,
     joints: Annotated[Optional[str], typer.Option("--joints", help="Write the joint files of these runs to RESULTS/joints/: run numbers (0-9,15), ok, failed or all; cached runs are re-run for them.")] = None,
     fresh: Annotated[bool, typer.Option("--fresh", help="Ignore the cache: run everything again (the new records replace nothing; the table uses them).")] = False,
     dry_run: Annotated[bool, typer.Option("--dry-run", help="Check the study and show its runs (how many, how many cached, the first command lines); run nothing.")] = False,
     strict: Annotated[bool, typer.Option("--strict", help="Exit 1 when any run did not exit 0 (default: only when runs crashed).")] = False,
-    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Draw the study's [[plot]] maps (default: success map and figures over the first two varied options).")] = True,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Draw the study's \\[\\[plot]] maps (default: success map and figures over the first two varied options).")] = True,
     kinds: Annotated[bool, typer.Option("--kinds", callback=_list_kinds, is_eager=True, help="List the run kinds and their options, and exit.")] = False,
     json_out: JsonOpt = False,
 ) -> None:
@@ -98,13 +103,14 @@ def sweep(
     from ..console import Reporter
     from ..options import check_number
     from ..sweep.engine import INLINE, ClusterSpec, run_runs
-    from ..sweep.spec import expand, read_study
+    from ..sweep.spec import Run, expand, read_study
     from ..sweep.store import RunStore
 
     rep = Reporter(json_out)
     if workers is not None:
         check_number("--workers", workers, 1, 512)
-    check_number("--batch", batch, 1, 10_000)
+    if batch is not None:
+        check_number("--batch", batch, 1, 10_000)
     study = read_study(study_file)
     runs = all_runs = expand(study)
     if runs_sel is not None:
@@ -133,13 +139,13 @@ def sweep(
         store.records.clear()
     _copy_study(study_file, out)
     want_joints = _joint_keys(runs, joint_idx, joint_words, store)
-    unique: dict[str, object] = {}
+    unique: dict[str, Run] = {}
     for r in runs:
         if r.key not in store or r.key in want_joints:
             unique.setdefault(r.key, r)
     todo = list(unique.values())
     cached_n = len({r.key for r in runs}) - len({r.key for r in todo if r.key not in store})
-    counts = {"computed": 0, "run_seconds": 0.0}
+    counts = {"computed": 0, "done": 0, "run_seconds": 0.0}
     joint_files: list[str] = []
     where = {"text": INLINE, "workers": 1}
     index_of: dict[str, list[int]] = {}
@@ -162,9 +168,11 @@ def sweep(
             if res.joints is not None:
                 joint_files.extend(_write_joints(out, res.joints, index_of[res.record["key"]], joint_idx, joint_words,
                                                  res.record))  # fmt: skip
-            update(counts["computed"])
+            counts["done"] += 1
+            update(counts["done"])
 
-        cluster = ClusterSpec(scheduler, workers or os.cpu_count() or 1, batch)
+        n_workers = workers or os.cpu_count() or 1
+        cluster = ClusterSpec(scheduler, n_workers, batch or auto_batch(len(todo), n_workers))
         try:
             execution = run_runs(todo, cluster, frozenset(want_joints), on_result, ready)
         except KeyboardInterrupt:

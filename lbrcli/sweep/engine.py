@@ -127,11 +127,11 @@ def run_dask(runs: Sequence[Run], cluster: ClusterSpec, joints: frozenset[str],
         keys = [f"lbr-run-{b[0].key}-{len(b)}" for b in batches]
         by_key = dict(zip(keys, batches))
         futures = client.map(execute_batch, batches, joints=joints, key=keys, pure=False)
-        for fut in as_completed(futures):
-            try:
-                results = fut.result()
-            except Exception as exc:  # noqa: BLE001  (the task, not the run, failed: KilledWorker, a lost scheduler)
-                results = _crashed(by_key[fut.key], exc)
+        for fut, results in as_completed(futures, with_results=True, raise_errors=False):
+            if fut.status != "finished":  # the task, not the run, failed: KilledWorker (it took down 3 workers)
+                exc = results[1] if isinstance(results, tuple) and len(results) == 3 else results
+                results = _crashed(by_key[fut.key], exc if isinstance(exc, BaseException) else
+                                   RuntimeError(f"the Dask task ended {fut.status}"))  # fmt: skip
             fut.release()
             for res in results:
                 on_result(res)

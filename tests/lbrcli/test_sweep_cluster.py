@@ -93,3 +93,21 @@ def test_interrupted_study_resumes_and_an_extended_grid_computes_only_the_new_ru
     recs = _records(out)
     assert len(recs) == 26 and len({r["key"] for r in recs}) == 26
     assert sorted(r["value"] for r in pq.read_table(out / "results.parquet").to_pylist()) == list(range(1, 27))
+
+
+
+def test_a_run_that_kills_its_workers_is_a_crashed_row(tmp_path):
+    """Dask gives a run lost with its worker to another; one that takes the workers down (here the first: allowed
+    failures 0) ends as a row naming KilledWorker, the study goes on, and the sweep exits 1."""
+    study = tmp_path / "study.toml"
+    study.write_text('[study]\nkind = "probe"\n[fixed]\nbusy = false\n[vary]\ncrash = ["none", "worker"]\n')
+    out = tmp_path / "results"
+    proc = subprocess.Popen([sys.executable, "-m", "lbrcli", "sweep", str(study), "-o", str(out), "--workers", "2",
+                             "--no-plots", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "0"})  # fmt: skip
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 1 and "1 runs crashed" in stderr
+    rows = pq.read_table(out / "results.parquet").to_pylist()
+    assert [(r["crash"], r["status"]) for r in rows] == [("none", "ok"), ("worker", "crashed")]
+    assert rows[1]["error"].startswith("KilledWorker") and rows[1]["worker"] == "?"
+    assert json.loads(stdout)["crashed"] == 1

@@ -70,6 +70,7 @@ def _prepare_folder(out: Path) -> None:
         raise OptionError(f"-o {out}: no folder {out.parent}")
     out.mkdir(exist_ok=True)
     (out / "plots").mkdir(exist_ok=True)
+    (out / STORE_NAME).touch()  # marks the folder as a study's, also when this first attempt stops early
 
 
 def sweep(

@@ -7,7 +7,9 @@ options; planned once per worker process and options)."""
 
 from __future__ import annotations
 
+import atexit
 import functools
+import shutil
 import tempfile
 from pathlib import Path
 from typing import Any, Mapping
@@ -35,7 +37,9 @@ def _planned(plan: tuple) -> str:
     outcome = plan_run(dict(plan), None)
     if outcome.exit_code:
         raise PlanningError(f"control-damp: the plan failed: {outcome.error}")
-    path = Path(tempfile.mkdtemp(prefix="lbr-sweep-plan-")) / "plan.csv"
+    folder = tempfile.mkdtemp(prefix="lbr-sweep-plan-")
+    atexit.register(shutil.rmtree, folder, True)
+    path = Path(folder) / "plan.csv"
     write_joint_csv(path, outcome.joints)
     return str(path)
 

@@ -6,7 +6,9 @@ Every figure comes from `lbr sweep --json` as a user runs it (wall time from the
 result; the cluster's start and the workers' warm-up are reported apart). ``overhead per run`` = (wall × workers −
 the runs' own time) / runs: what a worker slot spends per run on anything but the run (scheduling, transfer, the
 store, idle at the end). The machine's load average is reported with each part: the 2 cores are shared.
-`python benchmarks/bench_sweep.py [--quick] [throughput|cost|10k]` writes benchmarks/results/sweep.json.
+Also: the judged residual sway of the planners' pendulum model against the independent judge over a band of string
+lengths (the second judge of the judged figures).
+`python benchmarks/bench_sweep.py [--quick] [throughput|cost|judges|10k]` writes benchmarks/results/sweep.json.
 """
 
 from __future__ import annotations
@@ -97,6 +99,50 @@ def scheduler_cost(tmp: Path, quick: bool) -> dict:
     return out
 
 
+JUDGED = """
+[study]
+kind = "anti-sway"
+samples = {n}
+seed = 5
+[fixed]
+shaper = "{shaper}"
+length-tolerance = 0.0
+dt = 0.01
+[vary]
+points = {{ layout = {{ segments = [1, 3], x = [0.38, 0.68], y = [-0.3, 0.3], step = [0.08, 0.3] }} }}
+length = {{ uniform = [0.12, 0.6] }}
+a-max = {{ uniform = [0.8, 2.5] }}
+[judge]
+string-errors = [-0.2, -0.1, 0.0, 0.1, 0.2]
+model = "{model}"
+"""
+
+
+def judges(tmp: Path, quick: bool) -> dict:
+    """The judged residual sway of the planners' pendulum model (RK4 on the sampled path) against the independent
+    judge (scipy DOP853 on a C² spline of the same joints), on random layouts, strings 0.12–0.6 m off by ±20 %."""
+    import pyarrow.parquet as pq
+
+    out = {}
+    for shaper in ("zv", "accel"):
+        tables = {}
+        for model in ("project", "independent"):
+            study = tmp / f"judge-{shaper}-{model}.toml"
+            study.write_text(JUDGED.format(n=4 if quick else 16, shaper=shaper, model=model))
+            _sweep(study, tmp / f"judge-{shaper}-{model}", "--workers", "2", "--no-plots")
+            tables[model] = pq.read_table(tmp / f"judge-{shaper}-{model}" / "results.parquet").to_pylist()
+        diffs, sways = [], []
+        for a, b in zip(tables["project"], tables["independent"]):
+            if a["status"] == "ok":
+                ja, jb = json.loads(a["judged_residual_sway_by_error_deg"]), json.loads(b["judged_residual_sway_by_error_deg"])
+                diffs += [abs(x - y) for x, y in zip(ja, jb)]
+                sways += jb
+        big = [d / s for d, s in zip(diffs, sways) if s >= 0.1]
+        out[shaper] = {"runs": len(tables["project"]), "judged": len(diffs), "max_abs_diff_deg": max(diffs),
+                       "largest_sway_deg": max(sways), "max_rel_diff_above_0_1_deg": max(big) if big else None}
+    return out
+
+
 def study_10k(tmp: Path, quick: bool) -> dict:
     """The 10,000-run anti-sway study on `dask scheduler` + 2 `dask worker` processes, end to end (table, plots)."""
     from lbrcli.sweep.processes import local_dask_cluster
@@ -114,21 +160,22 @@ def study_10k(tmp: Path, quick: bool) -> dict:
             "overhead_per_run_ms": 1e3 * f["overhead_per_run_s"], "load_before": load, "load_after": _load()}  # fmt: skip
 
 
-def run(quick: bool = False, parts: tuple[str, ...] = ("throughput", "cost", "10k")) -> list[tuple[str, float, str]]:
+def run(quick: bool = False, parts: tuple[str, ...] = ("throughput", "cost", "judges", "10k")) -> list[tuple[str, float, str]]:
     figures = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
-    figures.update(cores=os.cpu_count(), quick=quick, date=time.strftime("%d %b %Y"))
+    figures.update(cores=os.cpu_count(), quick=quick)
+    figures.pop("date", None)
     with tempfile.TemporaryDirectory(prefix="bench-sweep-") as tmp:
-        if "throughput" in parts:
-            figures["throughput"] = throughput(Path(tmp), quick)
-        if "cost" in parts:
-            figures["scheduler_cost"] = scheduler_cost(Path(tmp), quick)
-        if "10k" in parts:
-            figures["study_10k"] = study_10k(Path(tmp), quick)
+        for part, name, fn in (("throughput", "throughput", throughput), ("cost", "scheduler_cost", scheduler_cost),
+                               ("judges", "judges", judges), ("10k", "study_10k", study_10k)):  # fmt: skip
+            if part in parts:
+                figures[name] = {**fn(Path(tmp), quick), "date": time.strftime("%d %b %Y")}
     if not quick:
         RESULTS.parent.mkdir(exist_ok=True)
         RESULTS.write_text(json.dumps(figures, indent=1) + "\n")
     rows: list[tuple[str, float, str]] = []
     for name, res in figures.get("throughput", {}).items():
+        if name == "date":
+            continue
         for w in ("1", "2", 1, 2):
             if w in res:
                 r = res[w]
@@ -137,7 +184,15 @@ def run(quick: bool = False, parts: tuple[str, ...] = ("throughput", "cost", "10
                          (f"sweep {name}: {w} worker(s) load average before", r["load_before"], "")]  # fmt: skip
         rows.append((f"sweep {name}: 2 workers / 1 worker", res["speedup_2_vs_1"], "x"))
     for name, r in figures.get("scheduler_cost", {}).items():
+        if name == "date":
+            continue
         rows += [(f"sweep empty runs, {name}: wall per run", r["ms_per_run"], "ms")]
+    for shaper, r in figures.get("judges", {}).items():
+        if shaper == "date":
+            continue
+        rows += [(f"sweep judged residual, {shaper}: project vs independent judge, max |diff| ({r['judged']} values)",
+                  r["max_abs_diff_deg"], "deg"),
+                 (f"sweep judged residual, {shaper}: largest judged sway", r["largest_sway_deg"], "deg")]
     if "study_10k" in figures:
         r = figures["study_10k"]
         rows += [(f"sweep 10k anti-sway: runs ({r['ok']} ok, {r['crashed']} crashed)", r["rows"], ""),
@@ -149,6 +204,6 @@ def run(quick: bool = False, parts: tuple[str, ...] = ("throughput", "cost", "10
 
 
 if __name__ == "__main__":
-    chosen = tuple(a for a in sys.argv[1:] if not a.startswith("-")) or ("throughput", "cost", "10k")
+    chosen = tuple(a for a in sys.argv[1:] if not a.startswith("-")) or ("throughput", "cost", "judges", "10k")
     for k, v, u in run(quick="--quick" in sys.argv, parts=chosen):
         print(f"{k:<70} {v:>10.4g} {u}")

@@ -10,6 +10,7 @@ the closed-loop kinds run the command itself (``kinds.subprocess``).
 
 from __future__ import annotations
 
+import functools
 import importlib
 import pkgutil
 from dataclasses import dataclass, field
@@ -104,8 +105,9 @@ def python_args(options: Mapping[str, Any]) -> dict[str, Any]:
     return {k.replace("-", "_"): cli_text(v) if isinstance(v, (list, tuple)) else v for k, v in options.items()}
 
 
+@functools.lru_cache(maxsize=1)
 def registry() -> dict[str, RunKind]:
-    """Every kind of every module of this package, by name."""
+    """Every kind of every module of this package, by name (found once per process)."""
     found: dict[str, RunKind] = {}
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
         module = importlib.import_module(f"{__name__}.{info.name}")

@@ -80,9 +80,10 @@ BusyWaitOpt = Annotated[
 SimLenientOpt = Annotated[
     bool,
     typer.Option(
-        "--sim-lenient",
-        help="Simulator only: a controller tolerant of a loaded machine — connection quality judged over 1 s and "
-        "GOOD with half the replies in time (default: over 50 cycles, 90 %, as strict as the real one).",
+        "--sim-lenient/--sim-strict",
+        help="Simulator only: judge the connection quality leniently (default: over 1 s, GOOD with half the replies "
+        "in time — the simulator shares this machine with the client and whatever else runs on it) or as strictly as "
+        "the real controller (--sim-strict: over 50 cycles, 90 %).",
     ),
 ]
 TrackingErrorOpt = Annotated[

@@ -222,7 +222,8 @@ def read_table(
 
     A headerless file of exactly ``headerless_width`` numeric columns is accepted when ``headerless_dt`` [s]
     is given; it gets the column names ``columns[1:]`` and a time column t = k·dt.
-    Cells of ``nan_columns`` may be empty or 'nan' (e.g. the ball position of a frame where it was not found).
+    Cells of ``nan_columns`` and of every extra column after ``columns`` may be empty or 'nan' (a missing value,
+    e.g. the ball position of a frame where it was not found); the required columns must hold numbers.
     UTF-8 with or without a byte-order mark. Well-formed files are parsed by numpy's C reader (about the cost of
     ``numpy.loadtxt``); any fault sends the file through the strict per-cell reader, which names it.
     """
@@ -270,7 +271,9 @@ def read_table(
             raise CsvFormatError("no data rows after the header", file=spath, row=first_line)
 
     width = len(names)
-    nan_ok = {names.index(c) for c in nan_columns if c in names}
+    # a missing value (empty cell or nan) is allowed in the named columns and in every column after the required ones
+    nan_ok = {names.index(c) for c in nan_columns if c in names} | set(range(len(columns) if not headerless else width,
+                                                                             width))  # fmt: skip
     data = _fast_body(path, raw, body_start, body_line - 1, width, nan_ok)
     if data is None:
         rows = _csv_rows(_decode(raw, body_start, len(raw), spath), spath, body_line)
@@ -288,10 +291,27 @@ def read_table(
     return Table(path=spath, names=names, data=data)
 
 
+def float_first_row(fmt: str) -> str:
+    """The format of a file's first data row: a ``%…g`` field in its alternate form (``%#…g``: always a decimal
+    point), so that readers which type columns from their first rows (polars, DuckDB) take them as floats even where
+    later rows hold whole numbers (``0``)."""
+    return re.sub(r"%(\.\d+)?g", lambda m: "%#" + (m.group(1) or "") + "g", fmt)
+
+
 def write_table(path: str | Path, names: Sequence[str], data: np.ndarray, fmt: str | Sequence[str] = "%.10g") -> None:
-    """Write an (n, m) array with a header line, atomically (a temporary name renamed when complete)."""
+    """Write an (n, m) array with a header line, atomically (a temporary name renamed when complete). Float columns
+    read as floats everywhere (:func:`float_first_row`); NaN is written as ``nan`` (a missing value)."""
+    data = np.asarray(data, dtype=float)
+    if data.ndim == 1:
+        data = data[:, None]
+    fmts = [fmt] * data.shape[1] if isinstance(fmt, str) else list(fmt)
+    row = ",".join(fmts)
+    first = ",".join(float_first_row(f) for f in fmts)
     with atomic_path(path) as tmp:
-        np.savetxt(tmp, np.asarray(data, dtype=float), delimiter=",", header=",".join(names), comments="", fmt=fmt)
+        with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(",".join(names) + "\n")
+            lines = [(first if i == 0 else row) % tuple(r) for i, r in enumerate(data.reshape(len(data), -1).tolist())]
+            fh.write("\n".join(lines) + ("\n" if lines else ""))
 
 
 def read_joint_csv(path: str | Path, dt: float | None = None) -> JointTrajectory:

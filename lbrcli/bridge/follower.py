@@ -36,6 +36,8 @@ REFINE_CYCLES = 50  # cycles a pose that has not converged is refined further be
 class TargetFollower(LBRClient):
     """Follows ``source``'s targets; sends the state back every ``state_every`` messages (0: never)."""
 
+    jerk_limited = True  # its motion is ruckig's: the safety core keeps any clamp within the jerk limit too
+
     def __init__(self, source: TargetInbox, limits: JointLimits, *, robot: Robot | None = None,
                  timeout_s: float = 0.1, first_target_s: float = 30.0, speed_scale: float = 0.5,
                  state_every: int = 1, ik_options: OnlineIkOptions = OnlineIkOptions()) -> None:  # fmt: skip
@@ -83,7 +85,10 @@ class TargetFollower(LBRClient):
             raise StopSession("the source ended the session", completed=True)
         if src.latest is None:
             if now - self._t_start > self.first_target_s:
-                raise StopSession(f"no target arrived within {self.first_target_s:g} s of commanding", completed=False)
+                bad = getattr(src, "last_bad", None)
+                why = f" ({src.bad} invalid; the last: {bad})" if bad else ""
+                raise StopSession(f"no target arrived within {self.first_target_s:g} s of commanding{why}",
+                                  completed=False)  # fmt: skip
         elif now - src.latest_time > self.timeout_s:
             raise StopSession(f"dead-man: no target for {(now - src.latest_time) * 1e3:.0f} ms "
                               f"(more than {self.timeout_s * 1e3:g} ms)", completed=False)  # fmt: skip
@@ -182,10 +187,13 @@ class TargetFollower(LBRClient):
         self._check_source(now)
         if not self.reply_due:
             return self._q  # type: ignore[return-value]
-        if self.skipped:  # the controller extrapolated our last command at its velocity: continue from there
-            dt = self._otg.delta_time
-            inp.current_position = [p + self.skipped * v * dt for p, v in zip(inp.current_position, inp.current_velocity)]
-            inp.current_acceleration = list(_ZERO7)
+        ex = self.executed
+        if (self.skipped or self.replies_lost or self.clamped) and ex is not None:
+            # the controller extrapolated our last commands (lost messages or replies), or the safety core clamped one:
+            # re-plan from what it executed
+            inp.current_position = list(ex.position)
+            inp.current_velocity = list(ex.velocity)
+            inp.current_acceleration = list(ex.acceleration)
         src = self.source
         if src.fresh:
             src.fresh = False

@@ -3,7 +3,8 @@
 paho's network thread receives (its callback only appends the payload to a bounded deque); the FRI loop drains the
 deque once per cycle, so the broker never blocks a cycle. MQTT does not tell who published: the broker
 authenticates the clients (user name and password in the URL, TLS with mqtts://, its ACL decides who may publish on
-the command topic), and a shared secret (HMAC-SHA256 on every message) lets the bridge itself refuse anyone else.
+the command topic), and a shared secret (HMAC-SHA256 on every message, bound to the session's nonce that is published
+retained on ``<topic>/nonce``) lets the bridge itself refuse anyone else, and replays.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ class MqttTransport:
         self._next_state = 0.0
         self._ready = threading.Event()
         self._refused: str | None = None
+        self._announced = False
         self._client = paho_client(f"lbr-serve-{id(self):x}", target)
         self._client.on_connect = self._on_connect
         self._client.on_subscribe = self._on_subscribe
@@ -90,10 +92,22 @@ class MqttTransport:
         self._client.publish(self.state_topic, data, qos=0)
         self.published += 1
 
+    @property
+    def nonce_topic(self) -> str:
+        return f"{self.target.topic}/nonce"
+
+    def announce(self, data: bytes) -> None:
+        """Publish the session's challenge (its nonce), retained on ``<topic>/nonce``: a source that starts later,
+        or says hello, finds it there."""
+        self._client.publish(self.nonce_topic, data, qos=1, retain=True)
+        self._announced = True
+
     def describe(self, sender: Hashable | None) -> str:
         where = f"mqtt://{self.target.host}:{self.target.port}/{self.target.topic}"
         return f"{where} source {sender}" if sender is not None else where
 
     def close(self) -> None:
+        if self._announced:  # the session's nonce goes with it: no source signs for a session that is over
+            self._client.publish(self.nonce_topic, b"", qos=1, retain=True).wait_for_publish(1.0)
         self._client.loop_stop()
         self._client.disconnect()

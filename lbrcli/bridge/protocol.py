@@ -20,7 +20,14 @@ The JSON form is one UTF-8 object per datagram or message, one of ``{"q": [7 × 
 ``{"pose": [x, y, z, qw, qx, qy, qz], "twist": [6]}`` or ``{"pose_zyx": [x, y, z, α, β, γ], "twist": [6]}``, each
 with optional ``"seq"`` (int), ``"t"`` [s] and ``"source"`` (int). ``{"end": true}`` ends the session.
 
-With a shared secret every target (either form) carries ``HMAC-SHA256(secret, message)`` as its last 32 bytes.
+With a shared secret every message (either form, the end message too) carries
+``HMAC-SHA256(secret, nonce ‖ message)`` as its last 32 bytes, where ``nonce`` is the bridge's random 16-byte session
+nonce: a source asks for it with a hello (``b"LBRH"`` + u8 version 1 + 3 zero bytes + u32 source id, 12 bytes, or
+``{"hello": true, "source": id}``) and the bridge answers with the challenge (``b"LBRN"`` + u8 1 + 3 zero bytes + the
+16-byte nonce, or ``{"nonce": "<32 hex digits>"}``; on MQTT published, retained, on ``<topic>/nonce``). A message
+signed in another session fails (replays from earlier sessions); within a session the sequence counter inside the
+signed message must grow (replays and reordering are stale); the end message carries the owner's ``seq`` and
+``source`` and is judged the same way.
 
 State (``STATE_FORMAT``, 256 bytes)::
 
@@ -98,25 +105,88 @@ def encode_target(values, v=None, seq: int = 0, t: float = 0.0, kind: int = KIND
                         source & 0xFFFFFFFF, float(t), *vals, *vs)  # fmt: skip
 
 
-def sign(message: bytes, secret: bytes) -> bytes:
-    """``message`` followed by its HMAC-SHA256 tag under ``secret``."""
-    return message + hmac.digest(secret, message, hashlib.sha256)
+HELLO_MAGIC = b"LBRH"
+NONCE_MAGIC = b"LBRN"
+NONCE_SIZE = 16
+_HELLO = struct.Struct("<4sB3xI")  # 12 bytes
+_NONCE = struct.Struct("<4sB3x16s")  # 24 bytes
 
 
-def verify(data: bytes, secret: bytes) -> bytes:
-    """The message of a signed datagram; :class:`BadTarget` when its tag does not match."""
+def sign(message: bytes, secret: bytes, nonce: bytes = b"") -> bytes:
+    """``message`` followed by its HMAC-SHA256 tag under ``secret`` for the session ``nonce`` (see the layout)."""
+    return message + hmac.digest(secret, nonce + message, hashlib.sha256)
+
+
+def verify(data: bytes, secret: bytes, nonce: bytes = b"") -> bytes:
+    """The message of a datagram signed for the session ``nonce``; :class:`BadTarget` when its tag does not match."""
     if len(data) <= TAG_SIZE:
         raise BadTarget("too short for a signed message")
     body, tag = data[:-TAG_SIZE], data[-TAG_SIZE:]
-    if not hmac.compare_digest(hmac.digest(secret, body, hashlib.sha256), tag):
-        raise BadTarget("its HMAC-SHA256 tag does not match the shared secret")
+    if not hmac.compare_digest(hmac.digest(secret, nonce + body, hashlib.sha256), tag):
+        raise BadTarget("its HMAC-SHA256 tag does not match the shared secret and this session's nonce")
     return body
 
 
-def _finite(values, n: int, what: str) -> tuple[float, ...]:
+def encode_hello(source: int = 0, binary: bool = True) -> bytes:
+    """A source's request for the session nonce."""
+    if binary:
+        return _HELLO.pack(HELLO_MAGIC, VERSION, source & 0xFFFFFFFF)
+    return json.dumps({"hello": True, "source": source}).encode()
+
+
+def is_hello(data: bytes) -> bool | None:
+    """True for a binary hello, False for a JSON one, None for anything else."""
+    if len(data) == _HELLO.size and data[:4] == HELLO_MAGIC:
+        return True
+    if data[:1] == b"{" and b'"hello"' in data and len(data) < 256:
+        try:
+            obj = json.loads(data)
+        except (UnicodeDecodeError, ValueError):
+            return None
+        if isinstance(obj, dict) and obj.get("hello") is True:
+            return False
+    return None
+
+
+def encode_nonce(nonce: bytes, binary: bool = True) -> bytes:
+    """The bridge's challenge: its session nonce (16 bytes)."""
+    if binary:
+        return _NONCE.pack(NONCE_MAGIC, VERSION, nonce)
+    return json.dumps({"nonce": nonce.hex()}).encode()
+
+
+def decode_nonce(data: bytes) -> bytes | None:
+    """The session nonce of a challenge (binary or JSON), or None if ``data`` is not one."""
+    if len(data) == _NONCE.size and data[:4] == NONCE_MAGIC:
+        return _NONCE.unpack(data)[2]
+    if data[:1] == b"{" and b'"nonce"' in data:
+        try:
+            obj = json.loads(data)
+            nonce = bytes.fromhex(obj["nonce"])
+        except (UnicodeDecodeError, ValueError, KeyError, TypeError):
+            return None
+        return nonce if len(nonce) == NONCE_SIZE else None
+    return None
+
+
+def encode_end(seq: int | None = None, source: int = 0) -> bytes:
+    """The end message (``{"end": true}``, with the source's ``seq`` and id when it signs)."""
+    obj: dict = {"end": True}
+    if seq is not None:
+        obj["seq"] = seq & 0xFFFFFFFF
+    if source:
+        obj["source"] = source
+    return json.dumps(obj).encode()
+
+
+def _finite(values, n: int, what: str, strict: bool = False) -> tuple[float, ...]:
+    """``n`` finite floats; ``strict`` (JSON): only numbers — no strings, booleans or nested lists."""
+    if strict and not (isinstance(values, list)
+                       and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in values)):  # fmt: skip
+        raise BadTarget(f"{what} must be a list of {n} numbers (not strings or booleans)")
     try:
         vals = tuple(float(x) for x in values)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise BadTarget(f"{what} must be {n} numbers") from None
     if len(vals) != n:
         raise BadTarget(f"{what} must be {n} numbers, got {len(vals)}")
@@ -151,7 +221,9 @@ def decode_target(data: bytes) -> Target:
         vals = _finite(rest[:7], 7, what)
         _check_pose(kind, vals)
         v = _finite(rest[7:], 7, "the feed-forward") if flags & FLAG_VELOCITY else None
-        return Target(vals, v, seq, t if math.isfinite(t) else 0.0, kind, source)
+        if not math.isfinite(t):
+            raise BadTarget("the source time is not finite")
+        return Target(vals, v, seq, t, kind, source)
     if data[:1] == b"{":
         try:
             obj = json.loads(data.decode("utf-8"))
@@ -164,15 +236,17 @@ def decode_target(data: bytes) -> Target:
                 break
         else:
             raise BadTarget('a JSON target needs "q" (7 joint positions [rad]), "pose" or "pose_zyx"')
-        vals = _finite(obj[key], n, f'"{key}"') + ((0.0,) if n == 6 else ())
+        vals = _finite(obj[key], n, f'"{key}"', strict=True) + ((0.0,) if n == 6 else ())
         _check_pose(kind, vals)
         v = None
         if obj.get(vkey) is not None:
-            v = _finite(obj[vkey], vn, f'"{vkey}"') + ((0.0,) if vn == 6 else ())
+            v = _finite(obj[vkey], vn, f'"{vkey}"', strict=True) + ((0.0,) if vn == 6 else ())
         seq = _uint32(obj, "seq")
         source = _uint32(obj, "source") or 0
         t = obj.get("t", 0.0)
-        t = float(t) if isinstance(t, (int, float)) and not isinstance(t, bool) and math.isfinite(t) else 0.0
+        if not (isinstance(t, (int, float)) and not isinstance(t, bool) and math.isfinite(t)):
+            raise BadTarget('"t" must be a finite number of seconds')
+        t = float(t)
         return Target(vals, v, seq, t, kind, source, binary=False)
     raise BadTarget("neither a binary target (magic LBRT) nor a JSON object")
 
@@ -201,12 +275,19 @@ def encode_state(s: State) -> bytes:
                        s.target_t, s.t, *s.measured, *s.commanded, *s.external_torque, *s.tcp)  # fmt: skip
 
 
+STATE_NAMES = ("IDLE", "MONITORING_WAIT", "MONITORING_READY", "COMMANDING_WAIT", "COMMANDING_ACTIVE")
+
+
 def encode_state_json(s: State) -> bytes:
+    """The JSON state: the keys the MQTT telemetry (``lbr … --mqtt``) and the execution log use for the same values
+    (``state`` the session state's name, ``msr_q``, ``cmd_q`` [rad], ``ext_tau`` [Nm]), and the bridge's own
+    (``state_id`` 0–4, ``braking``, ``following``, ``unreached``, ``seq``, ``target_seq``, ``target_t`` [s], ``t`` [s],
+    ``tcp`` [m, quaternion w x y z])."""
+    name = STATE_NAMES[s.session_state] if 0 <= s.session_state < len(STATE_NAMES) else str(s.session_state)
     return json.dumps({
-        "state": s.session_state, "braking": s.braking, "following": s.following, "unreached": s.unreached,
-        "seq": s.seq, "target_seq": s.target_seq, "target_t": s.target_t, "t": s.t,
-        "q_measured": list(s.measured), "q_commanded": list(s.commanded), "tau_ext": list(s.external_torque),
-        "tcp": list(s.tcp),
+        "state": name, "state_id": s.session_state, "braking": s.braking, "following": s.following,
+        "unreached": s.unreached, "seq": s.seq, "target_seq": s.target_seq, "target_t": s.target_t, "t": s.t,
+        "msr_q": list(s.measured), "cmd_q": list(s.commanded), "ext_tau": list(s.external_torque), "tcp": list(s.tcp),
     }).encode()  # fmt: skip
 
 
@@ -214,11 +295,26 @@ def decode_state(data: bytes) -> State:
     """A state from its binary (magic LBRS) or JSON form; ValueError for anything else."""
     if data[:1] == b"{":
         o = json.loads(data)
-        return State(o["state"], o["braking"], o["following"], o["unreached"], o["seq"], o["target_seq"],
-                     o["target_t"], o["t"], tuple(o["q_measured"]), tuple(o["q_commanded"]), tuple(o["tau_ext"]),
+        return State(o["state_id"], o["braking"], o["following"], o["unreached"], o["seq"], o["target_seq"],
+                     o["target_t"], o["t"], tuple(o["msr_q"]), tuple(o["cmd_q"]), tuple(o["ext_tau"]),
                      tuple(o["tcp"]))  # fmt: skip
     if data[:4] != STATE_MAGIC or len(data) != STATE_SIZE:
         raise ValueError("not a version-1 bridge state datagram")
     magic, version, st, flags, seq, tseq, tt, t, *rest = _STATE.unpack(data)
     return State(st, bool(flags & 1), bool(flags & 2), bool(flags & 4), seq, tseq, tt, t, tuple(rest[:7]),
                  tuple(rest[7:14]), tuple(rest[14:21]), tuple(rest[21:28]))  # fmt: skip
+
+
+def claimed_source(data: bytes) -> int | None:
+    """The source id a message that is not a valid target still carries (binary: its header; JSON: ``"source"``),
+    or None: who sent it cannot be told."""
+    if data[:4] == TARGET_MAGIC and len(data) >= 16:
+        return struct.unpack_from("<I", data, 12)[0]
+    if data[:1] == b"{":
+        try:
+            obj = json.loads(data)
+        except (UnicodeDecodeError, ValueError, RecursionError):
+            return None
+        src = obj.get("source") if isinstance(obj, dict) else None
+        return src if isinstance(src, int) and not isinstance(src, bool) else None
+    return None

@@ -56,7 +56,7 @@ class UdpTargets(TargetInbox):
     """A :class:`TargetInbox` on one UDP socket (``port`` 0: any free port, in ``.port``)."""
 
     def __init__(self, port: int = 30300, host: str = "127.0.0.1", allowed: set[str] | None = None,
-                 secret: bytes | None = None, more: Sequence = ()) -> None:  # fmt: skip
+                 secret: bytes | None = None, more: Sequence = (), limits=None) -> None:  # fmt: skip
         self.udp = UdpTransport(port, host, allowed)
         self.port = self.udp.port
-        super().__init__((self.udp, *more), secret)
+        super().__init__((self.udp, *more), secret, limits)

@@ -74,7 +74,7 @@ def upright(
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
     busy_wait: BusyWaitOpt = None,
-    sim_lenient: SimLenientOpt = False,
+    sim_lenient: SimLenientOpt = True,
     limits: LimitsOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
@@ -94,7 +94,7 @@ def upright(
 
     from ..console import Reporter
     from ..fri_options import busy_wait_seconds, check_simulator_only, validate_session
-    from ..fri_runner import exit_for, print_summary, run_client, simulator_kwargs
+    from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import check_number, limits_from
     from ..parsing import parse_joint_vector
 
@@ -115,7 +115,7 @@ def upright(
         check_number("--sensor-delay", sensor_delay, 0.0, 100.0, unit="ms")
     pushes = _pushes(push)
     check_simulator_only(robot, {"--push": bool(pushes), "--sim-delay": sim_delay != 5.0, "--sim-jitter": sim_jitter != 1.0,
-                                 "--sim-lenient": sim_lenient})  # fmt: skip
+                                 "--sim-strict": not sim_lenient})  # fmt: skip
     if robot is not None and not pendulum:
         raise OptionError("--pendulum PORT is needed with --robot (the module's serial port)")
     if robot is None and pendulum not in (None, "sim"):
@@ -163,16 +163,11 @@ def upright(
     figures.update(rod_length_m=rod_length, equivalent_length_m=model.equivalent_length, hold_s=hold,
                    robot=robot or "simulator", rail_velocity_m_s=rail.limits.velocity,
                    rail_acceleration_m_s2=rail.limits.acceleration)  # fmt: skip
-    if plot is not None:
-        if log is None:
-            rep.warn("--plot needs --log (the plot is drawn from the log); no plot written")
-        else:
-            from ..plots.control import plot_upright
+    from ..plots.control import plot_upright
 
-            plot_upright(Path(log), Path(plot))
-            rep.print(f"plot: {plot}")
+    plot_error = plot_log(plot, log, rep, "upright", figures, draw=plot_upright)
     rep.emit(figures)
-    exit_for(result, lab_figures)
+    exit_for(result, lab_figures, failed=plot_error)
 
 
 def damp(
@@ -204,7 +199,7 @@ def damp(
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
     busy_wait: BusyWaitOpt = None,
-    sim_lenient: SimLenientOpt = False,
+    sim_lenient: SimLenientOpt = True,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -263,7 +258,7 @@ def damp(
     damp_s = 3.0 * period_T if damp_time is None else damp_time
     check_number("--damp-time", damp_s, 0.0, 600.0, unit="s")
     check_simulator_only(robot, {"--sim-length": sim_length is not None, "--sim-delay": sim_delay != 0.0,
-                                 "--sim-start": sim_start is not None, "--sim-lenient": sim_lenient})  # fmt: skip
+                                 "--sim-start": sim_start is not None, "--sim-strict": not sim_lenient})  # fmt: skip
     if sensor == "module" and robot is not None and not pendulum:
         raise OptionError("--pendulum PORT is needed with --sensor module and --robot")
     if robot is None and pendulum not in (None, "sim"):
@@ -327,9 +322,9 @@ def damp(
         rep.print(f"damper per cycle: p50 {f['controller_us_p50']:.1f} µs, p99 {f['controller_us_p99']:.1f} µs")
     figures.update(file=name, rows=len(traj), duration_s=traj.duration, string_length_m=model_len,
                    damp_s=damp_s, robot=robot or "simulator", sim_length_m=true_len if robot is None else None)  # fmt: skip
-    plot_log(plot, log, rep, joint_csv.name)
+    plot_error = plot_log(plot, log, rep, joint_csv.name, figures)
     rep.emit(figures)
-    exit_for(result, lab_figures)
+    exit_for(result, lab_figures, failed=plot_error)
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

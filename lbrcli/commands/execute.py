@@ -114,7 +114,7 @@ def execute(
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
     busy_wait: BusyWaitOpt = None,
-    sim_lenient: SimLenientOpt = False,
+    sim_lenient: SimLenientOpt = True,
     max_tracking_error: TrackingErrorOpt = None,
     pendulum: PendulumOpt = None,
     baud: BaudOpt = 115200,
@@ -158,7 +158,7 @@ def execute(
     if not 1 <= receive_multiplier <= 100:
         raise OptionError(f"--receive-multiplier must be 1..100, got {receive_multiplier}")
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--damping": damping != 0.0,
-                                 "--receive-multiplier": receive_multiplier != 1, "--sim-lenient": sim_lenient})  # fmt: skip
+                                 "--receive-multiplier": receive_multiplier != 1, "--sim-strict": not sim_lenient})  # fmt: skip
     if not (math.isfinite(start_sway) and 0 < start_sway <= 45):
         raise OptionError(f"--start-sway must be in (0, 45] deg, got {start_sway:g}")
     if not (math.isfinite(sway_wait) and 0 <= sway_wait <= 3600):
@@ -240,9 +240,9 @@ def execute(
     figures.update(file=name, rows=len(traj), duration_s=traj.duration, robot=robot or "simulator")
     if robot is not None and result.figures.get("operation_mode") == "TEST_MODE_1" and not t1:
         rep.warn("the robot is in T1: the controller limits the flange speed to 250 mm/s (check with --t1)")
-    plot_log(plot, log, rep, joint_csv.name)
+    plot_error = plot_log(plot, log, rep, joint_csv.name, figures)
     rep.emit(figures)
-    exit_for(result, lab_figures, mqtt)
+    exit_for(result, lab_figures, mqtt, failed=plot_error)
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

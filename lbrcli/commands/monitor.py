@@ -45,7 +45,7 @@ def monitor(
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
     busy_wait: BusyWaitOpt = None,
-    sim_lenient: SimLenientOpt = False,
+    sim_lenient: SimLenientOpt = True,
     pendulum: PendulumOpt = None,
     baud: BaudOpt = 115200,
     pendulum_zero: PendZeroOpt = 0,
@@ -78,7 +78,7 @@ def monitor(
     if not (math.isfinite(duration) and 0 < duration <= 86400):
         raise OptionError(f"--duration must be in (0, 86400] s, got {duration:g}")
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
-                                 "--sim-lenient": sim_lenient})  # fmt: skip
+                                 "--sim-strict": not sim_lenient})  # fmt: skip
     model = make_robot(flange, tool)
     fid = model.model.getFrameId(FLANGE_FRAME)
     mdl, data = model.model, model.data
@@ -110,9 +110,9 @@ def monitor(
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)
     figures.update(duration_s=duration, robot=robot or "simulator")
-    plot_log(plot, log, rep, "monitor")
+    plot_error = plot_log(plot, log, rep, "monitor", figures)
     rep.emit(figures)
-    exit_for(result, lab_figures, mqtt)
+    exit_for(result, lab_figures, mqtt, failed=plot_error)
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -30,7 +30,7 @@ def ptp(
     plot: PlotOpt = None,
     realtime: RealtimeOpt = False,
     busy_wait: BusyWaitOpt = None,
-    sim_lenient: SimLenientOpt = False,
+    sim_lenient: SimLenientOpt = True,
     max_tracking_error: TrackingErrorOpt = None,
     limits: LimitsOpt = None,
     json_out: JsonOpt = False,
@@ -62,7 +62,7 @@ def ptp(
     if not (math.isfinite(settle) and 0 <= settle <= 60):
         raise OptionError(f"--settle must be 0..60 s, got {settle:g}")
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
-                                 "--sim-lenient": sim_lenient})  # fmt: skip
+                                 "--sim-strict": not sim_lenient})  # fmt: skip
     lim = limits_from(limits)
     over = np.flatnonzero(np.abs(goal) > lim.position)
     if over.size:
@@ -115,9 +115,9 @@ def ptp(
         err = float(np.max(np.abs(np.array(sim_stats.final_q) - goal)))
         figures["final_error_rad"] = err
         rep.print(f"simulated robot ended {err:.2e} rad from Q")
-    plot_log(plot, log, rep, "ptp")
+    plot_error = plot_log(plot, log, rep, "ptp", figures)
     rep.emit(figures)
-    exit_for(result)
+    exit_for(result, failed=plot_error)
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -69,7 +69,7 @@ def serve(
     wait: WaitOpt = None,
     realtime: RealtimeOpt = False,
     busy_wait: BusyWaitOpt = None,
-    sim_lenient: SimLenientOpt = False,
+    sim_lenient: SimLenientOpt = True,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -119,7 +119,7 @@ def serve(
     if duration is not None and not (math.isfinite(duration) and 0 < duration <= 86400):
         raise OptionError(f"--duration must be in (0, 86400] s, got {duration:g}")
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
-                                 "--sim-lenient": sim_lenient})  # fmt: skip
+                                 "--sim-strict": not sim_lenient})  # fmt: skip
     lim = limits_from(limits)
     allowed = {h.strip() for h in source.split(",") if h.strip()} if source else None
     sim_kwargs: dict[str, Any] = {}
@@ -147,7 +147,7 @@ def serve(
         for tr in transports:
             tr.close()
         raise OptionError(f"--mqtt: {exc}") from None
-    targets = TargetInbox(transports, key)
+    targets = TargetInbox(transports, key, lim)
     follower = TargetFollower(targets, lim, robot=make_robot(flange, tool), timeout_s=timeout,
                               first_target_s=first_target, speed_scale=speed_scale, state_every=state_every)  # fmt: skip
     try:

@@ -153,8 +153,10 @@ class DampingClient(TrajectoryPlayer):
         move = self._return
         if not self.reply_due:
             return self._cmd
-        if self.skipped and not replanned:  # messages were lost during the return: continue from the extrapolation
-            self._replan_return()
+        if self.skipped and not replanned:  # messages were lost during the return: it goes on in step with its plan
+            prev = self._cmd_prev or self._cmd
+            self._cmd, self._cmd_prev, _ = extrapolated(self._cmd, prev, self.skipped, self._period)
+            move.skip(self.skipped)
         if move.done:
             if self._held < 2:  # at rest on the last row before the session's stop: it starts with zero velocity
                 self._held += 1
@@ -169,7 +171,7 @@ class DampingClient(TrajectoryPlayer):
     # -- log and figures ---------------------------------------------------------------------------------------
     def log_values(self, mon=None) -> tuple[float, ...]:
         if self._k < 0:
-            return (0.0, 0.0, math.nan, math.nan, math.nan, math.nan)
+            return (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # before the first row (phase < TRAJECTORY): nothing estimated yet
         d = self.damper
         kk = min(self._k, len(self._ref) - 1)
         ox, oy = d.observers

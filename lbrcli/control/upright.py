@@ -129,7 +129,7 @@ class UprightClient(LBRClient):
         q, self._last2, vel = extrapolated(self._last, self._last2, n, dt)
         self._last = q
         if not self._move.done:
-            self._move.start(q, self._move.target, vel)
+            self._move.skip(n)  # it goes on in step with its plan
         elif self.cart is not None:
             # the cart's acceleration resumes where it was: ramping it up from 0 again would starve the balance of
             # acceleration at every gap (the extrapolation's own jump is the controller's)
@@ -213,7 +213,7 @@ class UprightClient(LBRClient):
     # -- log and figures -------------------------------------------------------------------------------------
     def log_values(self, mon=None) -> tuple[float, ...]:
         if self.ctl is None:
-            return (-1.0, math.nan, math.nan, 0.0, 0.0, 0.0)
+            return (-1.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # mode −1: not started, nothing estimated yet
         c = self.cart
         return (float(self.ctl.mode), self.obs.phi, self.obs.omega, c.x, c.v, c.a)
 

@@ -70,6 +70,7 @@ class ClientApplication(Replying, SessionEnding):
         hold_cycles: int = 5,
         max_tracking_error: float | None = None,
         reply_gap_s: float | None = None,
+        tracking_lag_s: float | None = None,
         busy_wait_s: float = 0.0,
         prepare: bool = True,
     ) -> None:
@@ -91,6 +92,7 @@ class ClientApplication(Replying, SessionEnding):
         self.hold_cycles = max(1, hold_cycles)
         self.max_tracking_error = max_tracking_error  # [rad] None: velocity limit × max(20 ms, 8 periods) per joint
         self.reply_gap_s = reply_gap_s  # [s] None: 50 ms
+        self.tracking_lag_s = tracking_lag_s  # [s] the default tracking bound's lag at full speed (None: 20 ms)
         self.busy_wait_s = busy_wait_s  # [s] the receive polls this long before each message is due (transport)
         self.transport: UdpTransport | None = None
         self.cycle = Cycle()
@@ -150,6 +152,7 @@ class ClientApplication(Replying, SessionEnding):
         self._was_active = False
         self._send_counter = 0
         self._client_seq = 0
+        self._reply_seq_prev: int | None = None  # our reply to the previous message, if it carried a position
         self._answered_any = False
         self._unanswered_at_start = 0
         self._cpu0 = 0.0
@@ -159,6 +162,7 @@ class ClientApplication(Replying, SessionEnding):
         self.missed = self.stale = self.malformed = 0
         self.active_cycles = 0
         self.prepared_replies = 0  # cycles answered with the reply prepared after the previous one
+        self.lost_replies = 0  # commands the controller reported not received (reflected counter) while moving
         self.states_seen: list[int] = []
         self._latencies: list[int] = []  # [ns]
 
@@ -252,6 +256,7 @@ class ClientApplication(Replying, SessionEnding):
             self.malformed += 1
             return self._check_clocks(now)
         seq = mon.header.sequenceCounter
+        d = 0
         if self._last_seq >= 0:
             d = (seq - self._last_seq) & 0xFFFFFFFF
             if d == 0 or d > 0x7FFFFFFF:
@@ -263,10 +268,17 @@ class ClientApplication(Replying, SessionEnding):
         self._last_data = data
         ci = mon.connectionInfo
         state = ci.sessionState
+        # our reply to the previous message never reached the controller (it reflects an older one): it bridged that
+        # period by extrapolation instead of executing our command
+        expected = self._reply_seq_prev
+        lost_reply = (expected is not None and d == 1 and self._sup is not None and self._sup.reflecting
+                      and mon.header.reflectedSequenceCounter != expected)  # fmt: skip
+        self._reply_seq_prev = None
         prepared = self._prepared
         if prepared is not None:
             self._prepared = None
-            if seq == prepared[0] and state == CMD_ACTIVE and self._stop is None and self._interrupt is None:
+            if (seq == prepared[0] and state == CMD_ACTIVE and self._stop is None and self._interrupt is None
+                    and not lost_reply):  # fmt: skip
                 going_on = self._send_prepared(prepared, mon, seq, now, t_rx)
                 if going_on is not None:
                     return going_on
@@ -284,6 +296,10 @@ class ClientApplication(Replying, SessionEnding):
                                  "controller were lost in a row: no command is safe from here", observe=False)  # fmt: skip
                     return False
                 skipped = self._motion.extrapolate((d - 1) // (clock.period_key[1] if clock.period_key else 1))  # type: ignore[union-attr]
+        if lost_reply and self._moving():
+            self._motion.reply_lost()  # type: ignore[union-attr]
+            self.lost_replies += 1
+        self.client.replies_lost = 1 if lost_reply else 0
         self._last_seq = seq
         self.cycles += 1
         cyc = self.cycle
@@ -295,8 +311,9 @@ class ClientApplication(Replying, SessionEnding):
         if state != IDLE and clock.learn_period(ci):
             self._motion = ExecutedMotion(self.limits, clock.period_s, self.max_force, self.max_moment,  # type: ignore[arg-type]
                                           self.hold_cycles, mon.monitorData.measuredJointPosition.value)  # fmt: skip
+            self.client.executed = self._motion
             self._sup = Supervisor.from_limits(self.limits.velocity, ci.sendPeriod * 1e-3, clock.period_key[1],  # type: ignore[index]
-                                               self.max_tracking_error, self.reply_gap_s)  # fmt: skip
+                                               self.max_tracking_error, self.reply_gap_s, self.tracking_lag_s)  # fmt: skip
             if self.busy_wait_s > 0.0:
                 transport.expect_period(ci.sendPeriod * 1e-3)  # type: ignore[union-attr]
                 transport.warm = self._warm  # type: ignore[union-attr]

@@ -1,18 +1,24 @@
 """Jerk-limited braking stop: from the last command's position, velocity and acceleration to rest (ruckig).
 
 Every stop the client initiates (interrupt, guard refusal, a client's end, a failed observer) runs through here,
-so the commanded deceleration never exceeds the acceleration and jerk limits. The state is estimated from the
-last three commands sent (finite differences at the command period), the motion is computed online one cycle at
-a time (ruckig's velocity interface with target velocity 0), and the stop is done when ruckig says Finished.
+so the commanded deceleration never exceeds the acceleration and jerk limits. The state is taken from the last
+three commands sent as the braking envelope defines it (:mod:`trajectories.envelope`: the step velocity plus half a
+period of the step acceleration, and that acceleration), so the stop's first sampled step continues the history
+within the jerk limit; each joint stops on its own, time-optimally (ruckig's velocity interface, no
+synchronisation: the distances the envelope reserves are each joint's shortest). A command admitted into the
+envelope always leaves this stop inside the velocity, acceleration, jerk and position limits. Computed online one
+cycle at a time; done when ruckig says Finished.
 """
 
 from __future__ import annotations
 
 from typing import Sequence
 
-from ruckig import ControlInterface, InputParameter, OutputParameter, Result, Ruckig
+from ruckig import ControlInterface, InputParameter, OutputParameter, Result, Ruckig, Synchronization
 
 from trajectories.limits import JointLimits
+
+INSIDE = 1.0 - 1e-6  # the stop's limits, a hair inside the guard's (ruckig's rounding at the limits)
 
 
 class BrakingStop:
@@ -24,7 +30,8 @@ class BrakingStop:
         self._inp = InputParameter(7)
         self._out = OutputParameter(7)
         self._inp.control_interface = ControlInterface.Velocity
-        lim = limits.scaled(scale) if scale != 1.0 else limits
+        self._inp.synchronization = Synchronization.No
+        lim = limits.scaled(scale * INSIDE)
         # a stop must not stall on a limit it already exceeds: ruckig brakes into the limits first
         self._inp.max_velocity = lim.velocity.tolist()
         self._inp.max_acceleration = lim.acceleration.tolist()
@@ -33,13 +40,14 @@ class BrakingStop:
         self._inp.target_acceleration = [0.0] * 7
         self.cycles = 0  # cycles commanded so far
         self.done = False
+        self._hold: tuple[float, ...] = ()
 
     def start(self, q: Sequence[float], q_1: Sequence[float], q_2: Sequence[float]) -> None:
         """Brake from the command ``q`` [rad] that followed ``q_1`` and ``q_2`` (one and two periods before)."""
         dt = self.period_s
         inp = self._inp
         inp.current_position = list(q)
-        # velocity at q (not at the midpoint of the last step): second-order backward difference
+        # the continuous state the step history continues into: v_k + a_k·dt/2 (second-order backward difference)
         inp.current_velocity = [(3.0 * a - 4.0 * b + c) / (2.0 * dt) for a, b, c in zip(q, q_1, q_2)]
         inp.current_acceleration = [(a - 2.0 * b + c) / (dt * dt) for a, b, c in zip(q, q_1, q_2)]
         self.cycles = 0

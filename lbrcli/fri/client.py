@@ -9,11 +9,13 @@ TORQUE mode or a wrench in WRENCH mode. ``command`` may instead return the joint
 not depend on the next message (a stream of precomputed positions) may say so in ``prepare_command``: its reply then
 goes out as soon as the message is checked.
 To end the session raise :class:`~lbrcli.fri.errors.StopSession`; the application then brakes within the limits.
+Every joint position passes the motion-safety core (:mod:`~lbrcli.fri.motion`): it is clamped into the braking
+envelope (``clamped``), or — with ``exact_command`` — a command that would need the clamp ends the session braking.
 """
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Sequence
 
 from .command import LBRCommand
 from .constants import ClientCommandMode, SessionState
@@ -32,9 +34,19 @@ class LBRClient:
     reply_due: bool = True  # set by the application: this cycle's command is sent (every k-th message)
     skipped: int = 0  # set by the application: command periods the controller bridged since the last command
     # (its messages to us were lost; it extrapolated) — a client that follows time should advance by them
+    replies_lost: int = 0  # set by the application: our last command never reached the controller (its reflected
+    # counter says so); it bridged that period instead — ``executed`` holds where that left the robot
     braking: bool = False  # set by the application: it brakes to a stop this cycle (the callbacks are not called)
     phase: int = 0  # free for the client: logged per cycle (e.g. which part of a trajectory is playing)
     row: int = -1
+    # the motion-safety core: every joint position is admitted only if a braking stop from the state it creates stays
+    # inside the limits; a command outside is clamped to that envelope (``clamped`` is set for that cycle) …
+    exact_command: bool = False  # … unless the client sets this: then the session ends with a braking stop instead
+    jerk_limited: bool = False  # the clamp also keeps the command within the jerk limit of what was executed
+    clamped: bool = False  # set by the application: the last command sent was clamped into the envelope
+    executed: Any = None  # set by the application (ExecutedMotion, once the period is known): the executed
+    # position [rad], velocity [rad/s] and acceleration [rad/s²] — the controller's extrapolation included — to
+    # re-plan from after lost messages (``skipped``) or a clamp
 
     def on_state_change(self, old: SessionState, new: SessionState) -> None:
         """The session state changed from ``old`` to ``new`` (first call: old = IDLE)."""

@@ -12,7 +12,9 @@ named as the IO (analog: analogValue, boolean/digital: digitalValue), e.g. ``bal
 
 Units: t [s] controller time since the first message (sequence counter × send period), positions [rad],
 torques [Nm]. A value the controller did not send is written as 0; an IO value missing from a message keeps its
-last value. Each row reaches the file in one ``write`` call, so any ending (SIGINT, exception, kill) leaves complete
+last value; no cell is ever empty or nan (the clients' extra columns say with a flag when they hold nothing yet, e.g.
+``pend_age`` −1 before the pendulum module's first reading), and the first row writes every float with a decimal
+point, so pandas, polars and PlotJuggler read the file with their defaults. Each row reaches the file in one ``write`` call, so any ending (SIGINT, exception, kill) leaves complete
 rows that ``trajectories.csvio.read_table(path, LOG_COLUMNS, time="increasing")`` reads.
 """
 
@@ -24,6 +26,7 @@ import re
 from pathlib import Path
 from typing import Any, Sequence
 
+from trajectories.csvio import float_first_row
 from trajectories.errors import InputError
 
 from .constants import Phase
@@ -122,6 +125,9 @@ class LogLayout:
         self.update_io(first)
         self.names: tuple[str, ...] = tuple(names)
         self.template = ",".join(fmts) + "\n"
+        # the first row in the alternate form (always a decimal point): readers that type columns from their first
+        # rows (polars, DuckDB) take every float column as float although later rows may write 0 as "0"
+        self._next = float_first_row(self.template)
 
     def io_column(self, fri_name: str) -> int | None:
         """Index into ``io_values`` of an IO value by its FRI name (None if not logged)."""
@@ -195,7 +201,9 @@ class LogLayout:
         if self.io_names:
             self.update_io(mon)
             vals += tuple(self.io_values)
-        return self.template % vals
+        line = self._next % vals
+        self._next = self.template
+        return line
 
 
 class ExecutionLog:

@@ -1,14 +1,21 @@
-"""What the controller executes from our joint position commands, and what may follow it.
+"""The motion-safety core: what the controller executes from our commands, and what may follow it.
 
 :class:`ExecutedMotion` keeps the last three joint positions sent in COMMANDING_ACTIVE — continued, over lost
-monitoring messages, as the controller's extrapolation continued them — and judges each next command against them
-with the guard; a client-side stop brakes from them (``BrakingStop``). Built when the command period is known.
+monitoring messages, as the controller's extrapolation continued them — and admits each next command only into the
+braking envelope (:class:`trajectories.envelope.BrakingEnvelope`: a jerk-limited stop from the state it creates stays
+inside every limit). A client's command outside it is clamped to it (feedback and following clients) or, when the
+client asked for its command to be sent exactly (a file's rows), ends the session with the braking stop instead; the
+guard then checks what is sent (a refusal is a bug signal). Every client-side stop brakes from the executed history
+(``BrakingStop``) and, in TORQUE or WRENCH mode, ramps the effort down (:class:`EffortRamp`). One instance per
+session, built when the command period is known; the same for every client.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any, Sequence
 
+from trajectories.envelope import BrakingEnvelope
 from trajectories.limits import JointLimits
 
 from .braking import BrakingStop
@@ -20,19 +27,58 @@ _WRENCH = int(ClientCommandMode.WRENCH)
 _ZERO6 = (0.0,) * 6
 _ZERO7 = (0.0,) * 7
 _CMD_ACTIVE = 4
+CLAMP_TOL = 1e-12  # [rad] a change below this is rounding, not a clamp
+EFFORT_RAMP_MIN_S = 0.05  # [s] the shortest effort ramp of a stop
+EFFORT_RANGE_S = 0.25  # [s] a stop ramps an effort down at most at its whole range (torque limit, wrench bound) per this
 
 
 class Refused(Exception):
     """A command failed the guard and nothing is moving under our command: end without sending it."""
 
 
+class EffortRamp:
+    """The torque or wrench of a stop: from the last one sent to zero along a raised cosine whose steepest rate is at
+    most ``rates`` [Nm/s or N/s per component] (and that lasts at least ``EFFORT_RAMP_MIN_S``)."""
+
+    def __init__(self, rates: Sequence[float], period_s: float) -> None:
+        self.rates = tuple(rates)
+        self.period_s = period_s
+        self._from: tuple[float, ...] = ()
+        self._n = 0
+        self._k = 0
+
+    def start(self, effort: Sequence[float]) -> None:
+        self._from = tuple(effort)
+        # a raised cosine from e to 0 over T has its steepest rate π·|e| / (2T)
+        t = max([EFFORT_RAMP_MIN_S] + [math.pi * abs(e) / (2.0 * r) for e, r in zip(self._from, self.rates)])
+        self._n = max(1, int(math.ceil(t / self.period_s)))
+        self._k = 0
+
+    @property
+    def done(self) -> bool:
+        return self._k >= self._n
+
+    def next(self) -> tuple[float, ...]:
+        if self._k < self._n:
+            self._k += 1
+        s = 0.5 * (1.0 + math.cos(math.pi * self._k / self._n))
+        return tuple(e * s for e in self._from)
+
+
 class ExecutedMotion:
-    """The sent history [rad], the guard on the next command, the braking stop (``hold_cycles`` at rest after it)."""
+    """The sent history [rad], the envelope and guard on the next command, the braking stop (``hold_cycles`` at rest
+    after it) and the effort ramps of TORQUE and WRENCH mode."""
 
     def __init__(self, limits: JointLimits, period_s: float, max_force: float, max_moment: float, hold_cycles: int,
                  q: Sequence[float]) -> None:  # fmt: skip
+        self.period_s = period_s
         self.guard = CommandGuard.from_limits(limits, period_s, max_force, max_moment)
+        self.envelope: BrakingEnvelope = self.guard.envelope
+        self._limits = limits
         self.brake = BrakingStop(limits, period_s)  # ready before it is needed
+        # effort rates of a stop: the whole torque table, or the wrench bounds, per EFFORT_RANGE_S
+        self.torque_ramp = EffortRamp([float(t) / EFFORT_RANGE_S for t in limits.torque], period_s)
+        self.wrench_ramp = EffortRamp([b / EFFORT_RANGE_S for b in [max_force] * 3 + [max_moment] * 3], period_s)
         self.hold_cycles = hold_cycles
         self.prev = self.prev2 = self.prev3 = tuple(q)  # what the controller executed, newest first
         self.active_sent = 0  # joint positions sent in COMMANDING_ACTIVE
@@ -40,11 +86,35 @@ class ExecutedMotion:
         self.hold_left = 0
         self.braking_cycles = 0
         self.extrapolated_cycles = 0
+        self.clamped_cycles = 0  # commands the core changed to keep a braking stop available
+        self.largest_clamp = 0.0  # [rad]
+        self.last_torque: tuple[float, ...] | None = None  # the effort last sent (TORQUE / WRENCH mode)
+        self.last_wrench: tuple[float, ...] | None = None
+        self._ramp: EffortRamp | None = None
 
     @property
     def moving(self) -> bool:
         """Commands were sent in COMMANDING_ACTIVE: a stop must brake."""
         return self.active_sent > 0
+
+    # -- the executed state, for clients that re-plan ---------------------------------------------------------
+    @property
+    def position(self) -> tuple[float, ...]:
+        """[rad] where the controller was last commanded (its extrapolation included)."""
+        return self.prev
+
+    @property
+    def velocity(self) -> tuple[float, ...]:
+        """[rad/s] the continuous velocity the history continues into (step velocity + half a period of its
+        acceleration): what a re-planned motion starts from."""
+        dt = self.period_s
+        return tuple((3.0 * a - 4.0 * b + c) / (2.0 * dt) for a, b, c in zip(self.prev, self.prev2, self.prev3))
+
+    @property
+    def acceleration(self) -> tuple[float, ...]:
+        """[rad/s²] the last step acceleration."""
+        dt2 = self.period_s * self.period_s
+        return tuple((a - 2.0 * b + c) / dt2 for a, b, c in zip(self.prev, self.prev2, self.prev3))
 
     def extrapolate(self, n: int) -> int:
         """The controller bridged ``n`` command periods without our commands: continue the history as it did (at the
@@ -60,35 +130,71 @@ class ExecutedMotion:
             self.brake.start(self.prev, self.prev2, self.prev3)
         return n
 
+    def reply_lost(self) -> None:
+        """The controller did not receive our last command: it bridged that period by extrapolating the two commands
+        before it (at their velocity, within the velocity limit). A braking stop goes on from there."""
+        cap = self.guard.max_step
+        self.prev = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(self.prev2, self.prev3, cap))
+        self.extrapolated_cycles += 1
+        if self.braking:
+            self.brake.start(self.prev, self.prev2, self.prev3)
+
+    def retime(self, period_s: float) -> None:
+        """The controller executes each command in ``period_s`` [s], faster than its period says: plan the braking
+        stop at that period (the executed history is faster than we thought, and so must be its deceleration)."""
+        if period_s < self.period_s and not self.braking:
+            self.brake = BrakingStop(self._limits, period_s)
+
     def begin_braking(self) -> None:
         if not self.braking:
             self.brake.start(self.prev, self.prev2, self.prev3)
             self.braking = True
             self.hold_left = self.hold_cycles
+            self._ramp = None
 
     def held_long_enough(self) -> bool:
-        """Count one cycle at rest after the braking stop; True when the hold is over."""
-        if not (self.braking and self.brake.done):
+        """Count one cycle at rest after the braking stop (and the effort ramp); True when the hold is over."""
+        if not (self.braking and self.brake.done and (self._ramp is None or self._ramp.done)):
             return False
         self.hold_left -= 1
         return self.hold_left <= 0
 
+    def admit(self, q: Sequence[float], exact: bool, jerk: bool) -> tuple[tuple[float, ...] | None, str | None]:
+        """The position to send for the client's ``q`` [rad] in COMMANDING_ACTIVE: (q or its clamp, None), or
+        (None, why) when it cannot be sent (not 7 finite values, no admissible command, or ``exact`` and a clamp
+        would change it)."""
+        adm = self.envelope.admit(q, self.prev, self.prev2, self.prev3, jerk)
+        if adm.reason is not None:
+            return None, adm.reason
+        if adm.clamped > CLAMP_TOL:
+            if exact:
+                j = adm.joint
+                dt = self.period_s
+                p1, p2 = self.prev[j], self.prev2[j]
+                return None, self.envelope.explain(j, q[j], (q[j] - p1) / dt, (q[j] - 2.0 * p1 + p2) / (dt * dt))
+            self.clamped_cycles += 1
+            if adm.clamped > self.largest_clamp:
+                self.largest_clamp = adm.clamped
+        return adm.q, None
+
     def next_command(self, measured: Sequence[float], state: int, mode: int, q: Sequence[float],
-                     tau: Sequence[float] | None, wrench: Sequence[float] | None) -> tuple[Any, Any, Any, str | None]:  # fmt: skip
-        """The command to send (q [rad], tau [Nm] or None, wrench or None) and, if the client's was refused, why
-        (the braking stop then replaces it). While braking the client's is ignored. :class:`Refused` when the
-        command fails and nothing moves under our command (or the stop itself failed)."""
+                     tau: Sequence[float] | None, wrench: Sequence[float] | None, exact: bool = False,
+                     jerk: bool = False) -> tuple[Any, Any, Any, str | None]:  # fmt: skip
+        """The command to send (q [rad], tau [Nm] or None, wrench or None) and, if the client's could not be sent,
+        why (the braking stop then replaces it). While braking the client's is ignored. :class:`Refused` when the
+        command cannot be sent and nothing moves under our command (or the stop itself failed)."""
         guard = self.guard
         if state == _CMD_ACTIVE:
             prev, prev2 = self.prev, self.prev2
         else:  # COMMANDING_WAIT: the robot stands where it is measured, the command must be reachable from there
             prev = prev2 = tuple(measured)
-        braking = self.braking
-        if braking:
-            q = self.brake.next()
-            self.braking_cycles += 1
-            tau = wrench = None
-        reason = guard.refuse_position(q, prev, prev2, not braking)
+        if self.braking:
+            return self._braking_command(mode, prev, prev2)
+        reason = None
+        if state == _CMD_ACTIVE:
+            q, reason = self.admit(q, exact, jerk)
+        if reason is None:
+            reason = guard.refuse_position(q, prev, prev2, state != _CMD_ACTIVE)
         if reason is None and mode == _TORQUE:
             tau = tau if tau is not None else _ZERO7
             reason = guard.refuse_torque(tau)
@@ -96,16 +202,34 @@ class ExecutedMotion:
             wrench = wrench if wrench is not None else _ZERO6
             reason = guard.refuse_wrench(wrench)
         if reason is None:
+            if mode == _TORQUE:
+                self.last_torque = tuple(tau)  # type: ignore[arg-type]
+            elif mode == _WRENCH:
+                self.last_wrench = tuple(wrench)  # type: ignore[arg-type]
             return q, tau, wrench, None
         text = f"guard refused the command: {reason}"
-        if braking or state != _CMD_ACTIVE or not self.moving:
+        if state != _CMD_ACTIVE or not self.moving:
             raise Refused(text)
         self.begin_braking()
+        q, tau, wrench, _ = self._braking_command(mode, prev, prev2)
+        return q, tau, wrench, text
+
+    def _braking_command(self, mode: int, prev: Sequence[float], prev2: Sequence[float]) -> tuple[Any, Any, Any, None]:
         q = self.brake.next()
         self.braking_cycles += 1
-        if guard.refuse_position(q, prev, prev2, False) is not None:
-            q = prev  # cannot happen within the limits; a hold is the last resort
-        return q, (_ZERO7 if mode == _TORQUE else None), (_ZERO6 if mode == _WRENCH else None), text
+        if self.guard.refuse_position(q, prev, prev2, False) is not None:
+            q = prev  # cannot happen from inside the envelope; a hold is the last resort
+        tau = wrench = None
+        if mode == _TORQUE or mode == _WRENCH:
+            if self._ramp is None:
+                self._ramp = self.torque_ramp if mode == _TORQUE else self.wrench_ramp
+                last = self.last_torque if mode == _TORQUE else self.last_wrench
+                self._ramp.start(last if last is not None else (_ZERO7 if mode == _TORQUE else _ZERO6))
+            if mode == _TORQUE:
+                tau = self._ramp.next()
+            else:
+                wrench = self._ramp.next()
+        return q, tau, wrench, None
 
     def sent(self, q: tuple[float, ...], state: int) -> None:
         """``q`` [rad] went out: in COMMANDING_ACTIVE the controller executes it."""

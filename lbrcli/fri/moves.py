@@ -8,7 +8,7 @@ import math
 from typing import Any, Sequence
 
 import numpy as np
-from ruckig import InputParameter, OutputParameter, Result, Ruckig, Trajectory
+from ruckig import InputParameter, Result, Ruckig, Trajectory
 
 from trajectories.limits import JointLimits
 
@@ -46,12 +46,18 @@ def _plan_to_rest(otg: Ruckig, inp: InputParameter, q_from: Sequence[float], q_t
 
 
 class OnlineMove:
-    """A rest-to-rest ruckig move computed one cycle at a time (position interface)."""
+    """A rest-to-rest ruckig move (position interface), planned once and followed in time one cycle at a time. After
+    lost messages (the controller extrapolated our commands meanwhile) it goes on in step with its plan
+    (:meth:`skip`): it arrives when it was planned to, whatever is lost; the motion-safety core absorbs the difference
+    between the controller's extrapolation and the plan (≈ the move's acceleration × period², well inside the
+    limits of a move at a fraction of them)."""
 
     def __init__(self, limits: JointLimits, period_s: float, scale: float, minimum_duration: float | None = None) -> None:
-        self._otg = Ruckig(7, period_s)
+        self._otg = Ruckig(7)
         self._inp = _move_input(limits, scale, minimum_duration)
-        self._out = OutputParameter(7)
+        self.period_s = period_s
+        self._traj = Trajectory(7)
+        self._k = 0  # commands taken
         self.target: tuple[float, ...] = ()
         self.done = True
         self.duration_s = 0.0
@@ -59,23 +65,33 @@ class OnlineMove:
     def start(self, q_from: Sequence[float], q_to: Sequence[float], v_from: Sequence[float] | None = None) -> float:
         """Plan from ``q_from`` [rad] (at rest, or moving at ``v_from`` [rad/s]) to rest at ``q_to``; the duration
         [s]."""
-        traj = _plan_to_rest(self._otg, self._inp, q_from, q_to, v_from)
+        self._traj = _plan_to_rest(self._otg, self._inp, q_from, q_to, v_from)
+        self._k = 0
         self.target = tuple(q_to)
-        self.duration_s = traj.duration
-        self.done = False
-        return traj.duration
+        self.duration_s = self._traj.duration
+        self.done = self.duration_s <= 0.0
+        return self.duration_s
+
+    def skip(self, n: int) -> None:
+        """``n`` command periods went by without our commands (the controller bridged them)."""
+        if not self.done:
+            self._k += n
+
+    def unstep(self) -> None:
+        """Take back the last :meth:`next` (computed a cycle ahead, never sent)."""
+        if self._k > 0:
+            self._k -= 1
+            self.done = False
 
     def next(self) -> tuple[float, ...]:
         if self.done:
             return self.target
-        res = self._otg.update(self._inp, self._out)
-        if res == Result.Finished:
+        self._k += 1
+        t = self._k * self.period_s
+        if t >= self.duration_s - 1e-12:
             self.done = True
             return self.target
-        if res != Result.Working:
-            raise StopSession(f"ruckig failed during the move ({res.name})", completed=False)
-        self._out.pass_to_input(self._inp)
-        return tuple(self._out.new_position)
+        return tuple(self._traj.at_time(t)[0])
 
 
 class ShapedMove:
@@ -120,6 +136,17 @@ class ShapedMove:
         self.duration_s = self._end
         self.done = False
         return self._end
+
+    def skip(self, n: int) -> None:
+        """``n`` command periods went by without our commands (the controller bridged them)."""
+        if not self.done:
+            self._k += n
+
+    def unstep(self) -> None:
+        """Take back the last :meth:`next` (computed a cycle ahead, never sent)."""
+        if self._k > 0:
+            self._k -= 1
+            self.done = False
 
     def next(self) -> tuple[float, ...]:
         if self.done:

@@ -67,6 +67,9 @@ class SessionResult:
     largest_tracking_error_rad: float | None = None  # max |measured − commanded| in COMMANDING_ACTIVE (position)
     largest_reply_gap: int | None = None  # most controller messages between two replies of ours it received
     prepared_replies: int = 0  # answered with the reply prepared after the previous cycle (LBRClient.prepare_command)
+    lost_replies: int = 0  # our commands the controller reported not received while moving (it extrapolated)
+    clamped_cycles: int = 0  # commands the motion-safety core clamped into the braking envelope
+    largest_clamp_rad: float = 0.0  # [rad] the largest change such a clamp made
     figures: dict[str, Any] = field(default_factory=dict)  # from the observers
 
     @property
@@ -132,5 +135,8 @@ def session_result(app: Any, outcome: Outcome, reason: EndReason, text: str, fig
         largest_tracking_error_rad=sup.largest_tracking_error if sup is not None else None,
         largest_reply_gap=sup.largest_reply_gap if sup is not None else None,
         prepared_replies=app.prepared_replies,
+        lost_replies=app.lost_replies,
+        clamped_cycles=app._motion.clamped_cycles if app._motion is not None else 0,
+        largest_clamp_rad=app._motion.largest_clamp if app._motion is not None else 0.0,
         figures=figures,
     )

@@ -210,15 +210,19 @@ class TrajectoryPlayer(LBRClient):
 
     def _bridged(self, n: int) -> None:
         """The controller extrapolated our last command for ``n`` periods (its messages were lost): continue from
-        there — the move re-planned, the rows rejoined in step (never rows behind), the settle unchanged."""
-        self._ahead = None  # a move's step computed ahead belongs to the old plan
+        there — the move goes on in step with its plan (it arrives on time; the motion-safety core absorbs the
+        extrapolation's difference), the rows rejoined in step (never rows behind), the settle unchanged."""
+        move = self._move
+        if self._ahead is not None:  # a move's step computed ahead was never sent
+            self._ahead = None
+            if move is not None:
+                move.unstep()
         dt = self._period
         q, self._last2, vel = extrapolated(self._last, self._last2, n, dt)
         self._last = q
         self.skipped_rows += n
-        move = self._move
         if move is not None and (not move.done or not self._started):  # moving to, or waiting at, the start
-            move.start(q, self.rows[0], vel)
+            move.skip(n)
         elif self._queue or self._i < len(self.rows):
             first = self._i + n - len(self._queue)  # the row due now (a rejoin in progress: its rows)
             self._queue, self._i = rejoin(self.limits, dt, q, vel, self.rows, min(first, len(self.rows)),
@@ -227,10 +231,12 @@ class TrajectoryPlayer(LBRClient):
 
     def _advance(self) -> bool:
         """Step to the next command (``_last``, ``phase``, ``row``); False when the hold at the end is over."""
+        self.exact_command = True  # the file's rows go out exactly, or the session ends braking …
         if self._queue:
             self._last = self._queue.pop()
             self.phase, self.row = PHASE_TRAJECTORY, self._i - len(self._queue) - 1
             self.trajectory_rows += 1
+            self.exact_command = False  # … our own moves and rejoins may be clamped into the envelope
             return True
         move = self._move
         ahead = self._ahead
@@ -245,6 +251,7 @@ class TrajectoryPlayer(LBRClient):
                 self.phase, self.row = PHASE_MOVE, -1
                 self.move_rows += 1
                 self._last = q
+                self.exact_command = False
                 return True
         if not self._started and self._wait_for_sway():
             return True

@@ -51,6 +51,7 @@ class Replying:
     _ended: bool
     _prepared: Prepared | None
     _client_seq: int
+    _reply_seq_prev: int | None
     _last_seq: int
     _answered_any: bool
     _unanswered_at_start: int
@@ -79,6 +80,8 @@ class Replying:
             self._call_client("after_reply")
             if sup is not None:
                 sup.sent(self._client_seq, seq)
+            if self.cycle.sent_position and self.cycle.state == CMD_ACTIVE:
+                self._reply_seq_prev = self._client_seq
             if not self._answered_any:
                 self._answered_any = True
                 self._unanswered_at_start = self.missed  # messages that went by before the first reply
@@ -90,9 +93,12 @@ class Replying:
         state = self.cycle.state
         if sup is not None and self._stop is None:
             commanding, moving, command, last_sent = supervised
+            stamp = getattr(self.transport, "received_ns", None)
             problem = sup.check(mon, seq, commanding, moving, mon.ipoData.clientCommandMode == _POSITION, command,
-                                last_sent)  # fmt: skip
+                                last_sent, stamp() if stamp is not None else None)  # fmt: skip
             if problem is not None:
+                if sup.measured_period_s is not None and self._motion is not None:
+                    self._motion.retime(sup.measured_period_s)  # brake at the period the robot really runs at
                 self._stop_braking(Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {problem}")
         if answered and self._motion is not None and self._motion.held_long_enough():
             self._finish(*self._stop, observe=True)  # type: ignore[misc]
@@ -151,8 +157,10 @@ class Replying:
         if q is None:
             return
         q = tuple(q)
-        if motion.guard.refuse_position(q, motion.prev, motion.prev2, True) is not None:
-            return  # the full cycle will refuse it with its reason and brake
+        adm = motion.envelope.admit(q, motion.prev, motion.prev2, motion.prev3, self.client.jerk_limited)
+        if adm.reason is not None or adm.clamped > 0.0 or motion.guard.refuse_position(q, motion.prev, motion.prev2,
+                                                                                       False) is not None:  # fmt: skip
+            return  # the full cycle decides (clamps it, or refuses it with its reason and brakes)
         reply = self._reply
         reply.set_motion(_POSITION, q, None, None)  # type: ignore[union-attr]
         reply.set_io(())  # type: ignore[union-attr]
@@ -167,12 +175,16 @@ class Replying:
             self._finish(Outcome.REFUSED, EndReason.GUARD, "the controller did not send its send period; no command is safe", observe=True)
             return False
         mode = mon.ipoData.clientCommandMode
+        client = self.client
+        clamps = motion.clamped_cycles
         try:
             q, tau, wrench, refused = motion.next_command(mon.monitorData.measuredJointPosition.value, state, mode,
-                                                          cmd.joint_position, cmd.torque, cmd.wrench)  # fmt: skip
+                                                          cmd.joint_position, cmd.torque, cmd.wrench,
+                                                          client.exact_command, client.jerk_limited)  # fmt: skip
         except Refused as exc:
             self._finish(Outcome.REFUSED, EndReason.GUARD, str(exc), observe=True)
             return False
+        client.clamped = motion.clamped_cycles != clamps
         if refused is not None and self._stop is None:
             self._stop = (Outcome.REFUSED, EndReason.GUARD, refused)
         cyc = self.cycle

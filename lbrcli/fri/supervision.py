@@ -89,44 +89,66 @@ def commanding_end(mon: Any, state: int, was_active: bool, period_key: tuple[int
 # -- supervision of a commanding session --------------------------------------------------------------------------
 TRACKING_LAG_S = 0.02  # [s] the lag the default tracking bound allows at full speed (at least 8 command periods)
 REPLY_GAP_S = 0.05  # [s] the default: longest time the controller may go without receiving a reply of ours
-CLOCK_SLACK = 0.1  # relative: timestamps may run this much slower than sequence × send period before we object
+FAST_WINDOW = 10  # messages: a controller whose timestamps run faster than its period is judged over this many …
+FAST_RATIO = 0.75  # … as timestamps advancing less than this × steps × period (plus FAST_ALLOWANCE_S) …
+FAST_ALLOWANCE_S = 1e-3  # … and below every older on-time message (a late burst catching up is not faster)
+RX_WINDOW = 20  # messages: by our clock (the kernel's receive times) it must be more than twice as fast:
+RX_RATIO = 0.5  # test controllers that answer in lock-step run somewhat faster than their period
+SLOW_WINDOW = 100  # messages: a controller slower than its period (a period change it did not announce) …
+SLOW_RATIO = 1.6  # … advances more than this (plus SLOW_ALLOWANCE_S) on its own clock and on ours
+SLOW_ALLOWANCE_S = 5e-3
+FROZEN_MESSAGES = 10  # a clock with sub-second resolution unchanged over this many messages is frozen
+JUMP_S = 0.1  # [s] a timestamp further ahead than the messages explain jumped
 _RING = 256
 
 
 class Supervisor:
     """Per-message checks of a session once its period is known (hot path: a few float operations each).
 
-    - ``clock``: the controller's timestamps must advance by at least ``send_period_s`` per sequence step (less
-      means the controller really runs faster than it says, and every step would be executed faster);
+    - ``clock``: each message's timestamp step against the sequence step × ``send_period_s`` and, with the kernel's
+      receive time of the datagram, against our own clock: timestamps that go back, freeze or jump, and a controller
+      that sends faster (or much slower) than its period says, are found within ``FAST_WINDOW`` messages (a slower
+      one within ``SLOW_WINDOW``) — windows, not sums since the first message, so a change mid-session counts as
+      soon as it happens;
     - ``replies``: the reflected sequence counter tells which reply of ours the controller last received; more than
       ``max_reply_gap`` of its messages since then means our commands are not reaching it;
     - ``tracking``: |measured − commanded| per joint within ``max_tracking_error`` [rad] (position mode).
     """
 
     __slots__ = ("send_period_s", "max_tracking_error", "max_reply_gap", "_ts0", "_seq0", "_ts_last", "_answered",
-                 "_reflecting", "largest_tracking_error", "largest_reply_gap")  # fmt: skip
+                 "_reflecting", "largest_tracking_error", "largest_reply_gap", "_seq_last", "_frozen", "_coarse",
+                 "_ring_seq", "_ring_ts", "_ring_rx", "_n", "measured_period_s")  # fmt: skip
 
     def __init__(self, max_tracking_error: Sequence[float], max_reply_gap: int, send_period_s: float) -> None:
         self.send_period_s = send_period_s
         self.max_tracking_error = tuple(max_tracking_error)  # [rad] per joint
         self.max_reply_gap = max_reply_gap  # controller messages
-        self._ts0 = -1  # [ns] timestamp of the first message
+        self._ts0 = -1  # [ns] timestamp of the first message with one
         self._seq0 = 0
         self._ts_last = -1
+        self._seq_last = -1
+        self._frozen = 0  # messages since the timestamp last changed
+        self._coarse = True  # every timestamp so far on a whole second (a coarse clock ticks once a second)
+        self._ring_seq = [0] * _RING  # per message: sequence counter, timestamp [ns], kernel receive time [ns]
+        self._ring_ts = [0] * _RING
+        self._ring_rx = [0] * _RING
+        self._n = 0  # messages in the rings
         self._answered = [-1] * _RING  # monitoring sequence counter answered by each of our replies (ring)
         self._reflecting = False  # the controller has been seen reflecting our counter
         self.largest_tracking_error = 0.0  # [rad]
         self.largest_reply_gap = 0  # controller messages
+        self.measured_period_s: float | None = None  # [s] set with a "faster than its period" problem
 
     @classmethod
     def from_limits(cls, velocity_limit: Sequence[float], send_period_s: float, receive_multiplier: int = 1,
-                    max_tracking_error: float | None = None, reply_gap_s: float | None = None) -> "Supervisor":
-        """Defaults: tracking bound = velocity limit × max(20 ms, 8 command periods) per joint; reply gap =
-        max(50 ms, 2 command periods + 1 message) in messages."""
+                    max_tracking_error: float | None = None, reply_gap_s: float | None = None,
+                    tracking_lag_s: float | None = None) -> "Supervisor":  # fmt: skip
+        """Defaults: tracking bound = velocity limit × max(``tracking_lag_s`` (20 ms), 8 command periods) per joint;
+        reply gap = max(50 ms, 2 command periods + 1 message) in messages."""
         k = max(1, receive_multiplier)
         period = send_period_s * k
         if max_tracking_error is None:
-            lag = max(TRACKING_LAG_S, 8 * period)
+            lag = max(TRACKING_LAG_S if tracking_lag_s is None else tracking_lag_s, 8 * period)
             bound = tuple(v * lag for v in velocity_limit)
         else:
             bound = (max_tracking_error,) * 7
@@ -134,24 +156,97 @@ class Supervisor:
         gap = max(2 * k + 1, int(math.ceil(gap_s / send_period_s - 1e-9)))
         return cls(bound, gap, send_period_s)
 
-    def clock(self, seq: int, sec: int, nanosec: int) -> str | None:
-        """None while the timestamps agree with the send period (evaluated when the timestamp changes)."""
+    def clock(self, seq: int, sec: int, nanosec: int, received_ns: int | None = None) -> str | None:
+        """None while the controller's timestamp (``sec``, ``nanosec``) and the kernel's receive time of the message
+        (``received_ns`` [ns], or None) agree with the send period."""
         ts = sec * 1_000_000_000 + nanosec
-        if ts == self._ts_last:
-            return None  # no timestamps, or a coarse clock between ticks: nothing to judge
-        self._ts_last = ts
-        if self._ts0 < 0 or ts == 0:
-            self._ts0, self._seq0 = ts, seq
-            return None
-        # cumulative from the first message: a late first message or a controller catching up cannot trip it
-        steps = (seq - self._seq0) & 0xFFFFFFFF
-        expected = steps * self.send_period_s  # [s]
-        elapsed = (ts - self._ts0) * 1e-9
-        slack = max(3 * self.send_period_s, 0.02)
-        if elapsed < expected * (1.0 - CLOCK_SLACK) - slack:
-            return (f"the controller's timestamps advanced {elapsed * 1e3:.1f} ms over {steps} messages: it sends every "
-                    f"{elapsed / steps * 1e3:.2f} ms, not every {self.send_period_s * 1e3:g} ms as its period says")  # fmt: skip
+        period = self.send_period_s
+        problem = None
+        if ts != 0 or self._ts0 >= 0:
+            if self._ts0 < 0:
+                self._ts0, self._seq0 = ts, seq
+            elif self._seq_last >= 0:
+                steps = (seq - self._seq_last) & 0xFFFFFFFF
+                if nanosec:
+                    self._coarse = False
+                if ts < self._ts_last:
+                    problem = (f"the controller's timestamp went back {(self._ts_last - ts) * 1e-6:.1f} ms: its clock "
+                               "is not one a controller has")  # fmt: skip
+                elif ts == self._ts_last:
+                    self._frozen += steps
+                    limit = FROZEN_MESSAGES if not self._coarse else int(1.0 / period) + FROZEN_MESSAGES
+                    if self._frozen >= limit:
+                        problem = f"the controller's timestamp stood still over {self._frozen} messages: its clock froze"
+                else:
+                    self._frozen = 0
+                    ahead = (ts - self._ts_last) * 1e-9 - steps * period
+                    if ahead > JUMP_S and not self._coarse:
+                        problem = (f"the controller's timestamp jumped {ahead * 1e3:.0f} ms ahead of its "
+                                   f"{steps} message(s)")  # fmt: skip
+            self._ts_last = ts
+        self._seq_last = seq
+        k = self._n % _RING
+        self._ring_seq[k] = seq
+        self._ring_ts[k] = ts
+        self._ring_rx[k] = received_ns if received_ns is not None else -1
+        self._n += 1
+        if problem is None:
+            problem = self._rate(seq, ts, received_ns, period)
+        return problem
+
+    def _rate(self, seq: int, ts: int, rx: int | None, period: float) -> str | None:
+        """The windows: faster than the period on either clock, or much slower on both."""
+        n = self._n
+        if n > 4:  # from the 5th message on
+            for what, now, ring, window, ratio in (("timestamps", ts, self._ring_ts, FAST_WINDOW, FAST_RATIO),
+                                                   ("messages", rx, self._ring_rx, RX_WINDOW, RX_RATIO)):  # fmt: skip
+                if now is None or (what == "timestamps" and (self._coarse or self._ts0 < 0)):
+                    continue
+                w = min(n - 1, window)
+                k = (n - 1 - w) % _RING
+                then = ring[k]
+                if then <= 0:
+                    continue
+                steps = (seq - self._ring_seq[k]) & 0xFFFFFFFF
+                elapsed = (now - then) * 1e-9
+                slack = steps * period * (1.0 - ratio) + FAST_ALLOWANCE_S
+                if elapsed < steps * period - slack and self._ahead_of_all(now, seq, ring, w, period, slack):
+                    self.measured_period_s = max(elapsed / steps, 1e-5)
+                    return (f"the controller's {what} advanced {elapsed * 1e3:.1f} ms over {steps} messages: it "
+                            f"sends every {elapsed / steps * 1e3:.2f} ms, not every {period * 1e3:g} ms as its "
+                            "period says")  # fmt: skip
+        if n > SLOW_WINDOW and rx is not None and not self._coarse:
+            k = (n - 1 - SLOW_WINDOW) % _RING
+            then_ts, then_rx = self._ring_ts[k], self._ring_rx[k]
+            if then_rx > 0 and then_ts > 0:
+                steps = (seq - self._ring_seq[k]) & 0xFFFFFFFF
+                bound = steps * period * SLOW_RATIO + SLOW_ALLOWANCE_S
+                if (ts - then_ts) * 1e-9 > bound and (rx - then_rx) * 1e-9 > bound:
+                    return (f"the controller sends every {(rx - then_rx) * 1e-6 / steps:.2f} ms over the last "
+                            f"{steps} messages, not every {period * 1e3:g} ms as its period says")  # fmt: skip
         return None
+
+    def _ahead_of_all(self, now: int, seq: int, ring: list[int], w: int, period: float, slack: float) -> bool:
+        """The message at ``now`` [ns] is earlier (relative to the sequence × period grid) than every older message in
+        the ring beyond the window ``w`` by more than ``slack`` [s]: the clock really runs fast — a message that was
+        late (a stall, then a burst catching up) leaves later ones on the grid, not ahead of it."""
+        n = self._n
+        mine = now * 1e-9 - ((seq - self._ring_seq[(n - 1) % _RING]) & 0xFFFFFFFF) * period  # = now
+        ref_seq = self._ring_seq[(n - 1) % _RING]
+        for i in range(w, min(n, _RING)):
+            k = (n - 1 - i) % _RING
+            t = ring[k]
+            if t <= 0:
+                continue
+            back = (ref_seq - self._ring_seq[k]) & 0xFFFFFFFF  # messages before this one
+            if mine - (t * 1e-9 + back * period) >= -slack:  # that older one was as early (or earlier) on the grid
+                return False
+        return True
+
+    @property
+    def reflecting(self) -> bool:
+        """The controller has been seen reflecting our sequence counter."""
+        return self._reflecting
 
     def sent(self, client_seq: int, answered_seq: int) -> None:
         """Our reply ``client_seq`` answered the monitoring message ``answered_seq``."""
@@ -193,11 +288,11 @@ class Supervisor:
         return None
 
     def check(self, mon: Any, seq: int, commanding: bool, moving: bool, position_mode: bool,
-              command: Sequence[float], last_sent: int) -> str | None:  # fmt: skip
-        """All checks due for this message: the clock always; with ``commanding`` (COMMANDING_ACTIVE, not braking)
+              command: Sequence[float], last_sent: int, received_ns: int | None = None) -> str | None:  # fmt: skip
+        """All checks due for this message (``received_ns``: the kernel's receive time [ns], or None): the clock always; with ``commanding`` (COMMANDING_ACTIVE, not braking)
         the replies, and with ``moving`` in position mode the tracking of ``command`` [rad]. The first problem."""
         ts = mon.monitorData.timestamp
-        problem = self.clock(seq, ts.sec, ts.nanosec)
+        problem = self.clock(seq, ts.sec, ts.nanosec, received_ns)
         if problem is None and commanding:
             problem = self.replies(seq, mon.header.reflectedSequenceCounter, last_sent)
             if problem is None and moving and position_mode:

@@ -16,8 +16,10 @@ no warming, roughly doubles the reply latency on this VM).
 
 from __future__ import annotations
 
+import fcntl
 import select
 import socket
+import struct
 import time
 from typing import Callable
 
@@ -29,6 +31,8 @@ DEFAULT_BUSY_WAIT_S = 9e-4  # [s] polled before a message is due (0: always slee
 DEFAULT_BUSY_WAIT_REALTIME_S = 2e-4  # [s] under SCHED_FIFO: a task that never sleeps is throttled by the kernel
 # (sched_rt_runtime_us: 95 % of each second), which loses ≈ 50 ms of messages a second
 WARM_EVERY_S = 5e-5  # [s] how often the busy-wait calls ``warm``
+SIOCGSTAMPNS = 0x8907  # Linux: the kernel's receive time of the last datagram read from a socket
+_TIMESPEC = struct.Struct("qq")
 
 
 def resolve_ip(host: str) -> str:
@@ -52,6 +56,10 @@ class UdpTransport:
             sock.close()
             raise FriError(f"cannot bind the FRI port {bind_host or '*'}:{port}: {exc.strerror}") from None
         sock.setblocking(False)
+        try:  # stamp every datagram on arrival (else the first ones read are stamped when read: see received_ns)
+            sock.setsockopt(socket.SOL_SOCKET, getattr(socket, "SO_TIMESTAMPNS", 35), 1)
+        except OSError:
+            pass
         self.sock = sock
         self._rlist = (sock,)  # for select, built once
         self.port: int = sock.getsockname()[1]
@@ -63,6 +71,8 @@ class UdpTransport:
         self._t_last = 0.0  # [s] perf_counter when the last datagram was taken
         self.polled = 0  # datagrams taken while busy-waiting (not woken by the scheduler)
         self.warm: Callable[[], None] | None = None  # called every WARM_EVERY_S while busy-waiting
+        self._stamp = bytearray(16)
+        self._stamps = True  # the kernel gives receive times (SIOCGSTAMPNS); off after the first failure
 
     def expect_period(self, period_s: float | None) -> None:
         """The controller sends every ``period_s`` [s]: busy-wait the window before each message (if any)."""
@@ -109,6 +119,20 @@ class UdpTransport:
                 self.polled += 1
             self.peer = addr
             return data
+
+    def received_ns(self) -> int | None:
+        """The kernel's receive time [ns, the ``time.time_ns`` clock] of the last datagram returned by ``receive`` —
+        when it arrived, however late this process read it — or None where the kernel does not say. ≈ 2 µs: called
+        after the reply."""
+        if not self._stamps:
+            return None
+        try:
+            fcntl.ioctl(self.sock, SIOCGSTAMPNS, self._stamp, True)
+        except OSError:
+            self._stamps = False
+            return None
+        sec, nsec = _TIMESPEC.unpack_from(self._stamp)
+        return sec * 1_000_000_000 + nsec
 
     def send(self, data: bytes) -> None:
         """Send a datagram to the last sender (OSError propagates: the caller decides)."""

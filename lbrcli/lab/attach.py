@@ -92,10 +92,11 @@ class LabAttachments:
         return PENDULUM_COLUMNS if self.pendulum is not None else ()
 
     def extra(self, mon: Any) -> tuple[float, ...]:
-        """pend_theta, pend_omega, pend_age for the log row (NaN before the first reading)."""
+        """pend_theta, pend_omega, pend_age for the log row (0, 0, −1 before the first reading: no missing values,
+        so every CSV reader types the columns as numbers)."""
         r = self.pendulum.latest if self.pendulum is not None else None
         if r is None:
-            return (math.nan, math.nan, math.nan)
+            return (0.0, 0.0, -1.0)
         return (r.theta, r.omega, time.monotonic() - r.host_time)
 
     def pendulum_sway(self, state: Any) -> float | None:

@@ -32,7 +32,10 @@ def plot_upright(log_path: str | Path, path: str | Path) -> None:
     if tab.has("pendulum_phi"):
         ax.plot(t, from_upright(tab.column("pendulum_phi")), color="0.6", lw=2.0, label="simulated rod (truth)")
     if tab.has("est_phi"):
-        ax.plot(t, from_upright(tab.column("est_phi")), color="tab:blue", lw=0.8, label="observer estimate")
+        est = tab.column("est_phi")
+        if tab.has("mode"):
+            est = np.where(tab.column("mode") >= 0, est, np.nan)  # mode −1: the controller had not started
+        ax.plot(t, from_upright(est), color="tab:blue", lw=0.8, label="observer estimate")
     if tab.has("mode"):
         mode = tab.column("mode")
         bal = mode == 1

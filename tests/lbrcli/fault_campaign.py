@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
-from fri_scripted_controller import CA, CW, IDLE, MR, MW, Cycle, ScriptedController
+from lbrcli.fri.testing import CA, CW, IDLE, MR, MW, Cycle, ScriptedController, active, preamble
 
 from lbrcli.fri import ClientApplication, EndReason, ExecutionLog, LogObserver, TrajectoryPlayer
 from lbrcli.fri.log import LOG_COLUMNS
@@ -44,20 +44,6 @@ def swing(n: int = 800, amp: float = 0.3, dt: float = 1e-3) -> np.ndarray:
     s = np.linspace(0.0, 1.0, n)
     p = 10 * s**3 - 15 * s**4 + 6 * s**5
     return Q0 + amp * p[:, None] * DIRECTION
-
-
-def preamble(**kw: Any) -> list[Cycle]:
-    return ([Cycle(state=IDLE, **kw)] + [Cycle(state=MW, quality=1, **kw)] * 3 + [Cycle(state=MR, **kw)] * 3
-            + [Cycle(state=CW, **kw)] * 4)  # fmt: skip
-
-
-def active(n: int, at: dict[int, Cycle] | None = None, **kw: Any) -> list[Cycle]:
-    """n COMMANDING_ACTIVE cycles; ``at`` replaces (or, for lists, inserts) cycles at those indices."""
-    out: list[Cycle] = [Cycle(state=CA, **kw)] * n
-    for i in sorted(at or {}, reverse=True):
-        c = at[i]
-        out[i : i + 1] = c if isinstance(c, list) else [c]
-    return out
 
 
 @dataclass

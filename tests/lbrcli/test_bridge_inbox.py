@@ -109,32 +109,79 @@ def test_the_first_source_id_owns_the_session_and_others_are_ignored():
     assert box.ended and box.error is None
 
 
-def test_garbage_that_cannot_be_told_apart_from_the_owner_stops_but_a_named_stranger_does_not():
-    tr = Scripted()
+def test_garbage_from_the_owner_stops_but_a_stranger_or_anonymous_garbage_does_not():
+    tr = Scripted()  # MQTT-like: the sender is known only by the source id inside a message
     box = TargetInbox([tr])
-    tr.queue += [encode_target([0.1] * 7, source=5), encode_target([np.nan] * 7, source=9)]
+    tr.queue += [encode_target([0.1] * 7, source=5), encode_target([np.nan] * 7, source=9), b"hello",
+                 b'{"q": "nonsense"}']  # fmt: skip
     box.poll()
-    assert box.error is not None and "not finite" in box.error  # NaN inside a binary target: whose is unknown
+    assert box.error is None and box.bad == 3  # a stranger's NaN, garbage that names no source: ignored, counted
+    tr.queue += [encode_target([0.2] * 7, source=5), encode_target([np.nan] * 7, source=5)]
+    box.poll()
+    assert box.error is not None and "not finite" in box.error  # the owner's invalid target
     udp = Scripted(sender=("10.0.0.2", 4000))
     other = Scripted(sender=("10.0.0.3", 4000))
     box = TargetInbox([udp, other])
     udp.queue.append(encode_target([0.1] * 7))
     other.queue.append(b"garbage")
     box.poll()
-    assert box.error is None and box.foreign == 1  # an address that is not the owner's: ignored
+    assert box.error is None and box.bad == 1  # an address that is not the owner's: ignored
     udp.queue.append(b"garbage")
     box.poll()
     assert "garbage" not in box.error and "scripted ('10.0.0.2', 4000)" in box.error
 
 
-def test_with_a_secret_unsigned_and_wrongly_signed_messages_are_ignored():
+def test_every_target_is_judged_on_arrival_even_when_a_valid_one_follows_in_the_same_cycle():
+    from trajectories.limits import default_limits
+
+    lim = default_limits()
+    tr = Scripted(sender=("10.0.0.2", 4000))
+    box = TargetInbox([tr], limits=lim)
+    q = [0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0]
+    beyond = list(q)
+    beyond[3] = -lim.position[3] - 0.01
+    tr.queue += [encode_target(q, seq=1), encode_target(beyond, seq=2), encode_target(q, seq=3)]
+    box.poll()
+    assert box.error is not None and "A4" in box.error and "position limits" in box.error
+
+
+@pytest.mark.parametrize("q", [["0"] * 7, [True] * 7, [[0]] * 7, [0] * 6 + ["1e300"]])
+def test_json_targets_take_numbers_only(q):
+    with pytest.raises(BadTarget):
+        decode_target(json.dumps({"q": q}).encode())
+
+
+def test_with_a_secret_only_this_sessions_signatures_count_and_replays_are_stale():
     tr = Scripted()
     box = TargetInbox([tr], secret=KEY)
-    tr.queue += [encode_target([0.9] * 7, seq=1), sign(encode_target([0.8] * 7, seq=2), b"wrong-secret-0000"),
-                 b"garbage", sign(encode_target([0.1] * 7, seq=3), KEY)]  # fmt: skip
+    other_session = b"\x01" * 16
+    n = box.nonce
+    assert len(n) == 16 and n != other_session
+    tr.queue += [encode_target([0.9] * 7, seq=1), sign(encode_target([0.8] * 7, seq=2), b"wrong-secret-0000", n),
+                 b"garbage", sign(encode_target([0.7] * 7, seq=9), KEY, other_session),  # recorded earlier
+                 sign(encode_target([0.1] * 7, seq=3), KEY, n)]  # fmt: skip
     box.poll()
-    assert box.unauthenticated == 3 and box.accepted == 1 and box.latest.values == (0.1,) * 7
+    assert box.unauthenticated == 4 and box.accepted == 1 and box.latest.values == (0.1,) * 7
     assert box.error is None  # an unauthenticated party cannot even stop the session
-    tr.queue += [sign(encode_target([0.2] * 7, seq=3), KEY)]  # a replay of an old counter
+    tr.queue += [sign(encode_target([0.2] * 7, seq=3), KEY, n)]  # a replay of this session's counter
     box.poll()
     assert box.stale == 1 and box.latest.values == (0.1,) * 7
+    # the end message is bound to the session and the counter too: an old one, or a replayed one, ends nothing
+    tr.queue += [sign(json.dumps({"end": True, "seq": 10}).encode(), KEY, other_session),
+                 sign(json.dumps({"end": True, "seq": 2}).encode(), KEY, n)]  # fmt: skip
+    box.poll()
+    assert not box.ended and box.unauthenticated == 5 and box.stale == 2
+    tr.queue += [sign(json.dumps({"end": True, "seq": 4}).encode(), KEY, n)]
+    box.poll()
+    assert box.ended
+
+
+def test_a_hello_gets_the_session_nonce_back_in_its_form():
+    from lbrcli.bridge.protocol import decode_nonce, encode_hello
+
+    tr = Scripted(sender=("10.0.0.2", 4000))
+    box = TargetInbox([tr], secret=KEY)
+    tr.queue += [encode_hello(3), encode_hello(3, binary=False)]
+    box.poll()
+    assert [decode_nonce(m) for m in tr.sent] == [box.nonce, box.nonce]
+    assert tr.sent[0][:4] == b"LBRN" and tr.sent[1][:1] == b"{" and box.hellos == 2 and box.owner is None

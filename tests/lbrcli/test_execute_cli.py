@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 from conftest import run_lbr
-from fri_scripted_controller import CA, CW, MR, MW, Cycle, ScriptedController
+from lbrcli.fri.testing import CA, CW, MR, MW, Cycle, ScriptedController
 
 from lbrcli.fri.codec import FriCodec
 from lbrcli.fri.log import LOG_COLUMNS, PHASE_HOLD, PHASE_MOVE, PHASE_TRAJECTORY

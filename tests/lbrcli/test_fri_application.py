@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 import pytest
-from fri_scripted_controller import CA, CW, IDLE, MR, MW, Cycle, ScriptedController
+from lbrcli.fri.testing import CA, CW, IDLE, MR, MW, Cycle, ScriptedController
 
 from lbrcli.fri import (
     ClientApplication,

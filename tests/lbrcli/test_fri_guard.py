@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lbrcli.fri.guard import CommandGuard, stopping_distance
+from lbrcli.fri.guard import CommandGuard
+from trajectories.envelope import stop_distance as stopping_distance
 from trajectories.limits import default_limits
 
 

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from fri_scripted_controller import CA, IDLE, MR, Cycle
+from lbrcli.fri.testing import CA, IDLE, MR, Cycle
 from test_fri_application import LIM, Q0, assert_within_limits, fast_ramp, min_jerk, preamble, run, sent_positions
 
 from lbrcli.fri import EndReason, LBRClient, Outcome, TrajectoryPlayer

@@ -6,11 +6,11 @@ from __future__ import annotations
 import math
 
 from fault_campaign import LIM, Q0, active, preamble, ramp
-from fri_scripted_controller import CA, Cycle, ScriptedController
+from lbrcli.fri.testing import CA, Cycle, ScriptedController
 
 from lbrcli.fri import ClientApplication, EndReason, TrajectoryPlayer
-from lbrcli.fri.guard import stopping_distance
-from lbrcli.fri.supervision import Supervisor
+from trajectories.envelope import stop_distance as stopping_distance
+from lbrcli.fri.supervision import RX_WINDOW, Supervisor
 
 
 def sup(period=5e-3):
@@ -103,3 +103,72 @@ def test_tracking_names_the_joint_that_left_its_bound_even_as_nan() -> None:
         for bad in (0.1 + 0.02, float("nan")):
             m = tuple(bad if i == j else 0.1 for i in range(7))
             assert f"A{j + 1} " in s.tracking(m, q)
+
+
+def _first_problem(s: Supervisor, stamps) -> tuple[int, str] | tuple[None, None]:
+    """Feed (seq, timestamp [ns], kernel receive time [ns] or None); the first message with a problem."""
+    for seq, ts, rx in stamps:
+        text = s.clock(seq, ts // 10**9, ts % 10**9, rx)
+        if text:
+            return seq, text
+    return None, None
+
+
+def test_a_clock_that_freezes_mid_session_trips_within_a_few_messages():
+    p = 1_000_000  # [ns] 1 ms
+    stamps = [(k, 10**9 + 123 + k * p if k < 500 else 10**9 + 123 + 500 * p, 5 * 10**9 + k * p) for k in range(700)]
+    seq, text = _first_problem(sup(1e-3), stamps)
+    assert seq is not None and 500 < seq <= 500 + 10 and ("froze" in text or "advanced" in text)
+
+
+def test_a_clock_that_jumps_back_or_ahead_trips_at_once():
+    p = 1_000_000
+    back = [(k, 10**9 + k * p - (50 * p if k >= 300 else 0), None) for k in range(400)]
+    seq, text = _first_problem(sup(1e-3), back)
+    assert seq == 300 and "went back" in text
+    ahead = [(k, 10**9 + k * p + (500 * p if k >= 300 else 0), None) for k in range(400)]
+    seq, text = _first_problem(sup(1e-3), ahead)
+    assert seq == 300 and "jumped" in text
+
+
+def test_a_period_change_mid_session_trips_within_the_window_not_the_whole_session():
+    # 2000 messages at 1 ms, then the controller sends every 0.3 ms while its timestamps and period still say 1 ms
+    p = 1_000_000
+    rx = [5 * 10**9 + k * p for k in range(2000)] + [5 * 10**9 + 2000 * p + k * p * 3 // 10 for k in range(1, 200)]
+    stamps = [(k, 10**9 + k * p, r) for k, r in enumerate(rx)]
+    seq, text = _first_problem(sup(1e-3), stamps)
+    assert seq is not None and 2000 < seq <= 2000 + RX_WINDOW and "messages advanced" in text
+    # the same change on its own clock too: found within a few messages
+    stamps = [(k, 10**9 + (r - 5 * 10**9), r) for k, r in enumerate(rx)]
+    seq, text = _first_problem(sup(1e-3), stamps)
+    assert seq is not None and 2000 < seq <= 2000 + 6 and "timestamps advanced" in text
+
+
+def test_a_frozen_clock_that_sends_faster_than_its_period_is_caught_by_the_receive_times():
+    # claims 5 ms, sends every 2 ms; its timestamps stand still (a coarse clock's worth: whole seconds)
+    stamps = [(k, 7 * 10**9, 3 * 10**9 + k * 2_000_000) for k in range(100)]
+    s = sup(5e-3)
+    seq, text = _first_problem(s, stamps)
+    assert seq is not None and seq <= 10 and "2.00 ms, not every 5 ms" in text
+    assert s.measured_period_s is not None and abs(s.measured_period_s - 2e-3) < 1e-4
+
+
+def test_a_much_slower_controller_trips_only_when_both_clocks_agree():
+    p = 1_000_000
+    slow = [(k, 10**9 + k * 2 * p, 5 * 10**9 + k * 2 * p) for k in range(300)]  # 2 ms real, 1 ms claimed
+    seq, text = _first_problem(sup(1e-3), slow)
+    assert seq is not None and seq <= 110 and "not every 1 ms" in text
+    # our receive times late in a burst (this process or the network stalled), its own clock on time: no problem
+    rx = [5 * 10**9 + k * p + (30 * p if 100 <= k < 130 else 0) for k in range(400)]
+    assert _first_problem(sup(1e-3), [(k, 10**9 + k * p, r) for k, r in enumerate(rx)]) == (None, None)
+
+
+def test_receive_jitter_of_a_loaded_machine_never_trips():
+    import numpy as np
+
+    rng = np.random.default_rng(3)
+    p = 1_000_000
+    # sends on a 1 ms grid, each up to 0.5 ms late (never two closer than 0.9 period); timestamps exact
+    late = np.minimum(rng.exponential(0.1 * p, 5000), 0.5 * p).astype(int)
+    rx = [5 * 10**9 + k * p + int(d) for k, d in enumerate(late)]
+    assert _first_problem(sup(1e-3), [(k, 10**9 + k * p, r) for k, r in enumerate(rx)]) == (None, None)

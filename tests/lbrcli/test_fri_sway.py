@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from fri_scripted_controller import CA, Cycle
+from lbrcli.fri.testing import CA, Cycle
 from test_fri_application import LIM, Q0, min_jerk, preamble, run, sent_positions
 
 from lbrcli.fri import Outcome, TrajectoryPlayer

@@ -1,4 +1,4 @@
-"""A scripted FRI controller for client tests: exact states per cycle, in lock-step with the client.
+"""A scripted FRI controller for testing clients: exact states per cycle, in lock-step with the client.
 
 Unlike the simulator (real time, its own session logic), this controller sends the monitoring message of each
 scripted cycle, waits for the reply the FRI rules require (receiveMultiplier counted as KUKA's client does) and
@@ -17,11 +17,11 @@ import socket
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Any, Callable
 
-from lbrcli.fri.codec import FriCodec
-from lbrcli.fri.constants import MONITORING_MESSAGE_ID
-from trajectories.errors import FriDecodeError
+from ..codec import FriCodec
+from ..constants import MONITORING_MESSAGE_ID
+from ..errors import FriDecodeError
 
 MW, MR, CW, CA, IDLE = 1, 2, 3, 4, 0
 
@@ -76,6 +76,7 @@ class ScriptedController:
     unexpected: list[int] = field(default_factory=list)  # replies reflecting a message that must not be answered
     sent_seqs: list[int] = field(default_factory=list)
     on_cycle: Callable[[int], None] | None = None  # called with the script index before each cycle is sent
+    inputs: Callable[[int], dict] | None = None  # analog inputs {name: value} of the message of script index i
     tolerate_unanswered: int = 0  # expected replies that may be missing (e.g. a backlog the client dropped)
     wait_for_client: float = 0.0  # [s] > 0: repeat the first expected-reply cycle (new counters) until answered
     max_bridge: int | None = None  # more cycles than this without a command in COMMANDING_ACTIVE: the controller
@@ -98,6 +99,8 @@ class ScriptedController:
         self._vel = [0.0] * 7  # [rad/cycle] last commanded velocity (for extrapolation)
         self._bridged = 0  # consecutive COMMANDING_ACTIVE cycles without a command
         self.fell_back = False  # the controller stopped commanding because commands were missing
+        self._i = 0  # the script index being sent
+        self.late_replies = 0  # replies that came after the controller had given up on them (dropped)
 
     def _robot_step(self, c: Cycle, pos: tuple[float, ...] | None) -> None:
         """The robot's motion in one cycle: to the received command, else extrapolated (COMMANDING_ACTIVE)."""
@@ -124,7 +127,12 @@ class ScriptedController:
     def command_ratios(self, velocity, acceleration) -> tuple[float, float]:
         """Largest |command − executed before| / (velocity limit × period) and |second difference| / (acceleration
         limit × period²) over the received commands, against the robot's executed positions."""
-        step_r = second_r = 0.0
+        return self.motion_ratios(velocity, acceleration)[:2]
+
+    def motion_ratios(self, velocity, acceleration, jerk=None) -> tuple[float, float, float]:
+        """As :meth:`command_ratios`, and the largest third difference / (jerk limit × period³) (0 without
+        ``jerk``)."""
+        step_r = second_r = third_r = 0.0
         e = self.executed
         for i in self.command_at:
             if i < 2:
@@ -135,7 +143,35 @@ class ScriptedController:
                 second = step - (e[i - 1][j] - e[i - 2][j])
                 step_r = max(step_r, abs(step) / (velocity[j] * dt))
                 second_r = max(second_r, abs(second) / (acceleration[j] * dt * dt))
-        return step_r, second_r
+                if jerk is not None and i >= 3:
+                    third = second - ((e[i - 1][j] - e[i - 2][j]) - (e[i - 2][j] - e[i - 3][j]))
+                    third_r = max(third_r, abs(third) / (jerk[j] * dt * dt * dt))
+        return step_r, second_r, third_r
+
+    def end_velocity(self, velocity) -> float:
+        """The speed of the last received command relative to what the robot executed before it, as a fraction of
+        the velocity limit (0: the client left the robot at rest; more: the controller must stop it itself)."""
+        if not self.command_at:
+            return 0.0
+        i = self.command_at[-1]
+        if i < 1:
+            return 0.0
+        e, dt = self.executed, self.periods[i]
+        return max(abs(e[i][j] - e[i - 1][j]) / (velocity[j] * dt) for j in range(7))
+
+    def efforts(self) -> tuple[float, float]:
+        """(largest |change| of the commanded torque or wrench between two replies, |last effort sent|) over the
+        replies that carried one [Nm or N]."""
+        last = None
+        worst = 0.0
+        for r in self.replies:
+            eff = r.torque if r.torque is not None else r.wrench
+            if eff is None:
+                continue
+            if last is not None and len(last) == len(eff):
+                worst = max(worst, max(abs(a - b) for a, b in zip(eff, last)))
+            last = eff
+        return worst, (max(abs(x) for x in last) if last else 0.0)
 
     def start(self) -> "ScriptedController":
         self.thread.start()
@@ -174,6 +210,10 @@ class ScriptedController:
             io.name, io.type, io.direction, io.analogValue = "ball_theta", 2, 0, c.ball
             io = md.readIORequest.add()
             io.name, io.type, io.direction, io.digitalValue = "gripper", 1, 0, 1
+        if self.inputs is not None:
+            for name, value in self.inputs(self._i).items():
+                io = md.readIORequest.add()
+                io.name, io.type, io.direction, io.analogValue = name, 2, 0, value
         for name, kind, direction, value in c.io_out:
             io = md.readIORequest.add()
             io.name, io.type, io.direction = name, kind, direction
@@ -190,7 +230,9 @@ class ScriptedController:
             c.mutate(m)
         return self.codec.encode(m)
 
-    def _await_reply(self, deadline: float):
+    def _await_reply(self, deadline: float, expected: int | None = None):
+        """The next command message before ``deadline``; with ``expected``, replies to older messages (late ones,
+        a loaded client) are dropped and counted in ``late_replies``: the cycle they answered is long gone."""
         cmd = self.codec.new_command()
         while time.monotonic() < deadline:
             if self.client_done.is_set():
@@ -204,9 +246,13 @@ class ScriptedController:
                     return None
                 continue
             try:
-                return self.codec.decode_command(data, cmd)
+                got = self.codec.decode_command(data, cmd)
             except FriDecodeError:
                 continue
+            if expected is not None and 0 < ((expected - got.header.reflectedSequenceCounter) & 0xFFFFFFFF) < 0x80000000:
+                self.late_replies += 1
+                continue
+            return got
         return None
 
     def _run(self) -> None:
@@ -215,6 +261,7 @@ class ScriptedController:
         send_counter = 0
         dest = ("127.0.0.1", self.client_port)
         for i, c in enumerate(self.script):
+            self._i = i
             if self.on_cycle is not None:
                 self.on_cycle(i)
             if self.fell_back and c.state >= CW:
@@ -268,7 +315,7 @@ class ScriptedController:
                     cmd = self._await_reply(time.monotonic() + 0.02)
                 self.wait_for_client = 0.0
             else:
-                cmd = self._await_reply(time.monotonic() + self.reply_timeout)
+                cmd = self._await_reply(time.monotonic() + self.reply_timeout, seq)
             if cmd is None:
                 self.unanswered.append(i)
                 self._robot_step(c, None)
@@ -297,3 +344,23 @@ class ScriptedController:
             )
             self._robot_step(c, pos)
             time.sleep(self.pace_s)
+
+
+def preamble(**kw: Any) -> list[Cycle]:
+    """The cycles before commanding: IDLE, MONITORING_WAIT (quality FAIR), MONITORING_READY, COMMANDING_WAIT."""
+    return ([Cycle(state=IDLE, **kw)] + [Cycle(state=MW, quality=1, **kw)] * 3 + [Cycle(state=MR, **kw)] * 3
+            + [Cycle(state=CW, **kw)] * 4)  # fmt: skip
+
+
+def active(n: int, at: dict[int, Cycle] | None = None, **kw: Any) -> list[Cycle]:
+    """n COMMANDING_ACTIVE cycles; ``at`` replaces (or, for lists, inserts) cycles at those indices."""
+    out: list[Cycle] = [Cycle(state=CA, **kw)] * n
+    for i in sorted(at or {}, reverse=True):
+        c = at[i]
+        out[i : i + 1] = c if isinstance(c, list) else [c]
+    return out
+
+
+def session_script(n: int, at: dict[int, Cycle] | None = None, **kw: Any) -> list[Cycle]:
+    """A whole session: the preamble, then ``n`` COMMANDING_ACTIVE cycles (``at``: see :func:`active`)."""
+    return preamble(**kw) + active(n, at, **kw)

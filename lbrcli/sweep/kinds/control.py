@@ -1,6 +1,7 @@
 """Kinds ``control-damp`` and ``control-upright``: `lbr control damp|upright` on the built-in simulator, each run its
 own `lbr` process (an FRI session at 1–5 ms in real time, with the simulator in another process, as the command
-runs it; ``--port 0`` so that runs sharing a machine do not collide, ``--sim-lenient`` for loaded machines).
+runs it; ``--port 0`` so that runs sharing a machine do not collide; the simulator's lenient connection quality is
+the commands' default, ``sim-strict = true`` asks for the real controller's).
 
 ``control-damp`` streams ``joint-csv``, or the anti-sway move planned from the inline table ``plan`` (anti-sway
 options; planned once per worker process and options)."""
@@ -19,11 +20,11 @@ from ._process import run_lbr
 
 DAMP_OPTIONS = ("length", "damp-time", "sensor", "io-names", "module-axis", "sensor-delay", "sensor-rate", "open-loop",
                 "move-to-start", "start-tolerance", "start-sway", "sway-wait", "sim-length", "sim-delay", "sim-start",
-                "wait", "sim-lenient", "flange", "tool", "limits", "dt", "port", "fri-version")  # fmt: skip
+                "wait", "sim-lenient", "sim-strict", "flange", "tool", "limits", "dt", "port", "fri-version")  # fmt: skip
 UPRIGHT_OPTIONS = ("rod-length", "rod-mass", "tip-mass", "hold", "swing-timeout", "travel", "q-start", "move-to-start",
                    "sensor-rate", "sensor-delay", "sim-delay", "sim-jitter", "push", "period", "wait", "sim-lenient",
-                   "limits", "port", "fri-version")  # fmt: skip
-SESSION = {"port": 0, "sim-lenient": True}
+                   "sim-strict", "limits", "port", "fri-version")  # fmt: skip
+SESSION = {"port": 0}
 
 
 @functools.lru_cache(maxsize=8)

@@ -360,3 +360,34 @@ def check_number(
         return Number(low, high, low_open=low_open, high_open=high_open, unit=unit).check(value)
     except typer.BadParameter as exc:
         raise OptionError(f"{option} {exc.message}") from None
+
+
+def parse_as_command(fn, values: dict[str, Any]) -> dict[str, Any]:
+    """``values`` by parameter name of the command function ``fn``, as a user types them (text, or a number a study
+    file gives: written as on the command line, so a plain number of an angle option means what its --help says)
+    → what the command receives from its parse-time validators; OptionError (exit 2) naming the option. Values of
+    parameters without a validator, and None, pass unchanged. In-process callers (``lbr sweep``) check their
+    values by this, with the command's own ranges."""
+    import typing
+
+    import typer.models
+
+    from trajectories.errors import OptionError
+
+    hints = typing.get_type_hints(fn, include_extras=True)
+    out = dict(values)
+    for name, value in values.items():
+        hint = hints.get(name)
+        if value is None or typing.get_origin(hint) is not typing.Annotated:
+            continue
+        for m in typing.get_args(hint)[1:]:
+            if isinstance(m, typer.models.ParameterInfo) and m.parser is not None:
+                first = (m.default,) if isinstance(m.default, str) else ()  # typer.Option("--x", ...) in Annotated
+                decls = [d for d in (*first, *(m.param_decls or ())) if d.startswith("-")]
+                shown = max(decls, key=len) if decls else name
+                typed = str(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else value
+                try:
+                    out[name] = m.parser(typed)
+                except typer.BadParameter as exc:
+                    raise OptionError(f"{shown} {exc.message}") from None  # as check_number says it
+    return out

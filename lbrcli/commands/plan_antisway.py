@@ -62,20 +62,16 @@ def plan_anti_sway_command(
     is never re-timed.
     """
     from ..console import Reporter
-    from ..obstacle_file import read_obstacles
-    from ..options import limits_from, within_limits
 
     rep = Reporter(json_out)
-    lim = limits_from(limits)
-    q_ref = within_limits(q0, lim, "--q0")
-    obs = read_obstacles(obstacles) if obstacles is not None else ()
+    inputs = _plan_inputs(
+        length, a_max, points, z, shaper, dt, length_tolerance=length_tolerance, max_sway=max_sway,
+        obstacles=obstacles, ball_radius=ball_radius, no_fallback=no_fallback, j_max=j_max, v_max=v_max,
+        no_tune=no_tune, q0=q0, margin=margin, jerk=jerk, flange=flange, tool=tool, limits=limits,
+    )
     with rep.progress("IK", None) as update:
-        figs = plan_anti_sway_files(
-            points, length, a_max, z, shaper, dt, out, task_out, prediction, plot, flange=flange, tool=tool, q0=q_ref,
-            limits=lim, margin=margin, jerk=jerk, j_max=j_max, v_max=math.inf if v_max is None else v_max,
-            length_tolerance=length_tolerance, tune=not no_tune, max_sway=max_sway, obstacles=obs,
-            ball_radius=ball_radius, fallback=not no_fallback, progress=update,
-        )
+        figs = plan_anti_sway_files(**inputs, out=out, task_out=task_out, prediction=prediction, plot=plot,
+                                    progress=update)
     if figs["fallback"]:
         fb = figs["fallback"]
         rep.print(f"fallback: {fb['from']} could not plan ({fb['reason']}); used {fb['to']}")
@@ -106,6 +102,62 @@ def plan_anti_sway_command(
         if figs[name] is not None:
             rep.print(f"{name.replace('_', ' ')}: {figs[name]}")
     rep.emit(figs)
+
+
+def anti_sway_inputs(
+    length: float,
+    a_max: float,
+    points: str = DEFAULT_POINTS_TEXT,
+    z: float | None = None,
+    shaper: str = "auto",
+    dt: float = DEFAULT_DT,
+    *,
+    length_tolerance: float = 0.1,
+    max_sway: str | None = None,
+    obstacles: Path | None = None,
+    ball_radius: float = DEFAULT_BALL_RADIUS,
+    no_fallback: bool = False,
+    j_max: float | None = None,
+    v_max: float | None = None,
+    no_tune: bool = False,
+    q0: str | None = None,
+    margin: float = 0.0,
+    jerk: bool = False,
+    flange: str = DEFAULT_FLANGE,
+    tool: str | None = None,
+    limits: Path | None = None,
+) -> dict:
+    """The options of `lbr plan anti-sway` as typed (text, or numbers as a study file gives them), checked by the
+    command's own parse-time validators (:func:`lbrcli.options.parse_as_command`) → keyword arguments of
+    :func:`lbrcli.antisway.plan_anti_sway`; OptionError/InputError (exit 2) on a bad one. ``lbr sweep`` calls it,
+    so a study's run plans exactly what the command line would."""
+    from ..options import parse_as_command
+
+    typed = dict(length=length, a_max=a_max, points=points, z=z, shaper=shaper, dt=dt,
+                 length_tolerance=length_tolerance, max_sway=max_sway, obstacles=obstacles, ball_radius=ball_radius,
+                 no_fallback=no_fallback, j_max=j_max, v_max=v_max, no_tune=no_tune, q0=q0, margin=margin, jerk=jerk,
+                 flange=flange, tool=tool, limits=limits)  # fmt: skip
+    parsed = parse_as_command(plan_anti_sway_command, typed)
+    return _plan_inputs(**parsed)
+
+
+def _plan_inputs(length: float, a_max: float, points, z, shaper: str, dt: float, *, length_tolerance: float,
+                 max_sway: float | None, obstacles: Path | None, ball_radius: float, no_fallback: bool,
+                 j_max: float | None, v_max: float | None, no_tune: bool, q0, margin: float, jerk: bool, flange: str,
+                 tool, limits: Path | None) -> dict:
+    """The parsed options (as the command's validators give them) → keyword arguments of
+    :func:`lbrcli.antisway.plan_anti_sway`: the limits and obstacles read, --q0 checked against the limits."""
+    from ..obstacle_file import read_obstacles
+    from ..options import limits_from, within_limits
+
+    lim = limits_from(limits)
+    return dict(
+        points=points, length=length, a_max=a_max, z=z, shaper=shaper, dt=dt, flange=flange, tool=tool,
+        q0=within_limits(q0, lim, "--q0"), limits=lim, margin=margin, jerk=jerk, j_max=j_max,
+        v_max=math.inf if v_max is None else v_max, length_tolerance=length_tolerance, tune=not no_tune,
+        max_sway=max_sway, obstacles=read_obstacles(obstacles) if obstacles is not None else (),
+        ball_radius=ball_radius, fallback=not no_fallback,
+    )
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -131,6 +131,7 @@ def ws(tmp_path_factory):
     (d / "limits.toml").write_text("velocity_deg_s = [98, 98, 100, 130, 140, 180, 180]\n")
     (d / "obstacles.csv").write_text("name,x_min,y_min,z_min,x_max,y_max,z_max\npost,0.5,-0.2,0,0.55,-0.15,0.25\n")
     (d / "secret.txt").write_text("0123456789abcdef0123\n")
+    (d / "study.toml").write_text('[study]\nkind = "probe"\n[vary]\nvalue = [1]\n')
     tv = np.arange(0, 2.0, 1 / 60)
     render_pendulum_video(d / "video.mp4", tv, 0.3 * np.sin(2 * np.pi * tv), (160, 40), 120, 8, size=(320, 240),
                           fps=60, pivot_marker="green")  # fmt: skip
@@ -175,6 +176,7 @@ BASE = {
     "control damp": ["control", "damp", "{ws}/joint.csv"],
     "view": ["view", "{ws}/joint.csv", "-o", "{out}/v.html"],
     "export": ["export", "{ws}/log.csv", "-o", "{out}/r.mcap"],
+    "sweep": ["sweep", "{ws}/study.toml", "-o", "{out}/res", "--scheduler", "inline"],
 }
 
 
@@ -328,6 +330,7 @@ BEYOND = "3," + ",".join(map(str, Q_START[1:]))  # A1 3 rad: outside ±170°
         ("plan cup-and-ball", ("--q-start", BEYOND), "--q-start: A1"),
         ("view", ("--offset", "nofile.csv=1"), "--offset: nofile.csv is none of the files given"),
         ("export", ("{ws}/stopped.csv",), "at most one execution log"),
+        ("sweep", ("--runs", "5"), "--runs: 5 is outside the study's runs 0-0"),
         ("plan cup-and-ball", ("--length", "0.05"), "exceed the cup's extent"),
         ("sim", ("--cup", "default"), "--cup needs the simulated ball"),
         ("execute", ("--cup", "default", "--length", "0"), "--cup needs the simulated ball"),
@@ -572,6 +575,8 @@ def test_bad_calibration_images(guarded_ws, tmp_path, name, content, words):
         (["serve", "--secret", "{ws}/nope.txt"], "not found"),
         (["serve", "--secret", "/dev/zero"], "is larger than lbr reads"),
         (["check", "/dev/zero", "--limits", "{ws}/limits.toml"], "NUL byte"),
+        (["sweep", "/dev/zero", "-o", "{out}/res"], "NUL byte"),
+        (["sweep", "{ws}/joint.csv", "-o", "{out}/res"], "not valid TOML"),
     ],
 )
 def test_bad_logs_and_other_inputs(guarded_ws, tmp_path, argv, words):
@@ -612,7 +617,7 @@ OUTPUTS = [
     ("track calibrate", "-o"), ("track film", "-o"), ("track film", "--truth"), ("track live", "-o"),
     ("track live", "--plot"), ("demo", "--out"),
     ("control upright", "--log"), ("control upright", "--plot"), ("control damp", "--log"),
-    ("control damp", "--plot"), ("view", "-o"), ("export", "-o"),
+    ("control damp", "--plot"), ("view", "-o"), ("export", "-o"), ("sweep", "-o"),
 ]  # fmt: skip
 
 

@@ -30,6 +30,26 @@ def limits():
     return default_limits()
 
 
+def run_in_process(argv) -> tuple[int, str, str]:
+    """(exit code, stdout, stderr) of `lbr ARGV` run in this process by ``lbrcli.app.main`` (the code path of the
+    `lbr` script without a Python start-up: for many quick refusals)."""
+    import contextlib
+    import io
+
+    import lbrcli.console
+    from lbrcli.app import main
+
+    lbrcli.console._emitted = False
+    out, err = io.StringIO(), io.StringIO()
+    code = 0
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            main([str(a) for a in argv])
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    return code, out.getvalue(), err.getvalue()
+
+
 def run_lbr(*args: str, timeout: float = 120, **kwargs) -> subprocess.CompletedProcess:
     """Run the real `lbr` entry point in a subprocess (as a user would)."""
     return subprocess.run(

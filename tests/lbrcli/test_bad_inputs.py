@@ -12,7 +12,6 @@ per case): ≈ 800 cases.
 from __future__ import annotations
 
 import contextlib
-import io
 import math
 import os
 import resource
@@ -25,25 +24,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import lbrcli.console
-from conftest import Q_START
+from conftest import Q_START, run_in_process
 
 # ---------------------------------------------------------------- running a command in-process
 
 
-def run(argv) -> tuple[int, str, str]:
-    """(exit code, stdout, stderr) of `lbr ARGV` run in this process."""
-    from lbrcli.app import main
-
-    lbrcli.console._emitted = False
-    out, err = io.StringIO(), io.StringIO()
-    code = 0
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            main([str(a) for a in argv])
-        except SystemExit as exc:
-            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
-    return code, out.getvalue(), err.getvalue()
+run = run_in_process  # `lbr ARGV` in this process: (exit code, stdout, stderr)
 
 
 def error_line(code: int, err: str, expected: int) -> str:
@@ -271,13 +257,28 @@ def _bad_values(parser) -> list[str]:
     return ["a b,,", "not-an-ip"]  # other parsers (--source, --client, ...)
 
 
+SYNTAX_ONLY = frozenset({"inf", "-inf", "", "abc", "0x10", "1e400", "１", "1.5", "1e3"})  # Number's syntax cases
+
+
 def _option_cases():
+    """Every value option with its parser's bad values. The syntax cases of a plain number (inf, '', abc, 0x10, …)
+    are the shared Number parser's, the same for every option (test_every_numeric_option_is_validated_by_the_
+    shared_parsers checks each option has it): they run on the first numeric option of each command; every numeric
+    option gets 'nan', '1_0' and its own range's ends."""
+    from lbrcli.options import Number
+
     cases = []
     for command, fn in _commands():
+        syntax_done = False
         for shown, info, _ in _value_options(fn):
             if info.parser is None:
                 continue
-            for value in _bad_values(info.parser):
+            values = _bad_values(info.parser)
+            if isinstance(info.parser, Number):
+                if syntax_done:
+                    values = [v for v in values if v not in SYNTAX_ONLY]
+                syntax_done = True
+            for value in values:
                 cases.append(pytest.param(command, shown, value, id=f"{command}|{shown or 'ARG'}|{value}"))
     return cases
 

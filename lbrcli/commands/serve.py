@@ -49,6 +49,9 @@ def serve(
     first_target: Annotated[
         float, typer.Option("--first-target", help="Stop if no target arrived this long after commanding started \\[s].")
     ] = 30.0,
+    delay: Annotated[
+        Optional[float], typer.Option("--delay", help="Follow the targets this long behind the newest, on the source's clock \\[s] (default: automatic, from the source's gaps and jitter, 2 ms to --timeout).")
+    ] = None,
     speed_scale: Annotated[
         float, typer.Option("--speed-scale", help="Share of the velocity, acceleration and jerk limits ruckig may use (0..1].")
     ] = 0.5,
@@ -81,14 +84,15 @@ def serve(
     Targets arrive over UDP at --listen and/or on the --mqtt topic, binary (136 bytes, magic LBRT, version 1) or
     JSON: joints {"q": \\[7 rad]}, a TCP pose {"pose": \\[x, y, z m, qw, qx, qy, qz]} or {"pose_zyx": \\[x, y, z m,
     alpha, beta, gamma rad]}, with optional feed-forward "v" / "twist" (layout in the README and
-    lbrcli.bridge.protocol). Poses go through the online IK; ruckig follows the newest target within --speed-scale
-    of the limits at every FRI cycle and the guard checks every command. The state (256 bytes, magic LBRS, or JSON
+    lbrcli.bridge.protocol). Poses go through the online IK; the targets are read back on their source's clock
+    ("t"), --delay behind the newest and interpolated, and ruckig follows that reference within --speed-scale of
+    the limits at every FRI cycle; the guard checks every command. The state (256 bytes, magic LBRS, or JSON
     for JSON sources) goes back over UDP every --state-every messages and on TOPIC/state at --mqtt-state-hz. The
     first source owns the session; others are ignored. A braking stop within the limits ends it when targets stop
     for --timeout (dead-man), the owner sends garbage or a joint target outside the position limits (exit 1), it
     sends {"end": true} or --duration elapses (exit 0), or Ctrl-C.
     """
-    from lbrcli.bridge import MqttTransport, MqttUnavailable, TargetFollower, TargetInbox, UdpTransport
+    from lbrcli.bridge import MqttTransport, MqttUnavailable, TargetFollower, TargetInbox, TimelineOptions, UdpTransport
     from lbrcli.lab.telemetry import parse_mqtt_url
     from trajectories.errors import OptionError
 
@@ -112,6 +116,8 @@ def serve(
     for name, value, lo, hi in (("--timeout", timeout, 0.005, 10.0), ("--first-target", first_target, 0.1, 3600.0)):
         if not (math.isfinite(value) and lo <= value <= hi):
             raise OptionError(f"{name} must be {lo:g}..{hi:g} s, got {value:g}")
+    if delay is not None and not (math.isfinite(delay) and 0 <= delay < timeout):
+        raise OptionError(f"--delay must be 0 s or more and less than --timeout ({timeout:g} s), got {delay:g}")
     if not (math.isfinite(speed_scale) and 0 < speed_scale <= 1):
         raise OptionError(f"--speed-scale must be in (0, 1], got {speed_scale:g}")
     if not 0 <= state_every <= 1000:
@@ -149,7 +155,8 @@ def serve(
         raise OptionError(f"--mqtt: {exc}") from None
     targets = TargetInbox(transports, key, lim)
     follower = TargetFollower(targets, lim, robot=make_robot(flange, tool), timeout_s=timeout,
-                              first_target_s=first_target, speed_scale=speed_scale, state_every=state_every)  # fmt: skip
+                              first_target_s=first_target, speed_scale=speed_scale, state_every=state_every,
+                              timeline=TimelineOptions(delay_s=delay, max_delay_s=timeout))  # fmt: skip
     try:
         result, sim_stats, _ = run_client(
             rep, follower, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,

@@ -1,18 +1,32 @@
-"""Tracking hard cases (issue #16) on rendered videos with ground truth, one figure set per scenario:
-found share of the frames where the ball is visible, false fixes (> 5 px off), centre and θ RMS errors,
-tracking / decoding time. Goals: ≥ 99 % found and 0 false fixes on every non-adversarial video, θ ≤ 0.2° RMS
-(tilted camera with calibration included), tracking ≤ 2× decoding time. Adversarial (reported only): a
-swing-up at 30 fps with the shutter open the whole frame.
+"""Tracking hard cases (issues #16 and #35) on rendered videos with exact ground truth, one figure set per video:
+found share of the frames where the ball is visible, false fixes (> 5 px off), centre and θ RMS errors, tracking /
+decoding time. The kinds: dark start, a static red disc (and --start), tilted camera with calibration, swing-ups at
+60 and 30 fps, orange ball beside a hand, occluding rod, moving pivot with marker, slow motion, heavy JPEG, clutter in
+the ball's colour (labels, cables, a tool), H.264 at 100 kbit/s (alone and with clutter), an oblique camera with a
+sharp ball, 30 fps with whole-frame searches, a 3 px ball, a ball a quarter of the frame — and held-out variations
+(orange clutter on VP9, H.264 60 kbit/s, clutter on HEVC, a 2.6 px ball on H.264, a ball a third of the frame, an
+oblique view from the other side at 30 fps) that were not used to tune the tracker.
+
+Visible: the whole ball inside the frame, clear of objects of its colour (colour alone cannot separate them), and
+for low-bitrate codecs shown by the decoded frame (≥ 30 % of its disc in its colour: the encoder sometimes drops a
+moving ball's blocks). Goals (issue #35): ≥ 99 % found, 0 false fixes, centre ≤ 0.5 px RMS, θ ≤ 0.1° with
+calibration; tracking ≤ 1.5× decoding at 720p, ≤ 2× at 4K. Adversarial cases are reported, not counted.
+
+`python benchmarks/bench_track_robust.py [--quick]` prints the figures and writes them to
+docs/guides/results/track_robust.{json,md} (the tracking guide quotes that table).
 """
 
 from __future__ import annotations
 
+import json
 import math
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+
+RESULTS = Path(__file__).resolve().parent.parent / "docs" / "guides" / "results"
 
 
 def _decode(path: Path) -> float:
@@ -24,12 +38,13 @@ def _decode(path: Path) -> float:
     return time.perf_counter() - t0
 
 
-def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repeats: int) -> list[tuple[str, float, str]]:
+def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repeats: int, held_out: bool) -> dict:
     from tracking import scenarios
     from tracking.color import color_spec
     from tracking.pipeline import track_video
 
-    sc = scenarios.ALL[name](folder / f"{name}.mp4", size, duration_s)
+    make = (scenarios.HELD_OUT if held_out else scenarios.ALL)[name]
+    sc = make(folder / f"{name}_{size[0]}.mp4", size, duration_s)
     kw = dict(sc.track_kwargs)
     ball = kw.pop("ball", color_spec("red"))
     _decode(sc.path)  # warm the file cache
@@ -40,51 +55,89 @@ def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repe
         t0 = time.perf_counter()
         track = track_video(sc.path, ball, **kw)
         tracking = min(tracking, time.perf_counter() - t0)
-    out = scenarios.score(sc, track)
-    label = f"{sc.name}{' (adversarial)' if sc.adversarial else ''}"
-    rows = [
-        (f"{label}: found", out.found_percent, "%"),
-        (f"{label}: false fixes", out.false_fixes, "frames"),
-        (f"{label}: centre RMS", out.centre_rms_px, "px"),
-        (f"{label}: track / decode time", tracking / decode, "x"),
-    ]
-    if math.isfinite(out.theta_rms_deg):
-        rows.insert(3, (f"{label}: theta RMS", out.theta_rms_deg, "deg"))
+    shown = scenarios.ball_shown(sc) if sc.lossy else np.ones(len(sc.counted), bool)
+    counted = sc.counted & shown
+    from dataclasses import replace
+
+    out = scenarios.score(replace(sc, counted=counted), track)
+    row = {
+        "name": sc.name, "key": name, "held_out": held_out, "adversarial": sc.adversarial,
+        "size": f"{size[0]}x{size[1]}", "frames": int(len(sc.truth.t)), "counted": int(counted.sum()),
+        "erased_by_codec": int((sc.counted & ~shown).sum()), "found_percent": out.found_percent,
+        "false_fixes": out.false_fixes, "centre_rms_px": out.centre_rms_px, "theta_rms_deg": out.theta_rms_deg,
+        "unsure_frames": int(track.unsure.sum()) if track.unsure is not None else 0,
+        "track_over_decode": tracking / decode, "decode_fps": len(sc.truth.t) / decode,
+    }
     if name == "tilted":  # `compare` against the true motion delayed by 0.5 s: the lag must come out right
         from tracking.compare import compare_angles
 
-        lag = 0.5
-        cmp = compare_angles(sc.truth.t - lag, sc.truth.theta, track.t, track.theta)
-        rows.append((f"{label}: compare lag error", abs(cmp.lag_s - lag) * sc.truth.fps, "frames"))
-    return rows
+        cmp = compare_angles(sc.truth.t - 0.5, sc.truth.theta, track.t, track.theta)
+        row["compare_lag_error_ms"] = abs(cmp.lag_s - 0.5) * 1e3
+    return row
+
+
+def _table(rows: list[dict]) -> str:
+    head = "| video | size | counted frames | found | false fixes (> 5 px) | centre RMS | θ RMS | track / decode |\n"
+    head += "|---|---|---|---|---|---|---|---|\n"
+
+    def f(x, fmt):  # noqa: ANN001
+        return "—" if x is None or (isinstance(x, float) and not math.isfinite(x)) else format(x, fmt)
+
+    lines = []
+    for r in rows:
+        tag = " (held out)" if r["held_out"] else (" (adversarial)" if r["adversarial"] else "")
+        erased = f", {r['erased_by_codec']} erased by the codec" if r["erased_by_codec"] else ""
+        lines.append(
+            f"| {r['name']}{tag} | {r['size']} | {r['counted']}{erased} | {f(r['found_percent'], '.1f')} % | "
+            f"{r['false_fixes']} | {f(r['centre_rms_px'], '.2f')} px | {f(r['theta_rms_deg'], '.3f')}° | "
+            f"{f(r['track_over_decode'], '.2f')}× |"
+        )
+    return head + "\n".join(lines) + "\n"
 
 
 def run(quick: bool = False) -> list[tuple[str, float, str]]:
     from tracking import scenarios
 
-    size, duration, repeats = ((640, 360), 2.0, 1) if quick else ((1280, 720), 6.0, 2)
-    rows: list[tuple[str, float, str]] = [(f"videos {size[0]}x{size[1]}", duration, "s each")]
+    size, duration, repeats = ((640, 360), 2.0, 1) if quick else ((1280, 720), 4.0, 2)
+    rows: list[dict] = []
     with tempfile.TemporaryDirectory() as tmp:
         for name in scenarios.ALL:
-            rows += _one(name, Path(tmp), size, duration, repeats)
-        if not quick:  # whole-frame searches at 1080p: the ball invisible for the first 0.4 s
-            rows += [(f"1080p {k}", v, u) for k, v, u in _one("dark_start", Path(tmp), (1920, 1080), 3.0, repeats)]
-    goals = [r for r in rows if "(adversarial)" not in r[0]]
-    found = [v for k, v, _ in goals if k.endswith(": found")]
-    false = [v for k, v, _ in goals if k.endswith(": false fixes")]
-    theta = [v for k, v, _ in goals if k.endswith(": theta RMS")]
-    ratio = [v for k, v, _ in goals if k.endswith("track / decode time")]
-    rows += [
-        ("goal videos: worst found", float(np.min(found)), "%"),
-        ("goal videos: false fixes in all", float(np.sum(false)), "frames"),
-        ("goal videos: worst theta RMS", float(np.max(theta)), "deg"),
-        ("goal videos: worst track / decode time", float(np.max(ratio)), "x"),
-    ]
-    return rows
+            rows.append(_one(name, Path(tmp), size, duration, repeats, False))
+        for name in scenarios.HELD_OUT:
+            rows.append(_one(name, Path(tmp), size, duration, repeats, True))
+        big = (1920, 1080) if quick else (3840, 2160)
+        for name in ("plain", "clutter"):  # the time budget at 4K (whole-frame searches at the start)
+            rows.append(_one(name, Path(tmp), big, 1.5 if quick else 2.5, repeats, False))
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    if not quick:
+        (RESULTS / "track_robust.json").write_text(json.dumps(rows, indent=1) + "\n")
+        (RESULTS / "track_robust.md").write_text(_table(rows))
+    figures: list[tuple[str, float, str]] = [(f"videos {size[0]}x{size[1]}", duration, "s each")]
+    for r in rows:
+        label = f"{r['name']} {r['size']}" + (" (held out)" if r["held_out"] else " (adversarial)" if r["adversarial"] else "")
+        figures += [(f"{label}: found", r["found_percent"], "%"), (f"{label}: false fixes", r["false_fixes"], "frames"),
+                    (f"{label}: centre RMS", r["centre_rms_px"], "px"), (f"{label}: track / decode", r["track_over_decode"], "x")]
+        if math.isfinite(r["theta_rms_deg"]):
+            figures.append((f"{label}: theta RMS", r["theta_rms_deg"], "deg"))
+    goal = [r for r in rows if not r["adversarial"] and not r["held_out"]]
+    held = [r for r in rows if r["held_out"]]
+    for tag, sel in (("goal videos", goal), ("held-out videos", held)):
+        figures += [
+            (f"{tag}: videos", len(sel), ""),
+            (f"{tag}: worst found", float(np.nanmin([r["found_percent"] for r in sel])), "%"),
+            (f"{tag}: false fixes in all", float(np.sum([r["false_fixes"] for r in sel])), "frames"),
+            (f"{tag}: worst centre RMS", float(np.nanmax([r["centre_rms_px"] for r in sel])), "px"),
+            (f"{tag}: worst theta RMS", float(np.nanmax([r["theta_rms_deg"] for r in sel])), "deg"),
+        ]
+    small = [r["track_over_decode"] for r in goal if r["size"] == f"{size[0]}x{size[1]}"]
+    large = [r["track_over_decode"] for r in rows if r["size"] in ("3840x2160", "1920x1080")]
+    figures += [(f"worst track / decode at {size[0]}x{size[1]}", float(np.max(small)), "x"),
+                ("worst track / decode at 4K" if not quick else "worst track / decode at 1080p", float(np.max(large)), "x")]
+    return figures
 
 
 if __name__ == "__main__":
     import sys
 
     for name, value, unit in run(quick="--quick" in sys.argv):
-        print(f"{name:<60} {value:>12.4g} {unit}")
+        print(f"{name:<75} {value:>12.4g} {unit}")

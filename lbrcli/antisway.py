@@ -35,6 +35,7 @@ FALLBACK_DESIGNS = ("robust-slow", "robust-gentle", "box-zvd", "zvd", "ei", "acc
 GENTLE_STEP, GENTLE_TRIES = 0.85, 6  # robust-gentle: a_max × 0.85 on the failing segments only, up to 6 times
 FALLBACK_RESIDUAL = math.radians(0.5)  # a fallback must leave at most this swing across the length band [rad]
 DEFAULT_BALL_RADIUS = 0.02  # [m]
+Z_RANGE = (-0.5, 1.5)  # [m] flange heights worth planning at (the arm reaches about −0.4..1.3 m)
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,20 @@ class BandPrediction:
     peak_time: tuple[float, ...]  # [s]
     ball_paths: tuple[Any, ...]  # (n, 3) ball centres [m] per length
     clearance: Any = None  # planners.obstacles.Clearance or None
+    dense_lengths: tuple[float, ...] = ()  # [m] a dense sweep across the band (residual and peak only)
+    dense_residual: tuple[float, ...] = ()  # [rad]
+    dense_peak: tuple[float, ...] = ()  # [rad]
+
+    @property
+    def worst_residual(self) -> tuple[float, float]:
+        """The largest residual over the band [rad] and its string length [m] (the dense sweep included)."""
+        pairs = list(zip(self.residual, self.lengths)) + list(zip(self.dense_residual, self.dense_lengths))
+        return max(pairs)
+
+    @property
+    def worst_peak(self) -> float:
+        """The largest tilt during the move over the band [rad] (the dense sweep included)."""
+        return max((*self.peak, *self.dense_peak))
 
 
 @dataclass(frozen=True)
@@ -90,8 +105,10 @@ class AntiSwayResult:
             "band_lengths_m": list(band.lengths),
             "band_residual_sway_deg": [math.degrees(x) for x in band.residual],
             "band_peak_sway_deg": [math.degrees(x) for x in band.peak],
-            "worst_residual_sway_deg": math.degrees(max(band.residual)),
-            "worst_peak_sway_deg": math.degrees(max(band.peak)),
+            "worst_residual_sway_deg": math.degrees(band.worst_residual[0]),
+            "worst_residual_length_m": band.worst_residual[1],
+            "worst_peak_sway_deg": math.degrees(band.worst_peak),
+            "band_dense_lengths": len(band.dense_lengths),
             "max_sway_deg": None if self.max_sway is None else math.degrees(self.max_sway),
             "max_ik_error_m": self.ik_error,
             "limits_ok": bool(self.report.ok),
@@ -132,38 +149,56 @@ class AntiSwayResult:
 
 
 def _joints_of(plan, robot, q0, lim, progress=None):
-    """IK of the pivot plan with the flange pointing down → (JointTrajectory, max position error [m])."""
+    """IK of the pivot plan with the flange pointing down → (JointTrajectory, max position error [m]). The plan
+    starts and ends at rest, so does the redundancy (the IK brings the self-motion to rest with the pivot)."""
     import numpy as np
 
-    from trajectories.ik import IkOptions, solve_ik_path
+    from trajectories.ik import solve_ik_path
     from trajectories.trajectory import JointTrajectory
 
-    def solve(t, pos):
-        return solve_ik_path(robot, pos, np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)), q0, lim, times=t,
-                             progress=progress)  # fmt: skip
-
     t, pos = plan.t, plan.position
-    res = solve(t, pos)
-    # the redundancy pull toward q0 may still move the elbow when the pivot has stopped: the file must end at rest
-    # (a step ≤ acceleration limit × dt), so hold the last pivot position until that motion has decayed
-    if len(t) < 2:
-        return JointTrajectory(t=t, q=res.q), res.max_position_error
-    dt = float(t[-1] - t[-2])
-    rest = 0.5 * np.asarray(lim.acceleration) * dt * dt  # [rad] per step
-    options = IkOptions()
-    # the pull's fraction per sample of the (coarse) sequential pass → its decay per dt
-    per_dt = (options.nullspace_gain or 0.02) * dt / max(dt, options.coarse_dt)
-    n_plan = len(t)
-    for _ in range(4):
-        end_step = np.abs(res.q[-1] - res.q[-2])
-        if (end_step <= rest).all():
-            break
-        need = math.log(float((rest / np.maximum(end_step, 1e-300)).min())) / math.log(1.0 - per_dt)
-        extra = max(int(math.ceil(need)) + 20, len(t) - n_plan)  # at least as many as added before: doubling
-        t = np.concatenate([t, t[-1] + dt * np.arange(1, extra + 1)])
-        pos = np.concatenate([pos, np.repeat(pos[-1:], extra, axis=0)])
-        res = solve(t, pos)
+    res = solve_ik_path(robot, pos, np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)), q0, lim, times=t,
+                        progress=progress)  # fmt: skip
     return JointTrajectory(t=t, q=res.q), res.max_position_error
+
+
+REACH_STEP = 0.001  # [m] spacing of the layout's check before planning
+
+
+def check_reach(points, z: float, robot, limits) -> None:
+    """Raise PlanningError naming the first turning point or place on a straight segment between them (1 mm
+    apart) that the flange cannot reach pointing down at height z [m] inside the joint limits: out of reach, or
+    beyond a joint's limit at every arm angle (:mod:`trajectories.ik_reach`)."""
+    import numpy as np
+
+    from trajectories.arm_angle import ArmGeometry
+    from trajectories.errors import PlanningError
+    from trajectories.ik_reach import first_unreachable
+
+    pts = np.asarray(points, dtype=float)
+    places, where = [pts[:1]], [(0, 0.0)]  # (segment, fraction along it); segment 0: the start point
+    for k in range(1, len(pts)):
+        m = max(1, int(np.ceil(np.linalg.norm(pts[k] - pts[k - 1]) / REACH_STEP)))
+        s = np.arange(1, m + 1) / m
+        places.append(pts[k - 1] + s[:, None] * (pts[k] - pts[k - 1]))
+        where += [(k, float(f)) for f in s]
+    xy = np.concatenate(places)
+    pos = np.column_stack([xy, np.full(len(xy), z)])
+    rot = np.broadcast_to(flange_down_rotation(), (len(xy), 3, 3))
+    fact = first_unreachable(ArmGeometry.of(robot), pos, rot, None, limits, speed=False)
+    if fact is None:
+        return
+    seg, frac = where[fact.index]
+    x, y = xy[fact.index]
+    if frac in (0.0, 1.0):
+        place = f"point {seg} ({x:.3f}, {y:.3f})"
+    else:
+        place = (f"first at ({x:.3f}, {y:.3f}) on segment {seg} from point {seg - 1} ({pts[seg - 1][0]:.3f}, "
+                 f"{pts[seg - 1][1]:.3f}) to point {seg} ({pts[seg][0]:.3f}, {pts[seg][1]:.3f})")
+    raise PlanningError(
+        f"the layout is out of reach at z = {z:g} m with the flange pointing down: {place}: {fact.describe()}; "
+        f"move the points or change --z"
+    )
 
 
 def predict_sway(joints, robot, string_length: float, stop_time: float, settle_periods: float = SETTLE_PERIODS):
@@ -196,8 +231,16 @@ def predict_band(joints, robot, lengths, stop_time: float, obstacles=(), ball_ra
         pivot = pos[np.minimum(np.arange(len(run.t)), len(pos) - 1)]
         paths.append(ball_path(pivot, run.s, float(ln)))
     clear = clearance(runs[0].t, dict(zip(map(float, lengths), paths)), tuple(obstacles), ball_radius) if obstacles else None
+    dense = ()
+    dres = dpeak = np.empty(0)
+    if len(lengths) > 1:  # the residual swings between the simulated lengths: judge the band densely
+        from planners.antisway import DENSE_LENGTHS
+        from planners.sway_prediction import band_sweep
+
+        dense = np.linspace(float(min(lengths)), float(max(lengths)), DENSE_LENGTHS)
+        dres, dpeak = band_sweep(joints.t, pos, dense, stop_time, end, substep=0.0025)
     return BandPrediction(tuple(map(float, lengths)), tuple(runs), tuple(res), tuple(peak), tuple(tpk), tuple(paths),
-                          clear)
+                          clear, tuple(map(float, dense)), tuple(map(float, dres)), tuple(map(float, dpeak)))
 
 
 def _failing_segments(plan, report) -> list[int]:
@@ -281,6 +324,11 @@ def _attempt(setup: _Setup, a_max, options, progress=None) -> AntiSwayResult:
         failure = (
             f"a_max = {_accel_text(a_max)} m/s² does not fit the joint limits at segment {failing[0]}{others} "
             f"({seg.start[0]:.3f},{seg.start[1]:.3f})→({seg.end[0]:.3f},{seg.end[1]:.3f}): {first.describe()}"
+        )
+    elif setup.max_sway is not None and band.worst_peak > setup.max_sway and max(band.peak) <= setup.max_sway:
+        failure = (
+            f"predicted sway {math.degrees(band.worst_peak):.2f}° for a string length between the simulated ones "
+            f"exceeds --max-sway {math.degrees(setup.max_sway):.2f}°"
         )
     elif setup.max_sway is not None and max(band.peak) > setup.max_sway:
         k = max(range(len(band.peak)), key=lambda i: band.peak[i])
@@ -374,6 +422,8 @@ def plan_anti_sway(
 
     pts = np.asarray(points, dtype=float)
     z = DEFAULT_Z if z is None else float(z)
+    if not (math.isfinite(z) and Z_RANGE[0] <= z <= Z_RANGE[1]):
+        raise OptionError(f"--z must be a flange height in [{Z_RANGE[0]:g}, {Z_RANGE[1]:g}] m, got {z:g}")
     tol = DEFAULT_LENGTH_TOLERANCE if length_tolerance is None else float(length_tolerance)
     _validate(pts, length, a_max, dt, shaper, tol, margin)
     if max_sway is not None and not (0 < max_sway < math.pi / 2):
@@ -389,6 +439,7 @@ def plan_anti_sway(
     q_ref = parse_joint_vector(ANTISWAY_Q0, "--q0") if q0 is None else np.asarray(q0, dtype=float)
     if q_ref.shape != (7,):
         raise OptionError("--q0: expected 7 joint angles")
+    check_reach(pts, z, robot, lim)
     setup = _Setup(pts, float(length), z, float(dt), robot, q_ref, lim, margin, jerk, max_sway, tuple(obstacles),
                    float(ball_radius))
     result = _attempt(setup, a_max, options, progress)
@@ -405,14 +456,14 @@ def plan_anti_sway(
             # and the robust design stays quicker than the baseline at a little less acceleration)
             if design == "robust-gentle":
                 found = _gentle(setup, a_max, options, result)
-                if found is not None and (tol == 0 or max(found[0].band.residual) <= FALLBACK_RESIDUAL):
+                if found is not None and (tol == 0 or found[0].band.worst_residual[0] <= FALLBACK_RESIDUAL):
                     alt = replace(found[0], baseline_duration=result.baseline_duration)  # at the user's a_max
                     tried.append((alt, f" (a_max {_accel_text(found[1])} m/s² per segment)"))
                 continue
             alt_opts = (replace(options, shaper="robust", v_max=min(options.v_max, 0.75 * peak_speed))
                         if design == "robust-slow" else replace(options, shaper=design))
             alt = _attempt(setup, a_max, alt_opts)
-            if alt.failure is None and (tol == 0 or max(alt.band.residual) <= FALLBACK_RESIDUAL):
+            if alt.failure is None and (tol == 0 or alt.band.worst_residual[0] <= FALLBACK_RESIDUAL):
                 tried.append((alt, ""))
         if tried:
             alt, note = min(tried, key=lambda r: r[0].stop_time)
@@ -439,7 +490,7 @@ def _validate(pts, length, a_max, dt, shaper, tol, margin) -> None:
     from planners.antisway import SHAPERS
     from trajectories.errors import OptionError
 
-    from .options import check_margin
+    from .options import check_number
 
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2:
         raise OptionError("--points: need a start and at least one turning point 'x0,y0;x1,y1;...'")
@@ -457,7 +508,7 @@ def _validate(pts, length, a_max, dt, shaper, tol, margin) -> None:
         raise OptionError(f"--shaper: unknown {shaper!r}; choose one of {', '.join(SHAPERS)}")
     if not (0.0 <= tol < 0.9):
         raise OptionError(f"--length-tolerance must be in [0, 0.9), got {tol:g}")
-    check_margin(margin)
+    check_number("--margin", margin, 0, 1, high_open=True)
 
 
 def write_outputs(result: AntiSwayResult, out: Path, task_out: Path | None = None, prediction: Path | None = None,
@@ -471,10 +522,9 @@ def write_outputs(result: AntiSwayResult, out: Path, task_out: Path | None = Non
 
     write_joint_csv(out, result.joints)
     if task_out is not None:
-        plan, t = result.plan, result.joints.t  # the joints may hold the last pivot position longer (rest)
-        position = np.concatenate([plan.position, np.repeat(plan.position[-1:], len(t) - len(plan.t), axis=0)])
-        quat = quaternions_from_matrices(np.broadcast_to(flange_down_rotation(), (len(t), 3, 3)))
-        write_task_csv(task_out, TaskTrajectory(t=t, position=position, quaternion=quat))
+        plan = result.plan
+        quat = quaternions_from_matrices(np.broadcast_to(flange_down_rotation(), (len(plan.t), 3, 3)))
+        write_task_csv(task_out, TaskTrajectory(t=plan.t, position=plan.position, quaternion=quat))
     if prediction is not None:
         r = result.run
         data = np.column_stack([r.t, r.theta, r.phi, r.theta_x, r.theta_y])

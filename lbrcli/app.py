@@ -19,6 +19,11 @@ import typer
 from . import commands
 from .outputs import guarded
 
+# OpenCV and FFmpeg print warnings of their own on stderr (e.g. one per frame a full disk refused); lbr reports the
+# outcome in one line instead.
+os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+
 app = typer.Typer(
     name="lbr",
     help="Dynamic-control experiments with the KUKA LBR iiwa 7 R800: plan, check, execute over FRI, track, compare.",
@@ -77,8 +82,15 @@ def _json_requested(argv: list[str]) -> bool:
 
 
 def _usage_message(exc) -> str:
-    """A click usage error as one line: what is wrong, then where to read the usage."""
+    """A click usage error as one line: what is wrong, then where to read the usage. A bad value names its option
+    first ('--margin must be in [0, 1), got 2'), as the option parsers of lbrcli.options phrase it."""
     message = " ".join(line.strip() for line in exc.format_message().splitlines() if line.strip())
+    param = getattr(exc, "param", None)
+    if type(exc).__name__ == "BadParameter" and param is not None and getattr(exc, "param_hint", None) is None:
+        names = [n for n in (getattr(param, "opts", None) or []) if n.startswith("-")]
+        hint = max(names, key=len) if names else str(getattr(param, "metavar", None) or param.name or "").upper()
+        text = " ".join(str(exc.message).split())
+        message = f"{hint} {text}" if text.startswith("must ") else f"{hint}: {text}"
     ctx = getattr(exc, "ctx", None)
     if ctx is not None:
         return f"{ctx.command_path}: {message} (see '{ctx.command_path} --help')"
@@ -108,22 +120,43 @@ def _interrupted(argv: list[str]) -> NoReturn:
     sys.exit(130)
 
 
+_command = None
+
+
+def _click_command():
+    """The click group of the app, built once per process (typer builds it anew on each call; ≈ 0.1 s)."""
+    global _command
+    if _command is None:
+        _command = typer.main.get_command(app)
+    return _command
+
+
+def _internal(exc: BaseException, argv: list[str]) -> NoReturn:
+    """An exception lbr did not expect: one line naming it (exit 1); LBR_TRACEBACK=1 re-raises it for a report."""
+    if os.environ.get("LBR_TRACEBACK"):
+        raise exc
+    text = " ".join(str(exc).split())[:300] or type(exc).__name__
+    _fail(f"internal error ({type(exc).__name__}: {text}); please report it with the command line "
+          "(LBR_TRACEBACK=1 shows where)", 1, argv)  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point: runs the app and turns every failure into one line on stderr and an exit code.
 
     Usage errors (unknown option, missing argument, a value that does not parse) exit 2; lbr errors carry their
-    code (2 bad input, 1 a check failed); file-system errors naming their file (an output folder that does not
-    exist, a path that is a directory, no permission) exit 2; Ctrl-C exits 130. With --json the error is also one
-    JSON object on stdout: ``{"ok": false, "exit_code": N, "error": "..."}``.
+    code (2 bad input, 1 a check failed or a job that could not be done, e.g. an output on a full disk);
+    file-system errors naming their file (an output folder that does not exist, a path that is a directory, no
+    permission) exit 2; Ctrl-C exits 130; an exception lbr did not expect is one line "internal error" (exit 1).
+    With --json the error is also one JSON object on stdout: ``{"ok": false, "exit_code": N, "error": "..."}``.
     """
-    from trajectories.errors import InputError, LbrError
+    from trajectories.errors import LbrError
 
     from ._click import click_exceptions
 
     argv = list(sys.argv[1:] if argv is None else argv)
     exc_mod = click_exceptions()
     try:
-        rv = app(args=argv, prog_name="lbr", standalone_mode=False)
+        rv = _click_command().main(args=argv, prog_name="lbr", standalone_mode=False)
     except getattr(exc_mod, "NoArgsIsHelpError", ()):  # `lbr` or `lbr plan` alone: the help was printed
         sys.exit(2)
     except exc_mod.ClickException as exc:
@@ -131,19 +164,27 @@ def main(argv: list[str] | None = None) -> None:
     except typer.Abort:  # end of input at a prompt, or Ctrl-C inside click
         _interrupted(argv)
     except LbrError as exc:
-        extra = {}
-        if isinstance(exc, InputError):
-            extra = {k: v for k, v in (("file", exc.file), ("row", exc.row), ("column", exc.column)) if v is not None}
-        _fail(str(exc), exc.exit_code, argv, extra)
+        where = (("file", getattr(exc, "file", None)), ("row", getattr(exc, "row", None)),
+                 ("column", getattr(exc, "column", None)))  # fmt: skip
+        _fail(str(exc), exc.exit_code, argv, {k: v for k, v in where if v is not None})
     except BrokenPipeError:  # `lbr ... | head`: the reader left; say nothing more
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         sys.exit(1)
     except OSError as exc:
-        if exc.filename is None:  # not about a file the user named (e.g. a socket): a bug, keep the traceback
-            raise
-        _fail(f"{exc.filename}: {exc.strerror or exc}", 2, argv, {"file": str(exc.filename)})
+        from trajectories.atomic import FAILED_WRITE_ERRNOS
+
+        failed = exc.errno in FAILED_WRITE_ERRNOS  # the disk, not the path: the job failed (exit 1)
+        if exc.filename is None:
+            if not failed:  # not about a file the user named (e.g. a socket)
+                _internal(exc, argv)
+            _fail(f"cannot write an output: {exc.strerror or exc}", 1, argv)
+        _fail(f"{exc.filename}: {exc.strerror or exc}", 1 if failed else 2, argv, {"file": str(exc.filename)})
     except KeyboardInterrupt:
         _interrupted(argv)
+    except MemoryError:
+        _fail("out of memory (is an input far larger than it should be?)", 1, argv)
+    except Exception as exc:  # a bug: one line (and the traceback with LBR_TRACEBACK=1), never a bare traceback
+        _internal(exc, argv)
     if rv == 130:  # typer turned a Ctrl-C into exit 130
         _interrupted(argv)
     if isinstance(rv, int) and rv:

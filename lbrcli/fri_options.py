@@ -7,7 +7,40 @@ from typing import Annotated, Optional
 
 import typer
 
+from .options import JointVector, choice, joints, number
+
 DEFAULT_BALL_LENGTH = 0.25  # [m] string length of the simulated ball without --length
+
+
+def parse_ip(text: str | None) -> str | None:
+    """--bind: an IPv4 or IPv6 address (not a host name: the FRI socket binds a local interface)."""
+    import ipaddress
+
+    if text is None:
+        return None
+    try:
+        return str(ipaddress.ip_address(str(text).strip()))
+    except ValueError:
+        raise typer.BadParameter(f"expected a local IP address such as 127.0.0.1 or 0.0.0.0, got {text!r}") from None
+
+
+def parse_host_port(text: str | tuple) -> tuple[str, int]:
+    """HOST:PORT (port 1..65535), at parse time (sim --client, track live --udp)."""
+    from trajectories.numbers import NotANumber, plain_int
+
+    if isinstance(text, tuple):
+        return text
+    host, sep, port = str(text).rpartition(":")
+    if not sep or not host.strip():
+        raise typer.BadParameter(f"expected HOST:PORT, got {text!r}")
+    try:
+        number = plain_int(port)
+    except NotANumber:
+        raise typer.BadParameter(f"the port must be a whole number, got {port!r}") from None
+    if not 1 <= number <= 65535:
+        raise typer.BadParameter(f"the port must be 1..65535, got {number}")
+    return host.strip(), number
+
 
 RobotOpt = Annotated[
     Optional[str],
@@ -18,16 +51,18 @@ RobotOpt = Annotated[
     ),
 ]
 PortOpt = Annotated[
-    int, typer.Option("--port", help="Local UDP port from the robot's FRI configuration (0: any free port, simulator).")
+    int, number("--port", low=0, high=65535, integer=True,
+                help="Local UDP port from the robot's FRI configuration (0: any free port, simulator).")
 ]
 BindOpt = Annotated[
     Optional[str],
-    typer.Option("--bind", help="Local address to bind (default: all interfaces; 127.0.0.1 with the simulator)."),
+    typer.Option("--bind", parser=parse_ip, metavar="IP",
+                 help="Local IP address to bind (default: all interfaces; 127.0.0.1 with the simulator)."),
 ]
 VersionOpt = Annotated[
     Optional[str],
-    typer.Option(
-        "--fri-version",
+    choice(
+        "--fri-version", choices=("1.15", "2.7"),
         help="FRI wire format: 1.15 or 2.7. Default: detected from the first datagram with --robot (2.7 frames carry "
         "a length and a CRC); 1.15 for the simulator.",
     ),
@@ -38,26 +73,33 @@ LogOpt = Annotated[
 ]
 WaitOpt = Annotated[
     Optional[float],
-    typer.Option("--wait", help="Seconds to wait for the first FRI message \\[s] (default 60 with --robot, 20 simulated)."),
+    number("--wait", low=0, high=3600, low_open=True, unit="s",
+           help="Seconds to wait for the first FRI message \\[s] (default 60 with --robot, 20 simulated)."),
 ]
 PeriodOpt = Annotated[
     Optional[int],
-    typer.Option(
-        "--period",
-        help="Send period \\[ms]: the simulator's (default: the file's step), or with --robot the period the "
-        "controller must have.",
-    ),
+    number("--period", low=1, high=100, unit="ms", integer=True,
+           help="Send period \\[ms]: the simulator's (default: the file's step), or with --robot the period the "
+           "controller must have."),
+]
+SessionPeriodOpt = Annotated[  # commands that play no file
+    Optional[int],
+    number("--period", low=1, high=100, unit="ms", integer=True,
+           help="Send period \\[ms]: the simulator's (default 1), or with --robot the period the controller must have "
+           "(default: whatever it sends)."),
 ]
 LengthOpt = Annotated[
     Optional[float],
-    typer.Option("--length", help=f"Simulated ball string length \\[m] (default {DEFAULT_BALL_LENGTH}; 0: no ball)."),
+    number("--length", low=0, high=5, unit="m",
+           help=f"Simulated ball string length \\[m] (default {DEFAULT_BALL_LENGTH}; 0: no ball)."),
 ]
 SimStartOpt = Annotated[
-    Optional[str],
-    typer.Option("--sim-start", help="Simulator only: where the simulated robot stands at start (7 angles, deg/rad)."),
+    Optional[JointVector],
+    joints("--sim-start", help="Simulator only: where the simulated robot stands at start (7 angles, deg/rad)."),
 ]
 MultiplierOpt = Annotated[
-    int, typer.Option("--receive-multiplier", help="Simulator only: the client answers every k-th message.")
+    int, number("--receive-multiplier", low=1, high=100, integer=True,
+                help="Simulator only: the client answers every k-th message.")
 ]
 RealtimeOpt = Annotated[
     bool,
@@ -68,8 +110,8 @@ RealtimeOpt = Annotated[
 ]
 BusyWaitOpt = Annotated[
     Optional[float],
-    typer.Option(
-        "--busy-wait",
+    number(
+        "--busy-wait", low=0, high=5, unit="ms",
         help="Poll the socket for this long before each controller message is due instead of sleeping \\[ms] "
         "(default 0.9 with --robot — 0.2 with --realtime, whose kernel throttles a loop that never sleeps — 0 with "
         "the embedded simulator): replies no longer wait for the scheduler to wake "
@@ -88,8 +130,8 @@ SimLenientOpt = Annotated[
 ]
 TrackingErrorOpt = Annotated[
     Optional[float],
-    typer.Option(
-        "--max-tracking-error",
+    number(
+        "--max-tracking-error", low=0, high=3, low_open=True, unit="rad",
         help="End the stream with a braking stop when a joint's measured position is farther than this from the "
         "command \\[rad] (default: its velocity limit × max(20 ms, 8 command periods)).",
     ),
@@ -104,77 +146,21 @@ PendulumOpt = Annotated[
     typer.Option("--pendulum", help="Serial port of the pendulum module (thesis ch. 6, e.g. /dev/ttyUSB0); 'sim': the "
                  "simulator's emulated module on a pseudo-terminal. Logs pend_theta \\[rad], pend_omega \\[rad/s]."),
 ]
-BaudOpt = Annotated[int, typer.Option("--baud", help="Baud rate of the pendulum module's serial port.")]
-PendZeroOpt = Annotated[int, typer.Option("--pendulum-zero", help="Encoder count (0..4095) of the hanging pendulum.")]
+BaudOpt = Annotated[int, number("--baud", low=50, high=4_000_000, integer=True,
+                                 help="Baud rate of the pendulum module's serial port.")]
+PendZeroOpt = Annotated[int, number("--pendulum-zero", low=0, high=4095, integer=True,
+                                    help="Encoder count of the hanging pendulum.")]
 MqttOpt = Annotated[
     Optional[str],
     typer.Option("--mqtt", help="Publish the state as JSON to mqtt://HOST:PORT/TOPIC (off the FRI loop; see `lbr listen`)."),
 ]
-MqttRateOpt = Annotated[float, typer.Option("--mqtt-rate", help="Telemetry messages per second \\[Hz].")]
-
-
-def validate_version(version: str | None) -> str | None:
-    from trajectories.errors import OptionError
-
-    if version is not None and version not in ("1.15", "2.7"):
-        raise OptionError(f"--fri-version must be 1.15 or 2.7, got {version!r}")
-    return version
-
-
-def validate_port(port: int) -> None:
-    from trajectories.errors import OptionError
-
-    if not 0 <= port <= 65535:
-        raise OptionError(f"--port: not a UDP port: {port}")
-
-
-def validate_wait(wait: float | None) -> None:
-    import math
-
-    from trajectories.errors import OptionError
-
-    if wait is not None and not (math.isfinite(wait) and 0 < wait <= 3600):
-        raise OptionError(f"--wait must be in (0, 3600] s, got {wait:g}")
-
-
-def validate_tracking_error(bound: float | None) -> None:
-    import math
-
-    from trajectories.errors import OptionError
-
-    if bound is not None and not (math.isfinite(bound) and 0 < bound <= 3.0):
-        raise OptionError(f"--max-tracking-error must be in (0, 3] rad, got {bound:g}")
-
-
-def validate_period(period: int | None) -> None:
-    from trajectories.errors import OptionError
-
-    if period is not None and not 1 <= period <= 100:
-        raise OptionError(f"--period must be 1..100 ms, got {period}")
+MqttRateOpt = Annotated[float, number("--mqtt-rate", low=0, high=1000, low_open=True, unit="Hz",
+                                      help="Telemetry messages per second \\[Hz].")]
 
 
 def busy_wait_seconds(busy_wait_ms: float | None) -> float | None:
-    """--busy-wait [ms] in seconds (None: the default for the session); OptionError outside 0..5 ms."""
-    import math
-
-    from trajectories.errors import OptionError
-
-    if busy_wait_ms is None:
-        return None
-    if not (math.isfinite(busy_wait_ms) and 0 <= busy_wait_ms <= 5):
-        raise OptionError(f"--busy-wait must be 0..5 ms, got {busy_wait_ms:g}")
-    return busy_wait_ms * 1e-3
-
-
-def validate_session(version: str | None, port: int, wait: float | None, period: int | None,
-                     max_tracking_error: float | None = None, busy_wait: float | None = None) -> None:  # fmt: skip
-    """The session options every FRI command shares (OptionError naming the first bad one)."""
-    busy_wait_seconds(busy_wait)
-    validate_version(version)
-    validate_port(port)
-    validate_wait(wait)
-    validate_tracking_error(max_tracking_error)
-    validate_period(period)
+    """--busy-wait [ms] in seconds (None: the default for the session)."""
+    return None if busy_wait_ms is None else busy_wait_ms * 1e-3
 
 
 def check_simulator_only(robot: str | None, options: dict[str, bool]) -> None:

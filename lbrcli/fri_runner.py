@@ -150,8 +150,9 @@ def run_client(
 
                 kw.update(lenient_quality(kw.get("period_ms", 1), kw.get("receive_multiplier", 1)))
             ball_length, ball_damping = kw.pop("ball_length", None), kw.pop("ball_damping", 0.0)
+            ball_model = kw.pop("ball_model", None)
             specs = tuple(plants) if plants is not None else default_plants(
-                ball_length, ball_damping, pendulum_pty=lab is not None and lab.pendulum == "sim")
+                ball_length, ball_damping, pendulum_pty=lab is not None and lab.pendulum == "sim", model=ball_model)
             sim = SimulatorProcess(SimConfig(client_port=app.port, version=version or "1.15", plants=specs, **kw))
             sim.start()
             rep.print(f"simulator on {sim.address[0]}:{sim.address[1]} → client on 127.0.0.1:{app.port}")

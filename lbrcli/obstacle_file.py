@@ -5,32 +5,33 @@ Format (CSV, base frame, metres; blank lines and lines starting with '#' are ign
     name,x_min,y_min,z_min,x_max,y_max,z_max
     post_a,0.50,-0.20,0.00,0.55,-0.15,0.25
 
-``name`` is any non-empty text (unique); each minimum must be below its maximum.
+``name`` is any non-empty text (unique); each minimum must be below its maximum. UTF-8, with or without a
+byte-order mark; at most 4 MiB.
 """
 
 from __future__ import annotations
 
 import csv
-import math
 from pathlib import Path
 
 from planners.obstacles import Obstacle
 from trajectories.errors import CsvFormatError
+from trajectories.numbers import NotANumber, plain_float
 
 OBSTACLE_COLUMNS = ("name", "x_min", "y_min", "z_min", "x_max", "y_max", "z_max")
 
 
 def read_obstacles(path: str | Path) -> tuple[Obstacle, ...]:
     """Parse the obstacle CSV; raise CsvFormatError (exit 2) naming file, row and column."""
+    import io
+
+    from trajectories.inputs import MAX_SMALL_BYTES, read_text_input
+
     spath = str(path)
+    text = read_text_input(path, MAX_SMALL_BYTES)  # a UTF-8 byte-order mark is dropped
     try:
-        with open(path, newline="") as fh:
-            rows = list(csv.reader(fh))
-    except FileNotFoundError:
-        raise CsvFormatError("file not found", file=spath) from None
-    except IsADirectoryError:
-        raise CsvFormatError("is a directory, not a CSV file", file=spath) from None
-    except (OSError, csv.Error, UnicodeDecodeError) as exc:
+        rows = list(csv.reader(io.StringIO(text, newline="")))
+    except csv.Error as exc:
         raise CsvFormatError(f"not a readable CSV file ({exc})", file=spath) from None
     lines = [(i + 1, r) for i, r in enumerate(rows) if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
     if not lines:
@@ -59,13 +60,10 @@ def read_obstacles(path: str | Path) -> tuple[Obstacle, ...]:
         vals = []
         for j in range(1, len(OBSTACLE_COLUMNS)):
             try:
-                v = float(row[j])
-            except ValueError:
-                v = math.nan
-            if not math.isfinite(v):
-                raise CsvFormatError(f"not a finite number: {row[j]!r} [m]", file=spath, row=row_no, column=j + 1,
-                                     column_name=OBSTACLE_COLUMNS[j])
-            vals.append(v)
+                vals.append(plain_float(row[j]))
+            except NotANumber as exc:
+                raise CsvFormatError(f"{exc} [m]", file=spath, row=row_no, column=j + 1,
+                                     column_name=OBSTACLE_COLUMNS[j]) from None
         for j in range(3):
             if not vals[j] < vals[j + 3]:
                 raise CsvFormatError(

@@ -1,6 +1,8 @@
 """Output safety at the CLI edge: a command never overwrites one of its inputs, nor writes two outputs to one file.
 
-Call :func:`guard_outputs` before any work, with the options as the user typed them; every output is then written
+Call :func:`guard_outputs` before any work, with the options as the user typed them (every command does through
+:func:`guarded`): an output that is an input, two outputs on one file, or an output that exists as a link, device,
+FIFO or socket are refused before anything is computed. Every output is then written
 through :func:`trajectories.atomic.atomic_path` (CSV writers and plots already do), so an interrupted command never
 leaves a half-written file under the final name.
 """
@@ -26,11 +28,15 @@ def _same_file(a: Path, b: Path) -> bool:
 
 
 def guard_outputs(inputs: Named, outputs: Named) -> None:
-    """Raise OptionError (exit 2, naming both paths) when an output is an input or two outputs are one file."""
+    """Raise OptionError (exit 2, naming both paths) when an output is an input or two outputs are one file, and
+    OutputRefused (exit 2) when an output exists as a symbolic link, a device, a FIFO or a socket."""
+    from trajectories.atomic import refuse_special
     from trajectories.errors import OptionError
 
     ins = [(name, Path(p)) for name, p in inputs.items() if p is not None]
     outs = [(name, Path(p)) for name, p in outputs.items() if p is not None]
+    for oname, opath in outs:
+        refuse_special(opath, oname)
     for oname, opath in outs:
         for iname, ipath in ins:
             if _same_file(opath, ipath):
@@ -43,7 +49,7 @@ def guard_outputs(inputs: Named, outputs: Named) -> None:
                 raise OptionError(f"{aname} {apath} and {bname} {bpath} are the same file: give each output its own name")
 
 
-INPUT_OPTIONS = frozenset({"limits", "calibration", "plane"})  # Path options that are read, not written
+INPUT_OPTIONS = frozenset({"limits", "calibration", "plane", "obstacles", "secret", "geometry"})  # Path options that are read
 
 
 def _path_roles(fn) -> dict[str, tuple[str, str]]:

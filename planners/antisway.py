@@ -53,7 +53,9 @@ DEFAULT_Z = 0.45  # flange height [m]
 JERK_RAMP = 0.04  # default jerk ramp a_max/j_max as a fraction of the period [-] (≤ 5 % added time)
 ROBUST_BUDGET_RAD = math.radians(0.3)  # worst-case residual allowed per layout with a length tolerance
 DEFAULT_LENGTH_TOLERANCE = 0.1  # relative string-length uncertainty the default design is robust to
-BAND_LENGTHS = (-1.0, -0.5, 0.0, 0.5, 1.0)  # where in the tolerance band the nonlinear check looks [× tolerance]
+BAND_LENGTHS = (-1.0, -0.5, 0.0, 0.5, 1.0)  # where in the tolerance band the paths are simulated [× tolerance]
+DENSE_FACTOR = 5  # robust designs are judged at this many times the frequencies their programme constrains
+DENSE_LENGTHS = 41  # plans are judged (figures, --max-sway) at this many string lengths across the band
 
 
 @dataclass(frozen=True)
@@ -235,12 +237,14 @@ def _robust_segment(
     """
     spec = robust_spec(length, a_max, options.length_tolerance, budget, options.max_sway)
     omegas = spec.omegas
+    # judged on a grid 5× denser than the programme's: the residual peaks between the frequencies it constrains
+    dense = np.linspace(spec.omega_lo, spec.omega_hi, (spec.n_freq - 1) * DENSE_FACTOR + 1)
     best, too_short = None, 0.0
 
     def check(prof):
-        z, peak = nonlinear_phasor(prof, omegas)
+        z, peak = nonlinear_phasor(prof, dense)
         res = float(np.abs(z).max())
-        return z, res, float(np.maximum(peak, np.abs(z)).max())
+        return z[::DENSE_FACTOR], res, float(np.maximum(peak, np.abs(z)).max())
 
     for _ in range(5):
         try:
@@ -267,7 +271,9 @@ def _robust_segment(
         too_short = 0.97 * prof.duration  # the corrected problem is about as hard (up to the grid)
         offset = z - linear_residual_phasor(prof, omegas)
         sway = None if sway_ok else spec.max_sway * min(0.9, 0.95 * options.max_sway / pk)
-        spec = RobustSpec(spec.omega_lo, spec.omega_hi, budget, sway if sway is not None else spec.max_sway,
+        at_grid = float(np.abs(z).max())
+        target = spec.residual if res <= budget or at_grid > budget else spec.residual * 0.97 * budget / res
+        spec = RobustSpec(spec.omega_lo, spec.omega_hi, target, sway if sway is not None else spec.max_sway,
                           spec.n_freq, tuple(offset))
     return best
 

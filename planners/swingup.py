@@ -4,7 +4,8 @@
 and jerk bounds along base y from the joint limits (``swingup_robot.axis_bounds``), plans, solves IK per
 sample, checks the joint path and drives the nonlinear ball simulation with it. For the fast method a joint
 path that still breaks a limit makes the bounds tighter by the observed ratio and the plan is redone.
-With ``taut`` the string must stay taut: the plan then aims at the highest angle reachable that way.
+With ``taut`` the string must stay taut until θ_d is reached: the plan then aims at the highest angle reachable that
+way (the fast method; a pivot that rests afterwards leaves a swing above 90° that goes slack at its next apex).
 """
 
 from __future__ import annotations
@@ -86,12 +87,22 @@ class SwingUpResult:
     def reached(self) -> bool:
         return self.t_reach is not None
 
+    @property
+    def taut_until_reach(self) -> bool:
+        """The verified string stays taut until θ_d is reached (taut throughout when it is not)."""
+        slack = self.verification.first_slack
+        if self.request.method == "energy":
+            return slack is None
+        return slack is None or (self.t_reach is not None and slack >= self.t_reach)
+
     def figures(self) -> dict:
         """JSON figures: those of the verification simulation, the plan's own claim under ``claimed``."""
         r, ver, plan = self.request, self.verification, self.plan
         slack = slack_report(ver.t, ver.tension)
         claimed_slack = slack_report(plan.t, plan.tension)
         n = min(len(plan.theta), len(ver.theta))
+        if ver.first_slack is not None:  # after the string goes slack the planar claim no longer applies
+            n = min(n, max(1, int(np.searchsorted(ver.t, ver.first_slack))))
         diff = np.abs(plan.theta[:n] - ver.theta[:n])
         figures = {
             "method": plan.method,
@@ -100,20 +111,17 @@ class SwingUpResult:
             "mass_kg": r.mass,
             "theta_d_deg": math.degrees(r.theta_d),
             "max_theta_deg": math.degrees(ver.max_theta),
+            "max_taut_theta_deg": math.degrees(ver.max_taut_theta),
             "t_reach_s": self.t_reach,
             "t_theta_d_s": first_reach(ver.t, ver.theta, r.theta_d),
             "reached": self.reached,
             "tolerance_deg": math.degrees(r.tolerance),
             "taut": slack.taut,
+            "taut_until_reach": self.taut_until_reach,
             "min_tension_margin": slack.min_margin,  # [m/s²] tension / ball mass
             "min_tension_n": slack.min_margin * r.mass,
             "first_slack_s": slack.t_first_slack,
-            "limits_ok": self.check.ok,
-            "max_ratio": {k: float(v.max()) for k, v in self.check.ratios().items()},
-            "violations": [v.describe() for v in self.check.failing],
-            "duration_s": float(self.trajectory.duration),
-            "samples": len(self.trajectory),
-            "dt_s": float(self.trajectory.dt),
+            **self.check.plan_figures(self.trajectory),
             "t_rest_s": plan.t_rest,
             "max_travel_m": float(np.max(np.abs(plan.x))),
             "bounds": {"v_max_m_s": self.bounds.v_max, "a_max_m_s2": self.bounds.a_max,
@@ -153,8 +161,9 @@ class SwingUpResult:
             )
         if not self.check.ok:
             reasons.append("joint limits violated: " + "; ".join(v.describe() for v in self.check.failing[:3]))
-        if self.request.taut and not slack_report(self.verification.t, self.verification.tension).taut:
-            reasons.append("the string goes slack")
+        if self.request.taut and not self.taut_until_reach:
+            reasons.append(f"the string goes slack at {self.verification.first_slack:.3f} s, "
+                           f"{math.degrees(self.verification.max_taut_theta):.1f}° high, before θ_d")
         return "; ".join(reasons) or None
 
 
@@ -188,7 +197,7 @@ def _highest_taut_energy(r: SwingUpRequest, bounds: TaskBounds) -> tuple[PivotPl
 
 
 def _fast_on_arm(r: SwingUpRequest, robot: Robot, setup: ArmSetup, limits: JointLimits, bounds: TaskBounds,
-                 notes: list[str], progress=None, max_attempts: int = 4):
+                 notes: list[str], progress=None, max_attempts: int = 4, governor: bool = False):
     """Fast plan whose joint path passes the check (jerk included), with the bounds fitted to the arm.
 
     The first bounds come from the Jacobian over the band (first order, optimistic); while the joint path breaks
@@ -200,7 +209,7 @@ def _fast_on_arm(r: SwingUpRequest, robot: Robot, setup: ArmSetup, limits: Joint
     params = None
     last = None
     for attempt in range(1, max_attempts + 1):
-        problem = _fast_problem(r, bounds)
+        problem = replace(_fast_problem(r, bounds), governor=governor)
         settings = r.search if attempt == 1 else replace(r.search, maxiter=max(5, r.search.maxiter // 2))
         params, _ = optimise(problem, settings, start=params)
         plan = _on_side(r, simulate_fast(problem, params), notes if attempt == 1 else [])
@@ -255,6 +264,7 @@ def plan_swing_up(r: SwingUpRequest, robot: Robot, limits: JointLimits, progress
     notes: list[str] = []
     highest = None
     attempts = 1
+    bounds0 = bounds
     if r.method == "energy":
         if r.taut:
             plan, highest = _highest_taut_energy(r, bounds)
@@ -269,9 +279,17 @@ def plan_swing_up(r: SwingUpRequest, robot: Robot, limits: JointLimits, progress
         report = check_trajectory(traj, limits)
     else:
         plan, traj, ik_err, report, bounds, attempts = _fast_on_arm(r, robot, setup, limits, bounds, notes, progress)
+        if not r.taut:  # the tension governor often pumps sooner within the joint limits: keep the quicker of both
+            alt_notes: list[str] = []
+            alt = _fast_on_arm(r, robot, setup, limits, bounds0, alt_notes, progress, governor=True)
+            if alt[3].ok and (not report.ok or _reach_key(alt[0]) < _reach_key(plan)):
+                plan, traj, ik_err, report, bounds, attempts = alt
+                notes[:] = alt_notes + ["with the tension governor (quicker than without)"]
         if r.taut and plan.t_reach is None:
-            highest = plan.max_theta
-    ver = verify(robot, traj, r.length, r.theta0)
+            highest = plan.max_theta  # replaced by the verified one below
+    ver = verify(robot, traj, r.length, r.theta0, mass=r.mass)
+    if r.taut and r.method == "fast":
+        highest = ver.max_taut_theta  # what the string really holds taut, not the planar claim
     return SwingUpResult(request=r, plan=plan, trajectory=traj, check=report, verification=ver, bounds=bounds,
                          max_ik_error=ik_err, planning_time=time.perf_counter() - start, highest_taut_theta=highest,
                          attempts=attempts, notes=tuple(notes))

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Callable
 
 import numpy as np
 
@@ -38,8 +39,19 @@ class FastProblem:
     overshoot: float = math.radians(5.0)  # [rad] largest accepted apex above θ_d
     theta0: float = 0.0  # [rad]
     theta_dot0: float = 0.0  # [rad/s]
-    taut: bool = False  # require positive tension (claimed) along the plan
-    min_tension: float = 0.5  # [m/s²] tension margin required with ``taut``
+    taut: bool = False  # require positive tension (claimed) until θ_d is reached (or until the highest angle)
+    min_tension: float = 0.5  # [m/s²] tension margin required with ``taut`` or ``release``
+    release: bool = False  # cup-and-ball: taut while pumping, then the free swing of energy ≈ θ_d releases the ball
+    governor_margin: float = 1.0  # [m/s²] the governor aims this far above min_tension (the jerk limit lags it)
+    governor: bool = False  # cap the acceleration to keep the claimed tension even without ``taut`` (often quicker)
+    band: tuple[float, ...] = ()  # string lengths (× length) also driven by the planned pivot path (info["band"])
+    scorer: Callable[["FastProblem", PivotPlan], "FastOutcome"] | None = None  # replaces ``score`` (module-level)
+    goal: object = None  # what ``scorer`` aims at (a picklable frozen dataclass of its own)
+
+    @property
+    def governed(self) -> bool:
+        """The pumping acceleration is capped to keep the claimed tension (``taut`` or ``release``)."""
+        return self.taut or self.release or self.governor
 
 
 @dataclass(frozen=True)
@@ -58,8 +70,12 @@ class FastParams:
 
 
 def param_ranges(problem: "FastProblem") -> tuple[tuple[float, float], ...]:
-    """Search box of (speed, first_speed, centring, apex_offset); with ``taut`` the apex may aim far lower."""
-    low = -min(problem.theta_d - 0.2, 1.2) if problem.taut else -0.4
+    """Search box of (speed, first_speed, centring, apex_offset). The apex offset may aim well below θ_d (a pump
+    stopped early can still carry the ball to θ_d; with ``taut`` the highest taut swing aims near 90° whatever θ_d),
+    ``release`` aims within ±0.3 rad of θ_d (the apex energy is what it asks for)."""
+    if problem.release:
+        return ((0.3, 1.0), (0.1, 1.0), (0.0, 6.0), (-0.3, 0.3))
+    low = -max(0.4, min(problem.theta_d - 0.2, problem.theta_d - math.pi / 2 + 0.3))
     return ((0.3, 1.0), (0.1, 1.0), (0.0, 6.0), (low, 0.4))
 
 
@@ -75,8 +91,57 @@ class FastOutcome:
     cost: float
 
 
+def tension_window(theta: float, theta_dot: float, length: float, min_tension: float, a_max: float,
+                   lookahead: float) -> tuple[float, float]:
+    """Pivot accelerations (lo, hi) [m/s²] along the swing axis that keep l·θ̇² + g·cos θ − u·sin θ ≥ min_tension
+    [m/s²] now and at the angle ``lookahead`` [s] ahead (the jerk limit makes a cap act late), within ±a_max. The
+    window may exclude 0: near an apex above 90° the pivot must accelerate away from the ball."""
+    lo, hi = -a_max, a_max
+    base = length * theta_dot * theta_dot - min_tension
+    for k, th in enumerate((theta, theta + theta_dot * lookahead)):
+        c, sn = base + G * math.cos(th), math.sin(th)
+        new_lo, new_hi = lo, hi
+        if sn > 1e-3:
+            new_hi = min(hi, c / sn)
+        elif sn < -1e-3:
+            new_lo = max(lo, c / sn)
+        if k and new_lo > new_hi:  # the look-ahead contradicts the present: the present wins
+            break
+        lo, hi = new_lo, new_hi
+    return max(lo, -a_max), min(hi, a_max)
+
+
+def planar_rk4(th: float, om: float, a0: float, a1: float, h: float, length: float) -> tuple[float, float]:
+    """One RK4 step h [s] of the planar pendulum (θ [rad], θ̇ [rad/s]) with the pivot acceleration going linearly
+    from a0 to a1 [m/s²] (``cartpole.theta_ddot``)."""
+    il, gl = 1.0 / length, G / length
+    am = 0.5 * (a0 + a1)
+    k1t, k1o = om, -a0 * il * math.cos(th) - gl * math.sin(th)
+    t2, o2 = th + 0.5 * h * k1t, om + 0.5 * h * k1o
+    k2t, k2o = o2, -am * il * math.cos(t2) - gl * math.sin(t2)
+    t3, o3 = th + 0.5 * h * k2t, om + 0.5 * h * k2o
+    k3t, k3o = o3, -am * il * math.cos(t3) - gl * math.sin(t3)
+    t4, o4 = th + h * k3t, om + h * k3o
+    k4t, k4o = o4, -a1 * il * math.cos(t4) - gl * math.sin(t4)
+    return th + h / 6.0 * (k1t + 2 * k2t + 2 * k3t + k4t), om + h / 6.0 * (k1o + 2 * k2o + 2 * k3o + k4o)
+
+
+def _jerk_step(x: float, v: float, a: float, want: float, pb: TaskBounds, h: float) -> tuple[float, float, float]:
+    """One step h [s] of the pivot turning its acceleration toward ``want`` [m/s²] at the jerk limit, the speed kept
+    within v_max (the acceleration is released when the speed would pass it)."""
+    a1 = a + max(-pb.j_max * h, min(pb.j_max * h, want - a))
+    v1 = v + 0.5 * (a + a1) * h
+    if abs(v1) > pb.v_max:
+        a1 = a + max(-pb.j_max * h, min(pb.j_max * h, -a))
+        v1 = v + 0.5 * (a + a1) * h
+    return x + v * h + h * h * (2.0 * a + a1) / 6.0, v1, a1
+
+
 def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
-    """Run the pumping policy with the planar model (RK4, pivot acceleration linear within a step)."""
+    """Run the pumping policy with the planar model (RK4, pivot acceleration linear within a step).
+
+    With ``problem.governed`` the acceleration is capped every step (``tension_window``) until the pivot rests, so
+    that the claimed tension stays above ``min_tension`` while the pivot moves."""
     from ruckig import ControlInterface, InputParameter, OutputParameter, Result, Ruckig
 
     pb, l, h = problem.bounds, problem.length, problem.dt
@@ -92,21 +157,21 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
     inp.max_velocity, inp.max_acceleration, inp.max_jerk = [pb.v_max], [pb.a_max], [pb.j_max]
     inp.target_acceleration = [0.0]
 
-    def accel(th, om, a):
-        return -(a / l) * math.cos(th) - (G / l) * math.sin(th)
-
+    band_l = [l * f for f in problem.band]
+    band_y = [(problem.theta0, problem.theta_dot0) for _ in band_l]
+    band_rec = [([problem.theta0], [problem.theta_dot0]) for _ in band_l]
     th, om = problem.theta0, problem.theta_dot0
     x = v = a = 0.0
     ts, xs, vs, us, ths, oms = [0.0], [0.0], [0.0], [0.0], [th], [om]
     phase = "first"  # first half-swing, then "pump", "stop", "rest"
     t = 0.0
-    t_rest = None
+    t_rest = t_stop = None
     n_max = int((problem.horizon + 3.0 * t0) / h) + 2
     power_sign = 0.0
     for _ in range(n_max):
         e = 0.5 * l * l * om * om - G * l * math.cos(th)
         if phase in ("first", "pump") and (e >= e_stop or t >= problem.horizon):
-            phase = "stop"
+            phase, t_stop = "stop", t
         s = om * math.cos(th)
         if phase == "first":
             target = v_first
@@ -124,20 +189,30 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
                     target = 0.0
         if phase in ("stop", "rest"):
             target = 0.0
-        inp.target_velocity = [target]
-        res = otg.update(inp, out)
-        if res not in (Result.Working, Result.Finished):
-            raise PlanningError(f"ruckig failed during the fast swing-up: {res}")
-        x1, v1, a1 = out.new_position[0], out.new_velocity[0], out.new_acceleration[0]
-        out.pass_to_input(inp)
-        # RK4 of the pendulum with the pivot acceleration linear from a to a1 over the step
-        am = 0.5 * (a + a1)
-        k1t, k1o = om, accel(th, om, a)
-        k2t, k2o = om + 0.5 * h * k1o, accel(th + 0.5 * h * k1t, om + 0.5 * h * k1o, am)
-        k3t, k3o = om + 0.5 * h * k2o, accel(th + 0.5 * h * k2t, om + 0.5 * h * k2o, am)
-        k4t, k4o = om + h * k3o, accel(th + h * k3t, om + h * k3o, a1)
-        th += h / 6.0 * (k1t + 2 * k2t + 2 * k3t + k4t)
-        om += h / 6.0 * (k1o + 2 * k2o + 2 * k3o + k4o)
+        forced = None
+        if problem.governed and phase != "rest":
+            lo, hi = tension_window(th, om, l, problem.min_tension + problem.governor_margin, pb.a_max,
+                                    pb.a_max / pb.j_max)
+            if lo > 0.0 or hi < 0.0:  # the pivot must accelerate away from the ball: as hard as the jerk allows
+                forced = lo if lo > 0.0 else hi
+            else:
+                floor = 0.02 * pb.a_max
+                inp.min_acceleration, inp.max_acceleration = [min(lo, -floor)], [max(hi, floor)]
+        if forced is None:
+            inp.target_velocity = [target]
+            res = otg.update(inp, out)
+            if res not in (Result.Working, Result.Finished):
+                raise PlanningError(f"ruckig failed during the fast swing-up: {res}")
+            x1, v1, a1 = out.new_position[0], out.new_velocity[0], out.new_acceleration[0]
+            out.pass_to_input(inp)
+        else:
+            x1, v1, a1 = _jerk_step(x, v, a, forced, pb, h)
+            inp.current_position, inp.current_velocity, inp.current_acceleration = [x1], [v1], [a1]
+            res = Result.Working
+        th, om = planar_rk4(th, om, a, a1, h, l)
+        for i, lb in enumerate(band_l):  # the same pivot path on the other strings (open loop)
+            band_y[i] = planar_rk4(*band_y[i], a, a1, h, lb)
+            band_rec[i][0].append(band_y[i][0]), band_rec[i][1].append(band_y[i][1])
         x, v, a = x1, v1, a1
         t += h
         ts.append(t), xs.append(x), vs.append(v), us.append(a), ths.append(th), oms.append(om)
@@ -163,16 +238,24 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
         reach_angle=reach_angle,
         t_reach=first_reach(tt, theta, reach_angle),
         t_rest=float(t_rest),
-        info={"params": params, "bounds": pb, "travel_m": problem.travel},
+        info={"params": params, "bounds": pb, "travel_m": problem.travel, "t_stop": t_stop if t_stop is not None else t_rest,
+              "band": {"lengths": tuple(band_l), "theta": np.array([r[0] for r in band_rec]).reshape(len(band_l), len(ts)),
+                       "theta_dot": np.array([r[1] for r in band_rec]).reshape(len(band_l), len(ts))}},
     )
 
 
 def score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
     """Cost: the reach time if θ_d is reached inside the band, else a penalty > 100 (growing with the missing
-    angle, so that a search that cannot reach θ_d finds the highest angle); slack with ``taut`` costs > 1000."""
+    angle, so that a search that cannot reach θ_d finds the highest angle); slack with ``taut`` costs > 1000.
+    A problem with its own ``scorer`` (a module-level function, picklable) is scored by it."""
+    if problem.scorer is not None:
+        return problem.scorer(problem, plan)
     max_theta = plan.max_theta
     max_travel = float(np.max(np.abs(plan.x)))
-    min_tension = float(np.min(plan.tension))
+    # ``taut``: the string must hold until θ_d is reached (or, short of it, until the highest angle): a pivot that then
+    # rests leaves a swing above 90° that goes slack at its next apex whatever the plan does
+    until = plan.t_reach if plan.t_reach is not None else float(plan.t[int(np.argmax(np.abs(plan.theta)))])
+    min_tension = float(np.min(plan.tension[plan.t <= until + 1e-9]))
     penalty = 0.0
     if plan.t_reach is None:
         penalty += 100.0 + 10.0 * (problem.theta_d - max_theta)

@@ -8,7 +8,9 @@ would turn it). The ball only feels the pivot position; ``fixed`` is badly condi
 ≈5 m/s²).
 
 Verification: joint path → FK of the TCP → acceleration realised by position commands at the sample rate
-(``pendulum.SampledAcceleration``) → nonlinear spherical pendulum (``pendulum.simulate``), θ = θ_y.
+(``pendulum.SampledAcceleration``) → the project's string model without the cup (``string_sim``: the spherical
+pendulum while taut, free flight when the string goes slack, the jerk when it tightens again), θ = θ_y of the
+anchor→ball direction.
 """
 
 from __future__ import annotations
@@ -24,14 +26,13 @@ from trajectories.limits import JointLimits
 from trajectories.robot import Robot
 from trajectories.trajectory import JointTrajectory
 
-from .pendulum import PendulumRun, SampledAcceleration, direction_from_angles, simulate
+from .pendulum import SampledAcceleration, direction_from_angles
 from .swingup_plan import TaskBounds
 
 ORIENTATIONS = ("fixed", "follow")
 # Strong null-space pull toward q_start: q becomes (nearly) a function of the pivot position, so the arm
 # rests as soon as the pivot does (the default 0.02/sample leaves a slow self-motion after the stop).
 IK_OPTIONS = IkOptions(nullspace_gain=0.3)
-CONSTRAINT_RATE = 20.0  # [1/s] Baumgarte rate keeping |s| = 1 through slack phases (rigid-string model)
 
 
 @dataclass(frozen=True)
@@ -54,13 +55,15 @@ def _rot_z(angle: np.ndarray) -> np.ndarray:
 
 
 def pivot_poses(robot: Robot, setup: ArmSetup, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """TCP positions (n, 3) [m] and rotations (n, 3, 3) for pivot displacements x (n,) [m] along base y."""
+    """TCP positions (n, 3) [m] and rotations (n, 3, 3) for pivot displacements x [m]: (n,) along base y, or
+    (n, 2) along base y and z."""
     start = robot.fk(np.asarray(setup.q_start, dtype=float))
     p0, r0 = start.translation, start.rotation
     x = np.asarray(x, dtype=float)
-    pos = p0[None, :] + x[:, None] * np.array([0.0, 1.0, 0.0])
+    yz = np.column_stack([x, np.zeros_like(x)]) if x.ndim == 1 else x
+    pos = p0[None, :] + np.column_stack([np.zeros(len(yz)), yz])
     if setup.orientation == "fixed":
-        rot = np.broadcast_to(r0, (x.size, 3, 3)).copy()
+        rot = np.broadcast_to(r0, (len(pos), 3, 3)).copy()
     else:
         yaw = np.arctan2(pos[:, 1], pos[:, 0]) - math.atan2(p0[1], p0[0])
         rot = np.einsum("nij,jk->nik", _rot_z(yaw), r0)
@@ -77,8 +80,9 @@ def joint_path(robot: Robot, setup: ArmSetup, t: np.ndarray, x: np.ndarray, limi
 
 
 def axis_bounds(robot: Robot, setup: ArmSetup, limits: JointLimits, travel: float, margin: float = 0.1,
-                samples: int = 41, first_order: bool = False) -> TaskBounds:
-    """Pivot speed, acceleration and jerk along base y that keep every joint within (1 − margin)·limits.
+                samples: int = 41, first_order: bool = False, axis: str = "y") -> TaskBounds:
+    """Pivot speed, acceleration and jerk along base y (``axis`` "z": base z) that keep every joint within
+    (1 − margin)·limits.
 
     q(y) is solved by IK over |y| ≤ travel [m]; with q' = dq/dy, q'' and q''' (finite differences, max over
     the band) the joint rates are q̇ = q'·v, q̈ = q'·a + q''·v², q⃛ = q'·j + 3q''·v·a + q'''·v³, bounded
@@ -87,8 +91,12 @@ def axis_bounds(robot: Robot, setup: ArmSetup, limits: JointLimits, travel: floa
     """
     y = np.linspace(-travel, travel, samples)
     mid = samples // 2
-    up, _ = joint_path(robot, setup, y[mid:], y[mid:], limits)
-    down, _ = joint_path(robot, setup, y[mid::-1], y[mid::-1], limits)
+
+    def disp(d: np.ndarray) -> np.ndarray:
+        return d if axis == "y" else np.column_stack([np.zeros_like(d), d])
+
+    up, _ = joint_path(robot, setup, y[mid:], disp(y[mid:]), limits)
+    down, _ = joint_path(robot, setup, y[mid::-1], disp(y[mid::-1]), limits)
     q = np.vstack([down.q[::-1], up.q[1:]])
     h = y[1] - y[0]
     d1, d2, d3 = derivatives(q, h, 3)
@@ -108,27 +116,49 @@ def axis_bounds(robot: Robot, setup: ArmSetup, limits: JointLimits, travel: floa
 
 @dataclass(frozen=True)
 class Verification:
-    """The nonlinear ball simulation driven by the joint path: θ_y (n,) [rad], tension per mass (n,) [m/s²]."""
+    """The nonlinear ball simulation driven by the joint path: θ_y (n,) [rad] of the anchor→ball direction, tension
+    per mass (n,) [m/s²] (NaN where the string is slack)."""
 
     t: np.ndarray
     theta: np.ndarray
     tension: np.ndarray
     pivot: np.ndarray  # (n, 3) TCP positions [m]
     pivot_acc: np.ndarray  # (n, 3) realised accelerations [m/s²]
-    run: PendulumRun
+    run: object  # string_sim.BallRun
 
     @property
     def max_theta(self) -> float:
         return float(np.max(np.abs(self.theta)))
 
+    @property
+    def slack(self) -> np.ndarray:
+        """(n,) bool: the string is slack at the sample."""
+        return ~np.isfinite(self.tension)
+
+    @property
+    def first_slack(self) -> float | None:
+        """First time the string went slack [s] (None: taut throughout)."""
+        return self.run.first_slack
+
+    @property
+    def max_taut_theta(self) -> float:
+        """Largest |θ| [rad] while the string is taut."""
+        taut = np.isfinite(self.tension)
+        return float(np.max(np.abs(self.theta[taut]))) if taut.any() else 0.0
+
 
 def verify(robot: Robot, traj: JointTrajectory, length: float, theta0: float = 0.0, theta_dot0: float = 0.0,
-           damping: float = 0.0) -> Verification:
-    """Simulate the ball (spherical, nonlinear) under the TCP path the joint trajectory realises."""
+           damping: float = 0.0, mass: float | None = None) -> Verification:
+    """Simulate the ball (the string model, no cup; the default ball, of ``mass`` [kg] if given) under the TCP path
+    the joint trajectory realises."""
+    from .string_model import Ball, StringModel
+    from .string_sim import PivotMotion, simulate_string
+
     pos, _ = robot.fk_path(traj.q)
-    acc = SampledAcceleration(traj.t, pos)
     s0 = direction_from_angles(0.0, theta0)
     sdot0 = np.array([0.0, math.cos(theta0), math.sin(theta0)]) * theta_dot0
-    run = simulate(traj.t, acc, length, s0, sdot0, damping=damping, rtol=1e-9, atol=1e-10, max_step=traj.dt,
-                   constraint_rate=CONSTRAINT_RATE)
-    return Verification(t=traj.t, theta=run.theta_y, tension=run.tension, pivot=pos, pivot_acc=acc.samples(), run=run)
+    ball = Ball() if mass is None else Ball(mass=mass)
+    run = simulate_string(StringModel(length, ball=ball, cup=None, damping=damping), PivotMotion(traj.t, pos),
+                          float(traj.t[-1]), traj.t, s0, sdot0, rtol=1e-9, atol=1e-10)
+    return Verification(t=traj.t, theta=run.theta_y, tension=run.tension, pivot=pos,
+                        pivot_acc=SampledAcceleration(traj.t, pos).samples(), run=run)

@@ -68,12 +68,14 @@ class SlackReport:
 
 
 def slack_report(t: np.ndarray, margin: np.ndarray) -> SlackReport:
-    """Summarise a sampled tension margin (T/m [m/s²] at times t [s])."""
+    """Summarise a sampled tension margin (T/m [m/s²] at times t [s]; NaN where the string is slack — a one-sided
+    string model has no tension there — counts as slack, the minimum is over the taut samples)."""
     margin = np.asarray(margin, dtype=float)
-    k = int(np.argmin(margin))
-    slack = np.flatnonzero(margin <= 0.0)
+    taut = np.isfinite(margin)
+    k = int(np.nanargmin(margin)) if taut.any() else 0
+    slack = np.flatnonzero(~(margin > 0.0))
     return SlackReport(
-        min_margin=float(margin[k]),
+        min_margin=float(margin[k]) if taut.any() else float("nan"),
         t_min=float(t[k]),
         t_first_slack=float(t[slack[0]]) if slack.size else None,
         slack_fraction=float(slack.size / max(1, margin.size)),

@@ -29,6 +29,7 @@ class Choice:
 
     index: int | None
     reason: str
+    moving: bool = False  # the chosen one was judged to move like a pendulum
 
 
 def _spread(p: np.ndarray) -> float:
@@ -81,16 +82,17 @@ def choose_pendulum(
     alive = [k for k in range(n) if seen[k] >= _MIN_SEEN]
     if not alive:
         return Choice(int(np.argmax(fits)) if final else None, "no candidate was seen in most frames")
-    if len(alive) == 1:
-        return Choice(alive[0], "the only candidate seen in most frames")
     thr = max(_MOVE_PX, 0.5 * radius_px)
-    moving = [
-        k for k in alive
-        if seen[k] >= _MIN_SEEN_MOVING and _spread(centres[k]) > thr and _smooth(centres[k]) and _steady(centres[k])
-    ]
+
+    def moves(k: int) -> bool:
+        return seen[k] >= _MIN_SEEN_MOVING and _spread(centres[k]) > thr and _smooth(centres[k]) and _steady(centres[k])
+
+    if len(alive) == 1:
+        return Choice(alive[0], "the only candidate seen in most frames", moves(alive[0]))
+    moving = [k for k in alive if moves(k)]
     pool = moving if moving else alive
     if len(pool) == 1:
-        return Choice(pool[0], "the only one moving")
+        return Choice(pool[0], "the only one moving" if moving else "the only candidate left", bool(moving))
     if not moving and not final:
         return Choice(None, "none moves yet")
     if not moving and saturations is not None:
@@ -107,7 +109,7 @@ def choose_pendulum(
                 return float(np.std(r) / max(np.mean(r), 1.0)) if len(r) >= 2 else math.inf
 
             best = min(pool, key=cv)
-            return Choice(best, f"its distance to the pivot is the steadiest ({100 * cv(best):.1f} % variation)")
+            return Choice(best, f"its distance to the pivot is the steadiest ({100 * cv(best):.1f} % variation)", True)
 
         def tilt(k: int) -> float:
             d = np.nanmedian(centres[k] - pivots, axis=0)

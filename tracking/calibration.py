@@ -188,8 +188,11 @@ def calibration_to_dict(cal: CameraCalibration) -> dict:
 
 
 def save_calibration(path: str | Path, cal: CameraCalibration) -> None:
-    """Write the calibration as JSON."""
-    Path(path).write_text(json.dumps(calibration_to_dict(cal), indent=2) + "\n")
+    """Write the calibration as JSON (atomically: a temporary name renamed when complete)."""
+    from trajectories.atomic import atomic_open
+
+    with atomic_open(path) as fh:
+        fh.write(json.dumps(calibration_to_dict(cal), indent=2) + "\n")
 
 
 def _array(d: dict, key: str, shape: tuple[int, ...] | None, spath: str) -> np.ndarray:
@@ -206,17 +209,30 @@ def _array(d: dict, key: str, shape: tuple[int, ...] | None, spath: str) -> np.n
     return a
 
 
+def _scalar(d: dict, key: str, default: float, spath: str) -> float:
+    value = d.get(key, default)
+    if value is None:
+        return default
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InputError(f"field '{key}' must be a number", file=spath)
+    try:
+        return float(value)
+    except OverflowError:
+        raise InputError(f"field '{key}' is out of range", file=spath) from None
+
+
 def load_calibration(path: str | Path) -> CameraCalibration:
     """Read a calibration JSON written by :func:`save_calibration`; InputError naming the field if malformed."""
+    from trajectories.inputs import MAX_SMALL_BYTES, read_text_input
+
     spath = str(path)
+    text = read_text_input(path, MAX_SMALL_BYTES)
     try:
-        d = json.loads(Path(path).read_text())
-    except FileNotFoundError:
-        raise InputError("file not found", file=spath) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read: {exc}", file=spath) from None
+        d = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise InputError(f"not JSON: {exc.msg} at line {exc.lineno}", file=spath) from None
+        raise InputError(f"not JSON: {exc.msg}", file=spath, row=exc.lineno) from None
+    except RecursionError:
+        raise InputError("not a calibration: nested too deeply", file=spath) from None
     if not isinstance(d, dict):
         raise InputError("not a calibration object", file=spath)
     K = _array(d, "camera_matrix", (3, 3), spath)
@@ -224,7 +240,12 @@ def load_calibration(path: str | Path) -> CameraCalibration:
     if len(D) not in (4, 5, 8, 12, 14):
         raise InputError(f"field 'dist_coeffs' must have 4, 5, 8, 12 or 14 values, got {len(D)}", file=spath)
     size = _array(d, "image_size", (2,), spath)
+    if not np.all((size >= 1) & (size <= 100_000) & (size == np.round(size))):
+        raise InputError("field 'image_size' must be two whole numbers of pixels (1..100000)", file=spath)
     board = _array(d, "board", (2,), spath) if "board" in d else np.array([0, 0])
+    if not np.all((board >= 0) & (board <= 1000)):
+        raise InputError("field 'board' must be two counts of inner corners (0..1000)", file=spath)
+    views = _scalar(d, "views", 0, spath)  # nan fails the range test below
     plane = None
     if d.get("plane") is not None:
         p = d["plane"]
@@ -240,10 +261,10 @@ def load_calibration(path: str | Path) -> CameraCalibration:
         camera_matrix=K,
         dist_coeffs=D,
         image_size=(int(size[0]), int(size[1])),
-        rms_px=float(d.get("rms_px", math.nan)),
+        rms_px=_scalar(d, "rms_px", math.nan, spath),
         board=(int(board[0]), int(board[1])),
-        square_m=float(d.get("square_m", math.nan)),
-        views=int(d.get("views", 0)),
+        square_m=_scalar(d, "square_m", math.nan, spath),
+        views=int(views) if 0 <= views <= 1e9 else 0,
         plane=plane,
     )
 

@@ -14,20 +14,40 @@ import numpy as np
 from trajectories.errors import CheckFailed
 
 _GAP_FACTOR = 2.5  # a gap longer than this × the median frame interval is masked, not interpolated over
-_MIN_OVERLAP = 0.25  # a lag must overlap at least this fraction of the shorter series
 _MIN_WINDOW_S = 2.0  # [s] the default lag window is at least ± this
 _RIVAL_SEPARATION_S = 0.15  # [s] a rival peak lies at least this far from the chosen lag
+UNCOVERED_WEIGHT = 0.5  # measured samples outside the model's span count this share of their energy as misfit
+_REFINED_MINIMA = 4  # the best local minima of the misfit on the grid refined to sub-sample before ranking
+AMBIGUOUS_RMS_RATIO = 1.5  # a rival lag whose RMS misfit is within this factor of the best one's makes the lag ambiguous
 
 
 @dataclass(frozen=True)
 class LagEstimate:
-    """Lag [s] (measured time − model time) and the match score 2Σxy/(Σx²+Σy²) over the overlap (−1..1)."""
+    """Lag [s] (measured time − model time) and the match score: the share of the measured θ the model explains
+    (1 − Σ(y − model)²/Σy² over the whole measurement, the model taken as 0 outside its span; ≤ 1)."""
 
     lag_s: float
     correlation: float
     window_s: float = math.inf  # the lag was searched within ± this [s]
     rival_lag_s: float = math.nan  # the best other peak of the score (NaN when none) [s]
     rival_correlation: float = math.nan  # its score
+    rms_rad: float = math.nan  # RMS of (measured − model) over the whole measurement at the lag, 0 outside the model [rad]
+    rival_rms_rad: float = math.nan  # the same at the rival lag [rad]
+    at_window_edge: bool = False  # the best lag lies on the edge of the window: the true one may be outside
+    overlap_misfit: float = math.nan  # Σ(y − model)² / Σy² over the overlap alone at the lag
+    overlap_rms_rad: float = math.nan  # RMS of (y − model) over the overlap alone at the lag [rad]
+
+    @property
+    def ambiguous(self) -> bool:
+        """The rival explains the measurement nearly as well (see below), or the lag sits on the edge of the window."""
+        if self.at_window_edge:
+            return True
+        if not math.isfinite(self.rival_rms_rad):
+            return False
+        # the rival's misfit exceeds the best one's by less than it would if the best one's residual inside the
+        # overlap grew by the ratio (the same as rival RMS ≤ ratio × best RMS when both overlap the whole track)
+        margin = (AMBIGUOUS_RMS_RATIO**2 - 1.0) * self.overlap_rms_rad**2
+        return self.rival_rms_rad**2 - self.rms_rad**2 <= margin
 
 
 def default_lag_window(t_model: np.ndarray, t_meas: np.ndarray) -> float:
@@ -45,7 +65,10 @@ class Comparison:
     lag_window_s: float  # the lag was searched within ± this [s] (NaN when given)
     rival_lag_s: float  # the best other peak of the lag score [s] (NaN when none or given)
     rival_correlation: float  # its score (close to `correlation`: the lag is ambiguous)
-    correlation: float  # match score 2Σxy/(Σx²+Σy²) at the lag, −1..1 (NaN when the lag was given)
+    correlation: float  # match score at the lag (see LagEstimate), ≤ 1 (NaN when the lag was given)
+    rms_fit_deg: float  # RMS misfit at the lag over the whole track, model 0 outside its span [deg] (NaN when given)
+    rival_rms_fit_deg: float  # the same at the rival lag [deg]
+    ambiguous: bool  # a rival lag explains the track nearly as well, or the lag is on the window's edge
     mirrored: bool  # the negated measurement correlates better: the camera sees θ mirrored (use flip)
     rms_deg: float  # RMS of measured − model over the overlap [deg]
     max_deg: float  # largest |measured − model| [deg]
@@ -84,13 +107,20 @@ def resample(t: np.ndarray, x: np.ndarray, grid: np.ndarray, max_gap_s: float = 
 
 
 def _series(t: np.ndarray, x: np.ndarray, step: float, max_gap_s: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """(first time [s], values on the grid (0 where unknown), mask of known samples) — θ keeps its physical zero."""
     ok = np.isfinite(x)
     t0 = float(t[ok][0])
     grid = np.arange(t0, float(t[ok][-1]) + 0.5 * step, step)
     y = resample(t, x, grid, max_gap_s)
     m = np.isfinite(y)
-    y = np.where(m, y - (y[m].mean() if m.any() else 0.0), 0.0)
-    return t0, y, m.astype(float)
+    return t0, np.where(m, y, 0.0), m.astype(float)
+
+
+def _local_minima(e: np.ndarray) -> np.ndarray:
+    """Indices of the finite local minima of e (plateau edges included)."""
+    inner = np.flatnonzero((e[1:-1] <= e[:-2]) & (e[1:-1] <= e[2:]) & np.isfinite(e[1:-1])) + 1
+    ends = [k for k, nb in ((0, 1), (len(e) - 1, len(e) - 2)) if len(e) > 1 and np.isfinite(e[k]) and e[k] <= e[nb]]
+    return np.union1d(inner, np.array(ends, int))
 
 
 def estimate_lag(
@@ -101,16 +131,18 @@ def estimate_lag(
     max_lag_s: float | None = None,
     step_s: float | None = None,
 ) -> LagEstimate:
-    """Lag [s] that best matches the two θ series (NaN samples in the measurement skipped).
+    """Lag [s] at which the model explains the measurement best (NaN samples in the measurement skipped).
 
-    Both are resampled on a grid of step_s [s] (default: the measurement's median frame interval), mean
-    removed, gaps masked. For every shift the overlap is scored by 2·Σxy / (Σx² + Σy²) — the normalised
-    cross-correlation made amplitude-sensitive, so a shift by one period of a growing or decaying swing
-    scores lower than the true lag (all sums by FFT). Shifts overlapping less than a quarter of the shorter
-    series, or holding less than half of the weaker series' energy, are not considered, nor lags beyond
-    ± max_lag_s (default :func:`default_lag_window`). The peak is refined to sub-sample by least squares of
-    the residual; the best other local peak is reported as a rival (a periodic swing scores nearly alike one
-    period off).
+    Both are resampled on a grid of step_s [s] (default: the measurement's median frame interval), gaps in
+    the measurement masked. For every shift the whole measurement is scored: inside the overlap by its squared
+    difference from the model, outside it by half its own square (what was measured where the model says
+    nothing is unexplained; half, because the sway may go on after the prediction ends). The score is 1 − that
+    error / the measurement's energy — the share of the measured θ the model explains — so a shift that
+    overlaps only part of the clip pays for the rest (a periodic swing matches itself one period off over a
+    shorter overlap, and must not win). Lags beyond
+    ± max_lag_s (default :func:`default_lag_window`) are not considered; the minimum is refined to
+    sub-sample by least squares of the residual; the best other local minimum at least 0.15 s away is the
+    rival (a steady swing scores nearly alike one period off: then the lag is ambiguous).
     """
     from scipy.optimize import minimize_scalar
     from scipy.signal import correlate
@@ -123,43 +155,77 @@ def estimate_lag(
         return correlate(a, b, mode="full", method="fft")
 
     sxy = xc(ym, xm)
-    sxx = xc(my, xm * xm)  # model energy inside the overlap
-    syy = xc(ym * ym, mm)  # measurement energy inside the overlap
+    sxx = xc(my, xm * xm)  # model energy where it is compared with a measured sample
     count = xc(my, mm)
     shifts = np.arange(-(len(xm) - 1), len(ym))
     lags = ty0 - tm0 + shifts * step
-    ex, ey = float(np.dot(xm, xm)), float(np.dot(ym, ym))
-    if ex == 0.0 or ey == 0.0:
+    ey = float(np.dot(ym, ym))
+    if float(np.ptp(xm[mm > 0])) == 0.0 or float(np.ptp(ym[my > 0])) == 0.0:
         raise CheckFailed("cannot estimate the lag: a θ series is constant (give --lag)")
-    energy = sxx + syy
-    valid = (count >= _MIN_OVERLAP * min(mm.sum(), my.sum()) - 0.5) & (energy >= min(ex, ey))
+    default_window = max_lag_s is None
     if max_lag_s is None:
         max_lag_s = default_lag_window(t_model, t_meas)
-    valid &= np.abs(lags) <= max_lag_s
+    overlapping = count >= 2.0 - 0.5
+    valid = (np.abs(lags) <= max_lag_s) & overlapping
     if not valid.any():
         raise CheckFailed("no lag with enough overlap between prediction and track")
-    score = np.where(valid, 2.0 * sxy / np.maximum(energy, 1e-300), -np.inf)
-    k = int(np.argmax(score))
-    lag0 = float(lags[k])
-    peaks = np.flatnonzero(
-        (score[1:-1] >= score[:-2]) & (score[1:-1] >= score[2:]) & np.isfinite(score[1:-1])
-        & (np.abs(lags[1:-1] - lag0) >= _RIVAL_SEPARATION_S)
-    ) + 1
-    rival = int(peaks[np.argmax(score[peaks])]) if len(peaks) else None
-
-    def residual(lag: float) -> float:
-        e = _errors(t_model, theta_model, t_meas, theta_meas, lag)[2]
-        return float(np.mean(e * e)) if len(e) else math.inf
-
-    res = minimize_scalar(residual, bounds=(lag0 - step, lag0 + step), method="bounded", options={"xatol": step * 1e-3})
-    lag = float(res.x) if res.success and res.fun <= residual(lag0) else lag0
+    syy = xc(ym * ym, mm)  # measured energy inside the overlap
+    inside = np.clip(syy - 2.0 * sxy + sxx, 0.0, None)  # Σ over the overlap of (y − model)²
+    error = inside + UNCOVERED_WEIGHT * np.clip(ey - syy, 0.0, None)
+    err = np.where(valid, error, np.inf)
+    minima = _local_minima(err)
+    if default_window and not valid[overlapping].all():  # the default window is a guess: a better lag beyond it rivals
+        minima = np.append(minima, int(np.argmin(np.where(overlapping & ~valid, error, np.inf))))
+    # the grid's step misaligns the series by up to half a step: refine the best few minima before ranking them
+    order = minima[np.argsort(error[minima])][:_REFINED_MINIMA]
+    t_meas, theta_meas = np.asarray(t_meas, float), np.asarray(theta_meas, float)
+    refined = []
+    for j in order:
+        lo, hi = float(lags[j] - step), float(lags[j] + step)
+        res = minimize_scalar(
+            lambda lag: _misfit(t_model, theta_model, t_meas, theta_meas, lag, (lo, hi))[0],
+            bounds=(lo, hi), method="bounded", options={"xatol": step * 1e-3},
+        )
+        lag = float(res.x)
+        if _misfit(t_model, theta_model, t_meas, theta_meas, float(lags[j]), (lo, hi))[0] < res.fun:
+            lag = float(lags[j])
+        refined.append((*_misfit(t_model, theta_model, t_meas, theta_meas, lag), lag, int(j)))
+    refined.sort()
+    best_ms, best_inside, lag, k = refined[0]
+    if abs(lag) > max_lag_s + step:  # only a rival may lie beyond the window: keep the best inside as the lag
+        best_ms, best_inside, lag, k = next((r for r in refined if abs(r[2]) <= max_lag_s + step), refined[0])
+    rivals = [r for r in refined if abs(r[2] - lag) >= _RIVAL_SEPARATION_S]
+    ey_n = float(np.mean(np.asarray(theta_meas)[np.isfinite(theta_meas)] ** 2))
+    rival = rivals[0] if rivals else None
     return LagEstimate(
         lag_s=lag,
-        correlation=float(score[k]),
+        correlation=1.0 - best_ms / ey_n,
         window_s=float(max_lag_s),
-        rival_lag_s=float(lags[rival]) if rival is not None else math.nan,
-        rival_correlation=float(score[rival]) if rival is not None else math.nan,
+        rival_lag_s=rival[2] if rival else math.nan,
+        rival_correlation=1.0 - rival[0] / ey_n if rival else math.nan,
+        rms_rad=math.sqrt(best_ms),
+        rival_rms_rad=math.sqrt(rival[0]) if rival else math.nan,
+        at_window_edge=abs(lag) >= float(max_lag_s) - 1.5 * step,
+        overlap_misfit=float(inside[k] / max(syy[k], 1e-300)),
+        overlap_rms_rad=math.sqrt(best_inside),
     )
+
+
+def _misfit(t_model, theta_model, t_meas, theta_meas, lag: float, bracket: tuple[float, float] | None = None):
+    """(misfit, its part inside the overlap) [rad²]: the mean over the measured samples of (measured − model)²
+    where the model covers them and of half the measured value² elsewhere (see :func:`estimate_lag`), and the
+    mean of the first alone over the covered samples. bracket: (lo, hi) lags [s] — then only the samples the
+    model covers at every lag in it are compared (the rest count as uncovered), so that the misfit is smooth in
+    the lag for a sub-sample search."""
+    ok = np.isfinite(theta_meas)
+    t, y = t_meas[ok], theta_meas[ok]
+    tm = np.asarray(t_model, float)
+    lo, hi = bracket if bracket is not None else (lag, lag)
+    cover = (t - hi >= tm[0]) & (t - lo <= tm[-1])
+    e = _wrap(y[cover] - np.interp(t[cover] - lag, tm, np.asarray(theta_model, float)))
+    sq = float(np.sum(e * e))
+    total = (sq + UNCOVERED_WEIGHT * float(np.sum(y[~cover] ** 2))) / max(len(y), 1)
+    return total, sq / max(int(cover.sum()), 1)
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
@@ -200,18 +266,19 @@ def compare_angles(
         y = -y
     if np.count_nonzero(np.isfinite(y)) < 2 or len(tm) < 2:
         raise CheckFailed("not enough samples: the track needs θ in at least two frames, the prediction two samples")
-    mirrored = False
-    corr = window = rival = rival_corr = math.nan
+    mirrored = ambiguous = False
+    corr = window = rival = rival_corr = fit = rival_fit = math.nan
     if lag_s is None:
         est = estimate_lag(tm, xm, ty, y, max_lag_s)
         try:
             other = estimate_lag(tm, xm, ty, -y, max_lag_s)
-            # mirrored when the negated track leaves less than half the mismatch (1 − score) of the track as given
-            mirrored = (1.0 - other.correlation) < 0.5 * (1.0 - est.correlation)
+            # mirrored when the negated track leaves less than half the misfit (over the overlap) of the track as given
+            mirrored = other.overlap_misfit < 0.5 * est.overlap_misfit
         except CheckFailed:
             pass
         lag, corr = est.lag_s, est.correlation
         window, rival, rival_corr = est.window_s, est.rival_lag_s, est.rival_correlation
+        fit, rival_fit, ambiguous = math.degrees(est.rms_rad), math.degrees(est.rival_rms_rad), est.ambiguous
     else:
         lag = float(lag_s)
     t, model, err = _errors(tm, xm, ty, y, lag)
@@ -229,6 +296,9 @@ def compare_angles(
         rival_lag_s=rival,
         rival_correlation=rival_corr,
         correlation=corr,
+        rms_fit_deg=fit,
+        rival_rms_fit_deg=rival_fit,
+        ambiguous=ambiguous,
         mirrored=mirrored,
         rms_deg=float(np.sqrt(np.mean(ad**2))),
         max_deg=float(ad.max()),

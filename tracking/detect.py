@@ -54,6 +54,7 @@ class Blob:
     ellipse_fit: float  # IoU of the blob with its second-moment ellipse
     clipped: bool  # the blob touches an edge of the searched window that is not an edge of the frame
     saturation: float = float("nan")  # peak HSV saturation of the blob's pixels (0–255; the ball's own colour)
+    aspect: float = 1.0  # length / width of the blob's second-moment ellipse (1 for a disc)
 
     @property
     def radius_px(self) -> float:
@@ -123,6 +124,14 @@ def ellipse_fit(contour: np.ndarray) -> float:
     return both / union if union > 0 else 0.0
 
 
+def _aspect(m: dict) -> float:
+    """Length / width of the second-moment ellipse of a contour's moments."""
+    a, b, c = m["mu20"], m["mu11"], m["mu02"]
+    root = math.sqrt(max((a - c) ** 2 + 4.0 * b * b, 0.0))
+    lo = 0.5 * (a + c - root)
+    return math.sqrt((0.5 * (a + c + root)) / lo) if lo > 1e-12 else math.inf
+
+
 def find_blobs(
     bgr: np.ndarray,
     spec: ColorSpec,
@@ -171,7 +180,7 @@ def find_blobs(
             or (inner_bottom and by + bh >= h)
         )
         sat = float(cv2.minMaxLoc(hsv[by : by + bh, bx : bx + bw, 1], mask[by : by + bh, bx : bx + bw])[1])
-        out.append(Blob(m["m10"] / area + x0, m["m01"] / area + y0, area, circ, fit, clipped, sat))
+        out.append(Blob(m["m10"] / area + x0, m["m01"] / area + y0, area, circ, fit, clipped, sat, _aspect(m)))
     return out
 
 
@@ -235,4 +244,59 @@ def find_blobs_coarse(
                 return find_blobs(bgr, spec, gates, origin, size)
             if all(abs(b.u - o.u) > 0.5 or abs(b.v - o.v) > 0.5 for o in out):
                 out.append(b)
+    return out
+
+
+TINY_MAX_AREA_PX = 40.0  # [px²] a blob up to this area is searched by :func:`find_tiny` (a disc of radius ≈ 3.5 px)
+_TINY_MIN_SATURATION = 45  # a 3 px ball blurred by the lens and the codec keeps about half its saturation
+_TINY_MIN_CONTRAST = 35  # ... and stands out by this much from the saturation of its surroundings
+
+
+def find_tiny(
+    bgr: np.ndarray,
+    spec: ColorSpec,
+    origin: tuple[int, int] = (0, 0),
+    frame_size: tuple[int, int] | None = None,
+    min_saturation: int = _TINY_MIN_SATURATION,
+    max_area_px: float = TINY_MAX_AREA_PX,
+) -> list[Blob]:
+    """Balls a few pixels across, which blur, morphology and shape measures would erase: the colour's hue at a
+    lower saturation on the unblurred image, connected components of 1 to max_area_px pixels more saturated than
+    their surroundings, each centred on its saturation-weighted centroid over its box grown by 2 px (sub-pixel). Shape measures are meaningless at this
+    size (set to 1); a caller must judge such blobs by their motion. Same arguments as :func:`find_blobs`."""
+    import cv2
+
+    from .color import with_min_saturation
+
+    hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
+    loose = with_min_saturation(spec, min(min_saturation, min(b.lower[1] for b in spec.bands)))
+    mask = color_mask(hsv, loose)
+    n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    h, w = mask.shape
+    x0, y0 = origin
+    fw, fh = frame_size if frame_size is not None else (w + x0, h + y0)
+    sat_all = hsv[:, :, 1]
+    sat = sat_all.astype(np.float32) * (mask > 0)
+    out: list[Blob] = []
+    for i in range(1, n):
+        bx, by, bw, bh, area = (int(x) for x in stats[i])
+        if area > max_area_px or max(bw, bh) > 2.5 * math.sqrt(max_area_px):
+            continue
+        cx0, cy0 = max(bx - 2, 0), max(by - 2, 0)
+        cx1, cy1 = min(bx + bw + 2, w), min(by + bh + 2, h)
+        patch = sat[cy0:cy1, cx0:cx1]
+        total = float(patch.sum())
+        if total <= 0:
+            continue
+        ys, xs = np.mgrid[cy0:cy1, cx0:cx1]
+        u = float((patch * xs).sum() / total) + x0
+        v = float((patch * ys).sum() / total) + y0
+        clipped = (x0 > 0 and bx <= 0) or (y0 > 0 and by <= 0) or (x0 + w < fw and bx + bw >= w) or (y0 + h < fh and by + bh >= h)
+        # area of the equivalent sharp disc: the saturation mass over the peak (a blurred dot spreads, not grows)
+        peak = float(patch.max())
+        rx0, ry0, rx1, ry1 = max(bx - 5, 0), max(by - 5, 0), min(bx + bw + 5, w), min(by + bh + 5, h)
+        ring = sat_all[ry0:ry1, rx0:rx1]
+        if peak - float(np.median(ring)) < _TINY_MIN_CONTRAST:  # as saturated as its surroundings: a coloured surface
+            continue
+        out.append(Blob(u, v, max(total / peak, float(area)), 1.0, 1.0, bool(clipped), peak))
     return out

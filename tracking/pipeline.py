@@ -53,13 +53,16 @@ class Track:
     full_frame_searches: int  # frames where the search window failed and the whole frame was searched
     notes: tuple[str, ...] = ()  # ambiguities met (several ball-like candidates) and how they were resolved
     theta_in_plane: bool = False  # θ measured in the calibrated plane of motion (else in the image)
+    confidence: np.ndarray | None = None  # (n,) 0–1 of the frame's fix (0 when nothing was seen)
+    unsure: np.ndarray | None = None  # (n,) bool: a candidate was seen but not trusted (reported not found)
+    extra: tuple[tuple[str, np.ndarray], ...] = ()  # more (name, (n,) values) columns, written last (live: tilt, latency)
 
     @property
     def found_fraction(self) -> float:
         return float(self.found.mean()) if len(self.found) else 0.0
 
 
-class _Angles:
+class ImageAngles:
     """θ [rad] from raw ball and pivot pixels: in the image (undistorted when calibrated) or in the plane."""
 
     def __init__(self, calibration: CameraCalibration | None, size: tuple[int, int]) -> None:
@@ -113,42 +116,53 @@ def track_video(
     pivot_opts = pivot_options or (replace(options, start_uv=None) if options is not None else None)
     pivot_tracker = BallTracker(pivot_color, pivot_opts) if pivot_color is not None else None
     fixed = None if pivot_uv is None else (float(pivot_uv[0]), float(pivot_uv[1]))
-    angle = _Angles(calibration, info.size)
+    angle = ImageAngles(calibration, info.size)
 
     ts: list[float] = []
     uv: list[tuple[float, float]] = []
     radius: list[float] = []
+    conf: list[float] = []
     piv: list[tuple[float, float]] = []
     nan2 = (math.nan, math.nan)
+    sure = ball_tracker.options.min_confidence
 
-    def revise(tracker: BallTracker, positions: list, radii: list | None) -> None:
-        for k, blob in tracker.pop_revision():
+    def revise(tracker: BallTracker, positions: list, radii: list | None, confidences: list | None) -> None:
+        for k, blob, c in tracker.pop_revision():
             positions[k] = (blob.u, blob.v) if blob is not None else nan2
             if radii is not None:
                 radii[k] = blob.radius_px if blob is not None else math.nan
+            if confidences is not None:
+                confidences[k] = c if blob is not None else 0.0
 
     for k, t, frame in prefetched(iter_frames(path, fps)):  # decoding overlaps the tracking
         p: tuple[float, float] | None = fixed
         if pivot_tracker is not None:
             pb = pivot_tracker.update(frame, t)
-            revise(pivot_tracker, piv, None)
-            p = (pb.u, pb.v) if pb is not None else None
+            revise(pivot_tracker, piv, None, None)
+            p = (pb.u, pb.v) if pb is not None and pivot_tracker.confidence >= sure else None
         piv.append(p if p is not None else nan2)
         b = ball_tracker.update(frame, t, p)
-        revise(ball_tracker, uv, radius)
+        revise(ball_tracker, uv, radius, conf)
         ts.append(t)
         uv.append((b.u, b.v) if b is not None else nan2)
         radius.append(b.radius_px if b is not None else math.nan)
+        conf.append(ball_tracker.confidence if b is not None else 0.0)
         if on_frame is not None:
-            th = float(angle(np.array([b.u, b.v]), np.array(p))) if b is not None and p is not None else math.nan
-            on_frame(frame, FrameResult(k, t, b, p, th))
+            shown = b if b is not None and ball_tracker.confidence >= sure else None
+            th = float(angle(np.array([b.u, b.v]), np.array(p))) if shown is not None and p is not None else math.nan
+            on_frame(frame, FrameResult(k, t, shown, p, th))
         if progress is not None:
             progress(k + 1)
-    for tracker, positions, radii in ((ball_tracker, uv, radius), (pivot_tracker, piv, None)):
+    for tracker, positions, radii, confidences in ((ball_tracker, uv, radius, conf), (pivot_tracker, piv, None, None)):
         if tracker is not None:
             tracker.finish()
-            revise(tracker, positions, radii)
+            revise(tracker, positions, radii, confidences)
 
+    conf_a = np.array(conf, float)
+    seen = np.all(np.isfinite(np.array(uv, float).reshape(-1, 2)), axis=1)
+    trusted = seen & (conf_a >= sure)
+    uv = [c if ok else nan2 for c, ok in zip(uv, trusted)]
+    radius = [r if ok else math.nan for r, ok in zip(radius, trusted)]
     uv_a = np.array(uv, float).reshape(-1, 2)
     piv_a = np.array(piv, float).reshape(-1, 2)
     xy = None
@@ -169,4 +183,6 @@ def track_video(
         full_frame_searches=ball_tracker.full_frame_searches,
         notes=notes,
         theta_in_plane=angle.axes is not None,
+        confidence=np.where(seen, conf_a, 0.0),
+        unsure=seen & ~trusted,
     )

@@ -42,6 +42,7 @@ class Scenario:
     notes: str = ""
     time_scale: float = 1.0  # true capture time = container time / time_scale (slow-motion videos)
     extra: dict = field(default_factory=dict)
+    lossy: bool = False  # a low-bitrate codec may erase the ball in some frames: count only where it shows (ball_shown)
 
 
 def _swing(duration_s: float, amplitude_deg: float = 30.0, period_s: float = 1.0, lead_s: float = 0.0,
@@ -186,6 +187,122 @@ def compressed(path: Path, size, duration_s: float, seed: int = 10) -> Scenario:
     return Scenario("heavy compression, moving marker", path, gt, {"pivot_color": color_spec("green")}, _visible(gt))
 
 
+def _clutter(size, piv, L, r, bgr=None, seed: int = 0) -> tuple:
+    """A lab's clutter in the ball's colour, placed by the frame size: labels on the wall, a thick cable hanging
+    down behind the swing's edge, another along the table, a screwdriver with a coloured handle on the table."""
+    from .synthetic import BALL_BGR
+
+    w, h = size
+    col = bgr or BALL_BGR
+    rng = np.random.default_rng(seed)
+    px, py = piv
+    labels = [
+        ((0.06 * w, 0.12 * h), (0.06 * w + 7 * r, 0.12 * h + 3.5 * r)),
+        ((0.80 * w, 0.30 * h), (0.80 * w + 4 * r, 0.30 * h + 2.6 * r)),
+        ((0.12 * w, 0.55 * h), (0.12 * w + 3 * r, 0.55 * h + 2.2 * r)),
+    ]
+    out = [Distractor("label", np.array(p, float), bgr=col) for p in labels]
+    ys = np.linspace(0.05 * h, 0.86 * h, 50)
+    xs = px + 0.92 * L * math.sin(math.radians(36)) + 0.04 * w * np.sin(ys / (0.11 * h) + rng.uniform(0, 3))
+    out.append(Distractor("cable", np.column_stack([xs, ys]), thickness_px=max(2, int(round(0.8 * r))), bgr=col))
+    xt = np.linspace(0.02 * w, 0.6 * w, 40)
+    out.append(Distractor("cable", np.column_stack([xt, 0.93 * h + 0.015 * h * np.sin(xt / (0.05 * w))]),
+                          thickness_px=max(2, int(round(0.6 * r))), bgr=col))
+    out.append(Distractor("tool", np.array([0.72 * w, 0.955 * h]), radius_px=2.2 * r, bgr=col, angle_deg=-8.0))
+    return tuple(out)
+
+
+def _clear_of_clutter(gt: GroundTruth, margin_px: float = 2.0) -> np.ndarray:
+    """(n,) bool: the ball does not touch an object of its colour (where colour alone cannot separate them)."""
+    import cv2
+
+    from .synthetic import _draw_distractors
+
+    w, h = gt.size
+    canvas = np.zeros((h, w, 3), np.uint8)
+    _draw_distractors(canvas, gt.distractors)
+    mask = canvas.max(axis=2) > 40
+    dist = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 3)
+    u = np.clip(np.round(gt.ball_uv[:, 0]).astype(int), 0, w - 1)
+    v = np.clip(np.round(gt.ball_uv[:, 1]).astype(int), 0, h - 1)
+    return dist[v, u] > gt.ball_radius_px + margin_px
+
+
+def clutter(path: Path, size, duration_s: float, seed: int = 11, codec: str = "mp4v", bitrate_kbps=None,
+            ball_bgr=None, name: str = "clutter: labels, cables, a tool in the ball's colour") -> Scenario:
+    """The issue's cluttered lab: red labels, a thick red cable beside the swing, a red-handled screwdriver; the
+    ball starts at rest for 0.3 s, hanging among them."""
+    piv, L, r = _geometry(size)
+    t, th = _swing(duration_s, amplitude_deg=32.0, lead_s=0.3)
+    dis = _clutter(size, piv, L, r, ball_bgr)
+    kw = {} if ball_bgr is None else {"ball_bgr": ball_bgr}
+    gt = render_pendulum_video(path, t, th, piv, L, r, size, 60.0, distractors=dis, codec=codec,
+                               bitrate_kbps=bitrate_kbps, seed=seed, **kw)
+    track = {"pivot_uv": piv}
+    if ball_bgr == ORANGE_BGR:
+        track["ball"] = color_spec("orange")
+    return Scenario(name, path, gt, track, _visible(gt) & _clear_of_clutter(gt), lossy=bitrate_kbps is not None)
+
+
+def h264(path: Path, size, duration_s: float, seed: int = 12, bitrate_kbps: float = 100.0) -> Scenario:
+    """H.264 at 100 kbit/s (a phone's or a webcam's low-bandwidth stream): encoder ghosts of the ball, blocks."""
+    piv, L, r = _geometry(size)
+    t, th = _swing(duration_s, amplitude_deg=35.0)
+    gt = render_pendulum_video(path, t, th, piv, L, r, size, 60.0, codec="h264", bitrate_kbps=bitrate_kbps, seed=seed)
+    return Scenario(f"H.264 {bitrate_kbps:.0f} kbit/s", path, gt, {"pivot_uv": piv}, _visible(gt), lossy=True)
+
+
+def oblique(path: Path, size, duration_s: float, seed: int = 13, tilt=(-30.0, 38.0, -5.0), fps: float = 60.0,
+            name: str = "oblique camera, sharp ball + calibration") -> Scenario:
+    """A camera far off the plane's normal, short exposure (the ball sharp at the turning points), calibrated."""
+    w, h = size
+    piv, L, r = _geometry(size, pivot_y=0.2, string=0.5)
+    focal = 1.0 * w
+    H = tilted_view(size, focal, tilt, (w / 2.0, 0.45 * h))
+    K = np.array([[focal, 0.0, w / 2.0], [0.0, focal, h / 2.0], [0.0, 0.0, 1.0]])
+    t, th = _swing(duration_s, amplitude_deg=40.0, period_s=1.1)
+    gt = render_pendulum_video(path, t, th, piv, L, r, size, fps, plane_to_image=H, exposure=0.15, seed=seed)
+    m_per_plane_px = 0.3 / L
+    to_m = np.diag([m_per_plane_px, m_per_plane_px, 1.0]) @ np.linalg.inv(H)
+    cal = CameraCalibration(
+        camera_matrix=K, dist_coeffs=np.zeros(5), image_size=(w, h), rms_px=0.0, board=(9, 6), square_m=0.025, views=0,
+        plane=PlaneCalibration(to_m / to_m[2, 2], m_per_plane_px, np.zeros(3), np.zeros(3)),
+    )
+    pivot_image = tuple(float(c) for c in gt.pivot_uv[0])
+    return Scenario(name, path, gt, {"pivot_uv": pivot_image, "calibration": cal}, _visible(gt))
+
+
+def dark_start_30(path: Path, size, duration_s: float, seed: int = 14) -> Scenario:
+    """30 fps, the first 0.5 s nearly black: whole-frame searches while the ball swings fast, red box and cable."""
+    piv, L, r = _geometry(size)
+    t, th = _swing(duration_s, amplitude_deg=40.0, period_s=0.9)
+    gain = lambda tk: float(np.interp(tk, [0.0, 0.5, 0.8], [0.2, 0.2, 1.0]))  # noqa: E731
+    gt = render_pendulum_video(path, t, th, piv, L, r, size, 30.0, gain=gain, exposure=0.3, seed=seed)
+    return Scenario("30 fps, dark start: whole-frame searches", path, gt, {"pivot_uv": piv}, _visible(gt) & (gt.t >= 0.8))
+
+
+def tiny_ball(path: Path, size, duration_s: float, seed: int = 15, radius_px: float = 1.5, codec: str = "mp4v",
+              bitrate_kbps=None) -> Scenario:
+    """A ball 3 px across (radius_px), red box and cable in view, no size given."""
+    piv, L, _ = _geometry(size)
+    t, th = _swing(duration_s, amplitude_deg=30.0)
+    gt = render_pendulum_video(path, t, th, piv, L, radius_px, size, 60.0, exposure=0.3, defocus_px=0.4, codec=codec,
+                               bitrate_kbps=bitrate_kbps, seed=seed)
+    return Scenario(f"ball {2 * radius_px:.1f} px across" + (f", {codec} {bitrate_kbps:.0f} kbit/s" if bitrate_kbps else ""),
+                    path, gt, {"pivot_uv": piv}, _visible(gt), lossy=bitrate_kbps is not None)
+
+
+def big_ball(path: Path, size, duration_s: float, seed: int = 16, share: float = 0.25) -> Scenario:
+    """A ball a quarter of the frame height across, close to the camera, no size given."""
+    w, h = size
+    r = share * h / 2.0
+    piv = (w / 2.0, 0.05 * h)
+    L = 0.95 * h - piv[1] - 2.0 * r
+    t, th = _swing(duration_s, amplitude_deg=25.0, period_s=1.3)
+    gt = render_pendulum_video(path, t, th, piv, L, r, size, 60.0, distractors=None, seed=seed)
+    return Scenario(f"ball {100 * share:.0f} % of the frame height", path, gt, {"pivot_uv": piv}, _visible(gt))
+
+
 ALL: dict[str, Callable[..., Scenario]] = {
     "plain": plain,
     "dark_start": dark_start,
@@ -200,7 +317,58 @@ ALL: dict[str, Callable[..., Scenario]] = {
     "moving_pivot": moving_pivot,
     "slow_motion": slow_motion,
     "compressed": compressed,
+    "clutter": clutter,
+    "h264_100k": h264,
+    "h264_clutter": lambda p, s, d: clutter(p, s, d, seed=17, codec="h264", bitrate_kbps=100.0,
+                                            name="clutter + H.264 100 kbit/s"),
+    "oblique": oblique,
+    "dark_start_30": dark_start_30,
+    "tiny_ball": tiny_ball,
+    "big_ball": big_ball,
 }
+
+# Held-out style variations: not used to tune the tracker, only to report how it does on cases like the above
+HELD_OUT: dict[str, Callable[..., Scenario]] = {
+    "orange_clutter_vp9": lambda p, s, d: clutter(p, s, d, seed=21, codec="vp9", bitrate_kbps=150.0, ball_bgr=ORANGE_BGR,
+                                                  name="held-out: orange ball, orange clutter, VP9 150 kbit/s"),
+    "h264_60k": lambda p, s, d: h264(p, s, d, seed=22, bitrate_kbps=60.0),
+    "hevc_clutter": lambda p, s, d: clutter(p, s, d, seed=23, codec="hevc", bitrate_kbps=120.0,
+                                            name="held-out: clutter + HEVC 120 kbit/s"),
+    "tiny_ball_h264": lambda p, s, d: tiny_ball(p, s, d, seed=24, radius_px=1.3, codec="h264", bitrate_kbps=400.0),
+    "big_ball_third": lambda p, s, d: big_ball(p, s, d, seed=25, share=0.33),
+    "oblique_other_side": lambda p, s, d: oblique(p, s, d, seed=26, tilt=(20.0, -42.0, 8.0), fps=30.0,
+                                                  name="held-out: oblique from the other side, 30 fps"),
+}
+
+
+def ball_shown(sc: Scenario, min_share: float = 0.3, min_saturation: int = 60) -> np.ndarray:
+    """(n,) bool: the decoded frame shows the ball where it is — at least min_share of its disc in its colour (hue
+    band, saturation ≥ min_saturation). A low-bitrate encoder sometimes skips the blocks of a moving ball or
+    leaves it as a pale smear: those frames cannot count as "visible"."""
+    import cv2
+
+    from .color import with_min_saturation
+    from .video import iter_frames
+
+    spec = with_min_saturation(sc.track_kwargs.get("ball", color_spec("red")), min_saturation)
+    gt = sc.truth
+    r = gt.ball_radius_px
+    out = np.zeros(len(gt.t), bool)
+    for k, _, frame in iter_frames(sc.path):
+        if k >= len(out):
+            break
+        u, v = gt.ball_uv[k]
+        x0, y0 = int(max(0, math.floor(u - r))), int(max(0, math.floor(v - r)))
+        x1, y1 = int(min(frame.shape[1], math.ceil(u + r) + 1)), int(min(frame.shape[0], math.ceil(v + r) + 1))
+        if x1 <= x0 or y1 <= y0:
+            continue
+        from .color import color_mask
+
+        patch = color_mask(cv2.cvtColor(frame[y0:y1, x0:x1], cv2.COLOR_BGR2HSV), spec) > 0
+        ys, xs = np.mgrid[y0:y1, x0:x1]
+        disc = (xs - u) ** 2 + (ys - v) ** 2 <= r * r
+        out[k] = disc.any() and float(patch[disc].mean()) >= min_share
+    return out
 
 
 @dataclass(frozen=True)

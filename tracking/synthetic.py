@@ -22,9 +22,8 @@ from typing import Callable, Literal, Sequence
 
 import numpy as np
 
-from trajectories.errors import InputError
-
 from .calibration import apply_homography
+from .video import VideoSink
 
 BALL_BGR = (35, 30, 205)  # a saturated red (OpenCV hue ≈ 178)
 MARKER_BGR = {"green": (60, 170, 40), "blue": (200, 90, 30), "yellow": (30, 200, 220), "red": BALL_BGR}
@@ -37,13 +36,17 @@ Foreground = Callable[[np.ndarray, float, np.ndarray], None]  # draw(frame, t [s
 
 @dataclass(frozen=True)
 class Distractor:
-    """A red object that is not the ball [px]: ``box`` (points = two opposite corners), ``cable`` (polyline) or
-    ``disc`` (points = its centre, radius_px: its radius; as round as the ball)."""
+    """An object of the ball's colour that is not the ball [px]: ``box`` (points = two opposite corners),
+    ``label`` (a box with lines of white text), ``cable`` (polyline), ``disc`` (points = its centre, radius_px:
+    its radius; as round as the ball) or ``tool`` (a screwdriver: points = the handle's centre, radius_px = half
+    its length, an elongated rounded handle and a grey shaft, turned by angle_deg)."""
 
-    kind: Literal["box", "cable", "disc"]
+    kind: Literal["box", "label", "cable", "disc", "tool"]
     points: np.ndarray
     thickness_px: int = 5  # cable width [px]
-    radius_px: float = 8.0  # disc radius [px]
+    radius_px: float = 8.0  # disc radius, half the tool handle's length [px]
+    bgr: tuple[int, int, int] = (35, 30, 205)  # its colour (the red ball's by default)
+    angle_deg: float = 0.0  # tool: direction of the shaft from the image's +u axis [deg]
 
 
 @dataclass(frozen=True)
@@ -111,12 +114,33 @@ def _draw_distractors(frame: np.ndarray, distractors: Sequence[Distractor]) -> N
 
     for d in distractors:
         p = np.round(np.asarray(d.points) * 16).astype(np.int32)
-        if d.kind == "box":
-            cv2.rectangle(frame, tuple(p[0]), tuple(p[1]), BALL_BGR, -1, cv2.LINE_AA, 4)
+        if d.kind in ("box", "label"):
+            cv2.rectangle(frame, tuple(p[0]), tuple(p[1]), d.bgr, -1, cv2.LINE_AA, 4)
+            if d.kind == "label":  # lines of white "text": dashes of random length
+                (x0, y0), (x1, y1) = np.sort(np.asarray(d.points, float), axis=0)
+                rng = np.random.default_rng(int(x0 * 7 + y0))
+                rows = max(1, int((y1 - y0) // 9))
+                for k in range(rows):
+                    y = y0 + (k + 0.5) * (y1 - y0) / rows
+                    x = x0 + 0.12 * (x1 - x0)
+                    while x < x1 - 0.15 * (x1 - x0):
+                        n = rng.uniform(0.05, 0.2) * (x1 - x0)
+                        a, b = (int(x * 16), int(y * 16)), (int(min(x + n, x1 - 0.12 * (x1 - x0)) * 16), int(y * 16))
+                        cv2.line(frame, a, b, (235, 235, 235), 2, cv2.LINE_AA, 4)
+                        x += n + rng.uniform(0.02, 0.06) * (x1 - x0)
         elif d.kind == "disc":
-            _draw_ball(frame, np.asarray(d.points, float).reshape(1, 2), d.radius_px, BALL_BGR)
+            _draw_ball(frame, np.asarray(d.points, float).reshape(1, 2), d.radius_px, d.bgr)
+        elif d.kind == "tool":
+            c = np.asarray(d.points, float).reshape(2)
+            L = float(d.radius_px)
+            e = np.array([math.cos(math.radians(d.angle_deg)), math.sin(math.radians(d.angle_deg))])
+            tip = c + e * 2.6 * L
+            cv2.line(frame, tuple(int(x * 16) for x in c), tuple(int(x * 16) for x in tip), (150, 150, 155),
+                     max(2, int(0.25 * L)), cv2.LINE_AA, 4)
+            cv2.ellipse(frame, (tuple(float(x) for x in c), (2.0 * L, 2.0 * L / 2.8), float(d.angle_deg)), d.bgr, -1,
+                        cv2.LINE_AA)
         else:
-            cv2.polylines(frame, [p.reshape(-1, 1, 2)], False, BALL_BGR, d.thickness_px, cv2.LINE_AA, 4)
+            cv2.polylines(frame, [p.reshape(-1, 1, 2)], False, d.bgr, d.thickness_px, cv2.LINE_AA, 4)
 
 
 def _disc_alpha(centres: np.ndarray, r: float, x0: int, y0: int, pw: int, ph: int) -> np.ndarray:
@@ -149,6 +173,50 @@ def _draw_ball(frame: np.ndarray, centres: np.ndarray, r: float, color: tuple[in
     patch = frame[cy0:cy1, cx0:cx1].astype(np.float32)
     a = alpha[:, :, None]
     frame[cy0:cy1, cx0:cx1] = np.clip(patch * (1.0 - a) + ball * a + 0.5, 0, 255).astype(np.uint8)
+
+
+def draw_pendulum(frame: np.ndarray, pivot_uv: np.ndarray, ball_centres: np.ndarray, radius_px: float,
+                  ball_bgr: tuple[int, int, int] = BALL_BGR, pivot_marker: str | None = None,
+                  pivot_marker_radius_px: float = 9.0, ball_uv: np.ndarray | None = None,
+                  string_px: float | None = None) -> None:
+    """Draw in place the robot's flange above the pivot [px], the pivot marker (a colour name, or None), the string
+    to the ball (at ball_uv [px], default the middle of its centres; with string_px, its length [px], drawn sagging
+    when the ball is nearer — a slack string) and the ball, motion-blurred over its centres during the exposure
+    (m, 2) [px]."""
+    import cv2
+
+    p = np.asarray(pivot_uv, float)
+    fx, fy = int(round(p[0])), int(round(p[1]))
+    cv2.rectangle(frame, (fx - 28, fy - 70), (fx + 28, fy - 8), (90, 90, 95), -1, cv2.LINE_AA)
+    if pivot_marker is not None:
+        _draw_ball(frame, p[None, :], pivot_marker_radius_px, MARKER_BGR.get(pivot_marker, MARKER_BGR["green"]))
+    c = np.asarray(ball_centres, float).reshape(-1, 2)
+    b = c.mean(axis=0) if ball_uv is None else np.asarray(ball_uv, float)
+    if string_px is None or np.hypot(*(b - p)) >= 0.99 * string_px:  # taut: a straight string
+        cv2.line(frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1,
+                 cv2.LINE_AA, 4)
+    else:
+        string = _string_polyline(p, b, string_px)
+        cv2.polylines(frame, [np.round(string * 16).astype(np.int32).reshape(-1, 1, 2)], False, (45, 45, 50), 1,
+                      cv2.LINE_AA, 4)
+    _draw_ball(frame, c, radius_px, ball_bgr)
+
+
+def lab_background(size: tuple[int, int], seed: int = 0) -> np.ndarray:
+    """The backdrop of the rendered videos (a light wall, a darker table), (h, w, 3) BGR."""
+    return _background(size, np.random.default_rng(seed))
+
+
+def _string_polyline(p: np.ndarray, b: np.ndarray, length: float, n: int = 12) -> np.ndarray:
+    """(n, 2) points of a string of ``length`` [px] from p to b: straight when taut, sagging (a parabola hanging down
+    by the excess length) when the ball is nearer."""
+    d = float(np.hypot(*(b - p)))
+    u = np.linspace(0.0, 1.0, n)[:, None]
+    line = p[None, :] + u * (b - p)[None, :]
+    if d >= 0.99 * length:
+        return line
+    sag = 0.5 * math.sqrt(max(length * length - d * d, 0.0))
+    return line + np.array([0.0, 1.0]) * (4.0 * sag * u * (1.0 - u))
 
 
 def rod_occluder(p0: Sequence[float], p1: Sequence[float], width_px: float = 6.0,
@@ -241,8 +309,11 @@ def render_pendulum_video(
     foreground: Sequence[Foreground] = (),
     plane_to_image: np.ndarray | None = None,
     jpeg_quality: int | None = None,
+    bitrate_kbps: float | None = None,
+    ball_path: np.ndarray | None = None,
     seed: int = 0,
     progress: Callable[[int], None] | None = None,
+    target: str | Path | None = None,
 ) -> GroundTruth:
     """Render a pendulum video from θ(t) and return what was drawn.
 
@@ -257,7 +328,11 @@ def render_pendulum_video(
     on every frame after the ball (occluders, a hand); plane_to_image: homography from the plane of motion
     (pivot_uv, string_px and ball_radius_px are then in plane px) to the image (ball radius scaled by the
     local scale); the returned ball and pivot positions are in the image, θ in the plane; jpeg_quality:
-    each frame JPEG-compressed at this quality (1–100) before encoding (heavy compression artifacts).
+    each frame JPEG-compressed at this quality (1–100) before encoding (heavy compression artifacts);
+    bitrate_kbps: target bitrate [kbit/s] for codec 'h264', 'hevc', 'vp9' or 'av1' (written with PyAV); ball_path:
+    (n, 2) ball centres [px] per sample instead of pivot + string_px·(sin θ, cos θ) — a ball that may fly on a slack
+    string (drawn sagging when the ball is nearer than string_px); θ is then the direction pivot → ball; target: the
+    name an OutputError reports (the final name when ``path`` is a temporary one).
     """
     import cv2
 
@@ -287,8 +362,11 @@ def render_pendulum_video(
         return out
 
     def state(times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        th = interp(times, theta)
         pv = np.column_stack([interp(times, piv[:, 0]), interp(times, piv[:, 1])])
+        if ball_path is not None:
+            b = np.column_stack([interp(times, ball_path[:, 0]), interp(times, ball_path[:, 1])])
+            return np.arctan2(b[:, 0] - pv[:, 0], b[:, 1] - pv[:, 1]), pv, b
+        th = interp(times, theta)
         return th, pv, pv + L * np.column_stack([np.sin(th), np.cos(th)])
 
     H = None if plane_to_image is None else np.asarray(plane_to_image, float)
@@ -309,21 +387,13 @@ def render_pendulum_video(
     _draw_distractors(bg, dis)
     cv2.setRNGSeed(seed)
 
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*codec), float(fps), (w, h))
-    if not writer.isOpened():
-        raise InputError(f"cannot write a {codec!r} video here", file=str(path))
+    writer = VideoSink(path, codec, fps, (w, h), bitrate_kbps, target=target)
     noise = np.empty((h, w, 3), np.int16)
     frame16 = np.empty((h, w, 3), np.int16)
     try:
         for k in range(n_frames):
             frame = bg.copy()
             p = piv_f[k]
-            # the robot's flange above the pivot, and the pivot marker
-            fx, fy = int(round(p[0])), int(round(p[1]))
-            cv2.rectangle(frame, (fx - 28, fy - 70), (fx + 28, fy - 8), (90, 90, 95), -1, cv2.LINE_AA)
-            if pivot_marker is not None:
-                col = MARKER_BGR.get(pivot_marker, MARKER_BGR["green"])
-                _draw_ball(frame, p[None, :], pivot_marker_radius_px, col)
             # motion blur: sub-frame positions over the exposure, centred on the frame time
             half = 0.5 * exposure / fps
             m = 1
@@ -335,8 +405,8 @@ def render_pendulum_video(
             rk = r if H is None else r * float(homography_scale(H, centres.mean(axis=0))[0])
             centres = to_image(centres)
             b = ball_f[k]
-            cv2.line(frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1, cv2.LINE_AA, 4)
-            _draw_ball(frame, centres, rk, ball_bgr)
+            draw_pendulum(frame, p, centres, rk, ball_bgr, pivot_marker, pivot_marker_radius_px, b,
+                          None if ball_path is None else L)
             for draw in foreground:
                 draw(frame, float(tf[k] - t[0]), b)
             if gain is not None:
@@ -356,7 +426,7 @@ def render_pendulum_video(
             if progress is not None:
                 progress(k + 1)
     finally:
-        writer.release()
+        writer.close()
     return GroundTruth(
         t=tf - t[0],
         ball_uv=ball_f,

@@ -30,9 +30,16 @@ import numpy as np
 
 from .ambiguity import choose_pendulum
 from .color import ColorSpec, with_min_saturation
-from .detect import Blob, BlobGates, coarse_factor, coarse_hsv, find_blobs, find_blobs_coarse, to_hsv
+from .detect import (
+    TINY_MAX_AREA_PX, Blob, BlobGates, coarse_factor, coarse_hsv, find_blobs, find_blobs_coarse, find_tiny, to_hsv,
+)
+from .static_map import StaticMap
 
 COARSE_WINDOW_PX = 250_000  # search windows larger than this [px²] get the coarse first pass of whole frames
+TENTATIVE = 0.4  # confidence of a fix on a lock not yet confirmed, or while candidates are being judged
+CONFIRMED = 0.9  # confidence given to the frames of a lock once it is confirmed
+_ON_STATIC = 0.3  # confidence factor of a fix on a place where the ball's colour has been static
+_WEAK_SHAPE = 0.8  # ... of a fix less round than the strict gates while not moving fast
 
 
 @dataclass(frozen=True)
@@ -64,7 +71,21 @@ class TrackerOptions:
     start_radius_px: float = 60.0  # [px] ... within this distance
     resolve_s: float = 0.4  # [s] several candidates on a free search: follow each, judge the motion over this
     max_resolve_s: float = 10.0  # [s] ... and wait up to this long for one to move (else the static rules)
-    max_candidates: int = 4  # at most this many candidates are followed
+    max_candidates: int = 6  # at most this many candidates are followed
+    max_radius_share: float | None = 1.0 / 6.0  # a ball's radius may reach this share of the frame height (None: gates)
+    loose_circularity: float = 0.45  # when no blob passes the strict gates, acquire from blobs this round ...
+    loose_ellipse_fit: float = 0.75  # ... (a ball turned into blocks by a low-bitrate codec), tentatively
+    max_aspect: float = 2.5  # acquisition: a blob longer than this × its width is not a ball (a tool's handle)
+    tiny_search: bool = True  # when nothing else is found, look for balls a few pixels across (detect.find_tiny)
+    confirm_frames: int = 3  # a new lock is tentative (unsure) until followed this many frames ...
+    confirm_move_radii: float = 1.0  # ... and moved this many radii (at least 3 px), or hangs at rest (round, plumb when a pivot is known)
+    min_confidence: float = 0.5  # a fix below this confidence is reported unsure (not found)
+    string_tolerance: float = 0.25  # with a pivot: a fix farther than (1 + this) × the learned string length is rejected
+    string_min_fixes: int = 20  # the string length [px] is learned from this many confident fixes
+    static_lock_s: float = 0.6  # [s] a lock that has not moved for this long may be an object, not the ball:
+    recheck_s: float = 0.5  # [s] ... look this often for other candidates and keep the one moving like a pendulum
+    plumb_deg: float = 15.0  # a new lock at rest is confirmed only within this of the pivot's vertical (a hanging ball)
+    static_time_constant_s: float = 1.0  # [s] of the map of static objects in the ball's colour (tracking.static_map)
 
 
 @dataclass(frozen=True)
@@ -99,6 +120,16 @@ class _Follower:
         self.sats: deque[float] = deque([blob.saturation], maxlen=options.area_history)
         self._min_s = min(b.lower[1] for b in spec.bands)
         self._sat_specs: dict[int, ColorSpec] = {}
+        self.tiny = blob.area_px <= TINY_MAX_AREA_PX and blob.circularity == 1.0 and blob.ellipse_fit == 1.0
+        self.hits = 1  # fixes since acquisition
+        self.confirmed = False
+        self.pending: list[tuple[int, Blob]] = []  # tentative frames (update index, blob) until confirmed
+        self.origin = (blob.u, blob.v)
+        self.round = True  # acquired by the strict shape gates
+        self.recent: deque[tuple[float, float, float, int]] = deque()  # (t, u, v, update index) of the last fixes
+        self.string_misses = 0
+        self.last_recheck = t
+        self.named = False  # the user named it (start_uv)
 
     def _at(self, level: int) -> ColorSpec:
         if level not in self._sat_specs:
@@ -197,6 +228,28 @@ class _Follower:
                 return round_[0]
         return None
 
+    def note(self, t: float, u: float, v: float, index: int, keep_s: float) -> None:
+        """Remember a fix for the rest test (the last keep_s seconds)."""
+        self.recent.append((t, u, v, index))
+        while self.recent and self.recent[0][0] < t - keep_s:
+            self.recent.popleft()
+
+    def at_rest(self, span_s: float) -> bool:
+        """The fixes of the last span_s seconds (covering most of it) stay within a radius' share of their median."""
+        if len(self.recent) < 3 or self.recent[-1][0] - self.recent[0][0] < 0.8 * span_s:
+            return False
+        p = np.array([(u, v) for _, u, v, _ in self.recent])
+        spread = float(np.max(np.linalg.norm(p - np.median(p, axis=0), axis=1)))
+        return spread <= max(1.5, 0.3 * self.radius())
+
+    def moving(self, min_px: float) -> bool:
+        """Moved at least min_px [px] from where the lock began, steadily: each of the last 3 frame steps longer
+        than centroid noise (a fragment flickering in a dark frame hops once)."""
+        if math.hypot(self.fixes[-1].u - self.origin[0], self.fixes[-1].v - self.origin[1]) < min_px or len(self.recent) < 4:
+            return False
+        p = np.array([(u, v) for _, u, v, _ in list(self.recent)[-4:]])
+        return bool(np.all(np.linalg.norm(np.diff(p, axis=0), axis=1) > 0.3))
+
     def window(self, pred: Prediction, w: int, h: int) -> tuple[int, int, int, int] | None:
         o = self.options
         half = int(max(o.window_min_half_px, o.window_radius_factor * self.radius() + pred.gate_px))
@@ -224,6 +277,12 @@ class _Follower:
             max_area_px=o.gates.max_area_px * self._smear(pred),
         )
         sub = frame[y0:y1, x0:x1]
+        if self.tiny:  # a few pixels across: no blur, no morphology, no shape
+            found = find_tiny(sub, self.spec, (x0, y0), (w, h), max_area_px=max(TINY_MAX_AREA_PX, 4.0 * self.area))
+            blob = self.choose(found, pred)
+            if blob is not None and blob.clipped:
+                return None, False
+            return blob, True
         factor = coarse_factor(w) if (x1 - x0) * (y1 - y0) > COARSE_WINDOW_PX else 1  # the frame sets the ball size
         hsv = to_hsv(sub) if factor == 1 else coarse_hsv(sub, factor)
         for spec in self._specs(pred):
@@ -241,6 +300,7 @@ class _Follower:
         slowly (a motion-blurred streak is larger and paler than the ball)."""
         self.fixes = (self.fixes + [_Fix(t, blob.u, blob.v)])[-2:]
         self.area_misses = 0
+        self.hits += 1
         if pred is not None and pred.frame_step_px > self.options.blur_min_step_radii * self.radius():
             return
         self.areas.append(blob.area_px)
@@ -263,10 +323,17 @@ class _Hypotheses:
     shown: list[Blob | None]  # what was returned for each frame meanwhile
     starts: list[tuple[float, float]]  # where every candidate was first seen [px]
     merged: bool = False  # some candidates' followers converged onto another's blob and were dropped
+    incumbent_frames: list[int] = field(default_factory=list)  # frames of the lock (follower 0) at rest before: withdrawn if it loses
 
 
 class BallTracker:
-    """Stateful tracker of one coloured ball; call :meth:`update` once per frame in time order."""
+    """Stateful tracker of one coloured ball; call :meth:`update` once per frame in time order.
+
+    Every returned blob comes with :attr:`confidence` (0–1): below ``min_confidence`` the tracker is unsure —
+    a new lock not yet confirmed by a few frames of consistent motion, candidates still being judged, a fix on a
+    place where the ball's colour has been static — and the caller must not report it as found. Tentative frames
+    are revised once the doubt is settled (:meth:`pop_revision`).
+    """
 
     def __init__(self, spec: ColorSpec, options: TrackerOptions | None = None) -> None:
         self.spec = spec
@@ -274,12 +341,20 @@ class BallTracker:
         self._follower: _Follower | None = None
         self._hyp: _Hypotheses | None = None
         self._n = 0  # updates so far
-        self._revision: list[tuple[int, Blob | None]] = []
+        self._revision: list[tuple[int, Blob | None, float]] = []
         self.full_frame_searches = 0  # how often the window failed and the whole frame was searched
         self._coarse: tuple[np.ndarray, np.ndarray] | None = None  # (frame, its coarse HSV) of the last search
         self.notes: list[str] = []  # ambiguities met and how they were resolved (for the user)
         self._started = False  # a first fix was made (start_uv only applies before it)
         self._acquire_spec = with_min_saturation(spec, self.options.acquire_min_saturation)
+        self._static = StaticMap(spec, self.options.static_time_constant_s)
+        self._excluded: list[tuple[float, float, float]] = []  # (u, v, radius) [px] of objects found not to be the ball
+        self._string: deque[float] = deque(maxlen=300)  # distances [px] of confident fixes from the pivot
+        self._string_cache: float | None = None
+        self._string_added = 0
+        self._sized = False
+        self.confidence = 0.0  # of the blob returned by the last update (0 when none)
+        self.rejected_string = 0  # fixes rejected for lying beyond the string's reach
 
     # ------------------------------------------------------------------ public
 
@@ -288,9 +363,10 @@ class BallTracker:
         f = self._current()
         return f.predict(t) if f is not None else None
 
-    def pop_revision(self) -> list[tuple[int, Blob | None]]:
-        """Frames (update index, blob or None) whose result changed since returned, after choosing among
-        candidates; cleared by the call."""
+    def pop_revision(self) -> list[tuple[int, Blob | None, float]]:
+        """Frames (update index, blob or None, confidence) whose result changed since returned — after choosing
+        among candidates, confirming a tentative lock, or finding that a lock sat on a static object; cleared by
+        the call."""
         out, self._revision = self._revision, []
         return out
 
@@ -299,57 +375,226 @@ class BallTracker:
         """Several candidates are being followed; results returned meanwhile may be revised."""
         return self._hyp is not None
 
+    @property
+    def string_px(self) -> float | None:
+        """The string length learned from confident fixes [px] (their 95th percentile distance from the pivot;
+        recomputed every 10 fixes)."""
+        if len(self._string) < self.options.string_min_fixes:
+            return None
+        if self._string_cache is None or self._string_added >= 10:
+            self._string_cache = float(np.percentile(np.fromiter(self._string, float), 95))
+            self._string_added = 0
+        return self._string_cache
+
     def finish(self) -> None:
         """End of the video: choose among candidates still open (revisions via :meth:`pop_revision`)."""
         if self._hyp is not None:
             self._resolve(final=True)
 
     def update(self, frame: np.ndarray, t: float, pivot_uv: tuple[float, float] | None = None) -> Blob | None:
-        """Find the ball in a BGR frame taken at time t [s]; None when it is not found.
+        """Find the ball in a BGR frame taken at time t [s]; None when it is not found (see :attr:`confidence`).
 
-        pivot_uv: the pivot in this frame [px] when known (helps choosing among candidates).
+        pivot_uv: the pivot in this frame [px] when known (bounds where the ball can be, helps choosing among
+        candidates).
         """
         index = self._n
         self._n += 1
+        if not self._sized:
+            self._size_gates(frame)
+        self.confidence = 0.0
         if self._hyp is not None:
-            return self._update_hypotheses(frame, t, pivot_uv, index)
-        f = self._follower
-        pred = f.predict(t) if f is not None else None
-        if f is not None and pred is not None and math.isfinite(pred.gate_px):
-            blob, settled = f.search_window(frame, pred)
-            if not settled:
-                self.full_frame_searches += 1
-                blob = f.choose(self._whole(frame, self.spec), pred)
+            blob = self._update_hypotheses(frame, t, pivot_uv, index)
             if blob is not None:
-                f.accept(blob, t, pred)
-            return blob
-        return self._acquire(frame, t, pivot_uv, index)
+                settled = self._hyp is None and self._follower is not None and self._follower.confirmed
+                self.confidence = CONFIRMED if settled else TENTATIVE
+                if self._hyp is None and self._follower is not None and not self._follower.confirmed:
+                    self._follower.pending.append((index, blob))
+        else:
+            f = self._follower
+            pred = f.predict(t) if f is not None else None
+            if f is not None and not f.confirmed and (f.tiny or not f.round) and self._candidates(
+                self._whole(frame, self.spec), t
+            ):  # a tentative lock on a ragged or tiny blob gives way to a ball-shaped blob anywhere
+                f = pred = None
+            if f is not None and pred is not None and math.isfinite(pred.gate_px):
+                blob, settled = f.search_window(frame, pred)
+                if not settled:
+                    self.full_frame_searches += 1
+                    blob = f.choose(self._whole(frame, self.spec), pred)
+                if blob is not None and not self._within_string(f, blob, pivot_uv):
+                    blob = None
+                if blob is not None:
+                    f.accept(blob, t, pred)
+                    blob = self._judge(f, blob, t, pivot_uv, index)
+                if self._follower is f and blob is not None:
+                    blob = self._watch_rest(frame, f, blob, t, pivot_uv, index)
+            else:
+                blob = self._acquire(frame, t, pivot_uv, index)
+        self._learn(frame, t, blob, pivot_uv)
+        return blob
 
     # ------------------------------------------------------------------ internals
 
-    def _whole(self, frame: np.ndarray, spec: ColorSpec) -> list[Blob]:
+    def _size_gates(self, frame: np.ndarray) -> None:
+        """Once the frame size is known: let the largest ball be max_radius_share of the frame height."""
+        self._sized = True
+        share = self.options.max_radius_share
+        if share is None:
+            return
+        largest = math.pi * (share * frame.shape[0]) ** 2
+        if largest > self.options.gates.max_area_px:
+            self.options = replace(self.options, gates=replace(self.options.gates, max_area_px=largest))
+
+    def _learn(self, frame: np.ndarray, t: float, blob: Blob | None, pivot_uv) -> None:
+        """The static map (the confident ball left out) and the string length."""
+        ok = blob is not None and self.confidence >= self.options.min_confidence
+        keep = [(blob.u, blob.v, 1.5 * blob.radius_px + 2.0)] if ok else []
+        if self._follower is not None and self._follower.confirmed and not ok:  # a confirmed ball briefly missed
+            last = self._follower.fixes[-1]
+            keep.append((last.u, last.v, 2.0 * self._follower.radius() + 4.0))
+        self._static.update(frame, t, keep)
+        if ok and pivot_uv is not None and self._hyp is None:
+            self._string.append(math.hypot(blob.u - pivot_uv[0], blob.v - pivot_uv[1]))
+            self._string_added += 1
+
+    def _within_string(self, f: _Follower, blob: Blob, pivot_uv) -> bool:
+        """False for a fix farther from the pivot than the string reaches; after 3 in a row the lock is dropped."""
+        L = self.string_px
+        if L is None or pivot_uv is None:
+            return True
+        d = math.hypot(blob.u - pivot_uv[0], blob.v - pivot_uv[1])
+        if d <= (1.0 + self.options.string_tolerance) * L + 2.0 * blob.radius_px:
+            f.string_misses = 0
+            return True
+        self.rejected_string += 1
+        f.string_misses += 1
+        if f.string_misses >= 3:
+            self._follower = None
+        return False
+
+    def _judge(self, f: _Follower, blob: Blob, t: float, pivot_uv, index: int) -> Blob:
+        """Set the confidence of a fix on the lock; confirm a tentative lock (revising its frames)."""
+        o = self.options
+        f.note(t, blob.u, blob.v, index, max(o.static_lock_s, o.recheck_s) + 0.1)
+        conf = 1.0
+        if not f.confirmed and len(f.recent) >= 2:  # a tentative lock that jumped (after a gap) starts afresh there
+            p = [(u, v) for _, u, v, _ in list(f.recent)[-3:]]
+            step = math.hypot(p[-2][0] - p[-3][0], p[-2][1] - p[-3][1]) if len(p) == 3 else 0.0
+            if math.hypot(p[-1][0] - p[-2][0], p[-1][1] - p[-2][1]) > 4.0 * f.radius() + 2.0 * step:
+                f.pending, f.hits, f.origin = [], 1, (blob.u, blob.v)
+                f.recent = deque([f.recent[-1]])
+        if not f.confirmed:
+            moved = f.moving(max(3.0, o.confirm_move_radii * f.radius()))
+            at_rest_ok = f.round and (pivot_uv is None or self._plumb(blob, pivot_uv))
+            if f.hits >= o.confirm_frames and (moved or at_rest_ok):
+                f.confirmed = True
+                self._revision.extend((k, b, CONFIRMED) for k, b in f.pending)
+                f.pending = []
+            else:
+                f.pending.append((index, blob))
+                conf = TENTATIVE
+        if self._static.static_share(blob.u, blob.v, blob.radius_px) >= 0.5:
+            conf *= _ON_STATIC
+        g = o.gates
+        if not f.tiny and (blob.ellipse_fit < g.min_ellipse_fit - 0.05 or blob.circularity < g.min_circularity - 0.1):
+            pred_step = math.hypot(f.fixes[-1].u - f.fixes[0].u, f.fixes[-1].v - f.fixes[0].v) if len(f.fixes) == 2 else 0.0
+            if pred_step < 2.0 * f.radius():  # not a motion-blurred streak: just a ragged blob
+                conf *= _WEAK_SHAPE
+        self.confidence = conf
+        return blob
+
+    def _plumb(self, blob: Blob, pivot_uv) -> bool:
+        du, dv = blob.u - pivot_uv[0], blob.v - pivot_uv[1]
+        return dv > 0 and abs(math.degrees(math.atan2(du, dv))) <= self.options.plumb_deg
+
+    def _watch_rest(self, frame: np.ndarray, f: _Follower, blob: Blob, t: float, pivot_uv, index: int) -> Blob | None:
+        """A lock that sits still may be a static object of the ball's colour rather than the ball (at rest, or
+        held): every recheck_s look for other candidates; if there are any, follow them all and keep the one that
+        moves like a pendulum — and if that is another, the still frames of this lock are withdrawn and the
+        object excluded."""
+        o = self.options
+        every = o.recheck_s if f.confirmed else min(o.recheck_s, 0.1)  # a tentative lock at rest is doubted more often
+        if f.named or not f.at_rest(o.static_lock_s) or t - f.last_recheck < every:
+            return blob
+        f.last_recheck = t
+        r = f.radius()
+        away = (blob.u, blob.v, 2.0 * r + 2.0)
+        if f.confirmed:
+            others = [b for b in self._candidates(self._whole(frame, self.spec), t)
+                      if math.hypot(b.u - blob.u, b.v - blob.v) > away[2]]
+        else:  # a tentative lock: whatever could be the ball instead
+            others = self._find_candidates(frame, t, away)[0]
+        if others:
+            self._start_hypotheses([f] + [_Follower(self.spec, o, b, t) for b in others[: o.max_candidates - 1]],
+                                   [blob] + others, t, index, pivot_uv)
+            self._hyp.incumbent_frames = [k for _, _, _, k in f.recent if k != index]
+            self.confidence = TENTATIVE
+        return blob
+
+    def _whole(self, frame: np.ndarray, spec: ColorSpec, gates: BlobGates | None = None) -> list[Blob]:
         """Blobs passing the strict gates on the whole frame (a coarse pass first on large frames, its shrunk
         image kept for further colour thresholds on the same frame)."""
         factor = coarse_factor(frame.shape[1])
         if factor > 1 and (self._coarse is None or self._coarse[0] is not frame):
             self._coarse = (frame, coarse_hsv(frame, factor))
         small = self._coarse[1] if factor > 1 else None
-        return find_blobs_coarse(frame, spec, self.options.gates, factor, small_hsv=small)
+        return find_blobs_coarse(frame, spec, gates or self.options.gates, factor, small_hsv=small)
 
     def _current(self) -> _Follower | None:
         if self._hyp is not None:
             return self._hyp.followers[self._hyp.leader]
         return self._follower
 
+    def _candidates(self, blobs: list[Blob], t: float) -> list[Blob]:
+        """Blobs that may be the ball: not an object found not to be, not on a static place, not elongated."""
+        out = []
+        for b in blobs:
+            if any(math.hypot(b.u - u, b.v - v) <= r for u, v, r in self._excluded):
+                continue
+            if self._static.static_share(b.u, b.v, b.radius_px) >= 0.5 or b.aspect > self.options.max_aspect:
+                continue
+            out.append(b)
+        return out
+
+    def _find_candidates(self, frame: np.ndarray, t: float, away: tuple[float, float, float] | None = None
+                         ) -> tuple[list[Blob], bool]:
+        """(candidates on the whole frame, found by the strict gates): the strict gates first, else blobs only
+        roughly round (a ball turned into blocks by a low-bitrate codec) and after them balls a few pixels across;
+        the roundest first, tiny ones by saturation.
+        away: (u, v, distance) [px] — only candidates farther than that from (u, v) count."""
+        o = self.options
+
+        def keep(blobs: list[Blob]) -> list[Blob]:
+            blobs = self._candidates(blobs, t)
+            if away is None:
+                return blobs
+            return [b for b in blobs if math.hypot(b.u - away[0], b.v - away[1]) > away[2]]
+
+        def roundest(blobs: list[Blob]) -> list[Blob]:
+            return sorted(blobs, key=lambda b: -b.ellipse_fit)
+
+        blobs = roundest(keep(self._whole(frame, self.spec)))
+        if not blobs and o.acquire_min_saturation > min(b.lower[1] for b in self.spec.bands):
+            # a ball touching a paler object of its hue (a hand) merges with it; its saturated core does not
+            blobs = roundest(keep(self._whole(frame, self._acquire_spec)))
+        if blobs or o.start_uv is not None:
+            return blobs, True
+        loose = replace(o.gates, min_circularity=min(o.gates.min_circularity, o.loose_circularity),
+                        min_ellipse_fit=min(o.gates.min_ellipse_fit, o.loose_ellipse_fit))
+        blobs = roundest(keep(self._whole(frame, self.spec, loose)))
+        if o.tiny_search and o.gates.min_area_px <= TINY_MAX_AREA_PX:  # and, side by side, balls a few pixels across
+            tiny = [b for b in keep(find_tiny(frame, self.spec))
+                    if all(math.hypot(b.u - c.u, b.v - c.v) > c.radius_px + 2.0 for c in blobs)]
+            blobs += sorted(tiny, key=lambda b: -b.saturation)
+        return blobs, False
+
     def _acquire(self, frame: np.ndarray, t: float, pivot_uv, index: int) -> Blob | None:
-        """Free search of the whole frame (strict gates); forgets what was learned about the ball."""
+        """Free search of the whole frame; forgets what was learned about the ball. The strict gates first, then
+        (tentatively) blobs only roughly round, then balls a few pixels across."""
         o = self.options
         self.full_frame_searches += 1
         self._follower = None
-        blobs = self._whole(frame, self.spec)
-        if not blobs and o.acquire_min_saturation > min(b.lower[1] for b in self.spec.bands):
-            # a ball touching a paler object of its hue (a hand) merges with it; its saturated core does not
-            blobs = self._whole(frame, self._acquire_spec)
+        blobs, strict = self._find_candidates(frame, t)
         if o.start_uv is not None and not self._started:
             su, sv = o.start_uv
             near = [b for b in blobs if math.hypot(b.u - su, b.v - sv) <= o.start_radius_px]
@@ -358,27 +603,36 @@ class BallTracker:
             blob = min(near, key=lambda b: math.hypot(b.u - su, b.v - sv))
             self._started = True
             self._follower = _Follower(self.spec, o, blob, t)
+            self._follower.confirmed = self._follower.named = True  # named by the user: not second-guessed
+            self.confidence = CONFIRMED
             return blob
         if not blobs:
             return None
         self._started = True
         if len(blobs) == 1:
-            self._follower = _Follower(self.spec, o, blobs[0], t)
-            return blobs[0]
-        cands = sorted(blobs, key=lambda b: -b.ellipse_fit)[: o.max_candidates]
+            f = _Follower(self.spec, o, blobs[0], t)
+            f.round = strict
+            self._follower = f
+            return self._judge(f, blobs[0], t, pivot_uv, index)
+        cands = blobs[: o.max_candidates]  # in the order found: strict, loose, tiny; the roundest first
+        self._start_hypotheses([_Follower(self.spec, o, b, t) for b in cands], cands, t, index, pivot_uv)
+        self.confidence = TENTATIVE
+        return cands[0]
+
+    def _start_hypotheses(self, followers: list[_Follower], blobs: list[Blob], t: float, index: int, pivot_uv) -> None:
+        self._follower = None
         self._hyp = _Hypotheses(
-            followers=[_Follower(self.spec, o, b, t) for b in cands],
+            followers=followers,
             t0=t,
             first=index,
-            centres=[[(b.u, b.v)] for b in cands],
-            blobs=[[b] for b in cands],
+            centres=[[(b.u, b.v)] for b in blobs],
+            blobs=[[b] for b in blobs],
             pivots=[pivot_uv if pivot_uv is not None else (math.nan, math.nan)],
             times=[t],
             leader=0,
-            shown=[cands[0]],
-            starts=[(b.u, b.v) for b in cands],
+            shown=[blobs[0]],
+            starts=[(b.u, b.v) for b in blobs],
         )
-        return cands[0]
 
     def _update_hypotheses(self, frame: np.ndarray, t: float, pivot_uv, index: int) -> Blob | None:
         hyp = self._hyp
@@ -405,6 +659,8 @@ class BallTracker:
             chosen = self._resolve(final=t - hyp.t0 >= self.options.max_resolve_s)
             if chosen is not None:
                 return chosen[-1]
+            if self._hyp is None:  # abandoned
+                return None
         hyp.shown.append(hyp.blobs[hyp.leader][-1])
         return hyp.shown[-1]
 
@@ -441,7 +697,7 @@ class BallTracker:
         hyp = self._hyp
         assert hyp is not None
         self.notes.append(f"t = {hyp.t0:.3f} s: {len(hyp.followers)} ball-like candidates, all lost again; none kept")
-        self._revision.extend((hyp.first + j, None) for j in range(len(hyp.pivots) - 1))
+        self._revision.extend((hyp.first + j, None, 0.0) for j in range(len(hyp.pivots) - 1))
         self._hyp = None
         self._follower = None
 
@@ -468,8 +724,37 @@ class BallTracker:
             f"t = {hyp.t0:.3f} s: {len(hyp.starts)} ball-like candidates; took the one at "
             f"({start[0]:.0f}, {start[1]:.0f}) px, not {others}: {reason}"
         )
+        for j, f in enumerate(hyp.followers):  # a candidate that lost and never moved is an object to ignore from now on
+            c = np.array(hyp.centres[j], float)
+            c = c[np.all(np.isfinite(c), axis=1)]
+            if j != k and len(c) and float(np.max(np.linalg.norm(c - np.median(c, axis=0), axis=1))) <= max(1.5, 0.3 * f.radius()):
+                u, v = np.median(c, axis=0)
+                self._excluded.append((float(u), float(v), 1.5 * f.radius() + 3.0))
+        if k != 0 and hyp.incumbent_frames:  # the lock sat on an object, not the ball
+            self._revision.extend((j, None, 0.0) for j in hyp.incumbent_frames)
         blobs = hyp.blobs[k]
-        self._revision.extend((hyp.first + j, b) for j, (b, s) in enumerate(zip(blobs, hyp.shown)) if b is not s)
-        self._follower = hyp.followers[k]
+        f = hyp.followers[k]
+        # every frame meanwhile was tentative: the chosen candidate's fixes become confident — unless it never moved
+        # and hangs off the pivot's vertical (a held ball, or an object): then they stay tentative until it moves
+        c = np.array(hyp.centres[k], float)
+        c = c[np.all(np.isfinite(c), axis=1)]
+        still = len(c) == 0 or float(np.max(np.linalg.norm(c - np.median(c, axis=0), axis=1))) <= max(3.0, f.radius())
+        piv = np.array(hyp.pivots, float)
+        piv = piv[np.all(np.isfinite(piv), axis=1)]
+        last = blobs[-1] if blobs[-1] is not None else next((b for b in reversed(blobs) if b is not None), None)
+        hangs = last is not None and len(piv) > 0 and self._plumb(last, tuple(piv[-1]))
+        # confirmed when it moved like a pendulum, or hangs still below the pivot; else (a held ball, an object) it
+        # stays tentative until it moves
+        doubtful = not choice.moving and not (still and hangs) and not (still and len(piv) == 0 and final)
+        if doubtful and final and len(piv) > 0:  # nothing moved and nothing hangs below the pivot: none of them is the ball
+            self._abandon()
+            return None
+        f.confirmed = not doubtful
+        if not doubtful and f.pending:  # the incumbent lock's tentative frames from before are settled too
+            self._revision.extend((j, b, CONFIRMED) for j, b in f.pending)
+        f.pending = (f.pending + [(hyp.first + j, b) for j, b in enumerate(blobs[:-1]) if b is not None]) if doubtful else []
+        level = TENTATIVE if doubtful else CONFIRMED
+        self._revision.extend((hyp.first + j, b, level if b is not None else 0.0) for j, b in enumerate(blobs[:-1]))
+        self._follower = f
         self._hyp = None
         return blobs

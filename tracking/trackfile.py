@@ -1,5 +1,7 @@
 """The track CSV: ``t,frame,u,v,found`` [s, -, px, px, 0/1], then ``theta`` [rad] when a pivot is known,
-``pivot_u,pivot_v`` [px] when the pivot is tracked, ``x_m,y_m`` [m] with a plane calibration.
+``pivot_u,pivot_v`` [px] when the pivot is tracked, ``x_m,y_m`` [m] with a plane calibration, and
+``confidence,unsure`` [0–1, 0/1]: how sure the tracker was of the frame's fix; a frame it was unsure of (a
+candidate seen but not trusted) has found = 0, empty positions and unsure = 1.
 
 Lost frames keep their row with found = 0 and NaN positions and angles; times strictly increase
 (variable-frame-rate videos exist). Reading is strict (trajectories.csvio) and names file, row and column.
@@ -18,7 +20,7 @@ from trajectories.errors import CsvFormatError
 from .pipeline import Track
 
 TRACK_COLUMNS = ("t", "frame", "u", "v", "found")
-_NAN_COLUMNS = ("u", "v", "theta", "pivot_u", "pivot_v", "x_m", "y_m")
+_NAN_COLUMNS = ("u", "v", "theta", "pivot_u", "pivot_v", "x_m", "y_m", "theta_x", "theta_y", "t_source")
 
 
 @dataclass(frozen=True)
@@ -33,6 +35,8 @@ class TrackTable:
     theta: np.ndarray | None  # (n,) [rad]
     pivot_uv: np.ndarray | None  # (n, 2) [px]
     xy_m: np.ndarray | None  # (n, 2) [m]
+    confidence: np.ndarray | None = None  # (n,) 0–1
+    unsure: np.ndarray | None = None  # (n,) bool
 
 
 def track_columns(track: Track) -> tuple[tuple[str, ...], np.ndarray, list[str]]:
@@ -52,6 +56,14 @@ def track_columns(track: Track) -> tuple[tuple[str, ...], np.ndarray, list[str]]
         names += ["x_m", "y_m"]
         cols += [track.xy_m[:, 0], track.xy_m[:, 1]]
         fmt += ["%.6f", "%.6f"]
+    if track.confidence is not None:
+        names += ["confidence", "unsure"]
+        cols += [track.confidence, track.unsure.astype(float)]
+        fmt += ["%.3f", "%d"]
+    for name, values in track.extra:
+        names.append(name)
+        cols.append(np.asarray(values, float))
+        fmt.append("%.6g")
     return tuple(names), np.column_stack(cols), fmt
 
 
@@ -90,4 +102,6 @@ def read_track_csv(path: str | Path) -> TrackTable:
         theta=opt("theta"),
         pivot_uv=opt("pivot_u", "pivot_v"),
         xy_m=opt("x_m", "y_m"),
+        confidence=opt("confidence"),
+        unsure=(opt("unsure") == 1) if table.has("unsure") else None,
     )

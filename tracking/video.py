@@ -39,11 +39,10 @@ class VideoInfo:
 def _open(path: str | Path):
     import cv2
 
+    from trajectories.inputs import require_regular
+
     spath = str(path)
-    if not os.path.exists(spath):
-        raise InputError("file not found", file=spath)
-    if os.path.isdir(spath):
-        raise InputError("is a directory, not a video file", file=spath)
+    require_regular(spath)  # a device or a FIFO would block the decoder or never end
     os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # FFmpeg's own messages (e.g. "moov atom not found") off
     cap = cv2.VideoCapture(spath)
     if not cap.isOpened():
@@ -66,6 +65,51 @@ def _info(cap, spath: str) -> VideoInfo:
         fps=fps,
         frame_count=max(count, 0),
     )
+
+
+VIDEO_SUFFIXES = (".mp4", ".m4v", ".mov", ".avi", ".mkv")  # containers the mp4v writer of OpenCV fills
+
+
+def check_video_name(path: str | Path, option: str) -> None:
+    """OptionError (exit 2) unless ``path`` names a video container lbr writes (by its suffix)."""
+    from trajectories.errors import OptionError
+
+    if Path(path).suffix.lower() not in VIDEO_SUFFIXES:
+        raise OptionError(f"{option} {path}: a video name must end in {', '.join(VIDEO_SUFFIXES)}")
+
+
+def open_writer(path: str | Path, fps: float, size: tuple[int, int], target: str | Path | None = None,
+                codec: str = "mp4v"):
+    """A ``cv2.VideoWriter`` (FourCC ``codec``) on ``path``; OutputError (exit 1) naming ``target`` when it cannot be
+    opened (a full disk, a quota, no encoder)."""
+    import cv2
+
+    from trajectories.errors import OutputError
+
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*codec), float(fps), tuple(int(s) for s in size))
+    if not writer.isOpened():
+        writer.release()
+        raise OutputError("cannot start writing the video (a full disk, a quota or no encoder); nothing was written "
+                          "under this name", file=target if target is not None else path)  # fmt: skip
+    return writer
+
+
+def check_written(path: str | Path, frames: int, target: str | Path | None = None) -> None:
+    """OutputError (exit 1, naming ``target``) unless the video just written at ``path`` opens and holds ``frames``
+    frames: OpenCV's writer does not report a full disk or a failed encoder, it leaves a short or unreadable file."""
+    import cv2
+
+    from trajectories.errors import OutputError
+
+    cap = cv2.VideoCapture(str(path))
+    try:
+        got = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0) if cap.isOpened() else 0
+    finally:
+        cap.release()
+    if got < frames:
+        raise OutputError(f"the video could not be written ({got} of {frames} frames readable: a full disk, a quota "
+                          "or a codec missing?); nothing was written under this name",
+                          file=target if target is not None else path)  # fmt: skip
 
 
 def probe_video(path: str | Path) -> VideoInfo:
@@ -165,3 +209,73 @@ def prefetched(items: Iterator, depth: int = 8) -> Iterator:
     finally:
         stop.set()
         thread.join(timeout=5.0)
+
+
+# PyAV (FFmpeg) encoders for codecs OpenCV's wheels cannot write, by the name a user gives
+_AV_CODECS = {"h264": "libx264", "hevc": "libx265", "h265": "libx265", "vp9": "libvpx-vp9", "av1": "libsvtav1"}
+
+
+class VideoSink:
+    """Writes BGR frames to a video file: OpenCV's VideoWriter for a FourCC ('mp4v', 'MJPG', ...), PyAV (FFmpeg)
+    for 'h264', 'hevc', 'vp9', 'av1' — optionally at a target bitrate [kbit/s] (a phone's or a webcam's
+    low-bandwidth stream: encoder ghosts, blocking, smeared colour). A writer that cannot start (a full disk, a
+    quota, no encoder) is an OutputError naming ``target`` (the user's name when ``path`` is a temporary)."""
+
+    def __init__(self, path: str | Path, codec: str, fps: float, size: tuple[int, int],
+                 bitrate_kbps: float | None = None, target: str | Path | None = None) -> None:
+        from trajectories.errors import OutputError
+
+        self.path = str(path)
+        self._cv = None
+        self._av = None
+        name = codec.lower()
+        if name in _AV_CODECS:
+            from fractions import Fraction
+
+            try:
+                import av
+            except ImportError:
+                raise InputError(f"writing {codec} needs PyAV (pip install av)", file=self.path) from None
+            try:
+                self._av = av.open(self.path, "w")
+            except OSError as exc:  # PyAV's errors are OSErrors (ENOSPC, EACCES, ...)
+                raise OutputError(f"cannot start writing a {codec!r} video: {exc.strerror or exc}",
+                                  file=self.path if target is None else target) from None  # fmt: skip
+            stream = self._av.add_stream(_AV_CODECS[name], rate=Fraction(fps).limit_denominator(1001))
+            stream.width, stream.height = int(size[0]), int(size[1])
+            stream.pix_fmt = "yuv420p"
+            if bitrate_kbps is not None:
+                stream.bit_rate = int(bitrate_kbps * 1000)
+                if name == "h264":  # a real low-bandwidth stream: rate-controlled, no lookahead tricks
+                    stream.options = {"preset": "veryfast", "bf": "0"}
+            if _AV_CODECS[name] == "libx265":
+                stream.options = {**dict(stream.options or {}), "x265-params": "log-level=error"}
+            self._stream = stream
+        else:
+            if bitrate_kbps is not None:
+                raise ValueError(f"a bitrate is supported for {', '.join(_AV_CODECS)}, not {codec!r}")
+            self._cv = open_writer(self.path, fps, size, target, codec)
+
+    def write(self, frame: np.ndarray) -> None:
+        if self._cv is not None:
+            self._cv.write(frame)
+            return
+        import av
+
+        for packet in self._stream.encode(av.VideoFrame.from_ndarray(frame, format="bgr24")):
+            self._av.mux(packet)
+
+    def close(self) -> None:
+        if self._cv is not None:
+            self._cv.release()
+        elif self._av is not None:
+            for packet in self._stream.encode():
+                self._av.mux(packet)
+            self._av.close()
+        self._cv = self._av = None
+
+    def __enter__(self) -> "VideoSink":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -74,6 +74,17 @@ class CheckReport:
         """Peak / limit per quantity and joint."""
         return {k: self.peaks[k] / self.limits[k] for k in self.peaks}
 
+    def plan_figures(self, traj: JointTrajectory) -> dict:
+        """The figures a planner reports about its joint path and this check of it."""
+        return {
+            "limits_ok": self.ok,
+            "max_ratio": {k: float(v.max()) for k, v in self.ratios().items()},
+            "violations": [v.describe() for v in self.failing],
+            "duration_s": float(traj.duration),
+            "samples": len(traj),
+            "dt_s": float(traj.dt),
+        }
+
     def to_dict(self) -> dict:
         d = {
             "limits_ok": self.ok,

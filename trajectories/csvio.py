@@ -6,6 +6,7 @@ Every malformed input raises :class:`CsvFormatError` naming file, row (1-based l
 from __future__ import annotations
 
 import csv
+import io
 import math
 import re
 from dataclasses import dataclass
@@ -16,6 +17,8 @@ import numpy as np
 
 from .atomic import atomic_path
 from .errors import CsvFormatError
+from .inputs import MAX_CSV_BYTES, read_input
+from .numbers import DECIMAL, NAN_WORDS, NotANumber, plain_float
 from .trajectory import N_JOINTS, JointTrajectory, TaskTrajectory
 
 JOINT_COLUMNS = ("t",) + tuple(f"q{i}" for i in range(1, N_JOINTS + 1))
@@ -52,13 +55,12 @@ def _parse_float(cell: str, *, path: str, row: int, col: int, name: str, allow_n
         if allow_nan:
             return math.nan
         raise CsvFormatError("empty cell", file=path, row=row, column=col, column_name=name)
+    if allow_nan and text.lower() in NAN_WORDS:
+        return math.nan
     try:
-        value = float(text)
-    except ValueError:
-        raise CsvFormatError(f"not a number: {text!r}", file=path, row=row, column=col, column_name=name) from None
-    if not math.isfinite(value) and not (allow_nan and math.isnan(value)):
-        raise CsvFormatError(f"not a finite number: {text!r}", file=path, row=row, column=col, column_name=name)
-    return value
+        return plain_float(text)
+    except NotANumber as exc:
+        raise CsvFormatError(str(exc), file=path, row=row, column=col, column_name=name) from None
 
 
 def _looks_numeric(cells: Sequence[str]) -> bool:
@@ -100,15 +102,8 @@ def _check_time(t: np.ndarray, path: str, rule: TimeRule, first_row: int) -> Non
 
 
 def _read_bytes(path: str | Path, spath: str) -> bytes:
-    """The whole file (a leading UTF-8 byte-order mark dropped)."""
-    try:
-        raw = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise CsvFormatError("file not found", file=spath) from None
-    except IsADirectoryError:
-        raise CsvFormatError("is a directory, not a CSV file", file=spath) from None
-    except OSError as exc:
-        raise CsvFormatError(f"cannot open: {exc.strerror}", file=spath) from None
+    """The whole file, bounded (:func:`trajectories.inputs.read_input`), a leading UTF-8 byte-order mark dropped."""
+    raw = read_input(path, MAX_CSV_BYTES, error=CsvFormatError)
     return raw[3:] if raw.startswith(b"\xef\xbb\xbf") else raw
 
 
@@ -135,10 +130,8 @@ def _first_line(raw: bytes) -> tuple[int, int, int, int]:
     return 0, len(raw), len(raw), len(raw)
 
 
-def _fast_body(path: str | Path, raw: bytes, start: int, skip_lines: int, width: int,
-               nan_ok: set[int]) -> np.ndarray | None:
-    """Parse the data rows (raw[start:], after the first ``skip_lines`` lines of the file) with numpy's C reader
-    straight from the file; None when anything is unusual (blank lines, quotes, empty or malformed cells, a wrong
+def _fast_body(raw: bytes, start: int, width: int, nan_ok: set[int]) -> np.ndarray | None:
+    """Parse the data rows (raw[start:]) with numpy's C reader; None when anything is unusual (blank lines, quotes, empty or malformed cells, a wrong
     number of cells, a non-finite value outside ``nan_ok``, not UTF-8): the strict per-cell reader then finds and
     names the fault."""
     import warnings
@@ -152,8 +145,8 @@ def _fast_body(path: str | Path, raw: bytes, start: int, skip_lines: int, width:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # e.g. "input contained no data"
-            data = np.loadtxt(path, delimiter=",", comments=None, dtype=float, ndmin=2, skiprows=skip_lines,
-                              max_rows=lines, encoding="utf-8-sig")
+            data = np.loadtxt(io.BytesIO(raw[start:end]), delimiter=",", comments=None, dtype=float, ndmin=2,
+                              encoding="utf-8")
     except (ValueError, UserWarning):  # UnicodeDecodeError is a ValueError
         return None
     if data.shape != (lines, width):  # blank lines were skipped, or the column count differs
@@ -181,6 +174,9 @@ def _parse_rows(rows: list[tuple[int, list[str]]], width: int, names: Sequence[s
                 values = np.array(cells, dtype=float)
             except ValueError:
                 values = None
+            if values is not None and not all(DECIMAL.match(c.strip()) or c.strip().lower() in NAN_WORDS
+                                              for r in cells for c in r):  # fmt: skip
+                values = None  # e.g. '1_0', which numpy reads as 10: the cell-by-cell reader names it
             if values is not None:
                 finite = np.isfinite(values)
                 if finite.all() or not (~finite & ~allowed).any() and not np.isinf(values).any():
@@ -200,8 +196,6 @@ def _parse_rows(rows: list[tuple[int, list[str]]], width: int, names: Sequence[s
 
 def _csv_rows(text: str, spath: str, first_line: int = 1) -> list[tuple[int, list[str]]]:
     """Non-blank CSV rows with their 1-based line numbers."""
-    import io
-
     try:
         rows = list(csv.reader(io.StringIO(text, newline="")))
     except csv.Error as exc:
@@ -274,7 +268,7 @@ def read_table(
     # a missing value (empty cell or nan) is allowed in the named columns and in every column after the required ones
     nan_ok = {names.index(c) for c in nan_columns if c in names} | set(range(len(columns) if not headerless else width,
                                                                              width))  # fmt: skip
-    data = _fast_body(path, raw, body_start, body_line - 1, width, nan_ok)
+    data = _fast_body(raw, body_start, width, nan_ok)
     if data is None:
         rows = _csv_rows(_decode(raw, body_start, len(raw), spath), spath, body_line)
         if not rows:
@@ -314,11 +308,35 @@ def write_table(path: str | Path, names: Sequence[str], data: np.ndarray, fmt: s
             fh.write("\n".join(lines) + ("\n" if lines else ""))
 
 
+# What a joint or task file can plausibly hold; beyond it the file is wrong (units, a corrupted cell), and the
+# arithmetic downstream would overflow.
+MAX_JOINT_ANGLE = 2 * math.pi  # [rad] every iiwa joint stays within ±175°
+MAX_TASK_POSITION = 10.0  # [m] the arm reaches 0.8 m; millimetres read as metres land here
+STEP_RANGE = (1e-5, 60.0)  # [s] sample step of a trajectory file
+
+
+def _check_plausible(table: Table, first: int, width: int, bound: float, what: str) -> None:
+    """CsvFormatError naming row and column of the first |value| > bound in columns first..first+width-1."""
+    block = table.data[:, first : first + width]
+    bad = np.argwhere(np.abs(block) > bound)
+    if bad.size:
+        k, j = (int(v) for v in bad[0])
+        raise CsvFormatError(f"{what} {block[k, j]:g} is beyond ±{bound:g}", file=table.path, row=k + 2,
+                             column=first + j + 1, column_name=table.names[first + j])  # fmt: skip
+    t = table.data[:, 0]
+    if len(t) > 1:
+        step = (t[-1] - t[0]) / (len(t) - 1)
+        if not STEP_RANGE[0] <= step <= STEP_RANGE[1]:
+            raise CsvFormatError(f"time step {step:g} s is outside {STEP_RANGE[0]:g}..{STEP_RANGE[1]:g} s",
+                                 file=table.path, row=3, column=1, column_name="t")  # fmt: skip
+
+
 def read_joint_csv(path: str | Path, dt: float | None = None) -> JointTrajectory:
     """Read a joint trajectory (``t,q1..q7`` [s, rad]); a headerless 7-column file needs ``dt`` [s]."""
     table = read_table(path, JOINT_COLUMNS, headerless_dt=dt, headerless_width=N_JOINTS)
     if len(table.data) < 1:
         raise CsvFormatError("no samples", file=table.path)
+    _check_plausible(table, 1, N_JOINTS, MAX_JOINT_ANGLE, "joint angle [rad]")
     return JointTrajectory(t=table.data[:, 0].copy(), q=np.ascontiguousarray(table.data[:, 1 : 1 + N_JOINTS]))
 
 
@@ -330,6 +348,7 @@ def write_joint_csv(path: str | Path, traj: JointTrajectory) -> None:
 def read_task_csv(path: str | Path) -> TaskTrajectory:
     """Read a task trajectory (``t,x,y,z,qw,qx,qy,qz`` [s, m]); quaternions must be unit (within 1e-3)."""
     table = read_table(path, TASK_COLUMNS)
+    _check_plausible(table, 1, 3, MAX_TASK_POSITION, "position [m]")
     quat = table.data[:, 4:8]
     norms = np.linalg.norm(quat, axis=1)
     bad = np.flatnonzero(np.abs(norms - 1.0) > 1e-3)

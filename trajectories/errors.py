@@ -56,6 +56,18 @@ class OptionError(InputError):
     """A command-line option value is malformed or out of range."""
 
 
+class OutputRefused(InputError):
+    """An output path the commands do not replace: a symbolic link, a device, a FIFO or a socket. Exit code 2."""
+
+
+class OutputError(LbrError):
+    """An output could not be written (disk full, quota, I/O error); nothing is left under its name. Exit code 1."""
+
+    def __init__(self, message: str, *, file: str | Path) -> None:
+        self.file = str(file)
+        super().__init__(f"{self.file}: {message}")
+
+
 class CheckFailed(LbrError):
     """A check found violations (limits, start distance, ...). Exit code 1."""
 
@@ -66,7 +78,9 @@ class IkError(LbrError):
     ``reason`` is "out of reach" (no joint configuration reaches the pose), "position limit" (reachable only
     beyond a joint's position limit), "velocity limit" (reachable only faster than a joint's speed limit) or
     "not converged"; ``joint`` (0-based) and ``needed`` [rad] or [rad/s] name the limiting joint and the value
-    it would need.
+    it would need. ``kind`` says whose fact it is: "pose" (no configuration of the pose is inside the limits),
+    "path" (the speed a joint set by the poses alone needs), "start" (the path lbr followed from its start ran
+    into a limit there; the pose itself is reachable) or "" (not known).
     """
 
     def __init__(
@@ -80,6 +94,7 @@ class IkError(LbrError):
         reason: str = "not converged",
         joint: int | None = None,
         needed: float | None = None,
+        kind: str = "",
     ):
         self.index = index
         self.t = t
@@ -88,7 +103,15 @@ class IkError(LbrError):
         self.reason = reason
         self.joint = joint
         self.needed = needed
+        self.kind = kind
         super().__init__(message)
+
+    def figures(self) -> dict:
+        """The refusal as JSON figures."""
+        return {"index": self.index, "t_s": self.t, "reason": self.reason, "kind": self.kind,
+                "joint": None if self.joint is None else self.joint + 1, "needed": self.needed,
+                "position_error_m": None if self.position_error != self.position_error else self.position_error,
+                "rotation_error_rad": None if self.rotation_error != self.rotation_error else self.rotation_error}
 
 
 class PlanningError(LbrError):

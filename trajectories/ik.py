@@ -31,17 +31,19 @@ from typing import Callable
 
 import numpy as np
 import pinocchio as pin
-from scipy.interpolate import CubicSpline
 
+from .arm_angle import ArmGeometry
 from .boxqp import solve_box_qp
 from .chain import Chain, pose_errors
 from .errors import IkError
+from .ik_reach import PathFact, closest_configuration, first_unreachable
 from .limits import JointLimits
 from .linsolve import solve_spd
 from .resample import spaced_indices
 from .robot import Robot
 
 NO_TIMES_DT = 1e-3  # [s] sample period assumed for the null-space pull when a path has no times
+NO_TIMES_STRIDE = 20  # samples between the arm-angle checks before solving a path without times
 REPAIR_BACK = (0.1, 0.3, 1.0)  # [s] how far a repair goes back before a sample too fast to reach, per try
 REPAIR_RATE = 10.0  # [1/s] null-space pull toward the configuration the stalled sample needs
 MAX_REPAIRS = 6  # backtracks per pass at most
@@ -71,9 +73,13 @@ class IkOptions:
     coarse_dt: float = 0.02  # [s] sample spacing of the sequential pass on dense paths
     refine_iterations: int = 5  # vectorised Newton iterations on every sample after the coarse pass
     start_attempts: int = 4  # with q0 = None: best-scored start candidates tried on the full path
-    # with q0 = None: when the result exceeds the acceleration limit, also plan the arm angle over the whole path
-    # (0.5–4 s more) and keep the path with the lower peak acceleration
+    # when the result exceeds the acceleration limit: with q0 = None also plan the arm angle over the whole path
+    # (0.5–4 s more) and keep the path with the lower peak acceleration; then lower the accelerations along the
+    # self-motion (:mod:`.ik_smooth`; done anyway for a task path at rest at both ends)
     smooth: bool = False
+    # where the task path is at rest at an end, bring the self-motion to rest there too (needs times); at both
+    # ends, also keep the accelerations inside the limits (the file must pass `lbr check`)
+    rest_at_ends: bool = True
 
 
 @dataclass(frozen=True)
@@ -89,6 +95,8 @@ class IkResult:
     acceleration_ratio: float = 0.0  # peak |q̈| / limit over the path (second differences)
     acceleration_relaxed: int = 0  # samples whose acceleration bound was dropped because the path demands more
     candidates: tuple[str, ...] = field(default=())  # with q0 = None: what each start candidate scored
+    task_at_rest: tuple[bool, bool] = (False, False)  # the task path lets the joints start / end at rest
+    at_rest: tuple[bool, bool] = (False, False)  # the joint path starts / ends at rest (as `lbr check` asks)
 
     @property
     def max_position_error(self) -> float:
@@ -136,6 +144,8 @@ class PathSolver:
         self.upper = limits.position - options.limit_margin
         self.lower = -self.upper
         self.speed = options.speed_limits and self.times is not None and bool((np.diff(self.times) > 0).all())
+        self.acceleration_facts = False  # whether :meth:`fact` looked at A4's acceleration too
+        self._full_fact: tuple[PathFact | None] | None = None  # :meth:`fact` at every sample, once found
         self.chain = Chain.of(robot)
         self.weights = limits.velocity / limits.velocity.max()  # step weights [-]
         self._w_inv2 = np.diag(1.0 / self.weights**2)
@@ -313,17 +323,22 @@ class PathSolver:
             i += 1
         return out, ep_all, er_all, steps, relaxed
 
-    def refine(self, q: np.ndarray, iterations: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Vectorised Newton iterations on the samples still missing the tolerance (q clipped into the limits
-        first) → (q, position errors [m], rotation errors [rad])."""
+    def refine(
+        self, q: np.ndarray, iterations: int, idx: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Vectorised Newton iterations on the samples (all, or ``idx``) still missing the tolerance (q clipped into
+        the limits first) → (q, position errors [m], rotation errors [rad] of those samples)."""
         opt = self.options
-        q = np.clip(q, self.lower, self.upper)
+        samples = np.arange(self.n) if idx is None else np.asarray(idx)
+        q = np.array(q, dtype=float)
+        q[samples] = np.clip(q[samples], self.lower, self.upper)
         damp = opt.damping * np.eye(6)
-        ep, er = np.empty(self.n), np.empty(self.n)
-        todo = np.arange(self.n)
+        ep, er = np.empty(len(samples)), np.empty(len(samples))
+        todo = np.arange(len(samples))  # positions in ``samples``
         for it in range(iterations + 1):
-            pos, rot, jac = self.chain.kinematics(q[todo])
-            err = pose_errors(pos, rot, self.positions[todo], self.rotations[todo])
+            rows = samples[todo]
+            pos, rot, jac = self.chain.kinematics(q[rows])
+            err = pose_errors(pos, rot, self.positions[rows], self.rotations[rows])
             ep[todo] = e_p = np.linalg.norm(err[:, :3], axis=1)
             er[todo] = e_r = np.linalg.norm(err[:, 3:], axis=1)
             miss = (e_p > opt.position_tolerance) | (e_r > opt.rotation_tolerance)
@@ -332,7 +347,8 @@ class PathSolver:
                 break
             J = jac[miss]
             x = np.linalg.solve(J @ J.transpose(0, 2, 1) + damp, err[miss, :, None])
-            q[todo] = np.clip(q[todo] + (J.transpose(0, 2, 1) @ x)[:, :, 0], self.lower, self.upper)
+            rows = samples[todo]
+            q[rows] = np.clip(q[rows] + (J.transpose(0, 2, 1) @ x)[:, :, 0], self.lower, self.upper)
         return q, ep, er
 
     def rates(self, q: np.ndarray, idx: np.ndarray | None = None) -> tuple[float, float]:
@@ -367,45 +383,146 @@ class PathSolver:
         dM = target.actInv(data.oMf[fid])
         return q, float(np.linalg.norm(dM.translation)), float(np.linalg.norm(pin.log3(dM.rotation)))
 
-    def diagnose(self, stall: _Stall) -> IkError:
-        """Why sample ``stall.k`` was not reached: out of reach, a position limit or a speed limit."""
+    def diagnose(self, stall: _Stall, origin: str = "from the start given (--q0)") -> IkError:
+        """Why the path followed ``origin`` stalled at sample ``stall.k`` whose pose is reachable inside the limits
+        (:meth:`fact` found nothing there): a joint's position limit or speed limit on the way lbr's redundancy
+        went — a fact of that path, not of the pose."""
         k, t = stall.k, self.time(stall.k)
         # the configuration reaching the pose closest to the previous sample's (or to where it stalled)
         q, ep, er = self.nearest_solution(k, stall.q_prev if stall.q_prev is not None else stall.q)
         where = f"pose {k} (t = {t:.4f} s)"
-        kw = dict(index=k, t=t, position_error=stall.ep, rotation_error=stall.er)
-        if ep > 1e-6 or er > 1e-5:
-            return IkError(
-                f"{where} out of reach by {format_length(ep)}, {format_angle(er)} (remaining error of the "
-                f"closest configuration found, joint limits ignored)",
-                reason="out of reach",
-                **kw,
-            )
+        kw = dict(index=k, t=t, position_error=stall.ep, rotation_error=stall.er, kind="start")
         remaining = f"remaining error {format_length(stall.ep)}, {format_angle(stall.er)}"
+        _, _, psi, branch = closest_configuration(
+            ArmGeometry.of(self.robot), self.positions[k], self.rotations[k], self.upper
+        )
+        signs = "".join("+" if b > 0 else "−" for b in branch)
+        reachable = (
+            f"the pose itself is reachable inside the limits (e.g. at arm angle {math.degrees(psi):.1f}° in branch "
+            f"{signs} of A2/A4/A6)"
+        )
+        hint = "; without --q0 lbr chooses the start for the whole path" if "--q0" in origin else ""
 
         def held(text: str, reason: str, j: int, needed: float) -> IkError:
-            return IkError(f"{where}{text}; {remaining}", reason=reason, joint=j, needed=needed, **kw)
+            return IkError(f"{where}: {text}; {reachable}; {remaining}{hint}", reason=reason, joint=j, needed=needed,
+                           **kw)  # fmt: skip
 
         wrapped = np.where(np.abs(q) > self.limits.position, (q + np.pi) % (2 * np.pi) - np.pi, q)
         over = np.abs(wrapped) - self.limits.position
-        if (over > 0).any():
+        if (ep <= 1e-6 and er <= 1e-5) and (over > 0).any():
             j = int(np.argmax(over))
             return held(
-                f" did not converge: A{j + 1} held at its position limit (the pose needs "
-                f"{math.degrees(wrapped[j]):.2f}°, limit ±{math.degrees(self.limits.position[j]):.2f}°)",
+                f"the path {origin} ran into A{j + 1}'s position limit here (the arm angle it followed would need "
+                f"A{j + 1} at {math.degrees(wrapped[j]):.2f}°, limit ±{math.degrees(self.limits.position[j]):.2f}°)",
                 "position limit", j, float(wrapped[j]),
             )
-        if stall.q_prev is not None and self.speed:
+        if stall.q_prev is not None and self.speed and ep <= 1e-6 and er <= 1e-5:
             speed = np.abs(q - stall.q_prev) / stall.dt
             ratio = speed / self.limits.velocity
             j = int(np.argmax(ratio))
             if ratio[j] > 1.0:
                 return held(
-                    f": the path needs A{j + 1} at {speed[j]:.2f} rad/s, above its limit "
-                    f"{self.limits.velocity[j]:.2f} rad/s (×{ratio[j]:.1f})",
+                    f"the path {origin} needs A{j + 1} at {speed[j]:.2f} rad/s, above its limit "
+                    f"{self.limits.velocity[j]:.2f} rad/s (×{ratio[j]:.1f}) here",
                     "velocity limit", j, float(speed[j]),
                 )
-        return IkError(f"{where} did not converge inside the joint limits: {remaining}", **kw)
+        return IkError(f"{where}: the path {origin} did not converge inside the joint limits here; {reachable}; "
+                       f"{remaining}{hint}", **kw)  # fmt: skip
+
+    def fact(self, full: bool = True) -> PathFact | None:
+        """The first sample no joint path reaches inside the position limits (and, with speed bounds, A4's speed
+        limit; and its acceleration limit when the task path starts and ends at rest, so the file must pass
+        `lbr check`), exact at every sample (:mod:`.ik_reach`), or None. Not ``full``: the arm angles only every
+        ``coarse_dt`` (a pose excursion shorter than that can be missed; the solver then stalls there and asks
+        again in full; the legacy pass on every sample does so too)."""
+        if full and self._full_fact is not None:
+            return self._full_fact[0]
+        if self._full_fact is None:
+            self.acceleration_facts = self.speed and all(self.task_rest())
+        stride = 1
+        if not full and self.n > 2:  # the coarse pass's spacing (without times: every NO_TIMES_STRIDE-th sample)
+            dt = float(np.median(np.diff(self.times))) if self.times is not None else 0.0
+            stride = max(1, int(round(self.options.coarse_dt / dt))) if dt > 0 else NO_TIMES_STRIDE
+        found = first_unreachable(
+            ArmGeometry.of(self.robot), self.positions, self.rotations, self.times, self.limits,
+            self.options.limit_margin, speed=self.speed, acceleration=self.acceleration_facts, stride=stride,
+        )
+        if stride == 1:
+            self._full_fact = (found,)
+        return found
+
+    def task_rest(self) -> tuple[bool, bool]:
+        """Whether the task path starts / ends at rest (:func:`.ik_rest.task_at_rest`), judged at configurations
+        of its first and last pose found from the thesis start."""
+        from .ik_rest import task_at_rest
+
+        if self.times is None or self.n < 3 or not self.options.rest_at_ends:
+            return False, False
+        seed = np.array([0.0, 0.6, 0.0, -1.2, 0.0, 0.9, 0.0])
+        return task_at_rest(self, self.nearest_solution(0, seed)[0], self.nearest_solution(self.n - 1, seed)[0])
+
+    def fact_error(self, fact: PathFact) -> IkError:
+        """The refusal of a path at the sample of ``fact``."""
+        k, t = fact.index, self.time(fact.index)
+        before = (
+            "every pose before it is within reach and has an arm angle inside the position limits"
+            + (f", and A4 keeps its speed{' and acceleration' if self.acceleration_facts else ''} limit up to it"
+               if self.speed else "")
+            if k else "it is the first pose"
+        )
+        moving = {"velocity limit": f"from pose {k - 1} it ", "acceleration limit": f"from poses {k - 2}, {k - 1} it "}
+        why = (
+            "; the task path starts and ends at rest, so its joint file must keep the acceleration limit to pass "
+            "`lbr check`" if fact.reason == "acceleration limit" else ""
+        )
+        return IkError(
+            f"pose {k} (t = {t:.4f} s) cannot be reached inside the joint limits: {moving.get(fact.reason, '')}"
+            f"{fact.describe()} ({before}){why}",
+            index=k, t=t, position_error=fact.needed if fact.reason == "out of reach" else math.nan,
+            rotation_error=math.nan, reason=fact.reason, joint=fact.joint,
+            needed=fact.needed, kind="pose" if fact.of_pose else "path",
+        )
+
+    def prefix(self, m: int) -> "PathSolver":
+        """The first ``m`` samples of the path."""
+        t = None if self.times is None else self.times[:m]
+        return PathSolver(self.robot, self.positions[:m], self.rotations[:m], self.limits, self.options, t)
+
+    def reversed(self) -> "PathSolver":
+        """The same path backwards in time (times from 0)."""
+        t = None if self.times is None else self.times[-1] - self.times[::-1]
+        return PathSolver(self.robot, self.positions[::-1], self.rotations[::-1], self.limits, self.options, t)
+
+    def finish(self, res: IkResult) -> IkResult:
+        """The result with the self-motion brought to rest where the task path is (``options.rest_at_ends``,
+        :mod:`.ik_rest`), its rates and errors updated, and whether it starts and ends at rest."""
+        from dataclasses import replace
+
+        from .check import rest_violations
+        from .ik_rest import settle_ends, task_at_rest
+        from .ik_smooth import lower_accelerations
+        from .trajectory import JointTrajectory
+
+        if self.times is None or self.n < 3:
+            return res
+        task_rest = task_at_rest(self, res.q[0], res.q[-1])
+        q = res.q
+        if self.options.rest_at_ends and any(task_rest):
+            q, _ = settle_ends(self, q, task_rest)
+        # a task path at rest at both ends must give a file `lbr check` passes: accelerations too
+        if self.speed and (self.options.smooth or (self.options.rest_at_ends and all(task_rest))):
+            q = lower_accelerations(self, q, task_rest if self.options.rest_at_ends else (False, False))
+        ep, er = res.position_error, res.rotation_error
+        changed = np.flatnonzero((q != res.q).any(axis=1))
+        if len(changed):
+            pos, rot, _ = self.chain.kinematics(q[changed])
+            err = pose_errors(pos, rot, self.positions[changed], self.rotations[changed])
+            ep, er = ep.copy(), er.copy()
+            ep[changed], er[changed] = np.linalg.norm(err[:, :3], axis=1), np.linalg.norm(err[:, 3:], axis=1)
+        vel, acc = self.rates(q)
+        moving = {v.note for v in rest_violations(JointTrajectory(t=self.times, q=q), self.limits)}
+        return replace(res, q=q, position_error=ep, rotation_error=er, velocity_ratio=vel, acceleration_ratio=acc,
+                       task_at_rest=task_rest, at_rest=("start" not in moving, "end" not in moving))  # fmt: skip
 
     def coarse_indices(self, spacing: float | None = None) -> np.ndarray:
         """Samples of a sequential pass every ``spacing`` [s] (default ``coarse_dt``), first and last included."""
@@ -429,6 +546,8 @@ class PathSolver:
         vectorised refinement → the result, or None when it misses a tolerance or limit. ``relaxed``: samples
         whose acceleration bound had to be dropped (the knots' own acceleration then sets what is accepted);
         ``any_acceleration``: accept whatever acceleration, reporting the samples above the limit as relaxed."""
+        from scipy.interpolate import CubicSpline  # imported here: a refusal needs no scipy (0.5 s to import)
+
         opt = self.options
         spline = CubicSpline(self.times[idx], qc, axis=0)
         q, ep, er = self.refine(spline(self.times), opt.refine_iterations)
@@ -503,12 +622,35 @@ def solve_ik_path(
     if solver.n == 0:
         empty = np.empty(0)
         return IkResult(np.empty((0, 7)), empty, empty, np.empty(0, dtype=np.int32))
+    # facts of the poses and path: before solving (the arm angles on the coarse grid, exact when one is found),
+    # and at every sample once the solver stalls
+    fact = solver.fact(full=False) and solver.fact()
     if q0 is None:
+        if fact is not None:
+            raise solver.fact_error(fact)
         from .ik_start import solve_with_auto_start
 
-        return solve_with_auto_start(solver, progress)
+        return solver.finish(solve_with_auto_start(solver, progress))
     q_ref = np.clip(np.asarray(q0, dtype=float), solver.lower, solver.upper)
+    if fact is None:
+        try:
+            return solver.finish(solver.solve(q_ref, q_ref, progress))
+        except _Stall as stall:
+            fact = solver.fact()
+            if fact is None or fact.index > stall.k:
+                raise solver.diagnose(stall) from None
+            raise solver.fact_error(fact) from None
+    # past the first unreachable sample nothing can be solved: whether the path from q0 stops before it — a fact
+    # of that path — the coarse pass tells; where exactly, the pass on every sample (only then)
+    part = solver.prefix(fact.index + 1)
     try:
-        return solver.solve(q_ref, q_ref, progress)
+        part.sequential(part.coarse_indices(), q_ref, q_ref, progress, loose=True)
     except _Stall as stall:
-        raise solver.diagnose(stall) from None
+        if stall.k < fact.index:
+            try:
+                part.solve(q_ref, q_ref, progress)
+            except _Stall as exact:
+                stall = exact
+            if stall.k < fact.index:
+                raise solver.diagnose(stall) from None
+    raise solver.fact_error(fact)

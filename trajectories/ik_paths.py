@@ -9,6 +9,12 @@ Kinds (each at 1 ms and 5 ms sampling):
 - ``line``, ``circle``, ``figure8``: Cartesian shapes with the flange down, tilted up to 45° and yawing up to
   ±90°, with smooth (rest-to-rest) or periodic timing. Their reachability is shown by any solver returning a
   joint path that is accurate and inside the limits (see ``verify_joint_path``).
+
+``build_rest_suite`` adds paths the way users write them, mostly starting and ending at rest: handwriting and
+drawings on a table and a whiteboard with pens of several lengths and other flanges, near-singular passes,
+orientation-heavy moves, FK-built paths time-warped to rest, paths that leave the workspace (beyond the reach,
+too close to the shoulder, beyond a joint's limit at every arm angle, A4 faster than its limit), and a 60 s
+handwriting path at 1 ms.
 """
 
 from __future__ import annotations
@@ -17,11 +23,12 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
 from .chain import rotation_log
 from .limits import JointLimits
-from .robot import Robot
+from .robot import Flange, Robot, RobotConfig
 
 DOWN = np.diag([1.0, -1.0, -1.0])  # flange z along base −z
 
@@ -36,6 +43,7 @@ class TaskPath:
     position: np.ndarray  # (n, 3) [m]
     rotation: np.ndarray  # (n, 3, 3)
     witness: np.ndarray | None = None  # (n, 7) [rad], a feasible joint path for these poses
+    config: RobotConfig = RobotConfig()  # flange and tool the poses are of
 
     @property
     def dt(self) -> float:
@@ -247,3 +255,211 @@ def build_suite(robot: Robot, limits: JointLimits, seed: int = 0, quick: bool = 
     if quick:
         paths = [p for i, p in enumerate(paths) if i % 4 == 0 or p.name.startswith("issue-circle")]
     return paths
+
+
+# ---- paths the way users write them (``build_rest_suite``) ------------------------------------------------------
+
+PEN = RobotConfig(tool=(0.0, 0.0, 0.1))  # a 10 cm pen on the touch flange
+LONG_PEN = RobotConfig(flange=Flange.STANDARD, tool=(0.0, 0.0, 0.18))
+OFFSET_PEN = RobotConfig(flange=Flange.TOUCH_PNEUMATIC, tool=(0.04, -0.02, 0.12))
+
+
+def rest_timing(t: np.ndarray, ramp: float) -> np.ndarray:
+    """Path parameter s(t) ∈ [0, 1] at rest at both ends: the speed rises over ``ramp`` [s] (3x² − 2x³: the
+    acceleration is continuous), stays constant, and falls to zero at the end."""
+    duration = float(t[-1])
+    ramp = min(ramp, 0.5 * duration)
+    up = np.clip(t / ramp, 0.0, 1.0)
+    down = np.clip((duration - t) / ramp, 0.0, 1.0)
+    v = np.minimum(up * up * (3 - 2 * up), down * down * (3 - 2 * down))
+    s = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
+    return s / s[-1]
+
+
+def _frame(normal: np.ndarray, yaw: float = 0.0) -> np.ndarray:
+    """Rotation whose z axis is ``normal`` (the pen's direction), turned by ``yaw`` [rad] about it."""
+    z = np.asarray(normal, dtype=float) / np.linalg.norm(normal)
+    ref = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = ref - z * (ref @ z)
+    x /= np.linalg.norm(x)
+    base = np.column_stack([x, np.cross(z, x), z])
+    return base @ Rotation.from_rotvec([0.0, 0.0, yaw]).as_matrix()
+
+
+def _curve(kind: str, sigma: np.ndarray, size: float) -> np.ndarray:
+    """Planar curves (m, 2) [m] of parameter sigma ∈ [0, 1]: handwriting loops, a rose, a spiral, a heart."""
+    if kind == "loops":  # cursive "llllll": a prolate trochoid
+        th = 2 * np.pi * 6 * sigma
+        r = size / (2 * np.pi * 6)
+        return np.column_stack([r * th - 0.09 * size * np.sin(th) - 0.5 * size, 0.09 * size * (1 - np.cos(th))])
+    if kind == "rose":
+        ph = 2 * np.pi * sigma
+        rad = 0.5 * size * (0.6 + 0.4 * np.cos(5 * ph))
+        return np.column_stack([rad * np.cos(ph) - 0.5 * size, rad * np.sin(ph)])
+    if kind == "spiral":
+        ph = 2 * np.pi * 3 * sigma
+        rad = 0.5 * size * sigma
+        return np.column_stack([rad * np.cos(ph), rad * np.sin(ph)])
+    if kind == "heart":
+        ph = 2 * np.pi * sigma
+        x = 16 * np.sin(ph) ** 3
+        y = 13 * np.cos(ph) - 5 * np.cos(2 * ph) - 2 * np.cos(3 * ph) - np.cos(4 * ph)
+        return 0.5 * size / 17 * np.column_stack([x, y - 5])
+    raise ValueError(f"unknown curve {kind!r}")
+
+
+def drawing_path(
+    name: str,
+    kind: str,
+    dt: float,
+    duration: float,
+    centre: tuple[float, float, float],
+    plane: str = "table",
+    size: float = 0.3,
+    config: RobotConfig = PEN,
+    pen_tilt_deg: float = 0.0,
+    yaw_deg: float = 0.0,
+    rest: bool = True,
+    ramp: float = 0.5,
+) -> TaskPath:
+    """A curve drawn with a pen: on the ``table`` (horizontal, pen pointing down) or a ``board`` (the vertical plane
+    facing the robot, pen pointing along +x), tilted by ``pen_tilt_deg`` toward the drawing direction. ``rest``:
+    at rest at both ends; otherwise the pen moves at constant speed from the first sample to the last."""
+    t = np.arange(int(round(duration / dt)) + 1) * dt
+    sigma = rest_timing(t, ramp) if rest else t / t[-1]
+    uv = _curve(kind, sigma, size)
+    c = np.asarray(centre, dtype=float)
+    if plane == "table":
+        e1, e2, normal = np.array([0.0, 1.0, 0.0]), np.array([-1.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0])
+    else:
+        e1, e2, normal = np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0])
+    pos = c + uv[:, :1] * e1 + uv[:, 1:] * e2
+    tilt = Rotation.from_rotvec(e2 * math.radians(pen_tilt_deg)).as_matrix()
+    rot = np.broadcast_to(tilt @ _frame(normal, math.radians(yaw_deg)), (len(t), 3, 3)).copy()
+    return TaskPath(name=name, kind="drawing", t=t, position=pos, rotation=rot, config=config)
+
+
+def move_path(
+    name: str,
+    dt: float,
+    duration: float,
+    start: tuple[float, float, float],
+    end: tuple[float, float, float] | None = None,
+    rotation: np.ndarray = DOWN,
+    config: RobotConfig = RobotConfig(),
+    kind: str = "line",
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0),
+    angle_deg: float = 0.0,
+) -> TaskPath:
+    """A rest-to-rest move (quintic timing): the TCP along a straight line from ``start`` to ``end`` [m] (held at
+    ``start`` without one) while its orientation, ``rotation`` at first, turns by ``angle_deg`` about the base
+    ``axis``."""
+    t = np.arange(int(round(duration / dt)) + 1) * dt
+    s = _smooth_ramp(t, float(t[-1]))
+    a = np.asarray(start, dtype=float)
+    b = a if end is None else np.asarray(end, dtype=float)
+    pos = (1 - s[:, None]) * a + s[:, None] * b
+    ax = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    rot = Rotation.from_rotvec(np.outer(s * math.radians(angle_deg), ax)).as_matrix() @ rotation
+    return TaskPath(name=name, kind=kind, t=t, position=pos, rotation=rot, config=config)
+
+
+def rest_joint_path(
+    robot: Robot, name: str, kind: str, q: np.ndarray, dt: float, limits: JointLimits, share: float = 0.8
+) -> TaskPath:
+    """FK of a joint path time-warped to start and end at rest (q(T·s(t/T)), s quintic) and stretched in time until
+    its speeds and accelerations are within ``share`` of the limits: reachable by construction."""
+    t = np.arange(len(q)) * dt
+    spline = CubicSpline(t, q, axis=0)
+    stretch = 1.0
+    for _ in range(20):
+        tw = np.arange(int(round(stretch * t[-1] / dt)) + 1) * dt
+        qw = spline(_smooth_ramp(tw, float(tw[-1])) * t[-1])
+        vel = np.abs(np.diff(qw, axis=0)).max(axis=0) / dt / limits.velocity
+        acc = np.abs(np.diff(qw, 2, axis=0)).max(axis=0) / dt**2 / limits.acceleration
+        factor = max(vel.max() / share, math.sqrt(acc.max() / share))
+        if factor <= 1.0:
+            break
+        stretch *= factor * 1.02
+    return _fk_path(robot, name, kind, dt, qw)
+
+
+def build_rest_suite(limits: JointLimits, quick: bool = False) -> list[TaskPath]:
+    """The paths of the module docstring's second part (``quick``: a third of them, and no 60 s path)."""
+    robot = Robot()
+    paths: list[TaskPath] = []
+    for dt in (1e-3, 5e-3):
+        ms = f"{dt * 1e3:g}ms"
+        # handwriting and drawings, pens of several lengths, the table and the board
+        paths += [
+            drawing_path(f"write-table-pen-{ms}", "loops", dt, 6.0, (0.5, 0.0, 0.15), "table", 0.36),
+            drawing_path(f"write-board-{ms}", "loops", dt, 6.0, (0.62, 0.0, 0.55), "board", 0.4, RobotConfig()),
+            drawing_path(f"write-board-longpen-tilt20-{ms}", "loops", dt, 5.0, (0.7, 0.05, 0.45), "board", 0.32,
+                         LONG_PEN, pen_tilt_deg=20.0),
+            drawing_path(f"rose-table-offsetpen-{ms}", "rose", dt, 5.0, (0.62, 0.1, 0.12), "table", 0.3,
+                         OFFSET_PEN, yaw_deg=40.0),
+            drawing_path(f"spiral-table-{ms}", "spiral", dt, 4.0, (0.6, -0.15, 0.2), "table", 0.3),
+            drawing_path(f"heart-board-pen-tilt30-{ms}", "heart", dt, 4.0, (0.6, -0.1, 0.5), "board", 0.3,
+                         pen_tilt_deg=30.0),
+            drawing_path(f"spiral-board-fast-{ms}", "spiral", dt, 1.5, (0.78, 0.1, 0.55), "board", 0.3, LONG_PEN),
+            drawing_path(f"write-table-moving-ends-{ms}", "loops", dt, 5.0, (0.5, 0.0, 0.15), "table", 0.36,
+                         rest=False),
+            drawing_path(f"rose-board-moving-ends-{ms}", "rose", dt, 4.0, (0.6, 0.0, 0.5), "board", 0.3,
+                         RobotConfig(), rest=False),
+        ]
+        # near-singular passes: over the base axis (shoulder), at full stretch (elbow), forearm along the flange
+        paths += [
+            move_path(f"near-full-stretch-{ms}", dt, 3.0, (0.65, 0.0, 0.4), (0.9, 0.0, 0.4), _frame([1.0, 0.0, 0.0])),
+            move_path(f"near-wrist-singular-{ms}", dt, 3.0, (0.4, -0.2, 0.6), (0.4, 0.2, 0.6)),
+            move_path(f"pen-near-wrist-singular-{ms}", dt, 3.0, (0.5, -0.3, 0.3), (0.5, 0.3, 0.3), DOWN, PEN),
+        ]
+        # orientation-heavy moves at rest at both ends
+        paths += [
+            move_path(f"spin-flange-170-{ms}", dt, 3.0, (0.55, 0.0, 0.4), kind="orientation", angle_deg=170.0),
+            move_path(f"tumble-to-horizontal-{ms}", dt, 3.0, (0.5, 0.1, 0.45), kind="orientation", axis=(0, 1, 0), angle_deg=-90.0),
+            move_path(f"tilt-pen-50-{ms}", dt, 2.0, (0.5, -0.2, 0.25), None, DOWN, PEN, "orientation", (1, -1, 0), 50.0),
+            move_path(f"spin-pen-300-{ms}", dt, 4.0, (0.5, 0.0, 0.3), None, DOWN, PEN, "orientation", angle_deg=300.0),
+        ]
+        # FK-built joint paths time-warped to rest: random, through singularities, brushing a limit
+        rng = np.random.default_rng(17 if dt < 2e-3 else 18)
+        for c, centre in enumerate(CENTRES[:4]):
+            q = random_joint_path(rng, limits, dt, 3.0, np.array(centre), np.full(7, 0.8) * rng.uniform(0.5, 1, 7), 0.5)
+            paths.append(rest_joint_path(robot, f"rest-joint-c{c}-{ms}", "joint", q, dt, limits))
+        for joint in (5, 3, 1):
+            q = random_joint_path(rng, limits, dt, 3.0, np.array(CENTRES[1]), rng.uniform(0.2, 0.6, 7), 0.5)
+            q[:, joint] = 0.5 * np.cos(np.pi * np.arange(len(q)) * dt / 3.0) + (0.03 if joint == 3 else 0.0)
+            paths.append(rest_joint_path(robot, f"rest-singular-A{joint + 1}-{ms}", "singular", q, dt, limits))
+        # leaving the workspace (refused: the first pose that no joint path reaches inside the limits)
+        paths += [
+            move_path(f"leave-over-the-base-{ms}", dt, 3.0, (0.05, -0.25, 0.75), (0.05, 0.25, 0.75), kind="leave"),
+            move_path(f"leave-reach-outward-{ms}", dt, 3.0, (0.5, 0.0, 0.3), (1.0, 0.0, 0.3), kind="leave"),
+            move_path(f"leave-reach-upward-pen-{ms}", dt, 3.0, (0.3, 0.2, 0.6), (0.3, 0.2, 1.2), DOWN, PEN, "leave"),
+            move_path(f"leave-to-shoulder-{ms}", dt, 3.0, (0.5, 0.0, 0.3), (0.12, 0.0, 0.3), kind="leave"),
+            move_path(f"leave-tumble-up-{ms}", dt, 3.0, (0.45, 0.0, 0.15), kind="leave", axis=(0, 1, 0), angle_deg=150.0),
+            move_path(f"leave-a4-too-fast-{ms}", dt, 0.25, (0.45, 0.0, 0.45), (0.75, 0.0, 0.45), kind="leave"),
+        ]
+    if quick:
+        paths = paths[::3]
+    else:
+        paths.append(long_writing(1e-3, 60.0))
+        paths.append(long_writing(1e-3, 60.0, leave_at=50.0))
+    return paths
+
+
+def long_writing(dt: float, duration: float, leave_at: float | None = None) -> TaskPath:
+    """Handwriting for ``duration`` [s] on the table with a pen, at rest at both ends: 120 loops (≈ 0.15 m/s) on a
+    baseline that sweeps left and right three times while it comes 0.15 m closer; with ``leave_at`` [s] the pen
+    drifts away from the robot from that time on, out of reach."""
+    t = np.arange(int(round(duration / dt)) + 1) * dt
+    sigma = rest_timing(t, 0.5)
+    theta = 2 * np.pi * 120 * sigma
+    loop = 0.012  # [m]
+    pos = np.column_stack([0.60 - 0.15 * sigma - loop * (1 - np.cos(theta)),
+                           0.25 * np.sin(2 * np.pi * 3 * sigma) - loop * np.sin(theta), np.full(len(t), 0.15)])
+    name = f"write-60s-{dt * 1e3:g}ms"
+    if leave_at is not None:
+        pos[:, 0] += 0.04 * np.clip(t - leave_at, 0.0, None) ** 2
+        name = f"write-60s-leaving-at-{leave_at:g}s-{dt * 1e3:g}ms"
+    rot = np.broadcast_to(_frame([0.0, 0.0, -1.0]), (len(t), 3, 3)).copy()
+    return TaskPath(name=name, kind="drawing" if leave_at is None else "leave", t=t, position=pos, rotation=rot,
+                    config=PEN)

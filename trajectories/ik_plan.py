@@ -24,7 +24,6 @@ from .resample import spaced_indices
 PLAN_DT = 0.1  # [s] stage spacing of the grid search
 FINE_DT = 0.02  # [s] stage spacing of the final refinement
 N_PSI = 72  # arm-angle grid: 5° apart (the plans are refined off the grid)
-CHECK_PSI = 3600  # arm-angle grid (0.1°) of the check that a pose has no configuration inside the limits
 PEAK_POWER = 8  # exponent of the speed ratio in the cost: large → the peak dominates
 # predecessors of each branch: itself and the three branches one sign away (one singularity crossed)
 PRED = np.array([np.flatnonzero(np.abs(BRANCHES - b).sum(axis=-1) <= 2.0) for b in BRANCHES])  # (8, 4)
@@ -48,8 +47,7 @@ class PlanTargets:
     @cached_property
     def stages(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The grid search's stages every ``PLAN_DT``: indices (K,), arm angles (N_PSI,) [rad], configurations
-        (K, 8, N_PSI, 7) [rad] of every branch and arm angle, and whether each is within reach — computed once for
-        the reachability check and the plan."""
+        (K, 8, N_PSI, 7) [rad] of every branch and arm angle, and whether each is within reach."""
         idx = spaced_indices(self.times, PLAN_DT)
         psi = np.linspace(-np.pi, np.pi, N_PSI, endpoint=False)
         q, reach = self.configurations(idx[:, None, None], psi[None, None, :], BRANCHES[None, :, None, :])
@@ -78,24 +76,6 @@ class ArmAnglePlan:
         """The plan interpolated linearly in joint space at every path time (n,) [s] → (n, 7) [rad]."""
         t = times[self.indices]
         return np.stack([np.interp(times, t, self.q[:, j]) for j in range(7)], axis=1)
-
-
-def unreachable_sample(
-    path: PlanTargets,
-    margin: float = 1e-4,
-    n_psi: int = CHECK_PSI,
-) -> int | None:
-    """The first path sample among the plan's stages whose pose has no configuration ``margin`` [rad] inside
-    the position limits at any arm angle of a 0.1° grid in any branch (out of reach or beyond a limit), or None."""
-    idx, _, q, reach = path.stages
-    bound = path.limits.position - margin
-    inside = reach & (np.abs(q) <= bound).all(axis=-1)
-    fine = np.linspace(-np.pi, np.pi, n_psi, endpoint=False)
-    for k in idx[~inside.any(axis=(1, 2))]:  # empty on the coarse grid: look closer
-        q, reach = path.configurations(k, fine[None, :], BRANCHES[:, None, :])
-        if not (reach & (np.abs(q) <= bound).all(axis=-1)).any():
-            return int(k)
-    return None
 
 
 def plan_arm_angle(path: PlanTargets) -> list[ArmAnglePlan]:
@@ -207,7 +187,9 @@ def refine_plan(
         q = joints(intermediate_result.x)
         vel = np.diff(q, axis=0) / dt[:, None]
         acc = np.diff(vel, axis=0) / (0.5 * (dt[1:] + dt[:-1]))[:, None]
-        if (np.abs(vel) / limits.velocity).max() <= stop_speed and (np.abs(acc) / limits.acceleration).max() <= 1.0:
+        if (np.abs(vel) / limits.velocity).max(initial=0.0) <= stop_speed and (
+            np.abs(acc) / limits.acceleration
+        ).max(initial=0.0) <= 1.0:
             raise StopIteration
 
     res = minimize(cost, plan.psi, jac=grad, method="L-BFGS-B", callback=good_enough,

@@ -17,7 +17,7 @@ import numpy as np
 from .arm_angle import ArmGeometry
 from .errors import IkError
 from .ik import IkResult, PathSolver, _Stall
-from .ik_plan import PlanTargets, best_plan, unreachable_sample
+from .ik_plan import PlanTargets, best_plan
 from .resample import spaced_indices
 
 SCORE_DT = 0.1  # [s] sample spacing of the scoring pass
@@ -147,7 +147,7 @@ def _solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] |
     if not candidates:  # the first pose itself is unreachable: explain it from the thesis start
         q = np.clip(np.array(SEEDS[0]), solver.lower, solver.upper)
         q, ep, er, _ = solver.track(0, q, solver.lower, solver.upper, q, 0.0, solver.options.max_iterations_first)
-        raise solver.diagnose(_Stall(0, q, None, 0.0, ep, er))
+        raise solver.diagnose(_Stall(0, q, None, 0.0, ep, er), "from the seed configurations lbr starts from")
     scores = score_candidates(solver, candidates)
     order = sorted(range(len(candidates)), key=lambda i: scores[i], reverse=True)
     notes = tuple(
@@ -155,34 +155,35 @@ def _solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] |
         f"margin {math.degrees(scores[i][1]):.1f}°"
         for i in order
     )
-    first: _Stall | None = None
+    first: _Stall | None = None  # the furthest stall of a pass on every sample (its index is exact)
+    coarse: _Stall | None = None  # the furthest stall of a coarse pass (its index is on the coarse grid)
     tries = order[: solver.options.start_attempts]
     # the coarse pass of each candidate first — the best-scored ones, then the others (the scoring pass is coarser
     # still and cannot tell apart starts on one self-motion manifold whose speeds differ along the path); the
-    # (slower) pass on every sample only for the best two
+    # (slower) pass on every sample only for the best two. Every pose is reachable inside the position limits
+    # (checked before, :mod:`.ik_reach`): a stall is where the redundancy led, not a fact of the pose.
     more = order[solver.options.start_attempts : solver.options.start_attempts + EXTRA_TRIES]
-    reachable, beyond, targets = True, None, None
     for fallback, ranks in ((False, tries), (False, more), (True, tries[:2])):
-        if ranks is more and solver.times is not None:
-            targets = _targets(solver)
-            beyond = unreachable_sample(targets, solver.options.limit_margin)
-            if beyond is not None:
-                reachable = False  # some pose fits no arm angle: the best candidates' stall says where and why
-                break
         for i in ranks:
             try:
                 res = solver.solve(candidates[i], candidates[i], progress, fallback=fallback)
             except _Stall as stall:
-                if first is None or stall.k > first.k:
+                fact = solver.fact()  # checked at every sample now (the coarse check can miss a short excursion)
+                if fact is not None and fact.index <= stall.k:
+                    raise solver.fact_error(fact) from None
+                if fallback and (first is None or stall.k > first.k):
                     first = stall
+                elif not fallback and (coarse is None or stall.k > coarse.k):
+                    coarse = stall
                 continue
             rank = order.index(i) + 1
             label = f"auto (candidate {rank} of {len(candidates)}, margin {math.degrees(scores[i][1]):.1f}°)"
             return replace(res, start=label, candidates=notes)
+    first = first or coarse
     assert first is not None
     # the redundancy led every start into a part of the self-motion too fast somewhere: plan the arm angle over
     # the whole path and follow that plan
-    plan = best_plan(targets or _targets(solver)) if solver.speed and reachable else None
+    plan = best_plan(_targets(solver)) if solver.speed else None
     if plan is not None:
         label = f"auto (arm-angle plan, peak {plan.peak_speed:.2f} of the speed limits between its stages)"
         # the plan's configurations are exact solutions: through them directly, else follow it from its start
@@ -192,7 +193,7 @@ def _solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] |
         try:
             res = solver.solve(plan.q[0], plan.reference(solver.times), progress)
         except _Stall as stall:
-            if stall.k > first.k:
+            if stall.k > first.k:  # a pass on every sample (solve's fallback): exact
                 first = stall
         else:
             return replace(res, start=label, candidates=notes)
@@ -200,10 +201,7 @@ def _solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] |
         res = solver.through(plan.indices, plan.q, 1, any_acceleration=True)
         if res is not None:
             return replace(res, start=label, candidates=notes)
-    error = solver.diagnose(first)
-    if not reachable:
-        t = solver.time(beyond)
-        raise _noted(error, f"; pose {beyond} (t = {t:.4f} s) fits no arm angle of any branch inside the position limits")
+    error = solver.diagnose(first, "from every start lbr tried")
     if plan is not None and error.reason == "velocity limit":
         j = plan.peak_joint
         raise _noted(
@@ -222,6 +220,7 @@ def _noted(error: IkError, note: str) -> IkError:
     return IkError(
         str(error) + note, index=error.index, t=error.t, position_error=error.position_error,
         rotation_error=error.rotation_error, reason=error.reason, joint=error.joint, needed=error.needed,
+        kind=error.kind,
     )
 
 

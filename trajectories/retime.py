@@ -14,6 +14,8 @@ from .errors import PlanningError
 from .limits import JointLimits
 from .trajectory import JointTrajectory
 
+MAX_SAMPLES = 2_000_000  # longest re-timed output (≈ 33 min at 1 ms): ≈ 110 MB of samples
+
 
 @dataclass(frozen=True)
 class RetimeResult:
@@ -62,6 +64,11 @@ def retime(traj: JointTrajectory, limits: JointLimits, dt: float, *, scale: floa
     if result is None:
         raise PlanningError("toppra found no feasible timing for this path within the limits")
     duration = float(result.duration)
+    if not np.isfinite(duration) or duration / dt > MAX_SAMPLES:
+        raise PlanningError(
+            f"the fastest timing within the limits lasts {duration:.4g} s: more than {MAX_SAMPLES:,} samples at "
+            f"{dt:g} s (are the velocity or acceleration limits, or 1 − margin, tiny?)"
+        )
     n = int(np.ceil(duration / dt - 1e-9)) + 1
     t = np.arange(n) * dt
     qs = result(np.minimum(t, duration))

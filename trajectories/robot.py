@@ -154,26 +154,57 @@ class Robot:
             rot[k] = m.rotation
         return pos, rot
 
+    def link_frames(self, q: np.ndarray) -> np.ndarray:
+        """World poses (n, 9, 4, 4) of the joint frames A1..A7, the flange and the TCP along a path q (n, 7) [rad].
+
+        The model's own placements composed for all samples at once (every joint is a revolute joint about its
+        local z): the same poses as ``pin.forwardKinematics`` sample by sample, in one vectorised pass.
+        """
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        n = len(q)
+        model = self.model
+        out = np.zeros((n, N_JOINTS + 2, 4, 4))
+        out[:, :, 3, 3] = 1.0
+        rot = np.broadcast_to(np.eye(3), (n, 3, 3))
+        pos = np.zeros((n, 3))
+
+        def place(placement: pin.SE3) -> tuple[np.ndarray, np.ndarray]:  # (rot, pos) · placement
+            r, t = placement.rotation, placement.translation  # elementwise: small-matrix GEMMs are slow here
+            rr = rot[:, :, 0, None] * r[0] + rot[:, :, 1, None] * r[1] + rot[:, :, 2, None] * r[2]
+            return rr, pos + rot[:, :, 0] * t[0] + rot[:, :, 1] * t[1] + rot[:, :, 2] * t[2]
+
+        for i in range(N_JOINTS):
+            a, pos = place(model.jointPlacements[i + 1])
+            c, s = np.cos(q[:, i])[:, None], np.sin(q[:, i])[:, None]
+            rot = np.stack([a[:, :, 0] * c + a[:, :, 1] * s, a[:, :, 1] * c - a[:, :, 0] * s, a[:, :, 2]], axis=2)
+            out[:, i, :3, :3], out[:, i, :3, 3] = rot, pos
+        for k, fid in ((N_JOINTS, self.flange_id), (N_JOINTS + 1, self.tcp_id)):
+            out[:, k, :3, :3], out[:, k, :3, 3] = place(model.frames[fid].placement)
+        return out
+
     def inverse_dynamics(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         """Joint torques [Nm] for q [rad], v [rad/s], a [rad/s^2] (RNEA, gravity along −z of the base)."""
         return pin.rnea(self.model, self.data, q, v, a).copy()
 
 
-def parse_tool(text: str | None) -> tuple[float, float, float]:
-    """Parse ``--tool x,y,z`` [m]."""
-    if text is None or text.strip() == "":
+MAX_TOOL_OFFSET = 2.0  # [m] a tool (string attachment) this far from the flange is a typo
+
+
+def parse_tool(text: str | tuple | None) -> tuple[float, float, float]:
+    """Parse ``--tool x,y,z`` [m] (a tuple of three numbers is taken as it is); each within ±2 m."""
+    if text is None or (isinstance(text, str) and text.strip() == ""):
         return (0.0, 0.0, 0.0)
-    parts = text.split(",")
+    parts = text.split(",") if isinstance(text, str) else list(text)
     try:
         vals = tuple(float(p) for p in parts)
-    except ValueError:
+    except (TypeError, ValueError):
         raise OptionError(f"--tool: expected x,y,z in metres, got {text!r}") from None
-    if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
-        raise OptionError(f"--tool: expected three finite numbers x,y,z [m], got {text!r}")
+    if len(vals) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_TOOL_OFFSET for v in vals):
+        raise OptionError(f"--tool: expected three numbers x,y,z within ±{MAX_TOOL_OFFSET:g} m, got {text!r}")
     return vals  # type: ignore[return-value]
 
 
-def parse_flange(text: str) -> Flange:
+def parse_flange(text: str | Flange) -> Flange:
     try:
         return Flange(text)
     except ValueError:

@@ -7,7 +7,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
+from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, MarginOpt, ToolOpt
 
 
 def run_check(traj, lim, margin: float, jerk: bool, t1: bool, robot=None):
@@ -55,7 +55,7 @@ def print_report(rep, report, name: str) -> None:
 def check(
     joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad].")],
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of joint velocity and acceleration with the limits.")] = None,
-    margin: Annotated[float, typer.Option("--margin", help="Check against the limits scaled by (1 − margin), 0 ≤ margin < 1.")] = 0.0,
+    margin: MarginOpt = 0.0,
     jerk: Annotated[bool, typer.Option("--jerk", help="Fail on jerk violations too (jerk is always reported).")] = False,
     t1: Annotated[bool, typer.Option("--t1", help="Also check the Cartesian flange speed against T1's 250 mm/s.")] = False,
     flange: FlangeOpt = DEFAULT_FLANGE,
@@ -74,17 +74,15 @@ def check(
     from trajectories.csvio import read_joint_csv
 
     from ..console import Reporter
-    from ..options import check_margin, check_number, limits_from, make_robot
+    from ..options import limits_from, make_robot
     from ..outputs import guard_outputs
 
     rep = Reporter(json_out)
-    check_margin(margin)
-    check_number("--dt", dt, 1e-4, 1.0, unit="s")
     guard_outputs({"JOINT_CSV": joint_csv, "--limits": limits}, {"--plot": plot})
     lim = limits_from(limits)
-    robot = make_robot(flange, tool) if t1 else None
+    robot = make_robot(flange, tool)  # also without --t1: a bad --flange or --tool is an error, never ignored
     traj = read_joint_csv(joint_csv, dt)
-    report = run_check(traj, lim, margin, jerk, t1, robot)
+    report = run_check(traj, lim, margin, jerk, t1, robot if t1 else None)
     print_report(rep, report, str(joint_csv))
     if plot is not None:
         from ..plots.check import plot_check

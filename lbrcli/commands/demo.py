@@ -18,7 +18,8 @@ def demo(
 
     Plans a crane move with the thesis baseline and with the default shaper, checks and executes both on the
     simulator with the ball simulated; plans and executes a swing-up; films the simulated ball, tracks it back
-    and compares model and "experiment". Ends with a table; `summary.md` lists every command it ran.
+    and compares model and "experiment"; plans the cup-and-ball catch, rehearses it on the simulator with the cup,
+    films, tracks and compares the flight. Ends with a table; `summary.md` lists every command it ran.
 
     The run happens in a hidden sibling folder that replaces --out only when it completes: an interrupted run
     leaves --out as it was. An existing --out is replaced only if it holds a previous demo (its summary.md).

@@ -34,7 +34,8 @@ from ..fri_options import (
     VersionOpt,
     WaitOpt,
 )
-from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
+from ..cup_options import CupSpecOpt
+from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, MarginOpt, ToolOpt, number
 
 
 def check_or_fail(rep, traj, lim, margin: float, t1: bool, robot, name: str):
@@ -72,7 +73,8 @@ def execute(
         bool, typer.Option("--resample", help="Resample the file (cubic spline) to the controller's period if it differs.")
     ] = False,
     start_tolerance: Annotated[
-        float, typer.Option("--start-tolerance", help="Largest |first row − measured position| accepted \\[rad].")
+        float, number("--start-tolerance", low=0, high=0.1, unit="rad",
+                      help="Largest |first row − measured position| accepted \\[rad].")
     ] = 1e-3,
     move_to_start: Annotated[
         bool,
@@ -82,31 +84,33 @@ def execute(
             "the ball's swing with --length or the simulator's ball).",
         ),
     ] = False,
-    settle: Annotated[float, typer.Option("--settle", help="Hold the last row this long before stopping \\[s].")] = 1.0,
-    margin: Annotated[float, typer.Option("--margin", help="Check the file against the limits × (1 − margin).")] = 0.0,
+    settle: Annotated[float, number("--settle", low=0, high=600, unit="s", help="Hold the last row this long before stopping \\[s].")] = 1.0,
+    margin: MarginOpt = 0.0,
     t1: Annotated[bool, typer.Option("--t1", help="Also refuse files whose flange speed exceeds T1's 250 mm/s.")] = False,
     length: Annotated[
         Optional[float],
-        typer.Option(
-            "--length",
+        number(
+            "--length", low=0, high=5, unit="m",
             help="String length of the ball on the flange \\[m]: the move to the start is input-shaped (ZVD) for its "
             f"swing period; without --robot also the simulated ball's (default {DEFAULT_BALL_LENGTH}; 0: no ball).",
         ),
     ] = None,
     damping: Annotated[
-        float, typer.Option("--damping", help="Simulator only: damping of the simulated ball \\[1/s] (0: it swings on).")
+        float, number("--damping", low=0, high=1000, unit="1/s",
+                      help="Simulator only: damping of the simulated ball \\[1/s] (0: it swings on).")
     ] = 0.0,
+    cup: CupSpecOpt = None,
     start_sway: Annotated[
         float,
-        typer.Option(
-            "--start-sway",
+        number(
+            "--start-sway", low=0, high=45, low_open=True, unit="deg",
             help="With --move-to-start, hold the first row until the measured sway (the simulated ball, or --pendulum) "
             "has stayed below this for 0.6 of a swing period \\[deg].",
         ),
     ] = 0.2,
     sway_wait: Annotated[
         float,
-        typer.Option("--sway-wait", help="Hold it at most this long, then start and report the sway \\[s] (0: only report)."),
+        number("--sway-wait", low=0, high=3600, unit="s", help="Hold it at most this long, then start and report the sway \\[s] (0: only report)."),
     ] = 30.0,
     sim_start: SimStartOpt = None,
     receive_multiplier: MultiplierOpt = 1,
@@ -136,7 +140,9 @@ def execute(
     it leaves the ball at rest); then, while the simulated ball (or the --pendulum module) sways more than
     --start-sway, the first row is held, at most --sway-wait. The sway the rows start with is reported. Every command passes the guard. Ctrl-C, SIGTERM, a guard refusal and the end of the
     file are jerk-limited braking stops; a safety stop, drives off, POOR quality or the session leaving
-    COMMANDING_ACTIVE end the stream at once. Exit 0 completed, 1 refused or stopped, 2 bad input, 130 Ctrl-C.
+    COMMANDING_ACTIVE end the stream at once. The log's file_rows column (the rows streamed) lets `lbr track film` and
+    `lbr compare` tell a completed session from one that stopped early. Exit 0 completed, 1 refused or stopped, 2 bad
+    input, 130 Ctrl-C.
     """
     from lbrcli.fri import TrajectoryPlayer
     from lbrcli.lab.attach import LabOptions
@@ -144,33 +150,19 @@ def execute(
     from trajectories.errors import InputError, OptionError
 
     from ..console import Reporter
-    from ..fri_options import busy_wait_seconds, check_simulator_only, validate_session
+    from ..fri_options import busy_wait_seconds, check_simulator_only
     from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
-    from ..options import check_margin, limits_from, make_robot
+    from ..options import limits_from, make_robot, within_limits
+    from ..session_end import FILE_ROWS_COLUMN
 
     rep = Reporter(json_out)
-    validate_session(fri_version, port, wait, period, max_tracking_error, busy_wait=busy_wait)
-    check_margin(margin)
-    if not (math.isfinite(start_tolerance) and 0 <= start_tolerance <= 0.1):
-        raise OptionError(f"--start-tolerance must be 0..0.1 rad, got {start_tolerance:g}")
-    if not (math.isfinite(settle) and 0 <= settle <= 600):
-        raise OptionError(f"--settle must be 0..600 s, got {settle:g}")
-    if not 1 <= receive_multiplier <= 100:
-        raise OptionError(f"--receive-multiplier must be 1..100, got {receive_multiplier}")
-    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--damping": damping != 0.0,
+    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--damping": damping != 0.0, "--cup": cup is not None,
                                  "--receive-multiplier": receive_multiplier != 1, "--sim-strict": not sim_lenient})  # fmt: skip
-    if not (math.isfinite(start_sway) and 0 < start_sway <= 45):
-        raise OptionError(f"--start-sway must be in (0, 45] deg, got {start_sway:g}")
-    if not (math.isfinite(sway_wait) and 0 <= sway_wait <= 3600):
-        raise OptionError(f"--sway-wait must be 0..3600 s, got {sway_wait:g}")
-    if not (math.isfinite(damping) and damping >= 0):
-        raise OptionError(f"--damping must be >= 0 1/s, got {damping:g}")
     ball = DEFAULT_BALL_LENGTH if length is None and robot is None else length
-    if ball is not None and not (math.isfinite(ball) and 0 <= ball <= 5):
-        raise OptionError(f"--length must be 0..5 m, got {ball:g}")
     if log is not None and log.resolve() == joint_csv.resolve():
         raise OptionError(f"--log {log} is the trajectory file itself; choose another name")
     lim = limits_from(limits)
+    within_limits(sim_start, lim, "--sim-start")
     name = str(joint_csv)
     traj = read_joint_csv(joint_csv, dt)
     model = make_robot(flange, tool) if t1 else None
@@ -231,13 +223,31 @@ def execute(
                                       sim_start=sim_start, default_start=traj.q[0], flange=flange, tool=tool,
                                       max_runtime_s=traj.duration + settle + sway_wait + 120.0, limits=limits)  # fmt: skip
         sim_kwargs.update(receive_multiplier=receive_multiplier, ball_damping=damping)
+        if cup is not None:
+            from ..cup_options import parse_cup_spec
+
+            if not ball:
+                raise OptionError("--cup needs the simulated ball (--length > 0)")
+            sim_kwargs["ball_model"] = parse_cup_spec(cup, ball)
     result, sim_stats, lab_figures = run_client(
         rep, player, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
         sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), max_tracking_error=max_tracking_error, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
+        extra_names=(FILE_ROWS_COLUMN,), extra=lambda state: (len(player.rows),),  # the log tells when it completed
     )  # fmt: skip
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)
     figures.update(file=name, rows=len(traj), duration_s=traj.duration, robot=robot or "simulator")
+    plant = (figures.get("simulator") or {}).get("plants", {}).get("ball", {}).get("cup")
+    if plant is not None:
+        rep.print("simulated ball: " + ("caught in the cup" if plant["caught"] else f"not caught — {plant['failure']}")
+                  + " (simulator time)")
+    if cup is not None and log is not None:
+        from ..cup_log import cup_summary, describe
+
+        summary = cup_summary(log)
+        if summary is not None:
+            rep.print(describe(summary))
+            figures["cup"] = summary
     if robot is not None and result.figures.get("operation_mode") == "TEST_MODE_1" and not t1:
         rep.warn("the robot is in T1: the controller limits the flange speed to 250 mm/s (check with --t1)")
     plot_error = plot_log(plot, log, rep, joint_csv.name, figures)

@@ -7,17 +7,17 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..options import JsonOpt
+from ..options import JsonOpt, number
 
 
 def listen(
     url: Annotated[str, typer.Argument(help="mqtt://HOST:PORT/TOPIC published by `lbr execute/monitor --mqtt`.")],
-    duration: Annotated[Optional[float], typer.Option("--duration", help="Stop after this many seconds \\[s].")] = None,
-    count: Annotated[Optional[int], typer.Option("--count", help="Stop after this many messages.")] = None,
+    duration: Annotated[Optional[float], number("--duration", low=0, high=1e7, low_open=True, unit="s", help="Stop after this many seconds \\[s].")] = None,
+    count: Annotated[Optional[int], number("--count", low=1, high=10**12, integer=True, help="Stop after this many messages.")] = None,
     out: Annotated[Optional[Path], typer.Option("-o", "--out", help="Record every message as one JSON line.")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", help="Do not print each message.")] = False,
     connect_timeout: Annotated[
-        float, typer.Option("--connect-timeout", help="Exit 1 when the broker is not reached within this time \\[s].")
+        float, number("--connect-timeout", low=0, high=600, low_open=True, unit="s", help="Exit 1 when the broker is not reached within this time \\[s].")
     ] = 5.0,
     json_out: JsonOpt = False,
 ) -> None:
@@ -35,14 +35,10 @@ def listen(
     from trajectories.errors import CheckFailed
 
     from ..console import Reporter
-    from ..options import check_number
     from ..outputs import atomic_open
 
     rep = Reporter(json_out)
     target = parse_mqtt_url(url, "URL")
-    check_number("--duration", duration, 0.0, 1e7, low_open=True, unit="s")
-    check_number("--count", count, 1, 1e12)
-    check_number("--connect-timeout", connect_timeout, 0.0, 600.0, low_open=True, unit="s")
     done = threading.Event()
     n = 0
     interrupted = False

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Annotated, Any
 
 import typer
@@ -17,7 +16,7 @@ from ..fri_options import (
     MqttRateOpt,
     PendulumOpt,
     PendZeroOpt,
-    PeriodOpt,
+    SessionPeriodOpt,
     PlotOpt,
     PortOpt,
     RealtimeOpt,
@@ -28,17 +27,17 @@ from ..fri_options import (
     VersionOpt,
     WaitOpt,
 )
-from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, ToolOpt
+from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, ToolOpt, number
 
 
 def monitor(
-    duration: Annotated[float, typer.Option("--duration", help="How long to monitor \\[s].")],
+    duration: Annotated[float, number("--duration", low=0, high=86400, low_open=True, unit="s", help="How long to monitor \\[s].")],
     log: LogOpt = None,
     robot: RobotOpt = None,
     port: PortOpt = 30200,
     bind: BindOpt = None,
     fri_version: VersionOpt = None,
-    period: PeriodOpt = None,
+    period: SessionPeriodOpt = None,
     length: LengthOpt = None,
     sim_start: SimStartOpt = None,
     wait: WaitOpt = None,
@@ -65,18 +64,14 @@ def monitor(
 
     from lbrcli.fri import LBRClient, Phase
     from lbrcli.lab.attach import LabOptions
-    from trajectories.errors import OptionError
     from trajectories.robot import FLANGE_FRAME
 
     from ..console import Reporter
-    from ..fri_options import busy_wait_seconds, check_simulator_only, validate_session
+    from ..fri_options import busy_wait_seconds, check_simulator_only
     from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
     from ..options import THESIS_Q_START, make_robot
 
     rep = Reporter(json_out)
-    validate_session(fri_version, port, wait, period, busy_wait=busy_wait)
-    if not (math.isfinite(duration) and 0 < duration <= 86400):
-        raise OptionError(f"--duration must be in (0, 86400] s, got {duration:g}")
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
                                  "--sim-strict": not sim_lenient})  # fmt: skip
     model = make_robot(flange, tool)

@@ -13,7 +13,10 @@ from typing import Annotated, Any, Optional
 
 import typer
 
-from ..options import DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
+import numpy as np
+
+from ..options import (DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, JointVector, JsonOpt, LimitsOpt, ToolOpt, angle, choice,
+                       joints, number)  # fmt: skip
 
 PREDICTION_COLUMNS = ("t", "theta", "theta_planned")
 SIDES = {"any": 0, "+y": 1, "-y": -1}
@@ -70,7 +73,7 @@ def plan_swing_up_files(
     push: float = 0.0,
     duration: float | None = None,
     dt: float = 0.005,
-    q_start: str = THESIS_Q_START,
+    q_start: str | np.ndarray = THESIS_Q_START,
     k_e: float = 1.7,
     k_p: float = 0.05,
     k_d: float = 0.05,
@@ -93,8 +96,6 @@ def plan_swing_up_files(
     θ_d is not reached / limits are violated / the string goes slack with ``taut``); with ``strict`` a failure
     raises PlanningError after the files are written.
     """
-    import numpy as np
-
     from planners.swingup import SwingUpRequest, plan_swing_up
     from planners.swingup_fast import SearchSettings
     from trajectories.csvio import write_joint_csv, write_table, write_task_csv
@@ -102,16 +103,16 @@ def plan_swing_up_files(
     from trajectories.poses import quaternions_from_matrices
     from trajectories.trajectory import TaskTrajectory
 
-    from ..options import limits_from, make_robot
+    from ..options import limits_from, make_robot, within_limits
     from ..outputs import guard_outputs
     from ..parsing import parse_joint_vector
 
     _validate(length, mass, theta_d, method, theta0, dt, duration, travel, k_e, k_p, k_d, tolerance, margin,
               orientation, push, side, workers)
     guard_outputs({"--limits": limits}, {"-o": out, "--prediction": prediction, "--plot": plot, "--task-out": task_out})
-    q0 = parse_joint_vector(q_start, "--q-start")
     robot = make_robot(flange, tool)
     lim = limits_from(limits)
+    q0 = within_limits(parse_joint_vector(q_start, "--q-start"), lim, "--q-start")
     request = SwingUpRequest(
         length=length, mass=mass, theta_d=theta_d, method=method, q_start=tuple(float(v) for v in q0),
         orientation=None if orientation == "auto" else orientation, travel=travel, dt=dt, duration=duration,
@@ -180,28 +181,28 @@ def _summary(rep, f: dict) -> None:
 
 def swing_up(
     out: Annotated[Path, typer.Option("-o", "--out", help="Joint trajectory to write: t,q1..q7 \\[s, rad].")],
-    length: Annotated[float, typer.Option("--length", help="String length l \\[m] (pivot to ball centre).")],
-    mass: Annotated[float, typer.Option("--mass", help="Ball mass m \\[kg] (E is in joules, as in the thesis).")],
-    theta_d: Annotated[str, typer.Option("--theta-d", help="Target apex angle from the hanging vertical, (0, 180°) (e.g. 115deg).")],
-    method: Annotated[str, typer.Option("--method", help="energy: thesis energy shaping; fast: limit-aware bang-bang pumping.")] = "energy",
-    theta0: Annotated[str, typer.Option("--theta0", help="Initial ball angle toward +y (e.g. 0.1 or 5deg); the energy law needs ≠ 0 or --push.")] = "0",
-    push: Annotated[float, typer.Option("--push", help="energy: amplitude \\[m/s²] of a one-period sine start push at the natural period.")] = 0.0,
-    ke: Annotated[float, typer.Option("--ke", help="energy: gain k_E on θ̇·cos θ·(E − E_d) \\[E in J].")] = 1.7,
-    kp: Annotated[float, typer.Option("--kp", help="energy: position gain k_p \\[1/s²].")] = 0.05,
-    kd: Annotated[float, typer.Option("--kd", help="energy: velocity gain k_d \\[1/s].")] = 0.05,
-    duration: Annotated[Optional[float], typer.Option("--duration", help="Longest pumping time \\[s] (default 60 energy, 10 fast); then the pivot stops.")] = None,
-    dt: Annotated[float, typer.Option("--dt", help="Sample step \\[s] (FRI period; 0.005 as in the thesis, or 0.001).")] = 0.005,
-    q_start: Annotated[str, typer.Option("--q-start", help="Start configuration (7 angles, deg/rad suffixes); thesis pose by default.")] = THESIS_Q_START,
-    max_travel: Annotated[float, typer.Option("--max-travel", help="The pivot must stay within ±this along base y \\[m].")] = 0.3,
-    taut: Annotated[bool, typer.Option("--taut", help="Keep the string taut (tension/mass ≥ 0.5 m/s²); report the highest such angle.")] = False,
-    tolerance: Annotated[str, typer.Option("--tolerance", help="θ_d counts as reached at θ_d − tolerance (energy shaping is asymptotic; it aims at θ_d − tolerance/2).")] = "2deg",
-    margin: Annotated[float, typer.Option("--margin", help="Pivot bounds keep joints within (1 − margin)·limits.")] = 0.1,
-    orientation: Annotated[str, typer.Option("--orientation", help="Pivot orientation: fixed (thesis T_start), follow (turns with y about the vertical, well conditioned), auto (fixed for energy, follow for fast).")] = "auto",
+    length: Annotated[float, number("--length", low=0.01, high=5.0, unit="m", help="String length l \\[m] (pivot to ball centre).")],
+    mass: Annotated[float, number("--mass", low=0, high=100, low_open=True, unit="kg", help="Ball mass m \\[kg] (E is in joules, as in the thesis).")],
+    theta_d: Annotated[float, angle("--theta-d", low_deg=0, high_deg=180, low_open=True, high_open=True, help="Target apex angle from the hanging vertical (e.g. 115deg).")],
+    method: Annotated[str, choice("--method", choices=("energy", "fast"), help="energy: thesis energy shaping; fast: limit-aware bang-bang pumping.")] = "energy",
+    theta0: Annotated[float, angle("--theta0", low_deg=-90, high_deg=90, low_open=True, high_open=True, help="Initial ball angle toward +y (e.g. 0.1 or 5deg); the energy law needs ≠ 0 or --push.")] = "0",
+    push: Annotated[float, number("--push", low=-MAX_PUSH, high=MAX_PUSH, unit="m/s²", help="energy: amplitude \\[m/s²] of a one-period sine start push at the natural period.")] = 0.0,
+    ke: Annotated[float, number("--ke", low=0, high=MAX_GAIN, low_open=True, help="energy: gain k_E on θ̇·cos θ·(E − E_d) \\[E in J].")] = 1.7,
+    kp: Annotated[float, number("--kp", low=0, high=MAX_GAIN, unit="1/s²", help="energy: position gain k_p \\[1/s²].")] = 0.05,
+    kd: Annotated[float, number("--kd", low=0, high=MAX_GAIN, unit="1/s", help="energy: velocity gain k_d \\[1/s].")] = 0.05,
+    duration: Annotated[Optional[float], number("--duration", low=0, high=MAX_DURATION, low_open=True, unit="s", help="Longest pumping time \\[s] (default 60 energy, 10 fast); then the pivot stops.")] = None,
+    dt: Annotated[float, number("--dt", low=1e-4, high=0.02, unit="s", help="Sample step \\[s] (FRI period; 0.005 as in the thesis, or 0.001).")] = 0.005,
+    q_start: Annotated[JointVector, joints("--q-start", help="Start configuration (7 angles, deg/rad suffixes); thesis pose by default.")] = THESIS_Q_START,
+    max_travel: Annotated[float, number("--max-travel", low=0, high=1, low_open=True, unit="m", help="The pivot must stay within ±this along base y \\[m].")] = 0.3,
+    taut: Annotated[bool, typer.Option("--taut", help="Keep the string taut (tension/mass ≥ 0.5 m/s²) until θ_d is reached; report the highest angle the string holds taut.")] = False,
+    tolerance: Annotated[float, angle("--tolerance", low_deg=0, high_deg=180, high_open=True, help="θ_d counts as reached at θ_d − tolerance (energy shaping is asymptotic; it aims at θ_d − tolerance/2).")] = "2deg",
+    margin: Annotated[float, number("--margin", low=0, high=1, high_open=True, help="Pivot bounds keep joints within (1 − margin)·limits.")] = 0.1,
+    orientation: Annotated[str, choice("--orientation", choices=("auto", "fixed", "follow"), metavar="auto|fixed|follow", help="Pivot orientation: fixed (thesis T_start), follow (turns with y about the vertical, well conditioned), auto (fixed for energy, follow for fast).")] = "auto",
     prediction: Annotated[Optional[Path], typer.Option("--prediction", help="Write t,theta\\[,theta_planned] \\[s, rad] of the verification simulation.")] = None,
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: θ(t), pivot x(t) and u(t), tension margin, joint rates vs limits.")] = None,
     task_out: Annotated[Optional[Path], typer.Option("--task-out", help="Write the TCP path t,x,y,z,qw,qx,qy,qz \\[s, m].")] = None,
-    workers: Annotated[int, typer.Option("--workers", help="fast: processes evaluating candidates in parallel.")] = 2,
-    side: Annotated[str, typer.Option("--side", help="Reach θ_d toward +y, -y or any (a centred plan is mirrored).")] = "any",
+    workers: Annotated[int, number("--workers", low=1, high=64, integer=True, help="fast: processes evaluating candidates in parallel.")] = 2,
+    side: Annotated[str, choice("--side", choices=tuple(SIDES), help="Reach θ_d toward +y, -y or any (a centred plan is mirrored).")] = "any",
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -217,15 +218,14 @@ def swing_up(
     from trajectories.errors import PlanningError
 
     from ..console import Reporter
-    from ..parsing import parse_angle
 
     rep = Reporter(json_out)
     with rep.progress("swing-up: plan, IK, verify", None) as update:
         figures = plan_swing_up_files(
-            length, mass, parse_angle(theta_d, "--theta-d"), method, out=out, prediction=prediction, plot=plot,
-            task_out=task_out, theta0=parse_angle(theta0, "--theta0"), push=push, duration=duration, dt=dt,
+            length, mass, theta_d, method, out=out, prediction=prediction, plot=plot,
+            task_out=task_out, theta0=theta0, push=push, duration=duration, dt=dt,
             q_start=q_start, k_e=ke, k_p=kp, k_d=kd, travel=max_travel, taut=taut,
-            tolerance=parse_angle(tolerance, "--tolerance"), margin=margin, orientation=orientation, flange=flange,
+            tolerance=tolerance, margin=margin, orientation=orientation, flange=flange,
             tool=tool, limits=limits, workers=workers, side=side, progress=update,
         )
     _summary(rep, figures)

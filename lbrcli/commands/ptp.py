@@ -5,25 +5,26 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any
 
+import numpy as np
 import typer
 
-from ..fri_options import BindOpt, LengthOpt, LogOpt, PeriodOpt, PlotOpt, PortOpt, RealtimeOpt, RobotOpt, BusyWaitOpt, SimLenientOpt, SimStartOpt, TrackingErrorOpt, VersionOpt, WaitOpt
-from ..options import JsonOpt, LimitsOpt
+from ..fri_options import BindOpt, LengthOpt, LogOpt, SessionPeriodOpt, PlotOpt, PortOpt, RealtimeOpt, RobotOpt, BusyWaitOpt, SimLenientOpt, SimStartOpt, TrackingErrorOpt, VersionOpt, WaitOpt
+from ..options import JointVector, JsonOpt, LimitsOpt, joints, number
 
 
 def ptp(
-    q: Annotated[str, typer.Argument(help="Target joint position: 7 comma-separated angles (deg/rad suffixes; default rad).")],
-    time_s: Annotated[float, typer.Option("--time", help="Duration of the move \\[s] (jerk-limited, rest to rest).")],
+    q: Annotated[JointVector, joints(metavar="Q", argument=True, help="Target joint position: 7 comma-separated angles (deg/rad suffixes; default rad).")],
+    time_s: Annotated[float, number("--time", low=0, high=600, low_open=True, unit="s", help="Duration of the move \\[s] (jerk-limited, rest to rest).")],
     robot: RobotOpt = None,
     port: PortOpt = 30200,
     bind: BindOpt = None,
     log: LogOpt = None,
     fri_version: VersionOpt = None,
     speed_scale: Annotated[
-        float, typer.Option("--speed-scale", help="Fraction of the velocity/acceleration/jerk limits the move may use (≤ 0.5).")
+        float, number("--speed-scale", low=0, high=0.5, low_open=True, help="Fraction of the velocity/acceleration/jerk limits the move may use.")
     ] = 0.2,
-    settle: Annotated[float, typer.Option("--settle", help="Hold the target this long before stopping \\[s].")] = 0.2,
-    period: PeriodOpt = None,
+    settle: Annotated[float, number("--settle", low=0, high=60, unit="s", help="Hold the target this long before stopping \\[s].")] = 0.2,
+    period: SessionPeriodOpt = None,
     sim_start: SimStartOpt = None,
     length: LengthOpt = None,
     wait: WaitOpt = None,
@@ -41,29 +42,20 @@ def ptp(
     (exit 1, nothing sent) if Q is outside the position limits, or the move cannot be done in --time within the
     scaled limits.
     """
-    import numpy as np
-
     from lbrcli.fri import OnlineMove, StopSession, TrajectoryPlayer
-    from trajectories.errors import CheckFailed, OptionError
+    from trajectories.errors import CheckFailed
 
     from ..console import Reporter
-    from ..fri_options import busy_wait_seconds, check_simulator_only, validate_session
+    from ..fri_options import busy_wait_seconds, check_simulator_only
     from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
-    from ..options import DEFAULT_FLANGE, THESIS_Q_START, limits_from
-    from ..parsing import parse_joint_vector
+    from ..options import DEFAULT_FLANGE, THESIS_Q_START, limits_from, within_limits
 
     rep = Reporter(json_out)
-    validate_session(fri_version, port, wait, period, max_tracking_error, busy_wait=busy_wait)
-    goal = parse_joint_vector(q, "Q")
-    if not (math.isfinite(time_s) and 0 < time_s <= 600):
-        raise OptionError(f"--time must be in (0, 600] s, got {time_s:g}")
-    if not (math.isfinite(speed_scale) and 0 < speed_scale <= 0.5):
-        raise OptionError(f"--speed-scale must be in (0, 0.5], got {speed_scale:g}")
-    if not (math.isfinite(settle) and 0 <= settle <= 60):
-        raise OptionError(f"--settle must be 0..60 s, got {settle:g}")
+    goal = q
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
                                  "--sim-strict": not sim_lenient})  # fmt: skip
     lim = limits_from(limits)
+    within_limits(sim_start, lim, "--sim-start")
     over = np.flatnonzero(np.abs(goal) > lim.position)
     if over.size:
         j = int(over[0])

@@ -7,16 +7,18 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..options import DtOpt, JsonOpt, LimitsOpt
+from ..options import DtOpt, JsonOpt, LimitsOpt, number
 
 
 def retime(
     joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad] (an ordinary path).")],
     out: Annotated[Path, typer.Option("-o", "--out", help="Re-timed joint trajectory to write.")],
     step: Annotated[
-        Optional[float], typer.Option("--step", help="Output sample step \\[s] (default: the input's step, e.g. the FRI period).")
+        Optional[float], number("--step", low=1e-4, high=1.0, unit="s",
+                                help="Output sample step \\[s] (default: the input's step, e.g. the FRI period).")
     ] = None,
-    margin: Annotated[float, typer.Option("--margin", help="Use the limits scaled by (1 − margin); the samples are verified against them.")] = 0.02,
+    margin: Annotated[float, number("--margin", low=0, high=1, high_open=True,
+                                    help="Use the limits scaled by (1 − margin); the samples are verified against them.")] = 0.02,
     limits: LimitsOpt = None,
     dt: DtOpt = None,
     json_out: JsonOpt = False,
@@ -30,18 +32,15 @@ def retime(
     slower until they pass. Exit 1 without writing when they cannot (e.g. the path leaves the position limits).
     """
     from trajectories.csvio import read_joint_csv, write_joint_csv
-    from trajectories.errors import CheckFailed, OptionError
+    from trajectories.errors import CheckFailed, OptionError, PlanningError
     from trajectories.retime import retime_within
 
     from ..console import Reporter
-    from ..options import check_margin, check_number, limits_from
+    from ..options import check_number, limits_from
     from ..outputs import guard_outputs
     from .check import print_report, run_check
 
     rep = Reporter(json_out)
-    check_margin(margin)
-    check_number("--step", step, 1e-4, 1.0, unit="s")
-    check_number("--dt", dt, 1e-4, 1.0, unit="s")
     guard_outputs({"JOINT_CSV": joint_csv, "--limits": limits}, {"-o": out})
     lim = limits_from(limits)
     traj = read_joint_csv(joint_csv, dt)
@@ -53,8 +52,8 @@ def retime(
     # × (1 − margin) and re-timed slower until they pass; a file outside the limits is never written.
     try:
         result, ratios = retime_within(traj, lim.scaled(1.0 - margin), h, scale=1.0)
-    except CheckFailed as exc:
-        raise CheckFailed(f"{joint_csv}: {exc}; nothing written to {out}") from None
+    except (CheckFailed, PlanningError) as exc:
+        raise type(exc)(f"{joint_csv}: {exc}; nothing written to {out}") from None
     report = run_check(result.trajectory, lim, margin, False, False)
     if not report.ok:  # retime_within verified the same limits: a bug if reached
         raise CheckFailed(f"{joint_csv}: the re-timed path fails the limit check; nothing written to {out}")

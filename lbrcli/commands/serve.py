@@ -3,7 +3,6 @@ sent back."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Annotated, Any, Optional
 
@@ -14,7 +13,7 @@ from ..fri_options import (
     BindOpt,
     LengthOpt,
     LogOpt,
-    PeriodOpt,
+    SessionPeriodOpt,
     PortOpt,
     RealtimeOpt,
     BusyWaitOpt,
@@ -24,7 +23,7 @@ from ..fri_options import (
     VersionOpt,
     WaitOpt,
 )
-from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt
+from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt, number
 
 
 def serve(
@@ -35,37 +34,37 @@ def serve(
         Optional[str], typer.Option("--mqtt", help="Also take targets from this MQTT topic: mqtt://[USER:PASSWORD@]HOST:PORT/TOPIC (mqtts:// for TLS); the state is published on TOPIC/state.")
     ] = None,
     mqtt_state_hz: Annotated[
-        float, typer.Option("--mqtt-state-hz", help="Publish the state on MQTT at most this often \\[Hz] (0: never).")
+        float, number("--mqtt-state-hz", low=0, high=1000, unit="Hz", help="Publish the state on MQTT at most this often \\[Hz] (0: never).")
     ] = 50.0,
     secret: Annotated[
         Optional[Path], typer.Option("--secret", help="File with a shared secret (>= 16 bytes): every target must end with its HMAC-SHA256 tag; others are ignored.")
     ] = None,
     source: Annotated[
-        Optional[str], typer.Option("--source", help="Comma-separated hosts that may command (default: any; the first owns the session).")
+        Optional[frozenset], typer.Option("--source", parser=parse_sources, metavar="IP,IP,...", help="Comma-separated IP addresses that may command (default: any; the first owns the session).")
     ] = None,
     timeout: Annotated[
-        float, typer.Option("--timeout", help="Dead-man: brake when no target arrived for this long \\[s].")
+        float, number("--timeout", low=0.005, high=10, unit="s", help="Dead-man: brake when no target arrived for this long \\[s].")
     ] = 0.1,
     first_target: Annotated[
-        float, typer.Option("--first-target", help="Stop if no target arrived this long after commanding started \\[s].")
+        float, number("--first-target", low=0.1, high=3600, unit="s", help="Stop if no target arrived this long after commanding started \\[s].")
     ] = 30.0,
     delay: Annotated[
-        Optional[float], typer.Option("--delay", help="Follow the targets this long behind the newest, on the source's clock \\[s] (default: automatic, from the source's gaps and jitter, 2 ms to --timeout).")
+        Optional[float], number("--delay", low=0, high=10, unit="s", help="Follow the targets this long behind the newest, on the source's clock \\[s] (default: automatic, from the source's gaps and jitter, 2 ms to --timeout).")
     ] = None,
     speed_scale: Annotated[
-        float, typer.Option("--speed-scale", help="Share of the velocity, acceleration and jerk limits ruckig may use (0..1].")
+        float, number("--speed-scale", low=0, high=1, low_open=True, help="Share of the velocity, acceleration and jerk limits ruckig may use.")
     ] = 0.5,
     state_every: Annotated[
-        int, typer.Option("--state-every", help="Send the state back every N FRI messages (0: never).")
+        int, number("--state-every", low=0, high=1000, integer=True, help="Send the state back every N FRI messages (0: never).")
     ] = 1,
     duration: Annotated[
-        Optional[float], typer.Option("--duration", help="End (braking) after this long \\[s] (default: until the source ends).")
+        Optional[float], number("--duration", low=0, high=86400, low_open=True, unit="s", help="End (braking) after this long \\[s] (default: until the source ends).")
     ] = None,
     robot: RobotOpt = None,
     port: PortOpt = 30200,
     bind: BindOpt = None,
     fri_version: VersionOpt = None,
-    period: PeriodOpt = None,
+    period: SessionPeriodOpt = None,
     log: LogOpt = None,
     sim_start: SimStartOpt = None,
     length: LengthOpt = None,
@@ -97,37 +96,26 @@ def serve(
     from trajectories.errors import OptionError
 
     from ..console import Reporter
-    from ..fri_options import busy_wait_seconds, check_simulator_only, validate_session
+    from ..fri_options import busy_wait_seconds, check_simulator_only
     from ..fri_runner import exit_for, print_summary, run_client, simulator_kwargs
-    from ..options import THESIS_Q_START, limits_from, make_robot
+    from ..options import THESIS_Q_START, limits_from, make_robot, within_limits
 
     rep = Reporter(json_out)
-    validate_session(fri_version, port, wait, period, busy_wait=busy_wait)
     udp = listen.strip().lower() != "off"
     host, _, lport = listen.rpartition(":")
-    if udp and (not host or not lport.isdigit() or not 0 <= int(lport) <= 65535):
+    if udp and (not host or not (lport.isascii() and lport.isdigit()) or not 0 <= int(lport) <= 65535):
         raise OptionError(f"--listen must be HOST:PORT or off, got {listen!r}")
     if not udp and mqtt is None:
         raise OptionError("--listen off needs --mqtt: targets must come from somewhere")
     mqtt_target = parse_mqtt_url(mqtt) if mqtt is not None else None
-    if not (math.isfinite(mqtt_state_hz) and 0 <= mqtt_state_hz <= 1000):
-        raise OptionError(f"--mqtt-state-hz must be 0..1000, got {mqtt_state_hz:g}")
     key = _read_secret(secret) if secret is not None else None
-    for name, value, lo, hi in (("--timeout", timeout, 0.005, 10.0), ("--first-target", first_target, 0.1, 3600.0)):
-        if not (math.isfinite(value) and lo <= value <= hi):
-            raise OptionError(f"{name} must be {lo:g}..{hi:g} s, got {value:g}")
-    if delay is not None and not (math.isfinite(delay) and 0 <= delay < timeout):
-        raise OptionError(f"--delay must be 0 s or more and less than --timeout ({timeout:g} s), got {delay:g}")
-    if not (math.isfinite(speed_scale) and 0 < speed_scale <= 1):
-        raise OptionError(f"--speed-scale must be in (0, 1], got {speed_scale:g}")
-    if not 0 <= state_every <= 1000:
-        raise OptionError(f"--state-every must be 0..1000, got {state_every}")
-    if duration is not None and not (math.isfinite(duration) and 0 < duration <= 86400):
-        raise OptionError(f"--duration must be in (0, 86400] s, got {duration:g}")
+    if delay is not None and not delay < timeout:
+        raise OptionError(f"--delay must be less than --timeout ({timeout:g} s), got {delay:g}")
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
                                  "--sim-strict": not sim_lenient})  # fmt: skip
     lim = limits_from(limits)
-    allowed = {h.strip() for h in source.split(",") if h.strip()} if source else None
+    within_limits(sim_start, lim, "--sim-start")
+    allowed = set(source) if source else None
     sim_kwargs: dict[str, Any] = {}
     if robot is None:
         sim_kwargs = simulator_kwargs(length=length, default_length=DEFAULT_BALL_LENGTH, period_ms=period or 1,
@@ -184,13 +172,29 @@ def serve(
         raise typer.Exit(1)
 
 
+def parse_sources(text: str | None) -> frozenset[str] | None:
+    """--source: comma-separated IP addresses (the UDP senders allowed to command), checked at parse time."""
+    import ipaddress
+
+    if text is None or isinstance(text, frozenset):
+        return text
+    hosts = [h.strip() for h in str(text).split(",") if h.strip()]
+    if not hosts:
+        raise typer.BadParameter(f"expected comma-separated IP addresses, got {text!r}")
+    try:
+        return frozenset(str(ipaddress.ip_address(h)) for h in hosts)
+    except ValueError as exc:
+        raise typer.BadParameter(f"{exc} (UDP senders are matched by their IP address)") from None
+
+
 def _read_secret(path: Path) -> bytes:
-    from trajectories.errors import OptionError
+    from trajectories.errors import InputError, OptionError
+    from trajectories.inputs import MAX_SMALL_BYTES, read_input
 
     try:
-        key = path.read_bytes().rstrip(b"\r\n")
-    except OSError as exc:
-        raise OptionError(f"--secret {path}: cannot read ({exc.strerror})") from None
+        key = read_input(path, MAX_SMALL_BYTES, text=False).rstrip(b"\r\n")
+    except InputError as exc:
+        raise OptionError(f"--secret {path}: {exc.message}") from None
     if len(key) < 16:
         raise OptionError(f"--secret {path}: the secret has {len(key)} bytes, at least 16 are needed")
     return key

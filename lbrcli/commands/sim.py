@@ -6,69 +6,54 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt, THESIS_Q_START
+from ..cup_options import CupSpecOpt
+from ..fri_options import parse_host_port, parse_ip
+from ..options import (DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, Floats, JointVector, JsonOpt, LimitsOpt, ToolOpt,
+                       choice, floats, joints, number)  # fmt: skip
 
 
-def _parse_client(text: str) -> tuple[str, int]:
-    from trajectories.errors import OptionError
-
-    host, sep, port = text.rpartition(":")
-    if not sep or not host:
-        raise OptionError(f"--client: expected HOST:PORT, got {text!r}")
-    try:
-        number = int(port)
-    except ValueError:
-        raise OptionError(f"--client: port must be an integer, got {port!r}") from None
-    if not 1 <= number <= 65535:
-        raise OptionError(f"--client: port must be 1..65535, got {number}")
-    return host, number
-
-
-def _floats(text: str, n: int, option: str) -> tuple[float, ...]:
-    from trajectories.errors import OptionError
-
-    try:
-        values = tuple(float(x) for x in text.split(","))
-    except ValueError:
-        raise OptionError(f"{option}: expected {n} comma-separated numbers, got {text!r}") from None
-    if len(values) != n:
-        raise OptionError(f"{option}: expected {n} comma-separated numbers, got {len(values)}")
-    return values
+def _cartesian_stiffness(text: str | tuple) -> tuple[float, float]:
+    """--cartesian-stiffness TRANS,ROT: (0, 1e5] N/m and (0, 1e4] Nm/rad."""
+    trans, rot = Floats(2, 0.0, 1e5)(text)
+    if not (trans > 0 and 0 < rot <= 1e4):
+        raise typer.BadParameter(f"expected TRANS in (0, 1e5] N/m and ROT in (0, 1e4] Nm/rad, got {text!r}")
+    return trans, rot
 
 
 def sim(
-    port: Annotated[int, typer.Option("--port", help="UDP port the simulator sends from and listens on (0: any free port).")] = 0,
-    host: Annotated[str, typer.Option("--host", help="Address the simulator binds.")] = "127.0.0.1",
-    period: Annotated[int, typer.Option("--period", help="Send period \\[ms], 1..100.")] = 1,
-    client: Annotated[str, typer.Option("--client", help="Where monitoring messages go: HOST:PORT of the FRI client.")] = "127.0.0.1:30200",
-    q0: Annotated[str, typer.Option("--q0", help="Start joint positions q1..q7 \\[rad, or with deg suffix].")] = THESIS_Q_START,
-    length: Annotated[Optional[float], typer.Option("--length", help="Simulate a ball on a string of this length \\[m] hanging from the TCP.")] = None,
-    damping: Annotated[float, typer.Option("--damping", help="Damping of the simulated ball \\[1/s].")] = 0.0,
-    fri_version: Annotated[str, typer.Option("--fri-version", help="Wire format: 1.15 (bare protobuf) or 2.7 (length + CRC-32 framing).")] = "1.15",
-    receive_multiplier: Annotated[int, typer.Option("--receive-multiplier", help="The client answers every k-th message.")] = 1,
-    duration: Annotated[Optional[float], typer.Option("--duration", help="COMMANDING_ACTIVE time \\[s] after which the robot application ends the session (default: until the client stops); with --no-overlay the time from the first MONITORING_READY.")] = None,
-    timeout: Annotated[Optional[float], typer.Option("--timeout", help="Stop the simulator after this wall time \\[s] (it closes the session: IDLE).")] = None,
-    commanding_after: Annotated[float, typer.Option("--commanding-after", help="Time \\[s] from the first MONITORING_READY until the overlay starts (at quality GOOD).")] = 0.2,
-    quality_window: Annotated[int, typer.Option("--quality-window", help="Cycles in the sliding window of the connection quality.")] = 50,
-    quality_good: Annotated[float, typer.Option("--quality-good", help="Share of timely cycles in the window for GOOD (commanding allowed), 0..1; FAIR from 0.5, EXCELLENT from 0.98.")] = 0.9,
-    operation_mode: Annotated[str, typer.Option("--operation-mode", help="Reported operation mode: T1, T2 or AUT.")] = "T1",
-    loss: Annotated[float, typer.Option("--loss", help="Fault injection: probability of dropping a monitoring message.")] = 0.0,
-    delay: Annotated[float, typer.Option("--delay", help="Fault injection: delay of every monitoring message \\[ms].")] = 0.0,
-    jitter: Annotated[float, typer.Option("--jitter", help="Fault injection: extra random delay, uniform 0..J \\[ms].")] = 0.0,
-    malformed: Annotated[float, typer.Option("--malformed", help="Fault injection: probability of sending a corrupted datagram instead.")] = 0.0,
-    seed: Annotated[int, typer.Option("--seed", help="Seed of the fault injection.")] = 0,
+    port: Annotated[int, number("--port", low=0, high=65535, integer=True, help="UDP port the simulator sends from and listens on (0: any free port).")] = 0,
+    host: Annotated[str, typer.Option("--host", parser=parse_ip, metavar="IP", help="IP address the simulator binds.")] = "127.0.0.1",
+    period: Annotated[int, number("--period", low=1, high=100, unit="ms", integer=True, help="Send period \\[ms].")] = 1,
+    client: Annotated[tuple, typer.Option("--client", parser=parse_host_port, metavar="HOST:PORT", help="Where monitoring messages go: HOST:PORT of the FRI client.")] = "127.0.0.1:30200",
+    q0: Annotated[JointVector, joints("--q0", help="Start joint positions q1..q7 \\[rad, or with deg suffix].")] = THESIS_Q_START,
+    length: Annotated[Optional[float], number("--length", low=0, high=5, low_open=True, unit="m", help="Simulate a ball on a string of this length \\[m] hanging from the TCP.")] = None,
+    damping: Annotated[float, number("--damping", low=0, high=1000, unit="1/s", help="Damping of the simulated ball \\[1/s].")] = 0.0,
+    cup: CupSpecOpt = None,
+    fri_version: Annotated[str, choice("--fri-version", choices=("1.15", "2.7"), help="Wire format: 1.15 (bare protobuf) or 2.7 (length + CRC-32 framing).")] = "1.15",
+    receive_multiplier: Annotated[int, number("--receive-multiplier", low=1, high=100, integer=True, help="The client answers every k-th message.")] = 1,
+    duration: Annotated[Optional[float], number("--duration", low=0, high=86400 * 365, low_open=True, unit="s", help="COMMANDING_ACTIVE time \\[s] after which the robot application ends the session (default: until the client stops); with --no-overlay the time from the first MONITORING_READY.")] = None,
+    timeout: Annotated[Optional[float], number("--timeout", low=0, high=86400 * 365, low_open=True, unit="s", help="Stop the simulator after this wall time \\[s] (it closes the session: IDLE).")] = None,
+    commanding_after: Annotated[float, number("--commanding-after", low=0, high=3600, unit="s", help="Time \\[s] from the first MONITORING_READY until the overlay starts (at quality GOOD).")] = 0.2,
+    quality_window: Annotated[int, number("--quality-window", low=1, high=100_000, integer=True, help="Cycles in the sliding window of the connection quality.")] = 50,
+    quality_good: Annotated[float, number("--quality-good", low=0, high=1, low_open=True, help="Share of timely cycles in the window for GOOD (commanding allowed); FAIR from 0.5, EXCELLENT from 0.98.")] = 0.9,
+    operation_mode: Annotated[str, choice("--operation-mode", choices=("T1", "T2", "AUT"), fold=str.upper, help="Reported operation mode: T1, T2 or AUT.")] = "T1",
+    loss: Annotated[float, number("--loss", low=0, high=1, help="Fault injection: probability of dropping a monitoring message.")] = 0.0,
+    delay: Annotated[float, number("--delay", low=0, high=1000, unit="ms", help="Fault injection: delay of every monitoring message \\[ms].")] = 0.0,
+    jitter: Annotated[float, number("--jitter", low=0, high=1000, unit="ms", help="Fault injection: extra random delay, uniform 0..J \\[ms].")] = 0.0,
+    malformed: Annotated[float, number("--malformed", low=0, high=1, help="Fault injection: probability of sending a corrupted datagram instead.")] = 0.0,
+    seed: Annotated[int, number("--seed", low=0, high=2**32 - 1, integer=True, help="Seed of the fault injection.")] = 0,
     realtime: Annotated[bool, typer.Option("--realtime", help="Run the loop with real-time scheduling (SCHED_FIFO) if permitted: steadier 1 ms under load.")] = False,
     pendulum_pty: Annotated[bool, typer.Option("--pendulum-pty", help="Also emulate the thesis's pendulum module: the ball's planar angle θy as AS5600 lines on a pseudo-terminal (its path is printed; read it with --pendulum PATH). Needs --length.")] = False,
     no_overlay: Annotated[bool, typer.Option("--no-overlay", help="The application only monitors the session (never commands; --duration counts from the first MONITORING_READY), e.g. for KUKA's IOAccess example, which mirrors no positions.")] = False,
-    mode: Annotated[str, typer.Option("--mode", help="Client command mode of the simulated FRI overlay: position (joint position, position control), torque (joint impedance + commanded torque) or wrench (Cartesian impedance + commanded wrench).")] = "position",
-    stiffness: Annotated[float, typer.Option("--stiffness", help="Joint impedance stiffness \\[Nm/rad] (--mode torque), every joint.")] = 1000.0,
-    cartesian_stiffness: Annotated[str, typer.Option("--cartesian-stiffness", help="Cartesian impedance stiffness TRANS,ROT \\[N/m, Nm/rad] along the TCP axes (--mode wrench).")] = "2000,200",
-    damping_ratio: Annotated[float, typer.Option("--damping-ratio", help="Damping ratio ζ of the impedance controllers (KUKA's default 0.7).")] = 0.7,
-    io: Annotated[Optional[list[str]], typer.Option("--io", help="An IO channel of the application's FRI IO configuration: NAME:TYPE:DIRECTION\\[:VALUE], TYPE boolean|digital|analog, DIRECTION in|out (repeatable).")] = None,
+    mode: Annotated[str, choice("--mode", choices=("position", "torque", "wrench"), fold=str.lower, help="Client command mode of the simulated FRI overlay: position (joint position, position control), torque (joint impedance + commanded torque) or wrench (Cartesian impedance + commanded wrench).")] = "position",
+    stiffness: Annotated[float, number("--stiffness", low=0, high=1e5, low_open=True, unit="Nm/rad", help="Joint impedance stiffness \\[Nm/rad] (--mode torque), every joint.")] = 1000.0,
+    cartesian_stiffness: Annotated[tuple, typer.Option("--cartesian-stiffness", parser=_cartesian_stiffness, metavar="TRANS,ROT", help="Cartesian impedance stiffness TRANS,ROT \\[N/m, Nm/rad] along the TCP axes (--mode wrench).")] = "2000,200",
+    damping_ratio: Annotated[float, number("--damping-ratio", low=0, high=10, help="Damping ratio ζ of the impedance controllers (KUKA's default 0.7).")] = 0.7,
+    io: Annotated[Optional[list[str]], typer.Option("--io", metavar="NAME:TYPE:DIR[:VALUE]", help="An IO channel of the application's FRI IO configuration: NAME:TYPE:DIRECTION\\[:VALUE], TYPE boolean|digital|analog, DIRECTION in|out (repeatable).")] = None,
     io_preset: Annotated[Optional[str], typer.Option("--io-preset", help="A ready IO configuration: kuka-ioaccess (the channels KUKA's IOAccess example uses).")] = None,
-    external_torque: Annotated[Optional[str], typer.Option("--external-torque", help="A constant push of the environment on the joints τ1..τ7 \\[Nm].")] = None,
-    external_force: Annotated[Optional[str], typer.Option("--external-force", help="A constant external wrench on the TCP Fx,Fy,Fz,Mx,My,Mz \\[N, Nm], base-frame axes.")] = None,
-    torque_noise: Annotated[float, typer.Option("--torque-noise", help="Standard deviation of the noise on the measured torques \\[Nm].")] = 0.0,
+    external_torque: Annotated[Optional[tuple], floats("--external-torque", count=7, low=-1000, high=1000, unit="Nm", metavar="T1,...,T7", help="A constant push of the environment on the joints τ1..τ7 \\[Nm].")] = None,
+    external_force: Annotated[Optional[tuple], floats("--external-force", count=6, low=-1e4, high=1e4, metavar="FX,FY,FZ,MX,MY,MZ", help="A constant external wrench on the TCP Fx,Fy,Fz,Mx,My,Mz \\[N, Nm], base-frame axes.")] = None,
+    torque_noise: Annotated[float, number("--torque-noise", low=0, high=1000, unit="Nm", help="Standard deviation of the noise on the measured torques \\[Nm].")] = 0.0,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -94,35 +79,39 @@ def sim(
     from trajectories.errors import OptionError
 
     from ..fri.sim import IO_PRESETS, SimConfig, Simulator, parse_io
-    from ..parsing import parse_joint_vector
+    from ..options import limits_from, within_limits
     from ..plants import default_plants
 
     rep = Reporter(json_out)
-    client_host, client_port = _parse_client(client)
+    client_host, client_port = client
     channels = tuple(parse_io(text) for text in io or ())
     if io_preset is not None:
         if io_preset not in IO_PRESETS:
             raise OptionError(f"--io-preset: one of {', '.join(IO_PRESETS)}, got {io_preset!r}")
         channels = IO_PRESETS[io_preset] + channels
-    if length is not None and not length > 0:
-        raise OptionError(f"--length: string length must be > 0 m, got {length:g}")
-    extra = {}
-    for name, text, n in (("external_torque", external_torque, 7), ("external_force", external_force, 6),
-                          ("cartesian_stiffness", cartesian_stiffness, 2)):
-        if text is not None:
-            extra[name] = _floats(text, n, "--" + name.replace("_", "-"))
+    cup_model = None
+    if cup is not None:
+        from ..cup_options import parse_cup_spec
+
+        if length is None:
+            raise OptionError("--cup needs the simulated ball (--length)")
+        cup_model = parse_cup_spec(cup, length)
+    extra = {name: value for name, value in (("external_torque", external_torque), ("external_force", external_force),
+                                             ("cartesian_stiffness", cartesian_stiffness)) if value is not None}
+    lim = limits_from(limits)
+    within_limits(q0, lim, "--q0")
     config = SimConfig(
         client_host=client_host, client_port=client_port, host=host, port=port, period_ms=period,
         receive_multiplier=receive_multiplier, version=fri_version,
-        q0=tuple(float(x) for x in parse_joint_vector(q0, "--q0")),
+        q0=tuple(float(x) for x in q0),
         flange=parse_flange(flange).value, tool=parse_tool(tool),
-        plants=default_plants(length, damping, pendulum_pty=pendulum_pty),
+        plants=default_plants(length, damping, pendulum_pty=pendulum_pty, model=cup_model),
         commanding_after_s=commanding_after, session_duration_s=duration, max_runtime_s=timeout,
         loss=loss, delay_ms=delay, jitter_ms=jitter, malformed=malformed, seed=seed,
         quality_window=quality_window, quality_good=quality_good,
         quality_fair=min(0.5, quality_good), quality_excellent=max(0.98, quality_good),
-        operation_mode=operation_mode.upper(), realtime=realtime, limits_path=str(limits) if limits is not None else None,
-        overlay=not no_overlay, command_mode=mode.lower(), joint_stiffness=stiffness, damping_ratio=damping_ratio, io=channels,
+        operation_mode=operation_mode, realtime=realtime, limits_path=str(limits) if limits is not None else None,
+        overlay=not no_overlay, command_mode=mode, joint_stiffness=stiffness, damping_ratio=damping_ratio, io=channels,
         torque_noise=torque_noise, **extra,
     )
     config.validate()
@@ -180,6 +169,9 @@ def sim(
         import math
 
         rep.print(f"ball: max tilt {math.degrees(stats.max_ball_theta):.2f} deg")
+        catch = stats.plants.get("ball", {}).get("cup")
+        if catch is not None:
+            rep.print("ball: " + ("caught in the cup" if catch["caught"] else f"not caught — {catch['failure']}"))
     rep.emit({"address": f"{h}:{p}", "client": f"{client_host}:{client_port}", "period_ms": period,
               "fri_version": fri_version, **figures})
 

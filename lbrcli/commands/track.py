@@ -1,4 +1,5 @@
-"""`lbr track video` (ball centre and string angle per frame) and `lbr track calibrate` (checkerboard camera calibration)."""
+"""`lbr track video` (ball centre and string angle per frame), `lbr track calibrate` (checkerboard camera calibration)
+and `lbr track live` (the same tracker on a camera's stream)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,8 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..options import JsonOpt
+from ..fri_options import parse_host_port
+from ..options import JsonOpt, choice, floats, grid, number
 
 
 def _check_out(path: Path | None, option: str) -> None:
@@ -17,37 +19,24 @@ def _check_out(path: Path | None, option: str) -> None:
         raise OptionError(f"{option}: folder does not exist: {path.parent}")
 
 
-def parse_board(text: str) -> tuple[int, int]:
-    """'9x6' → (9, 6) inner corners (columns, rows)."""
-    from trajectories.errors import OptionError
-
-    parts = str(text).lower().replace("×", "x").split("x")
-    try:
-        cols, rows = (int(p) for p in parts)
-    except ValueError:
-        raise OptionError(f"--board: expected inner corners as COLSxROWS (e.g. 9x6), got {text!r}") from None
-    if cols < 2 or rows < 2:
-        raise OptionError(f"--board: need at least 2x2 inner corners, got {text!r}")
-    return cols, rows
-
-
 def video(
     video_path: Annotated[Path, typer.Argument(metavar="VIDEO", help="Experiment video (any format OpenCV/FFmpeg reads).")],
     out: Annotated[Path, typer.Option("-o", "--out", help="Track CSV to write: t,frame,u,v,found\\[,theta,...] \\[s, -, px, px, 0/1, rad].")],
-    pivot: Annotated[Optional[str], typer.Option("--pivot", help="Fixed pivot (string attachment) U,V \\[px] in the video image.")] = None,
+    pivot: Annotated[Optional[tuple], floats("--pivot", count=2, low=0, high=100_000, unit="px", metavar="U,V", help="Fixed pivot (string attachment) U,V \\[px] in the video image.")] = None,
     pivot_color: Annotated[Optional[str], typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame (e.g. green).")] = None,
     color: Annotated[str, typer.Option("--color", help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or an OpenCV hue range H1-H2 (0–179).")] = "red",
-    radius: Annotated[Optional[float], typer.Option("--radius", help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: 2–62 px radius).")] = None,
-    min_circularity: Annotated[float, typer.Option("--min-circularity", help="Minimum 4π·area/perimeter² of the ball blob (disc ≈ 0.9, cable ≈ 0.1).")] = 0.6,
-    min_fit: Annotated[float, typer.Option("--min-fit", help="Minimum overlap (IoU) of the blob with its moment ellipse (disc ≥ 0.9, any box ≈ 0.83).")] = 0.88,
+    radius: Annotated[Optional[float], number("--radius", low=0, high=10_000, low_open=True, unit="px", help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: learned, from a 3 px ball to a radius of 1/6 of the frame height).")] = None,
+    min_circularity: Annotated[float, number("--min-circularity", low=0, high=1, help="Minimum 4π·area/perimeter² of the ball blob (disc ≈ 0.9, cable ≈ 0.1).")] = 0.6,
+    min_fit: Annotated[float, number("--min-fit", low=0, high=1, help="Minimum overlap (IoU) of the blob with its moment ellipse (disc ≥ 0.9, any box ≈ 0.83).")] = 0.88,
     calibration: Annotated[Optional[Path], typer.Option("--calibration", help="Camera JSON from `lbr track calibrate`: undistort points; with a plane, θ in the plane of motion and x_m,y_m \\[m].")] = None,
-    start: Annotated[Optional[str], typer.Option("--start", help="Where the ball is when first seen, U,V \\[px]: the ball is the candidate nearest to it (names it among round objects of its colour).")] = None,
-    fps: Annotated[Optional[float], typer.Option("--fps", help="Capture frame rate \\[1/s] when the container's is wrong (slow-motion videos state their playback rate): times = frame / fps.")] = None,
-    min_saturation: Annotated[Optional[int], typer.Option("--min-saturation", help="Minimum HSV saturation (0–255) of ball pixels (default 100, or 80 for green, cyan, blue); lowered automatically inside the search window for motion-blurred balls.")] = None,
-    min_found: Annotated[float, typer.Option("--min-found", help="Exit 1 with a warning when the ball is found in fewer than this share of frames \\[%].")] = 90.0,
+    start: Annotated[Optional[tuple], floats("--start", count=2, low=0, high=100_000, unit="px", metavar="U,V", help="Where the ball is when first seen, U,V \\[px]: the ball is the candidate nearest to it (names it among round objects of its colour).")] = None,
+    fps: Annotated[Optional[float], number("--fps", low=0, high=100_000, low_open=True, unit="1/s", help="Capture frame rate \\[1/s] when the container's is wrong (slow-motion videos state their playback rate): times = frame / fps.")] = None,
+    min_saturation: Annotated[Optional[int], number("--min-saturation", low=1, high=255, integer=True, help="Minimum HSV saturation of ball pixels (default 100, or 80 for green, cyan, blue); lowered automatically inside the search window for motion-blurred balls.")] = None,
+    min_found: Annotated[float, number("--min-found", low=0, high=100, unit="%", help="Exit 1 with a warning when the ball is found in fewer than this share of frames \\[%].")] = 90.0,
     plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of θ \\[deg] and u, v \\[px] over time with lost frames marked.")] = None,
     preview: Annotated[Optional[Path], typer.Option("--preview", help="Video (mp4) with the detection drawn over it: ball circle, pivot, string, θ.")] = None,
     candidates: Annotated[Optional[Path], typer.Option("--candidates", help="PNG of the first frame with every ball-like blob circled and labelled U,V \\[px] (pick one for --start).")] = None,
+    slack: Annotated[bool, typer.Option("--slack/--no-slack", help="With a pivot: frames where the ball is nearer to the pivot than the string's length (estimated from the track) are slack — position kept, θ left empty.")] = True,
     json_out: JsonOpt = False,
 ) -> None:
     """Track a coloured ball in every frame of a video; θ from the pivot when one is known.
@@ -60,9 +49,14 @@ def video(
     the plane of motion (metric coordinates; the board's edges level and plumb), so an oblique camera does not
     bias it. When several round blobs of the ball's colour are seen at once, each is followed for a moment
     and the one moving like a pendulum about the pivot is kept (said in a warning); --start names the ball
-    instead. Exit 1 if the ball is found in fewer than --min-found percent of the frames, or the pivot
-    marker in none.
+    instead. Every fix has a confidence: a new lock until confirmed by steady motion, candidates being judged, a
+    fix where the ball's colour has been static are unsure — written found = 0, unsure = 1 (columns confidence,
+    unsure) — and a fix beyond the learned string length is rejected. Where the string is slack (the ball nearer to
+    the pivot than the string's length) θ is left empty and the position kept (--no-slack: θ everywhere; not judged
+    with a plane calibration). Exit 1 if the ball is found in fewer than --min-found percent of the frames, or the
+    pivot marker in none.
     """
+    import contextlib
     import math
     import time
 
@@ -75,10 +69,10 @@ def video(
     from tracking.pipeline import track_video
     from tracking.tracker import TrackerOptions
     from tracking.trackfile import write_track_csv
-    from tracking.video import probe_video
+    from tracking.video import check_video_name, check_written, open_writer, probe_video
 
     from ..console import Reporter
-    from ..parsing import parse_floats
+    from ..outputs import atomic_path
 
     rep = Reporter(json_out)
     if pivot is not None and pivot_color is not None:
@@ -87,27 +81,16 @@ def video(
     piv_spec = color_spec(pivot_color, "--pivot-color") if pivot_color is not None else None
     if piv_spec is not None and piv_spec.bands == ball_spec.bands:
         raise OptionError("--pivot-color must differ from the ball's --color")
-    piv_uv = tuple(parse_floats(pivot, "--pivot", 2)) if pivot is not None else None
-    start_uv = tuple(parse_floats(start, "--start", 2)) if start is not None else None
-    if fps is not None and not (math.isfinite(fps) and fps > 0):
-        raise OptionError(f"--fps must be a positive frame rate [1/s], got {fps:g}")
-    if min_saturation is not None and not 1 <= min_saturation <= 255:
-        raise OptionError(f"--min-saturation must be in 1–255, got {min_saturation}")
-    if not 0.0 <= min_found <= 100.0:
-        raise OptionError(f"--min-found must be a percentage in [0, 100], got {min_found:g}")
+    piv_uv, start_uv = pivot, start
     if min_saturation is not None:
         ball_spec = with_min_saturation(ball_spec, min_saturation)
-    if radius is not None and not radius > 0:
-        raise OptionError(f"--radius must be positive, got {radius:g}")
-    for value, name in ((min_circularity, "--min-circularity"), (min_fit, "--min-fit")):
-        if not 0.0 <= value <= 1.0:
-            raise OptionError(f"{name} must be in [0, 1], got {value:g}")
     for p, name in ((out, "--out"), (plot, "--plot"), (preview, "--preview"), (candidates, "--candidates")):
         _check_out(p, name)
-    shape = {"min_circularity": min_circularity, "min_ellipse_fit": min_fit}
-    gates = BlobGates.for_radius(radius, **shape) if radius else BlobGates(**shape)
-    options = TrackerOptions(gates=gates, start_uv=start_uv)
-    pivot_options = TrackerOptions(gates=BlobGates(**shape))
+    if preview is not None:
+        check_video_name(preview, "--preview")
+    options = _tracker_options(radius, min_circularity, min_fit, start_uv)
+    gates = options.gates
+    pivot_options = TrackerOptions(gates=BlobGates(min_circularity=min_circularity, min_ellipse_fit=min_fit))
     cal = load_calibration(calibration) if calibration is not None else None
     info = probe_video(video_path)
     for point, name in ((piv_uv, "--pivot"), (start_uv, "--start")):
@@ -116,28 +99,26 @@ def video(
                 f"{name} {point[0]:g},{point[1]:g} is outside the {info.width}x{info.height} px image of {video_path}"
             )
 
-    writer = None
-    on_frame = None
-    if preview is not None:
-        import cv2
-
-        from tracking.overlay import draw_overlay
-
-        writer = cv2.VideoWriter(str(preview), cv2.VideoWriter_fourcc(*"mp4v"), fps or info.fps, info.size)
-        if not writer.isOpened():
-            raise OptionError(f"--preview: cannot write a video to {preview}")
-
-        def on_frame(frame, res):  # noqa: ANN001
-            b = res.ball
-            draw_overlay(frame, res.t, (b.u, b.v) if b else None, b.radius_px if b else None, res.pivot_uv, res.theta)
-            writer.write(frame)
-
     if candidates is not None:
         n_cand = _write_candidates(video_path, ball_spec, gates, candidates)
         rep.print(f"candidates: {n_cand} ball-like blobs in the first frame, drawn in {candidates}")
 
     t0 = time.perf_counter()
-    try:
+    with contextlib.ExitStack() as stack:  # the preview appears under its name only when complete and readable
+        on_frame, writer, written = None, None, [0]
+        if preview is not None:
+            from tracking.overlay import draw_overlay
+
+            preview_tmp = stack.enter_context(atomic_path(preview))
+            writer = open_writer(preview_tmp, fps or info.fps, info.size, target=preview)
+            stack.callback(writer.release)
+
+            def on_frame(frame, res):  # noqa: ANN001
+                b = res.ball
+                draw_overlay(frame, res.t, (b.u, b.v) if b else None, b.radius_px if b else None, res.pivot_uv, res.theta)
+                writer.write(frame)
+                written[0] += 1
+
         with rep.progress(f"tracking {video_path.name}", info.frame_count or None) as update:
             track = track_video(
                 video_path,
@@ -151,10 +132,19 @@ def video(
                 progress=update,
                 on_frame=on_frame,
             )
-    finally:
         if writer is not None:
             writer.release()
+            check_written(preview_tmp, written[0], preview)
     elapsed = time.perf_counter() - t0
+    slack_info = None
+    if slack and track.theta is not None and not track.theta_in_plane:  # (distances of an oblique image: not judged)
+        from dataclasses import replace
+
+        from tracking.slack import slack_frames
+
+        mask, _, string_px = slack_frames(track.uv, track.pivot_uv if track.pivot_uv is not None else np.array(piv_uv))
+        track = replace(track, theta=np.where(mask, np.nan, track.theta))
+        slack_info = {"slack_frames": int(mask.sum()), "string_px": string_px}
     write_track_csv(out, track)
 
     n = len(track.t)
@@ -195,6 +185,11 @@ def video(
             rep.print(f"θ ({where}) in {len(th)} frames, from {figures['theta_min_deg']:.2f}° to {figures['theta_max_deg']:.2f}°")
         else:
             rep.print("θ in no frame")
+    if slack_info is not None:
+        figures.update(slack_info)
+        if slack_info["slack_frames"]:
+            rep.print(f"string slack in {slack_info['slack_frames']} frames (ball nearer than the string's "
+                      f"{slack_info['string_px']:.1f} px): position only, no θ there")
     if track.pivot_uv is not None:
         figures["pivot_found"] = int(np.all(np.isfinite(track.pivot_uv), axis=1).sum())
         rep.print(f"pivot marker found in {figures['pivot_found']} frames")
@@ -234,14 +229,18 @@ def _write_candidates(video_path: Path, spec, gates, png: Path) -> int:  # noqa:
 
     from trajectories.errors import OptionError
 
+    from ..outputs import atomic_open
+
     for _, _, frame in iter_frames(video_path):
         blobs = find_blobs_coarse(frame, spec, gates, coarse_factor(frame.shape[1]))
-        try:
-            ok = cv2.imwrite(str(png), draw_candidates(frame, blobs))
+        try:  # encoded in memory, written by Python: a full disk is an OSError, not a libpng message
+            ok, data = cv2.imencode(png.suffix or ".png", draw_candidates(frame, blobs))
         except cv2.error:
             ok = False
         if not ok:
-            raise OptionError(f"--candidates {png}: cannot write an image there (use .png or .jpg)")
+            raise OptionError(f"--candidates {png}: not an image format OpenCV writes (use .png or .jpg)")
+        with atomic_open(png, "wb") as fh:
+            fh.write(data.tobytes())
         return len(blobs)
     return 0
 
@@ -249,11 +248,11 @@ def _write_candidates(video_path: Path, spec, gates, png: Path) -> int:  # noqa:
 def calibrate(
     inputs: Annotated[list[Path], typer.Argument(metavar="IMAGES_OR_VIDEO...", help="Checkerboard images, folders of images, or videos.")],
     out: Annotated[Path, typer.Option("-o", "--out", help="Camera calibration JSON to write.")],
-    board: Annotated[str, typer.Option("--board", help="Inner corners COLSxROWS of the checkerboard (a 10x7-square board is 9x6).")] = "9x6",
-    square: Annotated[float, typer.Option("--square", help="Side of one square \\[m].")] = 0.025,
+    board: Annotated[tuple, grid("--board", low=2, high=1000, metavar="COLSxROWS", help="Inner corners COLSxROWS of the checkerboard (a 10x7-square board is 9x6).")] = "9x6",
+    square: Annotated[float, number("--square", low=0, high=10, low_open=True, unit="m", help="Side of one square \\[m].")] = 0.025,
     plane: Annotated[Optional[Path], typer.Option("--plane", help="Image (or video: first frame with the board) of the board lying in the plane of motion: metres per pixel.")] = None,
-    stride: Annotated[int, typer.Option("--stride", help="Use every N-th frame of videos.")] = 15,
-    max_views: Annotated[int, typer.Option("--max-views", help="At most this many views (evenly chosen) go into the calibration.")] = 40,
+    stride: Annotated[int, number("--stride", low=1, high=100_000, integer=True, help="Use every N-th frame of videos.")] = 15,
+    max_views: Annotated[int, number("--max-views", low=3, high=10_000, integer=True, help="At most this many views (evenly chosen) go into the calibration.")] = 40,
     json_out: JsonOpt = False,
 ) -> None:
     """Camera calibration from checkerboard views (OpenCV findChessboardCorners, cornerSubPix, calibrateCamera).
@@ -263,17 +262,14 @@ def calibrate(
     """
     import numpy as np
 
-    from trajectories.errors import InputError, OptionError
+    from trajectories.errors import InputError
     from tracking.calibration import calibrate_camera, find_board, iter_images, plane_from_corners, save_calibration
 
     from ..console import Reporter
 
     rep = Reporter(json_out)
-    cols_rows = parse_board(board)
-    if not square > 0:
-        raise OptionError(f"--square must be positive [m], got {square:g}")
-    if stride < 1 or max_views < 3:
-        raise OptionError("--stride must be ≥ 1 and --max-views ≥ 3")
+    cols_rows = board
+    board = "x".join(map(str, board))
     _check_out(out, "--out")
     views: list[np.ndarray] = []
     names: list[str] = []
@@ -341,6 +337,178 @@ def calibrate(
     rep.emit(figures)
 
 
+def live(
+    source: Annotated[str, typer.Argument(metavar="SOURCE", help="Camera: a V4L2 device index (0) or path (/dev/video0), a stream URL (http://…/stream.mjpg, rtsp://…), or a video file played at its frame rate.")],
+    out: Annotated[Optional[Path], typer.Option("-o", "--out", help="Track CSV as `track video` writes, plus theta_x,theta_y \\[rad], latency_s, t_source \\[s]; t from the first frame's capture.")] = None,
+    duration: Annotated[Optional[float], number("--duration", low=0, high=86400, low_open=True, unit="s", help="Stop after this long \\[s] (default: when the source ends, or Ctrl-C).")] = None,
+    pivot: Annotated[Optional[tuple], floats("--pivot", count=2, low=0, high=100_000, unit="px", metavar="U,V", help="Fixed pivot U,V \\[px] in the image.")] = None,
+    pivot_color: Annotated[Optional[str], typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame.")] = None,
+    color: Annotated[str, typer.Option("--color", help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or a hue range H1-H2 (0–179).")] = "red",
+    radius: Annotated[Optional[float], number("--radius", low=0, high=10_000, low_open=True, unit="px", help="Approximate ball radius \\[px] (default: learned, 1.5 px to 1/6 of the frame height).")] = None,
+    calibration: Annotated[Optional[Path], typer.Option("--calibration", help="Camera JSON from `lbr track calibrate` (undistortion; θ in the plane of motion).")] = None,
+    geometry: Annotated[Optional[Path], typer.Option("--geometry", help="Camera pose JSON (tracking.camera_geometry: camera_matrix, rotation, centre_m — or position_m, look_at_m, fov_deg — and pivot_m, string_m): adds the tilt components θx, θy in the base frame.")] = None,
+    udp: Annotated[Optional[tuple], typer.Option("--udp", parser=parse_host_port, metavar="HOST:PORT", help="Send every result to HOST:PORT as one UDP datagram (see --udp-format).")] = None,
+    udp_format: Annotated[str, choice("--udp-format", choices=("binary", "json"), help="binary (64 bytes little-endian, layout in docs/guides/camera.md) or json.")] = "binary",
+    mqtt: Annotated[Optional[str], typer.Option("--mqtt", help="Publish results as JSON to mqtt://HOST:PORT/TOPIC (at most --mqtt-rate per second).")] = None,
+    mqtt_rate: Annotated[float, number("--mqtt-rate", low=0, high=1000, low_open=True, unit="Hz", help="MQTT messages per second \\[Hz].")] = 50.0,
+    fps: Annotated[Optional[float], number("--fps", low=0, high=100_000, low_open=True, unit="1/s", help="Playback rate \\[1/s] of a video file SOURCE (default: its own).")] = None,
+    min_found: Annotated[float, number("--min-found", low=0, high=100, unit="%", help="Exit 1 when the ball is found in fewer than this share of the tracked frames \\[%].")] = 50.0,
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of θ and u, v over time, lost frames marked.")] = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Track the ball live in a camera's stream at the camera's rate; print latency and figures, publish results.
+
+    The same tracker as `lbr track video` runs on the newest frame: when it falls behind, frames are dropped (counted),
+    never queued. Each result has the frame's capture time and its latency (capture → result). With --udp every
+    result leaves as one datagram; with --mqtt as JSON. θ comes from --pivot/--pivot-color (or the pivot of
+    --geometry projected into the image); --geometry also gives θx, θy toward base +x, +y. Exit 1 when no frame
+    arrives or the ball is found in fewer than --min-found percent of the tracked frames; 2 when SOURCE cannot be
+    opened.
+    """
+    import math
+    import signal
+    import time
+
+    import numpy as np
+
+    from trajectories.errors import OptionError
+    from tracking.calibration import load_calibration
+    from tracking.camera_geometry import load_geometry
+    from tracking.color import color_spec
+    from tracking.live import LiveTracker, TiltSetup, track_from_results
+    from tracking.trackfile import write_track_csv
+
+    from ..console import Reporter
+
+    rep = Reporter(json_out)
+    if pivot is not None and pivot_color is not None:
+        raise OptionError("give either --pivot or --pivot-color, not both")
+    for p, name in ((out, "--out"), (plot, "--plot")):
+        _check_out(p, name)
+    ball_spec = color_spec(color, "--color")
+    piv_spec = color_spec(pivot_color, "--pivot-color") if pivot_color is not None else None
+    piv_uv = pivot
+    options = _tracker_options(radius, 0.6, 0.88, None)
+    cal = load_calibration(calibration) if calibration is not None else None
+    tilt = None
+    if geometry is not None:
+        geo, d = load_geometry(geometry)
+        if "pivot_m" not in d or "string_m" not in d:
+            raise OptionError(f"--geometry {geometry}: needs pivot_m [x,y,z] and string_m for the tilt")
+        tilt = TiltSetup(geo, tuple(float(x) for x in d["pivot_m"]), float(d["string_m"]))
+    udp_pub = mqtt_pub = None
+    if udp is not None:
+        from ..lab.camera_publish import UdpPublisher
+
+        host, port = udp
+        udp_pub = UdpPublisher(host.strip("[]"), port, udp_format)
+    if mqtt is not None:
+        from ..lab.telemetry import TelemetryPublisher, parse_mqtt_url
+
+        mqtt_pub = TelemetryPublisher(parse_mqtt_url(mqtt), mqtt_rate)
+    results = []
+
+    def on_result(r) -> None:  # noqa: ANN001
+        results.append(r)
+        if udp_pub is not None:
+            udp_pub.publish(r)
+        if mqtt_pub is not None and mqtt_pub.due(r.t_capture):
+            from ..lab.camera_publish import result_dict
+
+            mqtt_pub.offer(r.t_capture, lambda r=r: result_dict(r))
+
+    tracker = LiveTracker(source, ball_spec, options=options, pivot_uv=piv_uv, pivot_color=piv_spec, tilt=tilt,
+                          calibration=cal, on_result=on_result, file_fps=fps)
+    interrupted = False
+
+    def _interrupt(signum, frame) -> None:  # noqa: ANN001
+        nonlocal interrupted
+        interrupted = True
+
+    old_handler = signal.signal(signal.SIGINT, _interrupt)
+    tracker.start()
+    if mqtt_pub is not None:
+        mqtt_pub.start()
+    t0 = time.monotonic()
+    try:
+        while tracker.running and not interrupted and (duration is None or time.monotonic() - t0 < duration):
+            time.sleep(0.02)
+    finally:
+        tracker.stop()
+        signal.signal(signal.SIGINT, old_handler)
+        if udp_pub is not None:
+            udp_pub.close()
+        if mqtt_pub is not None:
+            mqtt_pub.stop()
+    elapsed = time.monotonic() - t0
+    st = tracker.stats
+    lat = np.array(st.latency_s) * 1e3
+    trk = np.array(st.track_s) * 1e3
+
+    def pct(a, q):  # noqa: ANN001
+        return float(np.percentile(a, q)) if len(a) else math.nan
+
+    n = st.tracked
+    figures = {
+        "source": str(source), "frames_read": st.read, "frames_tracked": n, "frames_dropped": st.dropped,
+        "found": st.found, "found_percent": 100.0 * st.found / n if n else 0.0, "duration_s": elapsed,
+        "rate_fps": n / elapsed if elapsed > 0 else math.nan, "source_fps": st.read / elapsed if elapsed > 0 else math.nan,
+        "width": tracker.size[0] if tracker.size else None, "height": tracker.size[1] if tracker.size else None,
+        "latency_ms_p50": pct(lat, 50), "latency_ms_p95": pct(lat, 95), "latency_ms_p99": pct(lat, 99),
+        "latency_ms_max": float(lat.max()) if len(lat) else math.nan,
+        "track_ms_p50": pct(trk, 50), "track_ms_p99": pct(trk, 99), "udp_sent": udp_pub.sent if udp_pub else 0,
+        "mqtt_published": mqtt_pub.published if mqtt_pub else 0, "interrupted": interrupted, "errors": st.errors,
+    }
+    rep.print(
+        f"{source}: {st.read} frames read in {elapsed:.2f} s ({figures['source_fps']:.1f} fps), {n} tracked, "
+        f"{st.dropped} dropped while busy; ball found in {st.found} ({figures['found_percent']:.1f} %)"
+    )
+    if n:
+        rep.print(f"latency capture → result: p50 {figures['latency_ms_p50']:.2f} ms, p95 {figures['latency_ms_p95']:.2f} ms, "
+                  f"max {figures['latency_ms_max']:.2f} ms; tracking p50 {figures['track_ms_p50']:.2f} ms per frame")
+    th = np.array([r.theta for r in results])
+    if np.isfinite(th).any():
+        figures["theta_min_deg"] = float(np.degrees(np.nanmin(th)))
+        figures["theta_max_deg"] = float(np.degrees(np.nanmax(th)))
+        rep.print(f"θ from {figures['theta_min_deg']:.2f}° to {figures['theta_max_deg']:.2f}°")
+    for e in st.errors:
+        rep.warn(e)
+    if results and (out is not None or plot is not None):
+        track = track_from_results(results, source, tracker.size, tracker.fps_nominal,
+                                   piv_uv is not None or piv_spec is not None or tilt is not None)
+        if out is not None:
+            write_track_csv(out, track)
+            figures["out"] = str(out)
+            rep.print(f"wrote {out}")
+        if plot is not None:
+            from ..plots.track import plot_track
+
+            plot_track(track, plot, title=str(source))
+            figures["plot"] = str(plot)
+            rep.print(f"plot: {plot}")
+    rep.emit(figures)
+    if n == 0:
+        rep.warn(f"no frame was tracked from {source}")
+        raise typer.Exit(1)
+    if figures["found_percent"] < min_found:
+        rep.warn(f"the ball was found in only {figures['found_percent']:.1f} % of the frames (--min-found {min_found:g} %)")
+        raise typer.Exit(1)
+
+
+def _tracker_options(radius: float | None, min_circularity: float, min_fit: float, start_uv):  # noqa: ANN001
+    """TrackerOptions from the shared command-line options, checked at parse time (gates for a given radius, or
+    learned)."""
+    from tracking.detect import BlobGates
+    from tracking.tracker import TrackerOptions
+
+    shape = {"min_circularity": min_circularity, "min_ellipse_fit": min_fit}
+    if radius:
+        return TrackerOptions(gates=BlobGates.for_radius(radius, **shape), start_uv=start_uv, max_radius_share=None,
+                              tiny_search=radius < 3.0)
+    return TrackerOptions(gates=BlobGates(**shape), start_uv=start_uv)
+
+
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
     groups["track"].command("video")(video)
     groups["track"].command("calibrate")(calibrate)
+    groups["track"].command("live")(live)

@@ -17,6 +17,7 @@ BALL_LENGTH = 0.25  # [m] string of the demo ball (thesis l = 0.25 m)
 BALL_MASS = 0.0139  # [kg] thesis ball
 CRANE_A_MAX = 2.0  # [m/s²]
 SWING_THETA_D = "115deg"
+CUP = "default"  # the cup-and-ball toy of the catch (`lbr plan cup-and-ball` defaults)
 
 
 @dataclass
@@ -75,12 +76,15 @@ def _tracking_error(out: Path, results: dict[str, StepResult]) -> dict[str, Any]
     found = track.column("found")[:n] > 0.5
     du = track.column("u")[:n][found] - truth[:n, 1][found]
     dv = track.column("v")[:n][found] - truth[:n, 2][found]
-    dth = np.degrees(track.column("theta")[:n][found] - truth[:n, 5][found])
+    theta = track.column("theta")[:n]
+    with_theta = found & np.isfinite(theta)  # no θ where the string was slack (the ball flying near the pivot)
+    dth = np.degrees(theta[with_theta] - truth[:n, 5][with_theta])
     return {
         "found_fraction": float(found.mean()),
         "centre_rms_px": float(np.sqrt(np.mean(du**2 + dv**2))),
         "theta_rms_deg": float(np.sqrt(np.mean(dth**2))),
         "theta_max_deg": float(np.abs(dth).max()),
+        "theta_fraction": float(with_theta.mean()),
     }
 
 
@@ -118,8 +122,27 @@ def demo_steps() -> list[Step]:
         Step("compare", "compare model and experiment",
              ("compare", "swingup_prediction.csv", "swingup_track.csv", "--plot", "swingup_compare.png"),
              needs=("track",)),
+        Step("view", "3D replay of the swing-up (one offline HTML file)",
+             ("view", "swingup.csv", "swingup_log.csv", "swingup_prediction.csv", "swingup_track.csv", "--length", L,
+              "-o", "swingup_view.html"), needs=("track",)),
     ]
-    return crane + swing
+    catch = [
+        Step("plan_catch", "plan the cup-and-ball catch",
+             ("plan", "cup-and-ball", "--length", L, "--min-success", "0", "-o", "catch.csv", "--prediction",
+              "catch_prediction.csv", "--plot", "catch_plan.png")),
+        Step("execute_catch", "execute the catch on the simulator (ball and cup simulated)",
+             ("execute", "catch.csv", "--port", "0", "--realtime", "--sim-lenient", "--length", L, "--cup", CUP,
+              "--settle", "1", "--log", "catch_log.csv", "--plot", "catch_execution.png"), needs=("plan_catch",)),
+        Step("film_catch", "film the catch (render catch.mp4 with the cup)",
+             ("track", "film", "catch_log.csv", "-o", "catch.mp4", "--length", L, "--cup", CUP, "--size", "960x540",
+              "--truth", "catch_video_truth.csv"), needs=("execute_catch",)),
+        Step("track_catch", "track the ball through the flight",
+             ("track", "video", "catch.mp4", "-o", "catch_track.csv", "--pivot-color", "green"), needs=("film_catch",)),
+        Step("compare_catch", "compare model and experiment, positions in the flight",
+             ("compare", "catch_prediction.csv", "catch_track.csv", "--plot", "catch_compare.png"),
+             needs=("track_catch",)),
+    ]
+    return crane + swing + catch
 
 
 def run_demo(out: Path, on_step: Callable[[Step, int], None] | None = None,
@@ -175,9 +198,23 @@ def summary_figures(results: dict[str, StepResult]) -> dict[str, Any]:
         "fri_cycles": _get(results, "execute_swingup", "cycles"),
         "fri_missed": _get(results, "execute_swingup", "missed"),
     }
+    rob = _get(results, "plan_catch", "robustness") or {}
+    cup = _get(results, "execute_catch", "cup") or {}
+    flight = _get(results, "compare_catch", "slack_position") or {}
+    f["catch"] = {
+        "caught": _get(results, "plan_catch", "caught"),
+        "catch_time_s": _get(results, "plan_catch", "catch_time_s"),
+        "entry_margin_m": _get(results, "plan_catch", "entry_margin_m"),
+        "relative_entry_speed_m_s": _get(results, "plan_catch", "relative_entry_speed_m_s"),
+        "band_success": rob.get("success_fraction"),
+        "executed_entered_s": cup.get("entered_after_start_s"),
+        "executed_stayed": cup.get("stayed"),
+        "flight_position_rms_m": flight.get("rms_m"),
+        "fri_missed": _get(results, "execute_catch", "missed"),
+    }
     f["tracking"] = dict(results["tracking_error"].figures) if "tracking_error" in results else {}
     f["compare"] = {k: _get(results, "compare", k) for k in ("lag_s", "rms_deg", "max_deg", "overlap_s")}
-    missed = [f[k]["fri_missed"] for k in ("crane_baseline", "crane_shaped", "swingup")]
+    missed = [f[k]["fri_missed"] for k in ("crane_baseline", "crane_shaped", "swingup", "catch")]
     f["fri_missed_total"] = sum(m for m in missed if isinstance(m, (int, float))) if any(
         isinstance(m, (int, float)) for m in missed) else None
     f["steps_failed"] = [n for n, r in results.items() if not r.ok]
@@ -196,6 +233,7 @@ def fmt(value: Any, spec: str = ".2f", unit: str = "") -> str:
 def summary_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
     """(figure, value) rows of the closing table."""
     b, s, sw, tr, cp = f["crane_baseline"], f["crane_shaped"], f["swingup"], f["tracking"], f["compare"]
+    ct = f["catch"]
     found = tr.get("found_fraction")
     missed = f["fri_missed_total"]
     return [
@@ -214,6 +252,14 @@ def summary_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
          f"{fmt(tr.get('centre_rms_px'), '.2f', ' px')} / {fmt(tr.get('theta_rms_deg'), '.3f', '°')}"),
         ("model vs experiment: θ RMS / max error [°]", f"{fmt(cp['rms_deg'])} / {fmt(cp['max_deg'])}"),
         ("model vs experiment: lag [s]", fmt(cp["lag_s"], ".3f")),
+        ("cup-and-ball: caught / enters the cup (plan) [s]",
+         f"{fmt(ct['caught'])} / {fmt(ct['catch_time_s'])}"),
+        ("cup-and-ball: share of the robustness band caught",
+         fmt(100 * ct["band_success"] if ct["band_success"] is not None else None, ".0f", " %")),
+        ("cup-and-ball executed: enters (after the first row) [s] / stayed",
+         f"{fmt(ct['executed_entered_s'])} / {fmt(ct['executed_stayed'])}"),
+        ("cup-and-ball: flight position model vs video, RMS",
+         fmt(1e3 * ct["flight_position_rms_m"] if ct["flight_position_rms_m"] is not None else None, ".1f", " mm")),
         ("FRI cycles missed (all runs)", fmt(missed, ".0f")),
     ]
 

@@ -15,10 +15,12 @@ def default_plants(
     ball_damping: float = 0.0,
     pendulum_pty: bool = False,
     pendulum_rate_hz: float = 200.0,
+    model=None,
 ) -> tuple:
     """The plants of a lab session for ``SimConfig.plants``: a ball on a string of ``ball_length`` [m] (None or
     0: none) with damping [1/s] hanging from the TCP, optionally the pendulum module emulated on a pty at
-    ``pendulum_rate_hz`` [Hz]. The ball hangs from the simulator's TCP: the tool offset is ``SimConfig.tool``.
+    ``pendulum_rate_hz`` [Hz]. The ball hangs from the simulator's TCP: the tool offset is ``SimConfig.tool``;
+    ``model`` (``planners.string_model.StringModel``) gives another ball and the cup on the flange.
     OptionError on bad values."""
     from trajectories.errors import OptionError
 
@@ -26,7 +28,7 @@ def default_plants(
         if pendulum_pty:
             raise OptionError("the pendulum module emulation needs a simulated ball (--length)")
         return ()
-    plants: tuple = (BallSpec(ball_length, ball_damping),)
+    plants: tuple = (BallSpec(ball_length, ball_damping, model=model),)
     if pendulum_pty:
         plants += (PendulumModuleSpec(pendulum_rate_hz),)
     for spec in plants:

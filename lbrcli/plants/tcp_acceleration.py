@@ -23,3 +23,9 @@ class TcpAcceleration:
                (p0[2] - 2.0 * p1[2] + p2[2]) * ih2)
         self._p0, self._p1 = list(p0), p1
         return acc
+
+    @property
+    def previous(self) -> tuple[float, float, float]:
+        """The TCP at the sample the last acceleration belongs to (one cycle before the last pushed) [m]."""
+        p = self._p1
+        return (p[0], p[1], p[2])

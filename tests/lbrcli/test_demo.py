@@ -8,7 +8,7 @@ import subprocess
 def test_demo_runs_the_whole_loop(tmp_path):
     out = tmp_path / "demo"
     res = subprocess.run([sys.executable, "-m", "lbrcli", "demo", "--out", str(out), "--json"],
-                         capture_output=True, text=True, timeout=600)
+                         capture_output=True, text=True, timeout=1200)
     assert res.returncode == 0, res.stderr[-3000:]
     f = json.loads(res.stdout)
     assert f["ok"] and not f["steps_failed"]
@@ -28,9 +28,15 @@ def test_demo_runs_the_whole_loop(tmp_path):
     assert f["tracking"]["centre_rms_px"] <= 0.5 and f["tracking"]["theta_rms_deg"] <= 0.2
     # model and "experiment" agree once aligned
     assert f["compare"]["rms_deg"] < 1.0 and f["compare"]["overlap_s"] > 1.0
+    # the cup-and-ball game: planned, caught on the simulator when the plan said, the flight filmed and tracked
+    catch = f["catch"]
+    assert catch["caught"] and catch["executed_stayed"]
+    assert abs(catch["executed_entered_s"] - catch["catch_time_s"]) < 0.03
+    assert catch["flight_position_rms_m"] < 0.005
     summary = (out / "summary.md").read_text()
     assert "lbr execute crane_shaped.csv" in summary and "FAILED" not in summary
-    for name in ("crane_baseline_log.csv", "crane_shaped_execution.png", "swingup.mp4", "swingup_compare.png"):
+    for name in ("crane_baseline_log.csv", "crane_shaped_execution.png", "swingup.mp4", "swingup_compare.png",
+                 "catch.mp4", "catch_plan.png", "catch_compare.png"):
         assert (out / name).stat().st_size > 1000
 
 

@@ -48,6 +48,8 @@ def test_too_fast_path_exits_1_naming_joint_and_speed(lbr, tmp_path, robot, limi
     lines = [l for l in res.stderr.splitlines() if l.strip()]
     assert len(lines) == 1 and "Traceback" not in res.stderr
     assert "rad/s, above its limit" in lines[0] and "pose " in lines[0]
+    # A1 is not set by the poses: a fact of the path from that start, and the automatic start is suggested
+    assert "the path from the start given (--q0)" in lines[0] and "without --q0" in lines[0]
 
 
 def test_bad_nullspace_rate_is_exit_2(lbr, tmp_path):
@@ -74,3 +76,40 @@ def test_smooth_keeps_the_arm_angle_plan_when_its_accelerations_are_lower(lbr, t
     check = verify_joint_path(robot, path, read_joint_csv(tmp_path / "b.csv").q, limits)
     assert check.ok(1e-6, 1e-5)
     assert abs(check.acceleration_ratio - smooth["peak_acceleration_ratio"]) < 0.05 * smooth["peak_acceleration_ratio"]
+
+
+def test_pen_line_at_rest_passes_lbr_check_and_says_so(lbr, tmp_path, robot, limits):
+    """`lbr ik T.csv -o q.csv --tool 0,0,0.1 && lbr check q.csv`: a rest-to-rest line (flange yawing 90°) drawn
+    with a 10 cm pen — the file starts and ends at rest and passes the check; --json says so with its figures."""
+    from trajectories.ik_paths import cartesian_path
+    from trajectories.robot import Robot, RobotConfig
+
+    pen = Robot(RobotConfig(tool=(0.0, 0.0, 0.1)))
+    line = cartesian_path("line", 0.002, center=(0.4, -0.2, 0.45), size=0.2, plane="yz", timing="smooth",
+                          yaw_deg=90, duration=6.0)  # fmt: skip
+    task = _write(line, tmp_path / "line.csv")  # the poses are the pen tip's
+    out = tmp_path / "q.csv"
+    res = lbr("ik", task, "-o", out, "--tool", "0,0,0.1", "--json")
+    assert res.returncode == 0, res.stderr
+    figures = json.loads(res.stdout)
+    assert figures["rest_at_ends"] is True and figures["task_at_rest"] == {"start": True, "end": True}
+    assert figures["limits_ok"] is True and not [v for v in figures["check"]["violations"] if v["fails"]]
+    assert figures["check"]["max_ratio"]["acceleration"] <= 1.0 and figures["jerk_ratio"] > 0
+    assert lbr("check", out).returncode == 0
+    pos, _ = pen.fk_path(read_joint_csv(out).q)
+    assert np.abs(pos - line.position).max() < 1e-6
+
+
+def test_refusal_names_the_first_unreachable_pose_in_json(lbr, tmp_path):
+    from trajectories.ik_paths import move_path
+
+    path = move_path("out", 0.005, 3.0, (0.5, 0.0, 0.3), (1.0, 0.0, 0.3))  # flange down, outward beyond reach
+    task = _write(path, tmp_path / "out.csv")
+    res = lbr("ik", task, "-o", tmp_path / "q.csv", "--json")
+    assert res.returncode == 1 and not (tmp_path / "q.csv").exists()
+    figures = json.loads(res.stdout)
+    refusal = figures["refusal"]
+    assert refusal["kind"] in ("pose", "path") and refusal["index"] > 0
+    assert abs(refusal["t_s"] - path.t[refusal["index"]]) < 1e-9
+    lines = [l for l in res.stderr.splitlines() if l.strip()]
+    assert len(lines) == 1 and f"pose {refusal['index']} " in lines[0] and "cannot be reached" in lines[0]

@@ -56,6 +56,22 @@ def test_default_plan_cli(default_plan):
     assert math.degrees(pred.column("theta").max()) == pytest.approx(figs["peak_sway_deg"], rel=1e-6)
 
 
+def test_no_length_in_the_band_is_worse_than_claimed(default_plan):
+    """The band's worst residual is judged densely: an independent judge (spline path, DOP853) at lengths between the
+    planner's 41 finds none worse than the reported worst."""
+    proc, files = default_plan
+    figs = json.loads(proc.stdout)
+    traj = read_joint_csv(files["joint.csv"])
+    pos, _ = Robot().fk_path(traj.q)
+    assert figs["band_dense_lengths"] == 41
+    worst = figs["worst_residual_sway_deg"]
+    k = round((figs["worst_residual_length_m"] / L - 0.9) / 0.2 * 40)  # the worst of the dense grid, and around it
+    lengths = L * (0.9 + 0.2 * (np.array([k - 0.5, k + 0.5, 4.5, 17.5, 33.5]) / 40))
+    for ln in lengths[(lengths >= 0.9 * L) & (lengths <= 1.1 * L)]:
+        residual, _ = judge_sway(pos, traj.dt, float(ln), figs["motion_s"])
+        assert residual <= worst * 1.01 + 1e-3, ln
+
+
 def test_joint_csv_is_what_was_predicted(default_plan):
     proc, files = default_plan
     figs = json.loads(proc.stdout)
@@ -239,3 +255,13 @@ def test_the_elbow_settles_before_the_file_ends(tmp_path):
     assert (last_step <= np.asarray(default_limits().acceleration) * 0.005**2).all()
     tt = read_task_csv(task)
     assert len(tt.position) == len(q) and np.allclose(tt.position[-1], tt.position[-2])
+
+
+def test_a_layout_out_of_reach_says_where(lbr, tmp_path):
+    """At z = 0.65 m the flange pointing down cannot follow the default layout's first segment: one line naming
+    the place on it and the joint, before any planning."""
+    proc = lbr("plan", "anti-sway", "--z", "0.65", "--length", "0.5", "--a-max", "2", "-o", tmp_path / "x.csv")
+    assert proc.returncode == 1 and not (tmp_path / "x.csv").exists()
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "out of reach at z = 0.65 m" in lines[0]
+    assert "segment 1 from point 0 (0.400, -0.300) to point 1 (0.620, -0.300)" in lines[0] and "A6" in lines[0]

@@ -6,7 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from planners.pendulum import SampledAcceleration, direction_from_angles, simulate
+from planners.pendulum import direction_from_angles
+from planners.string_model import StringModel
+from planners.string_sim import PivotMotion, simulate_string
 from trajectories.csvio import read_joint_csv, read_table
 from trajectories.robot import Robot
 
@@ -46,29 +48,30 @@ def test_energy_from_rest_exits_1_with_a_hint(lbr, tmp_path):
     assert "no motion" in line and "--theta0" in line and "--push" in line
 
 
-def test_thesis_example_claims_agree_with_the_simulated_ball(lbr, tmp_path):
+def test_thesis_example_fails_near_90_deg_on_a_real_string_as_the_thesis_experiments_did(lbr, tmp_path):
+    """Thesis Fig. 5.2: the planar (rigid) model of the plan claims 115°; the one-sided string the files are judged
+    with goes slack past 90° and the open-loop energy law no longer adds up — the thesis's own experiments peaked at
+    1.73 rad (§5.4). The command says so and exits 1, after writing every file."""
     out, pred, plot = tmp_path / "j.csv", tmp_path / "p.csv", tmp_path / "s.png"
     res = lbr(*BASE, "--theta-d", "115deg", "--ke", "1.7", "--kp", "0.05", "--kd", "0.05", "--theta0", "0.1",
               "-o", out, "--prediction", pred, "--plot", plot, "--json")
-    assert res.returncode == 0, res.stderr
-    f = json.loads(res.stdout)
-    assert f["reached"] and f["limits_ok"] and f["method"] == "energy" and f["orientation"] == "fixed"
-    assert abs(f["max_theta_deg"] - f["claimed"]["max_theta_deg"]) < 3
-    assert f["claimed"]["max_theta_difference_deg"] < 3
-    assert 113 <= f["max_theta_deg"] <= 117
-    # honest about the string: above 90° at the apex it goes slack
-    assert f["taut"] is False and f["min_tension_margin"] < 0 and f["first_slack_s"] > 0
+    assert res.returncode == 1 and "not reached" in res.stderr
+    f = json.loads(res.stdout.strip().splitlines()[0])
+    assert f["limits_ok"] and f["method"] == "energy" and f["orientation"] == "fixed"
+    assert f["claimed"]["max_theta_deg"] > 113  # the plan's own (planar) claim
+    assert not f["reached"] and 80 < f["max_theta_deg"] < 100  # the real string
     assert plot.stat().st_size > 20_000
-    # the goal's check, done here from the files alone: FK of the joint CSV drives the ball
+    # the same verdict from the files alone: FK of the joint CSV drives the string model
     traj = read_joint_csv(out)
     assert traj.dt == pytest.approx(0.005) and np.allclose(traj.q[0], Q_START, atol=1e-6)
     pos, _ = Robot().fk_path(traj.q)
-    run = simulate(traj.t, SampledAcceleration(traj.t, pos), 0.25, direction_from_angles(0.0, 0.1),
-                   rtol=1e-9, atol=1e-10, max_step=traj.dt, constraint_rate=20.0)
-    assert abs(math.degrees(np.abs(run.theta_y).max()) - f["claimed"]["max_theta_deg"]) < 3
+    run = simulate_string(StringModel(0.25, cup=None), PivotMotion(traj.t, pos), float(traj.t[-1]), traj.t,
+                          direction_from_angles(0.0, 0.1))
+    assert abs(math.degrees(np.abs(run.theta_y).max()) - f["max_theta_deg"]) < 0.5
     table = read_table(pred, ("t", "theta"))
     np.testing.assert_allclose(table.data[:, 1], run.theta_y, atol=math.radians(0.5))
-    assert np.abs(table.data[:, 1] - table.data[:, 2]).max() < math.radians(3)  # theta vs theta_planned
+    early = table.data[:, 0] < 10.0  # the planar claim (no drag, rigid) holds early, while the swing is small
+    assert np.abs(table.data[early, 1] - table.data[early, 2]).max() < math.radians(3)
 
 
 def test_fast_at_1_ms_reaches_115_deg_within_3_s_inside_the_limits(lbr, tmp_path):

@@ -38,7 +38,7 @@ def test_ball_plant_on_a_horizontal_tcp_acceleration_swings_backwards(robot):
     assert isinstance(ball, Plant) and tuple(ball.inputs) == BALL_IO_NAMES
     p0 = robot.fk(np.array(q0)).translation
     out = [list(ball.step(k * h, p0 + np.array([0.5 * 2.0 * (k * h) ** 2, 0.0, 0.0]))) for k in range(1, 60)]
-    theta, _, theta_x, theta_y = np.array(out).T
+    theta, _, theta_x, theta_y = np.array(out).T[:4]
     assert theta_x[-1] < -0.01 and abs(theta_y[-1]) < 1e-12 and theta[-1] == pytest.approx(-theta_x[-1])
     assert ball.figures()["max_ball_theta"] == pytest.approx(theta.max())
 

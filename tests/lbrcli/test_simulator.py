@@ -183,7 +183,8 @@ def test_ball_hangs_still_without_motion():
 
 
 def test_ball_swings_after_a_jerk_of_the_flange_as_the_pendulum_model_predicts(robot):
-    from planners.pendulum import SampledAcceleration, simulate
+    from planners.string_model import StringModel
+    from planners.string_sim import PivotMotion, simulate_string
 
     n_move = 120  # cycles of a smooth 0.25 rad turn of A1 (0.48 s), then hold
 
@@ -206,14 +207,18 @@ def test_ball_swings_after_a_jerk_of_the_flange_as_the_pendulum_model_predicts(r
     q = np.array([r.msr_q for r in rec])
     t = np.arange(len(q)) * h
     pos, _ = robot.fk_path(q)
-    ref = simulate(t, SampledAcceleration(t, pos), length, max_step=h)
+    ref = simulate_string(StringModel(length, cup=None), PivotMotion(t, pos), float(t[-1]))  # the same model, event-driven
+    d = ref.string_direction
     m = len(q) - 3
     sim_tx = np.array([r.io["ball_theta_x"] for r in rec[1:m + 1]])  # message k carries the ball at t[k−1]
     sim_ty = np.array([r.io["ball_theta_y"] for r in rec[1:m + 1]])
-    assert np.abs(sim_tx - ref.theta_x[:m]).max() < 1e-4
+    assert np.abs(sim_tx - np.arctan2(d[:m, 0], -d[:m, 2])).max() < 1e-4
     assert np.abs(sim_ty - ref.theta_y[:m]).max() < 1e-4
     sim_theta = np.array([r.io["ball_theta"] for r in rec[1:m + 1]])
     assert np.abs(sim_theta - ref.theta[:m]).max() < 1e-4
+    sim_ball = np.array([[r.io[f"ball_{c}"] for c in "xyz"] for r in rec[1:m + 1]])
+    assert np.abs(sim_ball - ref.position[:m]).max() < 1e-4  # [m]
+    assert {r.io["ball_phase"] for r in rec[1:m + 1]} == {0.0}  # taut throughout
 
 
 def test_loss_injection_is_counted_and_bridged():

@@ -54,8 +54,10 @@ def test_pivot_stays_in_the_band_on_base_y_and_ends_at_rest(fast, robot):
 
 def test_claim_agrees_with_the_ball_simulated_under_the_joint_path(fast):
     ver, plan = fast.verification, fast.plan
-    assert abs(ver.max_theta - plan.max_theta) < math.radians(3)
-    assert np.abs(ver.theta - plan.theta).max() < math.radians(3)
+    taut = ver.t < ver.first_slack  # the planar claim holds while the real (one-sided) string is taut
+    assert taut.sum() > 100
+    assert np.abs(ver.theta[taut] - plan.theta[taut]).max() < math.radians(3)
+    assert fast.figures()["claimed"]["max_theta_difference_deg"] < 3
     # and with an independent planar integration of the written pivot samples
     acc = SampledAcceleration(plan.t, np.column_stack([0 * plan.x, plan.x, 0 * plan.x]))
     sol = solve_ivp(lambda t, y: rhs(y, acc(t)[1], 0.25), (0, plan.t[-1]), [0, 0, 0, 0], method="LSODA",
@@ -65,11 +67,12 @@ def test_claim_agrees_with_the_ball_simulated_under_the_joint_path(fast):
 
 def test_reports_slack_honestly(fast):
     figures = fast.figures()
-    assert figures["taut"] is False and figures["min_tension_margin"] < 0
-    assert figures["first_slack_s"] is not None
-    # the slack starts near the top of the swing, past 90°
+    assert figures["taut"] is False and figures["first_slack_s"] is not None
+    # the string goes slack near the top of the swing, past 90°, where the taut angle stops: the ball then flies
     k = np.searchsorted(fast.verification.t, figures["first_slack_s"])
     assert abs(fast.verification.theta[k]) > math.radians(90)
+    assert 90 < figures["max_taut_theta_deg"] <= figures["max_theta_deg"]
+    assert np.isnan(fast.verification.tension[k + 1])  # no tension in a slack string
 
 
 def test_taut_constraint_gives_the_highest_taut_angle():
@@ -77,9 +80,11 @@ def test_taut_constraint_gives_the_highest_taut_angle():
     problem = FastProblem(length=0.25, theta_d=THETA_D, bounds=bounds, taut=True)
     params, outcome = optimise(problem, SearchSettings(popsize=6, maxiter=12, workers=2))
     plan = simulate_fast(problem, params)
-    assert plan.tension.min() >= problem.min_tension
-    assert outcome.t_reach is None
-    assert math.radians(75) < plan.max_theta < THETA_D
+    # taut means taut until θ_d is reached (FastProblem.taut), or short of it until the highest angle
+    end = outcome.t_reach if outcome.t_reach is not None else plan.t[int(np.argmax(np.abs(plan.theta)))]
+    assert plan.tension[plan.t <= end].min() >= problem.min_tension
+    assert math.radians(75) < plan.max_theta
+    assert (outcome.t_reach is None) == (plan.max_theta < plan.reach_angle)
 
 
 def test_stop_profile_reaches_rest_within_the_bounds():

@@ -78,11 +78,47 @@ def test_limits_override_file(tmp_path):
     assert np.all(lim.velocity == 1.0)
     assert lim.position[0] == pytest.approx(np.radians(170))  # the rest stays default
     p.write_text("velocity_rad_s = [1, 1]\n")
-    with pytest.raises(InputError, match="7 positive numbers"):
+    with pytest.raises(InputError, match="list of 7 numbers"):
         load_limits(p)
     p.write_text("speed = [1, 1, 1, 1, 1, 1, 1]\n")
     with pytest.raises(InputError, match="unknown limit table"):
         load_limits(p)
+    p.write_bytes(b"\xef\xbb\xbfvelocity_rad_s = [1, 1, 1, 1, 1, 1, 2]\n")  # a byte-order mark is read
+    assert load_limits(p).velocity[6] == 2.0
+
+
+@pytest.mark.parametrize(
+    "content, words",
+    [
+        (bytes(range(256)) * 4, "NUL byte"),
+        (b"\xff\xfe velocity", "not UTF-8"),
+        (b"a = " + b"[" * 5000 + b"]" * 5000, "nested deeper"),
+        (b"velocity_deg_s = [" + b",".join([b"9" * 400] * 7) + b"]", "list of 7 numbers"),
+        (b"velocity_deg_s = [1e-300, 98, 100, 130, 140, 180, 180]", "'velocity_deg_s' (A1) = 1e-300 is outside"),
+        (b"velocity_deg_s = [98, 98, 100, 130, 140, 180, inf]", "(A7) = inf is outside"),
+        (b"velocity_deg_s = [98, 98, 100, 130, 140, 180, nan]", "(A7) = nan is outside"),
+        (b"position_rad = [1, 1, 1, 1, 1, 1, 1e9]", "(A7) = 1e+09 is outside"),
+        (b"velocity_deg_s = [true, 98, 100, 130, 140, 180, 180]", "list of 7 numbers"),
+        (b"t1_cartesian_speed_m_s = 1e300", "outside the plausible range"),
+        (b"t1_cartesian_speed_m_s = 'fast'", "must be a number"),
+        (b"velocity_deg_s = ", "not a valid TOML"),
+    ],
+)
+def test_hostile_limits_files_are_refused_naming_the_file(tmp_path, content, words):
+    p = tmp_path / "lim.toml"
+    p.write_bytes(content)
+    with pytest.raises(InputError, match=words.replace("(", r"\(").replace(")", r"\)").replace("+", r"\+")) as exc:
+        load_limits(p)
+    assert exc.value.file == str(p)
+
+
+def test_limits_file_size_is_bounded(tmp_path):
+    p = tmp_path / "lim.toml"
+    p.write_bytes(b"# " + b"x" * (5 << 20) + b"\n")
+    with pytest.raises(InputError, match="more than lbr reads"):
+        load_limits(p)
+    with pytest.raises(InputError, match="NUL byte"):
+        load_limits("/dev/zero")
 
 
 def _rest_to_rest(q_peak, n=400, h=0.005):

@@ -1,3 +1,5 @@
+import os
+
 import numpy as np
 import pytest
 
@@ -126,8 +128,27 @@ def test_crlf_trailing_and_inner_blank_lines_keep_row_numbers(tmp_path):
 
 
 def test_quoted_cells_read_like_csv(tmp_path):
-    text = HEADER + '"0",1,2,3,4,5,6,7\n0.005,"1",2,3,4,5,6,7\n'
+    text = HEADER + '"0",1,2,3,4,5,6,0.7\n0.005,"1",2,3,4,5,6,0.7\n'
     assert read_joint_csv(write(tmp_path, text)).q[1, 0] == 1.0
+
+
+@pytest.mark.parametrize("cell, words", [("1_0", "not a number: '1_0'"), ("١", "not a number"), ("0x1", "not a number"),
+                                         ("1e400", "not a finite number"), ("inf", "not a finite number"),
+                                         ("1e300", "joint angle [rad] 1e+300 is beyond")])
+def test_cells_must_be_plain_finite_plausible_numbers(tmp_path, cell, words):
+    text = HEADER + "0,0,0,0,0,0,0,0\n0.005,0,0,%s,0,0,0,0\n" % cell
+    with pytest.raises(CsvFormatError) as exc:
+        read_joint_csv(write(tmp_path, text))
+    assert words in str(exc.value) and (exc.value.row, exc.value.column) == (3, 4)
+
+
+def test_bounded_reads(tmp_path):
+    with pytest.raises(CsvFormatError, match="NUL byte at offset 0"):
+        read_joint_csv("/dev/zero")
+    fifo = tmp_path / "f.csv"
+    os.mkfifo(fifo)
+    with pytest.raises(CsvFormatError, match="empty file"):  # no writer: read as empty, never blocks
+        read_joint_csv(fifo)
 
 
 def test_not_utf8_names_the_row(tmp_path):

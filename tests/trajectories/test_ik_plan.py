@@ -1,37 +1,14 @@
-"""The whole-path arm-angle plan: a check that a pose fits no configuration, plans along fast paths, and the
-fallback that solves fast FK-built paths the local redundancy resolution could not."""
+"""The whole-path arm-angle plan: plans along fast paths, and the fallback that solves fast FK-built paths the local
+redundancy resolution could not."""
 
 import numpy as np
 
 from trajectories.arm_angle import ArmGeometry
-from trajectories.errors import IkError
 from trajectories.ik import IkOptions, solve_ik_path
 from trajectories.ik_paths import build_suite, verify_joint_path
-from trajectories.ik_plan import PlanTargets, best_plan, unreachable_sample
+from trajectories.ik_plan import PlanTargets, best_plan
 
 BOUNDED = IkOptions(nullspace_gain=None, speed_limits=True)
-
-
-def test_no_reachable_pose_is_called_unreachable(robot, limits):
-    """Every FK-built path of two suites (joint paths, singular, brushing a limit by 0.5–2°) fits the check."""
-    geometry = ArmGeometry.of(robot)
-    for seed in (0, 3):
-        for path in build_suite(robot, limits, seed=seed):
-            if path.witness is not None:
-                assert unreachable_sample(PlanTargets(geometry, path.position, path.rotation, path.t, limits)) is None, path.name
-
-
-def test_a_pose_needing_a_joint_past_its_limit_is_found_and_named(robot, limits):
-    path = next(p for p in build_suite(robot, limits) if p.name == "circle-xy-tilt45-yaw60-smooth-5ms")
-    k = unreachable_sample(PlanTargets(ArmGeometry.of(robot), path.position, path.rotation, path.t, limits))
-    assert k is not None and 150 <= k <= 260  # the local solver stalls at pose 212 with A6 at its limit
-    try:
-        solve_ik_path(robot, path.position, path.rotation, None, limits, BOUNDED, times=path.t)
-    except IkError as exc:
-        assert "fits no arm angle of any branch inside the position limits" in str(exc)
-        assert exc.reason == "position limit"
-    else:
-        raise AssertionError("an unreachable path was solved")
 
 
 def test_plan_along_a_fast_joint_path_is_exact_and_inside_the_limits(robot, limits):

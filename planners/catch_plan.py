@@ -1,0 +1,380 @@
+"""The whole cup-and-ball game on the arm: swing the ball up, let it go, catch it in the cup, and stop.
+
+``plan_catch`` is what `lbr plan cup-and-ball` calls:
+
+1. Swing-up (``catch_swing``): fast energy pumping along base y with the tension governor (taut while the pivot
+   moves), chosen by differential evolution for an early release and a small spread of the landing points over the
+   string-length band, within ``max_time``.
+2. Release: the pivot brakes to rest and the ball's free swing goes slack by itself; every length of the band is
+   stepped to the moment all have been released (``catch_move.prepare_band``).
+3. Catch move (``catch_move``): a jerk-limited move in the base y–z plane to a position and velocity at a chosen
+   time, then a brake to rest; a grid and a Nelder–Mead search maximise the share of the band caught (entry margin
+   and relative entry speed as tie-breakers), the band stepped with ``string_stepper``.
+4. The joint path (IK per sample, ``swingup_robot``), the limit check (jerk included), and the verdict from the
+   nonlinear model driven by the TCP path the joints realise: the event-driven ``string_sim`` for the prediction,
+   the stepper for every member of the robustness band (length × mass × timing of the cup after the release).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from trajectories.check import CheckReport, check_trajectory
+from trajectories.errors import PlanningError
+from trajectories.limits import JointLimits
+from trajectories.robot import Robot
+from trajectories.trajectory import JointTrajectory
+
+from .catch_move import (
+    BandMember, CatchMove, band_members, band_score, cup_path, judge_band, pivot_motion, prepare_band,
+)
+from .catch_outcome import CatchOutcome, outcome
+from .catch_swing import ReleaseGoal, release_score
+from .pendulum import natural_period
+from .string_model import RESTING, StringModel
+from .string_sim import BallRun, PivotMotion, simulate_string
+from .string_stepper import step_path
+from .swingup_fast import FastProblem, SearchSettings, optimise, simulate_fast
+from .swingup import THESIS_Q_START
+from .swingup_plan import PivotPlan, TaskBounds
+from .swingup_robot import ArmSetup, axis_bounds, joint_path
+
+FLIGHT_ALLOWANCE = 0.3  # [s] the release must come this much before max_time (the ball's flight into the cup)
+SETTLE = 0.6  # [s] the pivot rests this long at the end (the ball settles in the cup)
+MAX_AXIS_TILT = math.radians(25.0)  # the cup must open upward within this angle of base +z at the start pose
+MOVE_SHARE = 0.75  # the catch move's y and z each get this share of their own bounds (they add up on the joints)
+SWING_JERK_SHARE = 0.8  # the swing-up's jerk bound: this share of the first-order one
+SEARCH_LENGTHS = 7  # string lengths across the band the catch-move search judges each candidate on
+BAND_LENGTHS = 9  # string lengths across the band of the verdict (× 3 masses × 3 timings)
+SPREAD_SHARE = 0.85  # the swing-up aims at landings of the band spread over at most this share of the opening
+SWING_HORIZON = 6.0  # [s] longest pumping without --max-time
+
+
+@dataclass(frozen=True)
+class CatchRequest:
+    """Everything a cup-and-ball plan depends on (SI units, angles in rad)."""
+
+    model: StringModel  # string length, ball, cup, coefficients
+    q_start: tuple[float, ...] = THESIS_Q_START
+    dt: float = 0.005  # [s] FRI period of the joint file
+    max_time: float | None = None  # [s] from rest to the ball entering the cup (None: as soon as the band allows)
+    release_apex: float = math.radians(150.0)  # [rad] where the search starts looking for the release energy
+    length_tol: float = 0.03  # robustness band: string length ± this share
+    mass_tol: float = 0.2  # ball mass ± this share
+    timing: bool = True  # and the cup's motion after the release one period early or late
+    travel: float = 0.3  # [m] the pivot stays within ± this along base y
+    z_travel: float = 0.08  # [m] and within ± this along base z
+    limit_margin: float = 0.1  # the bounds keep joints within (1 − margin)·limits
+    min_success: float = 0.95  # share of the band that must be caught
+    search: SearchSettings = SearchSettings(popsize=6, maxiter=14)
+    catch_evaluations: int = 60  # Nelder–Mead evaluations of the catch move
+
+
+@dataclass(frozen=True)
+class BandResult:
+    """The robustness band judged on the written joint path: each member and what happened to its ball."""
+
+    members: tuple[BandMember, ...]
+    outcomes: tuple[CatchOutcome, ...]
+
+    @property
+    def success(self) -> float:
+        return float(np.mean([o.caught for o in self.outcomes])) if self.outcomes else 0.0
+
+    def worst(self) -> tuple[BandMember, CatchOutcome]:
+        """The member caught with the least margin, or (when some are missed) the one missed by the most."""
+        def key(i):
+            o = self.outcomes[i]
+            return (o.caught, o.margin if o.margin is not None else -1.0)
+
+        i = min(range(len(self.outcomes)), key=key)
+        return self.members[i], self.outcomes[i]
+
+
+@dataclass(frozen=True)
+class CatchResult:
+    """Plan, joint path, check, prediction and band figures of a cup-and-ball plan."""
+
+    request: CatchRequest
+    swing: PivotPlan
+    move: CatchMove
+    path: np.ndarray  # (n, 2) pivot displacements along base y, z [m]
+    trajectory: JointTrajectory
+    check: CheckReport
+    prediction: BallRun
+    nominal: CatchOutcome
+    band: BandResult
+    bounds: tuple[TaskBounds, TaskBounds, TaskBounds]  # swing-up along y, catch move along y, along z
+    max_ik_error: float  # [m]
+    planning_time: float  # [s]
+    notes: tuple[str, ...] = field(default=())
+
+    def failure(self) -> str | None:
+        """Why the plan fails: the nominal ball is not caught, joint limits, or too little of the band caught."""
+        r = self.request
+        reasons = []
+        if not self.nominal.caught:
+            reasons.append(f"no catch: {self.nominal.failure}")
+        if not self.check.ok:
+            reasons.append("joint limits violated: " + "; ".join(v.describe() for v in self.check.failing[:3]))
+        if self.nominal.caught and self.band.success < r.min_success:
+            member, o = self.band.worst()
+            reasons.append(
+                f"catches {100 * self.band.success:.0f} % of the band (string ±{100 * r.length_tol:g} %, mass "
+                f"±{100 * r.mass_tol:g} %{', timing ±1 period' if r.timing else ''}), fewer than "
+                f"{100 * r.min_success:g} %; worst: l = {member.length:.4f} m, m = {1e3 * member.mass:.1f} g, "
+                f"timing {1e3 * member.shift:+.0f} ms: {o.failure or 'caught'}"
+            )
+        if r.max_time is not None and self.nominal.t_entry is not None and self.nominal.t_entry > r.max_time:
+            reasons.append(f"the ball enters the cup at {self.nominal.t_entry:.2f} s, after --max-time {r.max_time:g} s")
+        return "; ".join(reasons) or None
+
+    def figures(self) -> dict:
+        r, m, n = self.request, self.request.model, self.nominal
+        member, worst = self.band.worst()
+        cup = m.cup
+        return {
+            "caught": n.caught,
+            "catch_time_s": n.t_entry,
+            "rest_in_cup_s": n.t_rest,
+            "release_time_s": n.t_release,
+            "entry_margin_m": n.margin,
+            "relative_entry_speed_m_s": n.relative_speed,
+            "relative_lateral_speed_m_s": n.lateral_speed,
+            "contacts": n.contacts,
+            "failure": self.failure(),
+            "nominal_failure": n.failure,
+            "robustness": {
+                "success_fraction": self.band.success,
+                "members": len(self.band.members),
+                "length_tolerance": r.length_tol,
+                "mass_tolerance": r.mass_tol,
+                "timing_error_s": r.dt if r.timing else 0.0,
+                "min_success": r.min_success,
+                "worst": {"length_m": member.length, "mass_kg": member.mass, "timing_s": member.shift,
+                          **worst.figures()},
+                "min_entry_margin_m": min((o.margin for o in self.band.outcomes if o.caught and o.margin is not None),
+                                          default=None),
+                "max_relative_entry_speed_m_s": max((o.relative_speed for o in self.band.outcomes
+                                                     if o.caught and o.relative_speed is not None), default=None),
+            },
+            "length_m": m.length,
+            "mass_kg": m.ball.mass,
+            "ball_radius_m": m.ball.radius,
+            "cup": {"inner_radius_m": cup.inner_radius, "depth_m": cup.depth, "rim_height_m": cup.rim_height,
+                    "wall_m": cup.wall, "axis": list(cup.axis)},
+            "restitution": m.restitution,
+            "retension": m.retension,
+            "drag_coefficient": m.ball.drag_coefficient,
+            **self.check.plan_figures(self.trajectory),
+            "max_time_s": r.max_time,
+            "swing_up_rest_s": self.swing.t_rest,
+            "catch_move": {"t_start_s": self.move.t_start, "t_catch_s": self.move.t_catch, "y_m": self.move.y,
+                           "z_m": self.move.z, "vy_m_s": self.move.vy, "vz_m_s": self.move.vz},
+            "max_travel_m": {"y": float(np.max(np.abs(self.path[:, 0]))), "z": float(np.max(np.abs(self.path[:, 1])))},
+            "bounds": {axis: {"v_max_m_s": b.v_max, "a_max_m_s2": b.a_max, "j_max_m_s3": b.j_max}
+                       for axis, b in zip(("swing_y", "move_y", "move_z"), self.bounds)},
+            "max_ik_error_m": self.max_ik_error,
+            "planning_time_s": self.planning_time,
+            "notes": list(self.notes),
+        }
+
+
+def cup_axis_at_start(robot: Robot, model: StringModel, q_start) -> np.ndarray:
+    """The cup's opening direction in the base frame at q_start (unit)."""
+    rot = robot.fk(np.asarray(q_start, dtype=float)).rotation
+    return rot @ np.asarray(model.axis_flange)
+
+
+def _swing_up(r: CatchRequest, bounds: TaskBounds) -> PivotPlan:
+    m = r.model
+    window = 2.0 * (m.cup.inner_radius - m.ball.radius)  # lateral width of the opening the ball centre fits through
+    deadline = math.inf if r.max_time is None else r.max_time - FLIGHT_ALLOWANCE
+    goal = ReleaseGoal(height=m.cup.rim_height, reach=0.06, spread_target=SPREAD_SHARE * window, deadline=deadline)
+    problem = FastProblem(length=m.length, theta_d=r.release_apex, bounds=bounds, travel=r.travel, dt=r.dt,
+                          horizon=SWING_HORIZON if r.max_time is None else r.max_time + 1.0, release=True,
+                          band=(1.0 - r.length_tol, 1.0 + r.length_tol) if r.length_tol > 0 else (),
+                          scorer=release_score, goal=goal)
+    params, _ = optimise(problem, r.search)
+    return simulate_fast(problem, params)
+
+
+def _releases(r: CatchRequest, swing: PivotPlan, p0: np.ndarray, axis: np.ndarray) -> tuple[PivotMotion, float]:
+    """The swing-up path held at rest afterwards, and the time all lengths of the band have been released [s]."""
+    hold = int(round(natural_period(r.model.length * (1 + r.length_tol)) / r.dt))
+    x = np.concatenate([swing.x, np.full(hold, swing.x[-1])])
+    t = np.arange(len(x)) * r.dt
+    pivot = pivot_motion(t, p0, np.column_stack([x, np.zeros_like(x)]), axis)
+    last = swing.t_rest
+    for f in (1.0 - r.length_tol, 1.0, 1.0 + r.length_tol):
+        st, _ = step_path(replace(r.model, length=r.model.length * f), pivot, float(t[-1]))
+        slack = [e.t for e in st.events if e.kind == "slack"]
+        if not slack:
+            raise PlanningError(f"the swing-up does not release the ball on a {r.model.length * f:.4f} m string")
+        last = max(last, slack[0])
+    return pivot, r.dt * math.ceil(last / r.dt + 1e-9) + r.dt
+
+
+def _landings(model: StringModel, pivot: PivotMotion, lengths, rest_y: float) -> list[tuple[float, float, float]]:
+    """(time [s], y [m] from the start pose, vy [m/s]) where each length's ball comes down through the rim height
+    above the resting anchor (no cup in the way)."""
+    out = []
+    for ln in lengths:
+        st, rec = step_path(replace(model, length=ln, cup=None), pivot, pivot.t_end, record=True)
+        t, b = np.array(rec[0]), np.array(rec[1])
+        rel_z = b[:, 2] - pivot.x[-1, 2]
+        top = int(np.argmax(rel_z))
+        down = np.flatnonzero((rel_z[top:-1] >= model.cup.rim_height) & (rel_z[top + 1:] < model.cup.rim_height))
+        if down.size:
+            i = top + int(down[0])
+            w = (rel_z[i] - model.cup.rim_height) / (rel_z[i] - rel_z[i + 1])
+            y = b[i, 1] + w * (b[i + 1, 1] - b[i, 1]) - pivot.x[0, 1]
+            out.append((float(t[i] + w * (t[i + 1] - t[i])), float(y), float((b[i + 1, 1] - b[i, 1]) / (t[i + 1] - t[i]))))
+    return out
+
+
+def _search_catch(r: CatchRequest, swing: PivotPlan, release_pivot: PivotMotion, t_start: float, p0: np.ndarray,
+                  axis: np.ndarray, by: TaskBounds, bz: TaskBounds) -> CatchMove:
+    """Grid, then Nelder–Mead, over the catch move's time, position and velocity; judged on the length band."""
+    from scipy.optimize import minimize
+
+    m = r.model
+    lengths = tuple(m.length * (1 + r.length_tol * np.linspace(-1.0, 1.0, SEARCH_LENGTHS))) if r.length_tol else (m.length,)
+    members = tuple(BandMember(float(ln), m.ball.mass) for ln in lengths)
+    band = prepare_band(m, members, release_pivot, t_start)
+    lands = _landings(m, release_pivot, lengths, float(swing.x[-1]))
+    if not lands:
+        raise PlanningError("the released ball never comes down through the height of the rim")
+    t_land = float(np.mean([x[0] for x in lands]))
+    y_land = 0.5 * (min(x[1] for x in lands) + max(x[1] for x in lands))
+    vy_ball = float(np.mean([x[2] for x in lands]))
+    clearance = m.cup.inner_radius - m.ball.radius
+    cache: dict[tuple, float] = {}
+
+    def move_of(x) -> CatchMove:
+        return CatchMove(t_start, max(float(x[0]), t_start + r.dt), float(np.clip(x[1], -r.travel, r.travel)),
+                         float(np.clip(x[2], -r.z_travel, r.z_travel)), float(x[3]), float(x[4]))
+
+    def score(x) -> float:
+        key = tuple(np.round(x, 5))
+        if key not in cache:
+            mv = move_of(x)
+            try:
+                path, _ = cup_path(swing.x, swing.v, swing.u, r.dt, mv, by, bz, settle=0.3)
+            except PlanningError:
+                cache[key] = -10.0
+                return cache[key]
+            t = np.arange(len(path)) * r.dt
+            outs = judge_band(m, band, pivot_motion(t, p0, path, axis), float(t[-1]))
+            cache[key] = band_score(outs, clearance)
+        return cache[key]
+
+    best = None
+    for dtc in (-0.05, -0.025, 0.0):
+        for kappa in (0.0, 0.5, 1.0):
+            for z, vz in ((0.0, 0.0), (-0.02, -0.5 * bz.v_max)):
+                vy = kappa * vy_ball
+                x = np.array([t_land + dtc, y_land + vy * dtc, z, vy, vz])
+                s = score(x)
+                if best is None or s > best[0]:
+                    best = (s, x)
+    x0 = best[1]
+    simplex = [x0] + [x0 + d for d in np.diag([0.02, 0.01, 0.01, 0.2, 0.1])]
+    res = minimize(lambda x: -score(x), x0, method="Nelder-Mead",
+                   options={"maxfev": r.catch_evaluations, "initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-3})
+    return move_of(res.x if -res.fun >= best[0] else x0)
+
+
+def _split_ratios(traj: JointTrajectory, limits: JointLimits, k: int) -> tuple[dict[str, float], dict[str, float]]:
+    """Peak |joint rate| / limit of velocity, acceleration and jerk before sample k and from it on."""
+    from trajectories.differences import derivatives
+
+    rates = dict(zip(("velocity", "acceleration", "jerk"), derivatives(traj.q, traj.dt, 3)))
+    lim = {"velocity": limits.velocity, "acceleration": limits.acceleration, "jerk": limits.jerk}
+    ratio = {q: np.abs(v) / lim[q] for q, v in rates.items()}
+    return ({q: float(v[:k].max()) for q, v in ratio.items()}, {q: float(v[k:].max()) for q, v in ratio.items()})
+
+
+def _rescaled(bounds: TaskBounds, peaks: dict[str, float], target: float) -> TaskBounds:
+    """Bounds with each of speed, acceleration and jerk scaled by target / its joint peak ratio (never up)."""
+    f = {q: min(1.0, 0.97 * target / max(v, 1e-9)) for q, v in peaks.items()}
+    return TaskBounds(bounds.v_max * f["velocity"], bounds.a_max * f["acceleration"], bounds.j_max * f["jerk"])
+
+
+def judge_path(r: CatchRequest, traj: JointTrajectory, robot: Robot, t_start: float,
+               members: tuple[BandMember, ...] | None = None) -> tuple[BallRun, CatchOutcome, BandResult]:
+    """The verdict on a joint path: the event-driven prediction of the nominal ball under the TCP path the joints
+    realise, and every band member stepped along the same path (from ``t_start`` on they share nothing)."""
+    pos, rot = robot.fk_path(traj.q)
+    axes = rot @ np.asarray(r.model.axis_flange)
+    pivot = PivotMotion(traj.t, pos, axes)
+    end = float(traj.t[-1])
+    run = simulate_string(r.model, pivot, end)
+    nominal = outcome(run.events, run.final_phase == RESTING, run.final_inside)
+    members = members or band_members(r.model.length, r.model.ball.mass, r.dt, r.length_tol, r.mass_tol,
+                                      n_length=BAND_LENGTHS if r.length_tol else 1, n_mass=3 if r.mass_tol else 1,
+                                      timing=r.timing)
+    band = prepare_band(r.model, members, pivot, min(t_start, end))
+    return run, nominal, BandResult(members, tuple(judge_band(r.model, band, pivot, end)))
+
+
+def plan_catch(r: CatchRequest, robot: Robot, limits: JointLimits, progress=None) -> CatchResult:
+    """Plan, map onto the arm, check and judge a cup-and-ball catch. Raises PlanningError if no plan can be made."""
+    start = time.perf_counter()
+    r.model.validate()
+    if r.model.cup is None:
+        raise PlanningError("the cup-and-ball plan needs a cup")
+    axis = cup_axis_at_start(robot, r.model, r.q_start)
+    tilt = math.acos(max(-1.0, min(1.0, float(axis[2]))))
+    if tilt > MAX_AXIS_TILT:
+        raise PlanningError(f"the cup opens {math.degrees(tilt):.0f}° away from straight up at the start pose; the "
+                            f"catch needs it within {math.degrees(MAX_AXIS_TILT):.0f}° (--cup-axis, --q-start)")
+    setup = ArmSetup(q_start=tuple(float(v) for v in r.q_start), orientation="follow")
+    p0 = robot.fk(np.asarray(r.q_start, dtype=float)).translation
+    try:
+        # first-order bounds for the swing-up, its jerk lowered by what the second-order terms usually add (a swing-up
+        # re-planned after a limit violation is another swing-up: better to fit the first time)
+        by = axis_bounds(robot, setup, limits, r.travel, r.limit_margin, first_order=True)
+        by = TaskBounds(by.v_max, by.a_max, SWING_JERK_SHARE * by.j_max)
+        # the catch move runs along y and z at once: each gets conservative (second-order) bounds, shared
+        my = axis_bounds(robot, setup, limits, r.travel, r.limit_margin).scaled(MOVE_SHARE)
+        bz = axis_bounds(robot, setup, limits, r.z_travel, r.limit_margin, axis="z").scaled(MOVE_SHARE)
+    except ValueError as exc:
+        raise PlanningError(str(exc)) from None
+    notes: list[str] = []
+    target = 1.0 - r.limit_margin
+    swing, last = None, None
+    for attempt in range(1, 4):
+        try:
+            if swing is None:
+                swing = _swing_up(r, by)
+            release_pivot, t_start = _releases(r, swing, p0, axis)
+            move = _search_catch(r, swing, release_pivot, t_start, p0, axis, my, bz)
+        except PlanningError as exc:
+            if last is None:
+                raise
+            notes.append(f"attempt {attempt} with bounds scaled down: {exc}; the previous attempt is kept")
+            break
+        path, _ = cup_path(swing.x, swing.v, swing.u, r.dt, move, my, bz, settle=SETTLE)
+        t = np.arange(len(path)) * r.dt
+        traj, ik_err = joint_path(robot, setup, t, path, limits, progress)
+        report = check_trajectory(traj, limits, jerk=True)
+        last = (swing, move, path, traj, ik_err, report, t_start, (by, my, bz))
+        ratios = {q: report.ratios()[q] for q in ("velocity", "acceleration", "jerk")}
+        notes.append(f"attempt {attempt}: peak ratios " + ", ".join(f"{q} {v.max():.2f}" for q, v in ratios.items()))
+        if report.ok:
+            break
+        swing_peak, move_peak = _split_ratios(traj, limits, int(round(t_start / r.dt)))
+        if max(swing_peak.values()) > target:  # the swing-up breaks a limit: pump with tighter bounds, search again
+            by, swing = _rescaled(by, swing_peak, target), None
+        else:  # only the catch move does: move within tighter bounds
+            my, bz = _rescaled(my, move_peak, target), _rescaled(bz, move_peak, target)
+    swing, move, path, traj, ik_err, report, t_start, (by, my, bz) = last
+    run, nominal, band = judge_path(r, traj, robot, t_start)
+    return CatchResult(request=r, swing=swing, move=move, path=path, trajectory=traj, check=report, prediction=run,
+                       nominal=nominal, band=band, bounds=(by, my, bz), max_ik_error=ik_err,
+                       planning_time=time.perf_counter() - start, notes=tuple(notes))

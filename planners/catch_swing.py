@@ -1,0 +1,111 @@
+"""The cup-and-ball swing-up: pump the swing (taut), stop the pivot, and let the free swing release the ball.
+
+The pumping is the fast method's (``swingup_fast``: bang-bang energy pumping, jerk-limited by ruckig) with the
+tension governor on, so that the string stays taut while the pivot moves and the planar model is exact there. The
+pivot then rests, and the ball's free swing goes slack by itself where l·θ̇² + g·cos θ = 0, i.e. at
+cos θ_s = −2E/(3·g·l) for the swing energy E = ½·l²·θ̇² − g·l·cos θ (per unit mass): with the pivot at rest the whole
+flight that follows depends on E and l only, not on when the ball gets there. The search (differential evolution
+over the pumping's tuning) minimises the release time plus the spread of the landing points over the string-length
+band — the same pivot path drives every length of the band (``FastProblem.band``) — so that one cup position catches
+them all.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .pendulum import G
+from .swingup_fast import FastOutcome, FastProblem
+from .swingup_plan import PivotPlan
+from .tension import tension_margin
+
+
+@dataclass(frozen=True)
+class ReleaseGoal:
+    """What the release must give: the height [m] above the anchor where landings are measured (the ball centre at
+    the rim plane), how far [m] the cup may travel after the release to meet them, the landing spread over the band
+    the cup can take [m], and what exceeding it costs [s/m]."""
+
+    height: float
+    reach: float = 0.05  # [m]
+    spread_target: float = 0.0  # [m] a spread up to this costs nothing
+    spread_weight: float = 1000.0  # [s/m]: each mm beyond the target costs as much as 1 s of swing-up
+    deadline: float = math.inf  # [s] a release later than this costs 1000 per second late (a hard limit)
+    min_apex_clearance: float = 0.03  # [m] the flight's apex must clear the landing height by this
+
+
+@dataclass(frozen=True)
+class Landing:
+    """A free flight from the release (pivot at rest): release angle [rad] (signed: the side), the crossing of the
+    landing height going down relative to the anchor: lateral position y [m], velocity (vy, vz) [m/s], time after
+    the release [s], and the flight's apex height [m]."""
+
+    theta: float
+    y: float
+    vy: float
+    vz: float
+    t: float
+    apex: float
+
+
+def free_swing_landing(theta: float, theta_dot: float, length: float, height: float) -> Landing | None:
+    """Where the ball of a free swing (anchor at rest; state θ [rad], θ̇ [rad/s] while taut) lands at ``height`` [m]
+    above the anchor after it goes slack; None if it never goes slack (E ≤ 0 or a taut loop) or flies lower."""
+    e = 0.5 * length * theta_dot * theta_dot - G * math.cos(theta)  # [J/kg]/l: energy per unit mass and length
+    c = -2.0 * e / (3.0 * G)
+    if not -1.0 < c < 0.0:
+        return None
+    side = math.copysign(1.0, theta_dot if theta_dot != 0.0 else theta)
+    ts = math.acos(c)
+    v = math.sqrt(-G * length * c)
+    y0, z0 = side * length * math.sin(ts), -length * c
+    vy, vz = side * v * c, v * math.sin(ts)
+    apex = z0 + vz * vz / (2.0 * G)
+    if apex < height:
+        return None
+    t = (vz + math.sqrt(vz * vz - 2.0 * G * (height - z0))) / G
+    return Landing(side * ts, y0 + vy * t, vy, vz - G * t, t, apex)
+
+
+def release_score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
+    """``FastProblem.scorer`` of the cup-and-ball swing-up (``goal``: a ReleaseGoal). Cost: the nominal release time
+    [s] + spread_weight × the landing spread over the band beyond the target [m], + 1000 per second past the deadline,
+    + 100 and more when the landings' centre is beyond
+    the cup's reach, when a string of the band does not fly high enough, or goes slack before the pivot rests, +1000
+    and more when the claimed tension drops below ``min_tension`` while the pivot moves."""
+    goal: ReleaseGoal = problem.goal  # type: ignore[assignment]
+    k = min(int(np.searchsorted(plan.t, plan.t_rest - 1e-9)), len(plan.t) - 1)
+    band = plan.info["band"]
+    lengths = (problem.length, *band["lengths"])
+    thetas = np.vstack([plan.theta[None, :], band["theta"]])
+    rates = np.vstack([plan.theta_dot[None, :], band["theta_dot"]])
+    moving = plan.t <= plan.t_rest + 1e-9
+    penalty = 0.0
+    min_tension = math.inf
+    ys = []
+    for ln, th, om in zip(lengths, thetas, rates):
+        tension = tension_margin(th[moving], om[moving], plan.u[moving], 0.0, ln)
+        min_tension = min(min_tension, float(tension.min()))
+        land = free_swing_landing(float(th[k]), float(om[k]), ln, goal.height)
+        if land is None or land.apex < goal.height + goal.min_apex_clearance:
+            miss = goal.height + goal.min_apex_clearance - (land.apex if land is not None else -ln)
+            penalty += 100.0 + 10.0 * miss
+            continue
+        ys.append(land.y)
+    if min_tension < problem.min_tension:
+        penalty += 1000.0 + (problem.min_tension - min_tension)
+    spread = float(np.ptp(ys)) if len(ys) > 1 else 0.0
+    centre = float(np.mean(ys)) + float(plan.x[k]) if ys else 0.0
+    if abs(centre - plan.x[k]) > goal.reach:
+        penalty += 100.0 + 100.0 * (abs(centre - plan.x[k]) - goal.reach)
+    max_travel = float(np.max(np.abs(plan.x)))
+    if max_travel > problem.travel:
+        penalty += 100.0 + 100.0 * (max_travel - problem.travel)
+    after = np.flatnonzero(plan.tension[k:] <= 0.0)
+    t_release = float(plan.t[k + after[0]]) if after.size else problem.horizon + 3.0
+    cost = (penalty + t_release + goal.spread_weight * max(0.0, spread - goal.spread_target)
+            + 1000.0 * max(0.0, t_release - goal.deadline))
+    return FastOutcome(t_release if after.size else None, spread, max_travel, min_tension, cost)

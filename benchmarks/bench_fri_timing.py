@@ -287,6 +287,8 @@ def session(argv: Callable[[int], list[str]], kuka: bool, seconds: float, ball: 
         "cpu_us_per_message_steady": ((steady[-1][1] - steady[0][1]) * 1e-3 / ((steady[-1][0] - steady[0][0]) * 1e3)
                                       if len(steady) > 10 else None),
         "sim_realtime": s["realtime"],
+        "sim_cpu_fraction": s["cpu_fraction"],  # of one core: the simulator's own load (the ball adds to it)
+        "sim_period_ms_max": s["period_ms_max"],
     }
 
 

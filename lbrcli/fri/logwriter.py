@@ -4,10 +4,11 @@
 (``LogLayout.format``, one complete row per write, valid after any ending), but the FRI loop only hands each accepted
 monitoring datagram and the cycle's own figures (time, command, counters, phase, row, the client's extra columns) to
 a pipe — a few µs — and a child process (``python -m lbrcli.fri.logwriter``) decodes and formats them in batches
-every ``BATCH_S`` (20 ms). Formatting a row in Python costs ≈ 30–50 µs of the loop's CPU at 1 kHz on a busy PC, and
+every ``BATCH_S`` (5 ms), at nice 19. Formatting a row in Python costs ≈ 30–50 µs of the loop's CPU at 1 kHz on a busy PC, and
 waking a writer per row costs both processes more; see docs/explanations/fri-timing.md.
 
-The reply path never waits for the log: the pipe is non-blocking (1 MiB where the system allows); records it cannot
+The reply path never waits for the log: rows go to the pipe ``FLUSH_ROWS`` at a time (a kill -9 of the loop loses
+at most that many; any other ending writes them all), the pipe is non-blocking (1 MiB where the system allows); records it cannot
 take at once wait in memory and go with the next cycle's. A writer that fails (a full disk) exits with its reason;
 the loop learns it from the broken pipe at its next row and stops as for a failing in-process log (braking when
 commanding). Rows handed over when the session ends are written before :meth:`LogProcess.close` returns.
@@ -36,8 +37,10 @@ _BRAKE = int(Phase.BRAKE)
 PIPE_SIZE = 1 << 20  # [bytes] asked for the pipe (Linux F_SETPIPE_SZ; the default is 64 KiB)
 MAX_PENDING = 64 << 20  # [bytes] held in memory while the writer is behind, then the log fails
 _F_SETPIPE_SZ = 1031
-BATCH_S = 0.02  # [s] the writer sleeps this long between reads: rows are formatted in batches (warm caches, no
-# wake-up per row for either process); a row reaches the file at most this much later than with a direct write
+FLUSH_ROWS = 16  # rows handed to the pipe in one write (one system call per 16 ms at 1 kHz; all at the end)
+BATCH_S = 0.005  # [s] the writer sleeps this long between reads: rows are formatted in batches (warm caches, no
+# wake-up per row for either process) short enough (≈ 0.2 ms of work) that a batch that runs on the loop's CPU
+# cannot make a reply late (20 ms batches, ≈ 1 ms each, did: a late reply every 20 ms)
 
 
 class LogProcess:
@@ -70,6 +73,8 @@ class LogProcess:
             pass  # the default size: the pending buffer takes what does not fit
         os.set_blocking(self._pipe, False)
         self._pending = bytearray()
+        self._batch = bytearray()  # rows not yet handed to the pipe
+        self._in_batch = 0
         self._started = False
         self._closed = False
         self.rows = 0  # rows handed to the writer
@@ -96,8 +101,23 @@ class LogProcess:
             cyc.sent_position, _BRAKE if braking else (cyc.phase if answered or cyc.state >= 3 else 0),
             -1 if braking else cyc.row, *cmd, n,
         )  # fmt: skip
-        self._send(head + struct.pack(f"<{n}d", *extra) + data if n else head + data)
+        batch = self._batch
+        batch += head
+        if n:
+            batch += struct.pack(f"<{n}d", *extra)
+        batch += data
         self.rows += 1
+        self._in_batch += 1
+        if self._in_batch >= FLUSH_ROWS:
+            self._hand_over()
+
+    def _hand_over(self) -> None:
+        """The batched rows to the pipe."""
+        if self._batch:
+            frames = bytes(self._batch)
+            self._batch.clear()
+            self._in_batch = 0
+            self._send(frames)
 
     def on_end(self, app: Any, result: Any) -> None:
         self.close()
@@ -163,6 +183,10 @@ class LogProcess:
         """Hand over what is pending, wait until the writer wrote every row; a writer failure sets ``error``."""
         if self._closed:
             return
+        try:
+            self._hand_over()
+        except InputError:
+            return  # the writer had failed: ``error`` says why
         self._closed = True
         if self._pending:
             os.set_blocking(self._pipe, True)
@@ -243,6 +267,13 @@ def _serve(fd_out: int, path: str) -> int:
 
 
 if __name__ == "__main__":  # the child side of LogProcess
+    import signal
+
+    # Ctrl-C and a SIGTERM to the process group reach the writer too: it writes on until the loop, which brakes and
+    # logs the braking stop, closes the pipe (end of input)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     with __import__("contextlib").suppress(OSError):
-        os.nice(5)  # below the FRI loop (same user, nothing asked of the system)
+        os.nice(19)  # far below the FRI loop (same user, nothing asked of the system): rows wait in the pipe (1 MiB)
+        # and the loop's memory (MAX_PENDING, minutes at 1 kHz) while other work takes the CPU
     sys.exit(_serve(int(sys.argv[1]), sys.argv[2]))

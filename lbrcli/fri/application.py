@@ -22,8 +22,6 @@ continue from there, and the client is told how many command periods it missed (
 
 from __future__ import annotations
 
-import gc
-import sys
 import time
 from typing import Any, Callable, Sequence
 
@@ -38,6 +36,7 @@ from .ending import SessionEnding
 from .constants import DEFAULT_PORT, SessionState
 from .errors import FriDecodeError, FriError
 from .guard import DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT
+from .interpreter import loop_settings
 from .messages import FriVersion
 from .motion import ExecutedMotion
 from .outcome import EndReason, Outcome, SessionResult
@@ -48,8 +47,6 @@ from .supervision import Supervisor, commanding_end, consistent, joint_bound, ro
 from .transport import UdpTransport
 
 IDLE, MON_WAIT, MON_READY, CMD_WAIT, CMD_ACTIVE = 0, 1, 2, 3, 4
-SWITCH_INTERVAL_S = 1e-4  # [s] Python's GIL hand-over interval during a session (default 5 ms): a loop woken by a
-# message waits at most this long for a busy thread of the process (a bridge, a sensor, telemetry) to let it run
 
 
 class ClientApplication(Replying, SessionEnding):
@@ -194,19 +191,10 @@ class ClientApplication(Replying, SessionEnding):
     # -- the loop --------------------------------------------------------------------------------------------
     def run(self, duration_s: float | None = None) -> SessionResult:
         """Step until the session ends (or ``duration_s`` [s] after the first message); the result."""
-        gc.collect()
-        was = gc.isenabled()
-        gc.disable()
-        switch = sys.getswitchinterval()
-        sys.setswitchinterval(min(switch, SWITCH_INTERVAL_S))
-        try:
+        with loop_settings():
             self.start(duration_s)
             while self.step():
                 pass
-        finally:
-            sys.setswitchinterval(switch)
-            if was:
-                gc.enable()
         assert self.result is not None
         return self.result
 

@@ -78,3 +78,12 @@ def realtime(priority: int = DEFAULT_PRIORITY, cpu: int | None = None, lock_memo
             _libc().munlockall()
         os.sched_setaffinity(0, old_cpus)
         os.sched_setscheduler(0, old_policy, old_param)
+
+
+def permitted() -> bool:
+    """Whether this process may have the real-time settings (tried, then undone)."""
+    try:
+        with realtime():
+            return True
+    except RealtimeRefused:
+        return False

@@ -20,11 +20,7 @@ Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)
 
 
 def _permitted() -> bool:
-    try:
-        with rt.realtime(lock_memory=False):
-            return True
-    except rt.RealtimeRefused:
-        return False
+    return rt.permitted()
 
 
 _REFUSING = """
@@ -81,3 +77,15 @@ def test_a_refused_memory_lock_undoes_the_scheduling(monkeypatch):
         with rt.realtime():
             pass
     assert os.sched_getscheduler(0) == policy and os.sched_getaffinity(0) == cpus
+
+
+def test_the_demo_asks_for_realtime_only_where_it_is_granted(monkeypatch):
+    from lbrcli.demo.pipeline import demo_steps
+
+    def refuse(*a):
+        raise PermissionError(1, "Operation not permitted")
+
+    monkeypatch.setattr(os, "sched_setscheduler", refuse)
+    assert not rt.permitted()
+    executes = [s for s in demo_steps() if s.argv and s.argv[0] == "execute"]
+    assert executes and all("--realtime" not in s.argv for s in executes)

@@ -16,9 +16,9 @@ commanding). Rows handed over when the session ends are written before :meth:`Lo
 
 from __future__ import annotations
 
-import errno
 import fcntl
 import os
+import select
 import struct
 import subprocess
 import sys
@@ -37,6 +37,7 @@ _BRAKE = int(Phase.BRAKE)
 PIPE_SIZE = 1 << 20  # [bytes] asked for the pipe (Linux F_SETPIPE_SZ; the default is 64 KiB)
 MAX_PENDING = 64 << 20  # [bytes] held in memory while the writer is behind, then the log fails
 _F_SETPIPE_SZ = 1031
+READY_TIMEOUT_S = 60.0  # [s] for the writer process to start
 FLUSH_ROWS = 16  # rows handed to the pipe in one write (one system call per 16 ms at 1 kHz; all at the end)
 BATCH_S = 0.005  # [s] the writer sleeps this long between reads: rows are formatted in batches (warm caches, no
 # wake-up per row for either process) short enough (≈ 0.2 ms of work) that a batch that runs on the loop's CPU
@@ -66,6 +67,12 @@ class LogProcess:
             )  # fmt: skip
         finally:
             os.close(fd)
+        # the writer's start (imports: ≈ 0.5 s of CPU) is over before the session begins
+        out = self._proc.stdout  # type: ignore[union-attr]
+        if not select.select([out], [], [], READY_TIMEOUT_S)[0] or out.readline().strip() != b"ready":
+            self._proc.kill()
+            self._proc.wait()
+            raise InputError("cannot write the log: its writer process did not start", file=self.path)
         self._pipe = self._proc.stdin.fileno()  # type: ignore[union-attr]
         try:
             fcntl.fcntl(self._pipe, _F_SETPIPE_SZ, PIPE_SIZE)
@@ -213,6 +220,7 @@ def _serve(fd_out: int, path: str) -> int:
     from .messages import FriVersion
 
     log = ExecutionLog.from_fd(fd_out, path)
+    print("ready", flush=True)
     codec = mon = layout = None
     extra_names: tuple[str, ...] = ()
     fd_in = sys.stdin.fileno()

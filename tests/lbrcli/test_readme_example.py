@@ -6,6 +6,7 @@ Test-only changes, all named here: `lbr execute` gets `--port 0` (other sessions
 """
 
 import json
+import pytest
 import shlex
 import subprocess
 import sys
@@ -45,6 +46,7 @@ def _run_chain(chain: list[list[str]], cwd: Path) -> dict:
     return figures
 
 
+@pytest.mark.slow
 def test_readme_example_session_runs_as_written(tmp_path):
     from concurrent.futures import ThreadPoolExecutor
 

@@ -160,6 +160,7 @@ def test_the_stepper_and_the_event_driven_integrator_agree_event_by_event():
         assert outcome(st.events, st.resting, st.inside).caught == run.caught
 
 
+@pytest.mark.slow
 def test_the_penalty_judge_reaches_the_same_verdict_on_other_cups_lengths_and_heights():
     """A deliberately different integrator (penalty forces, Cartesian, symplectic Euler, spline anchor, its own
     cup distance): same catch / no catch; where the flight reaches the rim plane before touching anything, the same

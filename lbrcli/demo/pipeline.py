@@ -134,7 +134,7 @@ def demo_steps() -> list[Step]:
              ("plan", "cup-and-ball", "--length", L, "--min-success", "0", "-o", "catch.csv", "--prediction",
               "catch_prediction.csv", "--plot", "catch_plan.png")),
         Step("execute_catch", "execute the catch on the simulator (ball and cup simulated)",
-             ("execute", "catch.csv", "--port", "0", "--realtime", "--sim-lenient", "--length", L, "--cup", CUP,
+             ("execute", "catch.csv", "--port", "0", *rt, "--sim-lenient", "--length", L, "--cup", CUP,
               "--settle", "1", "--log", "catch_log.csv", "--plot", "catch_execution.png"), needs=("plan_catch",)),
         Step("film_catch", "film the catch (render catch.mp4 with the cup)",
              ("track", "film", "catch_log.csv", "-o", "catch.mp4", "--length", L, "--cup", CUP, "--size", "960x540",

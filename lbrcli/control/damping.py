@@ -60,6 +60,8 @@ class DampingClient(TrajectoryPlayer):
         if sensor is None:
             sensor = IoSensor(io_names) if io_names is not None else ModuleSensor(module_axis, sensor_rate_hz or 200.0)
         self.sensor = sensor
+        self._observe = getattr(sensor, "observe", None)  # a camera's pivot: the robot's pose of every message
+        self._failure = getattr(sensor, "failure", None)  # a sensor that can tell it failed (a camera's stream)
         self.target = target
         n_total = len(self.rows) + int(round(damp_s / period_s)) + 2
         acc = np.zeros((n_total, 2))
@@ -129,6 +131,10 @@ class DampingClient(TrajectoryPlayer):
             if self._k >= self._tail_from and math.isfinite(value):
                 self._tail[axis].append((t, value))
                 self.peak_residual = max(self.peak_residual, abs(value))
+        if self._failure is not None and self.sensor_fault is None:
+            why = self._failure()
+            if why is not None:
+                self._stop_correcting(why, t)
 
     def _stop_correcting(self, why: str, t: float) -> None:
         """The sensor is not to be trusted: no more correction (the offsets ride out); the session will fail."""
@@ -159,7 +165,19 @@ class DampingClient(TrajectoryPlayer):
         self.cost_ns.append(time.perf_counter_ns() - t0)
         return out
 
+    def monitor(self, state: LBRState) -> None:
+        if self._observe is not None:
+            self._observe(state)
+        super().monitor(state)
+
+    def wait_for_command(self, state: LBRState) -> None:
+        if self._observe is not None:
+            self._observe(state)
+        super().wait_for_command(state)
+
     def command(self, state: LBRState) -> Sequence[float] | None:
+        if self._observe is not None:
+            self._observe(state)
         if self._return is not None:
             return self._returning()
         if self._k >= 0 and self.reply_due:
@@ -256,4 +274,7 @@ class DampingClient(TrajectoryPlayer):
             sensor_fault=self.sensor_fault,
             **cost_figures_us(self.cost_ns),
         )
+        sensor_figures = getattr(self.sensor, "figures", None)
+        if sensor_figures is not None:
+            f.update(sensor_figures())
         return f

@@ -6,7 +6,10 @@ Each answers ``poll(state)`` once per FRI cycle with the readings that arrived s
 
 from __future__ import annotations
 
+import time
 from typing import Any, Iterator
+
+import numpy as np
 
 
 class IoSensor:
@@ -49,23 +52,70 @@ class ModuleSensor:
 
 class CameraSensor:
     """Tilt angles [rad] of the ball tracked live in a camera's frames (``tracker``: an object with ``latest()`` —
-    the newest result or None — whose results carry ``theta_x`` / ``theta_y`` [rad] for the axes the camera sees)."""
+    the newest result or None — whose results carry ``theta_x`` / ``theta_y`` [rad] for the axes the camera sees; a
+    NaN component is one this view does not give).
 
-    def __init__(self, tracker: Any, axes: tuple[int, ...], fps: float) -> None:
+    With ``delay_s`` [s] and results that carry ``moment`` (the time the frame shows, ``time.monotonic()``), each
+    reading is held until it is ``delay_s`` old and then handed on: the camera's latency varies from frame to frame
+    (tracking time, transfer, dropped frames), the damper's observer assumes one delay — the readings now have it
+    (one that arrives older is handed on at once and counted ``late``). A tracker with ``observe(t, q)`` is given
+    the robot's measured joint positions of every message (its pivot), one with ``freeze()`` is told when the rows
+    start, one with ``failure(now)`` is asked every cycle whether it can still be trusted."""
+
+    def __init__(self, tracker: Any, axes: tuple[int, ...], fps: float, delay_s: float | None = None) -> None:
         self.tracker = tracker
         self.axes = axes
         self.interval_s = 1.0 / fps
+        self.delay_s = delay_s
         self._last: Any = None
+        self._pending: list[Any] = []
+        self._started = False
+        self.ages: list[float] = []  # [s] age of each reading when handed on
+        self.late = 0
 
     def describe(self, axis: int) -> str:
         return "the camera"
 
+    def observe(self, state: Any) -> None:
+        observe = getattr(self.tracker, "observe", None)
+        if observe is not None:
+            observe(time.monotonic(), state.measured_joint_position)
+
+    def failure(self) -> str | None:
+        check = getattr(self.tracker, "failure", None)
+        return check(time.monotonic()) if check is not None else None
+
     def poll(self, state: Any) -> Iterator[tuple[int, float]]:
+        if not self._started:
+            self._started = True
+            freeze = getattr(self.tracker, "freeze", None)
+            if freeze is not None:
+                freeze()
         r = self.tracker.latest()
-        if r is None or r is self._last or not getattr(r, "found", True):
+        if r is not None and r is not self._last:
+            self._last = r
+            if getattr(r, "found", True):
+                self._pending.append(r)
+        if not self._pending:
             return
-        self._last = r
-        for axis in self.axes:
-            value = r.theta_x if axis == 0 else r.theta_y
-            if value is not None and value == value:  # NaN: this view does not give that component
-                yield axis, value
+        now = time.monotonic() if self.delay_s is not None else 0.0
+        while self._pending:
+            r = self._pending[0]
+            moment = getattr(r, "moment", None)
+            if self.delay_s is not None and moment is not None:
+                age = now - moment
+                if age < self.delay_s:
+                    return
+                self.ages.append(age)
+                self.late += int(getattr(r, "arrived", now) - moment > self.delay_s)
+            self._pending.pop(0)
+            for axis in self.axes:
+                value = r.theta_x if axis == 0 else r.theta_y
+                if value is not None and value == value:  # NaN: this view does not give that component
+                    yield axis, value
+
+    def figures(self) -> dict:
+        a = np.array(self.ages) * 1e3
+        return {"camera_age_ms_p50": float(np.percentile(a, 50)) if len(a) else None,
+                "camera_age_ms_p95": float(np.percentile(a, 95)) if len(a) else None,
+                "camera_late_readings": self.late}

@@ -213,10 +213,11 @@ def damp(
     sim_camera_fps: Annotated[Optional[float], number("--sim-camera-fps", low=10, high=500, unit="1/s", help="Simulator: its camera's frame rate \\[1/s] (default 120; 30–240 tested).")] = None,
     sim_camera_exposure: Annotated[Optional[float], number("--sim-camera-exposure", low=0, high=100, unit="ms", help="Simulator: its camera's exposure \\[ms] (motion blur; default 4, at most one frame).")] = None,
     sim_camera_latency: Annotated[Optional[float], number("--sim-camera-latency", low=0, high=500, unit="ms", help="Simulator: from the end of an exposure to the frame leaving its camera \\[ms] (default 15).")] = None,
-    sim_camera_stop: Annotated[Optional[float], number("--sim-camera-stop", low=0, high=3600, low_open=True, unit="s", help="Simulator: its camera stops streaming this long after it started \\[s] (a failure drill).")] = None,
+    sim_camera_stamp: Annotated[Optional[bool], typer.Option("--sim-camera-stamp/--no-sim-camera-stamp", help="Simulator: its camera writes each frame's index into the frame's corner (a camera's embedded frame counter), so a frame's moment is known exactly (default); without it, as with --camera, a frame shows its arrival − --camera-delay.")] = None,
+    sim_camera_stop: Annotated[Optional[float], number("--sim-camera-stop", low=0, high=3600, low_open=True, unit="s", help="Simulator: its camera stops streaming this long after the simulator started \\[s] (a failure drill).")] = None,
     io_names: Annotated[str, typer.Option("--io-names", help="Analog inputs with θx, θy \\[rad] (atan2(s_x, −s_z), atan2(s_y, −s_z) of the string direction s).")] = "ball_theta_x,ball_theta_y",
     module_axis: Annotated[str, choice("--module-axis", choices=("x", "y"), help="With --sensor module: the base axis the module swings along (x or y).")] = "y",
-    sensor_delay: Annotated[Optional[float], number("--sensor-delay", low=0, high=500, unit="ms", help="Age of a reading when it arrives \\[ms] (default: --sim-delay + one period; one period with --robot; with --sensor camera --camera-delay + 6, each camera reading held until it is that old).")] = None,
+    sensor_delay: Annotated[Optional[float], number("--sensor-delay", low=0, high=500, unit="ms", help="Age of a reading when it arrives \\[ms] (default: --sim-delay + one period; one period with --robot; with --sensor camera each reading's own age is used, this only where it is unknown; default --camera-delay + 6).")] = None,
     sensor_rate: Annotated[float, number("--sensor-rate", low=10, high=10000, unit="Hz", help="With --sensor module: readings per second \\[Hz].")] = 200.0,
     open_loop: Annotated[bool, typer.Option("--open-loop", help="Estimate and log the sway but do not correct (the plan alone, for comparison).")] = False,
     target: Annotated[float, number("--target", low=0.001, high=45, unit="deg", help="The goal: residual sway at most this, fitted over the last swing period of --damp-time \\[deg]; exit 1 above it.")] = 0.3,
@@ -267,6 +268,7 @@ def damp(
     from lbrcli.plants.ball import BallSpec
     from lbrcli.plants.pendulum_module import PendulumModuleSpec
     from planners.feedback.correction import correction_plan
+    from planners.feedback.damping import DampingOptions
     from planners.pendulum import natural_period
     from planners.shapers import make_shaper
     from trajectories.csvio import read_joint_csv
@@ -283,7 +285,7 @@ def damp(
     rep = Reporter(json_out)
     cam_opts = CameraOptions(camera, geometry, camera_position, camera_look_at, camera_fov, camera_delay,
                              sim_camera_position, sim_camera_look_at, sim_camera_fov, sim_camera_size, sim_camera_fps,
-                             sim_camera_exposure, sim_camera_latency, sim_camera_stop)  # fmt: skip
+                             sim_camera_exposure, sim_camera_latency, sim_camera_stop, sim_camera_stamp)  # fmt: skip
     cam_opts.validate(sensor, robot)
     names = tuple(n.strip() for n in io_names.split(","))
     if len(names) != 2 or not all(names):
@@ -332,7 +334,7 @@ def damp(
     camera_sensor = sim_camera = None
     with contextlib.ExitStack() as camera_stack:  # a camera (and the simulator's) is stopped however this ends
         if sensor == "camera":  # opened here: its frame rate and image size are needed, and it must see the ball
-            from lbrcli.control.camera_setup import camera_sensor_for
+            from lbrcli.control.camera_setup import camera_sensor_for, observer_bandwidth
 
             camera_sensor, sim_camera, assumed_ms = camera_sensor_for(
                 cam_opts, rep, camera_stack, robot_factory=lambda: make_robot(flange, tool), rows=traj.q, t=traj.t,
@@ -344,6 +346,8 @@ def damp(
             traj.q, lim, period_s, model_len, plan, damp_s=damp_s, sensor_delay_s=assumed_ms * 1e-3,
             io_names=names if sensor == "io" else None, module_axis=axis, sensor_rate_hz=sensor_rate, active=not open_loop,
             target=math.radians(target), sensor=camera_sensor,
+            options=DampingOptions(bandwidth=observer_bandwidth(1.0 / camera_sensor.interval_s))
+            if camera_sensor is not None else DampingOptions(),
             start_tolerance=start_tolerance, move_to_start=move_to_start,
             move_shaper=make_shaper("zvd", period_T), move_robot=model,
             sway=SwayWatch(IoSway("ball_theta"), math.radians(start_sway), window_for_length(model_len), sway_wait)

@@ -24,8 +24,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from tracking.camera_geometry import hanging_length, tilt_from_pixel
 from trajectories.errors import CheckFailed, InputError
 
+from ..lab.camera_publish import decode  # (imported here: not in the FRI loop's first cycle)
 from ..lab.timed_ring import TimedRing
 
 STILL_Q = 1e-4  # [rad] the joints moved less than this over REST_S: the robot stands still
@@ -49,17 +51,47 @@ class TiltReading:
     found: bool = True
 
 
-def _tracker_main(source: str, ball, options, file_fps: float | None, port: int, conn) -> None:  # noqa: ANN001
+CAMERA_NICENESS = 4  # the camera's processes yield the CPU to the FRI loop's: a late frame costs less than a late reply
+
+
+def _yield_to_the_loop() -> None:
+    """Lower this process's priority by CAMERA_NICENESS (where permitted): on a busy PC the FRI loop (and the
+    simulator) keep their cycle, the camera's frames come later instead."""
+    import os
+
+    try:
+        os.nice(CAMERA_NICENESS)
+    except (AttributeError, OSError):
+        pass
+
+
+def _tracker_main(source: str, ball, options, file_fps: float | None, port: int, conn,  # noqa: ANN001
+                  stamp: tuple[float, float] | None = None) -> None:  # fmt: skip
     """The tracking process: results to 127.0.0.1:port as datagrams; ("open", size, fps) or ("error", text) first,
-    ("end", figures) last on ``conn``; runs until told to stop, the stream ends or its starter is gone."""
+    ("end", figures) last on ``conn``; runs until told to stop, the stream ends or its starter is gone. With
+    ``stamp`` = (t0 [s, monotonic], fps): the frames carry their index (:func:`lbrcli.lab.camera_stream.write_stamp`,
+    a camera's embedded frame counter) and each result's t_source is the moment its frame shows, t0 + index / fps."""
     import signal
+    from dataclasses import replace
 
     from lbrcli.lab.camera_publish import UdpPublisher
+    from lbrcli.lab.camera_stream import read_stamp
     from tracking.live import LiveTracker
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the starter decides when it ends
+    _yield_to_the_loop()
     pub = UdpPublisher("127.0.0.1", port)
-    tracker = LiveTracker(source, ball, options=options, on_result=pub.publish, file_fps=file_fps)
+    index: dict[int, int] = {}  # frame seq → the camera's frame index
+
+    def on_frame(seq: int, frame) -> None:  # noqa: ANN001
+        index[seq] = read_stamp(frame)
+
+    def on_result(r) -> None:  # noqa: ANN001
+        k = index.pop(r.seq, None)
+        pub.publish(r if k is None else replace(r, t_source=stamp[0] + k / stamp[1]))
+
+    tracker = LiveTracker(source, ball, options=options, on_result=on_result if stamp else pub.publish,
+                          on_frame=on_frame if stamp else None, file_fps=file_fps)  # fmt: skip
     try:
         tracker.start()
     except InputError as exc:
@@ -92,12 +124,14 @@ class CameraTilt:
     :class:`~tracking.camera_geometry.CameraGeometry` (may be set after :meth:`start`). robot: a
     :class:`trajectories.robot.Robot` (its TCP is the pivot). ball: the ball's :class:`~tracking.color.ColorSpec`.
     string_m: the length assumed when the camera cannot measure it [m]. q_rest: where the robot stands before the
-    session's first message [rad] (None: unknown; only views during the session count).
+    session's first message [rad] (None: unknown; only views during the session count). stamp: (t0, fps) of a
+    camera that writes each frame's index into it (the simulated one, ``CameraConfig.stamp``): the moment a frame
+    shows is then t0 + index / fps [s, monotonic] rather than its arrival − ``camera_delay_s``.
     """
 
     def __init__(self, source: str, geometry, robot, ball, string_m: float, camera_delay_s: float, *,
                  q_rest: Sequence[float] | None = None, fps: float | None = None, options=None,
-                 start_timeout_s: float = 10.0) -> None:  # fmt: skip
+                 stamp: tuple[float, float] | None = None, start_timeout_s: float = 10.0) -> None:  # fmt: skip
         self.source = source
         self.geometry = geometry
         self.robot = robot
@@ -108,6 +142,7 @@ class CameraTilt:
         self.fps = fps  # nominal frame rate [1/s] (None: the source's own, once open)
         self.size: tuple[int, int] | None = None  # (w, h) [px] once open
         self.options = options
+        self.stamp = stamp  # (t0 [s, monotonic], fps): frames carry their index; their moment is t0 + index / fps
         self.start_timeout_s = start_timeout_s
         self.poses = TimedRing(4096, 7)  # the robot's measured joints [rad] at each message [s]
         self.string_m: float | None = None  # the length the tilt uses, fixed by freeze()
@@ -146,7 +181,7 @@ class CameraTilt:
         self._conn, child = ctx.Pipe()
         self._proc = ctx.Process(target=_tracker_main, name="lbr-camera-tracker", daemon=True,
                                  args=(source, self.ball, self.options, self.fps if is_file_source(source) else None,
-                                       self._sock.getsockname()[1], child))  # fmt: skip
+                                       self._sock.getsockname()[1], child, self.stamp))  # fmt: skip
         self._proc.start()
         child.close()
         t_end = time.monotonic() + self.start_timeout_s + 20.0  # (a spawned interpreter imports OpenCV first)
@@ -237,8 +272,6 @@ class CameraTilt:
 
     def drain(self) -> None:
         """Take in every result that arrived (never blocks)."""
-        from lbrcli.lab.camera_publish import decode
-
         sock = self._sock
         if sock is None:
             return
@@ -306,8 +339,6 @@ class CameraTilt:
 
     def _take(self, r: dict) -> None:
         """One tracker result (a decoded datagram: seq, t_capture, latency_s, found, u, v, …)."""
-        from tracking.camera_geometry import hanging_length, tilt_from_pixel
-
         self.results += 1
         t_result = r["t_capture"] + r["latency_s"]
         self._last_result = t_result
@@ -317,7 +348,7 @@ class CameraTilt:
         self._last_found = t_result
         if self.geometry is None:  # (a real camera is opened before its geometry is known)
             return
-        moment = r["t_capture"] - self.camera_delay_s
+        moment = r["t_source"] if self.stamp and math.isfinite(r["t_source"]) else r["t_capture"] - self.camera_delay_s
         uv = (r["u"], r["v"])
         length = self.string_m
         if length is None:  # before the first row: measure the string from the hanging ball

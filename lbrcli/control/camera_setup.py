@@ -22,6 +22,15 @@ MIN_PX_PER_DEG = 0.25  # [px] a 1° tilt must move the ball at least this far in
 TRANSFER_MS = 1.0  # the simulated camera's frame: sent → decoded here, about
 
 
+def observer_bandwidth(fps: float) -> float:
+    """The damper's observer bandwidth [rad/s] for camera readings at ``fps`` [1/s]: fps/40 within 2..6. A camera's
+    readings are noisier (0.05–0.3° per frame) and later (25–70 ms) than the controller's inputs, and each reading
+    corrects the estimate by gains proportional to bandwidth × reading interval: the default 20 rad/s lets 0.15° of
+    noise shake the ball by 0.1° and at 30 fps (gain 0.9 per reading) runs away. Offline scans of the crane move
+    (string ±20 %, 30–120 fps, 25–60 ms, 0.07–0.3° noise, 10 ms jitter) found 2–4 rad/s best."""
+    return min(6.0, max(2.0, fps / 40.0))
+
+
 @dataclass(frozen=True)
 class CameraOptions:
     """The command's camera options as given (None: not given)."""
@@ -40,6 +49,7 @@ class CameraOptions:
     sim_exposure_ms: float | None = None
     sim_latency_ms: float | None = None
     sim_stop_s: float | None = None
+    sim_stamp: bool | None = None  # the simulated camera writes each frame's index into it (default: yes)
 
     def sim_given(self) -> bool:
         return any(getattr(self, f.name) is not None for f in fields(self) if f.name.startswith("sim_"))
@@ -87,6 +97,7 @@ def sim_camera_config(opts: CameraOptions, pivots_m: np.ndarray, string_m: float
         position = position if position is not None else tuple(float(v) for v in auto_pos)
     fps = opts.sim_fps or SIM_FPS
     return CameraConfig(position_m=tuple(position), look_at_m=tuple(look_at), fov_deg=fov, size=tuple(size), fps=fps,
+                        stamp=opts.sim_stamp is not False,
                         exposure_s=(opts.sim_exposure_ms if opts.sim_exposure_ms is not None else min(SIM_EXPOSURE_MS, 500.0 / fps)) * 1e-3,
                         latency_s=(opts.sim_latency_ms if opts.sim_latency_ms is not None else SIM_LATENCY_MS) * 1e-3)  # fmt: skip
 
@@ -154,7 +165,7 @@ def camera_sensor_for(opts: CameraOptions, rep, stack, *, robot_factory, rows: n
     from lbrcli.lab.camera_stream import CameraProcess
     from lbrcli.plants.camera import SceneRing, SimCameraSpec, hanging_scene
 
-    from .camera import CameraTilt
+    from .camera import CAMERA_NICENESS, CameraTilt
     from .sensors import CameraSensor
 
     ball = color_spec(color, "--color")
@@ -176,10 +187,11 @@ def camera_sensor_for(opts: CameraOptions, rep, stack, *, robot_factory, rows: n
         ring = SceneRing.create()
         stack.callback(ring.remove)
         hanging_scene(ring, robot.fk(np.asarray(q_rest, float)).translation, true_len)
-        camera = CameraProcess(ring, sim_config, opts.sim_stop_s).start()
+        camera = CameraProcess(ring, sim_config, opts.sim_stop_s, niceness=CAMERA_NICENESS).start()
         stack.callback(camera.stop)
         tilt.source = camera.url
         tilt.geometry = geometry
+        tilt.stamp = (camera.t_start, sim_config.fps) if sim_config.stamp else None
         spec = SimCameraSpec(ring.path)
     stack.callback(tilt.stop)
     tilt.start()
@@ -193,12 +205,12 @@ def camera_sensor_for(opts: CameraOptions, rep, stack, *, robot_factory, rows: n
                           f"camera's {size[0]}x{size[1]}")  # fmt: skip
     tilt.view_px_per_deg = view.px_per_deg
     assumed_ms = sensor_delay_ms if sensor_delay_ms is not None else delay_ms + TRACKING_ALLOWANCE_MS
-    sensor = CameraSensor(tilt, (0, 1), tilt.fps, delay_s=max(0.0, assumed_ms * 1e-3 - period_s / 2))
+    sensor = CameraSensor(tilt, (0, 1), tilt.fps)
     c = geometry.centre
     rep.print(f"camera: {'the simulator’s, ' if opts.source is None else ''}{tilt.source}, {size[0]}x{size[1]} px at "
               f"{tilt.fps:g} fps, at ({c[0]:.2f}, {c[1]:.2f}, {c[2]:.2f}) m, {geometry.elevation_deg:.0f}° down; a 1° "
               f"tilt moves the ball ≥ {view.px_per_deg[0]:.2f} px (x), ≥ {view.px_per_deg[1]:.2f} px (y); its delay "
-              f"{delay_ms:.1f} ms, readings used {assumed_ms:.1f} ms old")  # fmt: skip
+              f"{delay_ms:.1f} ms; each reading used with its own age (about {assumed_ms:.0f} ms)")  # fmt: skip
     return sensor, spec, assumed_ms
 
 

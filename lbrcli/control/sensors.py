@@ -2,7 +2,8 @@
 (:class:`IoSensor`, e.g. the simulator's ball or an external tracker wired to the controller), the pendulum module's
 encoder on its serial port (:class:`ModuleSensor`, one axis), and a camera tracked live (:class:`CameraSensor`).
 Each answers ``poll(state)`` once per FRI cycle with the readings that arrived since: (axis, angle [rad]) pairs, axis
-0 the sway about base y (θx, the ball displaced along base x), 1 about base x (θy)."""
+0 the sway about base y (θx, the ball displaced along base x), 1 about base x (θy) — or (axis, angle, age [s]) from a
+sensor that knows each reading's age."""
 
 from __future__ import annotations
 
@@ -55,20 +56,19 @@ class CameraSensor:
     the newest result or None — whose results carry ``theta_x`` / ``theta_y`` [rad] for the axes the camera sees; a
     NaN component is one this view does not give).
 
-    With ``delay_s`` [s] and results that carry ``moment`` (the time the frame shows, ``time.monotonic()``), each
-    reading is held until it is ``delay_s`` old and then handed on: the camera's latency varies from frame to frame
-    (tracking time, transfer, dropped frames), the damper's observer assumes one delay — the readings now have it
-    (one that arrives older is handed on at once and counted ``late``). A tracker with ``observe(t, q)`` is given
-    the robot's measured joint positions of every message (its pivot), one with ``freeze()`` is told when the rows
-    start, one with ``failure(now)`` is asked every cycle whether it can still be trusted."""
+    Results that carry ``moment`` (the time the frame shows, ``time.monotonic()``) are handed on with their age
+    (axis, angle, age [s]): a camera's frames come late by varying amounts (tracking time, transfer, a busy PC), and
+    the damper's observer compares each with its estimate for that very moment; one older than ``max_age_s`` is
+    dropped (counted ``late``). A tracker with ``observe(t, q)`` is given the robot's measured joint positions of
+    every message (its pivot), one with ``freeze()`` is told when the rows start, one with ``failure(now)`` is asked
+    every cycle whether it can still be trusted."""
 
-    def __init__(self, tracker: Any, axes: tuple[int, ...], fps: float, delay_s: float | None = None) -> None:
+    def __init__(self, tracker: Any, axes: tuple[int, ...], fps: float, max_age_s: float = 0.25) -> None:
         self.tracker = tracker
         self.axes = axes
         self.interval_s = 1.0 / fps
-        self.delay_s = delay_s
+        self.max_age_s = max_age_s  # [s] the observer keeps its history this far back
         self._last: Any = None
-        self._pending: list[Any] = []
         self._started = False
         self.ages: list[float] = []  # [s] age of each reading when handed on
         self.late = 0
@@ -85,34 +85,28 @@ class CameraSensor:
         check = getattr(self.tracker, "failure", None)
         return check(time.monotonic()) if check is not None else None
 
-    def poll(self, state: Any) -> Iterator[tuple[int, float]]:
+    def poll(self, state: Any) -> Iterator[tuple]:
         if not self._started:
             self._started = True
             freeze = getattr(self.tracker, "freeze", None)
             if freeze is not None:
                 freeze()
         r = self.tracker.latest()
-        if r is not None and r is not self._last:
-            self._last = r
-            if getattr(r, "found", True):
-                self._pending.append(r)
-        if not self._pending:
+        if r is None or r is self._last or not getattr(r, "found", True):
             return
-        now = time.monotonic() if self.delay_s is not None else 0.0
-        while self._pending:
-            r = self._pending[0]
-            moment = getattr(r, "moment", None)
-            if self.delay_s is not None and moment is not None:
-                age = now - moment
-                if age < self.delay_s:
-                    return
-                self.ages.append(age)
-                self.late += int(getattr(r, "arrived", now) - moment > self.delay_s)
-            self._pending.pop(0)
-            for axis in self.axes:
-                value = r.theta_x if axis == 0 else r.theta_y
-                if value is not None and value == value:  # NaN: this view does not give that component
-                    yield axis, value
+        self._last = r
+        moment = getattr(r, "moment", None)
+        age = None
+        if moment is not None:
+            age = time.monotonic() - moment
+            if age > self.max_age_s:
+                self.late += 1
+                return
+            self.ages.append(age)
+        for axis in self.axes:
+            value = r.theta_x if axis == 0 else r.theta_y
+            if value is not None and value == value:  # NaN: this view does not give that component
+                yield (axis, value) if age is None else (axis, value, age)
 
     def figures(self) -> dict:
         a = np.array(self.ages) * 1e3

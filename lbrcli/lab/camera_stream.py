@@ -293,14 +293,17 @@ class CameraProcess:
     """A :class:`CameraServer` in its own process (forked), as a real camera is its own device: its rendering does
     not compete with the reader for Python's interpreter lock. ``url`` and ``t_start`` (on the shared monotonic
     clock) are known once :meth:`start` returns; :meth:`stop` ends the process, as does the end of the process that
-    started it. ``stop_after_s`` [s]: the camera stops streaming that long after its start (a failure drill).
+    started it. ``stop_after_s`` [s]: the camera stops streaming that long after its start — or after the scene's
+    ``live_since`` [s, monotonic] when it has that attribute (None until it is live) — a failure drill.
 
     A plain ``os.fork`` (not multiprocessing): a daemonic process — the FRI simulator's — may start it too."""
 
-    def __init__(self, scene: Scene, config: CameraConfig | None = None, stop_after_s: float | None = None) -> None:
+    def __init__(self, scene: Scene, config: CameraConfig | None = None, stop_after_s: float | None = None,
+                 niceness: int = 0) -> None:  # fmt: skip
         self.scene = scene
         self.config = config or CameraConfig()
         self.stop_after_s = stop_after_s
+        self.niceness = niceness  # the camera process's priority lowered by this (a busy PC: others keep their pace)
         self.geometry = self.config.geometry()
         self.url = ""
         self.t_start = math.nan
@@ -319,6 +322,8 @@ class CameraProcess:
                 os.close(r)
                 signal.signal(signal.SIGTERM, signal.SIG_DFL)
                 signal.signal(signal.SIGINT, signal.SIG_IGN)  # its starter decides when it stops
+                if self.niceness:
+                    os.nice(self.niceness)
                 _camera_child(self.scene, self.config, w, self.stop_after_s, parent)
                 code = 0
             finally:
@@ -373,8 +378,10 @@ def _camera_child(scene: Scene, config: CameraConfig, out: int, stop_after_s: fl
     os.write(out, f"{server.url} {server.t_start!r}\n".encode())
     os.close(out)
     while os.getppid() == parent:
-        time.sleep(0.2)
-        if stop_after_s is not None and server.clock() - server.t_start >= stop_after_s:
+        time.sleep(0.05)
+        since = getattr(scene, "live_since", None)  # a scene fed by a simulator counts from its first cycle
+        since = server.t_start if since is None and not hasattr(scene, "live_since") else since
+        if stop_after_s is not None and since is not None and server.clock() - since >= stop_after_s:
             server.stop()
             stop_after_s = None
     server.stop()

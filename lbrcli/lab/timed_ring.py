@@ -35,6 +35,10 @@ class TimedRing:
     def __len__(self) -> int:
         return int(self._count[0])
 
+    def time_of(self, index: int) -> float:
+        """Time [s] of the sample written index-th (from 0; it must still be in the ring)."""
+        return float(self._data[index % self.rows, 0])
+
     @property
     def newest_t(self) -> float:
         """Time of the newest sample [s] (−inf when empty)."""

@@ -74,6 +74,11 @@ class SceneRing:
     def started(self, t_start: float) -> None:
         self.t0 = t_start
 
+    @property
+    def live_since(self) -> float | None:
+        """When the simulator wrote its first sample [s, monotonic] (the first is the hanging start), None before."""
+        return self.ring.time_of(1) if len(self.ring) >= 2 else None
+
     def at(self, t: float, wait_s: float = _WAIT_S) -> tuple[np.ndarray, np.ndarray]:
         """(ball, pivot) [m] at monotonic time t [s], linear between samples; before the first sample the first,
         after the newest the newest (once the simulator has reached t, or ``wait_s`` [s] waited, or at once when the

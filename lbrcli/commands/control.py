@@ -209,7 +209,7 @@ def damp(
     sim_camera_position: Annotated[Optional[tuple], floats("--sim-camera-position", count=3, low=-20, high=20, unit="m", metavar="X,Y,Z", help="Simulator: its camera's centre \\[m], base frame (default: 30° above the ball's path, 45° around from the base's line to it, as close as sees it whole).")] = None,
     sim_camera_look_at: Annotated[Optional[tuple], floats("--sim-camera-look-at", count=3, low=-20, high=20, unit="m", metavar="X,Y,Z", help="Simulator: the point at its camera's image centre \\[m] (default: the middle of the ball's path).")] = None,
     sim_camera_fov: Annotated[Optional[float], number("--sim-camera-fov", low=5, high=120, unit="deg", help="Simulator: its camera's horizontal field of view \\[deg] (default 50).")] = None,
-    sim_camera_size: Annotated[Optional[tuple], grid("--sim-camera-size", low=64, high=4096, metavar="WxH", help="Simulator: its camera's image size \\[px] (default 640x480).")] = None,
+    sim_camera_size: Annotated[Optional[tuple], grid("--sim-camera-size", low=64, high=4096, metavar="WxH", help="Simulator: its camera's image size \\[px] (default 320x240).")] = None,
     sim_camera_fps: Annotated[Optional[float], number("--sim-camera-fps", low=10, high=500, unit="1/s", help="Simulator: its camera's frame rate \\[1/s] (default 120; 30–240 tested).")] = None,
     sim_camera_exposure: Annotated[Optional[float], number("--sim-camera-exposure", low=0, high=100, unit="ms", help="Simulator: its camera's exposure \\[ms] (motion blur; default 4, at most one frame).")] = None,
     sim_camera_latency: Annotated[Optional[float], number("--sim-camera-latency", low=0, high=500, unit="ms", help="Simulator: from the end of an exposure to the frame leaving its camera \\[ms] (default 15).")] = None,

@@ -317,10 +317,10 @@ class CameraTilt:
             errs = (self._end or {}).get("camera_errors") or []
             return f"the camera's stream ended{f' ({errs[-1]})' if errs else ''}"
         fps = self.fps or 30.0
-        stale = max(0.25, 10.0 / fps)
+        stale = max(0.5, 20.0 / fps)  # (a busy PC stalls a stream for a few frames; a dead one stays silent)
         if math.isfinite(self._last_result) and now - self._last_result > stale:
             return f"the camera delivered no frame for {now - self._last_result:.2f} s"
-        lost = max(0.5, 20.0 / fps)
+        lost = max(1.0, 40.0 / fps)
         if math.isfinite(self._last_found) and now - self._last_found > lost:
             return f"the camera lost the ball ({now - self._last_found:.2f} s without a sure fix)"
         return None

@@ -44,12 +44,12 @@ def _damp(crane_path, log, true_length: float, *camera: str):
 
 
 JUDGES = (
-    # the default camera (120 fps, 15 ms latency, 4 ms exposure, posed to see both axes) at 320x240, the string 20 %
-    # long: measured 0.03–0.10° (open loop 0.80°)
-    (0.30, ("--sim-camera-size", "320x240"), 0.3),
+    # the default camera (320x240, 120 fps, 15 ms latency, 4 ms exposure, posed to see both axes, frames stamped), the
+    # string 20 % long: measured 0.03–0.10° (open loop 0.80°)
+    (0.30, (), 0.3),
     # a second judge: from the other side of the move and higher (a 1° tilt moves the ball only 0.5–0.8 px), 90 fps,
     # 6 ms exposure, 30 ms latency, the string 20 % short: measured 0.15–0.17° (open loop 0.67°)
-    (0.20, ("--sim-camera-size", "320x240", "--sim-camera-position", "0.9,-0.9,1.0", "--sim-camera-look-at",
+    (0.20, ("--sim-camera-position", "0.9,-0.9,1.0", "--sim-camera-look-at",
             "0.5,0,0.2", "--sim-camera-fov", "60", "--sim-camera-fps", "90", "--sim-camera-exposure", "6",
             "--sim-camera-latency", "30"), 0.45),
 )
@@ -100,7 +100,7 @@ def test_a_camera_stream_that_stops_ends_the_correction_and_the_rows_finish(tmp_
     traj = tmp_path / "moves.csv"
     _write_moves(traj)
     p = run_lbr("control", "damp", traj, "--length", "0.25", "--sim-length", "0.3", "--sensor", "camera",
-                "--sim-camera-size", "320x240", "--sim-camera-stop", "1.5", "--port", "0", "--sim-lenient", "--json",
+                "--sim-camera-stop", "1.5", "--port", "0", "--sim-lenient", "--json",
                 timeout=180)  # fmt: skip
     assert p.returncode == 1, p.stderr[-2000:]
     fig = json.loads(p.stdout)

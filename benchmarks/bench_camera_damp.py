@@ -9,6 +9,8 @@ pixels), 120 fps / 15 ms, 60 fps / 30 ms and 30 fps / 50 ms, 320x240 (and 640x48
 with their index (the default) and not (a frame's moment from its arrival less the camera's delay, as a camera
 without a frame counter). Figures per case from the simulator's own ball (the log's ball_theta), the camera's
 latency and the readings' age, the largest offset, missed FRI cycles; the open loop from `--sensor io --open-loop`.
+On a loaded PC the simulator's robot sometimes stops following its commands (missed cycles) and a run fails — with any
+sensor, open loop too; such a case is run again (up to ATTEMPTS times) and the failures are listed with the figures.
 
 `python benchmarks/bench_camera_damp.py [--quick]` prints the figures and writes benchmarks/results/camera_damp.json
 and docs/guides/results/camera_damp.md (the camera guide quotes that table); `--quick` runs the goal point only.
@@ -74,6 +76,24 @@ def _case(crane: Path, move_end: float, true_length: float, args: tuple[str, ...
     return out
 
 
+ATTEMPTS = 3  # a run the loaded PC spoils (the simulator's robot not following its commands) is run again
+
+
+def _completed(crane: Path, move_end: float, true_length: float, args: tuple[str, ...]) -> dict:
+    """The first of up to ATTEMPTS runs that completed (exit 0, its sway logged), with the reasons the runs before it
+    failed (``failures``); the last run when none did."""
+    failures: list[str] = []
+    for _ in range(ATTEMPTS):
+        r = _case(crane, move_end, true_length, args)
+        if r["exit"] == 0 and math.isfinite(r.get("sway_2T", math.nan)):
+            break
+        failures.append(r["why"] or "the sway was not logged")
+    else:
+        failures.pop()  # the last failed run is the one reported
+    r["failures"] = failures
+    return r
+
+
 def _cases(quick: bool) -> list[tuple[str, tuple[str, ...]]]:
     goal = TIMINGS["120 fps / 15 ms"]
     cases = [("default pose, 320x240, 120 fps / 15 ms", goal)]
@@ -92,17 +112,17 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
     with tempfile.TemporaryDirectory() as tmp:
         crane, move_end = _crane(Path(tmp))
         lengths = (0.3,) if quick else (0.2, 0.3)
-        open_loop = {L: _case(crane, move_end, L, ("--sensor", "io", "--open-loop")) for L in lengths}
+        open_loop = {L: _completed(crane, move_end, L, ("--sensor", "io", "--open-loop")) for L in lengths}
         for L, o in open_loop.items():
             print(f"  open loop, string {L:g} m: exit {o['exit']}, {o.get('sway_2T', math.nan):.3f}° two periods after, "
-                  f"load {o['load']:.1f} {o['why'][:120]}", file=sys.stderr)  # fmt: skip
+                  f"load {o['load']:.1f}, failed before: {o['failures']}", file=sys.stderr)  # fmt: skip
         for name, args in _cases(quick):
             for L in lengths:
-                r = _case(crane, move_end, L, ("--sensor", "camera", *args))
+                r = _completed(crane, move_end, L, ("--sensor", "camera", *args))
                 r.update(case=name, length=L, open_2T=open_loop[L].get("sway_2T", math.nan))
                 results.append(r)
                 print(f"  {name}, string {L:g} m: exit {r['exit']}, {r.get('sway_2T', math.nan):.3f}° two periods after "
-                      f"(open loop {r['open_2T']:.3f}°), load {r['load']:.1f} {r['why'][:120]}", file=sys.stderr)  # fmt: skip
+                      f"(open loop {r['open_2T']:.3f}°), load {r['load']:.1f}, failed before: {r['failures']}", file=sys.stderr)  # fmt: skip
     rows: list[tuple[str, float, str]] = []
     for L in lengths:
         rows.append((f"open loop, string {L:g} m (plan 0.25): sway 2 periods after the move", open_loop[L].get("sway_2T", math.nan), "deg"))
@@ -110,6 +130,7 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         f = r["fig"]
         tag = f"{r['case']}, string {r['length']:g} m"
         rows += [(f"{tag}: exit code", float(r["exit"]), ""),
+                 (f"{tag}: runs that failed before (a loaded PC)", float(len(r["failures"])), ""),
                  (f"{tag}: sway 1 period after the move", r.get("sway_1T", math.nan), "deg"),
                  (f"{tag}: sway 2 periods after the move", r.get("sway_2T", math.nan), "deg"),
                  (f"{tag}: camera string measured", f.get("camera_string_m") or math.nan, "m"),
@@ -130,18 +151,23 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
 def _write_table(results: list[dict], open_loop: dict) -> None:
     DOCS.mkdir(parents=True, exist_ok=True)
     md = ["| camera | string | sway 2 periods after the move | 1 period after | a 1° tilt moves the ball (x / y) | "
-          "reading age p50 / p95 | frames dropped | largest offset | exit |", "|---|---|---|---|---|---|---|---|---|"]
+          "reading age p50 / p95 | frames dropped | largest offset | exit | runs failed before |",
+          "|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         f = r["fig"]
         px = f.get("camera_px_per_deg") or [math.nan, math.nan]
         md.append(f"| {r['case']} | {r['length']:g} m | {r.get('sway_2T', math.nan):.3f}° | {r.get('sway_1T', math.nan):.3f}° | "
                   f"{px[0]:.2f} / {px[1]:.2f} px | {f.get('camera_age_ms_p50') or math.nan:.1f} / "
                   f"{f.get('camera_age_ms_p95') or math.nan:.1f} ms | {f.get('camera_frames_dropped', '–')} | "
-                  f"{1e3 * (f.get('max_offset_m') or math.nan):.1f} mm | {r['exit']} |")  # fmt: skip
-    md += ["", "| open loop (the plan alone) | string | sway 2 periods after the move |", "|---|---|---|"]
-    md += [f"| `--sensor io --open-loop` | {L:g} m | {o.get('sway_2T', math.nan):.3f}° |" for L, o in open_loop.items()]
+                  f"{1e3 * (f.get('max_offset_m') or math.nan):.1f} mm | {r['exit']} | {len(r['failures'])} |")  # fmt: skip
+    md += ["", "| open loop (the plan alone) | string | sway 2 periods after the move | runs failed before |", "|---|---|---|---|"]
+    md += [f"| `--sensor io --open-loop` | {L:g} m | {o.get('sway_2T', math.nan):.3f}° | {len(o['failures'])} |"
+           for L, o in open_loop.items()]  # fmt: skip
     loads = [r["load"] for r in results]
-    md += ["", f"Machine load (1 min) at the start of the runs: {min(loads):.1f}–{max(loads):.1f} on {os.cpu_count()} cores."]
+    failed = [w for r in [*results, *open_loop.values()] for w in r["failures"]]
+    md += ["", f"Machine load (1 min) at the start of the runs: {min(loads):.1f}–{max(loads):.1f} on {os.cpu_count()} cores. "
+           f"{len(failed)} runs failed and were run again (up to {ATTEMPTS} per case); their reasons:"]
+    md += [f"- {w}" for w in failed] if failed else ["- none"]
     (DOCS / "camera_damp.md").write_text("\n".join(md) + "\n")
 
 

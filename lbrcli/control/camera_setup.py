@@ -226,4 +226,4 @@ def print_camera(rep, f: dict) -> None:
         rep.print(f"camera: string {f['camera_string_m']:.4f} m {how}")
     if f.get("camera_age_ms_p50") is not None:
         rep.print(f"camera: readings used at age p50 {f['camera_age_ms_p50']:.1f} ms, p95 {f['camera_age_ms_p95']:.1f} ms; "
-                  f"{f['camera_late_readings']} arrived older than that")  # fmt: skip
+                  f"{f['camera_late_readings']} too old to use (over 0.25 s)")  # fmt: skip

@@ -137,9 +137,8 @@ class SimCamera:
     def step(self, t: float, tcp: Sequence[float]) -> tuple[()]:
         now = time.monotonic()
         t_prev, p_prev = self._prev
-        sx, sy, sz = self._ball.s  # the ball at the previous cycle (see the module)
-        L = self._ball.length
-        self.ring.push(t_prev, (p_prev[0] + L * sx, p_prev[1] + L * sy, p_prev[2] + L * sz), p_prev)
+        stepper = self._ball.stepper  # the ball and the pivot at the previous cycle (see the module) [m]
+        self.ring.push(t_prev, tuple(stepper.b), np.asarray(stepper.p, float))
         self._prev = (now, tcp)
         return ()
 

@@ -287,6 +287,8 @@ def damp(
                              sim_camera_position, sim_camera_look_at, sim_camera_fov, sim_camera_size, sim_camera_fps,
                              sim_camera_exposure, sim_camera_latency, sim_camera_stop, sim_camera_stamp)  # fmt: skip
     cam_opts.validate(sensor, robot)
+    if sensor == "camera" and sim_delay != 0.0:
+        raise OptionError("--sim-delay delays the simulator's ball IO and module; its camera's delay is --sim-camera-latency")
     names = tuple(n.strip() for n in io_names.split(","))
     if len(names) != 2 or not all(names):
         raise OptionError(f"--io-names: expected two analog input names 'theta_x,theta_y', got {io_names!r}")

@@ -409,6 +409,7 @@ def test_a_session_that_ends_by_duration_without_any_target_exits_1(tmp_path):
     assert json.loads(out)["targets_accepted"] == 0
 
 
+@pytest.mark.slow  # real time: the script's own loop stalls on a busy machine
 def test_the_matlab_example_of_the_guide_follows_within_its_documented_lag(tmp_path):
     """docs/guides/bridge.md's MATLAB source, byte for byte in Python: 5000 joint targets (≈ 1 kHz) with the
     feed-forward, a 0.15·(1 − cos πt) rad wave on A1 in real time (0.47 rad/s at most, from rest); with the guide's

@@ -188,6 +188,40 @@ def _online_ik(n: int) -> list[tuple[str, float, str]]:
             ("online IK converged in one call", 100.0 * converged / n, "%")]  # fmt: skip
 
 
+def _bands(quick: bool) -> list[tuple[str, float, str]]:
+    """The follower in lock step (a scripted controller at 1 ms, a fake clock: the same on any machine): the largest
+    error against the wave delayed by the bridge's final delay (after 1.5 s, once the delay settled from its first
+    guess), and the executed motion's peak ratios to the limits — per source rate, feed-forward, lost replies and
+    lateness (the targets' exponential mean lateness; 1 % of them 30 ms more)."""
+    from lbrcli.bridge.testing import LockStepSource, follow_in_lock_step, wave
+    from trajectories.limits import default_limits
+
+    lim = default_limits()
+    rows = []
+    cases = [(1000.0, True), (250.0, True), (100.0, True), (100.0, False), (30.0, False)]
+    for rate, ff in cases[:2] if quick else cases:
+        for drop in (0.0, 0.05) if quick else (0.0, 0.05, 0.2):
+            for late_ms in (2.0,) if quick else (1.0, 5.0):
+                worst, delays, vs, accs = 0.0, [], [], []
+                for seed in (0,) if quick else (0, 1):
+                    r = follow_in_lock_step(LockStepSource(rate, ff, seed=seed, lateness_s=late_ms * 1e-3), lim,
+                                            drop=drop, seed=seed)  # fmt: skip
+                    d = r.follower.timeline.delay
+                    keep = r.t > 1.5
+                    ref = np.array([wave(x - d)[0] for x in r.t[keep]])
+                    worst = max(worst, float(np.degrees(np.abs(r.q[keep, 0] - r.q0[0] - ref).max())))
+                    v, a, _ = r.controller.motion_ratios(lim.velocity, lim.acceleration)
+                    delays.append(d * 1e3)
+                    vs.append(v)
+                    accs.append(a)
+                name = f"lock step {rate:g} Hz {'ff' if ff else 'positions'}, {drop:.0%} replies lost, {late_ms:g} ms late"
+                rows += [(f"{name}: max error behind the delay", worst, "deg"),
+                         (f"{name}: delay", max(delays), "ms"),
+                         (f"{name}: peak velocity / limit", max(vs), ""),
+                         (f"{name}: peak acceleration / limit", max(accs), "")]  # fmt: skip
+    return rows
+
+
 def run(quick: bool = False) -> list[tuple[str, float, str]]:
     from bench_lab import _broker  # a Mosquitto on a free loopback port (benchmarks/ is on the path)
 
@@ -198,7 +232,7 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
 
     ctx = mp.get_context("spawn")
     seconds = 4.0 if quick else 20.0
-    rows = _online_ik(500 if quick else 5000)
+    rows = _bands(quick) + _online_ik(500 if quick else 5000)
     with tempfile.TemporaryDirectory() as tmpdir:
         tmp = Path(tmpdir)
         # 1. UDP at 1 kHz, ended by the source

@@ -6,10 +6,10 @@ This process plays the controller: every send period (1 ms, then 5 ms) it sends 
 reflecting it. A reply that has not arrived when the next message is due counts as missed. Figures: send → reply
 latency p50/p99/max [ms], answered fraction, missed replies, and the client's own CPU time per cycle [µs] and
 internal receive → send latency (from its --json), and the share of replies it prepared a cycle ahead (the rows are
-known: the reply goes out once the message is decoded and checked). 1 ms is measured with the defaults (`--busy-wait`
-0.9 ms with --robot: at 1 ms the client polls the whole period and keeps the checks of its next reply in the CPU's
-caches), with `--busy-wait 0.2` (the default before 24 Nov 2026), `--busy-wait 0` (always sleep) and `--realtime`
-(SCHED_FIFO; needs root or CAP_SYS_NICE, else the client warns and runs normally).
+known: the reply goes out once the message is decoded and checked). 1 ms is measured with the defaults (no busy-wait
+since #40: the client blocks in the kernel until each message arrives), with `--busy-wait 0.2`, `--busy-wait 0` and
+`--realtime` (SCHED_FIFO, one CPU, mlockall; needs root or CAP_SYS_NICE + CAP_IPC_LOCK, else exit 2). The comparison
+with KUKA's client on `lbr sim` under load is `bench_fri_timing.py`.
 Full: 60 s of streaming per run; quick: 5 s.
 
 Floors on this machine, measured the same way: a C UDP echo (compiled here with cc) and a Python one. With

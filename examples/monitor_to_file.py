@@ -10,16 +10,16 @@ from __future__ import annotations
 
 from _connect import arguments, run
 
-from lbrcli.fri import ExecutionLog, LBRClient, LogObserver
+from lbrcli.fri import LBRClient, LogProcess
 
 
 def main(argv=None):
     p = arguments(__doc__.splitlines()[0])
     p.add_argument("--log", required=True)
     args = p.parse_args(argv)
-    with ExecutionLog(args.log) as log:
-        result = run(LBRClient(), args, observers=[LogObserver(log)])
-        rows = log.rows
+    with LogProcess(args.log) as log:  # rows formatted by a child process, off the FRI loop
+        result = run(LBRClient(), args, observers=[log])
+    rows = log.written
     print(f"{result.outcome.value}: {result.detail}; {rows} rows in {args.log}")
     return result, rows
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from _connect import arguments, run
 
-from lbrcli.fri import ExecutionLog, LogObserver, TrajectoryPlayer
+from lbrcli.fri import LogProcess, TrajectoryPlayer
 from trajectories.csvio import read_joint_csv
 from trajectories.limits import default_limits
 
@@ -23,8 +23,8 @@ def main(argv=None):
     traj = read_joint_csv(args.csv)
     args.period = round(traj.dt * 1e3)
     player = TrajectoryPlayer(traj.q, default_limits(), period_s=traj.dt, settle_s=0.2)
-    with ExecutionLog(args.log) as log:
-        result = run(player, args, observers=[LogObserver(log)], q0=tuple(traj.q[0]))
+    with LogProcess(args.log) as log:  # rows formatted by a child process, off the FRI loop
+        result = run(player, args, observers=[log], q0=tuple(traj.q[0]))
     print(f"{result.outcome.value}: {result.detail}; {player.trajectory_rows} rows streamed, "
           f"{result.prepared_replies} of {result.answered} replies prepared a cycle ahead")
     return result, player

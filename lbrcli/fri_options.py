@@ -105,18 +105,19 @@ RealtimeOpt = Annotated[
     bool,
     typer.Option(
         "--realtime",
-        help="Run the FRI loop with real-time scheduling (SCHED_FIFO, needs CAP_SYS_NICE or root); steadier 1 ms under load.",
+        help="Run the FRI loop as a real-time task: SCHED_FIFO (priority 20), pinned to the last CPU, memory locked "
+        "(mlockall) — replies on time however busy the PC is. Needs root or CAP_SYS_NICE and CAP_IPC_LOCK (or rtprio "
+        "and memlock limits); refused with exit 2 otherwise. See docs/explanations/fri-timing.md.",
     ),
 ]
 BusyWaitOpt = Annotated[
     Optional[float],
     number(
         "--busy-wait", low=0, high=5, unit="ms",
-        help="Poll the socket for this long before each controller message is due instead of sleeping \\[ms] "
-        "(default 0.9 with --robot — 0.2 with --realtime, whose kernel throttles a loop that never sleeps — 0 with "
-        "the embedded simulator): replies no longer wait for the scheduler to wake "
-        "the client, and the checks of the next reply are kept in the CPU's caches; costs that much CPU per period "
-        "(at 1 ms one core). 0: always sleep.",
+        help="Sleep-then-spin: poll the socket for this long before each controller message is due \\[ms] instead "
+        "of sleeping until it arrives (default 0: block in the kernel, as KUKA's client does, ≈ 0.1 ms of CPU per "
+        "message). Can shorten the reply on a quiet PC; costs that much CPU per period and, on a busy PC, makes the "
+        "scheduler run the client later (it used up its share).",
     ),
 ]
 SimLenientOpt = Annotated[

@@ -11,36 +11,6 @@ from typing import Any, Callable, Sequence
 import typer
 
 
-@contextlib.contextmanager
-def realtime_scheduling(rep, wanted: bool):
-    """SCHED_FIFO for the FRI loop if wanted and permitted (a warning otherwise); normal scheduling afterwards."""
-    import os
-
-    if not wanted:
-        yield
-        return
-    try:
-        old = os.sched_getscheduler(0), os.sched_getparam(0)
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(20))
-    except (AttributeError, PermissionError, OSError):
-        rep.warn("real-time scheduling was not granted (needs CAP_SYS_NICE); running with normal priority")
-        yield
-        return
-    try:
-        yield
-    finally:
-        os.sched_setscheduler(0, old[0], old[1])
-
-
-def default_busy_wait_s(embedded: bool, realtime: bool) -> float:
-    """[s] polled before each message when --busy-wait is not given: none with the embedded simulator (it shares
-    the cores), a short window under SCHED_FIFO (the kernel throttles a real-time loop that never sleeps), else
-    all of a 1 ms period."""
-    from lbrcli.fri.transport import DEFAULT_BUSY_WAIT_REALTIME_S, DEFAULT_BUSY_WAIT_S
-
-    return 0.0 if embedded else DEFAULT_BUSY_WAIT_REALTIME_S if realtime else DEFAULT_BUSY_WAIT_S
-
-
 LENIENT_TRACKING_LAG_S = 0.1  # [s] the lag at full speed the embedded simulator's robot may show on a loaded PC
 LENIENT_REPLY_GAP_S = 0.5  # [s] replies the embedded simulator may miss in a row on a loaded PC (default; --sim-strict and a robot: 50 ms)
 
@@ -111,9 +81,15 @@ def run_client(
     session with Ctrl-C/SIGTERM braking, stop everything; (result, simulator stats or None, lab figures).
     ``plants``: the simulator's plant specs instead of the ball (and ball-driven module) of ``sim_kwargs``; a client
     with a ``reader`` attribute gets the pendulum module's reader."""
-    from lbrcli.fri import ClientApplication, ExecutionLog, LogObserver, SessionFigures, interrupts_brake
+    from lbrcli.fri import ClientApplication, SessionFigures, interrupts_brake
+    from lbrcli.fri.logwriter import LogProcess
 
     embedded = robot is None
+    if realtime:  # refused before anything starts (exit 2), entered for the session below
+        from lbrcli.fri.realtime import realtime as realtime_settings
+
+        with realtime_settings():
+            pass
     app = ClientApplication(
         client,
         "127.0.0.1" if embedded else robot,
@@ -127,7 +103,7 @@ def run_client(
         max_tracking_error=max_tracking_error,
         reply_gap_s=LENIENT_REPLY_GAP_S if embedded and sim_lenient else None,
         tracking_lag_s=LENIENT_TRACKING_LAG_S if embedded and sim_lenient else None,
-        busy_wait_s=busy_wait_s if busy_wait_s is not None else default_busy_wait_s(embedded, realtime),
+        busy_wait_s=busy_wait_s or 0.0,
     )
     if lab is not None:
         lab.validate(embedded)
@@ -137,7 +113,7 @@ def run_client(
     extra_names = tuple(extra_names)
     try:
         if log_path is not None:
-            log = ExecutionLog(log_path)
+            log = LogProcess(log_path)  # rows formatted in a child process, off the FRI loop
         if embedded:
             from lbrcli.fri.sim import SimConfig, SimulatorProcess
             from lbrcli.plants import default_plants
@@ -176,12 +152,13 @@ def run_client(
                 rep.print(f"telemetry to {lab.mqtt} at {lab.mqtt_rate_hz:g} Hz")
                 app.observers.append(_TapObserver(attached.tap))
         if log is not None:
-            app.observers.insert(0, LogObserver(log, extra_names, extra))
+            log.extra_names, log.extra = extra_names, extra
+            app.observers.insert(0, log)
         if hasattr(client, "figures"):
             app.observers.append(client)
         if sim is not None:
             app.watchdog = lambda: None if sim.running else "the simulator process ended"
-        with interrupts_brake(app), realtime_scheduling(rep, realtime):
+        with interrupts_brake(app), (realtime_settings() if realtime else contextlib.nullcontext()):
             result = app.run(duration_s)
     finally:
         app.disconnect()
@@ -196,6 +173,12 @@ def run_client(
                 rep.warn(f"simulator: {exc}")
         if log is not None:
             log.close()
+    if log is not None and log.error and result.ok:  # the last rows could not be written: not what was asked
+        import dataclasses
+
+        from lbrcli.fri import EndReason, Outcome
+
+        result = dataclasses.replace(result, outcome=Outcome.FAILED, reason=EndReason.OBSERVER_FAILED, detail=log.error)
     return result, sim_stats, lab_figures
 
 

@@ -135,6 +135,88 @@ def tilt_from_pixel(geometry: CameraGeometry, uv, pivot_m, string_m: float, prev
     return TiltEstimate(math.atan2(s[0], -s[2]), math.atan2(s[1], -s[2]), ball, separation, miss)
 
 
+def string_direction(theta_x: float, theta_y: float) -> np.ndarray:
+    """Unit string direction (3,) of the tilt components θx, θy [rad] (as planners.pendulum.direction_from_angles)."""
+    s = np.array([math.tan(theta_x), math.tan(theta_y), -1.0])
+    return s / np.linalg.norm(s)
+
+
+def hanging_length(geometry: CameraGeometry, uv, pivot_m) -> tuple[float, float, float]:
+    """Where a ball hanging straight down below the pivot [m] must be for the camera to see it at pixel uv [px]:
+    (string length [m] — how far below the pivot the pixel's ray passes the vertical through it —, the ray's
+    closest distance to that vertical [m], the angle between the ray and the vertical [rad]). The length is well
+    conditioned when the ray crosses the vertical steeply (a camera looking straight down cannot tell it)."""
+    d = geometry.ray(uv)
+    w0 = geometry.centre - np.asarray(pivot_m, float)
+    b = float(d[2])  # d · e for the vertical e = (0, 0, 1)
+    denom = 1.0 - b * b
+    angle = math.acos(min(1.0, abs(b)))
+    if denom < 1e-9:
+        return math.nan, math.nan, angle
+    dd, ee = float(d @ w0), float(w0[2])
+    s = (b * ee - dd) / denom  # along the ray
+    t = (ee - b * dd) / denom  # along the vertical, from the pivot (up positive)
+    gap = float(np.linalg.norm(w0 + s * d - np.array([0.0, 0.0, t])))
+    return -t, gap, angle
+
+
+@dataclass(frozen=True)
+class SwayView:
+    """How well one camera sees a pendulum's sway along a path (see :func:`sway_view`): the smallest image shift
+    [px] a 1° tilt toward base +x and toward +y makes anywhere on the path and the samples where it is smallest,
+    and the first sample where the ball is out of the image (or behind the camera), None if it never is."""
+
+    px_per_deg: tuple[float, float]
+    worst: tuple[int, int]
+    outside: int | None
+
+
+def sway_view(geometry: CameraGeometry, pivots_m, string_m: float, sway_rad=None, margin_px: float = 0.0) -> SwayView:
+    """The view of a ball on a string of string_m [m] hanging from each of pivots_m (n, 3) [m], tilted by sway_rad
+    (n, 2) [rad] (θx, θy; default hanging): the pixel shift of a 1° tilt toward +x and +y about that tilt, and
+    whether the ball's centre stays margin_px [px] inside the image."""
+    P = np.atleast_2d(np.asarray(pivots_m, float))
+    S = np.zeros((len(P), 2)) if sway_rad is None else np.atleast_2d(np.asarray(sway_rad, float))
+    step = math.radians(1.0)
+    pts = []
+    for p, (tx, ty) in zip(P, S):
+        for dx, dy in ((0.0, 0.0), (step, 0.0), (0.0, step)):
+            pts.append(p + string_m * string_direction(tx + dx, ty + dy))
+    uv = geometry.project(np.array(pts)).reshape(len(P), 3, 2)
+    shift = np.linalg.norm(uv[:, 1:] - uv[:, :1], axis=2)  # (n, 2) [px per degree]
+    shift = np.where(np.isfinite(shift), shift, 0.0)
+    w, h = geometry.image_size
+    c = uv[:, 0]
+    inside = np.isfinite(c).all(axis=1) & (c[:, 0] >= margin_px) & (c[:, 0] <= w - margin_px) & \
+        (c[:, 1] >= margin_px) & (c[:, 1] <= h - margin_px)  # fmt: skip
+    worst = (int(np.argmin(shift[:, 0])), int(np.argmin(shift[:, 1])))
+    out = np.flatnonzero(~inside)
+    return SwayView((float(shift[worst[0], 0]), float(shift[worst[1], 1])), worst, int(out[0]) if len(out) else None)
+
+
+def camera_pose_for(pivots_m, string_m: float, sway_rad=None, fov_deg: float = 50.0, size: tuple[int, int] = (640, 480),
+                    elevation_deg: float = 30.0, azimuth_deg: float = 45.0, margin: float = 0.08) -> tuple[np.ndarray, np.ndarray]:
+    """(position, look_at) [m] of a camera that sees the whole of a pendulum's path: it looks at the middle of the
+    ball's positions (pivots_m (n, 3) [m], string_m [m], tilted by sway_rad (n, 2) [rad]) from elevation_deg above
+    and azimuth_deg around from the line from the base's origin to that middle (both sway axes then show in the
+    image), as close as keeps every position ``margin`` of the width inside the frame (fov_deg, size (w, h) [px])."""
+    P = np.atleast_2d(np.asarray(pivots_m, float))
+    S = np.zeros((len(P), 2)) if sway_rad is None else np.atleast_2d(np.asarray(sway_rad, float))
+    balls = np.array([p + string_m * string_direction(tx, ty) for p, (tx, ty) in zip(P, S)])
+    look = 0.5 * (balls.min(axis=0) + balls.max(axis=0))
+    az = math.atan2(look[1], look[0]) + math.radians(azimuth_deg) if np.hypot(look[0], look[1]) > 1e-6 else \
+        math.radians(azimuth_deg)  # fmt: skip
+    el = math.radians(elevation_deg)
+    away = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    distance = 0.3
+    while distance < 20.0:
+        g = CameraGeometry.from_pose(look + distance * away, look, fov_deg, size)
+        if sway_view(g, P, string_m, S, margin * size[0]).outside is None:
+            break
+        distance *= 1.05
+    return look + distance * away, look
+
+
 # ---------------------------------------------------------------- files
 
 

@@ -26,6 +26,7 @@ from .protocol import (
     sign,
     verify,
 )
+from .timeline import TargetTimeline, TimelineOptions
 from .udp import UdpTargets, UdpTransport
 
 __all__ = [
@@ -41,6 +42,8 @@ __all__ = [
     "Target",
     "TargetFollower",
     "TargetInbox",
+    "TargetTimeline",
+    "TimelineOptions",
     "Transport",
     "UdpTargets",
     "UdpTransport",

@@ -4,9 +4,10 @@ Every cycle it drains the source. A joint target [rad] goes to ruckig as it is; 
 IK (:class:`trajectories.ik_online.OnlineIk`, warm-started from the previous solution, a few Gauss–Newton steps
 within the cycle, continued on the next cycles until it converges, the redundancy pulled toward the posture at
 activation) and its twist feed-forward through the Jacobian's damped pseudo-inverse. The state goes back after the
-FRI reply (:meth:`after_reply`). Ruckig (position interface, at ``speed_scale`` of the velocity, acceleration and jerk limits)
-then gives the next position — so a 30 Hz or jittery source still gives a smooth stream at the FRI period, and the
-application's guard checks every command. It ends with :class:`~lbrcli.fri.StopSession` (the application brakes
+FRI reply (:meth:`after_reply`). The targets go on a :class:`~lbrcli.bridge.timeline.TargetTimeline` (their source's
+clock, read back a short delay behind the newest), and ruckig (position interface, at ``speed_scale`` of the velocity,
+acceleration and jerk limits) follows that reference — so a 30 Hz, jittery or bursty source still gives a smooth
+stream at the FRI period without overshoot, and the application's guard checks every command. It ends with :class:`~lbrcli.fri.StopSession` (the application brakes
 within the limits): when no target arrived for ``timeout_s`` after the first (or none within ``first_target_s``),
 when the owning source sends something that is not a target or a joint target outside the position limits, or
 when it sends the end message (completed).
@@ -15,11 +16,10 @@ when it sends the end message (completed).
 from __future__ import annotations
 
 import time
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
-from ruckig import InputParameter, OutputParameter, Result, Ruckig
 
 from lbrcli.fri import LBRClient, LBRState, StopSession
 from trajectories.ik_online import OnlineIk, OnlineIkOptions, fixed_angles_to_matrix, quaternion_to_matrix
@@ -28,8 +28,14 @@ from trajectories.robot import Robot
 
 from .inbox import TargetInbox
 from .protocol import KIND_JOINT, KIND_POSE, State, Target
+from .timeline import TargetTimeline, TimelineOptions
+from .tracker import ReferenceTracker, Untrackable
 
-_ZERO7 = [0.0] * 7
+_Z7 = np.zeros(7)
+JUMP_S = 0.05  # [s] the reference's clock jumps when it is this far from where it is due
+MAX_WARP = 0.05  # the reference's clock runs at most 5 % fast or slow while it catches up
+CATCHUP_S = 0.5  # [s] an offset is worked off at offset / CATCHUP_S (up to MAX_WARP)
+WARP_BANDWIDTH = 3.0  # [rad/s] of the warp's filter (≈ 1 s to settle)
 REFINE_CYCLES = 50  # cycles a pose that has not converged is refined further before it counts as unreached
 
 
@@ -40,25 +46,27 @@ class TargetFollower(LBRClient):
 
     def __init__(self, source: TargetInbox, limits: JointLimits, *, robot: Robot | None = None,
                  timeout_s: float = 0.1, first_target_s: float = 30.0, speed_scale: float = 0.5,
-                 state_every: int = 1, ik_options: OnlineIkOptions = OnlineIkOptions()) -> None:  # fmt: skip
+                 state_every: int = 1, ik_options: OnlineIkOptions = OnlineIkOptions(),
+                 timeline: TimelineOptions = TimelineOptions(),
+                 clock: Callable[[], float] = time.monotonic) -> None:  # fmt: skip
         if not (0 < speed_scale <= 1):
             raise ValueError(f"speed_scale must be in (0, 1], got {speed_scale}")
         self.source = source
+        self.clock = clock  # [s] the source's arrival times are on this clock (the inbox's: time.monotonic)
         self.limits = limits
         self.timeout_s = timeout_s
         self.first_target_s = first_target_s
         self.state_every = state_every
         self.ik = OnlineIk(robot or Robot(), limits, ik_options)
-        lim = limits.scaled(speed_scale)
-        self._vmax = [0.99 * v for v in lim.velocity.tolist()]  # feed-forward within what ruckig may reach
+        self.timeline = TargetTimeline(timeline)
+        self._limits = limits.scaled(speed_scale)
         self._upper = limits.position.tolist()  # [rad] symmetric: |q| ≤ position
         self._lower = [-x for x in self._upper]
-        self._otg: Ruckig | None = None
-        self._inp = InputParameter(7)
-        self._out = OutputParameter(7)
-        self._inp.max_velocity = lim.velocity.tolist()
-        self._inp.max_acceleration = lim.acceleration.tolist()
-        self._inp.max_jerk = lim.jerk.tolist()
+        self._tracker: ReferenceTracker | None = None
+        self._tau = 0.0  # [s] where on the targets' clock the last command stands
+        self._dt = 0.0  # [s] one command period
+        self._warp = 0.0  # the reference's clock runs at (1 + warp) periods per command period
+        self._warp_rate = 0.0  # [1/s]
         self._t_start = 0.0  # [s] time.monotonic() at activation
         self._count = 0
         self._seq = 0
@@ -75,6 +83,7 @@ class TargetFollower(LBRClient):
         self.poses_unreached = 0
         self.max_ik_position_error = 0.0  # [m] over the poses that did not converge
         self.ik_time_max = 0.0  # [s] longest IK work in one cycle
+        self.dry_cycles = 0  # commands past the newest target (coasting, then holding)
 
     def _check_source(self, now: float) -> None:
         src = self.source
@@ -113,7 +122,7 @@ class TargetFollower(LBRClient):
         self._seq += 1
         pos, rot = self.ik.tcp(np.asarray(q, dtype=float))
         x, y, z, w = pin.Quaternion(rot).coeffs()
-        self.source.send(State(msg.connectionInfo.sessionState, self.braking, self._otg is not None, self.unreached,
+        self.source.send(State(msg.connectionInfo.sessionState, self.braking, self._tracker is not None, self.unreached,
                                self._seq, (tgt.seq or 0) if tgt else 0, tgt.t if tgt else 0.0, state.timestamp,
                                tuple(msg.monitorData.measuredJointPosition.value), tuple(q),
                                tuple(msg.monitorData.externalTorque.value), (*pos.tolist(), w, x, y, z)))  # fmt: skip
@@ -136,11 +145,7 @@ class TargetFollower(LBRClient):
         self._pose = None
         self._ik_q = None
         self.unreached = False
-        self._set_target(q, tgt.v)
-
-    def _set_target(self, q: Sequence[float], v: Sequence[float] | None) -> None:
-        self._inp.target_position = list(q)
-        self._inp.target_velocity = [max(-m, min(m, x)) for x, m in zip(v, self._vmax)] if v is not None else list(_ZERO7)
+        self.timeline.add(q, tgt.v, tgt.t, self.source.latest_time)
 
     def _pose_target(self, tgt: Target) -> None:
         vals = tgt.values
@@ -149,19 +154,22 @@ class TargetFollower(LBRClient):
         self._pose = (position, rot, tgt)
         self._refine_left = REFINE_CYCLES
         self.pose_targets += 1
-        self._refine_pose()
+        self._refine_pose(first=True)
 
-    def _refine_pose(self) -> None:
+    def _refine_pose(self, first: bool = False) -> None:
         position, rot, tgt = self._pose  # type: ignore[misc]
         t0 = time.perf_counter()
-        seed = self._ik_q if self._ik_q is not None else np.array(self._inp.current_position)
+        seed = self._ik_q if self._ik_q is not None else self._tracker.q  # type: ignore[union-attr]
         res = self.ik.solve(seed, position, rot, posture=self._posture)
         self._ik_q = res.q
         v = None
         if tgt.v is not None:  # q̇ = J⁺·twist (damped) at the solution
             jac = self.ik.jacobian(res.q)
-            v = (jac.T @ np.linalg.solve(jac @ jac.T + 1e-4 * np.eye(6), np.array(tgt.v[:6]))).tolist()
-        self._set_target(res.q.tolist(), v)
+            v = jac.T @ np.linalg.solve(jac @ jac.T + 1e-4 * np.eye(6), np.array(tgt.v[:6]))
+        if first:
+            self.timeline.add(res.q, v, tgt.t, self.source.latest_time)
+        else:
+            self.timeline.replace_last(res.q, v)
         self._refine_left -= 1
         if res.converged or self._refine_left <= 0:
             self._pose = None
@@ -172,44 +180,77 @@ class TargetFollower(LBRClient):
         self.ik_time_max = max(self.ik_time_max, time.perf_counter() - t0)
 
     def command(self, state: LBRState) -> Sequence[float]:
-        now = time.monotonic()
-        inp = self._inp
-        if self._otg is None:  # activation: start from where the controller holds the robot, at rest
+        now = self.clock()
+        tl = self.timeline
+        if self._tracker is None:  # activation: start from where the controller holds the robot, at rest
             self._t_start = now
-            self._otg = Ruckig(7, state.sample_time * state.receive_multiplier)
-            inp.current_position = list(state.ipo_joint_position)
-            inp.current_velocity = list(_ZERO7)
-            inp.current_acceleration = list(_ZERO7)
-            inp.target_position = list(state.ipo_joint_position)
-            inp.target_velocity = list(_ZERO7)
+            self._dt = state.sample_time * state.receive_multiplier
+            self._tracker = ReferenceTracker(self._limits, self._dt, state.ipo_joint_position)
             self._q = state.ipo_joint_position
             self._posture = np.array(state.ipo_joint_position)
         self._check_source(now)
         if not self.reply_due:
             return self._q  # type: ignore[return-value]
+        tracker = self._tracker
         ex = self.executed
-        if (self.skipped or self.clamped) and ex is not None:
+        if ex is not None and (self.skipped or ex.last_clamp > 0.0):  # (any clamp: the next step starts from it)
             # the controller extrapolated our last commands (lost messages), or the safety core clamped one:
             # re-plan from what it executed
-            inp.current_position = list(ex.position)
-            inp.current_velocity = list(ex.velocity)
-            inp.current_acceleration = list(ex.acceleration)
+            tracker.reset(ex.position, ex.velocity, ex.acceleration)
         src = self.source
         if src.fresh:
             src.fresh = False
             tgt = src.latest
+            first = tl.empty
             if tgt.kind == KIND_JOINT:  # type: ignore[union-attr]
                 self._joint_target(tgt)  # type: ignore[arg-type]
             else:
                 self._pose_target(tgt)  # type: ignore[arg-type]
             self.targets_followed += 1
+            if first:
+                self._tau = tl.due(now)
         elif self._pose is not None:
             self._refine_pose()
-        res = self._otg.update(inp, self._out)
-        if res not in (Result.Working, Result.Finished):
-            raise StopSession(f"ruckig could not follow the target ({res.name})", completed=False)
-        self._out.pass_to_input(inp)
-        q = self._out.new_position
+        if tl.empty:  # no target yet: hold
+            q = tracker.step(lambda t: (tracker.q, _Z7, _Z7))
+        else:
+            # the reference advances one period per command (the controller's clock, steadier than ours). Before
+            # the first target's time it stands still, so its clock may be set to where the timeline says it is due;
+            # once it moves it is pulled there by running up to MAX_WARP faster or slower, the warp following a
+            # critically damped filter (the tracker sees a small, smooth change of the reference's velocity); more
+            # than JUMP_S off (a stall), it jumps
+            dt = self._dt
+            tau = self._tau + dt * (1 + self.skipped)
+            due = tl.due(now)
+            off = due - tau
+            if tau <= tl.oldest or abs(off) > JUMP_S:
+                tau = due
+                self._warp = self._warp_rate = 0.0
+            else:
+                want = max(-MAX_WARP, min(MAX_WARP, off / CATCHUP_S))
+                k = WARP_BANDWIDTH
+                self._warp_rate += (k * k * (want - self._warp) - 2.0 * k * self._warp_rate) * dt
+                self._warp = max(-MAX_WARP, min(MAX_WARP, self._warp + self._warp_rate * dt))
+                tau += self._warp * dt
+            self._tau = tau
+            if tau >= tl.newest:
+                self.dry_cycles += 1
+            tl.forget(tau - dt)
+            lo, up = self._lower, self._upper
+            start = tau - dt
+            rate = 1.0 + self._warp  # the reference's clock per tracker second
+
+            look = tl.ahead if tau < tl.newest + tl.options.coast_s else tl.at  # the source is alive: it goes on
+
+            def reference(t: float):
+                q, v, a = look(start + t * rate)
+                return np.clip(q, lo, up), v * rate, a * (rate * rate)
+
+            try:
+                q = tracker.step(reference)
+            except Untrackable as exc:
+                raise StopSession(str(exc), completed=False) from None
+        q = q.tolist()
         self._q = q
         self._send_state(state, q)
         return q
@@ -217,6 +258,10 @@ class TargetFollower(LBRClient):
     def figures(self) -> dict:
         f = dict(self.source.figures())
         f["targets_followed"] = self.targets_followed
+        tl = self.timeline
+        f.update(timing="source time" if tl.source_clock else "arrival", delay_max_ms=tl.largest_delay * 1e3,
+                 reference_dry_cycles=self.dry_cycles)  # fmt: skip
+
         if self.pose_targets:
             f.update(pose_targets=self.pose_targets, poses_unreached=self.poses_unreached,
                      max_ik_position_error_m=self.max_ik_position_error, ik_time_max_ms=self.ik_time_max * 1e3)  # fmt: skip

@@ -80,7 +80,9 @@ def surface_cases(s: Surface, faults: list[Fault] | None = None) -> list[Case]:
             kw["on_cycle"] = _interrupt_at(PREAMBLE + s.at, f.signal, s.on_cycle)
         if f.full_disk:
             kw["full_disk_at"] = PREAMBLE + s.at
-        out.append(_case(s, f.name, f.category, script, f.ends, **kw))
+        # (TORQUE and WRENCH overlays run in the controller's impedance control: a push is theirs to take)
+        ends = (NORMAL,) if f.category == "pushed" and s.mode != 1 else f.ends
+        out.append(_case(s, f.name, f.category, script, ends, **kw))
     return out + s.own
 
 
@@ -438,7 +440,8 @@ class _EffortOverlay(LBRClient):
         s = math.sin(2 * math.pi * self.k * 1e-3)
         if self.mode == ClientCommandMode.TORQUE:
             return tuple(self.amplitude * s * min(1.0, t / 40.0) for t in LIM.torque)
-        return (20.0 * s, -20.0 * s, 10.0 * s, 2.0 * s, -2.0 * s, 1.0 * s)
+        a = self.amplitude  # [N] the force's amplitude; moments a tenth of it [Nm]
+        return (a * s, -a * s, 0.5 * a * s, 0.1 * a * s, -0.1 * a * s, 0.05 * a * s)
 
     def command(self, state):
         self.hold_ipo(state)
@@ -453,7 +456,8 @@ class _EffortOverlay(LBRClient):
 
 def effort_surface(mode: int) -> Surface:
     name = "torque" if mode == ClientCommandMode.TORQUE else "wrench"
-    s = Surface(name, lambda: _EffortOverlay(mode, 1000, 39.6), 1700, 300, (EndReason.FINISHED,), mode=int(mode))
+    nominal = 39.6 if mode == ClientCommandMode.TORQUE else 19.8  # [Nm] KUKA's torque example; [N] within 20 N
+    s = Surface(name, lambda: _EffortOverlay(mode, 1000, nominal), 1700, 300, (EndReason.FINISHED,), mode=int(mode))
     beyond = 45.0 if mode == ClientCommandMode.TORQUE else 25.0
     s.own = [_case(s, f"{name} beyond its bound", "limits", _with_mode(preamble() + active(1700), int(mode)),
                    (EndReason.GUARD,), client=lambda: _EffortOverlay(mode, 1000, beyond))]  # fmt: skip

@@ -12,6 +12,7 @@ a period or two. Exit 0 when the file was streamed, damped and the arm returned 
 
 from __future__ import annotations
 
+import contextlib
 import math
 from pathlib import Path
 from typing import Annotated, Any, Optional
@@ -21,7 +22,7 @@ import typer
 from ..fri_options import (BaudOpt, BindOpt, BusyWaitOpt, LogOpt, PendZeroOpt, SessionPeriodOpt, PlotOpt, PortOpt,
                            RealtimeOpt, RobotOpt, SimLenientOpt, VersionOpt, WaitOpt)  # fmt: skip
 from ..options import (DEFAULT_FLANGE, THESIS_Q_START, DtOpt, FlangeOpt, JointVector, JsonOpt, LimitsOpt, ToolOpt,
-                       choice, joints, number)  # fmt: skip
+                       choice, floats, grid, joints, number)  # fmt: skip
 
 
 def _pushes(texts: list[str] | None) -> tuple[tuple[float, float], ...]:
@@ -197,10 +198,26 @@ def damp(
     joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad]; its step must be the FRI period.")],
     length: Annotated[Optional[float], number("--length", low=0.02, high=5, unit="m", help="String length the damper assumes (pivot to ball centre) \\[m]; default the simulated ball's.")] = None,
     damp_time: Annotated[Optional[float], number("--damp-time", low=0, high=600, unit="s", help="Keep damping this long after the last row \\[s] (default 3 swing periods).")] = None,
-    sensor: Annotated[str, choice("--sensor", choices=("io", "module"), help="Where the sway comes from: io (the controller's analog inputs --io-names) or module (the pendulum module on --pendulum; one axis).")] = "io",
+    sensor: Annotated[str, choice("--sensor", choices=("io", "module", "camera"), help="Where the sway comes from: io (the controller's analog inputs --io-names), module (the pendulum module on --pendulum; one axis) or camera (the ball tracked live in --camera, or the simulator's camera).")] = "io",
+    camera: Annotated[Optional[str], typer.Option("--camera", metavar="SOURCE", help="With --sensor camera: a V4L2 device index (0) or path (/dev/video0), a stream URL (http://…/stream.mjpg, rtsp://…) or a video file played at its frame rate; default with the simulator: its own camera (--sim-camera-*).")] = None,
+    geometry: Annotated[Optional[Path], typer.Option("--geometry", help="The camera's pose JSON, as `lbr track live --geometry` reads (camera_matrix, dist_coeffs, rotation, centre_m, image_size — or position_m, look_at_m, fov_deg, image_size); its pivot_m and string_m are not used: the pivot is the robot's TCP, the string is measured.")] = None,
+    camera_position: Annotated[Optional[tuple], floats("--camera-position", count=3, low=-20, high=20, unit="m", metavar="X,Y,Z", help="Instead of --geometry: the camera's centre in the base frame \\[m] (with --camera-look-at, --camera-fov; image size from the source).")] = None,
+    camera_look_at: Annotated[Optional[tuple], floats("--camera-look-at", count=3, low=-20, high=20, unit="m", metavar="X,Y,Z", help="The point at the image centre \\[m], base frame.")] = None,
+    camera_fov: Annotated[Optional[float], number("--camera-fov", low=1, high=170, unit="deg", help="Horizontal field of view \\[deg] (default 50).")] = None,
+    camera_delay: Annotated[Optional[float], number("--camera-delay", low=0, high=1000, unit="ms", help="The camera's own delay from the middle of a frame's exposure to its arrival here \\[ms], which the tracker cannot see (default: the simulated camera's exposure/2 + latency + 1 ms; 20 with --camera — measure yours).")] = None,
+    color: Annotated[str, typer.Option("--color", help="With --sensor camera: the ball's colour (red, orange, yellow, green, cyan, blue, magenta, or a hue range H1-H2).")] = "red",
+    sim_camera_position: Annotated[Optional[tuple], floats("--sim-camera-position", count=3, low=-20, high=20, unit="m", metavar="X,Y,Z", help="Simulator: its camera's centre \\[m], base frame (default: 30° above the ball's path, 45° around from the base's line to it, as close as sees it whole).")] = None,
+    sim_camera_look_at: Annotated[Optional[tuple], floats("--sim-camera-look-at", count=3, low=-20, high=20, unit="m", metavar="X,Y,Z", help="Simulator: the point at its camera's image centre \\[m] (default: the middle of the ball's path).")] = None,
+    sim_camera_fov: Annotated[Optional[float], number("--sim-camera-fov", low=5, high=120, unit="deg", help="Simulator: its camera's horizontal field of view \\[deg] (default 50).")] = None,
+    sim_camera_size: Annotated[Optional[tuple], grid("--sim-camera-size", low=64, high=4096, metavar="WxH", help="Simulator: its camera's image size \\[px] (default 320x240).")] = None,
+    sim_camera_fps: Annotated[Optional[float], number("--sim-camera-fps", low=10, high=500, unit="1/s", help="Simulator: its camera's frame rate \\[1/s] (default 120; 30–240 tested).")] = None,
+    sim_camera_exposure: Annotated[Optional[float], number("--sim-camera-exposure", low=0, high=100, unit="ms", help="Simulator: its camera's exposure \\[ms] (motion blur; default 4, at most one frame).")] = None,
+    sim_camera_latency: Annotated[Optional[float], number("--sim-camera-latency", low=0, high=500, unit="ms", help="Simulator: from the end of an exposure to the frame leaving its camera \\[ms] (default 15).")] = None,
+    sim_camera_stamp: Annotated[Optional[bool], typer.Option("--sim-camera-stamp/--no-sim-camera-stamp", help="Simulator: its camera writes each frame's index into the frame's corner (a camera's embedded frame counter), so a frame's moment is known exactly (default); without it, as with --camera, a frame shows its arrival − --camera-delay.")] = None,
+    sim_camera_stop: Annotated[Optional[float], number("--sim-camera-stop", low=0, high=3600, low_open=True, unit="s", help="Simulator: its camera stops streaming this long after the simulator started \\[s] (a failure drill).")] = None,
     io_names: Annotated[str, typer.Option("--io-names", help="Analog inputs with θx, θy \\[rad] (atan2(s_x, −s_z), atan2(s_y, −s_z) of the string direction s).")] = "ball_theta_x,ball_theta_y",
     module_axis: Annotated[str, choice("--module-axis", choices=("x", "y"), help="With --sensor module: the base axis the module swings along (x or y).")] = "y",
-    sensor_delay: Annotated[Optional[float], number("--sensor-delay", low=0, high=500, unit="ms", help="Age of a reading when it arrives \\[ms] (default: --sim-delay + one period; one period with --robot).")] = None,
+    sensor_delay: Annotated[Optional[float], number("--sensor-delay", low=0, high=500, unit="ms", help="Age of a reading when it arrives \\[ms] (default: --sim-delay + one period; one period with --robot; with --sensor camera each reading's own age is used, this only where it is unknown; default --camera-delay + 6).")] = None,
     sensor_rate: Annotated[float, number("--sensor-rate", low=10, high=10000, unit="Hz", help="With --sensor module: readings per second \\[Hz].")] = 200.0,
     open_loop: Annotated[bool, typer.Option("--open-loop", help="Estimate and log the sway but do not correct (the plan alone, for comparison).")] = False,
     target: Annotated[float, number("--target", low=0.001, high=45, unit="deg", help="The goal: residual sway at most this, fitted over the last swing period of --damp-time \\[deg]; exit 1 above it.")] = 0.3,
@@ -238,6 +255,12 @@ def damp(
     delay-compensating observer bridges --sensor-delay. After the last row it damps for --damp-time, then a
     jerk-limited move returns the arm to the last row. Log columns as `lbr execute` plus damp_x, damp_y [m] (the
     offset), est_theta_x/y and ref_theta_x/y [rad].
+
+    --sensor camera tracks the ball live in --camera (or, on the simulator, in its own rendered camera) and takes
+    the tilt from the camera's geometry, the robot's pivot at each frame's moment and the string length the camera
+    measures from the hanging ball. A camera that cannot see the ball along the move, or the sway along an axis the
+    move swings it in, is refused (exit 2); a camera that fails during the run (stream ended, no frames, ball lost)
+    stops the correction, the rows finish as planned, exit 1.
     """
     from lbrcli.control.damping import LOG_COLUMNS, DampingClient
     from lbrcli.fri.sway import IoSway, SwayWatch, window_for_length
@@ -245,6 +268,7 @@ def damp(
     from lbrcli.plants.ball import BallSpec
     from lbrcli.plants.pendulum_module import PendulumModuleSpec
     from planners.feedback.correction import correction_plan
+    from planners.feedback.damping import DampingOptions
     from planners.pendulum import natural_period
     from planners.shapers import make_shaper
     from trajectories.csvio import read_joint_csv
@@ -256,7 +280,15 @@ def damp(
     from ..options import limits_from, make_robot, within_limits
     from .execute import check_or_fail
 
+    from lbrcli.control.camera_setup import CameraOptions
+
     rep = Reporter(json_out)
+    cam_opts = CameraOptions(camera, geometry, camera_position, camera_look_at, camera_fov, camera_delay,
+                             sim_camera_position, sim_camera_look_at, sim_camera_fov, sim_camera_size, sim_camera_fps,
+                             sim_camera_exposure, sim_camera_latency, sim_camera_stop, sim_camera_stamp)  # fmt: skip
+    cam_opts.validate(sensor, robot)
+    if sensor == "camera" and sim_delay != 0.0:
+        raise OptionError("--sim-delay delays the simulator's ball IO and module; its camera's delay is --sim-camera-latency")
     names = tuple(n.strip() for n in io_names.split(","))
     if len(names) != 2 or not all(names):
         raise OptionError(f"--io-names: expected two analog input names 'theta_x,theta_y', got {io_names!r}")
@@ -301,42 +333,63 @@ def damp(
     plan = correction_plan(model, traj.q, lim, period_s)
     assumed_ms = sensor_delay if sensor_delay is not None else (
         sim_delay + period_ms if robot is None or sensor == "io" else 6.0 + period_ms)  # fmt: skip
-    axis = 0 if module_axis == "x" else 1
-    client = DampingClient(
-        traj.q, lim, period_s, model_len, plan, damp_s=damp_s, sensor_delay_s=assumed_ms * 1e-3,
-        io_names=names if sensor == "io" else None, module_axis=axis, sensor_rate_hz=sensor_rate, active=not open_loop,
-        target=math.radians(target),
-        start_tolerance=start_tolerance, move_to_start=move_to_start,
-        move_shaper=make_shaper("zvd", period_T), move_robot=model,
-        sway=SwayWatch(IoSway("ball_theta"), math.radians(start_sway), window_for_length(model_len), sway_wait)
-        if sensor == "io" else None,
-    )  # fmt: skip
-    rep.print(f"{name}: {len(traj)} rows, step {period_ms} ms, {traj.duration:.3f} s — within the limits; "
-              f"string {model_len:g} m (period {period_T:.3f} s), damping {damp_s:.2f} s after the last row"
-              + (" (open loop: no correction)" if open_loop else ""))  # fmt: skip
-    rep.print(f"offset room: up to {plan.travel * 1e3:.0f} mm, {float(plan.bounds[:, 2].min()):.2f}–"
-              f"{float(plan.bounds[:, 2].max()):.2f} m/s² along the file (the joints' headroom)")
-    sim_kwargs: dict[str, Any] = {}
-    plants = None
-    if robot is None:
-        sim_kwargs = simulator_kwargs(length=0.0, default_length=0.0, period_ms=period_ms, sim_start=sim_start,
-                                      default_start=traj.q[0], flange=flange, tool=tool,
-                                      max_runtime_s=traj.duration + damp_s + sway_wait + 120.0, limits=limits)  # fmt: skip
-        if sensor == "io":
-            plants = (BallSpec(true_len, 0.0, io_delay_ms=sim_delay),)
-        else:  # the module reads the ball's θy and delivers it over the emulated serial link --sim-delay late
-            plants = (BallSpec(true_len), PendulumModuleSpec(sensor_rate, delay_ms=sim_delay))
-    lab = LabOptions(pendulum or "sim", baud, pendulum_zero) if sensor == "module" else None
-    result, sim_stats, lab_figures = run_client(
-        rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-        sim_kwargs=sim_kwargs, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), sim_lenient=sim_lenient,
-        lab=lab, plants=plants, extra_names=LOG_COLUMNS, extra=client.log_values,
-    )  # fmt: skip
+    camera_sensor = sim_camera = None
+    with contextlib.ExitStack() as camera_stack:  # a camera (and the simulator's) is stopped however this ends
+        if sensor == "camera":  # opened here: its frame rate and image size are needed, and it must see the ball
+            from lbrcli.control.camera_setup import camera_sensor_for, observer_bandwidth
+
+            camera_sensor, sim_camera, assumed_ms = camera_sensor_for(
+                cam_opts, rep, camera_stack, robot_factory=lambda: make_robot(flange, tool), rows=traj.q, t=traj.t,
+                period_s=period_s, accel=plan.planned_accel, model_len=model_len, true_len=true_len,
+                target_rad=math.radians(target), color=color, sensor_delay_ms=sensor_delay,
+                q_rest=(sim_start if sim_start is not None else traj.q[0]) if robot is None else (None if move_to_start else traj.q[0]))  # fmt: skip
+        axis = 0 if module_axis == "x" else 1
+        client = DampingClient(
+            traj.q, lim, period_s, model_len, plan, damp_s=damp_s, sensor_delay_s=assumed_ms * 1e-3,
+            io_names=names if sensor == "io" else None, module_axis=axis, sensor_rate_hz=sensor_rate, active=not open_loop,
+            target=math.radians(target), sensor=camera_sensor,
+            options=DampingOptions(bandwidth=observer_bandwidth(1.0 / camera_sensor.interval_s))
+            if camera_sensor is not None else DampingOptions(),
+            start_tolerance=start_tolerance, move_to_start=move_to_start,
+            move_shaper=make_shaper("zvd", period_T), move_robot=model,
+            sway=SwayWatch(IoSway("ball_theta"), math.radians(start_sway), window_for_length(model_len), sway_wait)
+            if sensor == "io" else None,
+        )  # fmt: skip
+        rep.print(f"{name}: {len(traj)} rows, step {period_ms} ms, {traj.duration:.3f} s — within the limits; "
+                  f"string {model_len:g} m (period {period_T:.3f} s), damping {damp_s:.2f} s after the last row"
+                  + (" (open loop: no correction)" if open_loop else ""))  # fmt: skip
+        rep.print(f"offset room: up to {plan.travel * 1e3:.0f} mm, {float(plan.bounds[:, 2].min()):.2f}–"
+                  f"{float(plan.bounds[:, 2].max()):.2f} m/s² along the file (the joints' headroom)")
+        sim_kwargs: dict[str, Any] = {}
+        plants = None
+        if robot is None:
+            sim_kwargs = simulator_kwargs(length=0.0, default_length=0.0, period_ms=period_ms, sim_start=sim_start,
+                                          default_start=traj.q[0], flange=flange, tool=tool,
+                                          max_runtime_s=traj.duration + damp_s + sway_wait + 120.0, limits=limits)  # fmt: skip
+            if sensor == "io":
+                plants = (BallSpec(true_len, 0.0, io_delay_ms=sim_delay),)
+            elif sensor == "camera":  # the simulator's camera films its ball (unless --camera names another source)
+                plants = (BallSpec(true_len),) + ((sim_camera,) if sim_camera is not None else ())
+            else:  # the module reads the ball's θy and delivers it over the emulated serial link --sim-delay late
+                plants = (BallSpec(true_len), PendulumModuleSpec(sensor_rate, delay_ms=sim_delay))
+        lab = LabOptions(pendulum or "sim", baud, pendulum_zero) if sensor == "module" else None
+        result, sim_stats, lab_figures = run_client(
+            rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
+            sim_kwargs=sim_kwargs, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), sim_lenient=sim_lenient,
+            lab=lab, plants=plants, extra_names=LOG_COLUMNS, extra=client.log_values,
+        )  # fmt: skip
+        if camera_sensor is not None:
+            camera_sensor.tracker.stop()
+            lab_figures.update(camera_sensor.tracker.summary())
     figures = print_summary(rep, result, sim_stats, log)
     figures.update(lab_figures)
     f = figures  # the client's figures are merged into the session's
     rep.print(f"offset: largest {f['max_offset_m'] * 1e3:.1f} mm, trimmed to the headroom in {f['offset_trimmed_cycles']} "
               f"cycles; return to the last row {f['return_rows']} commands")  # fmt: skip
+    if camera_sensor is not None:
+        from lbrcli.control.camera_setup import print_camera
+
+        print_camera(rep, f)
     if f.get("sensor_fault"):
         rep.warn(f"the sway sensor failed a check: {f['sensor_fault']}")
     if f["measured_residual_deg"] is not None:

@@ -48,6 +48,9 @@ def serve(
     first_target: Annotated[
         float, number("--first-target", low=0.1, high=3600, unit="s", help="Stop if no target arrived this long after commanding started \\[s].")
     ] = 30.0,
+    delay: Annotated[
+        Optional[float], number("--delay", low=0, high=10, unit="s", help="Follow the targets this long behind the newest, on the source's clock \\[s] (default: automatic, from the source's gaps and jitter, 2 ms to --timeout).")
+    ] = None,
     speed_scale: Annotated[
         float, number("--speed-scale", low=0, high=1, low_open=True, help="Share of the velocity, acceleration and jerk limits ruckig may use.")
     ] = 0.5,
@@ -80,14 +83,15 @@ def serve(
     Targets arrive over UDP at --listen and/or on the --mqtt topic, binary (136 bytes, magic LBRT, version 1) or
     JSON: joints {"q": \\[7 rad]}, a TCP pose {"pose": \\[x, y, z m, qw, qx, qy, qz]} or {"pose_zyx": \\[x, y, z m,
     alpha, beta, gamma rad]}, with optional feed-forward "v" / "twist" (layout in the README and
-    lbrcli.bridge.protocol). Poses go through the online IK; ruckig follows the newest target within --speed-scale
-    of the limits at every FRI cycle and the guard checks every command. The state (256 bytes, magic LBRS, or JSON
+    lbrcli.bridge.protocol). Poses go through the online IK; the targets are read back on their source's clock
+    ("t"), --delay behind the newest and interpolated, and ruckig follows that reference within --speed-scale of
+    the limits at every FRI cycle; the guard checks every command. The state (256 bytes, magic LBRS, or JSON
     for JSON sources) goes back over UDP every --state-every messages and on TOPIC/state at --mqtt-state-hz. The
     first source owns the session; others are ignored. A braking stop within the limits ends it when targets stop
     for --timeout (dead-man), the owner sends garbage or a joint target outside the position limits (exit 1), it
     sends {"end": true} or --duration elapses (exit 0), or Ctrl-C.
     """
-    from lbrcli.bridge import MqttTransport, MqttUnavailable, TargetFollower, TargetInbox, UdpTransport
+    from lbrcli.bridge import MqttTransport, MqttUnavailable, TargetFollower, TargetInbox, TimelineOptions, UdpTransport
     from lbrcli.lab.telemetry import parse_mqtt_url
     from trajectories.errors import OptionError
 
@@ -105,6 +109,8 @@ def serve(
         raise OptionError("--listen off needs --mqtt: targets must come from somewhere")
     mqtt_target = parse_mqtt_url(mqtt) if mqtt is not None else None
     key = _read_secret(secret) if secret is not None else None
+    if delay is not None and not delay < timeout:
+        raise OptionError(f"--delay must be less than --timeout ({timeout:g} s), got {delay:g}")
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
                                  "--sim-strict": not sim_lenient})  # fmt: skip
     lim = limits_from(limits)
@@ -137,7 +143,8 @@ def serve(
         raise OptionError(f"--mqtt: {exc}") from None
     targets = TargetInbox(transports, key, lim)
     follower = TargetFollower(targets, lim, robot=make_robot(flange, tool), timeout_s=timeout,
-                              first_target_s=first_target, speed_scale=speed_scale, state_every=state_every)  # fmt: skip
+                              first_target_s=first_target, speed_scale=speed_scale, state_every=state_every,
+                              timeline=TimelineOptions(delay_s=delay, max_delay_s=timeout))  # fmt: skip
     try:
         result, sim_stats, _ = run_client(
             rep, follower, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,

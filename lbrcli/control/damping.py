@@ -60,6 +60,8 @@ class DampingClient(TrajectoryPlayer):
         if sensor is None:
             sensor = IoSensor(io_names) if io_names is not None else ModuleSensor(module_axis, sensor_rate_hz or 200.0)
         self.sensor = sensor
+        self._observe = getattr(sensor, "observe", None)  # a camera's pivot: the robot's pose of every message
+        self._failure = getattr(sensor, "failure", None)  # a sensor that can tell it failed (a camera's stream)
         self.target = target
         n_total = len(self.rows) + int(round(damp_s / period_s)) + 2
         acc = np.zeros((n_total, 2))
@@ -73,9 +75,10 @@ class DampingClient(TrajectoryPlayer):
         interval = sensor.interval_s or period_s
         opts = replace(options, travel=plan.travel)
         self.damper = SwayDamper(length, period_s, sensor_delay_s, interval, opts, actuation_delay=actuation_delay,
-                                 bounds=lambda x, v, a: self._bound)  # fmt: skip
+                                 bounds=lambda x, v, a: self._bound, max_delay=getattr(sensor, "max_age_s", None))  # fmt: skip
         self.damper.active = active
         self._lag = int(round(sensor_delay_s / period_s)) + actuation_delay
+        self._actuation = actuation_delay
         # the plan's own swing may be large (an unshaped move): a runaway is well beyond it
         peak = float(np.max(np.abs(np.asarray(self._ref)))) if len(self._ref) else 0.0
         health = replace(health, diverged=max(health.diverged, 1.5 * peak + math.radians(10.0)))
@@ -114,21 +117,29 @@ class DampingClient(TrajectoryPlayer):
     def _read(self, state: LBRState) -> None:
         d = self.damper
         t = self._k * self._period
-        seen = max(0, self._k - self._lag)  # the row whose moment a reading arriving now shows
-        ref = self._ref[min(seen, len(self._ref) - 1)]
-        for axis, value in self.sensor.poll(state):
+        last = len(self._ref) - 1
+        for reading in self.sensor.poll(state):
+            axis, value = reading[0], reading[1]
+            age = reading[2] if len(reading) > 2 else None  # [s] the reading's own age, if the sensor knows it
             obs = d.observers[axis]
             if self.sensor_fault is None:
+                lag = self._lag if age is None else obs.lag_of(age) + self._actuation
+                seen = self._k - lag if self._k > lag else 0  # the row whose moment the reading shows
                 drive = self._acc[min(self._k, len(self._acc) - 1)][axis] + d.carts[axis].a
-                fault = self.health[axis].reading(t, value, obs.predicted_reading(), ref[axis], drive)
+                fault = self.health[axis].reading(t, value, obs.predicted_reading(age), self._ref[min(seen, last)][axis],
+                                                  drive)  # fmt: skip
                 if fault is not None:
                     self._stop_correcting(fault, t)
                 else:  # the estimate follows the readings also open loop (it is logged)
-                    d.correct(axis, value)
+                    d.correct(axis, value, age)
             self.readings += 1
             if self._k >= self._tail_from and math.isfinite(value):
                 self._tail[axis].append((t, value))
                 self.peak_residual = max(self.peak_residual, abs(value))
+        if self._failure is not None and self.sensor_fault is None:
+            why = self._failure()
+            if why is not None:
+                self._stop_correcting(why, t)
 
     def _stop_correcting(self, why: str, t: float) -> None:
         """The sensor is not to be trusted: no more correction (the offsets ride out); the session will fail."""
@@ -159,7 +170,19 @@ class DampingClient(TrajectoryPlayer):
         self.cost_ns.append(time.perf_counter_ns() - t0)
         return out
 
+    def monitor(self, state: LBRState) -> None:
+        if self._observe is not None:
+            self._observe(state)
+        super().monitor(state)
+
+    def wait_for_command(self, state: LBRState) -> None:
+        if self._observe is not None:
+            self._observe(state)
+        super().wait_for_command(state)
+
     def command(self, state: LBRState) -> Sequence[float] | None:
+        if self._observe is not None:
+            self._observe(state)
         if self._return is not None:
             return self._returning()
         if self._k >= 0 and self.reply_due:
@@ -256,4 +279,7 @@ class DampingClient(TrajectoryPlayer):
             sensor_fault=self.sensor_fault,
             **cost_figures_us(self.cost_ns),
         )
+        sensor_figures = getattr(self.sensor, "figures", None)
+        if sensor_figures is not None:
+            f.update(sensor_figures())
         return f

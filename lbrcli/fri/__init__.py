@@ -38,6 +38,7 @@ from .constants import (
 from .errors import FriCommandError, FriDecodeError, FriError, FriStateError, FriTimeout, StopSession
 from .guard import CommandGuard
 from .log import ExecutionLog, LogObserver
+from .logwriter import LogProcess
 from .messages import FriVersion
 from .observers import SessionFigures
 from .outcome import EndReason, Outcome, SessionResult
@@ -68,6 +69,7 @@ __all__ = [
     "LBRCommand",
     "LBRState",
     "LogObserver",
+    "LogProcess",
     "Observer",
     "OnlineMove",
     "OperationMode",

@@ -22,7 +22,6 @@ continue from there, and the client is told how many command periods it missed (
 
 from __future__ import annotations
 
-import gc
 import time
 from typing import Any, Callable, Sequence
 
@@ -37,6 +36,7 @@ from .ending import SessionEnding
 from .constants import DEFAULT_PORT, SessionState
 from .errors import FriDecodeError, FriError
 from .guard import DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT
+from .interpreter import loop_settings
 from .messages import FriVersion
 from .motion import ExecutedMotion
 from .outcome import EndReason, Outcome, SessionResult
@@ -191,16 +191,10 @@ class ClientApplication(Replying, SessionEnding):
     # -- the loop --------------------------------------------------------------------------------------------
     def run(self, duration_s: float | None = None) -> SessionResult:
         """Step until the session ends (or ``duration_s`` [s] after the first message); the result."""
-        gc.collect()
-        was = gc.isenabled()
-        gc.disable()
-        try:
+        with loop_settings():
             self.start(duration_s)
             while self.step():
                 pass
-        finally:
-            if was:
-                gc.enable()
         assert self.result is not None
         return self.result
 

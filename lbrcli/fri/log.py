@@ -219,6 +219,13 @@ class ExecutionLog:
         self.rows = 0
         self._size = 0  # [bytes] written in complete rows
 
+    @classmethod
+    def from_fd(cls, fd: int, path: str | Path) -> "ExecutionLog":
+        """A log on a file already open for writing as ``fd`` (e.g. handed to a writer process)."""
+        log = cls.__new__(cls)
+        log.path, log._fd, log.layout, log.rows, log._size = Path(path), fd, None, 0, 0
+        return log
+
     def start(self, layout: LogLayout) -> None:
         """Fix the columns and write the header."""
         self.layout = layout
@@ -227,6 +234,11 @@ class ExecutionLog:
     def write(self, line: str) -> None:
         self._write(line)
         self.rows += 1
+
+    def write_rows(self, text: str, n: int) -> None:
+        """``n`` complete rows in one write."""
+        self._write(text)
+        self.rows += n
 
     def _write(self, text: str) -> None:
         if self._fd is None:

@@ -4,14 +4,15 @@ The client binds the port of the robot's FRI configuration (30200 by default), a
 controller's IP address (any source port: a simulator on the same machine cannot own the port too) and replies
 to the port each datagram came from.
 
-Waiting: the socket is non-blocking; a receive sleeps in ``select`` until a datagram arrives. With a busy-wait
-window (``busy_wait_s``) and the controller's send period known (``expect_period``), it sleeps only until the window
-before the next message is due and then polls the socket without sleeping: the reply no longer waits for the
-scheduler to wake the process (on this VM that is most of a Python client's latency at 1 ms; see the ``fri``
-benchmark). The window costs that much CPU per period. While it polls, ``warm`` (if set) is called every
-``WARM_EVERY_S``: the application re-runs the checks of its next reply on the last message, so that their code and
-data are in the CPU's caches when the message arrives (a window that leaves the CPU idle for part of the period, or
-no warming, roughly doubles the reply latency on this VM).
+Waiting (default): the receive blocks in the kernel (one ``recvfrom`` with ``SO_RCVTIMEO``) until a datagram
+arrives or the receive timeout passes, as KUKA's client blocks in ``select``: the process costs no CPU while it waits,
+so on a busy PC the scheduler wakes it at once (a process that polls uses up its share and waits behind the others).
+With a busy-wait window (``busy_wait_s``, the CLI's ``--busy-wait``) and the controller's send period known
+(``expect_period``), it sleeps only until the window before the next message is due and then polls the socket without
+sleeping (sleep-then-spin): on a quiet PC the reply no longer waits for the scheduler to wake the process, at the cost
+of the window's CPU per period. While it polls, ``warm`` (if set) is called every ``WARM_EVERY_S``: the application
+re-runs the checks of its next reply on the last message, so that their code and data are in the CPU's caches when
+the message arrives. See docs/explanations/fri-timing.md for the figures.
 """
 
 from __future__ import annotations
@@ -27,12 +28,13 @@ from .constants import MAX_DATAGRAM
 from .errors import FriError, InputError
 
 RECV_TIMEOUT_S = 0.05  # [s] how often a blocked receive returns to look at clocks and interrupt flags
-DEFAULT_BUSY_WAIT_S = 9e-4  # [s] polled before a message is due (0: always sleep in select); at 1 ms: all the time
-DEFAULT_BUSY_WAIT_REALTIME_S = 2e-4  # [s] under SCHED_FIFO: a task that never sleeps is throttled by the kernel
-# (sched_rt_runtime_us: 95 % of each second), which loses ≈ 50 ms of messages a second
+DEFAULT_BUSY_WAIT_S = 0.0  # [s] polled before a message is due: none by default (block in the kernel; see above)
 WARM_EVERY_S = 5e-5  # [s] how often the busy-wait calls ``warm``
 SIOCGSTAMPNS = 0x8907  # Linux: the kernel's receive time of the last datagram read from a socket
 _TIMESPEC = struct.Struct("qq")
+_TIMEVAL = struct.Struct("ll")
+_DONTWAIT = socket.MSG_DONTWAIT
+_RX_SIZE = MAX_DATAGRAM + 64
 
 
 def resolve_ip(host: str) -> str:
@@ -55,7 +57,10 @@ class UdpTransport:
         except OSError as exc:
             sock.close()
             raise FriError(f"cannot bind the FRI port {bind_host or '*'}:{port}: {exc.strerror}") from None
-        sock.setblocking(False)
+        # blocking, with the receive timeout in the kernel (SO_RCVTIMEO): one system call per datagram; the polls of
+        # the busy-wait, drain and send pass MSG_DONTWAIT
+        sock.setblocking(True)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVTIMEO, _TIMEVAL.pack(int(timeout_s), int(timeout_s % 1 * 1e6)))
         try:  # stamp every datagram on arrival (else the first ones read are stamped when read: see received_ns)
             sock.setsockopt(socket.SOL_SOCKET, getattr(socket, "SO_TIMESTAMPNS", 35), 1)
         except OSError:
@@ -80,23 +85,36 @@ class UdpTransport:
 
     def receive(self) -> bytes | None:
         """The next datagram from the controller, or None after the receive timeout."""
-        recvfrom = self.sock.recvfrom
-        robot = self.robot_ip
-        sock = self._rlist
         busy = self.busy_wait_s if self.period_s is not None else 0.0
         if busy > 0.0:
-            due = self._t_last + self.period_s  # type: ignore[operator]
-            spin_until = due + busy
-            t = time.perf_counter()
-            if due - busy - t > self.timeout_s or t > spin_until:
-                busy = 0.0  # long silent or late: plain wait
-            elif due - busy > t:
-                select.select(sock, (), (), due - busy - t)
+            return self._receive_spinning(busy)
+        recvfrom = self.sock.recvfrom
+        while True:
+            try:
+                data, addr = recvfrom(_RX_SIZE)  # blocks until a datagram or SO_RCVTIMEO
+            except (BlockingIOError, InterruptedError):  # the time-out (EAGAIN)
+                return None
+            except ConnectionRefusedError:  # an ICMP error from an earlier reply: nothing to read
+                continue
+            if self._take(addr):
+                return data
+
+    def _receive_spinning(self, busy: float) -> bytes | None:
+        """Sleep until ``busy`` [s] before the next message is due, then poll until it arrives (or ``busy`` after)."""
+        recvfrom = self.sock.recvfrom
+        sock = self._rlist
+        due = self._t_last + self.period_s  # type: ignore[operator]
+        spin_until = due + busy
+        t = time.perf_counter()
+        if due - busy - t > self.timeout_s or t > spin_until:
+            busy = 0.0  # long silent or late: plain wait
+        elif due - busy > t:
+            select.select(sock, (), (), due - busy - t)
         warm = self.warm if busy > 0.0 else None
         t_warm = 0.0
         while True:
             try:
-                data, addr = recvfrom(MAX_DATAGRAM + 64)
+                data, addr = recvfrom(_RX_SIZE, _DONTWAIT)
             except (BlockingIOError, InterruptedError):
                 if busy > 0.0:
                     t = time.perf_counter()
@@ -111,14 +129,19 @@ class UdpTransport:
                 continue
             except ConnectionRefusedError:  # an ICMP error from an earlier reply: nothing to read
                 continue
-            if addr[0] != robot:
-                self.foreign += 1
-                continue
-            self._t_last = time.perf_counter()
-            if busy > 0.0:
-                self.polled += 1
-            self.peer = addr
-            return data
+            if self._take(addr):
+                if busy > 0.0:
+                    self.polled += 1
+                return data
+
+    def _take(self, addr: tuple[str, int]) -> bool:
+        """A datagram from ``addr``: True (and it becomes the reply address) if it is the controller's."""
+        if addr[0] != self.robot_ip:
+            self.foreign += 1
+            return False
+        self._t_last = time.perf_counter()
+        self.peer = addr
+        return True
 
     def received_ns(self) -> int | None:
         """The kernel's receive time [ns, the ``time.time_ns`` clock] of the last datagram returned by ``receive`` —
@@ -137,18 +160,18 @@ class UdpTransport:
     def send(self, data: bytes) -> None:
         """Send a datagram to the last sender (OSError propagates: the caller decides)."""
         try:
-            self.sock.sendto(data, self.peer)  # type: ignore[arg-type]
+            self.sock.sendto(data, _DONTWAIT, self.peer)  # type: ignore[arg-type]
         except BlockingIOError:  # the socket's send buffer is full: wait for room, once
             if not select.select((), [self.sock], (), self.timeout_s)[1]:
                 raise
-            self.sock.sendto(data, self.peer)  # type: ignore[arg-type]
+            self.sock.sendto(data, _DONTWAIT, self.peer)  # type: ignore[arg-type]
 
     def drain(self) -> int:
         """Discard the datagrams waiting in the socket; their number."""
         n = 0
         try:
             while True:
-                self.sock.recvfrom(MAX_DATAGRAM + 64)
+                self.sock.recvfrom(_RX_SIZE, _DONTWAIT)
                 n += 1
         except (BlockingIOError, InterruptedError, ConnectionRefusedError):
             pass

@@ -11,6 +11,7 @@ queue. Rendering reuses :mod:`tracking.synthetic` (the same backdrop, ball and s
 from __future__ import annotations
 
 import math
+import os
 import socket
 import threading
 import time
@@ -63,7 +64,8 @@ class StreamStats:
 class CameraServer:
     """Serves ``scene`` as seen by the camera of ``config`` at http://127.0.0.1:PORT/stream.mjpg.
 
-    Scene time t runs with the wall clock from :meth:`start` (t = clock() − start), or from ``t0`` given to start;
+    Scene time t runs with the wall clock from :meth:`start` (t = clock() − start; a scene object with a
+    ``started(t_start)`` method is told that clock reading before the first frame);
     frame k shows the scene at t_k = k / fps and leaves at start + t_k + exposure/2 + latency. ``frame_times`` keeps
     t_k of every frame served, so a test can pair the tracker's results with the truth.
     """
@@ -90,6 +92,8 @@ class CameraServer:
         self.t_start = math.nan  # clock() at scene time 0
         self._noise: list[np.ndarray] | None = None
         self._noise_k = 0
+        self._plates: list[np.ndarray] = []  # the backdrop with each noise field, blurred
+        self._plates_of: np.ndarray | None = None
 
     # ------------------------------------------------------------------ lifecycle
 
@@ -120,6 +124,9 @@ class CameraServer:
         self._server = ThreadingHTTPServer((self._host, self._port), Handler)
         self._server.daemon_threads = True
         self.t_start = self.clock()
+        started = getattr(self.scene, "started", None)
+        if started is not None:  # a scene on the shared clock learns where its time 0 is
+            started(self.t_start)
         for target, name in ((self._server.serve_forever, "camera-http"), (self._render_loop, "camera-render")):
             th = threading.Thread(target=target, name=name, daemon=True)
             th.start()
@@ -146,14 +153,17 @@ class CameraServer:
     # ------------------------------------------------------------------ rendering
 
     def render(self, t: float, rng: np.random.Generator | None = None, background: np.ndarray | None = None) -> np.ndarray:
-        """The BGR frame showing the scene at time t [s] (the exposure centred on t)."""
+        """The BGR frame showing the scene at time t [s] (the exposure centred on t): the backdrop, the flange, string
+        and ball drawn on it, sensor noise (a bank of 8 fields drawn once: drawing a field costs ≈ 9 ms at VGA) and a
+        slight blur. The backdrop with each noise field is blurred once; per frame only the region of the drawing is
+        (the blur is local: the frame is the same as blurring it whole)."""
         import cv2
 
         from tracking.synthetic import draw_pendulum, lab_background
 
         c = self.config
         g = self.geometry
-        frame = (background if background is not None else lab_background(c.size, c.seed)).copy()
+        bg = background if background is not None else lab_background(c.size, c.seed)
         m = 1
         if c.exposure_s > 0:
             b0, _ = self.scene(t - c.exposure_s / 2)
@@ -166,16 +176,40 @@ class CameraServer:
         uv = g.project(balls)
         pivot_uv = g.project(np.asarray(pivot, float))[0]
         depth = float(g.depth(np.asarray(ball_mid, float))[0])
-        if np.all(np.isfinite(uv)) and depth > 0:
-            r_px = float(g.camera_matrix[0, 0]) * c.ball_radius_m / depth
-            draw_pendulum(frame, pivot_uv, uv, r_px, c.ball_bgr, c.pivot_marker)
-        if c.noise_std > 0:  # sensor noise from a bank of 8 fields drawn once (drawing a field costs ≈ 9 ms at VGA)
-            if self._noise is None:
+        noise = None
+        if c.noise_std > 0:
+            if self._noise is None or self._plates_of is not bg:
                 gen = rng or np.random.default_rng(c.seed)
-                self._noise = [np.round(gen.normal(0.0, c.noise_std, frame.shape)).astype(np.int16) for _ in range(8)]
+                self._noise = self._noise or [np.round(gen.normal(0.0, c.noise_std, bg.shape)).astype(np.int16)
+                                              for _ in range(8)]  # fmt: skip
+                self._plates = [cv2.GaussianBlur(cv2.add(bg, n, dtype=cv2.CV_8U), (0, 0), 0.5) for n in self._noise]
+                self._plates_of = bg
             self._noise_k = (self._noise_k + 1) % len(self._noise)
-            frame = cv2.add(frame, self._noise[self._noise_k], dtype=cv2.CV_8U)
-        return cv2.GaussianBlur(frame, (0, 0), 0.5)
+            noise = self._noise[self._noise_k]
+            out = self._plates[self._noise_k].copy()
+        else:
+            out = cv2.GaussianBlur(bg, (0, 0), 0.5)
+        if not (np.all(np.isfinite(uv)) and np.all(np.isfinite(pivot_uv)) and depth > 0):
+            return out
+        r_px = float(g.camera_matrix[0, 0]) * c.ball_radius_m / depth
+        h, w = bg.shape[:2]  # the region drawn in (the flange: 28 px either side, 70 px above the pivot), padded
+        pad = 4
+        x0 = int(max(0, min(uv[:, 0].min() - r_px, pivot_uv[0] - 40) - pad))
+        x1 = int(min(w, max(uv[:, 0].max() + r_px, pivot_uv[0] + 40) + pad + 1))
+        y0 = int(max(0, min(uv[:, 1].min() - r_px, pivot_uv[1] - 82) - pad))
+        y1 = int(min(h, max(uv[:, 1].max() + r_px, pivot_uv[1] + 12) + pad + 1))
+        if x1 - x0 <= 2 * pad or y1 - y0 <= 2 * pad:
+            return out
+        # drawn in that region only, with a margin the blur reads from (its kernel reaches 2 px at σ = 0.5)
+        mx0, my0, mx1, my1 = max(0, x0 - pad), max(0, y0 - pad), min(w, x1 + pad), min(h, y1 + pad)
+        part = bg[my0:my1, mx0:mx1].copy()
+        shift = np.array([mx0, my0], float)
+        draw_pendulum(part, pivot_uv - shift, uv - shift, r_px, c.ball_bgr, c.pivot_marker)
+        if noise is not None:
+            part = cv2.add(part, noise[my0:my1, mx0:mx1], dtype=cv2.CV_8U)
+        part = cv2.GaussianBlur(part, (0, 0), 0.5)
+        out[y0:y1, x0:x1] = part[y0 - my0 : y1 - my0, x0 - mx0 : x1 - mx0]
+        return out
 
     def _render_loop(self) -> None:
         import cv2
@@ -258,43 +292,78 @@ def read_stamp(frame: np.ndarray) -> int:
 class CameraProcess:
     """A :class:`CameraServer` in its own process (forked), as a real camera is its own device: its rendering does
     not compete with the reader for Python's interpreter lock. ``url`` and ``t_start`` (on the shared monotonic
-    clock) are known once :meth:`start` returns; :meth:`stop` ends the process."""
+    clock) are known once :meth:`start` returns; :meth:`stop` ends the process, as does the end of the process that
+    started it. ``stop_after_s`` [s]: the camera stops streaming that long after its start — or after the scene's
+    ``live_since`` [s, monotonic] when it has that attribute (None until it is live) — a failure drill.
 
-    def __init__(self, scene: Scene, config: CameraConfig | None = None) -> None:
+    A plain ``os.fork`` (not multiprocessing): a daemonic process — the FRI simulator's — may start it too."""
+
+    def __init__(self, scene: Scene, config: CameraConfig | None = None, stop_after_s: float | None = None,
+                 niceness: int = 0) -> None:  # fmt: skip
         self.scene = scene
         self.config = config or CameraConfig()
+        self.stop_after_s = stop_after_s
+        self.niceness = niceness  # the camera process's priority lowered by this (a busy PC: others keep their pace)
         self.geometry = self.config.geometry()
         self.url = ""
         self.t_start = math.nan
-        self._proc = None
-        self._conn = None
+        self._pid: int | None = None
 
     def start(self, timeout: float = 10.0) -> "CameraProcess":
-        import multiprocessing as mp
+        import select
+        import signal
 
-        ctx = mp.get_context("fork")
-        parent, child = ctx.Pipe()
-        self._proc = ctx.Process(target=_camera_child, args=(self.scene, self.config, child), daemon=True)
-        self._proc.start()
-        if not parent.poll(timeout):
+        r, w = os.pipe()
+        parent = os.getpid()
+        pid = os.fork()
+        if pid == 0:  # the camera
+            code = 1
+            try:
+                os.close(r)
+                signal.signal(signal.SIGTERM, signal.SIG_DFL)
+                signal.signal(signal.SIGINT, signal.SIG_IGN)  # its starter decides when it stops
+                if self.niceness:
+                    os.nice(self.niceness)
+                _camera_child(self.scene, self.config, w, self.stop_after_s, parent)
+                code = 0
+            finally:
+                os._exit(code)
+        os.close(w)
+        self._pid = pid
+        try:
+            ready, _, _ = select.select([r], [], [], timeout)
+            line = os.read(r, 4096).decode() if ready else ""
+        finally:
+            os.close(r)
+        if not line.strip():
             self.stop()
             raise RuntimeError("the simulated camera did not start")
-        self.url, self.t_start = parent.recv()
-        self._conn = parent
+        url, t_start = line.split()
+        self.url, self.t_start = url, float(t_start)
         return self
 
     def stop(self) -> None:
-        if self._conn is not None:
+        import signal
+
+        pid, self._pid = self._pid, None
+        if pid is None:
+            return
+        try:
+            os.kill(pid, signal.SIGTERM)
+        except ProcessLookupError:
+            pass
+        deadline = time.monotonic() + 3.0
+        while True:
             try:
-                self._conn.send("stop")
-            except (BrokenPipeError, OSError):
-                pass
-        if self._proc is not None:
-            self._proc.join(timeout=3.0)
-            if self._proc.is_alive():
-                self._proc.terminate()
-                self._proc.join(timeout=2.0)
-        self._proc = self._conn = None
+                done, _ = os.waitpid(pid, os.WNOHANG)
+            except ChildProcessError:
+                return
+            if done or time.monotonic() > deadline:
+                break
+            time.sleep(0.01)
+        if not done:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
 
     def __enter__(self) -> "CameraProcess":
         return self.start()
@@ -303,12 +372,16 @@ class CameraProcess:
         self.stop()
 
 
-def _camera_child(scene: Scene, config: CameraConfig, conn) -> None:  # noqa: ANN001
+def _camera_child(scene: Scene, config: CameraConfig, out: int, stop_after_s: float | None, parent: int) -> None:
+    """Serve until SIGTERM or the parent is gone; tell the parent the URL and t_start on the pipe ``out``."""
     server = CameraServer(scene, config).start()
-    conn.send((server.url, server.t_start))
-    try:
-        conn.recv()  # until told to stop (or the parent is gone)
-    except EOFError:
-        pass
-    finally:
-        server.stop()
+    os.write(out, f"{server.url} {server.t_start!r}\n".encode())
+    os.close(out)
+    while os.getppid() == parent:
+        time.sleep(0.05)
+        since = getattr(scene, "live_since", None)  # a scene fed by a simulator counts from its first cycle
+        since = server.t_start if since is None and not hasattr(scene, "live_since") else since
+        if stop_after_s is not None and since is not None and server.clock() - since >= stop_after_s:
+            server.stop()
+            stop_after_s = None
+    server.stop()

@@ -87,14 +87,14 @@ def sway_reference(accel: np.ndarray, length: float, dt: float, actuation_delay:
 class SwayDamper:
     """The correction Δp of ``axes`` pivot axes, stepped every ``dt`` [s] from delayed angle readings.
 
-    ``delay`` [s]: from the moment a reading shows to when it is handed to :meth:`correct`; ``reading_interval``
-    [s]: between readings; ``bounds``: optional (x, v, a) → (speed, a_lo, a_hi, j_lo, j_hi) for every axis (the
-    joints' headroom), else the options' constant bounds.
+    ``delay`` [s]: from the moment a reading shows to when it is handed to :meth:`correct` (or each reading's own
+    age, up to ``max_delay`` [s]); ``reading_interval`` [s]: between readings; ``bounds``: optional (x, v, a) →
+    (speed, a_lo, a_hi, j_lo, j_hi) for every axis (the joints' headroom), else the options' constant bounds.
     """
 
     def __init__(self, length: float, dt: float, delay: float, reading_interval: float,
                  options: DampingOptions = DampingOptions(), gain: np.ndarray | None = None, axes: int = 2,
-                 actuation_delay: int = 1, bounds: Callable | None = None) -> None:  # fmt: skip
+                 actuation_delay: int = 1, bounds: Callable | None = None, max_delay: float | None = None) -> None:  # fmt: skip
         options.validate()
         self.length, self.dt, self.options = length, dt, options
         k = damping_gain(length, options) if gain is None else np.asarray(gain, dtype=float)
@@ -102,13 +102,14 @@ class SwayDamper:
         lim = options.limits()
         self.carts = [Cart(lim, dt, bounds=bounds) for _ in range(axes)]
         self.observers = [DelayedObserver(length, dt, delay, reading_interval, options.bandwidth,
-                                          actuation_delay=actuation_delay) for _ in range(axes)]  # fmt: skip
+                                          actuation_delay=actuation_delay, max_delay=max_delay)
+                          for _ in range(axes)]  # fmt: skip
         self.deviation = [0.0] * axes  # e [rad] at the last step
         self.active = True  # False: no feedback; the offsets return smoothly to the planned path
 
-    def correct(self, axis: int, reading: float) -> None:
-        """A reading of the angle of ``axis`` [rad] arrived this cycle."""
-        self.observers[axis].correct(reading)
+    def correct(self, axis: int, reading: float, age: float | None = None) -> None:
+        """A reading of the angle of ``axis`` [rad] arrived this cycle, ``age`` [s] old (default: ``delay``)."""
+        self.observers[axis].correct(reading, age)
 
     def step(self, ref_angle: Sequence[float], ref_rate: Sequence[float], planned_accel: Sequence[float]) -> None:
         """One cycle: the feedback jerk per axis from the estimate against the reference (θ_ref [rad], θ̇_ref

@@ -5,7 +5,8 @@ acceleration a the robot actually applied (the command, ``actuation_delay`` cycl
 now is the angle ``delay`` cycles ago: its innovation against the estimate kept for that moment corrects the
 current estimate (and the kept history) with the gains of a second-order observer of bandwidth ``bandwidth``
 [rad/s] for the reading interval — the delay-compensating predictor of a Smith-type observer, without its matrices.
-Allocation-free per cycle.
+A sensor that knows each reading's own age (a camera's frames come late by varying amounts) passes it to
+:meth:`DelayedObserver.correct`; the history then reaches back ``max_delay``. Allocation-free per cycle.
 """
 
 from __future__ import annotations
@@ -21,14 +22,15 @@ class DelayedObserver:
 
     def __init__(self, length: float, dt: float, delay: float, reading_interval: float, bandwidth: float = 30.0,
                  damping_ratio: float = 0.8, actuation_delay: int = 2, friction: float = 0.0,
-                 phi0: float = 0.0, coulomb: float = 0.0) -> None:  # fmt: skip
+                 phi0: float = 0.0, coulomb: float = 0.0, max_delay: float | None = None) -> None:  # fmt: skip
         if not (length > 0 and dt > 0 and delay >= 0 and reading_interval > 0 and bandwidth > 0):
             raise ValueError("observer: length, step, reading interval and bandwidth must be > 0, the delay >= 0")
         self.length, self.dt, self.friction = length, dt, friction  # [m], [s], [1/s]
         self.coulomb = coulomb  # [rad/s²] the bearing's dry friction per inertia
         self.phi, self.omega = phi0, 0.0
         self._lag = max(0, int(round(delay / dt)))  # cycles between the reading's moment and now
-        self._hist = [phi0] * (self._lag + 1)  # φ̂ of the last lag + 1 cycles (ring)
+        keep = max(self._lag, int(round(max_delay / dt)) if max_delay is not None else 0)
+        self._hist = [phi0] * (keep + 1)  # φ̂ of the last keep + 1 cycles (ring)
         self._at = 0
         w = bandwidth
         self.gain_phi = min(0.9, 2.0 * damping_ratio * w * reading_interval)
@@ -53,21 +55,29 @@ class DelayedObserver:
         self._at = (self._at + 1) % len(self._hist)
         self._hist[self._at] = self.phi
 
-    def predicted_reading(self) -> float:
-        """The estimate [rad] for the moment a reading arriving now shows (``delay`` ago)."""
-        h = self._hist
-        return h[(self._at + 1) % len(h)]
+    def lag_of(self, age: float | None) -> int:
+        """Cycles back to a reading's moment: ``age`` [s] (None: the ``delay``), within the history kept."""
+        if age is None:
+            return self._lag
+        lag = int(round(age / self.dt))
+        return 0 if lag < 0 else min(lag, len(self._hist) - 1)
 
-    def correct(self, reading: float) -> None:
-        """A reading [rad] (the angle ``delay`` ago) arrived this cycle."""
+    def predicted_reading(self, age: float | None = None) -> float:
+        """The estimate [rad] for the moment a reading arriving now shows (``age`` [s] ago; default ``delay``)."""
         h = self._hist
-        then = h[(self._at + 1) % len(h)]  # the oldest kept: lag cycles ago
+        return h[(self._at - self.lag_of(age)) % len(h)]
+
+    def correct(self, reading: float, age: float | None = None) -> None:
+        """A reading [rad] of the angle ``age`` [s] ago (default ``delay``) arrived this cycle."""
+        h = self._hist
+        lag = self.lag_of(age)
+        then = h[(self._at - lag) % len(h)]  # the estimate kept for that moment
         e = wrap_angle(reading - then)
         self.last_innovation = e
         dp, dw = self.gain_phi * e, self.gain_omega * e
         self.phi += dp
         self.omega += dw
-        lag_dt = self.dt * self._lag
+        lag_dt = self.dt * lag
         self.phi += dw * lag_dt  # the rate correction has acted since the reading's moment
         for k in range(len(h)):
             h[k] += dp

@@ -2,7 +2,7 @@
 
 The client mirrors the ipo position in COMMANDING_WAIT; in COMMANDING_ACTIVE it sends ``policy(k, q_start)``
 (a joint vector [rad]) where k counts the COMMANDING_ACTIVE messages received (0, 1, ...; the time is
-k·period) and q_start is the ipo position of the first one — or no reply at all when the policy returns None.
+k·period) and q_start is the ipo position of the first one — or no reply at all when the policy returns None (a reply without joint positions when it returns ()).
 """
 
 from __future__ import annotations
@@ -136,7 +136,7 @@ class ScriptedClient:
                 q = q_active if policy is None else policy(k_active, q_active)
                 if q is None:
                     continue
-                cmd.commandData.jointPosition.value.extend(np.asarray(q, dtype=float).tolist())
+                cmd.commandData.jointPosition.value.extend(np.asarray(q, dtype=float).tolist())  # () : header only
             cmd.header.sequenceCounter = seq
             cmd.header.reflectedSequenceCounter = rec.seq
             sock.sendto(codec.encode(cmd), addr)

@@ -108,7 +108,9 @@ def test_damping_removes_the_sway_a_wrong_string_length_leaves(tmp_path, sensor,
 @pytest.mark.parametrize(
     "extra, needle",
     [
-        (["--sensor", "camera"], "--sensor"),
+        (["--sensor", "camera", "--robot", "192.170.10.2", "--length", "0.25"], "--camera"),
+        (["--camera", "0"], "--sensor camera"),
+        (["--sensor", "camera", "--sim-delay", "10"], "--sim-camera-latency"),
         (["--io-names", "only_one"], "--io-names"),
         (["--module-axis", "z"], "--module-axis"),
         (["--sim-delay", "-1"], "--sim-delay"),

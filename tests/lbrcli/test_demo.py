@@ -1,10 +1,12 @@
 """`lbr demo` end to end on the built-in simulator: the user's whole loop, asserting its real outcomes."""
 
 import json
+import pytest
 import sys
 import subprocess
 
 
+@pytest.mark.slow
 def test_demo_runs_the_whole_loop(tmp_path):
     out = tmp_path / "demo"
     res = subprocess.run([sys.executable, "-m", "lbrcli", "demo", "--out", str(out), "--json"],

@@ -4,6 +4,7 @@ with --robot 127.0.0.1, against the scripted controller; refusals before any soc
 from __future__ import annotations
 
 import json
+import os
 import signal
 import socket
 import subprocess
@@ -229,7 +230,8 @@ def test_step_must_equal_the_controller_period_unless_resampled(tmp_path):
     np.testing.assert_allclose(active[:401:5], traj.q, atol=1e-12)  # the file's samples, 1 ms in between  # the file's samples, 1 ms in between
 
 
-def test_sigint_mid_run_brakes_within_the_limits_with_a_parseable_log(tmp_path):
+@pytest.mark.parametrize("to", ["process", "group"])  # group: Ctrl-C in a terminal, which reaches the log writer too
+def test_sigint_mid_run_brakes_within_the_limits_with_a_parseable_log(tmp_path, to):
     traj = write_traj(tmp_path / "j.csv", 0.001, 20.0, amp=0.5)
     log = tmp_path / "log.csv"
     port = free_port()
@@ -237,14 +239,17 @@ def test_sigint_mid_run_brakes_within_the_limits_with_a_parseable_log(tmp_path):
     proc = subprocess.Popen(
         [sys.executable, "-m", "lbrcli", "execute", str(tmp_path / "j.csv"), "--robot", "127.0.0.1",
          "--port", str(port), "--log", str(log), "--json"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
     )  # fmt: skip
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:  # wait for streaming rows in the log (phase 2 is column 'phase')
         if log.exists() and log.read_text().count("\n") > 300:
             break
         time.sleep(0.05)
-    proc.send_signal(signal.SIGINT)
+    if to == "group":
+        os.killpg(proc.pid, signal.SIGINT)
+    else:
+        proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=60)
     ctl.client_done.set()
     ctl.join()

@@ -39,6 +39,18 @@ def _first(tr: UdpTransport) -> bytes:
     raise AssertionError("no datagram")
 
 
+def _stream(tr: UdpTransport, n: int, period_s: float) -> list[int]:
+    """The numbers of ``n`` datagrams another process sends every ``period_s`` [s], as received."""
+    th = _sender(tr.port, n, period_s)
+    got = [int.from_bytes(_first(tr), "little")]
+    while len(got) < n:
+        d = tr.receive()
+        assert d is not None
+        got.append(int.from_bytes(d, "little"))
+    th.wait(10)
+    return got
+
+
 def test_receive_times_out_with_none_and_takes_datagrams_in_order() -> None:
     tr = UdpTransport("127.0.0.1", 0, "127.0.0.1", timeout_s=0.05)
     try:
@@ -58,14 +70,7 @@ def test_busy_wait_takes_the_messages_that_arrive_in_its_window() -> None:
     tr = UdpTransport("127.0.0.1", 0, "127.0.0.1", timeout_s=0.05, busy_wait_s=1.5e-3)
     tr.expect_period(2e-3)
     try:
-        th = _sender(tr.port, 200, 2e-3)
-        got = [int.from_bytes(_first(tr), "little")]
-        while len(got) < 200:
-            d = tr.receive()
-            assert d is not None
-            got.append(int.from_bytes(d, "little"))
-        th.wait(10)
-        assert got == list(range(200))
+        assert _stream(tr, 200, 2e-3) == list(range(200))
         # the sender keeps its 2 ms grid: most messages land in the 1.5 ms before and after they are due
         assert tr.polled >= 100
         t0 = time.perf_counter()
@@ -126,5 +131,19 @@ def test_warm_is_called_while_busy_waiting_and_never_while_sleeping() -> None:
         n = len(calls)
         assert tr.receive() is None  # sleeping in select: no warming
         assert len(calls) == n
+    finally:
+        tr.close()
+
+
+def test_the_default_wait_blocks_in_the_kernel_and_takes_every_message_of_a_1ms_stream() -> None:
+    """No busy-wait by default (the CLI's and the library's): each receive blocks until its datagram, none is lost or
+    reordered, and nothing is ever taken by polling, also once the period is known."""
+    tr = UdpTransport("127.0.0.1", 0, "127.0.0.1", timeout_s=0.05)
+    tr.expect_period(1e-3)
+    try:
+        assert _stream(tr, 500, 1e-3) == list(range(500)) and tr.polled == 0
+        t0 = time.perf_counter()
+        assert tr.receive() is None  # then the kernel's receive time-out (SO_RCVTIMEO)
+        assert time.perf_counter() - t0 >= 0.04
     finally:
         tr.close()

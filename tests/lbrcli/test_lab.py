@@ -15,6 +15,9 @@ import pytest
 from lbrcli.lab.pendulum_serial import PendulumEmulator, PendulumReader, format_line, parse_line
 from lbrcli.lab.telemetry import MqttTarget, TelemetryListener, TelemetryPublisher, parse_mqtt_url
 from trajectories.errors import OptionError
+from lbrcli.fri.realtime import permitted
+
+REALTIME = ["--realtime"] if permitted() else []  # refused with exit 2 where the system does not grant it
 
 
 def wait_for(predicate, timeout=5.0):
@@ -241,7 +244,7 @@ def _log(path):
 def test_execute_reads_the_emulated_pendulum_module_over_a_pty(tmp_path, lbr):
     csv = _move_csv(tmp_path / "move.csv")
     log = tmp_path / "log.csv"
-    res = lbr("execute", csv, "--port", "0", "--realtime", "--pendulum", "sim", "--log", log, "--json")
+    res = lbr("execute", csv, "--port", "0", *REALTIME, "--pendulum", "sim", "--log", log, "--json")
     assert res.returncode == 0, res.stderr
     figures = json.loads(res.stdout)
     assert figures["pendulum_lines"] > 100 and figures["pendulum_malformed"] == 0
@@ -279,7 +282,7 @@ def test_execute_publishes_telemetry_to_a_real_broker(broker, tmp_path):
     assert listener.connected.wait(5)
     time.sleep(0.2)
     url = f"mqtt://{broker.host}:{broker.port}/{broker.topic}"
-    res = subprocess.run([sys.executable, "-m", "lbrcli", "execute", str(csv), "--port", "0", "--realtime", "--mqtt", url,
+    res = subprocess.run([sys.executable, "-m", "lbrcli", "execute", str(csv), "--port", "0", *REALTIME, "--mqtt", url,
                           "--mqtt-rate", "20", "--pendulum", "sim", "--json"], capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr
     figures = json.loads(res.stdout)
@@ -308,7 +311,7 @@ def test_lab_options_refused_with_one_line(tmp_path, lbr):
 
 def test_monitor_logs_the_pendulum(tmp_path, lbr):
     log = tmp_path / "mon.csv"
-    res = lbr("monitor", "--duration", "1", "--port", "0", "--realtime", "--sim-lenient", "--pendulum", "sim", "--length", "0.25",
+    res = lbr("monitor", "--duration", "1", "--port", "0", *REALTIME, "--sim-lenient", "--pendulum", "sim", "--length", "0.25",
               "--log", log, "--json")
     assert res.returncode == 0, res.stderr
     table = _log(log)

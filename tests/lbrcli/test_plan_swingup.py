@@ -48,6 +48,7 @@ def test_energy_from_rest_exits_1_with_a_hint(lbr, tmp_path):
     assert "no motion" in line and "--theta0" in line and "--push" in line
 
 
+@pytest.mark.slow
 def test_thesis_example_fails_near_90_deg_on_a_real_string_as_the_thesis_experiments_did(lbr, tmp_path):
     """Thesis Fig. 5.2: the planar (rigid) model of the plan claims 115°; the one-sided string the files are judged
     with goes slack past 90° and the open-loop energy law no longer adds up — the thesis's own experiments peaked at

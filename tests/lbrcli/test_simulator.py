@@ -127,7 +127,7 @@ def test_falls_back_to_monitoring_when_replies_stop():
     i = states.index(CA)
     assert states[i + 1:] == [MW, IDLE]
     assert stats.end_reason == "quality"
-    assert stats.missed_replies >= 3
+    assert stats.missed_replies >= 3 and stats.untimely_active_cycles >= 3  # the quality rule saw them in commanding
     after = [r for r in run.received if r.state == MW and r.seq > run.where(CA)[-1].seq]
     assert after and after[-1].quality <= 1  # POOR or FAIR
     assert all(r.tracking == 0.0 for r in after)
@@ -148,6 +148,29 @@ def test_safety_stop_on_a_command_outside_the_position_limits(limits):
     assert stopped and all(r.state != CA for r in stopped[1:])
     assert stopped[-1].drives == (0,) * 7  # stop category 1: drives off once stopped
     assert max(abs(r.msr_q[0]) for r in run.received) < limits.position[0]
+
+
+def test_a_reply_without_joint_positions_in_commanding_active_ends_the_overlay():
+    """KUKA's LBRClient sets the joint positions in every COMMANDING_ACTIVE cycle; a reply without them is an error:
+    the overlay ends, the robot stops where it is (drives on), the session goes back to monitoring and closes."""
+
+    def policy(k, q0):
+        return () if k >= 20 else q0 + 1e-3 * k  # a slow move, then replies with the header only
+
+    run, stats, _ = run_session(policy=policy, session_duration_s=2.0)
+    assert stats.end_reason == "command_missing" and stats.commands_without_position >= 1
+    assert not stats.safety_stop
+    i = run.states.index(CA)
+    assert run.states[i + 1] in (MR, MW) and run.states[-1] == IDLE
+    active = run.where(CA)
+    assert 20 <= len(active) < 60  # it ended within a few cycles of the first reply without positions
+    after = [r for r in run.received if r.seq > active[-1].seq]
+    assert after and all(r.drives == (2,) * 7 for r in after)  # stopped, drives on (not a safety stop)
+
+
+def test_header_only_replies_in_the_monitoring_states_are_the_protocol():
+    run, stats, _ = run_session(session_duration_s=0.2)
+    assert stats.end_reason == "duration" and stats.commands_without_position == 0
 
 
 def test_clipping_lowers_the_tracking_performance(limits):

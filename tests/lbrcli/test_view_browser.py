@@ -79,6 +79,7 @@ def _check_scene(pg, key: str, log: Path, offset: float, ui_time) -> float:
     return tau
 
 
+@pytest.mark.slow
 def test_offline_file_draws_the_run_where_the_files_say_and_the_slider_moves_it(tmp_path, tmp_path_factory, capsys):
     require_browser()
     run = run_files(tmp_path_factory)
@@ -115,6 +116,7 @@ def test_offline_file_draws_the_run_where_the_files_say_and_the_slider_moves_it(
         assert errors(console) == []
 
 
+@pytest.mark.slow
 def test_live_view_serves_on_loopback_and_follows_its_slider(tmp_path_factory):
     require_browser()
     run = run_files(tmp_path_factory)

@@ -2,6 +2,7 @@
 redundancy resolution could not."""
 
 import numpy as np
+import pytest
 
 from trajectories.arm_angle import ArmGeometry
 from trajectories.ik import IkOptions, solve_ik_path
@@ -22,6 +23,7 @@ def test_plan_along_a_fast_joint_path_is_exact_and_inside_the_limits(robot, limi
     assert plan.peak_speed <= 1.0
 
 
+@pytest.mark.slow
 def test_fast_paths_the_local_redundancy_could_not_follow_are_solved_through_the_plan(robot, limits):
     """Three FK-built paths (reachable within the limits by construction) on which every start candidate stalled
     on a speed limit ("the path needs A3 at 2.37 rad/s") before the plan existed; the third only through the

@@ -15,6 +15,10 @@ PositionHold semantics (as the real controller reports them):
   a position limit, then the drives switch off; the application ends the overlay.
 - A command in COMMANDING_WAIT must mirror the ipo position (and, in torque/wrench mode, carry a torque/wrench:
   KUKA's consistency check); in COMMANDING_ACTIVE a missing torque/wrench counts as zero (``incomplete_commands``).
+- In COMMANDING_ACTIVE every reply must carry the 7 joint positions (in every command mode: KUKA's ``LBRClient``
+  always sets them): a reply to a COMMANDING_ACTIVE message without them is an error — the overlay ends
+  (``end_reason`` "command_missing", ``commands_without_position``) and the robot stops, as after a safety stop
+  but with the drives on.
 """
 
 from __future__ import annotations
@@ -122,6 +126,8 @@ class Controller:
         self._vel_cap = self.limits.velocity * self.period  # [rad/cycle] no faster extrapolation than allowed
         self._cmd_fresh = False  # a command with 7 positions arrived in this interval
         self._header_only = False  # a reply without joint positions arrived in this interval
+        self._missing_refl = -1  # the monitoring counter the last reply without joint positions reflects
+        self._active_from: int | None = None  # the counter of the first COMMANDING_ACTIVE message
         self._target = q0.copy()  # the set-point handed to the interpolator this cycle [rad]
         self._sub = 0  # fine-interpolation sub-step within a receive-multiplier slot
         self._sub_from = q0.copy()
@@ -142,7 +148,7 @@ class Controller:
         self._tracking = 0.0
         self.min_tracking = 1.0
         self.counts = dict(replies=0, late=0, missed=0, malformed_rx=0, foreign_rx=0, commanded=0, gaps=0,
-                           active=0, incomplete=0)
+                           active=0, incomplete=0, no_position=0, untimely_active=0)
 
     # -- receiving -------------------------------------------------------------------------------------------
     def on_datagram(self, data: bytes, arrival: float) -> None:
@@ -194,6 +200,7 @@ class Controller:
                 self._overlay_fresh = True
         else:
             self._header_only = True
+            self._missing_refl = refl
 
     # -- one cycle -------------------------------------------------------------------------------------------
     def cycle(self, t: float) -> bytes:
@@ -202,7 +209,13 @@ class Controller:
         if self.seq >= 0 and was is not SessionState.IDLE:
             self._evaluate_interval()
         mirror_ok, safety = self._check_command(was)
-        state = self.machine.advance(t, self.quality, mirror_ok, safety)
+        missing = (was is CA and self._header_only and self._active_from is not None
+                   and self._missing_refl >= self._active_from)  # fmt: skip
+        if missing:
+            self.counts["no_position"] += 1
+        state = self.machine.advance(t, self.quality, mirror_ok, safety, missing)
+        if state is CA and was is not CA:
+            self._active_from = (self.seq + 1) & _U32
         self._motion(state, was)
         self._set_robot_info()
         if state is not was or not self.states_seen:
@@ -227,6 +240,8 @@ class Controller:
             self._since_timely = 0
         else:
             self._since_timely += 1
+            if self.state is CA:
+                self.counts["untimely_active"] += 1
             if self._any_reply and self._since_timely % k == 0:
                 self.counts["missed"] += 1
         self.quality = self.quality_monitor.push(self._since_timely < k)

@@ -61,6 +61,7 @@ class EndReason:
     DURATION = "duration"  # session_duration_s of COMMANDING_ACTIVE elapsed
     QUALITY = "quality"  # quality dropped below GOOD while commanding
     SAFETY = "safety_stop"  # command outside the position limits
+    COMMAND_MISSING = "command_missing"  # a reply in COMMANDING_ACTIVE without the 7 joint positions
 
 
 @dataclass(frozen=True)
@@ -114,8 +115,11 @@ class SessionMachine:
         self._ending_since = now
         self.state = state
 
-    def advance(self, now: float, quality: ConnectionQuality, mirror_ok: bool | None, safety_stop: bool) -> SessionState:
-        """New state after a cycle. ``mirror_ok``: this cycle's command mirrored ipo (None: no command)."""
+    def advance(self, now: float, quality: ConnectionQuality, mirror_ok: bool | None, safety_stop: bool,
+                command_missing: bool = False) -> SessionState:  # fmt: skip
+        """New state after a cycle. ``mirror_ok``: this cycle's command mirrored ipo (None: no command);
+        ``command_missing``: a reply to a COMMANDING_ACTIVE message carried no joint positions (an error: the overlay
+        ends, the robot stops)."""
         s = self.state
         good = quality >= ConnectionQuality.GOOD
         if s is SessionState.IDLE:
@@ -145,6 +149,9 @@ class SessionMachine:
         elif s is SessionState.COMMANDING_ACTIVE:
             if safety_stop:
                 self._end(now, EndReason.SAFETY, SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT)
+            elif command_missing:
+                self._end(now, EndReason.COMMAND_MISSING,
+                          SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT)
             elif not good:
                 self._end(now, EndReason.QUALITY, SessionState.MONITORING_WAIT)
             elif self.timing.session_duration_s is not None and now - self._since >= self.timing.session_duration_s:

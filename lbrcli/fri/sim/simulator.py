@@ -197,7 +197,8 @@ class Simulator:
         n = min(ncycles, RING)
         times = self._cycle_time[:n] if ncycles <= RING else np.roll(self._cycle_time, -(ncycles % RING))
         pp = percentiles(np.diff(times) * 1e3)
-        lp = percentiles(ctl.latency[: min(ctl.n_latency, RING)] * 1e3)
+        lat = ctl.latency[: min(ctl.n_latency, RING)] * 1e3
+        lp = percentiles(lat)
         wp = percentiles(self._work[:n] * 1e6)
         plants = {p.name: p.figures() for p in ctl.plants}
         ball = next((f["max_ball_theta"] for f in plants.values() if "max_ball_theta" in f), None)
@@ -211,8 +212,10 @@ class Simulator:
             overruns=self.overruns, active_cycles=c["active"],
             period_ms_p50=pp[0], period_ms_p99=pp[1], period_ms_max=pp[2],
             reply_latency_ms_p50=lp[0], reply_latency_ms_p99=lp[1], reply_latency_ms_max=lp[2],
+            reply_latency_ms_p999=float(np.percentile(lat, 99.9)) if len(lat) else None,
             final_q=tuple(float(x) for x in ctl.arm.q),
             work_us_p50=wp[0], work_us_p99=wp[1], cpu_fraction=cpu_fraction, realtime=realtime,
             command_mode=self.cfg.command_mode, io_writes=ctl.io.writes, io_refused=ctl.io.refused,
-            incomplete_commands=c["incomplete"], plants=plants,
+            incomplete_commands=c["incomplete"], commands_without_position=c["no_position"],
+            untimely_active_cycles=c["untimely_active"], plants=plants,
         )

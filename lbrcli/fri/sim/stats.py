@@ -35,6 +35,7 @@ class SimStats:
     period_ms_max: float | None = None
     reply_latency_ms_p50: float | None = None  # send of a message → arrival of the reply reflecting it [ms]
     reply_latency_ms_p99: float | None = None
+    reply_latency_ms_p999: float | None = None
     reply_latency_ms_max: float | None = None
     final_q: tuple[float, ...] = ()  # [rad] measured robot position at the end
     work_us_p50: float | None = None  # per-cycle computation (state, control, dynamics, plants, encode) [µs]
@@ -44,6 +45,8 @@ class SimStats:
     command_mode: str = "position"  # the overlay's client command mode
     io_writes: int = 0  # accepted writeIORequest values
     io_refused: int = 0  # writes to an input, an unknown channel, or with the wrong type (ignored)
+    untimely_active_cycles: int = 0  # COMMANDING_ACTIVE cycles without a timely reply (late or missing)
+    commands_without_position: int = 0  # replies to COMMANDING_ACTIVE messages without joint positions (an error)
     incomplete_commands: int = 0  # commands without the torque (TORQUE) or wrench (WRENCH) the mode needs
     plants: dict = field(default_factory=dict)  # figures of the plants, by plant name
 

@@ -61,3 +61,33 @@ def test_a_wrong_model_length_is_corrected_by_the_readings():
     ep, _ = _track(0.005, length_error=1.2)
     assert ep < math.radians(1.5)
     assert np.isfinite(ep)
+
+
+def _jittered(with_ages: bool, seed: int = 3) -> float:
+    """Max |φ̂ − φ| [rad] over the last 2 s when readings at 120 Hz come 20–70 ms late (a camera on a busy PC): told
+    each reading's age, or assuming the middle 45 ms for all."""
+    p = RigidPendulum(rod_length=0.5)
+    dt = 1e-3
+    rng = np.random.default_rng(seed)
+    obs = DelayedObserver(p.equivalent_length, dt, 0.045, 1 / 120, bandwidth=6.0, actuation_delay=0, max_delay=0.1)
+    phi = omega = 0.0
+    hist, err, queue = [], [], []
+    for k in range(4000):
+        a = 2.0 * math.sin(2 * math.pi * 0.7 * k * dt)
+        phi, omega = rk4_step(p, phi, omega, (a, 0.0), (a, 0.0), dt)
+        hist.append(phi)
+        if k % 8 == 0:  # a frame shows now, arrives 20–70 ms later
+            queue.append((k + int(rng.uniform(20, 70)), k))
+        for arrive, shown in [q for q in queue if q[0] == k]:
+            obs.correct(hist[shown], (k - shown) * dt if with_ages else None)
+        queue = [q for q in queue if q[0] > k]
+        obs.predict(a)
+        if k > 2000:
+            err.append(abs(obs.phi - phi))
+    return max(err)
+
+
+def test_readings_of_varying_age_are_compared_with_their_own_moment():
+    told, assumed = _jittered(True), _jittered(False)
+    assert told < math.radians(0.8), math.degrees(told)  # (measured 0.55°; 1.95–2.25° assuming one delay)
+    assert assumed > 3 * told, (math.degrees(assumed), math.degrees(told))

@@ -1,0 +1,28 @@
+"""Python's settings while an FRI loop runs: no garbage-collector pauses, a short GIL hand-over interval."""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+import sys
+from typing import Iterator
+
+SWITCH_INTERVAL_S = 1e-4  # [s] Python's GIL hand-over interval during a session (default 5 ms): a loop woken by a
+# message waits at most this long for a busy thread of the process (a bridge, a sensor, telemetry) to let it run
+
+
+@contextlib.contextmanager
+def loop_settings() -> Iterator[None]:
+    """Collect now, then no automatic collection (its pauses would land in cycles) and the short switch interval;
+    both restored after."""
+    gc.collect()
+    was = gc.isenabled()
+    gc.disable()
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(min(switch, SWITCH_INTERVAL_S))
+    try:
+        yield
+    finally:
+        sys.setswitchinterval(switch)
+        if was:
+            gc.enable()

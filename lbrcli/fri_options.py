@@ -129,6 +129,16 @@ SimLenientOpt = Annotated[
         "the real controller (--sim-strict: over 50 cycles, 90 %).",
     ),
 ]
+SimLockstepOpt = Annotated[
+    bool,
+    typer.Option(
+        "--sim-lockstep",
+        help="Simulator only: wait for each reply before the next cycle. The simulated time, plants and sensors advance "
+        "one period per cycle, so a closed loop behaves as on an idle PC however busy this one is (it just runs slower "
+        "than real time) — for tests, sweeps and rehearsals on a shared machine. Not with a camera (it renders in real "
+        "time).",
+    ),
+]
 TrackingErrorOpt = Annotated[
     Optional[float],
     number(

@@ -15,6 +15,9 @@ LENIENT_TRACKING_LAG_S = 0.1  # [s] the lag at full speed the embedded simulator
 LENIENT_REPLY_GAP_S = 0.5  # [s] replies the embedded simulator may miss in a row on a loaded PC (default; --sim-strict and a robot: 50 ms)
 
 
+LOCKSTEP_WAIT_S = 30.0  # [s] --sim-lockstep: the longest the simulator waits for a reply (then: a client gone)
+
+
 def simulator_kwargs(*, length: float | None, default_length: float, period_ms: int, sim_start: str | None,
                      default_start: str | Sequence[float], flange: str, tool: str | None, max_runtime_s: float,
                      limits=None) -> dict[str, Any]:  # fmt: skip
@@ -71,6 +74,7 @@ def run_client(
     commanding_timeout_s: float | None = None,
     realtime: bool = False,
     sim_lenient: bool = True,
+    sim_lockstep: bool = False,
     lab=None,
     observers: Sequence[Any] = (),
     max_tracking_error: float | None = None,
@@ -121,6 +125,8 @@ def run_client(
             kw = dict(sim_kwargs)
             if realtime:
                 kw["realtime"] = True
+            if sim_lockstep:
+                kw["lockstep_timeout_s"] = LOCKSTEP_WAIT_S
             if sim_lenient:
                 from .fri.sim import lenient_quality
 

@@ -35,7 +35,13 @@ class ProcessFitter:
         return self._pool.submit(fit_rod, *args)
 
     def close(self) -> None:
+        """Stop the worker, a fit still running included, and wait for the pool's thread (left running, it raced the
+        interpreter's exit and printed an ignored EBADF traceback)."""
+        procs = list((getattr(self._pool, "_processes", None) or {}).values())
         self._pool.shutdown(wait=False, cancel_futures=True)
+        for p in procs:
+            p.terminate()
+        self._pool.shutdown(wait=True)
 
     def __enter__(self) -> "ProcessFitter":
         return self

@@ -25,7 +25,7 @@ from ..rigid_pendulum import wrap_angle
 from .cart import Cart
 from .identify import DECAY_S, QUIET_S, IdentificationError, RodIdentification, excitation, identify
 from .observer import DelayedObserver
-from .upright import Mode, UprightController, UprightOptions, balance_gain
+from .upright import Mode, UprightController, UprightOptions, balance_gain, catch_reach
 
 WAIT, IDENTIFY, FIT, SWING, BALANCE, LOWER, PARK, DONE = (
     "wait", "identify", "fit", "swing", "balance", "lower", "park", "done")  # fmt: skip
@@ -59,13 +59,15 @@ class FitResult:
 
     rod: RodIdentification
     gain: tuple[float, ...]
+    reach: np.ndarray | None = None  # the balance's catch prediction (upright.catch_reach)
 
 
 def fit_rod(t_readings: np.ndarray, readings: np.ndarray, accel: np.ndarray, dt: float, nominal_length: float,
             t0: float, options: UprightOptions) -> FitResult:  # fmt: skip
     """Identify the rod and compute its balance gain (picklable: runs in a worker process)."""
     rod = identify(t_readings, readings, accel, dt, nominal_length, t0)
-    return FitResult(rod, balance_gain(rod.equivalent_length, options))
+    gain = balance_gain(rod.equivalent_length, options)
+    return FitResult(rod, gain, catch_reach(rod.equivalent_length, gain, options.catch_horizon))
 
 
 class UprightSession:
@@ -81,6 +83,8 @@ class UprightSession:
         self.reading_interval = reading_interval
         self.fitter = fitter
         self._nominal_gain = nominal_gain
+        self._nominal_reach = (catch_reach(length, nominal_gain, controller.catch_horizon)
+                               if nominal_gain is not None and any(nominal_gain) else None)  # fmt: skip
         self.phase = WAIT
         self.t = 0.0  # [s] since the session started
         self._phase_t = 0.0  # [s] since the phase started
@@ -176,7 +180,8 @@ class UprightSession:
                 if self.o.identify:
                     self._enter(IDENTIFY)
                 else:
-                    self._start_control(self.length, self._nominal_gain, self.o.sensor_delay_s, 0.0, 0.0)
+                    self._start_control(self.length, self._nominal_gain, self.o.sensor_delay_s, 0.0, 0.0,
+                                        self._nominal_reach)
                 return
         if self._phase_t > self.o.wait_s:
             rec = self._recent
@@ -224,15 +229,16 @@ class UprightSession:
             return
         self.offset = rod.offset
         sensor_delay = max(0.0, rod.delay - self.o.actuation_cycles * self.dt)
-        self._start_control(rod.equivalent_length, res.gain, sensor_delay, rod.damping, rod.coulomb)
+        self._start_control(rod.equivalent_length, res.gain, sensor_delay, rod.damping, rod.coulomb, res.reach)
 
-    def _start_control(self, length: float, gain, sensor_delay: float, damping: float, coulomb: float) -> None:
+    def _start_control(self, length: float, gain, sensor_delay: float, damping: float, coulomb: float,
+                       reach: np.ndarray | None = None) -> None:
         phi0 = 0.0
         if self._rec_y:
             phi0 = self.sign * (self._rec_y[-1] - self.offset)
         self.obs = DelayedObserver(length, self.dt, sensor_delay, self.reading_interval, friction=damping,
                                    actuation_delay=self.o.actuation_cycles, phi0=phi0, coulomb=coulomb)  # fmt: skip
-        self.ctl = UprightController(length, self.cart, self.co, gain, friction=coulomb)
+        self.ctl = UprightController(length, self.cart, self.co, gain, friction=coulomb, reach=reach)
         self._swing_t0 = self.t
         self._enter(SWING)
 

@@ -2,9 +2,10 @@
 
 Modes: ``SWING_UP`` pumps energy (Åström–Furuta): the cart acceleration a = −sat(k_E·(E_top − E)·φ̇·cos φ) − k_x·x
 − k_v·v, so Ė = −a·φ̇·cos φ raises the swing energy E toward the upright's; ``BALANCE`` once the rod is within
-``catch_angle`` of upright with less than ``catch_rate``
-and the cart within ``catch_travel`` of the rail's centre — LQR state feedback on (x, v, a, φ − π, φ̇) with the jerk
-as input; back to ``SWING_UP`` if it falls beyond ``drop_angle``. ``PARK`` (after :meth:`park`) stops balancing and
+``catch_angle`` of upright with less than ``catch_rate`` and the balance can catch it from there on the rail — LQR
+state feedback on (x, v, a, φ − π, φ̇) with the jerk as input, whose linear closed loop from the state at the catch
+(:func:`catch_reach`) must keep the cart within ``catch_travel`` of the rail's travel and within its speed and
+acceleration bounds (a rod caught near an end, or falling toward one, is let swing on and caught on a later pass); back to ``SWING_UP`` if it falls beyond ``drop_angle``. ``PARK`` (after :meth:`park`) stops balancing and
 brings the cart back to the rail's centre and to rest. ``LOWER`` (after :meth:`lower`) brings a balanced rod down as
 the swing-up brought it up, in reverse: the energy follows a target ramped from the upright's to the hanging rod's
 over ``ramp_s``, so the rod swings down in ever smaller swings instead of falling. Every mode drives the
@@ -16,6 +17,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import IntEnum
+
+import numpy as np
 
 from ..rigid_pendulum import swing_energy, wrap_angle
 from ..pendulum import G
@@ -42,7 +45,8 @@ class UprightOptions:
     accel_lag: float = 0.03  # [s] how fast the cart follows the swing-up's acceleration
     catch_angle: float = 0.35  # [rad] from upright
     catch_rate: float = 3.0  # [rad/s]
-    catch_travel: float = 0.6  # share of the rail's travel the cart may be off-centre at the catch [-]
+    catch_travel: float = 0.85  # share of the rail's travel the balance may use after a catch (predicted) [-]
+    catch_horizon: float = 3.0  # [s] of the closed loop predicted at a catch
     drop_angle: float = 0.7  # [rad] from upright
     weights: tuple[float, float, float, float, float] = (30.0, 10.0, 0.1, 200.0, 5.0)  # (x, v, a, θ, θ̇)
     jerk_weight: float = 1e-3
@@ -53,16 +57,39 @@ def balance_gain(length: float, options: UprightOptions = UprightOptions()) -> t
     return tuple(float(k) for k in lqr_gain(length, True, options.weights, options.jerk_weight))
 
 
+def catch_reach(length: float, gain: tuple[float, ...], horizon: float = 3.0, step: float = 0.01) -> np.ndarray:
+    """(3, n, 5): row [i, k] maps the state z = (x, v, a, θ, θ̇) at a catch to the cart's x [m], v [m/s], a [m/s²]
+    (i = 0, 1, 2) after (k + 1)·``step`` [s] under the balance's linear closed loop (gain K, rod of equivalent
+    ``length`` [m]) over ``horizon`` [s]."""
+    from scipy.linalg import expm
+
+    from .lqr import cart_pendulum
+
+    a, b = cart_pendulum(length, True)
+    phi = expm((a - b @ np.asarray(gain, dtype=float).reshape(1, 5)) * step)
+    n = max(1, int(round(horizon / step)))
+    out = np.empty((n, 5, 5))
+    p = np.eye(5)
+    for k in range(n):
+        p = phi @ p
+        out[k] = p
+    return np.ascontiguousarray(out[:, :3, :].transpose(1, 0, 2))
+
+
 class UprightController:
     """Drives ``cart`` from the estimate (φ, φ̇) of a pendulum of equivalent length ``length`` [m]."""
 
     def __init__(self, length: float, cart: Cart, options: UprightOptions = UprightOptions(),
-                 gain: tuple[float, ...] | None = None, friction: float = 0.0) -> None:
+                 gain: tuple[float, ...] | None = None, friction: float = 0.0, reach: np.ndarray | None = None) -> None:
         self.length = length
         self.friction = friction  # μ [rad/s²] the bearing's dry friction per inertia (identified): pumped for
         self.cart = cart
         self.o = options
         self.gain = gain if gain is not None else balance_gain(length, options)
+        # the catch's prediction (pass it in to keep the matrix exponential out of a real-time cycle)
+        self._reach = reach if reach is not None or not any(self.gain) else catch_reach(length, self.gain,
+                                                                                         options.catch_horizon)
+        self._z = np.zeros(5)
         self.mode = Mode.SWING_UP
         self.catches = 0
         self.falls = 0
@@ -82,7 +109,7 @@ class UprightController:
         o, cart = self.o, self.cart
         theta = wrap_angle(phi - math.pi)
         if (self.mode is Mode.SWING_UP and abs(theta) < o.catch_angle and abs(omega) < o.catch_rate
-                and abs(cart.x) < o.catch_travel * cart.limits.travel):
+                and self._catchable(theta, omega)):
             self.mode = Mode.BALANCE
             self.catches += 1
         elif self.mode is Mode.BALANCE and abs(theta) > o.drop_angle:
@@ -113,6 +140,17 @@ class UprightController:
             cart.track(a, o.accel_lag)
         else:
             cart.track(-o.centre_gain * cart.x - o.centre_damping * cart.v, o.accel_lag)
+
+    def _catchable(self, theta: float, omega: float) -> bool:
+        """The balance, started now, keeps the cart inside ``catch_travel`` of the rail and its speed and
+        acceleration bounds (the linear closed loop's prediction)."""
+        if self._reach is None:
+            return False
+        c, z = self.cart, self._z
+        z[0], z[1], z[2], z[3], z[4] = c.x, c.v, c.a, theta, omega
+        r = self._reach @ z  # (3, n)
+        return bool(np.abs(r[0]).max() < self.o.catch_travel * c.limits.travel
+                    and np.abs(r[1]).max() < c.limits.velocity and np.abs(r[2]).max() < c.acceleration_bound)
 
     @property
     def at_rest(self) -> bool:

@@ -83,7 +83,7 @@ def test_lbr_control_upright_swings_up_balances_and_survives_a_push(tmp_path):
     log = tmp_path / "up.csv"
     plot = tmp_path / "up.png"
     # a rod 15 % shorter than the model says, some dry friction, encoder noise: the identification finds it
-    p = run_lbr("control", "upright", "--rod-length", "0.4", "--sim-rod-length", "0.34", "--sim-friction", "0.02",
+    p = run_lbr("control", "upright", "--sim-lockstep", "--rod-length", "0.4", "--sim-rod-length", "0.34", "--sim-friction", "0.02",
                 "--sim-noise", "1", "--hold", "8", "--push", "-10deg@13.5", "--sim-delay", "8", "--log", log,
                 "--plot", plot, "--json", timeout=180)  # fmt: skip
     assert p.returncode == 0, p.stderr
@@ -114,9 +114,9 @@ def test_lbr_control_upright_swings_up_balances_and_survives_a_push(tmp_path):
 
 
 def test_lbr_control_upright_fails_when_it_cannot_catch_and_refuses_bad_input(tmp_path):
-    p = run_lbr("control", "upright", "--swing-timeout", "1", "--hold", "5", timeout=120)
+    p = run_lbr("control", "upright", "--sim-lockstep", "--swing-timeout", "1", "--hold", "5", timeout=120)
     assert p.returncode == 1 and "no catch upright within 1 s" in p.stderr
-    p = run_lbr("control", "upright", "--sim-encoder-sign", "-1", "--hold", "5", timeout=120)
+    p = run_lbr("control", "upright", "--sim-lockstep", "--sim-encoder-sign", "-1", "--hold", "5", timeout=120)
     assert p.returncode == 1 and "--encoder-sign -1" in p.stderr  # detected from the push, not guessed
     for args, text in ((("--rod-length", "0"), "--rod-length"), (("--push", "10deg"), "--push"),
                        (("--robot", "192.0.2.1"), "--pendulum PORT"), (("--push", "10deg@3", "--robot", "192.0.2.1",
@@ -140,19 +140,17 @@ def test_upright_rides_through_lost_and_malformed_messages(robot):
     lim = default_limits()
     model = RigidPendulum(rod_length=0.5)
     rail = build_rail(robot, Q_START, lim, 0.3)
-    from lbrcli.control.fitter import ProcessFitter
     from planners.feedback.session import SessionOptions
 
-    fitter = ProcessFitter()
-    client = UprightClient(rail, model.equivalent_length, lim, session=SessionOptions(hold_s=3.0), fitter=fitter)
+    # no fitter: the identification runs in the cycle while the lock-step simulator waits for it
+    client = UprightClient(rail, model.equivalent_length, lim, session=SessionOptions(hold_s=3.0))
     kw = simulator_kwargs(length=0.0, default_length=0.0, period_ms=1, sim_start=None, default_start=tuple(Q_START),
                           flange="touch-electric", tool=None, max_runtime_s=90)  # fmt: skip
     kw.update(loss=0.02, malformed=0.01, seed=3)
     result, _, lab = run_client(Reporter(True), client, robot=None, port=0, bind=None, version=None, limits=lim,
                                 log_path=None, wait=None, sim_kwargs=kw, lab=LabOptions("sim"),
                                 plants=(RigidModuleSpec(model),), extra_names=LOG_COLUMNS, extra=client.log_values,
-                                sim_lenient=True)  # fmt: skip
-    fitter.close()
+                                sim_lenient=True, sim_lockstep=True)  # fmt: skip (the same loop on a busy machine)
     assert result.outcome.value == "completed", result.detail
     assert result.missed > 50  # the faults happened
     f = client.figures()

@@ -132,6 +132,10 @@ class SimConfig:
     # timing
     spin_us: float = 200.0  # [µs] busy-wait before each send deadline (sleep until then)
     realtime: bool = False  # run the loop with real-time scheduling (SCHED_FIFO) if the OS permits
+    # lock-step: after each message the client must answer, wait for its reply (at most this long [s]) before the
+    # next cycle; the session's clock and the plants advance one period per cycle whatever the wall clock does, so
+    # a closed loop behaves the same on a busy machine (it only runs slower). None: real time, as a controller.
+    lockstep_timeout_s: float | None = None
 
     @property
     def fri_version(self) -> FriVersion:
@@ -200,6 +204,9 @@ class SimConfig:
             bad(f"--quality-window: must be 1..100000 cycles, got {self.quality_window}")
         if self.wait_cycles < 1:
             bad(f"wait_cycles must be >= 1, got {self.wait_cycles}")
+        if self.lockstep_timeout_s is not None and not (math.isfinite(self.lockstep_timeout_s)
+                                                        and 0.0 < self.lockstep_timeout_s <= 60.0):
+            bad(f"--sim-lockstep: the reply wait must be in (0, 60] s, got {self.lockstep_timeout_s:g}")
         for name, v in (("--duration", self.session_duration_s), ("--timeout", self.max_runtime_s)):
             if v is not None and not (math.isfinite(v) and v > 0):
                 bad(f"{name}: must be > 0 s, got {v:g}")

@@ -202,6 +202,16 @@ class Controller:
             self._header_only = True
             self._missing_refl = refl
 
+    def awaits_reply(self) -> bool:
+        """Lock-step: the client must answer the message just sent within this interval — it has answered before,
+        the session is open, and (receiveMultiplier k) no reply came in the k−1 intervals before."""
+        return (self._any_reply and not self._timely and self.state is not SessionState.IDLE
+                and self._since_timely + 1 >= self.cfg.receive_multiplier)  # fmt: skip
+
+    def answered(self) -> bool:
+        """A reply to the message just sent has arrived."""
+        return self._timely
+
     # -- one cycle -------------------------------------------------------------------------------------------
     def cycle(self, t: float) -> bytes:
         """Run the cycle starting at time t [s] (since the first): state, motion, plants; the message to send."""

@@ -167,6 +167,20 @@ class Link:
             if r:
                 self.drain(on_datagram)
 
+    def wait_for(self, done: Callable[[], bool], deadline: float, on_datagram: OnDatagram) -> bool:
+        """Receive (and send delayed datagrams) until ``done()`` or ``deadline`` (perf_counter [s]); whether
+        ``done()`` became true."""
+        fd = [self.sock]
+        while not done():
+            now = time.perf_counter()
+            due = self._flush_delay_line(now) if self._delay_line else math.inf
+            if now >= deadline:
+                return False
+            r, _, _ = select.select(fd, (), (), max(0.0, min(deadline, due) - now))
+            if r:
+                self.drain(on_datagram)
+        return True
+
     def flush(self, on_datagram: OnDatagram, max_wait_s: float = 0.2) -> None:
         """Let datagrams still in the delay line go out (at most ``max_wait_s`` [s] from now)."""
         if self._delay_line:

@@ -8,7 +8,10 @@ and can run with SCHED_FIFO (``realtime``). A real controller sends strictly per
 started a cycle late (its own scheduling), the next cycle still starts ``MIN_SPACING`` periods after it (and at
 least ``MIN_SEND_SPACING`` after a send delayed within its cycle), so the client keeps (almost) a whole period to
 answer and is not judged late for the simulator's delay; the cycles return to their grid over the following
-periods. However the loop stops (session end, stop(), timeout, parent gone), the last messages carry IDLE, as when
+periods. In lock-step (``lockstep_timeout_s``) the loop also waits for each reply the client owes before the next
+cycle, and the session's time advances one period per cycle: a closed loop on a busy machine runs slower than real
+time but exactly as on an idle one (the controller's timestamps, the plants and the sensors they feed all run on
+that time). However the loop stops (session end, stop(), timeout, parent gone), the last messages carry IDLE, as when
 a robot application ends and its FRI session closes.
 """
 
@@ -105,6 +108,8 @@ class Simulator:
         end_reason = ""
         forced = interrupted = False  # the simulator stops before the session ended by itself
         k = 0
+        lockstep = cfg.lockstep_timeout_s or 0.0  # [s] the reply wait of lock-step (0: real time)
+        suspended = -1  # lock-step: replies counted when the client last failed to answer in time (-1: it answers)
         try:
             try:
                 while True:
@@ -112,8 +117,15 @@ class Simulator:
                     if now - grid > period:  # fell behind by more than a cycle: re-synchronise
                         self.overruns += 1
                         grid = now
-                    rel = grid - t0
-                    if self._cycle(k, rel, now) is SessionState.IDLE:
+                    rel = k * period if lockstep else grid - t0
+                    gone = link.lost + link.malformed_sent
+                    state = self._cycle(k, rel, now)
+                    if lockstep and link.lost + link.malformed_sent == gone and ctl.awaits_reply():
+                        if suspended < 0 or ctl.counts["replies"] > suspended:
+                            answered = link.wait_for(ctl.answered, time.perf_counter() + lockstep, on_datagram)
+                            # a client that stopped answering is not waited for again until it answers
+                            suspended = -1 if answered else ctl.counts["replies"]
+                    if state is SessionState.IDLE:
                         ctl.machine.note_idle_sent()
                         if ctl.machine.finished:
                             end_reason = ctl.machine.end_reason or "idle"
@@ -184,7 +196,7 @@ class Simulator:
         while True:
             link.wait_until(next_t, ctl.on_datagram, spin)
             now = time.perf_counter()
-            self._cycle(k, next_t - t0, now)
+            self._cycle(k, k * self.period if self.cfg.lockstep_timeout_s else next_t - t0, now)
             machine.note_idle_sent()
             if machine.finished or now + self.period > deadline:
                 return k

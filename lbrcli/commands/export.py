@@ -57,6 +57,11 @@ def export(
     rep = Reporter(json_out)
     if out.suffix.lower() != ".mcap":
         raise OptionError(f"-o: the output is an MCAP file (.mcap), got {out}")
+    seen: dict[Path, Path] = {}
+    for p in files:
+        if p.resolve() in seen:
+            raise OptionError(f"FILE {p} is given twice (as {seen[p.resolve()]}): one execution log and/or one plan")
+        seen[p.resolve()] = p
     guard_outputs({f"FILE {p}": p for p in files} | {"--limits": limits}, {"-o": out})
     kinds = {p: file_kind(p) for p in files}
     logs = [p for p, k in kinds.items() if k == LOG]

@@ -41,7 +41,11 @@ class SessionOptions:
     wait_s: float = 10.0  # for the rod to hang still
     calm_range: float = math.radians(2.0)  # [rad] the readings' range over CALM_S while hanging still
     identify: bool = True  # identify the rod before the swing-up (else: the nominal model)
-    excite_amplitude: float = 0.06  # [m] the cart's excursion of the excitation (out 2× this and back)
+    # [m] the cart's excursion of the excitation (out 2× this and back); None: a swing of ``excite_swing`` [rad] at
+    # resonance for the nominal rod (amplitude = swing·l/π), within 40 % of the rail's travel — bearing friction eats
+    # into it, and the fit needs a few half-periods of free swing
+    excite_amplitude: float | None = None
+    excite_swing: float = 0.8
     fit_timeout_s: float = 30.0
     lower_ramp_s: float = 6.0  # the energy ramp of the gentle lowering
     lower_timeout_s: float = 20.0  # the lowering and the park together
@@ -194,7 +198,10 @@ class UprightSession:
         o = self.o
         period = 2 * math.pi * math.sqrt(self.length / 9.81)
         t = self._phase_t
-        a_plan = excitation(t - QUIET_S, period, o.excite_amplitude)
+        amplitude = o.excite_amplitude
+        if amplitude is None:
+            amplitude = min(max(o.excite_swing * self.length / math.pi, 0.02), 0.4 * self.cart.limits.travel)
+        a_plan = excitation(t - QUIET_S, period, amplitude)
         self.cart.track(a_plan, self.dt)  # the governor keeps the rail's bounds; the record has what it did
         self._rec_a.append(self.cart.a)
         if raw is not None:

@@ -4,8 +4,8 @@ Modes: ``SWING_UP`` pumps energy (Åström–Furuta): the cart acceleration a = 
 − k_v·v, so Ė = −a·φ̇·cos φ raises the swing energy E toward the upright's; ``BALANCE`` once the rod is within
 ``catch_angle`` of upright with less than ``catch_rate`` and the balance can catch it from there on the rail — LQR
 state feedback on (x, v, a, φ − π, φ̇) with the jerk as input, whose linear closed loop from the state at the catch
-(:func:`catch_reach`) must keep the cart within ``catch_travel`` of the rail's travel and within its speed and
-acceleration bounds (a rod caught near an end, or falling toward one, is let swing on and caught on a later pass); back to ``SWING_UP`` if it falls beyond ``drop_angle``. ``PARK`` (after :meth:`park`) stops balancing and
+(:func:`catch_reach`) must keep the cart within ``catch_travel`` of the rail's travel (a rod caught near an end, or
+falling toward one, is let swing on and caught on a later pass); back to ``SWING_UP`` if it falls beyond ``drop_angle``. ``PARK`` (after :meth:`park`) stops balancing and
 brings the cart back to the rail's centre and to rest. ``LOWER`` (after :meth:`lower`) brings a balanced rod down as
 the swing-up brought it up, in reverse: the energy follows a target ramped from the upright's to the hanging rod's
 over ``ramp_s``, so the rod swings down in ever smaller swings instead of falling. Every mode drives the
@@ -142,15 +142,14 @@ class UprightController:
             cart.track(-o.centre_gain * cart.x - o.centre_damping * cart.v, o.accel_lag)
 
     def _catchable(self, theta: float, omega: float) -> bool:
-        """The balance, started now, keeps the cart inside ``catch_travel`` of the rail and its speed and
-        acceleration bounds (the linear closed loop's prediction)."""
+        """The balance, started now, keeps the cart inside ``catch_travel`` of the rail (the linear closed loop's
+        prediction; its speed and acceleration are the governor's to trim)."""
         if self._reach is None:
             return False
         c, z = self.cart, self._z
         z[0], z[1], z[2], z[3], z[4] = c.x, c.v, c.a, theta, omega
         r = self._reach @ z  # (3, n)
-        return bool(np.abs(r[0]).max() < self.o.catch_travel * c.limits.travel
-                    and np.abs(r[1]).max() < c.limits.velocity and np.abs(r[2]).max() < c.acceleration_bound)
+        return bool(np.abs(r[0]).max() < self.o.catch_travel * c.limits.travel)
 
     @property
     def at_rest(self) -> bool:

@@ -309,7 +309,7 @@ def test_the_follower_against_a_controller_that_loses_and_garbles_messages():
         def poll(self):
             self.k += 1
             self.latest = Target(tuple(Q0 + np.array([min(0.2, 2e-4 * self.k), 0, 0, 0, 0, 0, 0])), seq=self.k)
-            self.latest_time, self.fresh = time.monotonic(), True
+            self.latest_time, self.fresh = self.k * 1e-3, True  # (the fake clock: one poll per 1 ms cycle)
 
         def send(self, data):
             pass
@@ -318,7 +318,7 @@ def test_the_follower_against_a_controller_that_loses_and_garbles_messages():
             return {}
 
     src = Source(k=0, latest=None, latest_time=0.0, fresh=False, error=None, ended=False, owner=None)
-    follower = TargetFollower(src, LIM, timeout_s=1.0, speed_scale=1.0)
+    follower = TargetFollower(src, LIM, timeout_s=1.0, speed_scale=1.0, clock=lambda: src.k * 1e-3)
     script = preamble()
     script += [Cycle(state=CA)] * 300 + [Cycle(state=CA, seq_jump=3)] + [Cycle(state=CA)] * 200
     script += [Cycle(raw=b"\x00garbled")] + [Cycle(state=CA)] * 1500
@@ -337,7 +337,7 @@ def _scripted_source(targets_by_poll):
         def poll(self):
             self.k += 1
             tgt = targets_by_poll(self.k)
-            self.latest_time = time.monotonic()
+            self.latest_time = self.k * 1e-3  # a fake clock (one poll per 1 ms cycle): no wall-clock stall on a busy PC
             if tgt is not None:
                 self.latest, self.fresh = tgt, True
 
@@ -369,7 +369,7 @@ def test_a_pose_target_is_reached_through_the_online_ik_within_the_limits(kind):
         gamma, beta, alpha = Rotation.from_matrix(goal_r).as_euler("xyz")  # fixed X, Y, Z = Rz(α)Ry(β)Rx(γ)
         tgt = Target((*goal_p, alpha, beta, gamma, 0.0), kind=KIND_POSE_ZYX)
     src = _scripted_source(lambda k: tgt if k in (1, 500) else None)
-    follower = TargetFollower(src, LIM, robot=robot, timeout_s=10.0, speed_scale=0.5)
+    follower = TargetFollower(src, LIM, robot=robot, timeout_s=10.0, speed_scale=0.5, clock=lambda: src.k * 1e-3)
     script = preamble() + [Cycle(state=CA)] * 2500
     res, ctl, _, err = run(script, follower, q_start=tuple(Q0))
     assert err is None
@@ -391,7 +391,7 @@ def test_an_unreachable_pose_is_followed_to_the_closest_configuration_and_flagge
 
     tgt = Target((1.6, 0.0, 0.3, 1.0, 0.0, 0.0, 0.0), kind=KIND_POSE)  # 1.6 m out: beyond the 0.8 m reach
     src = _scripted_source(lambda k: tgt if k == 1 else None)
-    follower = TargetFollower(src, LIM, timeout_s=10.0, speed_scale=0.5)
+    follower = TargetFollower(src, LIM, timeout_s=10.0, speed_scale=0.5, clock=lambda: src.k * 1e-3)
     script = preamble() + [Cycle(state=CA)] * 3000
     res, ctl, _, err = run(script, follower, q_start=tuple(Q0))
     assert err is None

@@ -158,6 +158,7 @@ def test_a_plan_alone_is_exported_from_zero_with_its_tf(tmp_path_factory, tmp_pa
     (["LOG", "-o", "x.mcap", "--prefix", "1bad"], "--prefix"),
     (["LOG", "-o", "x.mcap", "--compression", "gzip"], "--compression"),
     (["TRACK", "-o", "x.mcap"], "execution logs and plans"),
+    (["LOG", "LOG", "-o", "x.mcap"], "given twice"),
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path_factory, tmp_path, monkeypatch, capsys, argv,
                                                             message):

@@ -144,7 +144,8 @@ def run_client(
             from lbrcli.lab.attach import LabAttachments
 
             path = sim.pendulum_path if lab.pendulum == "sim" else lab.pendulum
-            attached = LabAttachments(lab, path).start()
+            # in lock-step the module's lines are read in the cycle: they are on the pty before the message
+            attached = LabAttachments(lab, path, polled=embedded and sim_lockstep and lab.pendulum == "sim").start()
             if attached.pendulum is not None:
                 rep.print(f"pendulum module on {path}")
                 if getattr(client, "sway", None) is not None:  # the module's angle is the sway to wait for

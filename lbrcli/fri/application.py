@@ -224,9 +224,12 @@ class ClientApplication(Replying, SessionEnding):
             if self._request_stop(Outcome.INTERRUPTED, self._interrupt, text):
                 return False
         transport = self.transport
+        t_wait = time.monotonic()
         data = transport.receive()  # type: ignore[union-attr]
         now = time.monotonic()
         if data is None:
+            if self._clock.quiet_from is None:
+                self._clock.quiet_from = t_wait
             self._prepared = None
             if self.watchdog is not None:
                 problem = self.watchdog()

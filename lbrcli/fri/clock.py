@@ -11,7 +11,7 @@ class SessionClock:
     """Times of one session [s]; ``t`` is the controller time of the current message since the first one."""
 
     __slots__ = ("first_message_timeout_s", "silence_timeout_s", "duration_s", "t_open", "t_first", "t_last_rx",
-                 "tick", "t_per_tick", "local_clock", "period_key", "period_s")  # fmt: skip
+                 "tick", "t_per_tick", "local_clock", "period_key", "period_s", "quiet_from")  # fmt: skip
 
     def __init__(self, first_message_timeout_s: float, silence_timeout_s: float, duration_s: float | None) -> None:
         self.first_message_timeout_s = first_message_timeout_s
@@ -20,6 +20,9 @@ class SessionClock:
         self.t_open = time.monotonic()
         self.t_first: float | None = None  # time.monotonic() of the first message
         self.t_last_rx = self.t_open
+        # [s] when the first wait without a message since the last one began: silence counts from there, so time
+        # this process spent in its own cycle (a stall, a long callback) is not taken for the controller's silence
+        self.quiet_from: float | None = None
         self.tick = 0  # sequence steps since the first message
         self.t_per_tick = 0.0  # [s] the send period
         self.local_clock: float | None = None  # perf_counter() at the first message when there is no send period
@@ -36,6 +39,7 @@ class SessionClock:
                 self.local_clock = time.perf_counter()
         self.tick += steps
         self.t_last_rx = now
+        self.quiet_from = None
 
     @property
     def t(self) -> float:
@@ -60,8 +64,9 @@ class SessionClock:
         if self.t_first is None:
             waited = now - self.t_open
             return ("first", waited) if waited > self.first_message_timeout_s else None
-        if now - self.t_last_rx > self.silence_timeout_s:
-            return ("silent", now - self.t_last_rx)
+        last = self.t_last_rx if self.quiet_from is None else max(self.t_last_rx, self.quiet_from)
+        if now - last > self.silence_timeout_s:
+            return ("silent", now - last)
         if self.duration_s is not None and not stopping and now - self.t_first >= self.duration_s:
             return ("duration", self.duration_s)
         return None

@@ -67,9 +67,10 @@ def snapshot(mon: Any, pendulum: PendulumReader | None) -> dict[str, Any]:
 class LabAttachments:
     """Started before the session, stopped after it; gives the session its extra log columns and its tap."""
 
-    def __init__(self, options: LabOptions, pendulum_path: str | None) -> None:
+    def __init__(self, options: LabOptions, pendulum_path: str | None, polled: bool = False) -> None:
         self.options = options
-        self.pendulum = PendulumReader(pendulum_path, options.baud, options.pendulum_zero) if pendulum_path else None
+        self.pendulum = (PendulumReader(pendulum_path, options.baud, options.pendulum_zero, threaded=not polled)
+                         if pendulum_path else None)  # fmt: skip
         self.publisher = (
             TelemetryPublisher(parse_mqtt_url(options.mqtt), options.mqtt_rate_hz) if options.mqtt else None
         )

@@ -52,19 +52,36 @@ def format_line(theta: float, omega: float, zero_count: int = 0) -> bytes:
 
 
 class PendulumReader:
-    """Reads the pendulum module's serial port in a daemon thread; ``latest`` is the newest reading (or None)."""
+    """Reads the pendulum module's serial port; ``latest`` is the newest reading (or None).
 
-    def __init__(self, port: str, baud: int = 115200, zero_count: int = 0) -> None:
+    ``threaded`` (default): a daemon thread reads the port as lines arrive. Otherwise every access to ``latest``
+    first takes what the port holds (one non-blocking read) — for the lock-step simulator, whose lines are on the port
+    before the message that follows them, so the session sees them in the same cycle however busy the machine is.
+    """
+
+    def __init__(self, port: str, baud: int = 115200, zero_count: int = 0, threaded: bool = True) -> None:
         self.port = port
         self.baud = baud
         self.zero_count = zero_count
-        self.latest: PendulumReading | None = None
+        self.threaded = threaded
+        self._latest: PendulumReading | None = None
         self.lines = 0
         self.malformed = 0
         self.error: str | None = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._serial = None
+        self._pending = b""
+
+    @property
+    def latest(self) -> PendulumReading | None:
+        if not self.threaded:
+            self.poll()
+        return self._latest
+
+    @latest.setter
+    def latest(self, reading: PendulumReading | None) -> None:
+        self._latest = reading
 
     def start(self) -> "PendulumReader":
         """Open the port (raises OptionError if it cannot be opened) and start reading."""
@@ -76,39 +93,55 @@ class PendulumReader:
             self._serial = serial.serial_for_url(self.port, baudrate=self.baud, timeout=0.05)
         except (serial.SerialException, OSError, ValueError) as exc:
             raise OptionError(f"--pendulum: cannot open serial port {self.port}: {exc}") from None
-        self._thread = threading.Thread(target=self._run, name="pendulum-serial", daemon=True)
-        self._thread.start()
+        if self.threaded:
+            self._thread = threading.Thread(target=self._run, name="pendulum-serial", daemon=True)
+            self._thread.start()
         return self
+
+    def poll(self) -> None:
+        """Take what the port holds now, without waiting (the unthreaded reader)."""
+        ser = self._serial
+        if ser is None or self.error is not None or self._stop.is_set():
+            return
+        try:
+            n = ser.in_waiting
+            if n:
+                self._feed(ser.read(n))
+        except Exception as exc:  # the device went away: keep the session running, report it at the end
+            self.error = str(exc)
 
     def _run(self) -> None:
         # Read whatever has arrived in one call and split lines here: pyserial's readline() reads byte by byte,
         # which would take the GIL from the FRI loop a dozen times per reading.
         ser = self._serial
-        pending = b""
         while not self._stop.is_set():
             try:
                 chunk = ser.read(max(1, ser.in_waiting))
             except Exception as exc:  # the device went away: keep the session running, report it at the end
                 self.error = str(exc)
                 return
-            if not chunk:
-                continue
-            pending += chunk
-            if b"\n" not in chunk:
-                if len(pending) > 256:  # no line end in sight: garbage
-                    self.malformed += 1
-                    pending = b""
-                continue
-            *lines, pending = pending.split(b"\n")
-            latest = None
-            for line in lines:
-                self.lines += 1
-                try:
-                    latest = parse_line(line, self.zero_count)
-                except (ValueError, UnicodeDecodeError):
-                    self.malformed += 1
-            if latest is not None:
-                self.latest = PendulumReading(time.monotonic(), latest[0], latest[1])
+            if chunk:
+                self._feed(chunk)
+
+    def _feed(self, chunk: bytes) -> None:
+        """Split what arrived into lines; the newest good one becomes ``latest``."""
+        pending = self._pending + chunk
+        if b"\n" not in chunk:
+            if len(pending) > 256:  # no line end in sight: garbage
+                self.malformed += 1
+                pending = b""
+            self._pending = pending
+            return
+        *lines, self._pending = pending.split(b"\n")
+        latest = None
+        for line in lines:
+            self.lines += 1
+            try:
+                latest = parse_line(line, self.zero_count)
+            except (ValueError, UnicodeDecodeError):
+                self.malformed += 1
+        if latest is not None:
+            self._latest = PendulumReading(time.monotonic(), latest[0], latest[1])
 
     def stop(self) -> None:
         self._stop.set()

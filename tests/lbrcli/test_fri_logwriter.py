@@ -41,16 +41,23 @@ def test_the_writer_process_writes_the_rows_the_in_process_log_writes(tmp_path, 
 def test_a_writer_that_cannot_write_brakes_and_ends_the_session():
     if not os.path.exists("/dev/full"):
         pytest.skip("no /dev/full on this system")
-    n = 3000
-    player = TrajectoryPlayer(min_jerk(n), LIM, period_s=1e-3)
+    # a 6 s move at ≈ 0.47 rad/s (within every limit, so only the log can end it). The writer runs at nice 19: on
+    # an idle machine it finds the disk full within milliseconds and the session brakes mid-move; on a machine whose
+    # cores are taken by other work it can be starved for the whole move — then the close says so (lbr exits 1)
+    n = 6000
+    player = TrajectoryPlayer(min_jerk(n, amp=1.5), LIM, period_s=1e-3)
     log = LogProcess("/dev/full")
     try:
         res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * (n + 300), player, observers=[log])
     finally:
         log.close()
-    assert err is None and res.outcome is Outcome.FAILED and res.reason is EndReason.OBSERVER_FAILED
-    assert "cannot write the log" in res.detail and "No space left" in res.detail
-    assert res.braking_cycles > 0  # it was moving: a braking stop, not a cut
+    assert err is None, err
+    if res.outcome is Outcome.FAILED:
+        assert res.reason is EndReason.OBSERVER_FAILED, res.detail
+        assert "cannot write the log" in res.detail and "No space left" in res.detail
+        assert res.braking_cycles > 0  # it was moving: a braking stop, not a cut
+    else:  # starved until the end: never a silent success
+        assert res.ok and log.error is not None and "cannot write the log" in log.error, (res.detail, log.error)
 
 
 def test_a_log_that_cannot_be_created_is_refused_at_once(tmp_path):

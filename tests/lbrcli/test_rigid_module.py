@@ -84,7 +84,7 @@ def test_lbr_control_upright_swings_up_balances_and_survives_a_push(tmp_path):
     plot = tmp_path / "up.png"
     # a rod 15 % shorter than the model says, some dry friction, encoder noise: the identification finds it
     p = run_lbr("control", "upright", "--sim-lockstep", "--rod-length", "0.4", "--sim-rod-length", "0.34", "--sim-friction", "0.02",
-                "--sim-noise", "1", "--hold", "8", "--push", "-10deg@13.5", "--sim-delay", "8", "--log", log,
+                "--sim-noise", "1", "--hold", "12", "--push", "-10deg@13.5", "--sim-delay", "8", "--log", log,
                 "--plot", plot, "--json", timeout=180)  # fmt: skip
     assert p.returncode == 0, p.stderr
     fig = json.loads(p.stdout)

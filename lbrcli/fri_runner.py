@@ -15,7 +15,7 @@ LENIENT_TRACKING_LAG_S = 0.1  # [s] the lag at full speed the embedded simulator
 LENIENT_REPLY_GAP_S = 0.5  # [s] replies the embedded simulator may miss in a row on a loaded PC (default; --sim-strict and a robot: 50 ms)
 
 
-LOCKSTEP_WAIT_S = 30.0  # [s] --sim-lockstep: the longest the simulator waits for a reply (then: a client gone)
+LOCKSTEP_WAIT_S = 0.5  # [s] --sim-lockstep: the longest the simulator waits for a reply (below the client's 1 s silence)
 
 
 def simulator_kwargs(*, length: float | None, default_length: float, period_ms: int, sim_start: str | None,

@@ -157,9 +157,7 @@ def upright(
         plants = (RigidModuleSpec(rod, sensor_rate, sim_delay, sim_jitter, pushes=pushes, zero_count=pendulum_zero,
                                   noise_counts=sim_noise, sign=sim_encoder_sign),)  # fmt: skip
     lab = LabOptions(pendulum or "sim", baud, pendulum_zero)
-    # in lock-step the fit runs in the cycle (the simulator waits for it): the session's time then does not depend on
-    # how long a worker process takes on this machine
-    fitter = ProcessFitter() if identify and not sim_lockstep else None
+    fitter = ProcessFitter() if identify else None
     client.fitter = fitter
     try:
         result, sim_stats, lab_figures = run_client(

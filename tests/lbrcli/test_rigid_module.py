@@ -143,8 +143,10 @@ def test_upright_rides_through_lost_and_malformed_messages(robot):
     rail = build_rail(robot, Q_START, lim, 0.3)
     from planners.feedback.session import SessionOptions
 
-    # no fitter: the identification runs in the cycle while the lock-step simulator waits for it
-    client = UprightClient(rail, model.equivalent_length, lim, session=SessionOptions(hold_s=3.0))
+    from lbrcli.control.fitter import ProcessFitter
+
+    fitter = ProcessFitter()  # the fit outside the cycle, as the CLI does
+    client = UprightClient(rail, model.equivalent_length, lim, session=SessionOptions(hold_s=3.0), fitter=fitter)
     kw = simulator_kwargs(length=0.0, default_length=0.0, period_ms=1, sim_start=None, default_start=tuple(Q_START),
                           flange="touch-electric", tool=None, max_runtime_s=90)  # fmt: skip
     kw.update(loss=0.02, malformed=0.01, seed=3)
@@ -152,6 +154,7 @@ def test_upright_rides_through_lost_and_malformed_messages(robot):
                                 log_path=None, wait=None, sim_kwargs=kw, lab=LabOptions("sim"),
                                 plants=(RigidModuleSpec(model),), extra_names=LOG_COLUMNS, extra=client.log_values,
                                 sim_lenient=True, sim_lockstep=True)  # fmt: skip (the same loop on a busy machine)
+    fitter.close()
     assert result.outcome.value == "completed", result.detail
     assert result.missed > 50  # the faults happened
     f = client.figures()

@@ -55,6 +55,8 @@ JUDGES = (
 )
 
 
+@pytest.mark.slow  # real time by nature (the camera renders and streams at its frame rate; no lock-step): beside two
+# busy processes it drops frames and its health check ends the correction; bench_camera_damp measures the band
 def test_the_camera_damps_the_sway_a_wrong_string_length_leaves(crane, tmp_path):
     """Both judges one after the other (each runs four processes in real time: simulator, camera, tracker, client)."""
     path, move_end = crane

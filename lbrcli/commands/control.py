@@ -263,8 +263,9 @@ def damp(
     --sensor camera tracks the ball live in --camera (or, on the simulator, in its own rendered camera) and takes
     the tilt from the camera's geometry, the robot's pivot at each frame's moment and the string length the camera
     measures from the hanging ball. A camera that cannot see the ball along the move, or the sway along an axis the
-    move swings it in, is refused (exit 2); a camera that fails during the run (stream ended, no frames, ball lost)
-    stops the correction, the rows finish as planned, exit 1.
+    move swings it in, is refused before anything is sent (exit 1, as the module on such an axis); a camera that
+    fails during the run (stream ended, no frames, ball lost) stops the correction, the rows finish as planned,
+    exit 1.
     """
     from lbrcli.control.damping import LOG_COLUMNS, DampingClient
     from lbrcli.fri.sway import IoSway, SwayWatch, window_for_length

@@ -189,10 +189,6 @@ def run_client(
     return result, sim_stats, lab_figures
 
 
-def _deg(x: float | None) -> float | None:
-    return None if x is None else math.degrees(x)
-
-
 def print_summary(rep, result, sim_stats, log_path: Path | None) -> dict[str, Any]:
     """Human summary and the figures for --json."""
     from lbrcli.fri.constants import SessionState

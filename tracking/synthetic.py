@@ -440,14 +440,6 @@ def render_pendulum_video(
     )
 
 
-def damped_swing(duration_s: float, amplitude_rad: float, string_m: float = 0.25, damping: float = 0.05,
-                 rate_hz: float = 1000.0) -> tuple[np.ndarray, np.ndarray]:
-    """A test signal: θ(t) [rad] of a lightly damped small-angle pendulum of length string_m [m], sampled at rate_hz."""
-    t = np.arange(int(round(duration_s * rate_hz)) + 1) / rate_hz
-    omega = math.sqrt(9.81 / string_m)
-    return t, amplitude_rad * np.exp(-damping * omega * t) * np.cos(omega * t)
-
-
 def swing_up(duration_s: float, max_deg: float = 150.0, period_s: float = 1.0,
              rate_hz: float = 1000.0) -> tuple[np.ndarray, np.ndarray]:
     """A test signal like a pumped swing-up: θ(t) [rad] oscillating with period_s [s], its amplitude growing

@@ -11,7 +11,7 @@ import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal, Sequence, TextIO
+from typing import Literal, Sequence
 
 import numpy as np
 

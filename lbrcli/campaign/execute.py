@@ -5,12 +5,12 @@ lying clocks, a pushed robot, signals, a full disk and bad files."""
 from __future__ import annotations
 
 import math
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 
 from lbrcli.fri import ClientApplication, EndReason, TrajectoryPlayer
-from lbrcli.fri.testing import CA, CW, IDLE, MR, MW, Cycle, active, preamble
+from lbrcli.fri.testing import CA, CW, IDLE, MR, Cycle, active, preamble
 from lbrcli.fri.testing.campaign import Case
 from trajectories.limits import default_limits
 

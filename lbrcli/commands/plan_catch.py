@@ -8,9 +8,12 @@ robustness band than --min-success is caught; exit 2 on bad options.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any, Optional
+from typing import TYPE_CHECKING, Annotated, Any, Optional
 
 import typer
+
+if TYPE_CHECKING:
+    import numpy as np
 
 from ..cup_options import (
     _BALL, _CUP, _MODEL, BallRadiusOpt, CupAxisOpt, CupDepthOpt, CupRadiusOpt, CupRimOpt, CupWallOpt, DragOpt, FrictionOpt, RestitutionOpt,

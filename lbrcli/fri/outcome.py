@@ -94,7 +94,10 @@ class SessionResult:
 def cost_figures_us(cost_ns: list[int]) -> dict[str, float | None]:
     """``controller_us_p50``, ``_p99``, ``_max`` [µs] of per-cycle costs [ns] (Nones when empty)."""
     c = sorted(cost_ns)
-    pick = (lambda p: None if not c else _percentile_ms(c, p) * 1e3)
+
+    def pick(p: float) -> float | None:
+        return None if not c else _percentile_ms(c, p) * 1e3
+
     return {"controller_us_p50": pick(50), "controller_us_p99": pick(99), "controller_us_max": pick(100)}
 
 

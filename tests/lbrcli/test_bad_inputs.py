@@ -12,12 +12,10 @@ per case): ≈ 800 cases.
 from __future__ import annotations
 
 import contextlib
-import math
 import os
 import resource
 import stat
 import subprocess
-import sys
 import typing
 from pathlib import Path
 

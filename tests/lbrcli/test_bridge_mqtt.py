@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import run_lbr
-from test_bridge import LIM, PERIOD_S, Q0, _judge
+from test_bridge import PERIOD_S, Q0, _judge
 from test_lab import Broker, _free_port
 
 from lbrcli.bridge import MqttBridgeClient

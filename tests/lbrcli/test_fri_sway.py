@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 from lbrcli.fri.testing import CA, Cycle
-from test_fri_application import LIM, Q0, min_jerk, preamble, run, sent_positions
+from test_fri_application import LIM, min_jerk, preamble, run, sent_positions
 
 from lbrcli.fri import Outcome, TrajectoryPlayer
 from lbrcli.fri.sway import IoSway, SwayWatch, window_for_length

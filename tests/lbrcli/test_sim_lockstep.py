@@ -62,7 +62,7 @@ def test_the_same_client_in_real_time_never_gets_past_monitoring_wait():
     config = SimConfig(client_port=client.port, **{**TEST_DEFAULTS, "max_runtime_s": 0.6})
     try:
         with SimulatorProcess(config) as sim:
-            run = client.run(None, timeout=3.0, answer_monitoring=_late)
+            client.run(None, timeout=3.0, answer_monitoring=_late)
             stats = sim.wait(10.0) or sim.stop()
     finally:
         client.close()

@@ -18,7 +18,7 @@ from planners.antisway import (
     simulate_path,
 )
 from planners.accel_shaping import plan_accel_shaping
-from planners.pendulum import G, natural_period, simulate
+from planners.pendulum import natural_period, simulate
 from planners.profiles import BoxProfile
 
 LAYOUT = np.array(DEFAULT_LAYOUT)

@@ -20,7 +20,9 @@ def _run(u_of_t, theta0=0.3, duration=6.0):
 
 
 def test_energy_bookkeeping_along_a_driven_run():
-    u_of_t = lambda t: 2.5 * math.sin(5.0 * t) + 1.0 * math.cos(13.0 * t)  # [m/s²] arbitrary pivot input
+    def u_of_t(t):
+        return 2.5 * math.sin(5.0 * t) + 1.0 * math.cos(13.0 * t)  # [m/s²] arbitrary pivot input
+
     t, (x, v, th, om) = _run(u_of_t)
     e = energy(th, om, L, M)
     u = np.array([u_of_t(tk) for tk in t])

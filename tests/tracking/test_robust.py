@@ -2,7 +2,6 @@
 capture by a round red object, θ in the plane of a tilted camera, fast blurred swing-ups, a skin-coloured
 hand beside an orange ball, an occluding rod, slow-motion timing."""
 
-import math
 
 import numpy as np
 import pytest

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from trajectories.check import check_trajectory
-from trajectories.retime import retime, retime_within
+from trajectories.retime import retime_within
 from trajectories.trajectory import JointTrajectory
 
 

@@ -46,7 +46,9 @@ from .state import LBRState
 from .supervision import Supervisor, commanding_end, consistent, joint_bound, robot_side_end
 from .transport import UdpTransport
 
-IDLE, MON_WAIT, MON_READY, CMD_WAIT, CMD_ACTIVE = 0, 1, 2, 3, 4
+from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE
+from .constants import STATE_COMMANDING_WAIT as CMD_WAIT
+from .constants import STATE_IDLE as IDLE
 
 
 class ClientApplication(Replying, SessionEnding):

@@ -19,6 +19,15 @@ class SessionState(IntEnum):
     COMMANDING_ACTIVE = 4
 
 
+# The session states as plain ints, for the per-cycle comparisons with a decoded message's field (an IntEnum's
+# comparison costs a method call): the one definition every module imports.
+STATE_IDLE = int(SessionState.IDLE)
+STATE_MONITORING_WAIT = int(SessionState.MONITORING_WAIT)
+STATE_MONITORING_READY = int(SessionState.MONITORING_READY)
+STATE_COMMANDING_WAIT = int(SessionState.COMMANDING_WAIT)
+STATE_COMMANDING_ACTIVE = int(SessionState.COMMANDING_ACTIVE)
+
+
 class ConnectionQuality(IntEnum):
     POOR = 0
     FAIR = 1

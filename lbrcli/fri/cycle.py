@@ -9,7 +9,7 @@ from .outcome import SessionResult
 if TYPE_CHECKING:
     from .application import ClientApplication
 
-IDLE = 0
+from .constants import STATE_IDLE as IDLE
 _ZERO7 = (0.0,) * 7
 
 

@@ -19,6 +19,7 @@ from trajectories.envelope import BrakingEnvelope
 from trajectories.limits import JointLimits
 
 from .braking import BrakingStop
+from .constants import STATE_COMMANDING_ACTIVE as _CMD_ACTIVE
 from .constants import ClientCommandMode
 from .guard import CommandGuard
 
@@ -26,7 +27,6 @@ _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
 _ZERO6 = (0.0,) * 6
 _ZERO7 = (0.0,) * 7
-_CMD_ACTIVE = 4
 CLAMP_TOL = 1e-12  # [rad] a change below this is rounding, not a clamp
 BENT_CYCLES = 50  # after a clamp of the bridged history's making, an exact client's rows are clamped back onto
 # the path (not refused) for this many commands

@@ -8,7 +8,7 @@ from typing import Any
 
 from .constants import Phase
 
-_ACTIVE = 4
+from .constants import STATE_COMMANDING_ACTIVE as _ACTIVE
 
 
 class SessionFigures:

@@ -21,7 +21,7 @@ from .motion import ExecutedMotion, Refused
 from .outcome import EndReason, Outcome
 from .supervision import Supervisor, commanding_end
 
-CMD_ACTIVE = 4
+from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE
 CLIENT_CLAMP = 1e-4  # [rad] a clamp the client is told about (``LBRClient.clamped``)
 _POSITION = int(ClientCommandMode.POSITION)
 _TORQUE = int(ClientCommandMode.TORQUE)

@@ -12,7 +12,9 @@ from typing import Any, Sequence
 from .constants import ConnectionQuality, DriveState, SafetyState, SessionState
 from .outcome import EndReason, Outcome
 
-IDLE, CMD_WAIT, CMD_ACTIVE = 0, 3, 4
+from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE
+from .constants import STATE_COMMANDING_WAIT as CMD_WAIT
+from .constants import STATE_IDLE as IDLE
 _DRIVE_ACTIVE = int(DriveState.ACTIVE)
 _POOR = int(ConnectionQuality.POOR)
 POSITION_SLACK = 0.05  # [rad] a reported position beyond the limits by more than this is not a real robot's

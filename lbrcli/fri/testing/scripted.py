@@ -23,7 +23,11 @@ from ..codec import FriCodec
 from ..constants import MONITORING_MESSAGE_ID
 from ..errors import FriDecodeError
 
-MW, MR, CW, CA, IDLE = 1, 2, 3, 4, 0
+from ..constants import STATE_COMMANDING_ACTIVE as CA
+from ..constants import STATE_COMMANDING_WAIT as CW
+from ..constants import STATE_IDLE as IDLE
+from ..constants import STATE_MONITORING_READY as MR
+from ..constants import STATE_MONITORING_WAIT as MW
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,8 @@ from typing import Annotated, Any, Optional, Sequence
 import numpy as np
 import typer
 
+from trajectories.start_poses import THESIS_START
+
 # ---------------------------------------------------------------- parse-time validation
 
 
@@ -313,7 +315,7 @@ MarginOpt = Annotated[
 ]
 
 DEFAULT_FLANGE = "touch-electric"
-THESIS_Q_START = "0,0.071,0,-1.3523,0,0.1301,0"  # [rad], thesis §5.3.2 start pose
+THESIS_Q_START = ",".join(f"{v:g}" for v in THESIS_START)  # [rad] as an option's text, thesis §5.3.2 start pose
 
 
 def robot_config(flange: str, tool: Sequence[float] | str | None):

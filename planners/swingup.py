@@ -20,6 +20,7 @@ from trajectories.check import CheckReport, check_trajectory
 from trajectories.errors import PlanningError
 from trajectories.limits import JointLimits
 from trajectories.robot import Robot
+from trajectories.start_poses import THESIS_START
 from trajectories.trajectory import JointTrajectory
 
 from .swingup_energy import EnergyParams, plan_energy
@@ -28,7 +29,7 @@ from .swingup_plan import PivotPlan, TaskBounds, first_reach, mirrored, reach_si
 from .swingup_robot import ArmSetup, Verification, axis_bounds, joint_path, verify
 from .tension import slack_report
 
-THESIS_Q_START = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)  # [rad], thesis §5.3.2
+THESIS_Q_START = THESIS_START  # [rad], thesis §5.3.2
 METHODS = ("energy", "fast")
 
 

@@ -29,6 +29,7 @@ from scipy.spatial.transform import Rotation
 from .chain import rotation_log
 from .limits import JointLimits
 from .robot import Flange, Robot, RobotConfig
+from .start_poses import THESIS_START
 
 DOWN = np.diag([1.0, -1.0, -1.0])  # flange z along base −z
 
@@ -183,7 +184,7 @@ def issue_circle(dt: float) -> TaskPath:
 
 # Joint-space centres: the thesis start and other comfortable configurations [rad].
 CENTRES = (
-    (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0),
+    THESIS_START,
     (0.3, 0.6, 0.2, -1.2, 0.3, 0.9, -0.4),
     (-0.8, 0.4, -0.5, -1.6, -0.6, 1.0, 0.8),
     (1.2, -0.5, 0.7, 1.4, -0.4, -0.8, 1.5),

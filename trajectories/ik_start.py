@@ -19,13 +19,14 @@ from .errors import IkError
 from .ik import IkResult, PathSolver, _Stall
 from .ik_plan import PlanTargets, best_plan
 from .resample import spaced_indices
+from .start_poses import THESIS_START
 
 SCORE_DT = 0.1  # [s] sample spacing of the scoring pass
 DISTINCT = 0.05  # [rad] candidates closer than this (all joints) count as one
 EXTRA_TRIES = 24  # further candidates tried (coarse pass) when the best-scored ones stall
 PER_CLASS = 1  # candidates scored per configuration class (signs of A2, A4, A6), most comfortable first
 SEEDS = (
-    (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0),  # thesis start
+    THESIS_START,
     (0.0, 0.6, 0.0, -1.2, 0.0, 0.9, 0.0),
     (0.0, -0.6, 0.0, 1.2, 0.0, -0.9, 0.0),
     (0.0, 0.6, 1.2, -1.2, -1.2, 0.9, 0.0),

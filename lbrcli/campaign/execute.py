@@ -13,11 +13,12 @@ from lbrcli.fri import ClientApplication, EndReason, TrajectoryPlayer
 from lbrcli.fri.testing import CA, CW, IDLE, MR, Cycle, active, preamble
 from lbrcli.fri.testing.campaign import Case
 from trajectories.limits import default_limits
+from trajectories.start_poses import THESIS_START
 
 from .faults import PREAMBLE, _flip, _mutate
 
 LIM = default_limits()
-Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])
+Q0 = np.array(THESIS_START)  # [rad]
 DIRECTION = np.array([1, 0.5, -0.5, 1, 0.3, -1, 1])
 
 

@@ -22,11 +22,12 @@ from lbrcli.fri import ClientCommandMode, EndReason, LBRClient, StopSession
 from lbrcli.fri.testing import CA, Cycle, active, preamble
 from lbrcli.fri.testing.campaign import Case, Run
 from trajectories.limits import default_limits
+from trajectories.start_poses import THESIS_START
 
 from .faults import NORMAL, PREAMBLE, Fault, controller_faults
 
 LIM = default_limits()
-Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)  # the thesis start pose [rad]
+Q0 = THESIS_START  # [rad]
 DIRECTION = np.array([1, 0.5, -0.5, 1, 0.3, -1, 1])
 REFUSED = (EndReason.CLIENT_REFUSED, EndReason.GUARD)
 

@@ -10,11 +10,12 @@ import math
 from dataclasses import dataclass
 
 from trajectories.errors import OptionError
+from trajectories.start_poses import THESIS_START
 
 from ..constants import N_JOINTS, OperationMode
 from ..messages import FriVersion
 
-THESIS_Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)  # [rad], thesis §5.3.2 start pose
+THESIS_Q0 = THESIS_START  # [rad], thesis §5.3.2 start pose
 OPERATION_MODES = {"T1": OperationMode.TEST_MODE_1, "T2": OperationMode.TEST_MODE_2, "AUT": OperationMode.AUTOMATIC_MODE}
 COMMAND_MODES = ("position", "torque", "wrench")  # the overlay's client command mode
 IO_TYPES = ("boolean", "digital", "analog")  # FriIOType 0, 1, 2

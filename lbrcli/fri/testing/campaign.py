@@ -21,6 +21,7 @@ from typing import Any, Callable, Iterator, Sequence
 
 from trajectories.csvio import read_table
 from trajectories.limits import JointLimits, default_limits
+from trajectories.start_poses import THESIS_START
 
 from ..application import ClientApplication
 from ..client import LBRClient
@@ -56,7 +57,7 @@ class Case:
     client: Callable[[], LBRClient]  # a fresh client
     expect: tuple[EndReason, ...]  # acceptable ends
     surface: str = "client"
-    q_start: tuple[float, ...] = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)  # [rad] where the robot stands
+    q_start: tuple[float, ...] = THESIS_START  # [rad] where the robot stands
     period_s: float = 1e-3
     limits: JointLimits | None = None
     # the controller waits 1 s for each reply (a loaded machine is slow, a message that must not be answered costs that)

@@ -139,6 +139,16 @@ SimLockstepOpt = Annotated[
         "time).",
     ),
 ]
+SimFastOpt = Annotated[
+    bool,
+    typer.Option(
+        "--sim-fast",
+        help="Simulator only: lock-step (--sim-lockstep) as fast as this computer answers — each cycle starts as soon "
+        "as the reply to the last is in, not on the period's grid. The session, its log and its figures are those of "
+        "the same run in real time on an idle PC (simulated time advances one period per cycle); a 60 s file "
+        "rehearses in seconds. Not with a camera.",
+    ),
+]
 TrackingErrorOpt = Annotated[
     Optional[float],
     number(

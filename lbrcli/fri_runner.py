@@ -75,6 +75,7 @@ def run_client(
     realtime: bool = False,
     sim_lenient: bool = True,
     sim_lockstep: bool = False,
+    sim_fast: bool = False,
     lab=None,
     observers: Sequence[Any] = (),
     max_tracking_error: float | None = None,
@@ -125,8 +126,9 @@ def run_client(
             kw = dict(sim_kwargs)
             if realtime:
                 kw["realtime"] = True
-            if sim_lockstep:
+            if sim_lockstep or sim_fast:
                 kw["lockstep_timeout_s"] = LOCKSTEP_WAIT_S
+                kw["lockstep_free"] = sim_fast
             if sim_lenient:
                 from .fri.sim import lenient_quality
 
@@ -145,7 +147,7 @@ def run_client(
 
             path = sim.pendulum_path if lab.pendulum == "sim" else lab.pendulum
             # in lock-step the module's lines are read in the cycle: they are on the pty before the message
-            attached = LabAttachments(lab, path, polled=embedded and sim_lockstep and lab.pendulum == "sim").start()
+            attached = LabAttachments(lab, path, polled=embedded and (sim_lockstep or sim_fast) and lab.pendulum == "sim").start()
             if attached.pendulum is not None:
                 rep.print(f"pendulum module on {path}")
                 if getattr(client, "sway", None) is not None:  # the module's angle is the sway to wait for

@@ -20,7 +20,7 @@ from typing import Annotated, Any, Optional
 import typer
 
 from ..fri_options import (BaudOpt, BindOpt, BusyWaitOpt, LogOpt, PendZeroOpt, SessionPeriodOpt, PlotOpt, PortOpt,
-                           RealtimeOpt, RobotOpt, SimLenientOpt, SimLockstepOpt, VersionOpt, WaitOpt)  # fmt: skip
+                           RealtimeOpt, RobotOpt, SimLenientOpt, SimFastOpt, SimLockstepOpt, VersionOpt, WaitOpt)  # fmt: skip
 from ..options import (DEFAULT_FLANGE, THESIS_Q_START, DtOpt, FlangeOpt, JointVector, JsonOpt, LimitsOpt, ToolOpt,
                        choice, floats, grid, joints, number)  # fmt: skip
 
@@ -86,6 +86,7 @@ def upright(
     busy_wait: BusyWaitOpt = None,
     sim_lenient: SimLenientOpt = True,
     sim_lockstep: SimLockstepOpt = False,
+    sim_fast: SimFastOpt = False,
     limits: LimitsOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
@@ -118,7 +119,7 @@ def upright(
         raise OptionError("--rod-mass and --tip-mass cannot both be 0")
     pushes = _pushes(push)
     check_simulator_only(robot, {"--push": bool(pushes), "--sim-delay": sim_delay != 5.0, "--sim-jitter": sim_jitter != 1.0,
-                                 "--sim-strict": not sim_lenient, "--sim-lockstep": sim_lockstep})  # fmt: skip
+                                 "--sim-strict": not sim_lenient, "--sim-lockstep": sim_lockstep, "--sim-fast": sim_fast})  # fmt: skip
     if robot is not None and not pendulum:
         raise OptionError("--pendulum PORT is needed with --robot (the module's serial port)")
     if robot is None and pendulum not in (None, "sim"):
@@ -159,12 +160,12 @@ def upright(
     lab = LabOptions(pendulum or "sim", baud, pendulum_zero)
     fitter = None
     if identify:  # in lock-step the fit's result is taken a fixed number of cycles after it was asked for
-        fitter = ProcessFitter(round(LOCKSTEP_FIT_S / ((period or 1) * 1e-3)) if sim_lockstep else None)
+        fitter = ProcessFitter(round(LOCKSTEP_FIT_S / ((period or 1) * 1e-3)) if sim_lockstep or sim_fast else None)
     client.fitter = fitter
     try:
         result, sim_stats, lab_figures = run_client(
             rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-            sim_kwargs=sim_kwargs, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), sim_lenient=sim_lenient, sim_lockstep=sim_lockstep,
+            sim_kwargs=sim_kwargs, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), sim_lenient=sim_lenient, sim_lockstep=sim_lockstep, sim_fast=sim_fast,
             lab=lab, plants=plants, extra_names=LOG_COLUMNS, extra=client.log_values,
         )  # fmt: skip
     finally:
@@ -245,6 +246,7 @@ def damp(
     busy_wait: BusyWaitOpt = None,
     sim_lenient: SimLenientOpt = True,
     sim_lockstep: SimLockstepOpt = False,
+    sim_fast: SimFastOpt = False,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -292,8 +294,9 @@ def damp(
                              sim_camera_position, sim_camera_look_at, sim_camera_fov, sim_camera_size, sim_camera_fps,
                              sim_camera_exposure, sim_camera_latency, sim_camera_stop, sim_camera_stamp)  # fmt: skip
     cam_opts.validate(sensor, robot)
-    if sensor == "camera" and sim_lockstep:
-        raise OptionError("--sim-lockstep: the simulator's camera films in real time; run --sensor camera without it")
+    if sensor == "camera" and (sim_lockstep or sim_fast):
+        flag = "--sim-fast" if sim_fast else "--sim-lockstep"
+        raise OptionError(f"{flag}: the simulator's camera films in real time; run --sensor camera without it")
     if sensor == "camera" and sim_delay != 0.0:
         raise OptionError("--sim-delay delays the simulator's ball IO and module; its camera's delay is --sim-camera-latency")
     names = tuple(n.strip() for n in io_names.split(","))
@@ -306,7 +309,7 @@ def damp(
     period_T = natural_period(model_len)
     damp_s = 3.0 * period_T if damp_time is None else damp_time
     check_simulator_only(robot, {"--sim-length": sim_length is not None, "--sim-delay": sim_delay != 0.0,
-                                 "--sim-start": sim_start is not None, "--sim-strict": not sim_lenient, "--sim-lockstep": sim_lockstep})  # fmt: skip
+                                 "--sim-start": sim_start is not None, "--sim-strict": not sim_lenient, "--sim-lockstep": sim_lockstep, "--sim-fast": sim_fast})  # fmt: skip
     if sensor == "module" and robot is not None and not pendulum:
         raise OptionError("--pendulum PORT is needed with --sensor module and --robot")
     if robot is None and pendulum not in (None, "sim"):
@@ -382,7 +385,7 @@ def damp(
         lab = LabOptions(pendulum or "sim", baud, pendulum_zero) if sensor == "module" else None
         result, sim_stats, lab_figures = run_client(
             rep, client, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-            sim_kwargs=sim_kwargs, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), sim_lenient=sim_lenient, sim_lockstep=sim_lockstep,
+            sim_kwargs=sim_kwargs, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), sim_lenient=sim_lenient, sim_lockstep=sim_lockstep, sim_fast=sim_fast,
             lab=lab, plants=plants, extra_names=LOG_COLUMNS, extra=client.log_values,
         )  # fmt: skip
         if camera_sensor is not None:

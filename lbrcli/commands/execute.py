@@ -28,7 +28,7 @@ from ..fri_options import (
     RealtimeOpt,
     BusyWaitOpt,
     SimLenientOpt,
-    SimLockstepOpt,
+    SimFastOpt, SimLockstepOpt,
     TrackingErrorOpt,
     RobotOpt,
     SimStartOpt,
@@ -121,6 +121,7 @@ def execute(
     busy_wait: BusyWaitOpt = None,
     sim_lenient: SimLenientOpt = True,
     sim_lockstep: SimLockstepOpt = False,
+    sim_fast: SimFastOpt = False,
     max_tracking_error: TrackingErrorOpt = None,
     pendulum: PendulumOpt = None,
     baud: BaudOpt = 115200,
@@ -159,7 +160,7 @@ def execute(
 
     rep = Reporter(json_out)
     check_simulator_only(robot, {"--sim-start": sim_start is not None, "--damping": damping != 0.0, "--cup": cup is not None,
-                                 "--receive-multiplier": receive_multiplier != 1, "--sim-strict": not sim_lenient, "--sim-lockstep": sim_lockstep})  # fmt: skip
+                                 "--receive-multiplier": receive_multiplier != 1, "--sim-strict": not sim_lenient, "--sim-lockstep": sim_lockstep, "--sim-fast": sim_fast})  # fmt: skip
     ball = DEFAULT_BALL_LENGTH if length is None and robot is None else length
     if log is not None and log.resolve() == joint_csv.resolve():
         raise OptionError(f"--log {log} is the trajectory file itself; choose another name")
@@ -233,7 +234,7 @@ def execute(
             sim_kwargs["ball_model"] = parse_cup_spec(cup, ball)
     result, sim_stats, lab_figures = run_client(
         rep, player, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, sim_lockstep=sim_lockstep, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), max_tracking_error=max_tracking_error, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
+        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, sim_lockstep=sim_lockstep, sim_fast=sim_fast, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), max_tracking_error=max_tracking_error, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
         extra_names=(FILE_ROWS_COLUMN,), extra=lambda state: (len(player.rows),),  # the log tells when it completed
     )  # fmt: skip
     figures = print_summary(rep, result, sim_stats, log)

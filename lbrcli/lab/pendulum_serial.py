@@ -157,11 +157,27 @@ class PendulumReader:
         self.stop()
 
 
+LOCKSTEP_SETTLE_S = 0.05  # [s] the longest a line written in a lock-step cycle is waited for on the reader's side
+
+
+def _readable(fd: int) -> int:
+    """Bytes the terminal ``fd`` holds for its readers (FIONREAD)."""
+    import array
+    import fcntl
+    import termios
+
+    buf = array.array("i", [0])
+    fcntl.ioctl(fd, termios.FIONREAD, buf, True)
+    return buf[0]
+
+
 class PendulumEmulator:
     """The module's radio receiver emulated on a pseudo-terminal: ``path`` is the device a reader opens.
 
     ``feed(t, θ, ω)`` writes a line at most every 1/rate_hz seconds, non-blocking (a full buffer drops lines,
-    as a radio link would).
+    as a radio link would). With ``settle_s`` > 0 (a simulator in lock-step) ``send`` returns once the line can be
+    read on the reader's side (at most that long): the kernel hands a pty's bytes over asynchronously, so a line
+    written in a cycle could otherwise reach the reader a cycle or more later on a busy machine.
     """
 
     def __init__(self, rate_hz: float = 200.0, zero_count: int = 0, delay_s: float = 0.0, jitter_s: float = 0.0,
@@ -184,6 +200,7 @@ class PendulumEmulator:
         self._rng = random.Random(seed)
         self._queue: deque[tuple[float, bytes]] = deque()
         self._last_due = -math.inf
+        self.settle_s = 0.0  # [s] see the class docstring
 
     def feed(self, t: float, theta: float, omega: float) -> None:
         """The angle θ [rad] and rate ω [rad/s] at time t [s]: a line every 1/rate_hz, on the port after the delay
@@ -213,12 +230,19 @@ class PendulumEmulator:
         import os
 
         try:
+            before = _readable(self.slave) if self.settle_s > 0.0 else 0
             os.write(self.master, line)
             self.sent += 1
-            return True
         except (BlockingIOError, OSError):
             self.dropped += 1
             return False
+        if self.settle_s > 0.0:  # the reader does not read meanwhile: in lock-step it waits for this cycle's message
+            import time
+
+            deadline = time.perf_counter() + self.settle_s
+            while _readable(self.slave) < before + len(line) and time.perf_counter() < deadline:
+                time.sleep(0)
+        return True
 
     def write_raw(self, data: bytes) -> None:
         import os

@@ -4,6 +4,8 @@ ball plant before it in ``SimConfig.plants``."""
 
 from __future__ import annotations
 
+from lbrcli.lab.pendulum_serial import LOCKSTEP_SETTLE_S
+
 import math
 from dataclasses import dataclass
 from typing import Sequence
@@ -33,7 +35,9 @@ class PendulumModuleSpec:
         ball = next((p for p in context.plants if isinstance(p, Ball)), None)
         if ball is None:
             raise OptionError("the pendulum module emulation needs a simulated ball (--length)")
-        return PendulumModule(self, ball, context.period_s)
+        module = PendulumModule(self, ball, context.period_s)
+        module._emu.settle_s = LOCKSTEP_SETTLE_S if context.lockstep else 0.0
+        return module
 
 
 class PendulumModule:

@@ -15,6 +15,8 @@ encoder zero, wrapped to (−π, π]) and ``pendulum_omega`` [rad/s]. ``pushes``
 
 from __future__ import annotations
 
+from lbrcli.lab.pendulum_serial import LOCKSTEP_SETTLE_S
+
 import math
 import random
 from dataclasses import dataclass, field
@@ -73,7 +75,9 @@ class RigidModuleSpec:
     def build(self, context) -> "RigidModule":
         self.validate()
         start = context.robot.fk(np.asarray(context.q0, dtype=float))
-        return RigidModule(self, context.period_s, start.translation.tolist(), start.rotation)
+        module = RigidModule(self, context.period_s, start.translation.tolist(), start.rotation)
+        module._emu.settle_s = LOCKSTEP_SETTLE_S if context.lockstep else 0.0
+        return module
 
 
 class RigidModule:

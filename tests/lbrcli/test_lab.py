@@ -325,3 +325,21 @@ def test_telemetry_that_reaches_no_broker_is_a_failure(lbr):
     res = lbr("monitor", "--duration", "0.5", "--port", "0", "--sim-lenient", "--mqtt", "mqtt://127.0.0.1:1/lbr/state")
     assert res.returncode == 1 and "Traceback" not in res.stderr
     assert res.stderr.strip().splitlines()[-1].startswith("lbr: failed: telemetry: nothing was published")
+
+
+def test_in_lock_step_a_module_line_is_readable_when_its_cycle_ends():
+    """settle_s (a simulator in lock-step): send returns once the reader's side holds the line, so the client's
+    poll in the same cycle reads it however late the kernel hands pty bytes over on a busy machine."""
+    from lbrcli.lab.pendulum_serial import COUNTS_PER_TURN, PendulumEmulator, PendulumReader, format_line
+
+    emu = PendulumEmulator(rate_hz=200.0)
+    emu.settle_s = 0.5
+    reader = PendulumReader(emu.path, threaded=False).start()
+    try:
+        for k in range(1, 60):
+            assert emu.send(format_line(0.01 * k, 0.0))  # this cycle's line
+            reading = reader.latest  # the client's poll in the same cycle
+            assert reading is not None and abs(reading.theta - 0.01 * k) <= math.pi / COUNTS_PER_TURN + 1e-12, k
+    finally:
+        reader.stop()
+        emu.close()

@@ -95,3 +95,36 @@ def test_a_bad_reply_wait_is_refused():
     for bad in (0.0, -1.0, float("nan"), 61.0):
         with pytest.raises(OptionError, match="--sim-lockstep"):
             SimConfig(client_port=1, lockstep_timeout_s=bad).validate()
+
+
+def test_fast_lock_step_runs_the_same_session_as_paced_lock_step():
+    """``lockstep_free`` (--sim-fast) starts each cycle when the reply is in, not on the period's grid: the session the
+    client sees — stamps one period apart, every command followed, the measured joints — is the paced one's."""
+
+    def policy(k, q0):
+        q = q0.copy()
+        q[6] += 2e-4 * k  # [rad] a slow ramp on A7
+        return q
+
+    sessions = {}
+    for free in (False, True):
+        run, stats = _session(policy=policy, session_duration_s=0.3, lockstep_free=free)
+        assert_sequence(run.states)
+        assert stats.end_reason == "duration" and stats.untimely_active_cycles == 0, stats
+        ns = np.array([s * 1_000_000_000 + n for s, n in (r.stamp for r in run.received)], dtype=np.int64)
+        assert np.all(np.diff(ns) == 4_000_000)
+        active = run.where(CA)
+        assert abs(len(active) - 75) <= 2
+        sessions[free] = np.array([r.msr_q for r in active])
+    paced, fast = sessions[False], sessions[True]
+    n = min(len(paced), len(fast))
+    assert n >= 70 and np.array_equal(paced[:n], fast[:n])  # joint for joint, cycle for cycle
+
+
+def test_fast_lock_step_needs_lock_step():
+    import pytest
+
+    from trajectories.errors import OptionError
+
+    with pytest.raises(OptionError, match="--sim-fast"):
+        SimConfig(client_port=1, lockstep_free=True).validate()

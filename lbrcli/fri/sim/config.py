@@ -137,6 +137,9 @@ class SimConfig:
     # next cycle; the session's clock and the plants advance one period per cycle whatever the wall clock does, so
     # a closed loop behaves the same on a busy machine (it only runs slower). None: real time, as a controller.
     lockstep_timeout_s: float | None = None
+    # lock-step only: start the next cycle as soon as the reply is in instead of on the period's grid — the session
+    # runs as fast as client and simulator compute (its clock, plants and sensors still one period per cycle)
+    lockstep_free: bool = False
 
     @property
     def fri_version(self) -> FriVersion:
@@ -208,6 +211,8 @@ class SimConfig:
         if self.lockstep_timeout_s is not None and not (math.isfinite(self.lockstep_timeout_s)
                                                         and 0.0 < self.lockstep_timeout_s <= 60.0):
             bad(f"--sim-lockstep: the reply wait must be in (0, 60] s, got {self.lockstep_timeout_s:g}")
+        if self.lockstep_free and self.lockstep_timeout_s is None:
+            bad("--sim-fast runs the simulator in lock-step: it needs the reply wait of --sim-lockstep")
         for name, v in (("--duration", self.session_duration_s), ("--timeout", self.max_runtime_s)):
             if v is not None and not (math.isfinite(v) and v > 0):
                 bad(f"{name}: must be > 0 s, got {v:g}")

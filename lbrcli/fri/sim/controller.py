@@ -91,7 +91,7 @@ class Controller:
         self._init_state(q0)
         self.plants = []
         self._plant_io: list[list] = []
-        ctx = PlantContext(self.period, self.robot, tuple(cfg.q0))
+        ctx = PlantContext(self.period, self.robot, tuple(cfg.q0), lockstep=cfg.lockstep_timeout_s is not None)
         for spec in cfg.plants:
             plant = spec.build(ctx)
             ctx.plants.append(plant)

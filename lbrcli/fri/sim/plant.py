@@ -21,6 +21,7 @@ class PlantContext:
     robot: Any  # trajectories.robot.Robot (pinocchio model with the configured TCP)
     q0: tuple[float, ...]  # [rad] the robot's start position
     plants: list = field(default_factory=list)  # the plants built before this one (in SimConfig.plants order)
+    lockstep: bool = False  # the simulator runs in lock-step: what a plant hands the client must be there each cycle
 
 
 @runtime_checkable

@@ -109,12 +109,15 @@ class Simulator:
         forced = interrupted = False  # the simulator stops before the session ended by itself
         k = 0
         lockstep = cfg.lockstep_timeout_s or 0.0  # [s] the reply wait of lock-step (0: real time)
+        free = bool(lockstep and cfg.lockstep_free)  # lock-step off the period's grid: the next cycle at once
         suspended = -1  # lock-step: replies counted when the client last failed to answer in time (-1: it answers)
         try:
             try:
                 while True:
                     now = time.perf_counter()
-                    if now - grid > period:  # fell behind by more than a cycle: re-synchronise
+                    if free:
+                        grid = now
+                    elif now - grid > period:  # fell behind by more than a cycle: re-synchronise
                         self.overruns += 1
                         grid = now
                     rel = k * period if lockstep else grid - t0
@@ -144,7 +147,8 @@ class Simulator:
                     if end_reason:
                         forced = True
                         break
-                    link.wait_until(send_at, on_datagram, spin)
+                    if not (free and ctl.answered()):  # free lock-step paces in real time until the client answers
+                        link.wait_until(send_at, on_datagram, spin)
             except KeyboardInterrupt:
                 end_reason, forced, interrupted = "stopped", True, True  # slot k is free or reused
                 send_at = max(send_at, time.perf_counter())

@@ -18,10 +18,7 @@ message after its reply, so its stop brakes from the next command. A client that
 expected message is decoded and checked (:mod:`~lbrcli.fri.replying`). Lost
 monitoring messages were bridged by the controller's extrapolation: the guard's reference and the braking stop
 continue from there, and the client is told how many command periods it missed (``LBRClient.skipped``).
-FRI 2.7: in CARTESIAN_POSE mode the client's pose is turned into joints (:class:`~lbrcli.fri.cartesian.PoseSolver`,
-the TCP of ``tcp_robot``) which pass the same core and guard as joint commands — a pose that cannot be reached or
-jumps is refused like a joint command — and the pose of the admitted joints goes out (a braking stop too); a
-``transformation_client`` provides the frames the application requests (:mod:`~lbrcli.fri.transformation`).
+FRI 2.7 Cartesian poses and transformation requests (``tcp_robot``, ``transformation_client``): :mod:`.replying`.
 """
 
 from __future__ import annotations
@@ -78,16 +75,11 @@ class ClientApplication(Replying, SessionEnding):
         tracking_lag_s: float | None = None,
         busy_wait_s: float = 0.0,
         prepare: bool = True,
-        transformation_client: TransformationClient | None = None,
-        tcp_robot: Any = None,
+        transformation_client: TransformationClient | None = None, tcp_robot: Any = None,
     ) -> None:
         self.client = client
-        self.transformation_client = transformation_client
-        self.tcp_robot = tcp_robot  # trajectories.robot.Robot whose TCP the controller's Cartesian poses are (None:
-        # the default robot, Touch Electric flange, no tool)
-        self._poses: Any = None  # PoseSolver, built at the first Cartesian command
-        self.prepares = (prepare and transformation_client is None
-                         and type(client).prepare_command is not LBRClient.prepare_command)  # fmt: skip
+        self.transformation_client, self.tcp_robot = transformation_client, tcp_robot
+        self.prepares = prepare and type(client).prepare_command is not LBRClient.prepare_command
         self.robot = robot
         self.port_requested = port
         self.bind_host = bind_host
@@ -384,10 +376,7 @@ class ClientApplication(Replying, SessionEnding):
             if self._stop is not None and not (motion is not None and motion.braking):
                 self._finish(*self._stop, observe=True)
                 return False
-        tc = self.transformation_client
-        if tc is not None:  # every message but IDLE, after the robot client (KUKA's ClientApplication::step)
-            tc.values.clear()
-            self._call_client("provide", on=tc)
+        self._provide_frames()
         cyc.phase = self.client.phase
         cyc.row = self.client.row
         if not due:
@@ -399,9 +388,7 @@ class ClientApplication(Replying, SessionEnding):
                 return False
         else:
             reply.header_only()  # plus IO writes, in the monitoring states
-        reply.set_io(cmd.io_writes)  # type: ignore[union-attr]
-        if tc is not None:
-            reply.set_transformations(tc.values)  # type: ignore[union-attr]
+        self._set_extras(cmd)  # IO writes, transformations
         try:
             transport.send(reply.datagram(self._client_seq, seq))  # type: ignore[union-attr]
         except OSError as exc:
@@ -430,6 +417,4 @@ class ClientApplication(Replying, SessionEnding):
         self._cmd = LBRCommand(self.state)
         self.client.robot_state = self.state
         self.client.robot_command = self._cmd
-        if self.transformation_client is not None:
-            self.transformation_client.robot_state = self.state
         self._reply = ReplyMessage(codec)

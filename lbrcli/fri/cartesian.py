@@ -84,7 +84,8 @@ class PoseSolver:
 
     def __init__(self, robot: Robot, limits: JointLimits, period_s: float, jump_cycles: int = JUMP_CYCLES) -> None:
         self.limits = limits
-        self.ik = OnlineIk(robot, limits, OnlineIkOptions(max_iterations=12, limit_margin=1e-4))
+        self.ik = OnlineIk(robot, limits, OnlineIkOptions(max_iterations=12, position_tolerance=1e-10,
+                                                          rotation_tolerance=1e-10, limit_margin=1e-4))
         self.max_jump = np.asarray(limits.velocity, dtype=float) * period_s * jump_cycles  # [rad]
 
     def solve(self, seed: Sequence[float], position: np.ndarray, rotation: np.ndarray, e1: float) -> PoseSolution:

@@ -8,6 +8,13 @@ When that message arrives it is decoded and checked as every message (self-consi
 the session), and the prepared reply goes out at once; the client's ``command`` call, which must set the same
 position, and the rest of the cycle follow. Any other message (lost ones before it, a state change, a stop) takes
 the full cycle. Supervision judges each message after its reply: a problem it finds brakes from the next command.
+
+FRI 2.7: in CARTESIAN_POSE mode the client's pose is turned into joints (:class:`~lbrcli.fri.cartesian.PoseSolver`,
+the TCP of the application's ``tcp_robot``: a ``trajectories.robot.Robot``, default the Touch Electric flange without
+a tool) which pass the same core and guard as joint commands — a pose that cannot be reached or jumps is refused like
+a joint command — and the pose of the admitted joints goes out (a braking stop's too). The application's
+``transformation_client`` provides the frames the robot application requests (:mod:`~lbrcli.fri.transformation`):
+called for every message but IDLE after the robot client, as KUKA's ``ClientApplication::step``.
 """
 
 from __future__ import annotations
@@ -52,7 +59,8 @@ class Replying:
     _stop: Any
     _ended: bool
     _prepared: Prepared | None
-    _poses: Any
+    _poses: Any = None  # the PoseSolver, built at the first Cartesian command
+    transformation_client: Any
     tcp_robot: Any
     limits: Any
     _client_seq: int
@@ -153,6 +161,7 @@ class Replying:
         only in COMMANDING_ACTIVE, POSITION mode, receive multiplier 1, and while nothing stops or brakes."""
         motion = self._motion
         if (self._stop is not None or self._ended or motion is None or motion.braking
+                or self.transformation_client is not None  # (its provide() runs in the full cycle)
                 or mon.ipoData.clientCommandMode != _POSITION or (mon.connectionInfo.receiveMultiplier or 1) != 1):  # fmt: skip
             return
         try:
@@ -171,6 +180,20 @@ class Replying:
         reply.set_io(())  # type: ignore[union-attr]
         nxt = (seq + 1) & 0xFFFFFFFF
         self._prepared = (nxt, reply.datagram(self._client_seq, nxt), q)  # type: ignore[union-attr]
+
+    def _provide_frames(self) -> None:
+        """The transformation client's ``provide`` for this message (values kept for the reply)."""
+        tc = self.transformation_client
+        if tc is not None:
+            tc.robot_state = self.state
+            tc.values.clear()
+            self._call_client("provide", on=tc)  # type: ignore[attr-defined]
+
+    def _set_extras(self, cmd: LBRCommand) -> None:
+        """The client's IO writes and the transformation client's values into this cycle's reply."""
+        self._reply.set_io(cmd.io_writes)
+        if self.transformation_client is not None:
+            self._reply.set_transformations(self.transformation_client.values)
 
     def _pose_solver(self, motion: ExecutedMotion) -> Any:
         """The session's PoseSolver (built at the first Cartesian command: pinocchio only for clients that use it)."""

@@ -14,6 +14,8 @@ from typing import Any
 
 from ..cartesian import wire_to_pose
 
+__all__ = ["TransformationBank"]
+
 
 class TransformationBank:
     """Requested frames ``names`` in monitoring message ``mon`` and what the client sent for them."""

@@ -10,6 +10,7 @@ tests/lbrcli/test_sim_kuka27.py.
 
 from __future__ import annotations
 
+import fcntl
 import os
 import shutil
 import subprocess
@@ -25,9 +26,17 @@ def _exe(name: str) -> Path:
 
 
 def build(src: str | None = None) -> str | None:
-    """Build the 2.7 examples of ``APPS``; None when done (or cached), else why not."""
+    """Build the 2.7 examples of ``APPS``; None when done (or cached), else why not. One build at a time (a lock
+    file: test workers in parallel wait for the first one's build)."""
     if all(_exe(a).exists() for a in APPS):
         return None
+    BUILD_DIR.parent.mkdir(parents=True, exist_ok=True)
+    with open(BUILD_DIR.parent / "kuka-fri-2.7.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        return None if all(_exe(a).exists() for a in APPS) else _build(src)
+
+
+def _build(src: str | None) -> str | None:
     src = src or os.environ.get("LBR_KUKA_FRI_SRC")
     if not src:
         return "no KUKA SDK source: set LBR_KUKA_FRI_SRC to a checkout of github.com/lbr-stack/fri"

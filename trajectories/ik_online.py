@@ -96,36 +96,44 @@ class OnlineIk:
         return pin.getFrameJacobian(self._model, self._data, self._fid, pin.LOCAL_WORLD_ALIGNED)
 
     def solve(self, seed: np.ndarray, position: np.ndarray, rotation: np.ndarray,
-              posture: np.ndarray | None = None) -> OnlineIkResult:  # fmt: skip
+              posture: np.ndarray | None = None, lock: tuple[int, float] | None = None) -> OnlineIkResult:  # fmt: skip
         """Joints reaching the TCP ``position`` [m] and ``rotation`` (3×3) in the base frame, from ``seed`` [rad].
 
         With ``posture`` [rad] the redundancy is pulled toward it in the null space (``posture_gain`` per call), so a
-        source going round in circles does not let the elbow drift."""
+        source going round in circles does not let the elbow drift. ``lock`` = (joint index, value [rad]) fixes one
+        joint instead (KUKA's redundancy E1: the A3 angle); the other six then reach the pose, no posture pull."""
         o = self.options
-        q = np.clip(np.asarray(seed, dtype=float), self._lo, self._hi)
+        lo, hi, w = self._lo, self._hi, self._w
+        if lock is not None:  # a box of zero width and zero step weight for the locked joint
+            j, value = lock
+            lo, hi, w = lo.copy(), hi.copy(), w.copy()
+            lo[j] = hi[j] = float(value)
+            w[j] = 0.0
+            posture = None
+        q = np.clip(np.asarray(seed, dtype=float), lo, hi)
         err = self._kinematics(q, position, rotation)
         it = 0
         while it < o.max_iterations and not _small(err, o):
             it += 1
             jac = self._frame_jacobian()
-            jw = jac * self._w  # step in weighted joints z: dq = w·z
+            jw = jac * w  # step in weighted joints z: dq = w·z
             dz = jw.T @ np.linalg.solve(jw @ jw.T + o.damping * np.eye(6), err)
-            dq = self._w * dz
+            dq = w * dz
             peak = np.abs(dq).max()
             if peak > o.max_step:
                 dq *= o.max_step / peak
-            if np.any(q + dq > self._hi) or np.any(q + dq < self._lo):
+            if np.any(q + dq > hi) or np.any(q + dq < lo):
                 # the least-squares step inside the box: min |J·dq − err|² + λ|dq|²
                 h = jac.T @ jac + o.damping * np.eye(7)
-                dq = solve_box_qp(h, jac.T @ err, np.maximum(self._lo - q, -o.max_step),
-                                  np.minimum(self._hi - q, o.max_step)).x  # fmt: skip
-            q = np.clip(q + dq, self._lo, self._hi)
+                dq = solve_box_qp(h, jac.T @ err, np.maximum(lo - q, -o.max_step),
+                                  np.minimum(hi - q, o.max_step)).x  # fmt: skip
+            q = np.clip(q + dq, lo, hi)
             err = self._kinematics(q, position, rotation)
         if posture is not None and o.posture_gain > 0:  # first order: leaves the TCP where it is
-            jw = self._frame_jacobian() * self._w
-            pull = o.posture_gain * (np.asarray(posture) - q) / self._w
+            jw = self._frame_jacobian() * w
+            pull = o.posture_gain * (np.asarray(posture) - q) / w
             pull -= jw.T @ np.linalg.solve(jw @ jw.T + o.damping * np.eye(6), jw @ pull)
-            q = np.clip(q + self._w * pull, self._lo, self._hi)
+            q = np.clip(q + w * pull, lo, hi)
             err = self._kinematics(q, position, rotation)
         return OnlineIkResult(q, float(np.linalg.norm(err[:3])), float(np.linalg.norm(err[3:])), it, _small(err, o))
 

@@ -45,7 +45,8 @@ def sim(
     realtime: Annotated[bool, typer.Option("--realtime", help="Run the loop with real-time scheduling (SCHED_FIFO) if permitted: steadier 1 ms under load.")] = False,
     pendulum_pty: Annotated[bool, typer.Option("--pendulum-pty", help="Also emulate the thesis's pendulum module: the ball's planar angle θy as AS5600 lines on a pseudo-terminal (its path is printed; read it with --pendulum PATH). Needs --length.")] = False,
     no_overlay: Annotated[bool, typer.Option("--no-overlay", help="The application only monitors the session (never commands; --duration counts from the first MONITORING_READY), e.g. for KUKA's IOAccess example, which mirrors no positions.")] = False,
-    mode: Annotated[str, choice("--mode", choices=("position", "torque", "wrench"), fold=str.lower, help="Client command mode of the simulated FRI overlay: position (joint position, position control), torque (joint impedance + commanded torque) or wrench (Cartesian impedance + commanded wrench).")] = "position",
+    mode: Annotated[str, choice("--mode", choices=("position", "torque", "wrench", "cartesian"), fold=str.lower, help="Client command mode of the simulated FRI overlay: position (joint position, position control), torque (joint impedance + commanded torque), wrench (Cartesian impedance + commanded wrench) or cartesian (FRI 2.7 CARTESIAN_POSE: the client commands the TCP pose and E1 = A3, turned into joints by IK; an unreachable or jumping pose ends the overlay).")] = "position",
+    transformation: Annotated[Optional[list[str]], typer.Option("--transformation", metavar="NAME", help="FRI 2.7: a frame the robot application asks the client to provide (requestedTransformations; repeatable, at most 5). The values the client sends are reported per frame (received, last value \\[m], timestamp).")] = None,
     stiffness: Annotated[float, number("--stiffness", low=0, high=1e5, low_open=True, unit="Nm/rad", help="Joint impedance stiffness \\[Nm/rad] (--mode torque), every joint.")] = 1000.0,
     cartesian_stiffness: Annotated[tuple, typer.Option("--cartesian-stiffness", parser=_cartesian_stiffness, metavar="TRANS,ROT", help="Cartesian impedance stiffness TRANS,ROT \\[N/m, Nm/rad] along the TCP axes (--mode wrench).")] = "2000,200",
     damping_ratio: Annotated[float, number("--damping-ratio", low=0, high=10, help="Damping ratio ζ of the impedance controllers (KUKA's default 0.7).")] = 0.7,
@@ -70,7 +71,8 @@ def sim(
 
     The robot application holds the robot (PositionHold): the ipo position stays where the robot stood when the
     overlay started, the measured position follows the client's commands (KUKA's LBRJointSineOverlay commands
-    ipo + sine). FRI 2.7 messages carry the measured and ipo Cartesian poses, the external force and E1 (A3).
+    ipo + sine). FRI 2.7 messages carry the measured and ipo Cartesian poses, the external force and E1 (A3);
+    --mode cartesian runs KUKA's CARTESIAN_POSE overlay, --transformation NAME requests frames from the client.
     """
     from trajectories.robot import parse_flange, parse_tool
 
@@ -112,7 +114,7 @@ def sim(
         quality_fair=min(0.5, quality_good), quality_excellent=max(0.98, quality_good),
         operation_mode=operation_mode, realtime=realtime, limits_path=str(limits) if limits is not None else None,
         overlay=not no_overlay, command_mode=mode, joint_stiffness=stiffness, damping_ratio=damping_ratio, io=channels,
-        torque_noise=torque_noise, **extra,
+        torque_noise=torque_noise, transformations=tuple(transformation or ()), **extra,
     )
     config.validate()
     interrupted: list[int] = []  # signals received (SIGINT, SIGTERM)
@@ -163,6 +165,12 @@ def sim(
         rep.print(f"IO: {stats.io_writes} writes applied, {stats.io_refused} refused (input or unknown channel)")
     if stats.incomplete_commands:
         rep.print(f"{stats.incomplete_commands} commands lacked the {config.command_mode} the mode needs (taken as 0)")
+    if stats.command_problem:
+        rep.print(f"[red]overlay ended[/red]: {stats.command_problem}")
+    for name, fig in stats.transformations.items():
+        last = fig["last"]
+        where = "" if last is None else " last x, y, z " + ", ".join(f"{v * 1e3:.3f}" for v in last[:3]) + " mm"
+        rep.print(f"transformation {name}: {fig['received']} values received{where}")
     if stats.safety_stop:
         rep.print("[red]safety stop[/red]: a command was outside the position limits (or not a number)")
     if stats.max_ball_theta is not None:

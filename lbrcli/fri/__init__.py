@@ -13,7 +13,8 @@ Write a client by subclassing :class:`LBRClient` and run it with :class:`ClientA
     with ClientApplication(Sine(), robot="192.170.10.2", port=30200) as app:
         result = app.run()
 
-The application owns the loop: transport, counters, the per-cycle guard, the braking stop and the observers
+FRI 2.7: ``LBRCommand.set_cartesian_pose`` in CARTESIAN_POSE mode, :class:`TransformationClient` for the frames a
+robot application requests (docs/guides/fri-2.7-cartesian.md). The application owns the loop: transport, counters, the per-cycle guard, the braking stop and the observers
 (log, figures). The simulator is in :mod:`lbrcli.fri.sim`.
 """
 
@@ -45,6 +46,7 @@ from .outcome import EndReason, Outcome, SessionResult
 from .players import OnlineMove, TrajectoryPlayer
 from .signals import interrupts_brake
 from .state import LBRState
+from .transformation import TransformationClient
 
 __all__ = [
     "BrakingStop",
@@ -82,6 +84,7 @@ __all__ = [
     "SessionState",
     "StopSession",
     "TrajectoryPlayer",
+    "TransformationClient",
     "detect_version",
     "interrupts_brake",
 ]

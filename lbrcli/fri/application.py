@@ -18,6 +18,7 @@ message after its reply, so its stop brakes from the next command. A client that
 expected message is decoded and checked (:mod:`~lbrcli.fri.replying`). Lost
 monitoring messages were bridged by the controller's extrapolation: the guard's reference and the braking stop
 continue from there, and the client is told how many command periods it missed (``LBRClient.skipped``).
+FRI 2.7 Cartesian poses and transformation requests (``tcp_robot``, ``transformation_client``): :mod:`.replying`.
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ from .reply import ReplyMessage
 from .replying import Prepared, Replying
 from .state import LBRState
 from .supervision import Supervisor, commanding_end, consistent, joint_bound, robot_side_end
+from .transformation import TransformationClient
 from .transport import UdpTransport
 
 from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE
@@ -75,8 +77,10 @@ class ClientApplication(Replying, SessionEnding):
         tracking_lag_s: float | None = None,
         busy_wait_s: float = 0.0,
         prepare: bool = True,
+        transformation_client: TransformationClient | None = None, tcp_robot: Any = None,
     ) -> None:
         self.client = client
+        self.transformation_client, self.tcp_robot = transformation_client, tcp_robot
         self.prepares = prepare and type(client).prepare_command is not LBRClient.prepare_command
         self.robot = robot
         self.port_requested = port
@@ -374,6 +378,7 @@ class ClientApplication(Replying, SessionEnding):
             if self._stop is not None and not (motion is not None and motion.braking):
                 self._finish(*self._stop, observe=True)
                 return False
+        self._provide_frames()
         cyc.phase = self.client.phase
         cyc.row = self.client.row
         if not due:
@@ -385,7 +390,7 @@ class ClientApplication(Replying, SessionEnding):
                 return False
         else:
             reply.header_only()  # plus IO writes, in the monitoring states
-        reply.set_io(cmd.io_writes)  # type: ignore[union-attr]
+        self._set_extras(cmd)  # IO writes, transformations
         try:
             transport.send(reply.datagram(self._client_seq, seq))  # type: ignore[union-attr]
         except OSError as exc:

@@ -4,7 +4,7 @@ Subclass it and override what you need; the :class:`~lbrcli.fri.application.Clie
 monitoring message, ``on_state_change(old, new)`` when the session state changed, then by state ``monitor``
 (MONITORING_WAIT/READY), ``wait_for_command`` (COMMANDING_WAIT) or ``command`` (COMMANDING_ACTIVE). In the
 commanding states set the joint position (always, as KUKA requires) through ``self.robot_command``, plus torques in
-TORQUE mode or a wrench in WRENCH mode. ``command`` may instead return the joint position [rad] (7 values).
+TORQUE mode or a wrench in WRENCH mode (FRI 2.7 CARTESIAN_POSE mode: ``set_cartesian_pose`` instead of joints). ``command`` may instead return the joint position [rad] (7 values).
 ``after_reply`` runs once the reply is on its way, for work that should not delay it. A client whose next command does
 not depend on the next message (a stream of precomputed positions) may say so in ``prepare_command``: its reply then
 goes out as soon as the message is checked.
@@ -79,10 +79,14 @@ class LBRClient:
         ends the session from the next cycle."""
 
     def hold_ipo(self, state: LBRState) -> None:
-        """Command the ipo position, and zero torque / wrench in TORQUE / WRENCH mode (KUKA's default)."""
+        """Command the ipo position, and zero torque / wrench in TORQUE / WRENCH mode; the ipo pose (and E1) in
+        CARTESIAN_POSE mode (KUKA's default)."""
         cmd = self.robot_command
-        cmd.set_joint_position(state.message.ipoData.jointPosition.value)
         mode = state.message.ipoData.clientCommandMode
+        if mode == ClientCommandMode.CARTESIAN_POSE:
+            cmd.set_cartesian_pose(state.ipo_cartesian_pose)
+            return
+        cmd.set_joint_position(state.message.ipoData.jointPosition.value)
         if mode == ClientCommandMode.TORQUE:
             cmd.set_torque(_ZERO_TORQUE)
         elif mode == ClientCommandMode.WRENCH:

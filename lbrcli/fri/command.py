@@ -1,14 +1,16 @@
-"""What the client answers in a cycle (KUKA's ``LBRCommand``): joint position, torque, wrench, IO writes.
+"""What the client answers in a cycle (KUKA's ``LBRCommand``): joint position, torque, wrench, Cartesian pose, IO.
 
 The application resets it before each callback and writes what was set into the command message. As in KUKA's
 SDK the joint position is always required in the commanding states (also in TORQUE and WRENCH mode); torques are
 allowed only in TORQUE mode, a wrench only in WRENCH mode, IO writes only to channels the controller reports as
-outputs. Values are taken by reference (no copy); the application checks them in its guard before sending.
+outputs. In FRI 2.7's CARTESIAN_POSE mode the client sets the TCP pose (and optionally E1) instead of joints; the
+application turns it into joints (IK), guards those like any joint command and sends their pose. Values are taken by
+reference (no copy); the application checks them in its guard before sending.
 """
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Sequence
 
 from .constants import ClientCommandMode
 from .errors import FriCommandError
@@ -25,10 +27,12 @@ class LBRCommand:
         self.joint_position: Sequence[float] | None = None  # [rad] 7 values
         self.torque: Sequence[float] | None = None  # [Nm] 7 values (TORQUE mode)
         self.wrench: Sequence[float] | None = None  # fx, fy, fz [N], tx, ty, tz [Nm] (WRENCH mode)
+        self.cartesian_pose: Any = None  # 4×4 [m] TCP in the base frame (CARTESIAN_POSE mode)
+        self.redundancy: float | None = None  # E1 = A3 [rad] with the pose; None: the ipo E1
         self.io_writes: list[tuple[str, int, float | int]] = []  # (name, FriIOType, value)
 
     def reset(self) -> None:
-        self.joint_position = self.torque = self.wrench = None
+        self.joint_position = self.torque = self.wrench = self.cartesian_pose = self.redundancy = None
         if self.io_writes:
             self.io_writes.clear()
 
@@ -52,6 +56,20 @@ class LBRCommand:
         if self._state.message.ipoData.clientCommandMode != ClientCommandMode.WRENCH:
             raise FriCommandError("a Cartesian wrench can be commanded only in client command mode WRENCH")
         self.wrench = wrench
+
+    def set_cartesian_pose(self, pose, redundancy: float | None = None) -> None:
+        """TCP pose in the base frame to command (CARTESIAN_POSE mode only, FRI 2.7): a 4×4 or 3×4 matrix, its 12
+        row-major values (translation [m]) or x, y, z [m], qw, qx, qy, qz; ``redundancy`` E1 = the A3 angle [rad]
+        (None: the controller's ipo E1). FriCommandError in another mode or for a malformed pose."""
+        if self._state.message.ipoData.clientCommandMode != ClientCommandMode.CARTESIAN_POSE:
+            raise FriCommandError("a Cartesian pose can be commanded only in client command mode CARTESIAN_POSE")
+        from .cartesian import pose_matrix  # (pinocchio only for clients that use it)
+
+        try:
+            self.cartesian_pose = pose_matrix(pose)
+        except ValueError as exc:
+            raise FriCommandError(f"Cartesian pose: {exc}") from None
+        self.redundancy = None if redundancy is None else float(redundancy)
 
     def _write(self, name: str, kind: int, value: float | int) -> None:
         if not self._state.is_output(name):

@@ -56,10 +56,11 @@ class SessionEnding:
         self._finish(outcome, reason, text)
         return True
 
-    def _call_client(self, method: str, *args: Any) -> Any:
-        """The client's ``method``; its StopSession or exception becomes the session's (braking) stop."""
+    def _call_client(self, method: str, *args: Any, on: Any = None) -> Any:
+        """The client's (or ``on``'s: the transformation client's) ``method``; its StopSession or exception becomes
+        the session's (braking) stop."""
         try:
-            return getattr(self.client, method)(*args)
+            return getattr(self.client if on is None else on, method)(*args)
         except StopSession as s:
             outcome = Outcome.COMPLETED if s.completed else Outcome.REFUSED
             reason = EndReason.FINISHED if s.completed else (EndReason.BAD_INPUT if s.bad_input else EndReason.CLIENT_REFUSED)

@@ -1,5 +1,6 @@
 """The command message the application sends back: one protobuf object reused every cycle (no allocation beyond
-what protobuf needs), filled with the guarded joint position, torque or wrench and the IO writes."""
+what protobuf needs), filled with the guarded joint position, torque or wrench — or, in FRI 2.7's CARTESIAN_POSE
+mode, the pose of the guarded joint position and its E1 instead of joints — the IO writes and the transformations."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from .constants import COMMAND_MESSAGE_ID, ClientCommandMode
 
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
+_CARTESIAN = int(ClientCommandMode.CARTESIAN_POSE)
 
 
 class ReplyMessage:
@@ -22,12 +24,26 @@ class ReplyMessage:
         out.header.sequenceCounter = 0
         out.header.reflectedSequenceCounter = 0
         self.message: Any = out
-        self._jp = self._torque = self._wrench = self._io = False  # which repeated fields hold values
+        self._jp = self._torque = self._wrench = self._io = self._pose = self._tr = False  # which fields hold values
 
     def set_motion(self, mode: int, q: Sequence[float], tau: Sequence[float] | None,
-                   wrench: Sequence[float] | None) -> None:  # fmt: skip
-        """Joint position [rad], plus the torque [Nm] in TORQUE mode or the wrench [N, Nm] in WRENCH mode."""
+                   wrench: Sequence[float] | None, pose: Sequence[float] | None = None) -> None:  # fmt: skip
+        """Joint position [rad], plus the torque [Nm] in TORQUE mode or the wrench [N, Nm] in WRENCH mode; in
+        CARTESIAN_POSE mode instead the wire ``pose`` (tx, ty, tz [mm], qw, qx, qy, qz) of q and E1 = q[2] [rad]."""
         cd = self.message.commandData
+        if mode == _CARTESIAN:
+            if self._jp:
+                cd.ClearField("jointPosition")
+                self._jp = False
+            if self._pose:
+                cd.cartesianPose.element[:] = pose
+            else:
+                cd.cartesianPose.name = ""
+                cd.cartesianPose.element.extend(pose)
+                cd.redundancyInformation.strategy = 0  # E1
+                self._pose = True
+            cd.redundancyInformation.value = q[2]
+            return
         if self._jp:
             cd.jointPosition.value[:] = q
         else:
@@ -48,9 +64,9 @@ class ReplyMessage:
 
     def header_only(self) -> None:
         """No command data (the monitoring states); IO writes may still be added."""
-        if self._jp or self._io:
+        if self._jp or self._io or self._pose or self._tr:
             self.message.ClearField("commandData")
-            self._jp = self._torque = self._wrench = self._io = False
+            self._jp = self._torque = self._wrench = self._io = self._pose = self._tr = False
 
     def set_io(self, writes: Sequence[tuple[str, int, float | int]]) -> None:
         """This cycle's IO writes (name, FriIOType, value); none clears the last cycle's."""
@@ -67,6 +83,19 @@ class ReplyMessage:
                 else:
                     io.digitalValue = value
             self._io = True
+
+    def set_transformations(self, values: Sequence[tuple[str, Sequence[float], int, int]]) -> None:
+        """This cycle's transformations (name, wire pose (tx, ty, tz [mm], qw, qx, qy, qz), sec, nanosec)."""
+        cd = self.message.commandData
+        if self._tr:
+            cd.ClearField("commandedTransformations")
+            self._tr = False
+        for name, element, sec, nanosec in values:
+            tr = cd.commandedTransformations.add()
+            tr.name = name
+            tr.element.extend(element)
+            tr.timestamp.sec, tr.timestamp.nanosec = sec, nanosec
+            self._tr = True
 
     def datagram(self, sequence: int, reflected: int) -> bytes:
         """The framed datagram with these counters."""

@@ -8,6 +8,13 @@ When that message arrives it is decoded and checked as every message (self-consi
 the session), and the prepared reply goes out at once; the client's ``command`` call, which must set the same
 position, and the rest of the cycle follow. Any other message (lost ones before it, a state change, a stop) takes
 the full cycle. Supervision judges each message after its reply: a problem it finds brakes from the next command.
+
+FRI 2.7: in CARTESIAN_POSE mode the client's pose is turned into joints (:class:`~lbrcli.fri.cartesian.PoseSolver`,
+the TCP of the application's ``tcp_robot``: a ``trajectories.robot.Robot``, default the Touch Electric flange without
+a tool) which pass the same core and guard as joint commands — a pose that cannot be reached or jumps is refused like
+a joint command — and the pose of the admitted joints goes out (a braking stop's too). The application's
+``transformation_client`` provides the frames the robot application requests (:mod:`~lbrcli.fri.transformation`):
+called for every message but IDLE after the robot client, as KUKA's ``ClientApplication::step``.
 """
 
 from __future__ import annotations
@@ -26,6 +33,7 @@ CLIENT_CLAMP = 1e-4  # [rad] a clamp the client is told about (``LBRClient.clamp
 _POSITION = int(ClientCommandMode.POSITION)
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
+_CARTESIAN = int(ClientCommandMode.CARTESIAN_POSE)
 
 Prepared = tuple[int, bytes, tuple[float, ...]]  # (sequence counter it answers, datagram, joint position [rad])
 Supervised = tuple[bool, bool, Any, int]  # (commanding, moving, command in force [rad], our last sequence counter)
@@ -51,6 +59,10 @@ class Replying:
     _stop: Any
     _ended: bool
     _prepared: Prepared | None
+    _poses: Any = None  # the PoseSolver, built at the first Cartesian command
+    transformation_client: Any
+    tcp_robot: Any
+    limits: Any
     _client_seq: int
     _reply_seq_prev: int | None
     _last_seq: int
@@ -95,7 +107,7 @@ class Replying:
         if sup is not None and self._stop is None:
             commanding, moving, command, last_sent = supervised
             stamp = getattr(self.transport, "received_ns", None)
-            problem = sup.check(mon, seq, commanding, moving, mon.ipoData.clientCommandMode == _POSITION, command,
+            problem = sup.check(mon, seq, commanding, moving, mon.ipoData.clientCommandMode in (_POSITION, _CARTESIAN), command,
                                 last_sent, stamp() if stamp is not None else None)  # fmt: skip
             if problem is not None:
                 if sup.measured_period_s is not None and self._motion is not None:
@@ -149,6 +161,7 @@ class Replying:
         only in COMMANDING_ACTIVE, POSITION mode, receive multiplier 1, and while nothing stops or brakes."""
         motion = self._motion
         if (self._stop is not None or self._ended or motion is None or motion.braking
+                or self.transformation_client is not None  # (its provide() runs in the full cycle)
                 or mon.ipoData.clientCommandMode != _POSITION or (mon.connectionInfo.receiveMultiplier or 1) != 1):  # fmt: skip
             return
         try:
@@ -168,6 +181,48 @@ class Replying:
         nxt = (seq + 1) & 0xFFFFFFFF
         self._prepared = (nxt, reply.datagram(self._client_seq, nxt), q)  # type: ignore[union-attr]
 
+    def _provide_frames(self) -> None:
+        """The transformation client's ``provide`` for this message (values kept for the reply)."""
+        tc = self.transformation_client
+        if tc is not None:
+            tc.robot_state = self.state
+            tc.values.clear()
+            self._call_client("provide", on=tc)  # type: ignore[attr-defined]
+
+    def _set_extras(self, cmd: LBRCommand) -> None:
+        """The client's IO writes and the transformation client's values into this cycle's reply."""
+        self._reply.set_io(cmd.io_writes)
+        if self.transformation_client is not None:
+            self._reply.set_transformations(self.transformation_client.values)
+
+    def _pose_solver(self, motion: ExecutedMotion) -> Any:
+        """The session's PoseSolver (built at the first Cartesian command: pinocchio only for clients that use it)."""
+        if self._poses is None:
+            from trajectories.robot import Robot
+
+            from .cartesian import PoseSolver
+
+            self._poses = PoseSolver(self.tcp_robot or Robot(), self.limits, motion.period_s)
+        return self._poses
+
+    def _pose_joints(self, mon: Any, state: int, cmd: LBRCommand, motion: ExecutedMotion) -> str | None:
+        """CARTESIAN_POSE: the joints of the client's pose as its joint command (``cmd.joint_position``), or why
+        there are none. IK warm-started from the joints last sent (COMMANDING_WAIT: the measured ones), A3 at the
+        client's E1 or else the ipo E1."""
+        if cmd.cartesian_pose is None:
+            return "no Cartesian pose was set (CARTESIAN_POSE mode needs one in every commanding cycle)"
+        seed = motion.prev if state == CMD_ACTIVE else mon.monitorData.measuredJointPosition.value
+        e1 = cmd.redundancy
+        if e1 is None:
+            red = mon.ipoData.redundancyInformation if mon.ipoData.HasField("redundancyInformation") else None
+            e1 = red.value if red is not None else seed[2]
+        m = cmd.cartesian_pose
+        sol = self._pose_solver(motion).solve(seed, m[:3, 3], m[:3, :3], e1)
+        if sol.problem is not None:
+            return sol.problem
+        cmd.joint_position = tuple(sol.q.tolist())
+        return None
+
     def _build_motion(self, mon: Any, state: int, cmd: LBRCommand) -> bool:
         """Guard the client's joint position (or take the braking stop's) and write it into the message; False if
         the session ended instead (a refusal, nothing sent)."""
@@ -178,6 +233,16 @@ class Replying:
         mode = mon.ipoData.clientCommandMode
         client = self.client
         clamps = motion.clamped_cycles
+        if mode == _CARTESIAN and not motion.braking:
+            problem = self._pose_joints(mon, state, cmd, motion)
+            if problem is not None:
+                text = f"guard refused the Cartesian command: {problem}"
+                if state != CMD_ACTIVE or not motion.moving:
+                    self._finish(Outcome.REFUSED, EndReason.GUARD, text, observe=True)
+                    return False
+                motion.begin_braking()  # from the joints last sent, within the joint limits, as any stop
+                if self._stop is None:
+                    self._stop = (Outcome.REFUSED, EndReason.GUARD, text)
         try:
             q, tau, wrench, refused = motion.next_command(mon.monitorData.measuredJointPosition.value, state, mode,
                                                           cmd.joint_position, cmd.torque, cmd.wrench,
@@ -194,7 +259,12 @@ class Replying:
                 self._stop = (Outcome.REFUSED, EndReason.GUARD, refused)
         cyc = self.cycle
         cyc.braking = motion.braking
-        self._reply.set_motion(mode, q, tau, wrench)  # type: ignore[union-attr]
+        pose = None
+        if mode == _CARTESIAN:  # what goes out is the pose of the joints the guard admitted (a stop's too)
+            from .cartesian import pose_to_wire
+
+            pose = pose_to_wire(*self._pose_solver(motion).tcp(q))
+        self._reply.set_motion(mode, q, tau, wrench, pose)  # type: ignore[union-attr]
         cyc.torque = tau if mode == _TORQUE else None
         cyc.wrench = wrench if mode == _WRENCH else None
         q = tuple(q)

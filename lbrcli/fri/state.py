@@ -189,6 +189,23 @@ class LBRState:
             raise FriStateError("the controller sent no redundancy information in this message")
         return md.measuredRedundancyInformation.value
 
+    @property
+    def ipo_redundancy_value(self) -> float:
+        """E1 [rad] of the application's own motion (FRI 2.x; KUKA's getIpoRedundancyValue)."""
+        ipo = self.message.ipoData
+        if "redundancyInformation" not in ipo.DESCRIPTOR.fields_by_name:
+            raise FriStateError(f"FRI {self.version.value} does not report redundancy information")
+        if not ipo.HasField("redundancyInformation"):
+            raise FriStateError("the controller sent no ipo redundancy information (no Cartesian overlay active)")
+        return ipo.redundancyInformation.value
+
+    @property
+    def requested_transformation_ids(self) -> tuple[str, ...]:
+        """Names of the frames the robot application asks the client to provide (FRI 2.x; else empty)."""
+        if "requestedTransformations" not in self.message.DESCRIPTOR.fields_by_name:
+            return ()
+        return tuple(t.name for t in self.message.requestedTransformations)
+
     # -- IO -------------------------------------------------------------------------------------------------
     @property
     def io_names(self) -> tuple[str, ...]:

@@ -17,7 +17,8 @@ from ..messages import FriVersion
 
 THESIS_Q0 = THESIS_START  # [rad], thesis §5.3.2 start pose
 OPERATION_MODES = {"T1": OperationMode.TEST_MODE_1, "T2": OperationMode.TEST_MODE_2, "AUT": OperationMode.AUTOMATIC_MODE}
-COMMAND_MODES = ("position", "torque", "wrench")  # the overlay's client command mode
+COMMAND_MODES = ("position", "torque", "wrench", "cartesian")  # the overlay's client command mode (cartesian: 2.7)
+MAX_TRANSFORMATIONS = 5  # requested transformations a 2.7 message carries at most (KUKA's SDK: 5, names < 64 bytes)
 IO_TYPES = ("boolean", "digital", "analog")  # FriIOType 0, 1, 2
 IO_DIRECTIONS = ("in", "out")  # FriIODirection INPUT = 0, OUTPUT = 1
 
@@ -118,7 +119,9 @@ class SimConfig:
     # robot application: FRI overlay configuration
     operation_mode: str = "T1"  # T1, T2 or AUT
     overlay: bool = True  # False: the application only monitors the session (no COMMANDING states)
-    command_mode: str = "position"  # position (joint position overlay), torque (joint impedance), wrench (Cartesian)
+    command_mode: str = "position"  # position (joint position overlay), torque (joint impedance), wrench (Cartesian
+    # impedance), cartesian (FRI 2.7 CARTESIAN_POSE: the client commands the TCP pose and E1, position control)
+    transformations: tuple[str, ...] = ()  # FRI 2.7: frames the application asks the client to provide (names)
     joint_stiffness: float = 1000.0  # [Nm/rad] joint impedance (torque mode), every joint
     cartesian_stiffness: tuple[float, float] = (2000.0, 200.0)  # [N/m], [Nm/rad] Cartesian impedance (wrench mode)
     nullspace_stiffness: float = 20.0  # [Nm/rad] joint stiffness in the null space of the Cartesian impedance
@@ -176,6 +179,18 @@ class SimConfig:
             bad(f"--operation-mode: one of {', '.join(OPERATION_MODES)}, got {self.operation_mode!r}")
         if self.command_mode not in COMMAND_MODES:
             bad(f"--mode: one of {', '.join(COMMAND_MODES)}, got {self.command_mode!r}")
+        if self.command_mode == "cartesian" and self.version != "2.7":
+            bad("--mode cartesian: the CARTESIAN_POSE command mode exists only in FRI 2.7 (--fri-version 2.7)")
+        if self.transformations:
+            if self.version != "2.7":
+                bad("--transformation: transformation requests exist only in FRI 2.7 (--fri-version 2.7)")
+            if len(self.transformations) > MAX_TRANSFORMATIONS:
+                bad(f"--transformation: at most {MAX_TRANSFORMATIONS} frames, got {len(self.transformations)}")
+            for name in self.transformations:
+                if not (isinstance(name, str) and 0 < len(name.encode()) < 64):
+                    bad(f"--transformation: a frame name must be 1..63 bytes, got {name!r}")
+            if len(set(self.transformations)) != len(self.transformations):
+                bad("--transformation: a frame is named twice")
         if not (math.isfinite(self.joint_stiffness) and 0.0 < self.joint_stiffness <= 1e5):
             bad(f"--stiffness: joint stiffness must be in (0, 1e5] Nm/rad, got {self.joint_stiffness:g}")
         kx, kr = self.cartesian_stiffness

@@ -19,6 +19,15 @@ PositionHold semantics (as the real controller reports them):
   always sets them): a reply to a COMMANDING_ACTIVE message without them is an error — the overlay ends
   (``end_reason`` "command_missing", ``commands_without_position``) and the robot stops, as after a safety stop
   but with the drives on.
+- FRI 2.7 CARTESIAN_POSE (``command_mode`` "cartesian", position control): the client commands the TCP pose (tx, ty,
+  tz [mm], quaternion) and E1 (the A3 angle) instead of joints; the controller turns each pose into joints with the
+  IK of :mod:`~lbrcli.fri.cartesian` (A3 at E1, warm-started from the last solution, within the position limits) and
+  they pass the same interpolator. In COMMANDING_WAIT the pose must mirror the ipo pose (its joints within
+  ``mirror_tolerance``); in COMMANDING_ACTIVE a pose the IK cannot reach, or one that jumps (a joint further than
+  10 periods at its velocity limit), ends the overlay (``end_reason`` "cartesian_refused") and the robot brakes
+  within its limits; a reply without a pose is "command_missing" as above.
+- FRI 2.7 transformation requests (``transformations``): every monitoring message names the frames the application
+  wants; the client's values arrive in ``commandedTransformations`` and are kept (:mod:`.transforms`).
 """
 
 from __future__ import annotations
@@ -29,6 +38,7 @@ import numpy as np
 
 from trajectories.errors import FriDecodeError, FriForeignMessage, OptionError
 
+from ..cartesian import PoseSolver, wire_to_pose
 from ..codec import FriCodec
 from ..constants import (
     N_JOINTS,
@@ -47,6 +57,7 @@ from .link import RING
 from .monitor import MonitoringWriter
 from .plant import PlantContext
 from .session import QualityMonitor, QualityThresholds, SessionMachine, SessionTiming
+from .transforms import TransformationBank
 
 _U32 = 0xFFFFFFFF
 CA, CW = SessionState.COMMANDING_ACTIVE, SessionState.COMMANDING_WAIT
@@ -54,6 +65,7 @@ MODES = {  # command mode -> (client command mode, overlay type, control mode)
     "position": (ClientCommandMode.POSITION, OverlayType.JOINT, ControlMode.POSITION_CONTROLMODE),
     "torque": (ClientCommandMode.TORQUE, OverlayType.JOINT, ControlMode.JOINT_IMPEDANCE_CONTROLMODE),
     "wrench": (ClientCommandMode.WRENCH, OverlayType.CARTESIAN, ControlMode.CARTESIAN_IMPEDANCE_CONTROLMODE),
+    "cartesian": (ClientCommandMode.CARTESIAN_POSE, OverlayType.CARTESIAN, ControlMode.POSITION_CONTROLMODE),
 }
 
 
@@ -88,6 +100,9 @@ class Controller:
         self.io = self.writer.io
         self.mon = self.writer.mon
         self._cmd = self.codec.new_command()
+        self.transforms = TransformationBank(self.mon, cfg.transformations) if cfg.transformations else None
+        self._poses = (PoseSolver(self.robot, self.limits, self.period * cfg.receive_multiplier)
+                       if self._mode == "cartesian" else None)  # fmt: skip
         self._init_state(q0)
         self.plants = []
         self._plant_io: list[list] = []
@@ -141,14 +156,17 @@ class Controller:
         self.latency = np.empty(RING)  # [s] send → reply reflecting it
         self.n_latency = 0
         self.safety = False
-        self._stiff = self._mode == "position"  # the arm follows the interpolator (position control)
+        self._stiff = self._mode in ("position", "cartesian")  # the arm follows the interpolator (position control)
+        self._pose_seed = q0.copy()  # [rad] the joints of the last Cartesian pose solved (its IK's warm start)
+        self._pose_problem: str | None = None  # why the last Cartesian pose in COMMANDING_ACTIVE cannot be executed
+        self.command_problem = ""  # the first such reason (the stats)
         self.state = SessionState.MONITORING_WAIT
         self.quality = ConnectionQuality.POOR
         self.states_seen: list[int] = []
         self._tracking = 0.0
         self.min_tracking = 1.0
         self.counts = dict(replies=0, late=0, missed=0, malformed_rx=0, foreign_rx=0, commanded=0, gaps=0,
-                           active=0, incomplete=0, no_position=0, untimely_active=0)
+                           active=0, incomplete=0, no_position=0, untimely_active=0, poses=0)
 
     # -- receiving -------------------------------------------------------------------------------------------
     def on_datagram(self, data: bytes, arrival: float) -> None:
@@ -183,6 +201,11 @@ class Controller:
         cd = cmd.commandData
         if cd.writeIORequest:
             self.io.apply(cd.writeIORequest)
+        if self.transforms is not None and cd.commandedTransformations:
+            self.transforms.apply(cd.commandedTransformations)
+        if self._poses is not None:
+            self._take_pose(cd, refl)
+            return
         jp = cd.jointPosition.value
         if len(jp) == N_JOINTS:
             self._cmd_q[:] = jp
@@ -201,6 +224,35 @@ class Controller:
         else:
             self._header_only = True
             self._missing_refl = refl
+
+    def _take_pose(self, cd, refl: int) -> None:
+        """CARTESIAN_POSE: the joints of the commanded pose (or why there are none) as this interval's command."""
+        if len(cd.cartesianPose.element) != 7:
+            self._header_only = True
+            self._missing_refl = refl
+            return
+        commanding = self.state is CA
+        seed = self._pose_seed if commanding else self.ipo  # COMMANDING_WAIT: the robot stands at the ipo position
+        e1 = cd.redundancyInformation.value if cd.HasField("redundancyInformation") else float(self.ipo[2])
+        try:
+            position, rotation = wire_to_pose(cd.cartesianPose.element)
+            sol = self._poses.solve(seed, position, rotation, e1)  # type: ignore[union-attr]
+            problem = sol.problem
+        except ValueError as exc:
+            sol, problem = None, f"malformed Cartesian pose: {exc}"
+        self._cmd_fresh = True
+        self._cmd_refl = refl
+        self._overlay_fresh = True
+        if problem is not None:
+            self._cmd_q[:] = np.nan  # never mirrors; in COMMANDING_ACTIVE the overlay ends (not a safety stop)
+            if commanding:
+                self._pose_problem = problem
+                self.command_problem = self.command_problem or problem
+            return
+        self._cmd_q[:] = sol.q  # type: ignore[union-attr]
+        if commanding:
+            self._pose_seed[:] = sol.q  # type: ignore[union-attr]
+        self.counts["poses"] += 1
 
     def awaits_reply(self) -> bool:
         """Lock-step: the client must answer the message just sent within this interval — it has answered before,
@@ -223,7 +275,9 @@ class Controller:
                    and self._missing_refl >= self._active_from)  # fmt: skip
         if missing:
             self.counts["no_position"] += 1
-        state = self.machine.advance(t, self.quality, mirror_ok, safety, missing)
+        refused = was is CA and self._pose_problem is not None
+        self._pose_problem = None
+        state = self.machine.advance(t, self.quality, mirror_ok, safety, missing, refused)
         if state is CA and was is not CA:
             self._active_from = (self.seq + 1) & _U32
         self._motion(state, was)
@@ -266,12 +320,12 @@ class Controller:
                     self.counts["incomplete"] += 1
                     ok = False
                 if ok:
-                    for a in (self._sub_from, self._sub_to, self._target, self._last_cmd):
+                    for a in (self._sub_from, self._sub_to, self._target, self._last_cmd, self._pose_seed):
                         a[:] = self._cmd_q
                     self._last_refl = self._cmd_refl
                 return ok, False
             return (False if self._header_only else None), False
-        if state is CA and self._cmd_fresh and not self.safety:
+        if state is CA and self._cmd_fresh and not self.safety and self._pose_problem is None:
             q = self._cmd_q
             if not (np.all(np.isfinite(q)) and np.all(np.abs(q) <= self.limits.position)):
                 self.safety = True

@@ -61,7 +61,8 @@ class EndReason:
     DURATION = "duration"  # session_duration_s of COMMANDING_ACTIVE elapsed
     QUALITY = "quality"  # quality dropped below GOOD while commanding
     SAFETY = "safety_stop"  # command outside the position limits
-    COMMAND_MISSING = "command_missing"  # a reply in COMMANDING_ACTIVE without the 7 joint positions
+    COMMAND_MISSING = "command_missing"  # a reply in COMMANDING_ACTIVE without the 7 joint positions (or pose)
+    CARTESIAN_REFUSED = "cartesian_refused"  # a Cartesian pose the controller cannot execute (unreachable, a jump)
 
 
 @dataclass(frozen=True)
@@ -116,10 +117,10 @@ class SessionMachine:
         self.state = state
 
     def advance(self, now: float, quality: ConnectionQuality, mirror_ok: bool | None, safety_stop: bool,
-                command_missing: bool = False) -> SessionState:  # fmt: skip
+                command_missing: bool = False, command_refused: bool = False) -> SessionState:  # fmt: skip
         """New state after a cycle. ``mirror_ok``: this cycle's command mirrored ipo (None: no command);
         ``command_missing``: a reply to a COMMANDING_ACTIVE message carried no joint positions (an error: the overlay
-        ends, the robot stops)."""
+        ends, the robot stops); ``command_refused``: a Cartesian pose could not be executed (the same)."""
         s = self.state
         good = quality >= ConnectionQuality.GOOD
         if s is SessionState.IDLE:
@@ -149,8 +150,8 @@ class SessionMachine:
         elif s is SessionState.COMMANDING_ACTIVE:
             if safety_stop:
                 self._end(now, EndReason.SAFETY, SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT)
-            elif command_missing:
-                self._end(now, EndReason.COMMAND_MISSING,
+            elif command_missing or command_refused:
+                self._end(now, EndReason.COMMAND_MISSING if command_missing else EndReason.CARTESIAN_REFUSED,
                           SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT)
             elif not good:
                 self._end(now, EndReason.QUALITY, SessionState.MONITORING_WAIT)

@@ -234,4 +234,7 @@ class Simulator:
             command_mode=self.cfg.command_mode, io_writes=ctl.io.writes, io_refused=ctl.io.refused,
             incomplete_commands=c["incomplete"], commands_without_position=c["no_position"],
             untimely_active_cycles=c["untimely_active"], plants=plants,
+            cartesian_poses=c["poses"], command_problem=ctl.command_problem,
+            transformations=ctl.transforms.figures() if ctl.transforms is not None else {},
+            transformations_refused=ctl.transforms.refused if ctl.transforms is not None else 0,
         )

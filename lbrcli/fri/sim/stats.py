@@ -49,6 +49,10 @@ class SimStats:
     commands_without_position: int = 0  # replies to COMMANDING_ACTIVE messages without joint positions (an error)
     incomplete_commands: int = 0  # commands without the torque (TORQUE) or wrench (WRENCH) the mode needs
     plants: dict = field(default_factory=dict)  # figures of the plants, by plant name
+    cartesian_poses: int = 0  # CARTESIAN_POSE commands turned into joints (FRI 2.7)
+    command_problem: str = ""  # why a Cartesian pose could not be executed (end reason cartesian_refused)
+    transformations: dict = field(default_factory=dict)  # FRI 2.7 requested frames: name -> received, last, stamp
+    transformations_refused: int = 0  # values for frames not requested, or malformed (ignored)
 
     def to_dict(self) -> dict:
         d = asdict(self)

@@ -48,9 +48,7 @@ from .supervision import Supervisor, commanding_end, consistent, joint_bound, ro
 from .transformation import TransformationClient
 from .transport import UdpTransport
 
-from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE
-from .constants import STATE_COMMANDING_WAIT as CMD_WAIT
-from .constants import STATE_IDLE as IDLE
+from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE, STATE_COMMANDING_WAIT as CMD_WAIT, STATE_IDLE as IDLE
 
 
 class ClientApplication(Replying, SessionEnding):

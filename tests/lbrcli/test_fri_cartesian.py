@@ -15,7 +15,6 @@ from lbrcli.fri.cartesian import PoseSolver, pose_matrix, pose_to_wire, wire_to_
 from lbrcli.fri.codec import FriCodec
 from lbrcli.fri import EndReason
 from lbrcli.fri.constants import COMMAND_MESSAGE_ID
-from lbrcli.fri.errors import FriCommandError
 from lbrcli.fri.sim import THESIS_Q0, SimConfig, SimulatorProcess, lenient_quality
 from lbrcli.fri.sim.controller import Controller
 

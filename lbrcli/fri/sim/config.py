@@ -15,6 +15,7 @@ from ..constants import N_JOINTS, OperationMode
 from ..messages import FriVersion
 
 THESIS_Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)  # [rad], thesis §5.3.2 start pose
+"""The thesis start pose (§5.3.2) [rad]: where the simulated robot stands unless told otherwise."""
 OPERATION_MODES = {"T1": OperationMode.TEST_MODE_1, "T2": OperationMode.TEST_MODE_2, "AUT": OperationMode.AUTOMATIC_MODE}
 COMMAND_MODES = ("position", "torque", "wrench")  # the overlay's client command mode
 IO_TYPES = ("boolean", "digital", "analog")  # FriIOType 0, 1, 2
@@ -74,6 +75,8 @@ IO_PRESETS: dict[str, tuple[IoChannel, ...]] = {
         IoChannel("FRI.In_Bool_Clock_Enabled", "boolean", "in", 1.0),
     ),
 }
+"""IO channel sets of KUKA's example applications by name (`lbr sim --io-preset`); the IOAccess client aborts if a
+channel is missing."""
 
 
 def lenient_quality(period_ms: int, receive_multiplier: int = 1) -> dict[str, float | int]:

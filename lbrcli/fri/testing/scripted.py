@@ -23,7 +23,16 @@ from ..codec import FriCodec
 from ..constants import MONITORING_MESSAGE_ID
 from ..errors import FriDecodeError
 
-MW, MR, CW, CA, IDLE = 1, 2, 3, 4, 0
+MW = 1
+"""Session state MONITORING_WAIT in a script."""
+MR = 2
+"""Session state MONITORING_READY in a script."""
+CW = 3
+"""Session state COMMANDING_WAIT in a script."""
+CA = 4
+"""Session state COMMANDING_ACTIVE in a script."""
+IDLE = 0
+"""Session state IDLE in a script."""
 
 
 @dataclass(frozen=True)
@@ -53,6 +62,9 @@ class Cycle:
 
 @dataclass
 class Reply:
+    """One reply the client sent to a scripted message, decoded: counters, commanded positions [rad], torques [Nm],
+    wrench [N, Nm] and IO writes."""
+
     cycle: int  # index in the script
     state: int
     seq: int  # of the monitoring message answered (expected)
@@ -65,6 +77,9 @@ class Reply:
 
 @dataclass
 class ScriptedController:
+    """A fake FRI controller for tests: sends the `script` of cycles to a client on loopback, one message per cycle,
+    and records every reply (`replies`), the cycles left unanswered and replies to messages that must be ignored."""
+
     client_port: int
     script: list[Cycle]
     q0: tuple[float, ...]

@@ -14,9 +14,9 @@ ROOT = Path(__file__).resolve().parents[2]
 LIBRARY = ("lbrcli.fri", "lbrcli.bridge", "lbrcli.plants", "lbrcli.control", "planners", "trajectories", "tracking")
 
 
-@pytest.fixture(scope="module")
-def site(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("site")
+@pytest.fixture
+def site(tmp_path) -> Path:
+    out = tmp_path / "site"
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
     res = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)], cwd=ROOT,
                          capture_output=True, text=True, timeout=300, env=env)
@@ -51,11 +51,15 @@ def _exports() -> dict[str, list[str]]:
     return found, loader
 
 
-def test_site_builds_strictly(site):
+def test_site_builds_strictly_and_covers_the_api(site):
+    """One build (it takes most of this test's time), three checks: it built, every public name is in the API
+    reference with a docstring, and the pages quote the code rather than copies of it."""
     assert (site / "index.html").exists() and (site / "reference" / "cli" / "index.html").exists()
+    _every_public_name_is_in_the_api_reference_with_a_docstring(site)
+    _pages_quote_the_code_not_copies(site)
 
 
-def test_every_public_name_is_in_the_api_reference_with_a_docstring(site):
+def _every_public_name_is_in_the_api_reference_with_a_docstring(site):
     exports, loader = _exports()
     assert {"lbrcli.fri", "lbrcli.bridge", "planners.feedback"} <= set(exports)
     inventory = _inventory(site)
@@ -73,7 +77,7 @@ def test_every_public_name_is_in_the_api_reference_with_a_docstring(site):
     assert not undocumented, f"{len(undocumented)} of {total} public names without a docstring: {undocumented[:20]}"
 
 
-def test_pages_quote_the_code_not_copies(site):
+def _pages_quote_the_code_not_copies(site):
     """The file-formats page's column lists come from the constants (hooks.py); a marker left over means none was."""
     from trajectories.csvio import JOINT_COLUMNS
 

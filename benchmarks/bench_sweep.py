@@ -61,9 +61,13 @@ def _load() -> float:
     return round(os.getloadavg()[0], 2)
 
 
+REPEATS = 3  # each throughput is the best of 3 (as timeit): other work on the 2 shared cores only ever slows a run
+
+
 def throughput(tmp: Path, quick: bool) -> dict:
-    """Runs/s with 1 and 2 local workers: probes sleeping 0.5 s (what the scheduler allows, whatever the machine's
-    load), probes of 0.5 s of CPU (a busy loop: what the cores give), and anti-sway plans of 0.5–2 s."""
+    """Runs/s with 1 and 2 local workers, each the best of ``REPEATS`` (all kept): probes sleeping 0.5 s (what the
+    scheduler allows, whatever the machine's load), probes of 0.5 s of CPU (a busy loop: what the cores give — a run
+    mean above 0.5 s says a core was shared), and anti-sway plans of 0.5–2 s."""
     out: dict = {}
     cases = {
         "probe sleeping 0.5 s": PROBE.format(busy="false", seconds=0.5, n=8 if quick else 24),
@@ -73,13 +77,17 @@ def throughput(tmp: Path, quick: bool) -> dict:
     for name, text in cases.items():
         study = tmp / f"{len(out)}.toml"
         study.write_text(text)
-        res = {}
-        for workers in (1, 2):
-            load = _load()
-            f = _sweep(study, tmp / f"{len(out)}-{workers}", "--workers", str(workers), "--no-plots")
-            res[workers] = {"runs": f["computed"], "wall_s": f["wall_s"], "runs_per_s": f["runs_per_s"],
-                            "run_s_mean": f["run_s_mean"], "overhead_per_run_s": f["overhead_per_run_s"],
-                            "startup_s": f["startup_s"], "load_before": load, "load_after": _load()}  # fmt: skip
+        res: dict = {}
+        for rep in range(REPEATS):
+            for workers in (1, 2):
+                load = _load()
+                f = _sweep(study, tmp / f"{len(out)}-{workers}-{rep}", "--workers", str(workers), "--no-plots")
+                got = {"runs": f["computed"], "wall_s": f["wall_s"], "runs_per_s": f["runs_per_s"],
+                       "run_s_mean": f["run_s_mean"], "overhead_per_run_s": f["overhead_per_run_s"],
+                       "startup_s": f["startup_s"], "load_before": load, "load_after": _load()}  # fmt: skip
+                res.setdefault(f"{workers} all runs/s", []).append(got["runs_per_s"])
+                if workers not in res or got["runs_per_s"] > res[workers]["runs_per_s"]:
+                    res[workers] = got
         res["speedup_2_vs_1"] = res[2]["runs_per_s"] / res[1]["runs_per_s"]
         out[name] = res
     return out

@@ -98,7 +98,7 @@ def upright(
     the balance holds it for --hold in one run (a fall is caught again within --recatch), and it is lowered gently in
     ever smaller swings before the arm parks. Exit 0 only when the hold was met; 1 otherwise (the reason on stderr).
     """
-    from lbrcli.control.fitter import ProcessFitter
+    from lbrcli.control.fitter import LOCKSTEP_FIT_S, ProcessFitter
     from lbrcli.control.upright import LOG_COLUMNS, UprightClient
     from planners.feedback.session import SessionOptions
     from lbrcli.lab.attach import LabOptions
@@ -157,7 +157,9 @@ def upright(
         plants = (RigidModuleSpec(rod, sensor_rate, sim_delay, sim_jitter, pushes=pushes, zero_count=pendulum_zero,
                                   noise_counts=sim_noise, sign=sim_encoder_sign),)  # fmt: skip
     lab = LabOptions(pendulum or "sim", baud, pendulum_zero)
-    fitter = ProcessFitter() if identify else None
+    fitter = None
+    if identify:  # in lock-step the fit's result is taken a fixed number of cycles after it was asked for
+        fitter = ProcessFitter(round(LOCKSTEP_FIT_S / ((period or 1) * 1e-3)) if sim_lockstep else None)
     client.fitter = fitter
     try:
         result, sim_stats, lab_figures = run_client(
@@ -261,8 +263,9 @@ def damp(
     --sensor camera tracks the ball live in --camera (or, on the simulator, in its own rendered camera) and takes
     the tilt from the camera's geometry, the robot's pivot at each frame's moment and the string length the camera
     measures from the hanging ball. A camera that cannot see the ball along the move, or the sway along an axis the
-    move swings it in, is refused (exit 2); a camera that fails during the run (stream ended, no frames, ball lost)
-    stops the correction, the rows finish as planned, exit 1.
+    move swings it in, is refused before anything is sent (exit 1, as the module on such an axis); a camera that
+    fails during the run (stream ended, no frames, ball lost) stops the correction, the rows finish as planned,
+    exit 1.
     """
     from lbrcli.control.damping import LOG_COLUMNS, DampingClient
     from lbrcli.fri.sway import IoSway, SwayWatch, window_for_length

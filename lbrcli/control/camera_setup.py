@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trajectories.errors import OptionError
+from trajectories.errors import CheckFailed, OptionError
 
 SIM_FPS = 120.0  # [1/s] the simulated camera's defaults
 SIM_LATENCY_MS = 15.0
@@ -129,20 +129,21 @@ def assumed_geometry(opts: CameraOptions, size: tuple[int, int] | None, sim_conf
 def check_view(geometry, where: str, pivots_m: np.ndarray, t_s: np.ndarray, string_m: float, sway_rad: np.ndarray,
                needed: dict[int, float]):  # fmt: skip
     """The camera must see the ball along the whole path and see a tilt along every axis in ``needed`` (axis → the
-    move's largest sway along it [rad]); OptionError naming ``where`` otherwise. The SwayView."""
+    move's largest sway along it [rad]); CheckFailed (exit 1, as the module on an axis it cannot see) naming ``where``
+    otherwise. The SwayView."""
     from tracking.camera_geometry import sway_view
 
     w = geometry.image_size[0]
     view = sway_view(geometry, pivots_m, string_m, sway_rad, margin_px=0.02 * w)
     if view.outside is not None:
         k = view.outside
-        raise OptionError(f"{where}: the camera does not see the ball at t = {t_s[k]:.2f} s of the move (it leaves "
+        raise CheckFailed(f"{where}: the camera does not see the ball at t = {t_s[k]:.2f} s of the move (it leaves "
                           f"the {geometry.image_size[0]}x{geometry.image_size[1]} image or is behind the camera)")  # fmt: skip
     for axis, sway in needed.items():
         if view.px_per_deg[axis] < MIN_PX_PER_DEG:
             k = view.worst[axis]
             name = "xy"[axis]
-            raise OptionError(f"{where}: the camera cannot see the sway along base {name}: a 1° tilt toward {name} "
+            raise CheckFailed(f"{where}: the camera cannot see the sway along base {name}: a 1° tilt toward {name} "
                               f"moves the ball {view.px_per_deg[axis]:.3f} px in its image at t = {t_s[k]:.2f} s (at "
                               f"least {MIN_PX_PER_DEG:g} px needed), and the move sways the ball up to "
                               f"{math.degrees(sway):.1f}° along {name}; look at the ball from higher up or from "
@@ -158,7 +159,7 @@ def camera_sensor_for(opts: CameraOptions, rep, stack, *, robot_factory, rows: n
     (n, 2) [m/s²]. The camera — --camera, or the simulator's, rendering a scene the simulator will write
     (:mod:`lbrcli.plants.camera`; until then the ball of ``true_len`` [m] hangs still at ``q_rest``) — is started
     here and must show the ball; everything started is stopped by ``stack`` (a contextlib.ExitStack). The geometry is
-    checked against the move first (OptionError: a camera that cannot see the sway)."""
+    checked against the move first (CheckFailed: a camera that cannot see the ball or the sway)."""
     from planners.feedback.damping import sway_reference
     from tracking.color import color_spec
 

@@ -254,7 +254,7 @@ def test_garbage_from_the_source_brakes_and_a_second_source_is_ignored(tmp_path)
 
 def test_a_json_target_outside_the_limits_is_refused(tmp_path):
     port = free_port()
-    proc = _serve(tmp_path, port)
+    proc = _serve(tmp_path, port, "--first-target", "3")  # only refused targets: the session ends 3 s into commanding
     try:
         s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         bad = list(Q0)

@@ -55,6 +55,8 @@ JUDGES = (
 )
 
 
+@pytest.mark.slow  # real time by nature (the camera renders and streams at its frame rate; no lock-step): beside two
+# busy processes it drops frames and its health check ends the correction; bench_camera_damp measures the band
 def test_the_camera_damps_the_sway_a_wrong_string_length_leaves(crane, tmp_path):
     """Both judges one after the other (each runs four processes in real time: simulator, camera, tracker, client)."""
     path, move_end = crane
@@ -78,7 +80,7 @@ def test_a_camera_that_cannot_see_the_sway_is_refused(crane):
     move sways the ball along x and y."""
     p = run_lbr("control", "damp", crane[0], "--length", "0.25", "--sensor", "camera", "--port", "0",
                 "--sim-camera-position", "1.6,0,0.2", "--sim-camera-look-at", "0.5,0,0.2")  # fmt: skip
-    assert p.returncode == 2, p.stderr
+    assert p.returncode == 1, p.stderr  # a check of the setup against the move that failed, as the module's axis
     assert "cannot see the sway along base x" in p.stderr and "--sim-camera-position" in p.stderr
     assert "Traceback" not in p.stderr and len(p.stderr.strip().splitlines()) == 1  # refused before anything started
 

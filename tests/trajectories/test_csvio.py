@@ -1,4 +1,5 @@
 import os
+import re
 
 import numpy as np
 import pytest
@@ -190,3 +191,56 @@ def test_nan_columns_allow_nan_text_but_not_inf(tmp_path):
     with pytest.raises(CsvFormatError) as exc:
         read_table(bad, ("t", "frame", "u", "v", "found"), time="increasing", nan_columns=("u", "v"))
     assert (exc.value.row, exc.value.column) == (3, 3)
+
+
+ODD_CELLS = ["1_0", "١", "0x1", "1e400", "-1e400", "inf", "-inf", "Infinity", "nan", "NaN", "-nan", "", " ", " 0.5",
+             "0.5 ", "+0.5", ".5", "5.", "1e-5", "1E+2", "0.5e", "e5", "--1", "1.2.3", "0.5\r", "1,5", "true", "null",
+             "N/A", "#N/A", "1e-400", "0.1f", "٣.٥", "０.５", "1 000", "\t0.5", "0,", "'0.5'"]
+
+
+@pytest.mark.parametrize("cell", ODD_CELLS)
+@pytest.mark.parametrize("nan_column", [False, True])
+def test_the_large_file_reader_reads_exactly_what_the_small_file_reader_reads(tmp_path, monkeypatch, cell, nan_column):
+    """Bodies of ≥ ARROW_MIN_BYTES go through Arrow's reader, smaller ones through numpy's; both fall back to the
+    strict reader on anything unusual. The same odd cell must give the same data or the same one-line error."""
+    from trajectories import csvio
+
+    monkeypatch.setattr(csvio, "ARROW_MIN_BYTES", 4096)  # [bytes] (1 MiB by default: the same reader, a smaller file)
+    arrow_calls = []
+    arrow = csvio._arrow_body
+    monkeypatch.setattr(csvio, "_arrow_body", lambda *a: arrow_calls.append(a[1:3]) or arrow(*a))
+    names = ["t", "a", "b", "extra"]
+    n_small, n_big = 20, 1 + csvio.ARROW_MIN_BYTES // len("0.123,0.25,-1.5,0.75\n")
+    def body(n):
+        rows = [f"{0.001 * k:.3f},0.25,-1.5,0.75" for k in range(n)]
+        rows[n // 2] = rows[n // 2].replace("0.25", cell, 1)
+        return "t,a,b,extra\n" + "\n".join(rows) + "\n"
+    outcomes = []
+    for n in (n_small, n_big):
+        p = tmp_path / f"{n}.csv"
+        p.write_text(body(n), newline="")
+        try:
+            table = read_table(p, names[:3], time="increasing", nan_columns=["a"] if nan_column else ())
+            outcomes.append(("ok", table.data[n // 2, 1], table.data.shape[0] - n))
+        except CsvFormatError as exc:
+            outcomes.append(("error", re.sub(r"row \d+", "row", str(exc).replace(str(p), "F")), exc.row - n // 2,
+                             exc.column))
+    small, big = outcomes
+    assert len(arrow_calls) == 1  # the big file went to Arrow
+    assert (small[0], small[2:]) == (big[0], big[2:])
+    if small[0] == "ok":
+        assert small[1] == big[1] or (np.isnan(small[1]) and np.isnan(big[1]))
+    else:
+        assert small[1] == big[1]
+
+
+def test_the_large_file_reader_is_used_and_equals_numpys(tmp_path):
+    from trajectories import csvio
+
+    rng = np.random.default_rng(3)
+    data = np.column_stack([np.arange(60000) * 1e-3, rng.normal(size=(60000, 5)) * 10.0 ** rng.integers(-8, 8, (60000, 5))])
+    p = tmp_path / "big.csv"
+    np.savetxt(p, data, delimiter=",", fmt="%.17g", header="t,a,b,c,d,e", comments="")
+    assert p.stat().st_size - len("t,a,b,c,d,e\n") >= csvio.ARROW_MIN_BYTES
+    table = read_table(p, ["t", "a", "b", "c", "d", "e"], time="increasing")
+    assert np.array_equal(table.data, np.loadtxt(p, delimiter=",", skiprows=1))  # the same doubles, bit for bit

@@ -3,7 +3,7 @@ controller, judged on what the robot executed — per surface the cases, the wor
 ratio of the commands, stops that were not braking stops, tracebacks, unreadable logs, unexpected ends.
 
 Run: `python benchmarks/bench_faults.py [--quick] [SURFACE ...]` prints every case and the table per surface and
-writes benchmarks/results/faults.json (the README and docs quote that file); `python benchmarks/run_all.py faults`
+writes benchmarks/results/faults.json (the docs quote that file); `python benchmarks/run_all.py faults`
 prints the totals."""
 
 from __future__ import annotations

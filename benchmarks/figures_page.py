@@ -1,6 +1,6 @@
 """Write docs/explanations/benchmark-figures.md from benchmarks/results/*.json (written by `run_all.py`).
 
-`python benchmarks/figures_page.py` — the README's figures point at this page, so they change only when a
+`python benchmarks/figures_page.py` — the docs' figures point at this page, so they change only when a
 benchmark is rerun, never by hand. `--check` exits 1 when the page differs from what the results give (CI).
 """
 

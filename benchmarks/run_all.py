@@ -3,7 +3,7 @@
 
 Each ``bench_*.py`` module exposes ``run(quick: bool) -> list[tuple[str, float, str]]`` (name, value, unit). A full
 run (not ``--quick``) also writes each benchmark's figures to ``benchmarks/results/NAME.json`` (with the date and
-the machine's load); ``python benchmarks/figures_page.py`` turns those files into the docs page the README quotes.
+the machine's load); ``python benchmarks/figures_page.py`` turns those files into the docs page the docs quote.
 """
 
 from __future__ import annotations

@@ -22,6 +22,7 @@ from trajectories.robot import Robot
 Q_START = (0.0, 0.5, 0.0, -1.2, 0.0, 0.8, 0.0)  # [rad]
 
 
+# --8<-- [start:source]
 def source(port: int, seconds: float, log: list) -> None:
     """Stream a horizontal 5 cm circle (orientation kept) for ``seconds``, then end the session."""
     client = BridgeClient("127.0.0.1", port)
@@ -38,6 +39,7 @@ def source(port: int, seconds: float, log: list) -> None:
     log.append(np.array(state.tcp[:3]) if state else None)
     client.end()
     client.close()
+# --8<-- [end:source]
 
 
 def main(argv=None):

@@ -45,11 +45,14 @@ from .robust_shaping import RobustSpec, linear_residual_phasor, nonlinear_phasor
 from .shapers import SHAPER_NAMES, Shaper, identity_shaper, make_shaper
 
 SHAPERS = ("auto", "robust", "accel", "box", *SHAPER_NAMES, "box-zv", "box-zvd", "box-ei")
+"""The `--shaper` designs `lbr plan anti-sway` knows, the default (`auto`) first."""
 TUNABLE = ("box", "zv", "mzv")  # designs with a simple zero at the design frequency
 
 # Thesis-like obstacle course (thesis Fig. 4.6: 90° turns on the table beside the robot), base frame [m].
 DEFAULT_LAYOUT = ((0.40, -0.30), (0.62, -0.30), (0.62, 0.05), (0.45, 0.05), (0.45, 0.30))
+"""The default turning points (x, y) [m] in the base frame: a thesis-like obstacle layout, start first."""
 DEFAULT_Z = 0.45  # flange height [m]
+"""The default flange height of an anti-sway move [m]."""
 JERK_RAMP = 0.04  # default jerk ramp a_max/j_max as a fraction of the period [-] (≤ 5 % added time)
 ROBUST_BUDGET_RAD = math.radians(0.3)  # worst-case residual allowed per layout with a length tolerance
 DEFAULT_LENGTH_TOLERANCE = 0.1  # relative string-length uncertainty the default design is robust to

@@ -57,8 +57,11 @@ TARGET_SIZE = struct.calcsize(TARGET_FORMAT)  # 136 bytes
 STATE_FORMAT = "<4sBBH I I d d 7d 7d 7d 7d"
 STATE_SIZE = struct.calcsize(STATE_FORMAT)  # 256 bytes
 KIND_JOINT = 1
+"""Target kind: seven joint positions [rad]."""
 KIND_POSE = 2  # position [m] + quaternion (w, x, y, z)
+"""Target kind: a TCP pose, position [m] and unit quaternion (w, x, y, z)."""
 KIND_POSE_ZYX = 3  # position [m] + fixed angles about Z, Y, X [rad]
+"""Target kind: a TCP pose, position [m] and fixed angles about Z, Y, X [rad]."""
 KINDS = {KIND_JOINT: "joint positions", KIND_POSE: "TCP pose (quaternion)", KIND_POSE_ZYX: "TCP pose (fixed angles)"}
 FLAG_VELOCITY = 1
 TAG_SIZE = 32  # HMAC-SHA256
@@ -270,6 +273,9 @@ class State:
 
 
 def encode_state(s: State) -> bytes:
+    """The binary state datagram the bridge sends back to its source (little-endian; layout in the file-formats
+    reference): session state, flags, counters, times [s], measured and commanded joints [rad], external torques
+    [Nm], TCP [m, quaternion w x y z]."""
     flags = (1 if s.braking else 0) | (2 if s.following else 0) | (4 if s.unreached else 0)
     return _STATE.pack(STATE_MAGIC, VERSION, s.session_state, flags, s.seq & 0xFFFFFFFF, s.target_seq & 0xFFFFFFFF,
                        s.target_t, s.t, *s.measured, *s.commanded, *s.external_torque, *s.tcp)  # fmt: skip

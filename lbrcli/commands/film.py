@@ -28,7 +28,7 @@ def film(
 ) -> None:
     """Film the simulated ball of an execution log: a camera on +x looking at the base y–z plane (image u = base +y,
     θ positive toward the image's right, as `lbr track video` measures it), a green marker on the pivot for
-    `--pivot-color green`. Stands in for the experiment video when there is no camera (the README's example). The
+    `--pivot-color green`. Stands in for the experiment video when there is no camera (the film-and-track tutorial). The
     ball is drawn where the log puts it (the simulator's ball_y, ball_z: flying on a slack string too, the string
     sagging); with --cup (the spec `lbr execute --cup` simulated) the cup is drawn on the pivot (a clear cup: the
     ball stays visible inside) and the ball has the spec's radius.

@@ -82,7 +82,7 @@ def serve(
 
     Targets arrive over UDP at --listen and/or on the --mqtt topic, binary (136 bytes, magic LBRT, version 1) or
     JSON: joints {"q": \\[7 rad]}, a TCP pose {"pose": \\[x, y, z m, qw, qx, qy, qz]} or {"pose_zyx": \\[x, y, z m,
-    alpha, beta, gamma rad]}, with optional feed-forward "v" / "twist" (layout in the README and
+    alpha, beta, gamma rad]}, with optional feed-forward "v" / "twist" (layout in the docs' file formats and
     lbrcli.bridge.protocol). Poses go through the online IK; the targets are read back on their source's clock
     ("t"), --delay behind the newest and interpolated, and ruckig follows that reference within --speed-scale of
     the limits at every FRI cycle; the guard checks every command. The state (256 bytes, magic LBRS, or JSON

@@ -7,11 +7,14 @@ from enum import IntEnum
 MONITORING_MESSAGE_ID = 0x245142
 COMMAND_MESSAGE_ID = 0x34001
 DEFAULT_PORT = 30200
+"""The UDP port FRI uses unless the robot application configures another (KUKA's default)."""
 MAX_DATAGRAM = 1500  # [bytes], each way
 N_JOINTS = 7
 
 
 class SessionState(IntEnum):
+    """The FRI session state the controller reports in every monitoring message."""
+
     IDLE = 0
     MONITORING_WAIT = 1
     MONITORING_READY = 2
@@ -29,6 +32,8 @@ STATE_COMMANDING_ACTIVE = int(SessionState.COMMANDING_ACTIVE)
 
 
 class ConnectionQuality(IntEnum):
+    """The controller's verdict on the connection (share of timely replies); below GOOD it leaves commanding."""
+
     POOR = 0
     FAIR = 1
     GOOD = 2
@@ -36,6 +41,8 @@ class ConnectionQuality(IntEnum):
 
 
 class SafetyState(IntEnum):
+    """The robot's safety state; any stop level ends a commanding session."""
+
     NORMAL_OPERATION = 0
     SAFETY_STOP_LEVEL_0 = 1
     SAFETY_STOP_LEVEL_1 = 2
@@ -43,18 +50,24 @@ class SafetyState(IntEnum):
 
 
 class OperationMode(IntEnum):
+    """The robot's operation mode: T1 (flange at most 250 mm/s), T2 or automatic."""
+
     TEST_MODE_1 = 0
     TEST_MODE_2 = 1
     AUTOMATIC_MODE = 2
 
 
 class DriveState(IntEnum):
+    """The state of the joint drives; commanding needs ACTIVE."""
+
     OFF = 0
     TRANSITIONING = 1
     ACTIVE = 2
 
 
 class ControlMode(IntEnum):
+    """The controller's control mode under the FRI overlay (position, joint or Cartesian impedance)."""
+
     POSITION_CONTROLMODE = 0
     CARTESIAN_IMPEDANCE_CONTROLMODE = 1
     JOINT_IMPEDANCE_CONTROLMODE = 2
@@ -62,6 +75,8 @@ class ControlMode(IntEnum):
 
 
 class ClientCommandMode(IntEnum):
+    """What the client's replies command: joint positions [rad], wrench [N, Nm], torques [Nm] or a Cartesian pose."""
+
     NO_COMMAND_MODE = 0
     POSITION = 1  # JOINT_POSITION in 2.x
     WRENCH = 2
@@ -70,6 +85,8 @@ class ClientCommandMode(IntEnum):
 
 
 class OverlayType(IntEnum):
+    """The FRI overlay the robot application opened: none, joint or Cartesian."""
+
     NO_OVERLAY = 0
     JOINT = 1
     CARTESIAN = 2

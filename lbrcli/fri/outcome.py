@@ -11,6 +11,8 @@ from .constants import SessionState
 
 
 class Outcome(str, Enum):
+    """How a session ended, as a whole (the value is what `--json` reports as `outcome`)."""
+
     COMPLETED = "completed"  # the client finished (or the monitoring duration elapsed)
     INTERRUPTED = "interrupted"  # Ctrl-C or SIGTERM
     STOPPED = "stopped"  # the robot side ended or broke the session
@@ -19,6 +21,8 @@ class Outcome(str, Enum):
 
 
 class EndReason(str, Enum):
+    """Why a session ended (the value is what `--json` reports as `reason`)."""
+
     FINISHED = "finished"  # the client said it is done
     DURATION = "duration"  # run(duration_s) elapsed
     SIGINT = "sigint"

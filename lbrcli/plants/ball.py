@@ -21,6 +21,8 @@ from trajectories.errors import OptionError
 from .tcp_acceleration import TcpAcceleration
 
 BALL_IO_NAMES = ("ball_theta", "ball_phi", "ball_theta_x", "ball_theta_y", "ball_x", "ball_y", "ball_z", "ball_phase")
+"""The simulated ball's analog inputs (and log columns): angles [rad], position [m] in the base frame, phase (taut,
+slack, in the cup)."""
 MAX_INTERVAL_S = 0.005  # [s] the stepper's longest interval (a longer controller period is split)
 
 

@@ -27,6 +27,8 @@ from .lqr import lqr_gain
 
 
 class Mode(IntEnum):
+    """What the upright controller is doing (the log's `mode` column): swinging up, balancing, parking the cart."""
+
     SWING_UP = 0
     BALANCE = 1
     PARK = 2

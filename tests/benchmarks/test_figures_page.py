@@ -1,4 +1,5 @@
-"""The docs page of benchmark figures is what benchmarks/results/*.json give, and the README's links into it land."""
+"""The docs page of benchmark figures is what benchmarks/results/*.json give, and the links into it (README and docs
+pages) land."""
 
 import importlib.util
 import json
@@ -32,11 +33,12 @@ def test_every_result_is_on_the_page_with_its_values(tmp_path):
     assert "| x | — | deg |" in text and "2026-01-02 03:04:05" in text
 
 
-def test_readme_links_to_the_page_land_on_a_section():
+def test_links_to_the_page_land_on_a_section():
     """Each link names a benchmark; once that benchmark has results, the page has its section."""
     page = _figures_page().PAGE.read_text()
     sections = {line[3:].strip() for line in page.splitlines() if line.startswith("## ")}
-    links = set(re.findall(r"benchmark-figures\.md#([a-z0-9_-]+)", (ROOT / "README.md").read_text()))
+    texts = [(ROOT / "README.md").read_text()] + [p.read_text() for p in (ROOT / "docs").rglob("*.md")]
+    links = {name for text in texts for name in re.findall(r"benchmark-figures\.md#([a-z0-9_-]+)", text)}
     assert links
     for name in links:
         assert (ROOT / "benchmarks" / f"bench_{name}.py").exists(), name

@@ -1,7 +1,7 @@
-"""The README's Example session runs as written on a fresh folder and ends with model and experiment agreeing.
+"""The README's user loop runs as written on a fresh folder and ends with model and experiment agreeing.
 
 Test-only changes, all named here: `lbr execute` gets `--port 0` (other sessions on a shared machine may hold
-30200), `--realtime` and `--sim-lenient` (the README's advice for a busy PC: the test machine runs other suites meanwhile), and
+30200), `--realtime` and `--sim-lenient` (the docs' advice for a busy PC: the test machine runs other suites meanwhile), and
 `lbr track film` renders a 640x360 video (quicker; the tracker's accuracy at full size is benchmarked).
 """
 
@@ -18,7 +18,7 @@ README = Path(__file__).resolve().parents[2] / "README.md"
 
 def example_commands() -> list[list[str]]:
     text = README.read_text()
-    block = text.split("### Example session", 1)[1].split("```bash", 1)[1].split("```", 1)[0]
+    block = text.split("## The user's loop", 1)[1].split("```bash", 1)[1].split("```", 1)[0]
     commands = []
     for line in block.splitlines():
         line = line.split("#", 1)[0].strip()
@@ -62,8 +62,7 @@ def test_readme_example_session_runs_as_written(tmp_path):
         figures = {}
         for f in pool.map(lambda c: _run_chain(c, tmp_path), chains):
             figures.update(f)
-    for name in ("move.csv", "run.csv", "swing.csv", "pred.csv", "experiment.mp4", "track.csv", "check.mp4",
-                 "compare.png"):
+    for name in ("swing.csv", "swing_run.csv", "pred.csv", "experiment.mp4", "track.csv", "check.mp4", "compare.png"):
         assert (tmp_path / name).stat().st_size > 1000, name
     cmp = figures["compare pred.csv"]
     # the filmed simulated ball is the plan's ball: same sign, sub-degree agreement once aligned

@@ -16,6 +16,7 @@ from ..constants import N_JOINTS, OperationMode
 from ..messages import FriVersion
 
 THESIS_Q0 = THESIS_START  # [rad], thesis §5.3.2 start pose
+"""The thesis start pose (§5.3.2) [rad]: where the simulated robot stands unless told otherwise."""
 OPERATION_MODES = {"T1": OperationMode.TEST_MODE_1, "T2": OperationMode.TEST_MODE_2, "AUT": OperationMode.AUTOMATIC_MODE}
 COMMAND_MODES = ("position", "torque", "wrench", "cartesian")  # the overlay's client command mode (cartesian: 2.7)
 MAX_TRANSFORMATIONS = 5  # requested transformations a 2.7 message carries at most (KUKA's SDK: 5, names < 64 bytes)
@@ -76,6 +77,8 @@ IO_PRESETS: dict[str, tuple[IoChannel, ...]] = {
         IoChannel("FRI.In_Bool_Clock_Enabled", "boolean", "in", 1.0),
     ),
 }
+"""IO channel sets of KUKA's example applications by name (`lbr sim --io-preset`); the IOAccess client aborts if a
+channel is missing."""
 
 
 def lenient_quality(period_ms: int, receive_multiplier: int = 1) -> dict[str, float | int]:

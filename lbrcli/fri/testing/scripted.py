@@ -23,11 +23,19 @@ from ..codec import FriCodec
 from ..constants import MONITORING_MESSAGE_ID
 from ..errors import FriDecodeError
 
-from ..constants import STATE_COMMANDING_ACTIVE as CA
-from ..constants import STATE_COMMANDING_WAIT as CW
-from ..constants import STATE_IDLE as IDLE
-from ..constants import STATE_MONITORING_READY as MR
-from ..constants import STATE_MONITORING_WAIT as MW
+from ..constants import (STATE_COMMANDING_ACTIVE, STATE_COMMANDING_WAIT, STATE_IDLE, STATE_MONITORING_READY,
+                         STATE_MONITORING_WAIT)
+
+MW = STATE_MONITORING_WAIT
+"""Session state MONITORING_WAIT in a script."""
+MR = STATE_MONITORING_READY
+"""Session state MONITORING_READY in a script."""
+CW = STATE_COMMANDING_WAIT
+"""Session state COMMANDING_WAIT in a script."""
+CA = STATE_COMMANDING_ACTIVE
+"""Session state COMMANDING_ACTIVE in a script."""
+IDLE = STATE_IDLE
+"""Session state IDLE in a script."""
 
 
 @dataclass(frozen=True)
@@ -57,6 +65,9 @@ class Cycle:
 
 @dataclass
 class Reply:
+    """One reply the client sent to a scripted message, decoded: counters, commanded positions [rad], torques [Nm],
+    wrench [N, Nm] and IO writes."""
+
     cycle: int  # index in the script
     state: int
     seq: int  # of the monitoring message answered (expected)
@@ -69,6 +80,9 @@ class Reply:
 
 @dataclass
 class ScriptedController:
+    """A fake FRI controller for tests: sends the `script` of cycles to a client on loopback, one message per cycle,
+    and records every reply (`replies`), the cycles left unanswered and replies to messages that must be ignored."""
+
     client_port: int
     script: list[Cycle]
     q0: tuple[float, ...]

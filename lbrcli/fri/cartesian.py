@@ -24,6 +24,7 @@ from trajectories.robot import Robot
 __all__ = ["E1_JOINT", "PoseSolution", "PoseSolver", "pose_matrix", "pose_to_wire", "wire_to_pose"]
 
 E1_JOINT = 2  # KUKA's redundancy E1 of the LBR is the angle of A3 (index 2) [rad]
+"""Index of the joint whose angle [rad] is KUKA's redundancy value E1 of the LBR (A3)."""
 JUMP_CYCLES = 10  # a pose whose joints are further than this many periods at the velocity limit is a jump
 REACH_POSITION = 1e-4  # [m] IK residual above which a pose counts as unreachable
 REACH_ROTATION = 1e-3  # [rad]

@@ -26,6 +26,7 @@ from .errors import FriCommandError
 __all__ = ["MAX_TRANSFORMATIONS", "TransformationClient"]
 
 MAX_TRANSFORMATIONS = 5
+"""Requested transformations one FRI 2.7 message carries at most (KUKA's SDK: 5)."""
 
 
 class TransformationClient:

@@ -73,7 +73,9 @@ def test_worker_killed_mid_study_loses_nothing_and_counts_nothing_twice(tmp_path
 
 def test_interrupted_study_resumes_and_an_extended_grid_computes_only_the_new_runs(tmp_path):
     out = tmp_path / "results"
-    proc = _sweep(_study(tmp_path / "study.toml", 20, 0.15), "-o", out, "--workers", "2")
+    # 40 sleeping runs of 0.25 s: ≈ 5 s on 2 workers, so the interrupt lands mid-study however late this loaded
+    # machine delivers it (20 of 0.15 s once finished first beside two busy loops)
+    proc = _sweep(_study(tmp_path / "study.toml", 40, 0.25), "-o", out, "--workers", "2")
     _wait_records(out, 4, proc)
     os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does: the whole foreground group
     stdout, stderr = proc.communicate(timeout=60)
@@ -81,18 +83,18 @@ def test_interrupted_study_resumes_and_an_extended_grid_computes_only_the_new_ru
     assert "Traceback" not in stderr and stderr.rstrip().endswith("lbr: interrupted")
     done = len(_records(out))
     figs = json.loads(stdout)
-    assert figs["interrupted"] and figs["rows"] == done and 4 <= done < 20
+    assert figs["interrupted"] and figs["rows"] == done and 4 <= done < 40
     assert len(pq.read_table(out / "results.parquet")) == done  # the partial table
 
-    # the same study with the grid extended from 20 to 26 values: only the runs not yet done are computed
-    proc = _sweep(_study(tmp_path / "study.toml", 26, 0.15), "-o", out, "--workers", "2")
+    # the same study with the grid extended from 40 to 46 values: only the runs not yet done are computed
+    proc = _sweep(_study(tmp_path / "study.toml", 46, 0.25), "-o", out, "--workers", "2")
     stdout, stderr = proc.communicate(timeout=120)
     assert proc.returncode == 0, stderr
     figs = json.loads(stdout)
-    assert figs["cached"] == done and figs["computed"] == 26 - done and figs["rows"] == 26
+    assert figs["cached"] == done and figs["computed"] == 46 - done and figs["rows"] == 46
     recs = _records(out)
-    assert len(recs) == 26 and len({r["key"] for r in recs}) == 26
-    assert sorted(r["value"] for r in pq.read_table(out / "results.parquet").to_pylist()) == list(range(1, 27))
+    assert len(recs) == 46 and len({r["key"] for r in recs}) == 46
+    assert sorted(r["value"] for r in pq.read_table(out / "results.parquet").to_pylist()) == list(range(1, 47))
 
 
 

@@ -52,6 +52,7 @@ def make_log(folder: Path, seconds: float) -> Path:
 
 
 WARM_UP_S = 3.0  # [s] after the arm appears, before the play rate is measured
+BROWSER_SETTLE_S = 2.0  # [s] the launched browser's own start-up finishes before the clock starts
 PLAY_WINDOW_S = 10.0  # [s] over which the play rate (scene time per wall time in the page) is measured
 
 
@@ -66,6 +67,8 @@ def measure_view(log: Path, folder: Path) -> dict[str, float]:
         return {}
     out: dict[str, float] = {}
     with page() as (pg, console):
+        pg.goto("about:blank")  # the browser is up and idle, as a user's is, before `lbr view` starts
+        time.sleep(BROWSER_SETTLE_S)
         t0 = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "lbrcli", "view", str(log), "--port", "0", "--duration", "120", "--json"],
                                 cwd=folder, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -214,9 +217,9 @@ def _table(rows: list[tuple[str, float, str]], quick: bool) -> str:
         lines.append(f"| {what} | {value} | {goal} |")
 
     if "view_open_s" in f:
-        row(f"`lbr view` of a {f['log_seconds']:.0f} s, 1 kHz execution log: command start → arm drawn in the browser",
+        row(f"`lbr view` of a {f['log_seconds']:.0f} s, 1 kHz execution log: command start (browser already open) → arm drawn in the browser",
             f"{f['view_open_s']:.2f} s (server ready {f['view_server_ready_s']:.2f} s)", "≤ 5 s")
-        row("… replay speed at 1x (scene time / wall time over 5 s)", f"{f['view_play_rate']:.2f}×", "≥ 1× (real time)")
+        row("… replay speed at 1x (scene time / wall time over 10 s, from 3 s after the arm appears)", f"{f['view_play_rate']:.2f}×", "≥ 1× (real time)")
         row("… console errors", f"{f['view_console_errors']:.0f}", "0")
     row("`lbr export` of that log (read + MCAP) / strict CSV read", f"{f['export_s']:.2f} s / {f['read_csv_s']:.2f} s = "
         f"{f['export_over_read']:.2f}×", "≤ 2×")

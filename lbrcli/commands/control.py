@@ -99,7 +99,7 @@ def upright(
     the balance holds it for --hold in one run (a fall is caught again within --recatch), and it is lowered gently in
     ever smaller swings before the arm parks. Exit 0 only when the hold was met; 1 otherwise (the reason on stderr).
     """
-    from lbrcli.control.fitter import LOCKSTEP_FIT_S, ProcessFitter
+    from lbrcli.control.fitter import ProcessFitter
     from lbrcli.control.upright import LOG_COLUMNS, UprightClient
     from planners.feedback.session import SessionOptions
     from lbrcli.lab.attach import LabOptions
@@ -158,9 +158,7 @@ def upright(
         plants = (RigidModuleSpec(rod, sensor_rate, sim_delay, sim_jitter, pushes=pushes, zero_count=pendulum_zero,
                                   noise_counts=sim_noise, sign=sim_encoder_sign),)  # fmt: skip
     lab = LabOptions(pendulum or "sim", baud, pendulum_zero)
-    fitter = None
-    if identify:  # in lock-step the fit's result is taken a fixed number of cycles after it was asked for
-        fitter = ProcessFitter(round(LOCKSTEP_FIT_S / ((period or 1) * 1e-3)) if sim_lockstep or sim_fast else None)
+    fitter = ProcessFitter() if identify else None
     client.fitter = fitter
     try:
         result, sim_stats, lab_figures = run_client(

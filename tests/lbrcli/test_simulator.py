@@ -309,7 +309,9 @@ def test_foreign_and_malformed_datagrams_are_counted_and_ignored():
         other.close()
         counts.update(foreign=2 + foreign_host, malformed=5)
 
-    run, stats, _ = run_session(before=send_foreign, session_duration_s=0.2)
+    # in lock-step: the quality rule is not what is tested here, and a loaded machine dropped the session to
+    # MONITORING_WAIT once (the counts held)
+    run, stats, _ = run_session(before=send_foreign, session_duration_s=0.2, lockstep_timeout_s=0.5)
     assert stats.foreign_received == counts["foreign"]
     assert stats.malformed_received == counts["malformed"]
     assert_sequence(run.states)

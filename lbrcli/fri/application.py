@@ -207,6 +207,7 @@ class ClientApplication(Replying, SessionEnding):
         self.connect()
         self._reset()
         self._clock = SessionClock(self.first_message_timeout_s, self.silence_timeout_s, duration_s)
+        self.client.command_period_s = None
         self._started = True
         for o in list(self.observers):
             self._call_observer(o, "on_start", self)
@@ -310,6 +311,7 @@ class ClientApplication(Replying, SessionEnding):
             self._cycles0 = 1
         cyc.begin(clock.t, state)
         if state != IDLE and clock.learn_period(ci):
+            self.client.command_period_s = clock.period_s
             self._motion = ExecutedMotion(self.limits, clock.period_s, self.max_force, self.max_moment,  # type: ignore[arg-type]
                                           self.hold_cycles, mon.monitorData.measuredJointPosition.value)  # fmt: skip
             self.client.executed = self._motion

@@ -72,8 +72,7 @@ class BallSpec:
         base = self.model if self.model is not None else StringModel(self.length, cup=None)
         return replace(base, length=self.length, damping=self.damping)
 
-    def build(self, context) -> "Ball":
-        self.validate()
+    def build(self, context) -> "Ball":  # (checked when it was made)
         pose = context.robot.fk(context.q0)
         return Ball(self, context.period_s, pose.translation.tolist(), pose.rotation)
 

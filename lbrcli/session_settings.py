@@ -13,10 +13,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from trajectories.errors import SettingError
 from trajectories.start_poses import THESIS_START
+
+if TYPE_CHECKING:
+    from lbrcli.fri import ClientApplication, LBRClient
+    from lbrcli.fri.sim import SimConfig
+    from lbrcli.plants import BallSpec
+    from trajectories.limits import JointLimits
 
 FRI_VERSIONS = ("1.15", "2.7")
 SIMULATED_VERSION = "1.15"  # the embedded simulator's wire format unless told otherwise
@@ -43,7 +49,7 @@ class SessionSettings:
     port: int = 30200  # local UDP port of the robot's FRI configuration (0: any free port)
     bind: str | None = None  # local IP address to bind (None: loopback with the simulator, all interfaces otherwise)
     version: str | None = None  # FRI wire format "1.15" or "2.7" (None: detected with a robot, 1.15 simulated)
-    limits: Any = None  # trajectories.limits.JointLimits the commands are guarded with (None: the default tables)
+    limits: JointLimits | None = None  # the limits every command is guarded with (None: the default tables)
     log: Path | None = None  # execution log CSV, one row per monitoring message
     wait_s: float | None = None  # [s] for the first FRI message (None: 60 with a robot, 20 simulated)
     duration_s: float | None = None  # [s] from the first message to the end (None: until the client ends it)
@@ -68,7 +74,7 @@ class SessionSettings:
         """No robot named: the session runs against the simulator this process starts on loopback."""
         return self.robot is None
 
-    def application(self, client: Any, observers: Sequence[Any] = (), lenient: bool = False):
+    def application(self, client: LBRClient, observers: Sequence[Any] = (), lenient: bool = False) -> ClientApplication:
         """The :class:`~lbrcli.fri.ClientApplication` of these settings (not bound yet); ``lenient``: the embedded
         simulator judges its quality leniently, so the supervision tolerates the same loaded PC."""
         from lbrcli.fri import ClientApplication
@@ -96,7 +102,7 @@ class SimulatorSettings:
     start: tuple[float, ...] = THESIS_START  # [rad] where the simulated robot stands at start (7 joints)
     flange: str = "touch-electric"  # media flange (trajectories.robot.Flange value)
     tool: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [m] TCP offset in the flange frame (the ball hangs there)
-    ball: Any = None  # lbrcli.plants.BallSpec: the ball on its string hanging from the TCP (None: no ball)
+    ball: BallSpec | None = None  # the ball on its string hanging from the TCP (None: no ball)
     plants: tuple = ()  # further plant specs after the ball (the pendulum module, the rigid module, a camera)
     limits_path: Path | None = None  # TOML overriding the simulated robot's joint limits
     max_runtime_s: float | None = None  # [s] the simulator stops after this long whatever happens (None: never)
@@ -125,7 +131,7 @@ class SimulatorSettings:
         """The ball (if any), then the other plants, in the order the simulator builds them."""
         return ((self.ball,) if self.ball is not None else ()) + tuple(self.plants)
 
-    def config(self, client_port: int, version: str | None = None, realtime: bool = False):
+    def config(self, client_port: int, version: str | None = None, realtime: bool = False) -> SimConfig:
         """The :class:`~lbrcli.fri.sim.SimConfig` of these settings for a client on loopback ``client_port``."""
         from lbrcli.fri.sim import SimConfig, lenient_quality
 

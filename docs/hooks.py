@@ -79,7 +79,7 @@ def _path(spec: str) -> list[str]:
 def _results_file(name: str) -> Path:
     found = [folder / f"{name}.json" for folder in RESULT_FOLDERS if (folder / f"{name}.json").exists()]
     if len(found) != 1:
-        where = " or ".join(str(f.relative_to(ROOT)) for f in RESULT_FOLDERS)
+        where = " or ".join(str(f.relative_to(ROOT) if f.is_relative_to(ROOT) else f) for f in RESULT_FOLDERS)
         raise FigureError(f"lbr:bench: no results file {name}.json in {where}" if not found else
                           f"lbr:bench: {name}.json is in more than one results folder")
     return found[0]
@@ -128,16 +128,17 @@ def _key_unit(key: str) -> str:
     return ""
 
 
-def number(value: float, digits: int | None = 3) -> str:
+def number(value: float, digits: int | None = 3, whole: bool = True) -> str:
     """A measured value rounded for prose: ``digits`` significant digits (45,294.2 → 45,300), thousands separated,
-    an exponent below 0.001 (5.28e-10); integers as they are."""
+    an exponent below 0.001 (5.28e-10); integers as they are (``whole=False``: a whole float rounded as any other,
+    for a range whose other end is not whole)."""
     if isinstance(value, bool):
         return "yes" if value else "no"
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "—"
     if math.isinf(value):
         return "∞" if value > 0 else "−∞"
-    if float(value).is_integer() and abs(value) < 1e15:
+    if float(value).is_integer() and abs(value) < 1e15 and (whole or value == 0):
         return f"{int(value):,}".replace("-", "−")
     if digits is None:  # a parameter: as the code has it
         return f"{value:,.6g}".replace("-", "−")
@@ -210,7 +211,8 @@ def _formatted(node, unit: str, options: str, where: str, digits: int | None = 3
     factor = _CONVERT.get((unit, shown), 1.0) if shown != unit else 1.0
     nums = [v * factor if isinstance(v, (int, float)) and not isinstance(v, bool) else v for v in values]
     if aggregate == ["range"]:
-        text = f"{number(min(nums), digits)}–{number(max(nums), digits)}"
+        whole = all(float(v).is_integer() for v in (min(nums), max(nums)))
+        text = f"{number(min(nums), digits, whole)}–{number(max(nums), digits, whole)}"
     elif aggregate:
         text = number({"min": min, "max": max, "median": statistics.median, "sum": sum}[aggregate[0]](nums), digits)
     else:
@@ -236,11 +238,16 @@ def expand(markdown: str) -> str:
             return _formatted(value, _key_unit(dotted.rpartition(".")[2]), options, f"lbr:value {dotted}", digits=None)
         return f"`{value}`"
 
-    markdown = _MARKER.sub(one, BENCH_MARKER.sub(lambda m: figure(m.group(1), m.group(2)), markdown))
-    left = re.search(r"<!-- lbr:.*?-->", markdown)
-    if left:
-        raise ValueError(f"docs marker not understood: {left.group(0)}")
-    return markdown
+    def prose(text: str) -> str:
+        text = _MARKER.sub(one, BENCH_MARKER.sub(lambda m: figure(m.group(1), m.group(2)), text))
+        left = re.search(r"<!-- lbr:.*?-->", text)
+        if left:
+            raise ValueError(f"docs marker not understood: {left.group(0)}")
+        return text
+
+    # a marker shown as code (a fenced block, `inline`) is left as it is
+    parts = re.split(r"(^ *```.*?^ *```[^\n]*$|`[^`\n]+`)", markdown, flags=re.M | re.S)
+    return "".join(part if i % 2 else prose(part) for i, part in enumerate(parts))
 
 
 def on_files(files, config):

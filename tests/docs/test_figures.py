@@ -9,12 +9,14 @@ in prose, outside fenced code blocks, inline code, HTML comments (the markers) a
 Parameters and limits (the 1 ms period, a ±10 % band, a 10° push, a goal of ≤ 5 s) are not measured figures. They
 are allowed only in the phrases of ``ALLOWED`` below, each a regex whose group ``fig`` is the allowed figure:
 
-- bounds: a figure right after ≤, ≥, <, > or "up to" (a goal, limit or threshold — a measured maximum is
-  written with a marker, never as a bound), and the cells of a table column headed "goal";
-- the FRI send period: 1, 2, 5 or 10 ms followed by "period"/"cycle"/"step", or after "at"/"every";
-- a band or perturbation of an input: ±N, N % shorter/longer/short/long/off/wider/narrower, N % of the limits;
-- what a run is given: a duration or angle followed by a word naming the input (hold, push, path, log, run,
-  session, video, window, timeout, delay, late, tilt, yaw, …), a size followed by ball/string/circle/…;
+- bounds: a figure right after ≤, ≥, <, >, "up to", "at least" or "at most" (a goal, limit or threshold — a
+  measured maximum is quoted with a marker, never typed as a bound), and the cells of a table column headed "goal";
+- the FRI send period: a figure followed by "period"/"cycle", or 1, 2, 4, 5 or 10 ms after "at"/"every";
+- a band or perturbation of an input: ±N; N followed by shorter/longer/short/long/off/wider/narrower/larger/
+  smaller/heavier/lighter; N "of the"/"of its" … after at/to/within/of (a share of the limits);
+- what a run is given: a figure followed by a word of ``INPUT_WORDS`` naming the input (hold, push, path, log, run,
+  session, video, window, timeout, delay, late, tilt, step, grid, apart, exposure, amplitude, …), a size followed by
+  ball/string/circle/disc/marker/radius/rod/cup/frame (one word may come between), "a/with N ms latency";
 - a default: "default N", "(default: N)".
 
 Anything else is a measured figure: quote it with a marker, write a parameter as the option that sets it in code
@@ -45,7 +47,7 @@ FIG = rf"(?P<fig>{FIGURE.pattern})"
 INPUT_WORDS = (r"hold|push|pushes|paths?|logs?|runs?|sessions?|videos?|clips?|moves?|windows?|timeouts?|delays?|"
                r"late|early|jitter|tilts?|yaw|turns?|swings?|pumping|settle|waits?|of streaming|of motion|of swing|"
                r"streams?|recording|budget|studies|sleeps?|sleeping|apart|slices?|steps?|grid|"
-               r"latency|exposure|shutter|per command|each|segments?|above|below|around|down|wide|margin|stages?|"
+               r"exposure|shutter|per command|segments?|above|below|around|down|wide|margin|stages?|"
                r"plans?|later|earlier|tail|lost|malformed|amplitudes?")
 ALLOWED = [re.compile(p) for p in (
     rf"(?:≤|≥|<|>|up to|at least|at most)\s*{FIG}",  # a bound: goal, limit, threshold
@@ -57,6 +59,7 @@ ALLOWED = [re.compile(p) for p in (
     rf"{FIG}\s+(?:{INPUT_WORDS})\b",  # what a run is given
     rf"{FIG},?\s+(?:\w+\s+)?(?:ball|string|circle|disc|marker|radius|square|board|rod|cup|frame)\b",
     rf"\bdefault:?\s+{FIG}",
+    rf"\b(?:a|an|with)\s+{FIG}\s+(?:camera\s+)?latency\b",  # a camera's latency, as a run is given it
 )]
 
 
@@ -140,3 +143,39 @@ def test_a_goal_column_is_a_parameter_and_code_is_not_prose():
     table = ["| what | figure | goal |", "|---|---|---|", "| open | 3.5 s | ≤ 5 s, 2 min |"]
     assert [hand_typed(t) for _, t in _prose(table)] == [[], [], ["3.5 s"]]
     assert not [hand_typed(t) for _, t in _prose(["```", "took 3.5 s", "```", "`3.5 s` <!-- 3 s -->"]) if hand_typed(t)]
+
+
+def _hooks():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("hooks", ROOT / "docs" / "hooks.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_marker_quotes_the_results_file_with_its_unit_and_rounding(tmp_path, monkeypatch):
+    import json
+
+    hooks = _hooks()
+    monkeypatch.setattr(hooks, "RESULT_FOLDERS", (tmp_path,))
+    (tmp_path / "demo.json").write_text(json.dumps({
+        "benchmark": "demo", "load_1min_before": 2.5,
+        "figures": [{"name": "plan: time (4 segments)", "value": 1.23456, "unit": "s"},
+                    {"name": "plan: residual", "value": 0.0012345, "unit": "deg"},
+                    {"name": "run: residual", "value": 0.5, "unit": "deg"}]}))
+    (tmp_path / "own.json").write_text(json.dumps({"cases": [{"key": "a", "p99_ms": 1.0, "share": 0.25},
+                                                              {"key": "b", "p99_ms": 2.5, "share": 0.5}]}))
+    assert hooks.figure('demo."plan: time (4 segments)"') == "1.23 s"
+    assert hooks.figure('demo."plan: time (4 segments)"', "unit=ms") == "1,230 ms"
+    assert hooks.figure('demo."plan: residual"') == "0.00123°"
+    assert hooks.figure('demo."*: residual"', "max") == "0.500°" and hooks.figure("demo.load_1min_before") == "2.50"
+    assert hooks.figure("own.cases.b.p99_ms") == "2.50 ms" and hooks.figure("own.cases.*.p99_ms", "range") == "1.00–2.50 ms"
+    assert hooks.figure("own.cases.0.share", "unit=%") == "25 %" and hooks.figure("own.cases.*", "count") == "2"
+    assert hooks.expand("x <!-- lbr:bench own.cases.b.p99_ms digits=2 --> y") == "x 2.5 ms y"
+    for spec, options in (("nothing.x", ""), ("own.cases.c.p99_ms", ""), ("own.cases.a.p50_ms", ""),
+                          ("own.cases.*.p99_ms", ""), ("own.cases.a.p99_ms", "sideways")):
+        with pytest.raises(hooks.FigureError):
+            hooks.figure(spec, options)
+    with pytest.raises(ValueError, match="not understood"):
+        hooks.expand('<!-- lbr:bench own.cases."a -->')

@@ -4,8 +4,8 @@ Goals (issue #37): the log opens in the view in ≤ 5 s and plays at real time o
 ≤ 20 MB; export to MCAP ≤ 2× the time lbr takes to read the CSV; every message read back by independent readers
 (rosbags; mcap + mcap-ros2-support) equals the log.
 
-    python benchmarks/bench_view.py [--quick]    # figures → benchmarks/results/view_export.json and the table in
-                                                 # docs/guides/view-and-export.md (between its figures markers)
+    python benchmarks/bench_view.py [--quick]    # figures → benchmarks/results/view_export.json (the view guide
+                                                 # quotes them with lbr:bench markers)
 """
 
 from __future__ import annotations
@@ -23,8 +23,6 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results" / "view_export.json"
-DOC = HERE.parent / "docs" / "guides" / "view-and-export.md"
-MARK_BEGIN, MARK_END = "<!-- figures: benchmarks/bench_view.py -->", "<!-- end of figures -->"
 Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # [rad]
 AXES = np.array([0.35, 0.2, -0.15, 0.3, 0.1, -0.25, 0.4])  # [rad]
 
@@ -206,33 +204,6 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
     return [(k, float(v), next((u for suffix, u in units.items() if k.endswith(suffix)), "")) for k, v in fig.items()]
 
 
-def _table(rows: list[tuple[str, float, str]], quick: bool) -> str:
-    f = {k: v for k, v, _ in rows}
-    lines = [MARK_BEGIN, "", f"Measured by `python benchmarks/bench_view.py{' --quick' if quick else ''}` on "
-             f"{time.strftime('%d %b %Y')} on the 2-core VM, load average {f['load_average_at_start']:.1f} at the start "
-             "(other work on the machine); Chromium renders in software.", "",
-             "| what | figure | goal |", "|---|---|---|"]
-
-    def row(what, value, goal):
-        lines.append(f"| {what} | {value} | {goal} |")
-
-    if "view_open_s" in f:
-        row(f"`lbr view` of a {f['log_seconds']:.0f} s, 1 kHz execution log: command start (browser already open) → arm drawn in the browser",
-            f"{f['view_open_s']:.2f} s (server ready {f['view_server_ready_s']:.2f} s)", "≤ 5 s")
-        row("… replay speed at 1x (scene time / wall time over 10 s, from 3 s after the arm appears)", f"{f['view_play_rate']:.2f}×", "≥ 1× (real time)")
-        row("… console errors", f"{f['view_console_errors']:.0f}", "0")
-    row("`lbr export` of that log (read + MCAP) / strict CSV read", f"{f['export_s']:.2f} s / {f['read_csv_s']:.2f} s = "
-        f"{f['export_over_read']:.2f}×", "≤ 2×")
-    row("… MCAP file", f"{f['export_messages']:.0f} messages, {f['export_mb']:.1f} MB", "—")
-    row("… JointState messages read back equal to the log (rosbags / mcap)",
-        f"{f['equal_rosbags']:.0f} / {f['equal_mcap']:.0f} of {f['joint_state_messages']:.0f}", "all")
-    row("offline HTML of that log (`lbr view -o`)", f"{f['offline_60s_mb']:.1f} MB, written in {f['offline_60s_write_s']:.1f} s", "—")
-    if "demo_offline_mb" in f:
-        row("`lbr demo`'s offline file (swingup_view.html)", f"{f['demo_offline_mb']:.2f} MB", "≤ 20 MB")
-    lines += ["", MARK_END]
-    return "\n".join(lines)
-
-
 def main() -> int:
     quick = "--quick" in sys.argv
     rows = run(quick)
@@ -240,11 +211,6 @@ def main() -> int:
         print(f"  {name:<28} {value:>12.4g} {unit}")
     RESULTS.parent.mkdir(exist_ok=True)
     RESULTS.write_text(json.dumps({k: {"value": v, "unit": u} for k, v, u in rows}, indent=1) + "\n")
-    if DOC.exists():
-        text = DOC.read_text()
-        if MARK_BEGIN in text and MARK_END in text:
-            head, rest = text.split(MARK_BEGIN, 1)
-            DOC.write_text(head + _table(rows, quick) + rest.split(MARK_END, 1)[1])
     return 0
 
 

@@ -103,28 +103,23 @@ def joint_transforms(robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return trans, quat
 
 
-def _rotate(quat: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """v (3,) or (n, 3) rotated by unit quaternions (n, 4) (x, y, z, w): v + w t + u × t with t = 2 u × v."""
-    u, w = quat[:, :3], quat[:, 3:]
-    t = 2 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
-
-
-def _compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton products a ⊗ b of quaternions (n, 4) (x, y, z, w)."""
-    ax, ay, az, aw = a.T
-    bx, by, bz, bw = b.T
-    return np.column_stack([aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
-                            aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz])
+def _rotate(x, y, z, w, v) -> tuple:
+    """v (3,) rotated by unit quaternions with components x, y, z, w (n,): v + w t + u × t with t = 2 u × v."""
+    tx, ty, tz = 2 * (y * v[2] - z * v[1]), 2 * (z * v[0] - x * v[2]), 2 * (x * v[1] - y * v[0])
+    return v[0] + w * tx + (y * tz - z * ty), v[1] + w * ty + (z * tx - x * tz), v[2] + w * tz + (x * ty - y * tx)
 
 
 def chain_positions(trans: np.ndarray, quat: np.ndarray, tip: np.ndarray) -> np.ndarray:
     """(n, 3) [m] in the base: the point ``tip`` (3,) of the last joint's frame through the joint transforms of
-    :func:`joint_transforms` — what a TF client composes from /tf."""
-    pos, rot = np.broadcast_to(trans[0], (len(quat), 3)), quat[:, 0]
+    :func:`joint_transforms` — what a TF client composes from /tf (quaternion products component by component)."""
+    x, y, z, w = quat[:, 0].T
+    p = trans[0]
     for i in range(1, len(trans)):
-        pos, rot = pos + _rotate(rot, trans[i]), _compose(rot, quat[:, i])
-    return pos + _rotate(rot, tip)
+        p = tuple(a + b for a, b in zip(p, _rotate(x, y, z, w, trans[i])))
+        bx, by, bz, bw = quat[:, i].T
+        x, y, z, w = (w * bx + x * bw + y * bz - z * by, w * by - x * bz + y * bw + z * bx,
+                      w * bz + x * by - y * bx + z * bw, w * bw - x * bx - y * by - z * bz)
+    return np.column_stack([a + b for a, b in zip(p, _rotate(x, y, z, w, tip))])
 
 
 class Bag:

@@ -17,6 +17,7 @@ from __future__ import annotations
 import os
 import struct
 import zlib
+from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import BinaryIO
@@ -54,7 +55,7 @@ class Series:
 
 class _Rows:
     """The Message records of series that share their times, one row per time: for each series in turn its record
-    (header, then the message) — a (n, width) byte buffer filled block by block with the numbers as typed fields."""
+    (header, then the message) — rows filled block by block, the numbers as typed fields at their offsets."""
 
     def __init__(self, group: list[Series]) -> None:
         self.times = group[0].times
@@ -63,7 +64,7 @@ class _Rows:
         names: list[str] = []
         formats: list = []
         offsets: list[int] = []
-        values: list[np.ndarray] = []
+        self.values: list[np.ndarray] = []
         head = np.empty(n, _HEAD)  # the same for every channel of the group: sequence from 1 (as rosbag2 and
         head["sequence"], head["log_time"], head["publish_time"] = np.arange(1, n + 1), self.times, self.times
         for j, s in enumerate(group):  # Foxglove's writer count), publish time = log time
@@ -77,22 +78,74 @@ class _Rows:
             for name, at, dtype, count, value in fields:
                 shape = (n,) if count == 1 else (n, count)
                 names.append(f"{j}:{name}"), formats.append(dtype if count == 1 else (dtype, count))
-                offsets.append(at), values.append(np.broadcast_to(np.asarray(value), shape))
+                offsets.append(at), self.values.append(np.broadcast_to(np.asarray(value), shape))
+        self.names = names
         self.width = len(template)
         self.template = np.frombuffer(bytes(template), np.uint8)
-        self.buf = np.empty((n, self.width), np.uint8)
-        rows = self.buf.view(np.dtype({"names": names, "formats": formats, "offsets": offsets,
-                                       "itemsize": self.width})).reshape(n)
-        self.fields = [(rows[name], value) for name, value in zip(names, values)]
+        self.dtype = np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": self.width})
         self.record_offsets = np.cumsum([0] + [_MESSAGE.size + len(s.template) for s in group])[:-1]
-        self.view = memoryview(self.buf).cast("B")
 
     def fill(self, a: int, b: int) -> memoryview:
-        """Rows a..b-1 written; their bytes."""
-        self.buf[a:b] = self.template
-        for rows, value in self.fields:
-            rows[a:b] = value[a:b]
-        return self.view[a * self.width:b * self.width]
+        """The bytes of rows a..b-1."""
+        block = np.empty((b - a, self.width), np.uint8)
+        block[:] = self.template
+        rows = block.view(self.dtype).reshape(b - a)
+        for name, value in zip(self.names, self.values):
+            rows[name] = value[a:b]
+        return memoryview(block).cast("B")
+
+
+@dataclass(frozen=True)
+class _Chunks:
+    """Every row of every group in log-time order (ties: the order the series were added), cut into chunks."""
+
+    times: np.ndarray  # (m,) [ns] of the rows in file order
+    gid: np.ndarray  # (m,) their group
+    row: np.ndarray  # (m,) their row in the group
+    chunk: np.ndarray  # (m,) their chunk
+    offset: np.ndarray  # (m,) [bytes] their offset in the chunk's records
+    firsts: np.ndarray  # (chunks,) the first and last row of each chunk
+    lasts: np.ndarray
+    sizes: list[int]  # [bytes] uncompressed records of each chunk
+
+    @classmethod
+    def of(cls, groups: list[_Rows]) -> _Chunks:
+        times = np.concatenate([g.times for g in groups])
+        gid = np.concatenate([np.full(len(g.times), k) for k, g in enumerate(groups)])
+        row = np.concatenate([np.arange(len(g.times)) for g in groups])
+        order = np.lexsort((row, gid, times))
+        times, gid, row = times[order], gid[order], row[order]
+        size = np.array([g.width for g in groups], dtype=np.int64)[gid]
+        start = np.cumsum(size) - size  # [bytes] each row's offset in the stream of all records
+        chunk = start // CHUNK_BYTES
+        chunk = np.concatenate([[0], np.cumsum(np.diff(chunk) > 0)])  # renumbered 0.. (a big row spans several)
+        firsts = np.flatnonzero(np.r_[True, np.diff(chunk) > 0])
+        lasts = np.r_[firsts[1:], len(chunk)] - 1
+        return cls(times, gid, row, chunk, start - start[firsts][chunk], firsts, lasts,
+                   (start[lasts] + size[lasts] - start[firsts]).tolist())
+
+    def runs(self):
+        """(chunk, group, first row, end row, whether the chunk ends with it) of the runs of consecutive rows of one
+        group, in file order."""
+        new = np.r_[True, (np.diff(self.gid) != 0) | (np.diff(self.row) != 1) | (np.diff(self.chunk) != 0)]
+        starts = np.flatnonzero(new)
+        ends = np.r_[starts[1:], len(self.gid)]
+        for a, b in zip(starts.tolist(), ends.tolist()):
+            c = int(self.chunk[a])
+            yield c, int(self.gid[a]), int(self.row[a]), int(self.row[b - 1]) + 1, b - 1 == self.lasts[c]
+
+    def message_indexes(self, groups: list[_Rows], grouped: list[list[Series]]) -> list[list[tuple[int, bytes]]]:
+        """Per chunk, (channel id, Message Index record) of every channel with messages in it."""
+        indexes: list[list[tuple[int, bytes]]] = [[] for _ in self.firsts]
+        for k, (g, series) in enumerate(zip(groups, grouped)):
+            mine = np.flatnonzero(self.gid == k)
+            bounds = np.searchsorted(self.chunk[mine], np.arange(len(self.firsts) + 1))
+            for s, at in zip(series, g.record_offsets.tolist()):
+                for c in np.flatnonzero(np.diff(bounds)).tolist():
+                    sel = mine[bounds[c]:bounds[c + 1]]
+                    indexes[c].append((s.channel_id, _message_index(s.channel_id, self.times[sel],
+                                                                    self.offset[sel] + at)))
+        return indexes
 
 
 def _compress(data, compression: str) -> tuple[int, bytes | memoryview]:
@@ -167,65 +220,46 @@ class BulkWriter:
                         None)
             (same.append(s) if same is not None else grouped.append([s]))
         groups = [_Rows(g) for g in grouped]
-        # every row of every group in log-time order (ties: the order the series were added), cut into chunks
-        times = np.concatenate([g.times for g in groups])
-        gid = np.concatenate([np.full(len(g.times), k) for k, g in enumerate(groups)])
-        row = np.concatenate([np.arange(len(g.times)) for g in groups])
-        order = np.lexsort((row, gid, times))
-        times, gid, row = times[order], gid[order], row[order]
-        size = np.array([g.width for g in groups], dtype=np.int64)[gid]
-        start = np.cumsum(size) - size  # [bytes] each row's offset in the stream of all records
-        chunk = start // CHUNK_BYTES
-        chunk = np.concatenate([[0], np.cumsum(np.diff(chunk) > 0)])  # renumbered 0.. (a big row spans several)
-        firsts = np.flatnonzero(np.r_[True, np.diff(chunk) > 0])
-        lasts = np.r_[firsts[1:], len(chunk)] - 1
-        sizes = (start[lasts] + size[lasts] - start[firsts]).tolist()  # [bytes] uncompressed
-        offset_in_chunk = start - start[firsts][chunk]
-        # message indexes: per chunk and channel, (log time, offset in the chunk) of its messages
-        indexes: list[list[tuple[int, bytes]]] = [[] for _ in firsts]
-        counts: dict[int, int] = {}
-        for k, (g, series) in enumerate(zip(groups, grouped)):
-            mine = np.flatnonzero(gid == k)
-            bounds = np.searchsorted(chunk[mine], np.arange(len(firsts) + 1))
-            for s, at in zip(series, g.record_offsets.tolist()):
-                counts[s.channel_id] = len(s.times)
-                for c in np.flatnonzero(np.diff(bounds)).tolist():
-                    sel = mine[bounds[c]:bounds[c + 1]]
-                    indexes[c].append((s.channel_id, _message_index(s.channel_id, times[sel],
-                                                                    offset_in_chunk[sel] + at)))
-        # chunks filled in turn (runs of consecutive rows of one group) and compressed by a pool meanwhile
-        new_run = np.r_[True, (np.diff(gid) != 0) | (np.diff(row) != 1) | (np.diff(chunk) != 0)]
-        runs = np.flatnonzero(new_run)
-        ends = np.r_[runs[1:], len(gid)]
-        data: list[list[memoryview]] = [[] for _ in firsts]
-        with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
-            jobs = []
-            for a, b in zip(runs.tolist(), ends.tolist()):
-                data[chunk[a]].append(groups[gid[a]].fill(int(row[a]), int(row[b - 1]) + 1))
-                if b == len(gid) or chunk[b] != chunk[a]:  # the chunk is complete
-                    parts = data[chunk[a]]
-                    jobs.append(pool.submit(_compress, parts[0] if len(parts) == 1 else b"".join(parts),
-                                            self.compression))
-            compression = "" if self.compression == "none" else self.compression
-            pos = _write(out, [MCAP0_MAGIC, _record(self.header)]
-                         + [_record(r) for r in (*self.schemas, *self.channels)])
-            chunk_indexes = []
-            for c, job in enumerate(jobs):
-                crc, body = job.result()
-                lo, hi = int(times[firsts[c]]), int(times[lasts[c]])
-                head = _CHUNK_HEAD.pack(Opcode.CHUNK, _CHUNK_HEAD.size - 9 + len(compression) + 8 + len(body), lo,
-                                        hi, sizes[c], crc, len(compression)) + compression.encode()
-                head += struct.pack("<Q", len(body))
-                index = ChunkIndex(message_start_time=lo, message_end_time=hi, chunk_start_offset=pos,
-                                   chunk_length=len(head) + len(body), message_index_offsets={},
-                                   message_index_length=0, compression=compression,
-                                   compressed_size=len(body), uncompressed_size=sizes[c])
-                pos += _write(out, [head, body])
-                for channel_id, message_index in sorted(indexes[c]):
-                    index.message_index_offsets[channel_id] = pos
-                    index.message_index_length += len(message_index)
-                    pos += _write(out, [message_index])
-                chunk_indexes.append(index)
+        chunks = _Chunks.of(groups)
+        indexes = chunks.message_indexes(groups, grouped)
+        counts = {s.channel_id: len(s.times) for s in self.series}
+        compression = "" if self.compression == "none" else self.compression
+        pos = _write(out, [MCAP0_MAGIC, _record(self.header)] + [_record(r) for r in (*self.schemas, *self.channels)])
+        chunk_indexes: list[ChunkIndex] = []
+
+        def written(c: int, job) -> int:  # chunk c and its message indexes, once compressed: bytes written
+            crc, body = job.result()
+            lo, hi = int(chunks.times[chunks.firsts[c]]), int(chunks.times[chunks.lasts[c]])
+            head = _CHUNK_HEAD.pack(Opcode.CHUNK, _CHUNK_HEAD.size - 9 + len(compression) + 8 + len(body), lo, hi,
+                                    chunks.sizes[c], crc, len(compression)) + compression.encode()
+            head += struct.pack("<Q", len(body))
+            index = ChunkIndex(message_start_time=lo, message_end_time=hi, chunk_start_offset=pos,
+                               chunk_length=len(head) + len(body), message_index_offsets={}, message_index_length=0,
+                               compression=compression, compressed_size=len(body), uncompressed_size=chunks.sizes[c])
+            at = pos + _write(out, [head, body])
+            for channel_id, message_index in sorted(indexes[c]):
+                index.message_index_offsets[channel_id] = at
+                index.message_index_length += len(message_index)
+                at += _write(out, [message_index])
+            chunk_indexes.append(index)
+            return at - pos
+
+        # chunks filled in turn (runs of consecutive rows of one group), compressed by a pool meanwhile and written
+        # in order as they come back (a few in flight: the memory of a few chunks, whatever the log's length)
+        workers = os.cpu_count() or 1
+        with ThreadPoolExecutor(workers) as pool:
+            pending: deque = deque()
+            parts: list[memoryview] = []
+            for c, g, a, b, complete in chunks.runs():
+                parts.append(groups[g].fill(a, b))
+                if complete:
+                    data = parts[0] if len(parts) == 1 else b"".join(parts)
+                    pending.append((c, pool.submit(_compress, data, self.compression)))
+                    parts = []
+                while pending and (len(pending) > 2 * workers or pending[0][1].done()):
+                    pos += written(*pending.popleft())
+            while pending:
+                pos += written(*pending.popleft())
         attachment_indexes = []
         for a in self.attachments:
             record = _record(a)
@@ -237,7 +271,7 @@ class BulkWriter:
         statistics = Statistics(message_count=int(sum(counts.values())), schema_count=len(self.schemas),
                                 channel_count=len(self.channels), attachment_count=len(self.attachments),
                                 metadata_count=0, chunk_count=len(chunk_indexes),
-                                message_start_time=int(times[0]), message_end_time=int(times[-1]),
+                                message_start_time=int(chunks.times[0]), message_end_time=int(chunks.times[-1]),
                                 channel_message_counts=dict(sorted(counts.items())))
         summary_start, summary, offsets = pos, bytearray(), []
         for opcode, records in ((Opcode.SCHEMA, self.schemas), (Opcode.CHANNEL, self.channels),

@@ -6,6 +6,8 @@ Goals (issue #37): the log opens in the view in ≤ 5 s and plays at real time o
 
     python benchmarks/bench_view.py [--quick]    # figures → benchmarks/results/view_export.json (the view guide
                                                  # quotes them with lbr:bench markers)
+    python benchmarks/bench_view.py --export-only  # only the export rows again (a fresh 60 s log; the view's
+                                                   # figures kept from the file)
 """
 
 from __future__ import annotations
@@ -102,23 +104,30 @@ def measure_export(log: Path, folder: Path, repeats: int) -> dict[str, float]:
     from trajectories.csvio import read_table
 
     out = folder / "log.mcap"
-    t_read = t_export = float("inf")
-    figures = {}
+    t_read = t_export = cpu_read = cpu_export = float("inf")
+    figures = best = {}
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         read_table(log, LOG_COLUMNS, time="increasing", nan_columns=NAN_COLUMNS)
-        t_read = min(t_read, time.perf_counter() - t0)
+        t_read, cpu_read = min(t_read, time.perf_counter() - t0), min(cpu_read, time.process_time() - c0)
         buf = io.StringIO()
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         with redirect_stdout(buf):
             try:
                 main(["export", str(log), "-o", str(out), "--json"])
             except SystemExit as exc:
                 if exc.code:
                     raise
-        t_export = min(t_export, time.perf_counter() - t0)
+        seconds, cpu_export = time.perf_counter() - t0, min(cpu_export, time.process_time() - c0)
         figures = json.loads(buf.getvalue())
+        if seconds < t_export:
+            t_export, best = seconds, figures
     return {"export_s": t_export, "read_csv_s": t_read, "export_over_read": t_export / t_read,
+            # CPU time of the process (all its threads): less sensitive to the other work on the machine
+            "export_cpu_s": cpu_export, "read_csv_cpu_s": cpu_read, "export_over_read_cpu": cpu_export / cpu_read,
+            # of the best run: the command's own CSV read, and the rest (series, TF, CDR, chunks, compression, file)
+            "export_own_read_s": best["read_s"], "export_write_s": best["seconds"] - best["read_s"],
+            "export_us_per_message": 1e6 * t_export / figures["messages"],
             "export_messages": float(figures["messages"]), "export_mb": figures["size_bytes"] / 1e6}
 
 
@@ -185,7 +194,10 @@ def measure_demo(folder: Path) -> dict[str, float]:
     return {"demo_offline_mb": html.stat().st_size / 1e6}
 
 
-def run(quick: bool = False) -> list[tuple[str, float, str]]:
+EXPORT_KEYS = ("export_", "read_csv_s", "joint_state_messages", "equal_", "log_rows")  # what --export-only measures
+
+
+def run(quick: bool = False, export_only: bool = False) -> list[tuple[str, float, str]]:
     import os
 
     seconds = 6.0 if quick else 60.0
@@ -193,20 +205,27 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         log = make_log(folder, seconds)
-        fig: dict[str, float] = {"log_seconds": seconds, "load_average_at_start": load}
-        fig.update(measure_view(log, folder))
+        if export_only:
+            kept = {k: v["value"] for k, v in json.loads(RESULTS.read_text()).items() if not k.startswith(EXPORT_KEYS)}
+            fig: dict[str, float] = kept | {"export_load_average_at_start": load, "export_measured_at": time.time()}
+        else:
+            fig = {"log_seconds": seconds, "load_average_at_start": load}
+            fig.update(measure_view(log, folder))
         fig.update(measure_export(log, folder, 2 if quick else 3))
         fig.update(verify_export(log, folder / "log.mcap"))
-        fig.update(measure_offline(log, folder))
-        if not quick:
-            fig.update(measure_demo(folder))
-    units = {"_s": "s", "_mb": "MB", "rate": "× real time", "over_read": "×"}
+        if not export_only:
+            fig.update(measure_offline(log, folder))
+            if not quick:
+                fig.update(measure_demo(folder))
+    units = {"_s": "s", "_mb": "MB", "rate": "× real time", "over_read": "×", "over_read_cpu": "×",
+             "_us_per_message": "µs",
+             "_measured_at": "s since 1970"}
     return [(k, float(v), next((u for suffix, u in units.items() if k.endswith(suffix)), "")) for k, v in fig.items()]
 
 
 def main() -> int:
-    quick = "--quick" in sys.argv
-    rows = run(quick)
+    quick, export_only = "--quick" in sys.argv, "--export-only" in sys.argv
+    rows = run(quick, export_only)
     for name, value, unit in rows:
         print(f"  {name:<28} {value:>12.4g} {unit}")
     RESULTS.parent.mkdir(exist_ok=True)

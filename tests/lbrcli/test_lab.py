@@ -303,7 +303,7 @@ def test_lab_options_refused_with_one_line(tmp_path, lbr):
     res = lbr("execute", csv, "--port", "0", "--pendulum", "/dev/does-not-exist")
     assert res.returncode == 2 and "cannot open serial port" in res.stderr and "Traceback" not in res.stderr
     res = lbr("execute", csv, "--robot", "127.0.0.1", "--port", "0", "--pendulum", "sim")
-    assert res.returncode == 2 and "not with --robot" in res.stderr
+    assert res.returncode == 2 and "--pendulum: 'sim'" in res.stderr and "not with a robot" in res.stderr
     res = lbr("monitor", "--duration", "0.5", "--mqtt", "http://x/y")
     assert res.returncode == 2 and "expected mqtt://" in res.stderr
 

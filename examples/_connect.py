@@ -14,8 +14,12 @@ def arguments(description: str, duration_s: float = 5.0) -> argparse.ArgumentPar
     p.add_argument("--duration", type=float, default=duration_s, help="session length [s]")
     p.add_argument("--period", type=int, default=5, help="simulator send period [ms]")
     p.add_argument("--fri-version", default="1.15", choices=("1.15", "2.7"), help="simulator wire format")
-    p.add_argument("--sim-lenient", action=argparse.BooleanOptionalAction, default=True,
-                   help="simulator tolerant of a loaded PC (1 s quality window; --no-sim-lenient: as strict as a robot)")
+    p.add_argument(
+        "--sim-lenient",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="simulator tolerant of a loaded PC (1 s quality window; --no-sim-lenient: as strict as a robot)",
+    )
     return p
 
 

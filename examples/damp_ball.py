@@ -17,7 +17,12 @@ from lbrcli.fri import LBRClient
 
 class BallDamper(LBRClient):
     def __init__(self, gain: float, radius: float, excite_s: float = 2.0, accel: float = 2.0):
-        self.gain, self.radius, self.excite_s, self.accel = gain, radius, excite_s, accel  # [m/s/rad], [m], [s], [rad/s²]
+        self.gain, self.radius, self.excite_s, self.accel = (
+            gain,
+            radius,
+            excite_s,
+            accel,
+        )  # [m/s/rad], [m], [s], [rad/s²]
         self.t = self.omega = 0.0  # [s], A1 velocity [rad/s]
         self.q: list[float] | None = None
         self.sway: list[tuple[float, float]] = []  # (t [s], θy [rad])

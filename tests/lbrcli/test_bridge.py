@@ -75,7 +75,11 @@ def test_state_round_trip_binary_and_json():
     assert len(data) == STATE_SIZE == 256 and data[:4] == b"LBRS"
     assert decode_state(data) == state == decode_state(encode_state_json(state))
     # the documented offsets: commanded q at 88, the TCP pose at 200
-    assert struct.unpack_from("<7d", data, 88) == (0.2,) * 7 and struct.unpack_from("<7d", data, 200)[:3] == (0.4, 0, 0.5)
+    assert struct.unpack_from("<7d", data, 88) == (0.2,) * 7 and struct.unpack_from("<7d", data, 200)[:3] == (
+        0.4,
+        0,
+        0.5,
+    )
 
 
 # -- the bridge on the simulator ----------------------------------------------------------------------------------
@@ -285,10 +289,18 @@ def test_no_target_within_first_target_of_commanding_ends_the_session(tmp_path):
 
 @pytest.mark.parametrize(
     "argv, option",
-    [(("--listen", "nowhere"), "--listen"), (("--timeout", "0"), "--timeout"), (("--speed-scale", "2"), "--speed-scale"),
-     (("--state-every", "-1"), "--state-every"), (("--length", "0.3", "--robot", "127.0.0.1"), "--length"),
-     (("--listen", "off"), "--mqtt"), (("--mqtt", "http://host/topic"), "--mqtt"), (("--secret", "/nonexistent"), "--secret"),
-     (("--mqtt-state-hz", "-1"), "--mqtt-state-hz"), (("--mqtt", "mqtt://127.0.0.1:1/lbr/cmd"), "--mqtt")],
+    [
+        (("--listen", "nowhere"), "--listen"),
+        (("--timeout", "0"), "--timeout"),
+        (("--speed-scale", "2"), "--speed-scale"),
+        (("--state-every", "-1"), "--state-every"),
+        (("--length", "0.3", "--robot", "127.0.0.1"), "--length"),
+        (("--listen", "off"), "--mqtt"),
+        (("--mqtt", "http://host/topic"), "--mqtt"),
+        (("--secret", "/nonexistent"), "--secret"),
+        (("--mqtt-state-hz", "-1"), "--mqtt-state-hz"),
+        (("--mqtt", "mqtt://127.0.0.1:1/lbr/cmd"), "--mqtt"),
+    ],
 )
 def test_serve_options_are_validated(argv, option):
     proc = run_lbr("serve", "--port", "0", *argv)

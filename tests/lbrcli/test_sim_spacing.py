@@ -47,8 +47,9 @@ def _spin(s: float) -> None:
         pass
 
 
-def _sends(period_ms: int, runtime_s: float, late_start: float = 0.0, late_send: float = 0.0,
-           work: float = 0.0) -> list[float]:
+def _sends(
+    period_ms: int, runtime_s: float, late_start: float = 0.0, late_send: float = 0.0, work: float = 0.0
+) -> list[float]:
     """Send instants [s] of a simulator whose every 5th cycle starts ``late_start`` periods late (it wakes late) or
     sends ``late_send`` periods late (its own work), and that works ``work`` periods before every send."""
     sink = _sink()

@@ -149,10 +149,15 @@ class SessionMachine:
                     self.state, self._since = SessionState.COMMANDING_ACTIVE, now
         elif s is SessionState.COMMANDING_ACTIVE:
             if safety_stop:
-                self._end(now, EndReason.SAFETY, SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT)
+                self._end(
+                    now, EndReason.SAFETY, SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT
+                )
             elif command_missing or command_refused:
-                self._end(now, EndReason.COMMAND_MISSING if command_missing else EndReason.CARTESIAN_REFUSED,
-                          SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT)
+                self._end(
+                    now,
+                    EndReason.COMMAND_MISSING if command_missing else EndReason.CARTESIAN_REFUSED,
+                    SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT,
+                )
             elif not good:
                 self._end(now, EndReason.QUALITY, SessionState.MONITORING_WAIT)
             elif self.timing.session_duration_s is not None and now - self._since >= self.timing.session_duration_s:

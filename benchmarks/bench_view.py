@@ -75,8 +75,7 @@ def measure_view(log: Path, folder: Path) -> dict[str, float]:
     """Seconds from `lbr view LOG` to the arm drawn in headless Chromium; scene time per wall time while playing
     (steady: over ``PLAY_WINDOW_S`` from ``WARM_UP_S`` after the arm appeared — the first 5 s measured 0.67× at load 9,
     the page still loading)."""
-    sys.path.insert(0, str(HERE.parent / "tests" / "lbrcli"))
-    from browser import chromium_path, page, status, status_time, wait_for_scene
+    from lbrcli.view.testing import chromium_path, page, status, status_time, wait_for_scene
 
     if chromium_path() is None:
         return {}

@@ -45,7 +45,7 @@ def test_joint_held_at_its_limit_is_named_as_a_fact_of_the_path_from_q0(robot, l
 
 
 def test_issue_circle_solved_from_a_start_chosen_for_the_whole_path(robot, limits):
-    path = issue_circle(0.001)  # at 5 ms: tests/lbrcli/test_ik_cli.py
+    path = issue_circle(0.001)  # at 5 ms: tests/lbrcli/commands/test_kinematics_ik.py
     res = _solve(robot, limits, path)
     check = verify_joint_path(robot, path, res.q, limits)
     assert check.position_error <= 1e-6 and check.rotation_error <= 1e-5

@@ -15,7 +15,7 @@ from planners.rigid_pendulum import RigidPendulum
 
 @pytest.fixture(scope="module")
 def rail(robot, limits):
-    from conftest import Q_START
+    from tests.helpers.cli import Q_START
 
     return build_rail(robot, Q_START, limits, 0.3)
 

@@ -27,10 +27,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from trajectories.start_poses import THESIS_START
 
 HERE = Path(__file__).resolve().parent
 BENT_Q0 = (0.4, 0.6, -0.3, -1.4, 0.3, 0.9, 0.2)  # [rad] a second start pose
-THESIS_Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)
+THESIS_Q0 = THESIS_START  # [rad]
 
 
 def _helpers():

@@ -22,10 +22,11 @@ from contextlib import redirect_stdout
 from pathlib import Path
 
 import numpy as np
+from trajectories.start_poses import THESIS_START
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results" / "view_export.json"
-Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # [rad]
+Q0 = np.array(THESIS_START)  # [rad]
 AXES = np.array([0.35, 0.2, -0.15, 0.3, 0.1, -0.25, 0.4])  # [rad]
 
 

@@ -112,6 +112,16 @@ PeriodOpt = Annotated[
         "controller must have.",
     ),
 ]
+StartToleranceOpt = Annotated[  # commands that play rows from a first one (execute, control damp)
+    float,
+    number(
+        "--start-tolerance",
+        low=0,
+        high=0.1,
+        unit="rad",
+        help="Largest |first row − measured position| accepted \\[rad].",
+    ),
+]
 SessionPeriodOpt = Annotated[  # commands that play no file
     Optional[int],
     number(

@@ -18,7 +18,7 @@ from trajectories.errors import InputError
 from ..console import Reporter
 from ..cup_options import CupSpecOpt, cup_model
 from ..fri_options import (DEFAULT_BALL_LENGTH, FRI_OPTIONS, LAB_OPTIONS, FriOptions, MultiplierOpt, PeriodOpt, PlotOpt,
-                           TrackingErrorOpt)  # fmt: skip
+                           StartToleranceOpt, TrackingErrorOpt)  # fmt: skip
 from ..fri_runner import exit_for, plot_log, print_summary, run_client
 from ..lab.attach import LabOptions
 from ..option_groups import with_options
@@ -63,16 +63,7 @@ def execute(
         bool,
         typer.Option("--resample", help="Resample the file (cubic spline) to the controller's period if it differs."),
     ] = False,
-    start_tolerance: Annotated[
-        float,
-        number(
-            "--start-tolerance",
-            low=0,
-            high=0.1,
-            unit="rad",
-            help="Largest |first row − measured position| accepted \\[rad].",
-        ),
-    ] = 1e-3,
+    start_tolerance: StartToleranceOpt = 1e-3,
     move_to_start: Annotated[
         bool,
         typer.Option(

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from tests.helpers.cli import Q_START
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 sys.path.insert(0, str(EXAMPLES))
@@ -59,7 +60,7 @@ def test_stream_csv_and_monitor_write_logs_the_project_reads(tmp_path):
 
     t = np.arange(0, 1.0 + 1e-9, 0.005)
     s = 10 * (t / t[-1]) ** 3 - 15 * (t / t[-1]) ** 4 + 6 * (t / t[-1]) ** 5
-    q = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0]) + 0.1 * s[:, None]
+    q = Q_START + 0.1 * s[:, None]
     csv = tmp_path / "move.csv"
     np.savetxt(csv, np.column_stack([t, q]), delimiter=",", header="t,q1,q2,q3,q4,q5,q6,q7", comments="", fmt="%.12g")
     result, player = stream_csv.main([str(csv), "--log", str(tmp_path / "run.csv"), "--sim-lenient"])

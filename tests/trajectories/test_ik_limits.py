@@ -8,9 +8,10 @@ import pytest
 from trajectories.errors import IkError
 from trajectories.ik import IkOptions, solve_ik_path
 from trajectories.ik_paths import build_suite, issue_circle, random_joint_path, verify_joint_path
+from tests.helpers.cli import Q_START
 
 BOUNDED = IkOptions(nullspace_gain=None, speed_limits=True)
-THESIS = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])
+THESIS = Q_START
 
 
 def _solve(robot, limits, path, q0=None, options=BOUNDED):

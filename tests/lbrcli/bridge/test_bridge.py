@@ -33,8 +33,9 @@ from lbrcli.bridge.protocol import STATE_SIZE, TARGET_SIZE
 from lbrcli.fri.log import LOG_COLUMNS, PHASE_BRAKE
 from trajectories.csvio import read_table
 from tests.helpers.bridge import judge_following, LIM, PERIOD_S
+from tests.helpers.cli import Q_START
 
-Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # the simulator's default start (thesis §5.3.2)
+Q0 = Q_START  # the simulator's default start (thesis §5.3.2)
 
 
 # -- wire format ------------------------------------------------------------------------------------------------

@@ -22,8 +22,9 @@ from lbrcli.fri.testing.relay import free_udp_port
 from lbrcli.fri.log import LOG_COLUMNS, PHASE_HOLD, PHASE_MOVE, PHASE_TRAJECTORY
 from trajectories.csvio import read_joint_csv, read_table, write_joint_csv
 from trajectories.trajectory import JointTrajectory
+from tests.helpers.cli import Q_START
 
-Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])
+Q0 = Q_START
 AXES = np.array([0.2, 0.1, -0.1, 0.15, 0.1, -0.2, 0.3])
 
 

@@ -23,10 +23,11 @@ from trajectories.trajectory import JointTrajectory
 pytest.importorskip("rosbags.highlevel", reason="rosbags is not installed (pip install -e .[test])")
 mcap_reader = pytest.importorskip("mcap.reader", reason="mcap is not installed (pip install -e .[test])")
 from rosbags.typesys import Stores, get_typestore  # noqa: E402
+from tests.helpers.cli import Q_START
 
 TYPES = get_typestore(Stores.ROS2_HUMBLE)
 NAMES = [f"lbr_A{i}" for i in range(1, 8)]
-Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # [rad]
+Q0 = Q_START  # [rad]
 LENGTH = 0.3  # [m]
 
 

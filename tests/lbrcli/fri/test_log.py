@@ -7,8 +7,9 @@ import numpy as np
 from lbrcli.fri.codec import FriCodec
 from lbrcli.fri.log import LOG_COLUMNS, ExecutionLog, LogLayout
 from trajectories.csvio import read_table
+from tests.helpers.cli import Q_START
 
-Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)
+Q0 = tuple(Q_START)  # [rad]
 
 
 def test_log_layout_io_columns_and_missing_values(tmp_path):

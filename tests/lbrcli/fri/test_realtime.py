@@ -15,8 +15,9 @@ import pytest
 from lbrcli.fri import realtime as rt
 from trajectories.csvio import write_joint_csv
 from trajectories.trajectory import JointTrajectory
+from tests.helpers.cli import Q_START
 
-Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)
+Q0 = tuple(Q_START)  # [rad]
 
 
 def _permitted() -> bool:

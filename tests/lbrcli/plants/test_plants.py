@@ -12,6 +12,7 @@ import pytest
 from lbrcli.fri.sim import Plant, PlantContext, SimConfig, SimulatorProcess
 from lbrcli.plants import BALL_IO_NAMES, BallSpec, PendulumModuleSpec, default_plants
 from trajectories.errors import OptionError
+from tests.helpers.cli import Q_START
 
 
 def test_default_plants_and_validation():
@@ -32,7 +33,7 @@ def test_default_plants_and_validation():
 
 def test_ball_plant_on_a_horizontal_tcp_acceleration_swings_backwards(robot):
     """Built stand-alone: a TCP accelerating along +x tilts the string towards −x (θx < 0), and θ grows."""
-    q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)
+    q0 = tuple(Q_START)
     h = 0.002
     ball = BallSpec(0.5).build(PlantContext(h, robot, q0))
     assert isinstance(ball, Plant) and tuple(ball.inputs) == BALL_IO_NAMES

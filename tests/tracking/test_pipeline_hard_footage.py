@@ -6,30 +6,12 @@ import math
 import numpy as np
 import pytest
 
-from tracking import scenarios
 from tracking.color import color_spec
 from tracking.pipeline import track_video
 from tracking.synthetic import Distractor, render_pendulum_video
 from tracking.trackfile import read_track_csv, write_track_csv
 
 SIZE = (480, 270)
-
-
-@pytest.fixture(scope="module")
-def run(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("hard")
-    cache = {}
-
-    def get(name, duration_s=2.0):
-        if name not in cache:
-            sc = scenarios.ALL[name](folder / f"{name}.mp4", SIZE, duration_s)
-            kw = dict(sc.track_kwargs)
-            ball = kw.pop("ball", color_spec("red"))
-            track = track_video(sc.path, ball, **kw)
-            cache[name] = (sc, track, scenarios.score(sc, track))
-        return cache[name]
-
-    return get
 
 
 @pytest.mark.parametrize(

@@ -9,27 +9,6 @@ from tracking import scenarios
 from tracking.color import color_spec
 from tracking.pipeline import track_video
 
-SIZE = (480, 270)  # [px] ball radius ≈ 4.6 px
-DURATION_S = 2.0
-
-
-@pytest.fixture(scope="module")
-def run(tmp_path_factory):
-    """run(name) → (scenario, track, outcome), each scenario rendered and tracked once per module."""
-    folder = tmp_path_factory.mktemp("robust")
-    cache = {}
-
-    def get(name, duration_s=DURATION_S):
-        if name not in cache:
-            sc = scenarios.ALL[name](folder / f"{name}.mp4", SIZE, duration_s)
-            kw = dict(sc.track_kwargs)
-            ball = kw.pop("ball", color_spec("red"))
-            track = track_video(sc.path, ball, **kw)
-            cache[name] = (sc, track, scenarios.score(sc, track))
-        return cache[name]
-
-    return get
-
 
 @pytest.mark.parametrize(
     "name",

@@ -110,13 +110,6 @@ class ClientApplication(Replying, SessionEnding):
         self._interrupt: EndReason | None = None
         self._reset()
 
-    def _check_send_period(self, send_period_ms: int) -> None:
-        """A controller at another send period than ``send_period_s`` ends the session before it commands (BAD_INPUT)."""
-        if self.send_period_s is not None and abs(send_period_ms * 1e-3 - self.send_period_s) > 1e-9:
-            self._stop_braking(Outcome.REFUSED, EndReason.BAD_INPUT,
-                               f"the controller's send period is {send_period_ms} ms, not the {self.send_period_s * 1e3:g} ms "
-                               "asked; set it in the robot's FRI configuration or ask for that period")  # fmt: skip
-
     # -- connection ------------------------------------------------------------------------------------------
     def connect(self) -> "ClientApplication":
         """Bind the local port (``port`` tells which; 0 binds a free one)."""

@@ -15,7 +15,7 @@ from tests.helpers.cli import Q_START
 from trajectories.limits import default_limits
 
 
-Q0 = tuple(Q_START)  # [rad]
+Q0 = tuple(Q_START.tolist())  # [rad]
 
 
 LIM = default_limits()

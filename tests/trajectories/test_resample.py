@@ -9,7 +9,7 @@ from trajectories.resample import resample
 from trajectories.trajectory import JointTrajectory
 from tests.helpers.cli import Q_START
 
-Q0 = tuple(Q_START)  # [rad]
+Q0 = tuple(Q_START.tolist())  # [rad]
 
 
 def test_resample_keeps_the_samples_and_interpolates_smoothly():

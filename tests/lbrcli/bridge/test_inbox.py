@@ -143,7 +143,7 @@ def test_every_target_is_judged_on_arrival_even_when_a_valid_one_follows_in_the_
     lim = default_limits()
     tr = Scripted(sender=("10.0.0.2", 4000))
     box = TargetInbox([tr], limits=lim)
-    q = list(Q_START)
+    q = Q_START.tolist()
     beyond = list(q)
     beyond[3] = -lim.position[3] - 0.01
     tr.queue += [encode_target(q, seq=1), encode_target(beyond, seq=2), encode_target(q, seq=3)]

@@ -91,7 +91,7 @@ def test_the_simulator_ball_plant_catches_it_cycle_by_cycle(planned, robot):
     f = json.loads(res.stdout)
     traj, pos, _ = _fk(out, robot)
     _, rot = robot.fk_path(traj.q)
-    plant = BallSpec(LENGTH, model=StringModel(LENGTH)).build(PlantContext(traj.dt, robot, tuple(Q_START)))
+    plant = BallSpec(LENGTH, model=StringModel(LENGTH)).build(PlantContext(traj.dt, robot, tuple(Q_START.tolist())))
     phases = [plant.step(t, p, r)[7] for t, p, r in zip(traj.t, pos, rot)]
     got = plant.figures()["cup"]
     assert got["caught"] and got["in_cup_at_end"]

@@ -9,7 +9,7 @@ from lbrcli.fri.log import LOG_COLUMNS, ExecutionLog, LogLayout
 from trajectories.csvio import read_table
 from tests.helpers.cli import Q_START
 
-Q0 = tuple(Q_START)  # [rad]
+Q0 = tuple(Q_START.tolist())  # [rad]
 
 
 def test_log_layout_io_columns_and_missing_values(tmp_path):

@@ -17,7 +17,7 @@ from trajectories.csvio import write_joint_csv
 from trajectories.trajectory import JointTrajectory
 from tests.helpers.cli import Q_START
 
-Q0 = tuple(Q_START)  # [rad]
+Q0 = tuple(Q_START.tolist())  # [rad]
 
 
 def _permitted() -> bool:

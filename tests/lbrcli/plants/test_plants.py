@@ -33,7 +33,7 @@ def test_default_plants_and_validation():
 
 def test_ball_plant_on_a_horizontal_tcp_acceleration_swings_backwards(robot):
     """Built stand-alone: a TCP accelerating along +x tilts the string towards −x (θx < 0), and θ grows."""
-    q0 = tuple(Q_START)
+    q0 = tuple(Q_START.tolist())
     h = 0.002
     ball = BallSpec(0.5).build(PlantContext(h, robot, q0))
     assert isinstance(ball, Plant) and tuple(ball.inputs) == BALL_IO_NAMES

@@ -36,7 +36,7 @@ def test_the_module_swings_in_the_y_z_plane_and_its_encoder_lines_arrive_late_an
     serial lines carry 12-bit counts of the angle one delay earlier."""
     h = 1e-3
     spec = RigidModuleSpec(RigidPendulum(rod_length=0.5), rate_hz=250.0, delay_ms=8.0, jitter_ms=0.0)
-    plant = spec.build(PlantContext(h, robot, tuple(Q_START)))
+    plant = spec.build(PlantContext(h, robot, tuple(Q_START.tolist())))
     fd = os.open(plant.info()["pendulum_path"], os.O_RDONLY | os.O_NONBLOCK)
     try:
         pose = robot.fk(Q_START)
@@ -160,7 +160,7 @@ def test_upright_rides_through_lost_and_malformed_messages(robot):
     fitter = ProcessFitter()  # the fit outside the cycle, as the CLI does
     client = UprightClient(rail, model.equivalent_length, lim, session=SessionOptions(hold_s=3.0), fitter=fitter)
     sim = SimulatorSettings(
-        start=tuple(Q_START),
+        start=tuple(Q_START.tolist()),
         plants=(RigidModuleSpec(model),),
         max_runtime_s=90,
         lockstep=True,

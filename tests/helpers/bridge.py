@@ -11,7 +11,10 @@ LIM = default_limits()
 
 
 # -- the bridge on the simulator ----------------------------------------------------------------------------------
-PERIOD_S = 0.004  # [s] the embedded simulator's send period in these real-time tests: on a machine busy with other
+PERIOD_S = 0.004  # [s] the embedded simulator's send period in these real-time tests; the bridge's 1 ms behaviour is
+# tested in lock step (test_bridge_timeline.py). The simulator keeps its period's grid but waits for each reply
+# (--sim-lockstep): on a machine busy with other work its connection-quality rule would otherwise drop the session
+# for late replies — a timing question, which the benchmarks answer
 
 
 def limit_ratios(tab, dt=PERIOD_S, following_only=False) -> tuple[float, float, float]:

@@ -36,6 +36,7 @@ def test_an_fri_command_body_is_at_most_40_lines(path, name):
     assert _body_lines(fn) <= 40, f"{path}:{fn.lineno} {name}: {_body_lines(fn)} lines"
 
 
+@pytest.mark.heavy
 def test_the_session_code_has_no_function_over_80_lines():
     long = [
         f"{p}:{f.lineno} {f.name} {_body_lines(f)}"

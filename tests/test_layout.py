@@ -4,6 +4,8 @@ public face); shared test code lives in tests/helpers, not in test modules."""
 
 from __future__ import annotations
 
+import pytest
+
 import ast
 from pathlib import Path
 
@@ -61,6 +63,7 @@ def test_the_check_refuses_a_stray_place():
     assert not _mirrored(TESTS / "planners" / "test_plannersx.py")
 
 
+@pytest.mark.heavy
 def test_every_test_folder_is_a_package_and_no_test_imports_another():
     """Every folder under tests/ has an __init__.py (test modules of one name in two folders stay apart:
     tests.lbrcli.commands.test_compare and tests.tracking.test_compare), and test modules import shared code from

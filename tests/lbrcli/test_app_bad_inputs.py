@@ -214,6 +214,7 @@ def test_the_campaign_covers_every_command():
     assert sorted(name for name, _ in _commands()) == sorted(BASE)
 
 
+@pytest.mark.heavy
 def test_every_numeric_option_is_validated_by_the_shared_parsers():
     """No int or float option of any command escapes lbrcli.options (one mechanism, at parse time), and every
     option's help shows a metavar a user can read (no '<list[str]>')."""
@@ -749,6 +750,7 @@ def _padding(folder: Path) -> None:
                 fh.write(b"\0" * 4096)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("disk", BOTH)
 @pytest.mark.parametrize("name, disks, argv", WRITERS, ids=[w[0] for w in WRITERS])
 def test_a_full_disk_leaves_nothing_and_exits_1(guarded_ws, tmp_path, tiny_disk, disk, name, disks, argv):

@@ -38,6 +38,7 @@ def test_check_ok_json(lbr, slow_csv):
     assert 0 < figures["max_ratio"]["velocity"] < 1
 
 
+@pytest.mark.heavy
 def test_check_violation_exit_1_names_joint(lbr, tmp_path):
     h = 0.005
     t = np.arange(0, 1.0, h)
@@ -137,6 +138,7 @@ def test_headerless_with_dt(lbr, tmp_path):
     assert res.returncode == 0 and json.loads(res.stdout)["duration_s"] == pytest.approx(0.02)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(
     "args",
     [

@@ -253,6 +253,7 @@ def test_retime_refuses_a_path_outside_the_position_limits_and_writes_nothing(ca
 
 
 # -- exit 1 when nothing was done ----------------------------------------------------------------------------------
+@pytest.mark.heavy
 def test_listen_with_no_broker_exits_1_and_records_nothing(capsys, tmp_path):
     rec = tmp_path / "rec.jsonl"
     code, out, err = run(capsys, "listen", "mqtt://127.0.0.1:9/lbr", "--connect-timeout", "0.5", "-o", rec, "--json")
@@ -261,6 +262,7 @@ def test_listen_with_no_broker_exits_1_and_records_nothing(capsys, tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.heavy
 def test_listen_with_nothing_published_exits_1(capsys, broker):
     url = f"mqtt://{broker.host}:{broker.port}/{broker.topic}"
     code, out, err = run(capsys, "listen", url, "--duration", "1", "--json")
@@ -275,6 +277,7 @@ def test_listen_numeric_options(capsys, argv):
 
 
 # -- Ctrl-C --------------------------------------------------------------------------------------------------------
+@pytest.mark.heavy
 def test_ctrl_c_ends_the_fast_swing_up_and_its_workers_within_a_second(tmp_path):
     """SIGINT to the whole process group, as a terminal sends it: exit 130, one line, no worker tracebacks."""
     proc = subprocess.Popen(
@@ -325,6 +328,7 @@ def _mapped(pid: int, name: str) -> bool:
         return False
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("library", ["_multiarray_umath", "pinocchio_pywrap"])
 def test_ctrl_c_while_python_imports_the_app_is_one_line_and_130(tmp_path, library):
     """A Ctrl-C that lands while the interpreter still imports numpy (the app's import) or pinocchio (inside the

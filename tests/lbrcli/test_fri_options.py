@@ -32,6 +32,7 @@ def _run(ctl: ScriptedController, *args: str):
         ctl.join()
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(
     "command",
     [

@@ -14,6 +14,7 @@ from tracking.trackfile import read_track_csv, write_track_csv
 SIZE = (480, 270)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(
     "name,min_found",
     [("clutter", 99.0), ("h264_clutter", 90.0), ("tiny_ball", 97.0), ("big_ball", 99.0), ("h264_100k", 90.0)],
@@ -32,6 +33,7 @@ def test_ball_size_is_learned_from_3_px_to_a_quarter_of_the_frame(run):
         assert abs(r - sc.truth.ball_radius_px) <= max(1.0, 0.2 * sc.truth.ball_radius_px), (name, r)
 
 
+@pytest.mark.heavy
 def test_lock_on_a_static_object_is_dropped_and_its_frames_withdrawn(tmp_path):
     """The issue's failure: the ball hidden at first, a red disc as round as it in view — the tracker may hold
     the disc, but never reports it as found, and takes the ball once it shows, swinging."""
@@ -63,6 +65,7 @@ def test_lock_on_a_static_object_is_dropped_and_its_frames_withdrawn(tmp_path):
     assert np.all(back.confidence[back.found] >= 0.5) and np.all(np.isnan(back.uv[back.unsure]))
 
 
+@pytest.mark.heavy
 def test_beyond_the_string_is_not_the_ball(tmp_path):
     """A red disc as round as the ball, outside the string's reach, appears while the ball is hidden by a rod:
     with the pivot known, it is never taken."""

@@ -10,6 +10,7 @@ from tracking.color import color_spec
 from tracking.pipeline import track_video
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(
     "name",
     [
@@ -51,6 +52,7 @@ def test_static_red_disc_is_not_taken_and_it_is_said(run):
     assert np.all(np.linalg.norm(track.uv[track.found] - disc, axis=1) > 10.0)
 
 
+@pytest.mark.heavy
 def test_tilted_camera_theta_in_the_plane(run):
     sc, track, out = run("tilted")
     assert track.theta_in_plane
@@ -69,6 +71,7 @@ def test_tilted_camera_theta_in_the_plane(run):
     assert np.allclose(r, 0.25, atol=0.002)
 
 
+@pytest.mark.heavy
 def test_slow_motion_fps_override(run):
     sc, track, out = run("slow_motion")
     assert out.found_percent >= 99.0
@@ -76,6 +79,7 @@ def test_slow_motion_fps_override(run):
     assert track.t[1] == pytest.approx(1.0 / 240.0)
 
 
+@pytest.mark.heavy
 def test_long_exposure_swing_up_is_found_where_it_is_and_never_elsewhere(run):
     """30 fps with the shutter open the whole frame: a streak ≈ 30 radii long at the bottom. Found in most
     frames (reported, not a stated goal), and no fix is far off."""

@@ -148,6 +148,7 @@ def _log(tmp_path):
     return read_table(tmp_path / "serve.csv", LOG_COLUMNS, time="increasing")
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("rate_hz", [1000.0, 30.0])
 def test_a_source_streaming_targets_is_followed_within_the_limits_and_gets_the_state(tmp_path, rate_hz):
     port = free_udp_port()
@@ -178,6 +179,7 @@ def test_a_source_streaming_targets_is_followed_within_the_limits_and_gets_the_s
     assert act[-1].target_t > 2.0  # the source's time is echoed
 
 
+@pytest.mark.heavy
 def test_dead_man_brakes_when_targets_stop(tmp_path):
     port = free_udp_port()
     proc = _serve(tmp_path, port, "--timeout", "0.05")
@@ -198,6 +200,7 @@ def test_dead_man_brakes_when_targets_stop(tmp_path):
     assert len(braked) == f["braking_cycles"]
 
 
+@pytest.mark.heavy
 def test_garbage_from_the_source_brakes_and_a_second_source_is_ignored(tmp_path):
     port = free_udp_port()
     proc = _serve(tmp_path, port, "--timeout", "1")
@@ -230,6 +233,7 @@ def test_garbage_from_the_source_brakes_and_a_second_source_is_ignored(tmp_path)
     assert np.abs(cmd[:, 1] - Q0[1]).max() < 1e-9  # A2 never moved: the intruder's target (+0.5 rad) was ignored
 
 
+@pytest.mark.heavy
 def test_a_json_target_outside_the_limits_is_refused(tmp_path):
     port = free_udp_port()
     proc = _serve(tmp_path, port, "--first-target", "3")  # only refused targets: the session ends 3 s into commanding
@@ -251,6 +255,7 @@ def test_a_json_target_outside_the_limits_is_refused(tmp_path):
     assert np.abs(cmd[:, 0] - Q0[0]).max() < 1e-9  # nothing moved towards it
 
 
+@pytest.mark.heavy
 def test_no_target_within_first_target_of_commanding_ends_the_session(tmp_path):
     proc = _serve(tmp_path, free_udp_port(), "--first-target", "0.5")
     out, err = proc.communicate(timeout=180)
@@ -263,6 +268,7 @@ def test_no_target_within_first_target_of_commanding_ends_the_session(tmp_path):
     assert np.abs(cmd - Q0).max() < 1e-9  # held where it stood
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(
     "argv, option",
     [
@@ -283,6 +289,7 @@ def test_serve_options_are_validated(argv, option):
     assert proc.returncode == 2 and option in proc.stderr and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
 
 
+@pytest.mark.heavy
 def test_the_follower_against_a_controller_that_loses_and_garbles_messages():
     """Lost monitoring messages (the controller extrapolates) and a malformed datagram mid-motion: every command
     within the limits against what the robot executed, the targets still followed."""
@@ -338,6 +345,7 @@ def _scripted_source(targets_by_poll):
     return Source(k=0, latest=None, latest_time=0.0, fresh=False, error=None, ended=False, owner="me", sent=[])
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("kind", ["quaternion", "fixed angles"])
 def test_a_pose_target_is_reached_through_the_online_ik_within_the_limits(kind):
     from lbrcli.fri.testing import CA, Cycle
@@ -371,6 +379,7 @@ def test_a_pose_target_is_reached_through_the_online_ik_within_the_limits(kind):
     assert np.allclose(tcp[:3], end.translation, atol=1e-9)
 
 
+@pytest.mark.heavy
 def test_an_unreachable_pose_is_followed_to_the_closest_configuration_and_flagged():
     from lbrcli.fri.testing import CA, Cycle
     from tests.helpers.fri_session import preamble, run
@@ -390,6 +399,7 @@ def test_an_unreachable_pose_is_followed_to_the_closest_configuration_and_flagge
     assert src.sent[-1].unreached  # the source is told
 
 
+@pytest.mark.heavy
 def test_a_session_that_ends_by_duration_without_any_target_exits_1(tmp_path):
     proc = _serve(tmp_path, free_udp_port(), "--duration", "1")
     out, err = proc.communicate(timeout=60)

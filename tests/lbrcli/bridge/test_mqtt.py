@@ -57,6 +57,7 @@ def _wait_for_session(proc, client: MqttBridgeClient, timeout: float = 30.0) -> 
         time.sleep(0.05)
 
 
+@pytest.mark.heavy
 def test_a_30hz_teleoperation_source_over_mosquitto_is_followed_smoothly_and_its_loss_brakes(tmp_path, broker):
     url = f"mqtt://lbr:robot-pw@127.0.0.1:{broker.port}/lab/iiwa/cmd"
     start = np.array([0.0, 0.5, 0.0, -1.2, 0.0, 0.8, 0.0])  # a teleoperation posture, away from the wrist singularity
@@ -121,6 +122,7 @@ def test_a_30hz_teleoperation_source_over_mosquitto_is_followed_smoothly_and_its
     assert s.following and np.linalg.norm(np.array(s.tcp[:3]) - robot.fk(np.array(s.commanded)).translation) < 1e-9
 
 
+@pytest.mark.heavy
 def test_the_end_message_over_mqtt_ends_the_session_and_a_refused_log_in_is_an_option_error(tmp_path, broker):
     url = f"mqtt://lbr:robot-pw@127.0.0.1:{broker.port}/lbr/cmd"
     proc = _serve(tmp_path, url)

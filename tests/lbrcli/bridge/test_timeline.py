@@ -74,6 +74,7 @@ def test_a_restarted_source_clock_goes_on_from_where_its_targets_arrive():
 
 
 # -- the follower in lock step -------------------------------------------------------------------------------------
+@pytest.mark.heavy
 @pytest.mark.parametrize("rate_hz, ff, drop, bound_deg", [
     (1000.0, True, 0.0, 0.1),  # a Simulink model at 1 kHz with the feed-forward
     (30.0, False, 0.0, 1.0),  # a teleoperation device at 30 Hz, positions only

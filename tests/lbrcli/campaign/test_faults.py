@@ -32,6 +32,7 @@ PICK = {
 OTHERS = [c for s in all_surfaces() for c in surface_cases(s) if c.name in PICK]
 
 
+@pytest.mark.heavy
 def test_the_campaign_is_wide():
     from lbrcli.campaign import all_cases
 
@@ -40,6 +41,7 @@ def test_the_campaign_is_wide():
     assert len({c.surface for c in cases}) >= 8 and len({c.category for c in cases}) >= 15
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("case", EXECUTE + OTHERS, ids=[c.name for c in EXECUTE + OTHERS])
 def test_case(case, tmp_path):
     r = run_case(case, tmp_path)

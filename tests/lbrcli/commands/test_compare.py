@@ -36,6 +36,7 @@ def files(tmp_path_factory):
     return pred, d / "track.csv"
 
 
+@pytest.mark.heavy
 def test_compare_recovers_lag_json_plot(lbr, files, tmp_path):
     pred, track = files
     plot = tmp_path / "cmp.png"

@@ -13,6 +13,7 @@ from planners.pendulum import natural_period
 from tests.helpers.damp import read_log, sway_after, write_moves, DT, THESIS
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("sensor, true_length, delay", [("io", 0.30, 10.0), ("module", 0.20, 5.0)])
 def test_damping_removes_the_sway_a_wrong_string_length_leaves(tmp_path, sensor, true_length, delay):
     traj = tmp_path / "moves.csv"
@@ -99,6 +100,7 @@ def test_a_file_off_the_fri_period_or_over_the_limits_is_refused_before_anything
     assert p.returncode == 1 and "refused" in p.stderr and "simulator on" not in p.stderr
 
 
+@pytest.mark.heavy
 def test_damping_rides_through_lost_and_malformed_messages(tmp_path):
     """3 % of the controller's messages lost and 1 % malformed: the controller extrapolates, the rows are rejoined
     within their share of the limits, the offsets keep the rest; the run completes and the sway is still damped."""

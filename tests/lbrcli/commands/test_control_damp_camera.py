@@ -90,6 +90,7 @@ def test_the_camera_damps_the_sway_a_wrong_string_length_leaves(crane, tmp_path)
         assert 0.0 < fig["max_offset_m"] < 0.08
 
 
+@pytest.mark.heavy
 def test_a_camera_that_cannot_see_the_sway_is_refused(crane):
     """Level with the ball and looking along base x, a tilt toward x only moves the ball toward the camera; the crane
     move sways the ball along x and y."""
@@ -100,6 +101,7 @@ def test_a_camera_that_cannot_see_the_sway_is_refused(crane):
     assert "Traceback" not in p.stderr and len(p.stderr.strip().splitlines()) == 1  # refused before anything started
 
 
+@pytest.mark.heavy
 def test_a_camera_that_cannot_be_reached_fails_before_anything_is_sent(tmp_path):
     traj = tmp_path / "moves.csv"
     write_moves(traj)
@@ -111,6 +113,7 @@ def test_a_camera_that_cannot_be_reached_fails_before_anything_is_sent(tmp_path)
     assert "simulator on" not in p.stderr
 
 
+@pytest.mark.heavy
 def test_a_camera_stream_that_stops_ends_the_correction_and_the_rows_finish(tmp_path):
     """The simulated camera stops streaming 1.5 s after the simulator started: the damper stops correcting, the rows
     are streamed as planned, the session ends as failed with the reason."""

@@ -54,6 +54,7 @@ def cmd(tab):
 
 
 # -- the built-in simulator ------------------------------------------------------------------------------------
+@pytest.mark.heavy
 @pytest.mark.parametrize("version", ["1.15", "2.7"])
 def test_execute_on_the_simulator_streams_every_row_and_logs(tmp_path, version):
     traj = write_traj(tmp_path / "j.csv", 0.01, 1.2)
@@ -92,6 +93,7 @@ def test_execute_on_the_simulator_streams_every_row_and_logs(tmp_path, version):
         assert png.stat().st_size > 10_000
 
 
+@pytest.mark.heavy
 def test_far_start_is_refused_and_move_to_start_gets_there(tmp_path):
     traj = write_traj(tmp_path / "j.csv", 0.01, 0.5, amp=0.2)
     far = ",".join(f"{v:.6f}" for v in Q0 + np.array([0.02, -0.03, 0, 0.06, 0, 0, 0.05]))
@@ -127,6 +129,7 @@ def test_step_not_a_whole_send_period_is_refused_before_the_simulator(tmp_path):
     assert not (tmp_path / "l.csv").exists()
 
 
+@pytest.mark.heavy
 def test_monitor_logs_flange_position_and_never_commands_motion(tmp_path, robot):
     import pinocchio as pin
 
@@ -149,6 +152,7 @@ def test_monitor_logs_flange_position_and_never_commands_motion(tmp_path, robot)
     np.testing.assert_allclose(ipo, np.repeat(Q0[None], len(ipo), axis=0), atol=1e-9)
 
 
+@pytest.mark.heavy
 def test_ptp_reaches_the_target_and_refuses_what_it_cannot_do(tmp_path):
     goal = "0.1,0.2,0,-1.2,0,0.3,8deg"
     proc = run_lbr("ptp", goal, "--time", "1", "--period", "10", "--port", "0", "--json")
@@ -215,6 +219,7 @@ def _script(n_active: int, period: int = 1) -> list[Cycle]:
     )
 
 
+@pytest.mark.heavy
 def test_step_must_equal_the_controller_period_unless_resampled(tmp_path):
     traj = write_traj(tmp_path / "j5.csv", 0.005, 0.4, amp=0.05)
     port = free_udp_port()
@@ -240,6 +245,7 @@ def test_step_must_equal_the_controller_period_unless_resampled(tmp_path):
     )  # the file's samples, 1 ms in between  # the file's samples, 1 ms in between
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("to", ["process", "group"])  # group: Ctrl-C in a terminal, which reaches the log writer too
 def test_sigint_mid_run_brakes_within_the_limits_with_a_parseable_log(tmp_path, to):
     traj = write_traj(tmp_path / "j.csv", 0.001, 20.0, amp=0.5)
@@ -280,6 +286,7 @@ def test_sigint_mid_run_brakes_within_the_limits_with_a_parseable_log(tmp_path, 
     np.testing.assert_allclose(active[-1], active[-2], atol=1e-12)  # at rest at the end
 
 
+@pytest.mark.heavy
 def test_help_names_units_and_the_robot_option():
     for command in ("execute", "monitor", "ptp"):
         proc = run_lbr(command, "--help")
@@ -290,6 +297,7 @@ def test_help_names_units_and_the_robot_option():
 FAR = Q0 + np.array([0.25, -0.2, 0.3, 0.3, -0.2, 0.3, 0.4])
 
 
+@pytest.mark.heavy
 def test_move_to_start_leaves_the_ball_at_rest_and_the_rows_wait_until_it_is_calm(tmp_path):
     from lbrcli.fri.log import PHASE_WAIT
 
@@ -317,6 +325,7 @@ def test_move_to_start_leaves_the_ball_at_rest_and_the_rows_wait_until_it_is_cal
     assert "start sway" in proc.stderr
 
 
+@pytest.mark.heavy
 def test_a_swing_that_outlasts_sway_wait_is_reported_and_the_rows_start(tmp_path):
     traj = write_traj(tmp_path / "j.csv", 0.005, 0.4, amp=0.2)
     far = ",".join(f"{v:.6f}" for v in FAR)

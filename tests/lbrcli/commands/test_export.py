@@ -44,6 +44,7 @@ def _joints(table, prefix: str) -> np.ndarray:
     return np.column_stack([table.column(f"{prefix}{i}") for i in range(1, 8)])
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("reader", [rosbags_messages, _mcap_messages], ids=["rosbags", "mcap"])
 def test_every_message_read_back_equals_the_log(exported, reader):
     run, out, fig = exported
@@ -150,6 +151,7 @@ def test_robot_description_is_attached_and_the_file_is_a_ros2_bag(exported):
     assert sum(fig["topics"].values()) == fig["messages"] == summary.statistics.message_count
 
 
+@pytest.mark.heavy
 def test_a_plan_alone_is_exported_from_zero_with_its_tf(tmp_path_factory, tmp_path):
     run = run_files(tmp_path_factory)
     out = tmp_path / "plan.mcap"

@@ -132,6 +132,7 @@ CASES = {  # rows, optional columns (stamps, cmd_tau, ball, phases), chunk size 
 }
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("case", list(CASES))
 def test_every_message_equals_a_reference_built_message_by_message(case, tmp_path, monkeypatch):
     n, (stamps, cmd_tau, ball, phases), chunk, compression, with_plan, tool = CASES[case]
@@ -218,6 +219,7 @@ def test_every_message_equals_a_reference_built_message_by_message(case, tmp_pat
     assert set(decoded) == expected_topics
 
 
+@pytest.mark.heavy
 def test_a_plan_alone_gets_its_tf_from_zero(tmp_path, monkeypatch):
     monkeypatch.setattr(bulk, "CHUNK_BYTES", 2000)
     t = np.arange(0, 5) * 0.004

@@ -1,3 +1,5 @@
+import pytest
+
 """`lbr ik` end to end: the start chosen for the whole path, joint speeds inside the limits, honest exit 1."""
 
 import json
@@ -19,6 +21,7 @@ def _write(path, file):
     return file
 
 
+@pytest.mark.heavy
 def test_issue_circle_auto_start_reported_and_inside_the_limits(lbr, tmp_path, robot, limits):
     path = issue_circle(0.005)
     task = _write(path, tmp_path / "circle.csv")
@@ -35,6 +38,7 @@ def test_issue_circle_auto_start_reported_and_inside_the_limits(lbr, tmp_path, r
     assert np.allclose(q[0], figures["q_start_rad"], atol=1e-6)
 
 
+@pytest.mark.heavy
 def test_too_fast_path_exits_1_naming_joint_and_speed(lbr, tmp_path, robot, limits):
     dt = 0.005
     q = random_joint_path(np.random.default_rng(5), limits, dt, 2.0, Q_START + 0.3, np.full(7, 0.3), 0.5)
@@ -60,6 +64,7 @@ def test_bad_nullspace_rate_is_exit_2(lbr, tmp_path):
     assert res.returncode == 2 and "--nullspace-rate" in res.stderr
 
 
+@pytest.mark.heavy
 def test_smooth_keeps_the_arm_angle_plan_when_its_accelerations_are_lower(lbr, tmp_path, robot, limits):
     """A fast FK-built 5 ms path whose locally resolved output reaches ≈ 26× the acceleration limit: --smooth
     compares it with the whole-path arm-angle plan's path and keeps that (≈ 2×), speeds still inside the limits."""
@@ -79,6 +84,7 @@ def test_smooth_keeps_the_arm_angle_plan_when_its_accelerations_are_lower(lbr, t
     assert abs(check.acceleration_ratio - smooth["peak_acceleration_ratio"]) < 0.05 * smooth["peak_acceleration_ratio"]
 
 
+@pytest.mark.heavy
 def test_pen_line_at_rest_passes_lbr_check_and_says_so(lbr, tmp_path, robot, limits):
     """`lbr ik T.csv -o q.csv --tool 0,0,0.1 && lbr check q.csv`: a rest-to-rest line (flange yawing 90°) drawn
     with a 10 cm pen — the file starts and ends at rest and passes the check; --json says so with its figures."""

@@ -51,6 +51,7 @@ def default_plan(tmp_path_factory):
     return proc, files
 
 
+@pytest.mark.heavy
 def test_default_plan_cli(default_plan):
     proc, files = default_plan
     assert proc.returncode == 0, proc.stderr
@@ -69,6 +70,7 @@ def test_default_plan_cli(default_plan):
     assert math.degrees(pred.column("theta").max()) == pytest.approx(figs["peak_sway_deg"], rel=1e-6)
 
 
+@pytest.mark.heavy
 def test_no_length_in_the_band_is_worse_than_claimed(default_plan):
     """The band's worst residual is judged densely: an independent judge (spline path, DOP853) at lengths between the
     planner's 41 finds none worse than the reported worst."""
@@ -85,6 +87,7 @@ def test_no_length_in_the_band_is_worse_than_claimed(default_plan):
         assert residual <= worst * 1.01 + 1e-3, ln
 
 
+@pytest.mark.heavy
 def test_joint_csv_is_what_was_predicted(default_plan):
     proc, files = default_plan
     figs = json.loads(proc.stdout)
@@ -109,6 +112,7 @@ def test_plan_passes_lbr_check(default_plan, lbr):
     assert json.loads(proc.stdout)["limits_ok"] is True
 
 
+@pytest.mark.heavy
 def test_baseline_reports_jerk_and_fails_only_when_asked(tmp_path):
     out = tmp_path / "base.csv"
     figs = plan_anti_sway_files(DEFAULT_LAYOUT, L, 1.0, None, "accel", 0.005, out)
@@ -117,6 +121,7 @@ def test_baseline_reports_jerk_and_fails_only_when_asked(tmp_path):
     assert figs["motion_s"] == pytest.approx(figs["baseline_motion_s"])
 
 
+@pytest.mark.heavy
 def test_length_tolerance_on_the_real_joint_path(tmp_path):
     out = tmp_path / "robust.csv"
     figs = plan_anti_sway_files(DEFAULT_LAYOUT, L, 2.0, None, "auto", 0.005, out, length_tolerance=0.2)
@@ -130,6 +135,7 @@ def test_length_tolerance_on_the_real_joint_path(tmp_path):
     assert figs["motion_s"] <= base["motion_s"]
 
 
+@pytest.mark.heavy
 def test_infeasible_acceleration_names_the_segment_and_a_verified_fit(tmp_path, lbr):
     pts = "0.40,-0.30;0.62,-0.30"
     proc = lbr(
@@ -160,6 +166,7 @@ def test_infeasible_acceleration_names_the_segment_and_a_verified_fit(tmp_path, 
     assert json.loads(ok.stdout)["limits_ok"]
 
 
+@pytest.mark.heavy
 def test_default_falls_back_to_another_design_before_giving_up(tmp_path):
     figs = plan_anti_sway_files(DEFAULT_LAYOUT[:2], L, 6.0, None, "auto", 0.005, tmp_path / "fb.csv")
     assert figs["limits_ok"] and figs["fallback"] is not None
@@ -167,6 +174,7 @@ def test_default_falls_back_to_another_design_before_giving_up(tmp_path):
     assert figs["worst_residual_sway_deg"] <= 0.5
 
 
+@pytest.mark.heavy
 def test_a_layout_whose_middle_segments_break_a_joint_limit_lowers_a_max_there_only(tmp_path):
     """A generated layout where the robust design at a_max breaks A4's acceleration limit on two of four segments:
     the fallback keeps a_max on the others and lowers it on those, which stays quicker than the thesis baseline
@@ -184,6 +192,7 @@ def test_a_layout_whose_middle_segments_break_a_joint_limit_lowers_a_max_there_o
         assert judge_sway(pos, 0.005, length * (1 + e), figs["motion_s"])[0] <= 0.5  # [deg]
 
 
+@pytest.mark.heavy
 def test_max_sway_bounds_the_swing_for_every_length_in_the_band(tmp_path, lbr):
     proc = lbr(
         "plan",
@@ -215,6 +224,7 @@ def _write(path, text):
     return path
 
 
+@pytest.mark.heavy
 def test_obstacle_on_the_ball_path_is_refused_with_its_name_and_time(tmp_path, lbr):
     pts = "0.40,-0.30;0.62,-0.30"
     obs = _write(
@@ -312,6 +322,7 @@ def test_bad_input_exits_2_with_one_line(tmp_path, lbr, args, word):
     assert len(lines) == 1 and word in lines[0] and "Traceback" not in proc.stderr
 
 
+@pytest.mark.heavy
 def test_the_elbow_settles_before_the_file_ends(tmp_path):
     """The redundancy pull may still move the elbow once the pivot has stopped: the file holds the last pivot
     position until the joints are at rest (this layout's plan ended with A1 at 0.054 rad/s, refused by the check)."""

@@ -43,6 +43,7 @@ def planned(tmp_path_factory):
     return res, out, pred, plot
 
 
+@pytest.mark.heavy
 def test_the_plan_catches_the_ball_within_the_limits(planned):
     res, out, pred, plot = planned
     assert res.returncode == 0, res.stderr
@@ -121,6 +122,7 @@ def test_bad_options_exit_2_in_one_line(tmp_path, args, fragment):
     assert fragment in lines[0] and not (tmp_path / "c.csv").exists()
 
 
+@pytest.mark.heavy
 def test_the_rehearsal_on_the_simulator_catches_it_and_the_log_says_when(planned, tmp_path):
     res, out, _, _ = planned
     f = json.loads(res.stdout)

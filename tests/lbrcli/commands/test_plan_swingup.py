@@ -98,6 +98,7 @@ def test_thesis_example_fails_near_90_deg_on_a_real_string_as_the_thesis_experim
     assert np.abs(table.data[early, 1] - table.data[early, 2]).max() < math.radians(3)
 
 
+@pytest.mark.heavy
 def test_fast_at_1_ms_reaches_115_deg_within_3_s_inside_the_limits(lbr, tmp_path):
     out, pred = tmp_path / "fast.csv", tmp_path / "fast_pred.csv"
     res = lbr(

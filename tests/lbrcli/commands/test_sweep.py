@@ -97,6 +97,7 @@ def test_a_toml_syntax_error_is_one_line_with_row_and_column(tmp_path, lbr):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.heavy
 def test_anti_sway_runs_reproduce_the_command_and_failures_are_rows(tmp_path, lbr):
     """Figures and joint file of a run equal `lbr plan anti-sway --json`'s (the table's command line, run as a
     process); the judged sway of the planners' pendulum model agrees with the independent DOP853 judge; an option
@@ -177,6 +178,7 @@ def test_a_results_folder_of_other_files_is_refused(tmp_path, lbr):
     assert sorted(f.name for f in (tmp_path / "busy").iterdir()) == ["thesis.pdf"]
 
 
+@pytest.mark.heavy
 def test_example_studies_parse_and_a_subset_runs(tmp_path, lbr):
     files = sorted(EXAMPLES.glob("*.toml"))
     assert len(files) >= 7

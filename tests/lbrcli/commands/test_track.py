@@ -23,6 +23,7 @@ def clip(tmp_path_factory):
     return d / "swing.mp4", gt
 
 
+@pytest.mark.heavy
 def test_track_fixed_pivot_json_plot_preview(lbr, clip, tmp_path):
     video, gt = clip
     out, plot, preview = tmp_path / "track.csv", tmp_path / "track.png", tmp_path / "preview.mp4"
@@ -43,6 +44,7 @@ def test_track_fixed_pivot_json_plot_preview(lbr, clip, tmp_path):
     assert info.size == SIZE and info.frame_count == len(gt.t)
 
 
+@pytest.mark.heavy
 def test_track_pivot_marker(lbr, clip, tmp_path):
     video, gt = clip
     out = tmp_path / "track.csv"
@@ -80,6 +82,7 @@ def board_images(tmp_path_factory):
     return d, K
 
 
+@pytest.mark.heavy
 def test_calibrate_then_track_in_metres(lbr, board_images, clip, tmp_path):
     d, K = board_images
     cam = tmp_path / "cam.json"
@@ -116,6 +119,7 @@ def test_calibrate_then_track_in_metres(lbr, board_images, clip, tmp_path):
     assert step_m == pytest.approx(step_px * 1e-3, rel=0.1)
 
 
+@pytest.mark.heavy
 def test_ball_never_found_exit_1(lbr, clip, tmp_path):
     video, _ = clip
     res = lbr("track", "video", video, "-o", tmp_path / "t.csv", "--color", "yellow")
@@ -123,6 +127,7 @@ def test_ball_never_found_exit_1(lbr, clip, tmp_path):
     assert "not found in any frame" in res.stderr and "Traceback" not in res.stderr
 
 
+@pytest.mark.heavy
 def test_bad_inputs_exit_2(lbr, clip, board_images, tmp_path):
     video, _ = clip
     out = tmp_path / "t.csv"
@@ -179,6 +184,7 @@ def _uv(point):
     return f"{point[0]:.1f},{point[1]:.1f}"
 
 
+@pytest.mark.heavy
 def test_round_red_object_ambiguity_said_and_start_names_the_ball(lbr, hard, tmp_path):
     sc = hard("red_disc")
     out = tmp_path / "t.csv"
@@ -204,6 +210,7 @@ def test_round_red_object_ambiguity_said_and_start_names_the_ball(lbr, hard, tmp
     assert np.max(np.linalg.norm(tr.uv[tr.found] - sc.truth.ball_uv[tr.found], axis=1)) < 2.0
 
 
+@pytest.mark.heavy
 def test_dark_start_found_share_checked(lbr, hard, tmp_path):
     sc = hard("dark_start")
     out = tmp_path / "t.csv"
@@ -221,6 +228,7 @@ def test_dark_start_found_share_checked(lbr, hard, tmp_path):
     assert out.exists()  # the track is still written
 
 
+@pytest.mark.heavy
 def test_tilted_camera_theta_in_plane_with_calibration(lbr, hard, tmp_path):
     from tracking.calibration import save_calibration
 
@@ -241,6 +249,7 @@ def test_tilted_camera_theta_in_plane_with_calibration(lbr, hard, tmp_path):
     assert np.degrees(np.sqrt(np.mean((tr.theta[ok] - sc.truth.theta[ok]) ** 2))) > 1.0
 
 
+@pytest.mark.heavy
 def test_slow_motion_fps_option(lbr, hard, tmp_path):
     sc = hard("slow_motion")
     out = tmp_path / "t.csv"
@@ -254,6 +263,7 @@ def test_slow_motion_fps_option(lbr, hard, tmp_path):
     assert np.degrees(np.sqrt(np.nanmean((tr.theta - sc.truth.theta) ** 2))) < 0.2
 
 
+@pytest.mark.heavy
 def test_pivot_marker_never_found_exit_1(lbr, clip, tmp_path):
     video, _ = clip
     res = lbr("track", "video", video, "-o", tmp_path / "t.csv", "--pivot-color", "blue")

@@ -34,6 +34,7 @@ def read_log(path):
 
 
 # -- the normal session ---------------------------------------------------------------------------------------
+@pytest.mark.heavy
 @pytest.mark.parametrize("version", ["1.15", "2.7"])
 @pytest.mark.parametrize("detect", [False, True])
 def test_session_streams_every_row_bit_exact_and_logs(tmp_path, version, detect):
@@ -114,6 +115,7 @@ def test_gaps_stale_foreign_and_malformed_are_counted_and_never_answered():
     assert max(ctl.command_ratios(LIM.velocity, LIM.acceleration)) <= 1.0
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(
     "mutate",
     [
@@ -158,6 +160,7 @@ def test_robot_side_events_end_the_session_at_once(bad, reason):
     assert ctl.unanswered == [len(preamble()) + 20 + (reason is EndReason.IDLE)]
 
 
+@pytest.mark.heavy
 def test_interrupt_mid_motion_is_a_jerk_limited_braking_stop(tmp_path):
     n = 600
     traj = fast_ramp(n)
@@ -183,6 +186,7 @@ def test_interrupt_mid_motion_is_a_jerk_limited_braking_stop(tmp_path):
     assert (tab.column("phase") == Phase.BRAKE).sum() == res.braking_cycles
 
 
+@pytest.mark.heavy
 def test_guard_refusal_mid_motion_brakes_instead_of_sending_the_jump():
     n = 500
     traj = fast_ramp(n, speed=0.5)
@@ -239,6 +243,7 @@ def test_far_start_is_refused_before_anything_is_sent():
     assert "--move-to-start" in res.detail and ctl.replies == [] and res.answered == 0
 
 
+@pytest.mark.heavy
 def test_move_to_start_is_jerk_limited_then_streams_the_file():
     traj = min_jerk(30) + np.array([0, 0, 0, 0.02, 0, 0, 0])
     player = TrajectoryPlayer(traj, LIM, period_s=1e-3, move_to_start=True)
@@ -269,6 +274,7 @@ def test_no_message_times_out_naming_the_cause():
         assert time.monotonic() - t0 < 1.0
 
 
+@pytest.mark.heavy
 def test_wait_is_honoured_while_garbage_keeps_arriving():
     import socket
     import threading
@@ -297,6 +303,7 @@ def test_wait_is_honoured_while_garbage_keeps_arriving():
     assert time.monotonic() - t0 < 0.5 + 0.5
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("version", ["1.15", "2.7"])
 def test_version_is_detected_from_the_first_datagram(version):
     res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * 5, LBRClient(), version=version, detect=True, duration=0.05)

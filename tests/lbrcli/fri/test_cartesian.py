@@ -141,6 +141,7 @@ def test_controller_ends_the_overlay_on_a_pose_it_cannot_execute(offset, reason)
     assert np.abs(q - np.array(THESIS_Q0)).max() < 1e-6  # nothing moved: the commands were the ipo pose
 
 
+@pytest.mark.heavy
 def test_controller_executes_poses_and_needs_a_mirror():
     ctl = Controller(SimConfig(**CFG))
     msgs = drive(ctl, cartesian_answer(lambda n: (20.0 * (1 - math.cos(n * 0.01)), 0.0, 0.0)), 1500)
@@ -242,6 +243,7 @@ def lockstep_session(client, duration=1.2, frames=None):
     )
 
 
+@pytest.mark.heavy
 def test_client_cartesian_line_is_executed_and_frames_arrive():
     client = LineClient(speed=0.1)
     result, stats, mons, cmds = lockstep_session(client, frames=Frames())
@@ -262,6 +264,7 @@ def test_client_cartesian_line_is_executed_and_frames_arrive():
     assert stats.transformations["Tool"]["received"] > 400
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("event", ["jump", "interrupt"])
 def test_client_cartesian_stop_brakes_within_the_joint_limits(event, limits):
     client = LineClient(speed=0.15, event_at=250, event=event)

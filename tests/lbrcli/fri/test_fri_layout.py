@@ -3,6 +3,8 @@ CLI, the planners, the tracking nor the lab package; its public names exist; no 
 
 from __future__ import annotations
 
+import pytest
+
 import json
 import subprocess
 import sys
@@ -15,6 +17,7 @@ FORBIDDEN = ("planners", "tracking", "typer", "matplotlib", "lbrcli.commands", "
              "lbrcli.bridge", "lbrcli.plants", "lbrcli.app", "lbrcli.demo")  # fmt: skip
 
 
+@pytest.mark.heavy
 def test_importing_every_fri_module_loads_no_planner_cli_or_lab_module():
     probe = (
         "import importlib, json, pkgutil, sys\n"

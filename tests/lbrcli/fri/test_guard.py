@@ -19,6 +19,7 @@ def _full_check(guard: CommandGuard, q, prev, prev2, room: bool) -> str | None:
     return None
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("period_s", [1e-3, 5e-3])
 def test_fast_path_decides_as_the_full_check_everywhere(period_s: float) -> None:
     limits = default_limits()

@@ -17,6 +17,7 @@ from lbrcli.fri.testing import CA, Cycle
 from tests.helpers.fri_session import LIM, min_jerk, preamble, run
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("version", ["1.15", "2.7"])
 def test_the_writer_process_writes_the_rows_the_in_process_log_writes(tmp_path, version):
     n = 300
@@ -38,6 +39,7 @@ def test_the_writer_process_writes_the_rows_the_in_process_log_writes(tmp_path, 
     assert len(table.data) == inproc.rows
 
 
+@pytest.mark.heavy
 def test_a_writer_that_cannot_write_brakes_and_ends_the_session():
     if not os.path.exists("/dev/full"):
         pytest.skip("no /dev/full on this system")

@@ -64,6 +64,7 @@ def _ratios(q: np.ndarray, dt: float, lim) -> tuple[float, float, float]:
             float((np.abs(j) / lim.jerk).max()))  # fmt: skip
 
 
+@pytest.mark.heavy
 def test_a_feedback_client_that_asks_too_much_is_clamped_and_can_always_brake():
     """A client that wants 3× the velocity limit toward A1's and A4's position limits and then stops asking: every
     command it gets is inside the limits, none is refused, and the brake from wherever it is stays inside too."""

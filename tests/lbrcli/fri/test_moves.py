@@ -36,6 +36,7 @@ def robot():
     return Robot()
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("length", [0.25, 0.6, 1.0])
 def test_shaped_move_leaves_the_ball_at_rest_within_a_fifth_of_the_limits(robot, length):
     shaper = make_shaper("zvd", natural_period(length))
@@ -53,6 +54,7 @@ def test_shaped_move_leaves_the_ball_at_rest_within_a_fifth_of_the_limits(robot,
         assert res_shaped < 0.15 and res_shaped < res_plain / 30, (res_plain, res_shaped)
 
 
+@pytest.mark.heavy
 def test_joint_space_shaping_alone_leaves_ten_times_more_sway(robot):
     shaper = make_shaper("zvd", natural_period(0.5))
     a, b = _moves(5, 1)[0]

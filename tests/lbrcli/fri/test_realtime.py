@@ -34,6 +34,7 @@ main(sys.argv[1:])
 """
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("command", ["execute", "ptp"])
 def test_a_refused_realtime_exits_2_with_one_line_before_anything_starts(tmp_path, command):
     traj = tmp_path / "t.csv"

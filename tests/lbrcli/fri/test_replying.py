@@ -46,6 +46,7 @@ def test_prepared_replies_carry_exactly_what_the_cycle_by_cycle_path_sends(versi
     assert all(r.header[1] == r.seq for r in ctl.replies)
 
 
+@pytest.mark.heavy
 def test_gaps_stale_foreign_and_garbage_take_the_full_cycle_and_change_nothing():
     n = 400
     traj = min_jerk(n)
@@ -60,6 +61,7 @@ def test_gaps_stale_foreign_and_garbage_take_the_full_cycle_and_change_nothing()
     assert replies(ctl) == replies(ctl0)  # (the sent positions skip what the controller extrapolated)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(
     "mutate",
     [
@@ -127,6 +129,7 @@ def test_a_wrong_prediction_ends_in_a_braking_stop_naming_the_client():
     assert np.all(v_end < 1e-9)
 
 
+@pytest.mark.heavy
 def test_an_honest_prediction_never_trips_the_check():
     n = 300
     traj = fast_ramp(n)
@@ -136,6 +139,7 @@ def test_an_honest_prediction_never_trips_the_check():
     assert err is None and res.reason is not EndReason.CLIENT_ERROR and res.prepared_replies >= n - 2
 
 
+@pytest.mark.heavy
 def test_supervision_brakes_from_the_command_after_the_message_it_judged():
     n = 1500
     traj = fast_ramp(n)
@@ -152,6 +156,7 @@ def test_supervision_brakes_from_the_command_after_the_message_it_judged():
     assert all(r.state != IDLE for r in ctl.replies)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("shaped", [False, True], ids=["ruckig", "shaped"])
 @pytest.mark.parametrize("gap_at", [None, 40, 150], ids=["no-gap", "gap-in-move", "gap-in-rows"])
 def test_moves_to_the_start_are_prepared_step_by_step_and_change_nothing(shaped, gap_at):

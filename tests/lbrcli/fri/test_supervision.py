@@ -3,6 +3,8 @@ reply check end to end against the scripted controller."""
 
 from __future__ import annotations
 
+import pytest
+
 import math
 
 from lbrcli.campaign.execute import LIM, Q0, ramp
@@ -59,6 +61,7 @@ def test_stopping_distance_is_an_upper_bound_of_a_jerk_limited_stop():
     assert stopping_distance(1.0, -8.57, 8.57, 135.0) < stopping_distance(1.0, 0.0, 8.57, 135.0)
 
 
+@pytest.mark.heavy
 def test_replies_that_stop_reaching_the_controller_end_the_stream():
     rows = ramp(900, speed=0.3)
     player = TrajectoryPlayer(rows, LIM, period_s=1e-3)

@@ -77,6 +77,7 @@ def _decaying(n: int, a0: float = 0.02, tau: float = 150.0) -> list[float]:
     return list(np.abs(a0 * np.exp(-k / tau) * np.cos(2 * np.pi * k / 80.0)))
 
 
+@pytest.mark.heavy
 def test_the_first_row_is_held_until_the_ball_has_been_calm_for_a_window():
     traj = min_jerk(40)
     balls = _decaying(3000)
@@ -136,6 +137,7 @@ def test_without_a_sway_reading_nothing_waits_and_no_sway_is_reported():
     np.testing.assert_array_equal(sent_positions(ctl)[: len(traj)], traj)
 
 
+@pytest.mark.heavy
 def test_after_a_move_the_swing_is_judged_from_the_arrival_on():
     traj = min_jerk(40) + np.array([0, 0, 0, 0.02, 0, 0, 0])
     script = preamble(ball=0.0) + [Cycle(state=CA, ball=0.0)] * 3000
@@ -151,6 +153,7 @@ def test_after_a_move_the_swing_is_judged_from_the_arrival_on():
     np.testing.assert_array_equal(q[m + 50 : m + 50 + len(traj)], traj)
 
 
+@pytest.mark.heavy
 def test_messages_lost_while_waiting_skip_no_row():
     traj = min_jerk(400)
     script = preamble(ball=0.03) + [Cycle(state=CA, ball=0.03)] * 60 + [Cycle(state=CA, ball=0.03, seq_jump=3)]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 import socket
 import subprocess
 import sys
@@ -66,6 +68,7 @@ def test_receive_times_out_with_none_and_takes_datagrams_in_order() -> None:
         tr.close()
 
 
+@pytest.mark.heavy
 def test_busy_wait_takes_the_messages_that_arrive_in_its_window() -> None:
     tr = UdpTransport("127.0.0.1", 0, "127.0.0.1", timeout_s=0.05, busy_wait_s=1.5e-3)
     tr.expect_period(2e-3)
@@ -92,6 +95,7 @@ def test_datagrams_from_other_hosts_are_counted_and_ignored() -> None:
         tr.close()
 
 
+@pytest.mark.heavy
 def test_warm_is_called_while_busy_waiting_and_never_while_sleeping() -> None:
     from lbrcli.fri.transport import WARM_EVERY_S
 
@@ -135,6 +139,7 @@ def test_warm_is_called_while_busy_waiting_and_never_while_sleeping() -> None:
         tr.close()
 
 
+@pytest.mark.heavy
 def test_the_default_wait_blocks_in_the_kernel_and_takes_every_message_of_a_1ms_stream() -> None:
     """No busy-wait by default (the CLI's and the library's): each receive blocks until its datagram, none is lost or
     reordered, and nothing is ever taken by polling, also once the period is known."""

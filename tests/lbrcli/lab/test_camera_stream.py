@@ -73,6 +73,7 @@ def run_live(scene, config, seconds=2.2):
         return results, stamps, live.stats, server, latest
 
 
+@pytest.mark.heavy
 def test_pendulum_through_the_simulated_camera(pendulum):
     run, scene = pendulum
     cfg = CameraConfig(
@@ -98,6 +99,7 @@ def test_pendulum_through_the_simulated_camera(pendulum):
     assert not any(r.tilt_ambiguous for r in found)  # seen from 30° above: the depth tilt is observable
 
 
+@pytest.mark.heavy
 def test_second_judge_other_pose_rate_blur_latency_bigger_ball(pendulum):
     """From the other side and lower, 120 fps, the shutter open 8 ms, 45 ms late, a ball 20 % larger."""
     run, scene = pendulum
@@ -120,6 +122,7 @@ def test_second_judge_other_pose_rate_blur_latency_bigger_ball(pendulum):
     assert np.min(delay) >= cfg.latency_s + cfg.exposure_s / 2 - 1e-3
 
 
+@pytest.mark.heavy
 def test_a_slow_consumer_drops_frames_and_never_queues(pendulum):
     """A callback slower than the camera: frames are dropped and counted, each result is about the newest frame."""
     _, scene = pendulum
@@ -146,6 +149,7 @@ def test_a_slow_consumer_drops_frames_and_never_queues(pendulum):
     assert all(read - 1 - seq <= 2 for seq, read in taken)
 
 
+@pytest.mark.heavy
 def test_video_file_played_at_its_rate(tmp_path):
     from tracking.synthetic import render_pendulum_video
 
@@ -166,6 +170,7 @@ def test_video_file_played_at_its_rate(tmp_path):
     assert np.degrees(np.max(np.abs(th - gt.theta[seq]))) < 0.5
 
 
+@pytest.mark.heavy
 def test_cli_live_udp_json_and_track_file(lbr, pendulum, tmp_path):
     _, scene = pendulum
     cfg = CameraConfig(size=(320, 240), fps=60.0, position_m=(0.5, -1.2, 0.45), look_at_m=(0.5, 0.0, 0.4), fov_deg=45.0)

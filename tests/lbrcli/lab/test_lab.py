@@ -61,6 +61,7 @@ def test_parse_mqtt_url():
             parse_mqtt_url(bad)
 
 
+@pytest.mark.heavy
 def test_publisher_decimates_and_listener_receives(broker):
     got = []
     listener = TelemetryListener(broker, got.append).start()
@@ -86,6 +87,7 @@ def test_publisher_decimates_and_listener_receives(broker):
     assert all(b - a >= 0.019 for a, b in zip(ts, ts[1:]))
 
 
+@pytest.mark.heavy
 def test_publisher_reconnects_after_broker_restart(broker_process, broker):
     pub = TelemetryPublisher(broker, rate_hz=100).start()
     assert wait_for(pub._client.is_connected)
@@ -116,6 +118,7 @@ def test_publisher_reconnects_after_broker_restart(broker_process, broker):
     assert pub.dropped > 0  # what was offered while disconnected was dropped, not queued into the FRI loop
 
 
+@pytest.mark.heavy
 def test_listen_cli_records(broker, tmp_path, lbr):
     url = f"mqtt://{broker.host}:{broker.port}/{broker.topic}"
     out = tmp_path / "rec.jsonl"
@@ -169,6 +172,7 @@ def _log(path):
     return read_table(path, LOG_COLUMNS, time="increasing", nan_columns=NAN_COLUMNS)
 
 
+@pytest.mark.heavy
 def test_execute_reads_the_emulated_pendulum_module_over_a_pty(tmp_path, lbr):
     csv = _move_csv(tmp_path / "move.csv")
     log = tmp_path / "log.csv"
@@ -209,6 +213,7 @@ def test_the_pendulum_module_is_the_sway_source_while_its_reading_is_fresh():
     assert attached.pendulum_sway(None) is None  # half a second old: not the swing now
 
 
+@pytest.mark.heavy
 def test_execute_publishes_telemetry_to_a_real_broker(broker, tmp_path):
     csv = _move_csv(tmp_path / "move.csv")
     got = []
@@ -253,6 +258,7 @@ def test_execute_publishes_telemetry_to_a_real_broker(broker, tmp_path):
     assert max(m["msr_q"][0] for m in got) > 0.2
 
 
+@pytest.mark.heavy
 def test_lab_options_refused_with_one_line(tmp_path, lbr):
     csv = _move_csv(tmp_path / "move.csv")
     res = lbr("execute", csv, "--port", "0", "--pendulum", "/dev/does-not-exist")
@@ -263,6 +269,7 @@ def test_lab_options_refused_with_one_line(tmp_path, lbr):
     assert res.returncode == 2 and "expected mqtt://" in res.stderr
 
 
+@pytest.mark.heavy
 def test_monitor_logs_the_pendulum(tmp_path, lbr):
     log = tmp_path / "mon.csv"
     res = lbr(
@@ -290,6 +297,7 @@ def test_monitor_logs_the_pendulum(tmp_path, lbr):
     assert np.isfinite(pend).sum() > 50 and np.nanmax(np.abs(pend)) < 2e-3
 
 
+@pytest.mark.heavy
 def test_telemetry_that_reaches_no_broker_is_a_failure(lbr):
     """The session ran, but what was asked (telemetry) did not happen: exit 1, one line."""
     res = lbr("monitor", "--duration", "0.5", "--port", "0", "--sim-lenient", "--mqtt", "mqtt://127.0.0.1:1/lbr/state")

@@ -44,6 +44,7 @@ def test_ball_plant_on_a_horizontal_tcp_acceleration_swings_backwards(robot):
     assert ball.figures()["max_ball_theta"] == pytest.approx(theta.max())
 
 
+@pytest.mark.heavy
 def test_pendulum_module_plant_writes_lines_on_its_pty():
     import os
 

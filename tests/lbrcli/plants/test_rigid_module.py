@@ -118,6 +118,7 @@ def test_lbr_control_upright_swings_up_balances_and_survives_a_push(tmp_path):
     assert plot.stat().st_size > 10_000
 
 
+@pytest.mark.heavy
 def test_lbr_control_upright_fails_when_it_cannot_catch_and_refuses_bad_input(tmp_path):
     p = run_lbr(
         "control", "upright", "--sim-lockstep", "--port", "0", "--swing-timeout", "1", "--hold", "5", timeout=120

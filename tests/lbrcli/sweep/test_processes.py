@@ -4,6 +4,8 @@ wait for records, never for times)."""
 
 from __future__ import annotations
 
+import pytest
+
 import json
 import os
 import signal
@@ -50,6 +52,7 @@ def _sweep(*args) -> subprocess.Popen:
                             stderr=subprocess.PIPE, text=True, start_new_session=True)  # fmt: skip
 
 
+@pytest.mark.heavy
 def test_worker_killed_mid_study_loses_nothing_and_counts_nothing_twice(tmp_path):
     study = _study(tmp_path / "study.toml", 24, 0.25)
     out = tmp_path / "results"
@@ -71,6 +74,7 @@ def test_worker_killed_mid_study_loses_nothing_and_counts_nothing_twice(tmp_path
     assert sorted(r["value"] for r in table) == list(range(1, 25))
 
 
+@pytest.mark.heavy
 def test_interrupted_study_resumes_and_an_extended_grid_computes_only_the_new_runs(tmp_path):
     out = tmp_path / "results"
     # 40 sleeping runs of 0.25 s: ≈ 5 s on 2 workers, so the interrupt lands mid-study however late this loaded
@@ -97,6 +101,7 @@ def test_interrupted_study_resumes_and_an_extended_grid_computes_only_the_new_ru
     assert sorted(r["value"] for r in pq.read_table(out / "results.parquet").to_pylist()) == list(range(1, 47))
 
 
+@pytest.mark.heavy
 def test_a_run_that_kills_its_workers_is_a_crashed_row(tmp_path):
     """Dask gives a run lost with its worker to another; one that takes the workers down (here the first: allowed
     failures 0) ends as a row naming KilledWorker, the study goes on, and the sweep exits 1."""

@@ -20,6 +20,7 @@ from trajectories.errors import CsvFormatError
 from trajectories.robot import Robot, RobotConfig
 
 
+@pytest.mark.heavy
 def test_every_kind_is_recognised_and_a_foreign_file_is_named(tmp_path_factory, tmp_path):
     run = run_files(tmp_path_factory)
     assert [file_kind(p) for p in (run.plan, run.log, run.track, run.obstacles)] == [JOINT, LOG, TRACK, OBSTACLES]
@@ -123,6 +124,7 @@ def test_drawn_bodies_and_balls_are_where_pinocchio_puts_the_logged_arm(tmp_path
     assert 0.0 < lost < 0.4  # the track's lost frames and the time before it are not drawn
 
 
+@pytest.mark.heavy
 def test_turning_points_are_the_points_the_crane_move_was_planned_through(tmp_path):
     points = [(0.45, -0.15), (0.6, -0.15), (0.6, 0.1), (0.5, 0.1)]
     text = ";".join(f"{x},{y}" for x, y in points)

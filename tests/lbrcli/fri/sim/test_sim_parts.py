@@ -28,6 +28,7 @@ def test_feasible_motion_is_followed_exactly(limits):
     assert np.array_equal(ip.q, path[-1])
 
 
+@pytest.mark.heavy
 @settings(max_examples=30, deadline=None)
 @given(st.lists(st.floats(-2.0, 2.0), min_size=7, max_size=7), st.integers(1, 3))
 def test_clipped_motion_respects_the_limits_and_arrives(limits, target, hold):
@@ -249,6 +250,7 @@ def test_close_sends_the_idle_messages_of_a_normal_ending():
     assert m.finished
 
 
+@pytest.mark.heavy
 def test_the_sim_package_imports_no_cli_planners_or_lab():
     """lbrcli.fri.sim is a library: a controller without plants pulls in neither the CLI, nor planners, nor lab."""
     import subprocess

@@ -53,6 +53,7 @@ def run_session(version="1.15", policy=None, multiplier=1, before=None, answer=N
     return run, stats, config
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("version", ["1.15", "2.7"])
 def test_state_sequence_and_counters(version):
     run, stats, cfg = run_session(version, session_duration_s=0.3)
@@ -85,6 +86,7 @@ def test_state_sequence_and_counters(version):
     assert stats.reply_latency_ms_p50 is not None and stats.period_ms_p50 is not None
 
 
+@pytest.mark.heavy
 def test_measured_torques_are_the_inverse_dynamics(robot):
     run, stats, cfg = run_session(session_duration_s=0.1)
     r = run.where(CA)[-1]
@@ -93,6 +95,7 @@ def test_measured_torques_are_the_inverse_dynamics(robot):
     assert abs(r.msr_tau[1]) > 1.0  # gravity loads the shoulder
 
 
+@pytest.mark.heavy
 def test_receive_multiplier_is_honoured_and_commands_are_fine_interpolated():
     ramp = 4e-4  # [rad] per cycle on A7 (0.05 rad/s at 8 ms)
 
@@ -113,6 +116,7 @@ def test_receive_multiplier_is_honoured_and_commands_are_fine_interpolated():
     assert np.median(dq) == pytest.approx(ramp, rel=0.2)
 
 
+@pytest.mark.heavy
 def test_falls_back_to_monitoring_when_replies_stop():
     silent = []
 
@@ -156,6 +160,7 @@ def test_a_session_dropped_for_quality_says_so_when_the_simulator_is_stopped_aft
     assert stats.end_reason == "quality"
 
 
+@pytest.mark.heavy
 def test_safety_stop_on_a_command_outside_the_position_limits(limits):
     def policy(k, q0):
         q = q0.copy()
@@ -173,6 +178,7 @@ def test_safety_stop_on_a_command_outside_the_position_limits(limits):
     assert max(abs(r.msr_q[0]) for r in run.received) < limits.position[0]
 
 
+@pytest.mark.heavy
 def test_a_reply_without_joint_positions_in_commanding_active_ends_the_overlay():
     """KUKA's LBRClient sets the joint positions in every COMMANDING_ACTIVE cycle; a reply without them is an error:
     the overlay ends, the robot stops where it is (drives on), the session goes back to monitoring and closes."""
@@ -191,11 +197,13 @@ def test_a_reply_without_joint_positions_in_commanding_active_ends_the_overlay()
     assert after and all(r.drives == (2,) * 7 for r in after)  # stopped, drives on (not a safety stop)
 
 
+@pytest.mark.heavy
 def test_header_only_replies_in_the_monitoring_states_are_the_protocol():
     run, stats, _ = run_session(session_duration_s=0.2)
     assert stats.end_reason == "duration" and stats.commands_without_position == 0
 
 
+@pytest.mark.heavy
 def test_clipping_lowers_the_tracking_performance(limits):
     step = 0.2  # [rad] on A4, far beyond what one cycle allows
 
@@ -221,6 +229,7 @@ def test_clipping_lowers_the_tracking_performance(limits):
     assert all(np.array_equal(r.ipo_q, cfg.q0) for r in run.received if r.state in (CW, CA))
 
 
+@pytest.mark.heavy
 def test_ball_hangs_still_without_motion():
     run, stats, _ = run_session(session_duration_s=0.2, plants=default_plants(0.5))
     assert stats.max_ball_theta is not None and stats.max_ball_theta < 1e-12
@@ -228,6 +237,7 @@ def test_ball_hangs_still_without_motion():
     assert max(abs(r.io["ball_theta_x"]) for r in run.received) < 1e-12
 
 
+@pytest.mark.heavy
 def test_ball_swings_after_a_jerk_of_the_flange_as_the_pendulum_model_predicts(robot):
     from planners.string_model import StringModel
     from planners.string_sim import PivotMotion, simulate_string
@@ -269,6 +279,7 @@ def test_ball_swings_after_a_jerk_of_the_flange_as_the_pendulum_model_predicts(r
     assert {r.io["ball_phase"] for r in rec[1 : m + 1]} == {0.0}  # taut throughout
 
 
+@pytest.mark.heavy
 def test_loss_injection_is_counted_and_bridged():
     run, stats, _ = run_session(loss=0.04, seed=3, session_duration_s=0.4)
     assert CA in run.states
@@ -279,6 +290,7 @@ def test_loss_injection_is_counted_and_bridged():
     assert stats.missed_replies >= missing - 2
 
 
+@pytest.mark.heavy
 def test_malformed_injection_is_counted():
     run, stats, _ = run_session(malformed=0.04, seed=5, session_duration_s=0.4)
     assert CA in run.states
@@ -288,6 +300,7 @@ def test_malformed_injection_is_counted():
     assert received[-1].seq + 1 - len(received) == run.undecodable  # every corrupted message still took a counter
 
 
+@pytest.mark.heavy
 def test_delays_within_the_period_are_tolerated():
     # in lock-step: the delay line delivers every message and the session runs its course; whether a loaded machine
     # still answers in time is a question for the benchmarks
@@ -297,6 +310,7 @@ def test_delays_within_the_period_are_tolerated():
     assert stats.reply_latency_ms_p50 >= 0.0
 
 
+@pytest.mark.heavy
 def test_replies_later_than_the_next_send_keep_the_session_in_monitoring_wait():
     run, stats, _ = run_session(delay_ms=6.0, max_runtime_s=0.6, client_timeout=0.8, **REAL_TIME)
     assert stats.states_seen == (MW, IDLE)  # the timeout closes the session
@@ -306,6 +320,7 @@ def test_replies_later_than_the_next_send_keep_the_session_in_monitoring_wait():
     assert all(r.quality == 0 for r in run.received)
 
 
+@pytest.mark.heavy
 def test_foreign_and_malformed_datagrams_are_counted_and_ignored():
     counts = {}
 
@@ -396,6 +411,7 @@ def test_bad_configuration_is_refused():
         taken.close()
 
 
+@pytest.mark.heavy
 def test_lbr_sim_command_runs_a_session_and_reports_json():
     import json
     import subprocess
@@ -449,6 +465,7 @@ def test_lbr_sim_command_runs_a_session_and_reports_json():
     assert "COMMANDING_ACTIVE" in err  # the states as they change, on stderr with --json
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(
     "args, message",
     [

@@ -46,6 +46,7 @@ def _closed_with_idle(states: list[int], n: int = 3) -> None:
     assert states and states[-n:] == [IDLE] * n and IDLE not in states[:-n]
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("version", ["1.15", "2.7"])
 def test_timeout_closes_the_session_with_idle(version):
     sock = _silent()
@@ -61,6 +62,7 @@ def test_timeout_closes_the_session_with_idle(version):
     _closed_with_idle(states)
 
 
+@pytest.mark.heavy
 def test_timeout_while_commanding_closes_the_session_and_a_kuka_like_client_leaves():
     client = ScriptedClient()
     config = SimConfig(client_port=client.port, period_ms=4, max_runtime_s=0.8, **LENIENT)
@@ -74,6 +76,7 @@ def test_timeout_while_commanding_closes_the_session_and_a_kuka_like_client_leav
     assert CA in run.states and run.states[-1] == IDLE and stats.states_seen[-1] == IDLE
 
 
+@pytest.mark.heavy
 def test_stop_closes_the_session_with_idle():
     sock = _silent()
     try:
@@ -87,6 +90,7 @@ def test_stop_closes_the_session_with_idle():
     _closed_with_idle(states)
 
 
+@pytest.mark.heavy
 def test_keyboard_interrupt_closes_the_session_then_is_raised():
     sock = _silent()
     calls = [0]
@@ -108,6 +112,7 @@ def test_keyboard_interrupt_closes_the_session_then_is_raised():
     assert calls[0] == 40  # no further stop() calls while closing
 
 
+@pytest.mark.heavy
 def test_lbr_sim_sigterm_closes_the_session_and_reports():
     sock = _silent()
     try:
@@ -130,6 +135,7 @@ def test_lbr_sim_sigterm_closes_the_session_and_reports():
     _closed_with_idle(states)
 
 
+@pytest.mark.heavy
 def test_parent_exit_closes_the_session_with_idle():
     """The simulator process notices its parent is gone (checked every 512 cycles) and closes the session."""
     sock = _silent()

@@ -43,6 +43,7 @@ def q_of(field) -> np.ndarray:
     return np.array(field.value)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("version", ["1.15", "2.7"])
 @pytest.mark.parametrize("period_ms", [1, 2, 5])
 def test_joint_sine_overlay_moves_measured_not_ipo(version, period_ms):
@@ -78,6 +79,7 @@ def test_joint_sine_overlay_moves_measured_not_ipo(version, period_ms):
     assert min(m.ipoData.trackingPerformance for _, m in pairs) == 1.0
 
 
+@pytest.mark.heavy
 def test_torque_mode_response_is_the_joint_impedance_dynamics(robot):
     """A torque sine on A4 under joint impedance (K, ζ): the deflection e = q − ipo follows
     (K − ω² M + iω D)⁻¹ τ (linearised about the ipo pose), a constant torque deflects by τ/K."""
@@ -130,6 +132,7 @@ def test_torque_mode_response_is_the_joint_impedance_dynamics(robot):
     assert np.allclose(q_of(last.monitorData.externalTorque), 0.0)
 
 
+@pytest.mark.heavy
 def test_wrench_mode_constant_force_deflects_by_force_over_stiffness(robot):
     """Cartesian impedance: a constant 20 N along the TCP's x moves the TCP along it by F/k at steady state."""
     F, k = 20.0, 2000.0
@@ -163,6 +166,7 @@ def test_wrench_mode_constant_force_deflects_by_force_over_stiffness(robot):
     assert np.linalg.norm(pin.log3(start.rotation.T @ end.rotation)) < 1e-3
 
 
+@pytest.mark.heavy
 def test_io_outputs_are_written_inputs_reported_wrong_writes_refused():
     """The IOAccess example's channels plus an analog input: outputs read back, inputs reported, bad writes refused."""
     channels = IO_PRESETS["kuka-ioaccess"] + (IoChannel("Ext.Analog_In", "analog", "in", 0.5),)
@@ -194,6 +198,7 @@ def test_io_outputs_are_written_inputs_reported_wrong_writes_refused():
         assert got["FRI.Out_Integer_Seconds"].digitalValue == s.io["FRI.Out_Integer_Seconds"]
 
 
+@pytest.mark.heavy
 def test_fri_2_7_fields_are_the_kinematics_of_the_measured_pose(robot):
     force = np.array([0.0, 0.0, -15.0, 0.0, 0.0, 0.0])  # a 15 N downward pull on the TCP (base axes)
     run, stats, _ = session(
@@ -219,6 +224,7 @@ def test_fri_2_7_fields_are_the_kinematics_of_the_measured_pose(robot):
     assert np.ptp([q_of(m.monitorData.measuredJointPosition)[1] for m in run.active()]) > 0.05
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("mode", ["position", "torque"])
 def test_safety_stop_brakes_inside_the_position_limits(limits, mode):
     """A runaway command on A4 (accelerating towards its limit) → safety stop; A4 never passes 120°."""
@@ -247,6 +253,7 @@ def test_safety_stop_brakes_inside_the_position_limits(limits, mode):
     assert run.messages[-2].robotInfo.driveState[0] == 0  # stopped, drives off
 
 
+@pytest.mark.heavy
 def test_torque_mode_wait_needs_a_torque():
     """KUKA's consistency check: in torque mode COMMANDING_WAIT needs a torque with the mirrored position."""
     client = KukaLikeClient("1.15")

@@ -68,6 +68,7 @@ def steady_pairs(mons, cmds):
             yield c, m1
 
 
+@pytest.mark.heavy
 def test_kuka_cartesian_overlay_moves_the_flange_by_its_amplitude():
     """LBRCartesianOverlay (defaults: 0.15 Hz, 30 "rad" added to x and y in mm, filter 0.99, E1 swept ±45° by 0.1°
     per command): the commanded offsets are its source's formula; the measured flange follows them (our model and
@@ -115,6 +116,7 @@ def test_kuka_cartesian_overlay_moves_the_flange_by_its_amplitude():
     assert dh[:, 0].max() < 1e-4 and dh[:, 1].max() < 1e-3  # [m], [rad]: the second judge
 
 
+@pytest.mark.heavy
 def test_kuka_transformation_provider_values_arrive():
     """TransformationProvider sends PBase with x, y, z [mm] stepping 1, 5, 10 per message (wrapping at 100, 200,
     300), stamped with the message's time; the simulator keeps them; the client leaves on IDLE by itself."""
@@ -137,6 +139,7 @@ def test_kuka_transformation_provider_values_arrive():
     )
 
 
+@pytest.mark.heavy
 def test_kuka_simulated_transformation_provider_runs_and_its_data_arrive():
     """SimulatedTransformationProvider provides getRequestedTransformationIDs()[0] from its recorded data (it
     crashed when the controller requested nothing): the first second holds row 0, a 30° rotation about x."""

@@ -5,6 +5,8 @@ stops answering is waited for once, not every cycle."""
 
 from __future__ import annotations
 
+import pytest
+
 import time
 
 import numpy as np
@@ -33,6 +35,7 @@ def _late(r) -> bool:
     return True
 
 
+@pytest.mark.heavy
 def test_a_client_three_periods_late_keeps_an_exact_session():
     def policy(k, q0):
         time.sleep(0.012)
@@ -58,6 +61,7 @@ def test_a_client_three_periods_late_keeps_an_exact_session():
     assert abs(np.median(dq) - 2e-4) < 0.2e-4
 
 
+@pytest.mark.heavy
 def test_the_same_client_in_real_time_never_gets_past_monitoring_wait():
     client = ScriptedClient()
     config = SimConfig(client_port=client.port, **{**TEST_DEFAULTS, "max_runtime_s": 0.6})
@@ -70,6 +74,7 @@ def test_the_same_client_in_real_time_never_gets_past_monitoring_wait():
     assert stats.states_seen == (MW, IDLE) and stats.late_replies > 0.8 * stats.replies
 
 
+@pytest.mark.heavy
 def test_a_client_that_stops_answering_is_waited_for_once():
     silent: list[int] = []
 
@@ -97,6 +102,7 @@ def test_a_bad_reply_wait_is_refused():
             SimConfig(client_port=1, lockstep_timeout_s=bad).validate()
 
 
+@pytest.mark.heavy
 def test_fast_lock_step_runs_the_same_session_as_paced_lock_step():
     """``lockstep_free`` (--sim-fast) starts each cycle when the reply is in, not on the period's grid: the session the
     client sees — stamps one period apart, every command followed, the measured joints — is the paced one's."""

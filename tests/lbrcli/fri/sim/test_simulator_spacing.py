@@ -68,6 +68,7 @@ def _sends(
     return np.array(sent)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("late_start, late_send, floor", [(0.6, 0.0, MIN_SPACING), (0.0, 0.6, MIN_SEND_SPACING)])
 def test_a_late_cycle_does_not_shorten_the_next_period(monkeypatch, late_start, late_send, floor):
     period_ms = 4
@@ -83,6 +84,7 @@ def test_a_late_cycle_does_not_shorten_the_next_period(monkeypatch, late_start, 
     assert gaps.min() >= MIN_SEND_SPACING * p - 1e-9, np.sort(gaps)[:5] / p
 
 
+@pytest.mark.heavy
 def test_on_time_cycles_keep_the_period(monkeypatch):
     period_ms = 1
     gaps = np.diff(_sends(monkeypatch, period_ms, 1.0, work=0.2)) * 1e3  # [ms] (0.2 ms of work before each send)

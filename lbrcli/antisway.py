@@ -454,22 +454,15 @@ def plan_anti_sway(
     import numpy as np
 
     from planners.antisway import DEFAULT_LENGTH_TOLERANCE, DEFAULT_Z, AntiSwayOptions
-    from trajectories.errors import OptionError, PlanningError
+    from trajectories.errors import PlanningError
     from trajectories.limits import load_limits
 
     from .options import make_robot
-    from .parsing import parse_joint_vector
 
     pts = np.asarray(points, dtype=float)
     z = DEFAULT_Z if z is None else float(z)
-    if not (math.isfinite(z) and Z_RANGE[0] <= z <= Z_RANGE[1]):
-        raise OptionError(f"--z must be a flange height in [{Z_RANGE[0]:g}, {Z_RANGE[1]:g}] m, got {z:g}")
     tol = DEFAULT_LENGTH_TOLERANCE if length_tolerance is None else float(length_tolerance)
-    _validate(pts, length, a_max, dt, shaper, tol, margin)
-    if max_sway is not None and not (0 < max_sway < math.pi / 2):
-        raise OptionError(f"--max-sway must be in (0, 90) deg, got {math.degrees(max_sway):g} deg")
-    if not (math.isfinite(ball_radius) and 0 <= ball_radius < 1):
-        raise OptionError(f"--ball-radius must be in [0, 1) m, got {ball_radius:g}")
+    _validate(pts, length, a_max, dt, shaper, tol, margin, z, max_sway, ball_radius)
     options = AntiSwayOptions(
         shaper=shaper,
         j_max=None if j_max is None else float(j_max),
@@ -480,9 +473,7 @@ def plan_anti_sway(
     )
     lim = limits if limits is not None else load_limits(None)
     robot = make_robot(flange, tool)
-    q_ref = parse_joint_vector(ANTISWAY_Q0, "--q0") if q0 is None else np.asarray(q0, dtype=float)
-    if q_ref.shape != (7,):
-        raise OptionError("--q0: expected 7 joint angles")
+    q_ref = _start_pose(q0)
     check_reach(pts, z, robot, lim)
     setup = _Setup(
         pts,
@@ -502,39 +493,56 @@ def plan_anti_sway(
     if result.failure is None:
         return result
     if fallback and shaper == "auto":
-        from dataclasses import replace
+        alt = _fallback(setup, a_max, options, result)
+        if alt is not None:
+            return alt
+    raise PlanningError(_failure_text(setup, a_max, options, result, fallback and shaper == "auto", suggest))
 
-        tried = []
-        peak_speed = float(np.abs(np.diff(result.plan.position, axis=0)).max() / dt) * math.sqrt(2)
-        for design in FALLBACK_DESIGNS:
-            # robust-slow: the robust design with the pivot speed capped at 3/4 of the failed plan's peak;
-            # robust-gentle: the robust design at a lower a_max (a joint's acceleration limit is often what fails,
-            # and the robust design stays quicker than the baseline at a little less acceleration)
-            if design == "robust-gentle":
-                found = _gentle(setup, a_max, options, result)
-                if found is not None and (tol == 0 or found[0].band.worst_residual[0] <= FALLBACK_RESIDUAL):
-                    alt = replace(found[0], baseline_duration=result.baseline_duration)  # at the user's a_max
-                    tried.append((alt, f" (a_max {_accel_text(found[1])} m/s² per segment)"))
-                continue
-            alt_opts = (
-                replace(options, shaper="robust", v_max=min(options.v_max, 0.75 * peak_speed))
-                if design == "robust-slow"
-                else replace(options, shaper=design)
-            )
-            alt = _attempt(setup, a_max, alt_opts)
-            if alt.failure is None and (tol == 0 or alt.band.worst_residual[0] <= FALLBACK_RESIDUAL):
-                tried.append((alt, ""))
-        if tried:
-            alt, note = min(tried, key=lambda r: r[0].stop_time)
-            to = (
-                alt.plan.shaper
-                if math.isinf(alt.plan.options.v_max)
-                else (f"{alt.plan.shaper} (pivot speed ≤ {alt.plan.options.v_max:.2f} m/s)")
-            )
-            to += note
-            return replace(alt, fallback={"from": shaper, "to": to, "reason": result.failure})
+
+def _fallback(setup: _Setup, a_max: float, options, result: AntiSwayResult) -> AntiSwayResult | None:
+    """The quickest of the other designs (``FALLBACK_DESIGNS``) that plans at ``a_max`` [m/s²] where the shaper
+    ``auto`` failed (``result``), with at most ``FALLBACK_RESIDUAL`` residual across the length band; None if none."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    tol = options.length_tolerance
+    tried = []
+    peak_speed = float(np.abs(np.diff(result.plan.position, axis=0)).max() / setup.dt) * math.sqrt(2)
+    for design in FALLBACK_DESIGNS:
+        # robust-slow: the robust design with the pivot speed capped at 3/4 of the failed plan's peak;
+        # robust-gentle: the robust design at a lower a_max (a joint's acceleration limit is often what fails,
+        # and the robust design stays quicker than the baseline at a little less acceleration)
+        if design == "robust-gentle":
+            found = _gentle(setup, a_max, options, result)
+            if found is not None and (tol == 0 or found[0].band.worst_residual[0] <= FALLBACK_RESIDUAL):
+                alt = replace(found[0], baseline_duration=result.baseline_duration)  # at the user's a_max
+                tried.append((alt, f" (a_max {_accel_text(found[1])} m/s² per segment)"))
+            continue
+        alt_opts = (
+            replace(options, shaper="robust", v_max=min(options.v_max, 0.75 * peak_speed))
+            if design == "robust-slow"
+            else replace(options, shaper=design)
+        )
+        alt = _attempt(setup, a_max, alt_opts)
+        if alt.failure is None and (tol == 0 or alt.band.worst_residual[0] <= FALLBACK_RESIDUAL):
+            tried.append((alt, ""))
+    if not tried:
+        return None
+    alt, note = min(tried, key=lambda r: r[0].stop_time)
+    to = (
+        alt.plan.shaper
+        if math.isinf(alt.plan.options.v_max)
+        else (f"{alt.plan.shaper} (pivot speed ≤ {alt.plan.options.v_max:.2f} m/s)")
+    )
+    return replace(alt, fallback={"from": options.shaper, "to": to + note, "reason": result.failure})
+
+
+def _failure_text(setup: _Setup, a_max: float, options, result: AntiSwayResult, fell_back: bool, suggest: bool) -> str:
+    """Why no plan: the failure, that no fallback design planned either, and (``suggest``) the largest a_max
+    [m/s²] that plans."""
     msg = result.failure
-    if fallback and shaper == "auto":
+    if fell_back:
         msg += (
             f"; no fallback design ({', '.join(FALLBACK_DESIGNS)}) plans either with ≤ "
             f"{math.degrees(FALLBACK_RESIDUAL):g}° residual across the length band"
@@ -546,10 +554,25 @@ def plan_anti_sway(
             if best > 0
             else "; no a_max plans (the layout is outside the joint limits at any acceleration)"
         )
-    raise PlanningError(msg + " (an anti-sway plan is never re-timed)")
+    return msg + " (an anti-sway plan is never re-timed)"
 
 
-def _validate(pts, length, a_max, dt, shaper, tol, margin) -> None:
+def _start_pose(q0: Sequence[float] | None):
+    """The IK's reference pose (7,) [rad]: ``q0``, else the anti-sway start pose."""
+    import numpy as np
+
+    from trajectories.errors import OptionError
+
+    from .parsing import parse_joint_vector
+
+    q_ref = parse_joint_vector(ANTISWAY_Q0, "--q0") if q0 is None else np.asarray(q0, dtype=float)
+    if q_ref.shape != (7,):
+        raise OptionError("--q0: expected 7 joint angles")
+    return q_ref
+
+
+def _validate(pts, length, a_max, dt, shaper, tol, margin, z, max_sway, ball_radius) -> None:
+    """Every setting of :func:`plan_anti_sway` in its range (OptionError naming the first one that is not)."""
     import numpy as np
 
     from planners.antisway import SHAPERS
@@ -557,6 +580,8 @@ def _validate(pts, length, a_max, dt, shaper, tol, margin) -> None:
 
     from .options import check_number
 
+    if not (math.isfinite(z) and Z_RANGE[0] <= z <= Z_RANGE[1]):
+        raise OptionError(f"--z must be a flange height in [{Z_RANGE[0]:g}, {Z_RANGE[1]:g}] m, got {z:g}")
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2:
         raise OptionError("--points: need a start and at least one turning point 'x0,y0;x1,y1;...'")
     seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
@@ -574,6 +599,10 @@ def _validate(pts, length, a_max, dt, shaper, tol, margin) -> None:
     if not (0.0 <= tol < 0.9):
         raise OptionError(f"--length-tolerance must be in [0, 0.9), got {tol:g}")
     check_number("--margin", margin, 0, 1, high_open=True)
+    if max_sway is not None and not (0 < max_sway < math.pi / 2):
+        raise OptionError(f"--max-sway must be in (0, 90) deg, got {math.degrees(max_sway):g} deg")
+    if not (math.isfinite(ball_radius) and 0 <= ball_radius < 1):
+        raise OptionError(f"--ball-radius must be in [0, 1) m, got {ball_radius:g}")
 
 
 def write_outputs(

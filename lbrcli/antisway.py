@@ -36,6 +36,7 @@ GENTLE_STEP, GENTLE_TRIES = 0.85, 6  # robust-gentle: a_max × 0.85 on the faili
 FALLBACK_RESIDUAL = math.radians(0.5)  # a fallback must leave at most this swing across the length band [rad]
 DEFAULT_BALL_RADIUS = 0.02  # [m]
 Z_RANGE = (-0.5, 1.5)  # [m] flange heights worth planning at (the arm reaches about −0.4..1.3 m)
+SETTINGS = "plan_anti_sway"  # the owner of its SettingErrors: ``plan_anti_sway.FIELD`` (a parameter of it)
 
 
 @dataclass(frozen=True)
@@ -206,7 +207,7 @@ def check_reach(points, z: float, robot, limits) -> None:
         )
     raise PlanningError(
         f"the layout is out of reach at z = {z:g} m with the flange pointing down: {place}: {fact.describe()}; "
-        f"move the points or change --z"
+        f"move the points or change the flange height z"
     )
 
 
@@ -356,13 +357,13 @@ def _attempt(setup: _Setup, a_max, options, progress=None) -> AntiSwayResult:
     elif setup.max_sway is not None and band.worst_peak > setup.max_sway and max(band.peak) <= setup.max_sway:
         failure = (
             f"predicted sway {math.degrees(band.worst_peak):.2f}° for a string length between the simulated ones "
-            f"exceeds --max-sway {math.degrees(setup.max_sway):.2f}°"
+            f"exceeds the sway limit (max sway) {math.degrees(setup.max_sway):.2f}°"
         )
     elif setup.max_sway is not None and max(band.peak) > setup.max_sway:
         k = max(range(len(band.peak)), key=lambda i: band.peak[i])
         failure = (
             f"predicted sway {math.degrees(band.peak[k]):.2f}° at t = {band.peak_time[k]:.3f} s (string "
-            f"{band.lengths[k]:.3f} m, segment {plan.segment_of(band.peak_time[k])}) exceeds --max-sway "
+            f"{band.lengths[k]:.3f} m, segment {plan.segment_of(band.peak_time[k])}) exceeds the sway limit (max sway) "
             f"{math.degrees(setup.max_sway):.2f}°"
         )
     elif band.clearance is not None and band.clearance.touches:
@@ -561,48 +562,51 @@ def _start_pose(q0: Sequence[float] | None):
     """The IK's reference pose (7,) [rad]: ``q0``, else the anti-sway start pose."""
     import numpy as np
 
-    from trajectories.errors import OptionError
+    from trajectories.errors import SettingError
 
     from .parsing import parse_joint_vector
 
-    q_ref = parse_joint_vector(ANTISWAY_Q0, "--q0") if q0 is None else np.asarray(q0, dtype=float)
+    q_ref = parse_joint_vector(ANTISWAY_Q0, "ANTISWAY_Q0") if q0 is None else np.asarray(q0, dtype=float)
     if q_ref.shape != (7,):
-        raise OptionError("--q0: expected 7 joint angles")
+        raise SettingError(SETTINGS, "q0", "expected 7 joint angles")
     return q_ref
 
 
 def _validate(pts, length, a_max, dt, shaper, tol, margin, z, max_sway, ball_radius) -> None:
-    """Every setting of :func:`plan_anti_sway` in its range (OptionError naming the first one that is not)."""
+    """Every setting of :func:`plan_anti_sway` in its range (SettingError ``plan_anti_sway.FIELD`` naming the first
+    one that is not; the command maps it to its option)."""
     import numpy as np
 
     from planners.antisway import SHAPERS
-    from trajectories.errors import OptionError
+    from trajectories.errors import SettingError
 
-    from .options import check_number
+    def bad(field: str, message: str) -> SettingError:
+        return SettingError(SETTINGS, field, message)
 
     if not (math.isfinite(z) and Z_RANGE[0] <= z <= Z_RANGE[1]):
-        raise OptionError(f"--z must be a flange height in [{Z_RANGE[0]:g}, {Z_RANGE[1]:g}] m, got {z:g}")
+        raise bad("z", f"must be a flange height in [{Z_RANGE[0]:g}, {Z_RANGE[1]:g}] m, got {z:g}")
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2:
-        raise OptionError("--points: need a start and at least one turning point 'x0,y0;x1,y1;...'")
+        raise bad("points", "need a start and at least one turning point 'x0,y0;x1,y1;...'")
     seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
     if np.any(seg < 1e-6):
         k = int(np.argmin(seg)) + 1
-        raise OptionError(f"--points: segment {k} has zero length (points {k - 1} and {k} coincide)")
+        raise bad("points", f"segment {k} has zero length (points {k - 1} and {k} coincide)")
     if not (math.isfinite(length) and 0.01 <= length <= 3.0):
-        raise OptionError(f"--length must be a string length in [0.01, 3] m, got {length:g}")
+        raise bad("length", f"must be a string length in [0.01, 3] m, got {length:g}")
     if not (math.isfinite(a_max) and 0 < a_max <= 20.0):
-        raise OptionError(f"--a-max must be in (0, 20] m/s², got {a_max:g}")
+        raise bad("a_max", f"must be in (0, 20] m/s², got {a_max:g}")
     if not (math.isfinite(dt) and 1e-4 <= dt <= 0.05):
-        raise OptionError(f"--dt must be in [0.0001, 0.05] s, got {dt:g}")
+        raise bad("dt", f"must be in [0.0001, 0.05] s, got {dt:g}")
     if shaper not in SHAPERS:
-        raise OptionError(f"--shaper: unknown {shaper!r}; choose one of {', '.join(SHAPERS)}")
+        raise bad("shaper", f"unknown {shaper!r}; choose one of {', '.join(SHAPERS)}")
     if not (0.0 <= tol < 0.9):
-        raise OptionError(f"--length-tolerance must be in [0, 0.9), got {tol:g}")
-    check_number("--margin", margin, 0, 1, high_open=True)
+        raise bad("length_tolerance", f"must be in [0, 0.9), got {tol:g}")
+    if not (math.isfinite(margin) and 0 <= margin < 1):
+        raise bad("margin", f"must be in [0, 1), got {margin:g}")
     if max_sway is not None and not (0 < max_sway < math.pi / 2):
-        raise OptionError(f"--max-sway must be in (0, 90) deg, got {math.degrees(max_sway):g} deg")
+        raise bad("max_sway", f"must be in (0, 90) deg, got {math.degrees(max_sway):g} deg")
     if not (math.isfinite(ball_radius) and 0 <= ball_radius < 1):
-        raise OptionError(f"--ball-radius must be in [0, 1) m, got {ball_radius:g}")
+        raise bad("ball_radius", f"must be in [0, 1) m, got {ball_radius:g}")
 
 
 def write_outputs(

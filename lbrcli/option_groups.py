@@ -115,6 +115,21 @@ def with_options(*, flags: Mapping[str, str] | None = None, **groups: OptionGrou
     return decorate
 
 
+SHARED_FLAGS = {
+    "RobotConfig.tool": "--tool",
+    "RobotConfig.flange": "--flange",
+    "Plot.path": "--plot",
+}
+"""Settings every command that takes them takes by the same option: the app maps a SettingError of these that no
+command mapped (:func:`flag_message`)."""
+
+
+def flag_message(exc: SettingError, names: Mapping[str, str] = SHARED_FLAGS) -> str | None:
+    """The message of ``exc`` naming the option its setting comes from (``names``), or None if it has none."""
+    flag = names.get(exc.setting)
+    return f"{flag}: {exc.message}" if flag is not None else None
+
+
 class settings_named:
     """Context: a SettingError raised inside becomes an OptionError naming the flag of its setting
     (``names``: "Class.field" → "--flag"); a setting without a flag keeps its own name."""
@@ -127,5 +142,5 @@ class settings_named:
 
     def __exit__(self, kind, exc, tb) -> bool:
         if isinstance(exc, SettingError) and exc.setting in self.names:
-            raise OptionError(f"{self.names[exc.setting]}: {exc.message}") from None
+            raise OptionError(flag_message(exc, self.names)) from None
         return False

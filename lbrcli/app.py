@@ -102,8 +102,9 @@ def _error_message(exc) -> str:
     """An lbr error's line: a setting's error names the option it comes from where every command names it alike."""
     from trajectories.errors import SettingError
 
-    from .option_groups import flag_message
+    from .option_groups import SHARED_FLAGS, flag_message, name_flags
 
+    name_flags(exc, SHARED_FLAGS)
     return (flag_message(exc) if isinstance(exc, SettingError) else None) or str(exc)
 
 

@@ -68,7 +68,8 @@ def plan_energy(p: EnergyParams, bounds: TaskBounds) -> PivotPlan:
     if p.theta0 == 0.0 and p.theta_dot0 == 0.0 and p.push == 0.0:
         raise PlanningError(
             "from exact rest the energy law produces no motion (θ = θ̇ = 0 gives u = 0); "
-            "start from a small angle (--theta0 0.1) or give a start push (--push 0.5)"
+            "start from a small angle (EnergyParams.theta0, e.g. 0.1 rad) or give a start push (EnergyParams.push, "
+            "e.g. 0.5 m/s²)"
         )
     e_d = desired_energy(p.theta_d, p.length, p.mass)
     reach_angle = p.theta_d - p.tolerance

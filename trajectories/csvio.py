@@ -277,10 +277,14 @@ def read_table(
             raise CsvFormatError(f"missing header; expected '{expected}'", file=spath, row=first_line)
         if headerless_dt is None:
             raise CsvFormatError(
-                f"headerless {headerless_width}-column file: give the sample step with --dt", file=spath, row=first_line
+                f"headerless {headerless_width}-column file: give the sample step with read_table.headerless_dt",
+                file=spath,
+                row=first_line,
             )
         if not (headerless_dt > 0 and math.isfinite(headerless_dt)):
-            raise CsvFormatError(f"--dt must be a positive number of seconds, got {headerless_dt:g}", file=spath)
+            raise CsvFormatError(
+                f"read_table.headerless_dt must be a positive number of seconds, got {headerless_dt:g}", file=spath
+            )
         names = tuple(columns[1:])
         headerless = True
         body_start, body_line = first_start, first_line

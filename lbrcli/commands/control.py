@@ -530,7 +530,9 @@ def _camera_options(
                          sim_camera_latency, sim_camera_stop, sim_camera_stamp)  # fmt: skip
 
 
-CAMERA_OPTIONS = OptionGroup(_camera_options)
+CAMERA_OPTIONS = OptionGroup(_camera_options, flags={
+    "CameraOptions.geometry": "--geometry", "CameraOptions.position": "--camera-position",
+    "CameraOptions.sim_position": "--sim-camera-position", "CameraSensor.color": "--color"})  # fmt: skip
 """`lbr control damp --sensor camera`: the camera (or the simulator's) and its geometry (:class:`CameraOptions`)."""
 
 

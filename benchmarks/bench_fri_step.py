@@ -4,16 +4,16 @@ A session of ``lbr execute``'s client (a trajectory player with the figures and 
 recorded against the scripted controller (``lbrcli.fri.testing``) over loopback; the monitoring datagrams it
 received are then replayed to a new application whose transport hands them over from memory and swallows the
 replies. Figures: the best of ``REPEATS`` timed replays [µs per step] (the best, as timeit: other work on a shared
-machine only ever slows a run), and with ``--profile`` the cProfile of one replay (top functions by own time).
-It measures the code of a cycle (decode, checks, client callback, guard, encode, observers), not the system calls.
+machine only ever slows a run) and their median, with the reply prepared a cycle ahead and built in step; with
+``--profile`` the cProfile of one replay (top functions by own time). It measures the code of a cycle (decode,
+checks, client callback, guard, encode, observers), not the system calls.
 
-Run: `python benchmarks/bench_fri_step.py [--profile]`.
+Run: `python benchmarks/run_all.py fri_step` or `python benchmarks/bench_fri_step.py [--quick] [--profile]`.
 """
 
 from __future__ import annotations
 
 import cProfile
-import json
 import pstats
 import sys
 import tempfile
@@ -30,7 +30,6 @@ Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)  # [rad]
 ROWS = 3000  # 3 s at 1 ms
 REPEATS = 7
 LIM = default_limits()
-OUT = Path(__file__).resolve().parent / "results" / "fri_step.json"
 
 
 def trajectory(n: int) -> np.ndarray:
@@ -113,25 +112,35 @@ def replay(
     return (t1 - t0) * 1e-3 / max(n, 1), n, reason
 
 
-def main(argv: list[str]) -> int:
+def run(quick: bool = False, profile: bool = False) -> list[tuple[str, float, str]]:
+    """The figures (name, value, unit): µs per step, best and median of the replays, prepared and built in step."""
+    repeats = 3 if quick else REPEATS
+    rows: list[tuple[str, float, str]] = []
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         datagrams = record(folder)
-        figures: dict = {"datagrams": len(datagrams)}
         for prepare in (True, False):  # the reply prepared a cycle ahead (lbr execute's default), or built in step
-            tag = "prepared" if prepare else "in_step"
-            runs = [replay(folder, datagrams, prepare) for _ in range(REPEATS)]
+            tag = "prepared a cycle ahead" if prepare else "built in step"
+            runs = [replay(folder, datagrams, prepare) for _ in range(repeats)]
             us = [r[0] for r in runs]
-            figures[tag] = {"steps": runs[0][1], "end": runs[0][2], "us_per_step_best": round(min(us), 2),
-                            "us_per_step_median": round(float(np.median(us)), 2)}  # fmt: skip
-            print(f"step, {tag}: {min(us):.1f} µs per cycle (best of {REPEATS}; median {np.median(us):.1f}) over "
-                  f"{runs[0][1]} steps ({runs[0][2]})")  # fmt: skip
-            if "--profile" in argv:
+            rows += [(f"step, reply {tag}: CPU per cycle, best of {repeats}", round(min(us), 2), "µs"),
+                     (f"step, reply {tag}: CPU per cycle, median", round(float(np.median(us)), 2), "µs")]  # fmt: skip
+            if profile:
                 prof = cProfile.Profile()
                 replay(folder, datagrams, prepare, prof)
                 pstats.Stats(prof).sort_stats("tottime").print_stats(12)
-    OUT.parent.mkdir(exist_ok=True)
-    OUT.write_text(json.dumps(figures, indent=1) + "\n")
+    return rows
+
+
+def main(argv: list[str]) -> int:
+    from run_all import save_results
+
+    t0 = time.perf_counter()
+    rows = run(quick="--quick" in argv, profile="--profile" in argv)
+    for name, value, unit in rows:
+        print(f"  {name:<55} {value:>8.1f} {unit}")
+    if "--quick" not in argv:
+        save_results("fri_step", rows, time.perf_counter() - t0)
     return 0
 
 

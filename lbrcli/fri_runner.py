@@ -44,6 +44,12 @@ def realtime_context(realtime: bool):
     return realtime_settings()
 
 
+LATE_REPLIES_HINT = (
+    ": the simulator's connection-quality rule dropped it for late replies, as a controller does (this computer was "
+    "too busy to answer every period in time; --sim-lockstep waits for each reply, see docs/explanations/fri-timing.md)"
+)
+
+
 class _SessionParts:
     """What a session started besides the application — log writer, simulator, lab attachments — and their stop."""
 
@@ -121,16 +127,26 @@ class _SessionParts:
             self.log.close()
 
     def judged(self, result):
-        """The session's result, failed when the log could not write its last rows (not what was asked)."""
-        if self.log is None or not self.log.error or not result.ok:
-            return result
+        """The session's result, failed when the log could not write its last rows (not what was asked); when the
+        embedded simulator dropped the session for late replies, the detail says why and how to avoid it."""
         import dataclasses
 
         from lbrcli.fri import EndReason, Outcome
 
+        if not result.ok and self._dropped_for_late_replies():
+            return dataclasses.replace(result, detail=result.detail + LATE_REPLIES_HINT)
+        if self.log is None or not self.log.error or not result.ok:
+            return result
         return dataclasses.replace(
             result, outcome=Outcome.FAILED, reason=EndReason.OBSERVER_FAILED, detail=self.log.error
         )
+
+    def _dropped_for_late_replies(self) -> bool:
+        """The embedded simulator, on the period's grid, ended the session for its connection quality."""
+        stats, sim = self.sim_stats, self.simulator
+        if stats is None or sim is None or sim.paced_by_replies or sim.loss > 0 or sim.malformed > 0:
+            return False  # (injected faults are their own explanation)
+        return stats.end_reason == "quality"
 
 
 def run_client(rep, client, session: SessionSettings, simulator: SimulatorSettings | None = None, *, lab=None,

@@ -55,7 +55,7 @@ NoBallLengthOpt = Annotated[  # a simulated ball only when asked for
 ]
 
 
-@with_options(fri=FRI_OPTIONS.without("sim_lockstep", "sim_fast").replacing(length=NoBallLengthOpt))
+@with_options(fri=FRI_OPTIONS.without("sim_fast").replacing(length=NoBallLengthOpt))
 def ptp(
     q: Annotated[
         JointVector,

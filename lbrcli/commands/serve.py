@@ -43,7 +43,7 @@ def parse_sources(text: str | None) -> frozenset[str] | None:
         raise typer.BadParameter(f"{exc} (UDP senders are matched by their IP address)") from None
 
 
-@with_options(fri=FRI_OPTIONS.without("sim_lockstep", "sim_fast"))
+@with_options(fri=FRI_OPTIONS.without("sim_fast"))
 def serve(
     fri: FriOptions,
     listen: Annotated[

@@ -22,11 +22,14 @@ FAST = dict(
     end_delay_s=0.05,
     max_runtime_s=15.0,
 )
+# these tests are about the protocol's semantics and the plant's response, not about timing (tests/lbrcli/test_sim_spacing.py
+# is): the simulator waits for every reply (simulated time advances one period per cycle), so load changes nothing
+LOCKSTEP = dict(lockstep_timeout_s=2.0, lockstep_free=True)
 
 
 def session(version="1.15", client_overlay=None, mode="position", io_writer=None, **cfg):
     client = KukaLikeClient(version)
-    config = SimConfig(client_port=client.port, version=version, command_mode=mode, **{**FAST, **cfg})
+    config = SimConfig(client_port=client.port, version=version, command_mode=mode, **{**FAST, **LOCKSTEP, **cfg})
     try:
         with SimulatorProcess(config) as sim:
             run = client.run(client_overlay, mode=mode, io=io_writer, timeout=20.0)
@@ -87,7 +90,13 @@ def test_torque_mode_response_is_the_joint_impedance_dynamics(robot):
         return np.zeros(7), tau, None
 
     run, stats, cfg = session(
-        "1.15", overlay, mode="torque", period_ms=2, session_duration_s=1.6, joint_stiffness=K, damping_ratio=zeta
+        "1.15",
+        overlay,
+        mode="torque",
+        period_ms=2,
+        session_duration_s=1.6,
+        joint_stiffness=K,
+        damping_ratio=zeta,
     )
     assert not stats.safety_stop and stats.incomplete_commands == 0
     active = run.active()
@@ -135,10 +144,7 @@ def test_wrench_mode_constant_force_deflects_by_force_over_stiffness(robot):
         period_ms=2,
         session_duration_s=2.0,
         cartesian_stiffness=(k, 150.0),
-        quality_window=500,
-        quality_good=0.2,
-        quality_fair=0.1,
-    )  # a loaded machine answers late
+    )
     assert not stats.safety_stop and stats.incomplete_commands == 0
     active = run.active()
     assert all(m.ipoData.overlayType == 2 and m.robotInfo.controlMode == 1 for m in active)

@@ -77,6 +77,11 @@ class SessionTiming:
     idle_messages: int = 3  # IDLE messages sent before the simulator stops (also when it is stopped: ``close``)
     overlay: bool = True  # False: the application only monitors (no COMMANDING states)
 
+    @classmethod
+    def of(cls, cfg) -> "SessionTiming":
+        """The timing fields of a :class:`~lbrcli.fri.sim.SimConfig` (same names)."""
+        return cls(**{f: getattr(cfg, f) for f in cls.__dataclass_fields__})
+
 
 class SessionMachine:
     """The controller's FRI session state, advanced once per cycle at time ``now`` [s].

@@ -151,8 +151,8 @@ class Simulator:
                         if ctl.machine.finished:
                             end_reason = ctl.machine.end_reason or "idle"
                             break
-                    if self._stop():
-                        end_reason = "stopped"
+                    if self._stop():  # the session's own end (quality, safety stop, …) if it had one first
+                        end_reason = ctl.machine.end_reason or "stopped"
                     elif cfg.max_runtime_s is not None and rel >= cfg.max_runtime_s:
                         end_reason = "max_runtime"
                     elif k % 512 == 0 and self._parent_gone():

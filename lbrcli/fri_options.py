@@ -269,7 +269,7 @@ SESSION_FLAGS = {
     "ClientApplication.robot": "--robot", "ClientApplication.version": "--fri-version",
     "TrajectoryPlayer.resample": "--resample", "TrajectoryPlayer.start_tolerance": "--start-tolerance",
     "TrajectoryPlayer.move_to_start": "--move-to-start", "SwayWatch.threshold": "--start-sway",
-    "SwayWatch.max_wait_s": "--sway-wait", "ExecutionLog.path": "--log",
+    "SwayWatch.max_wait_s": "--sway-wait", "ExecutionLog.path": "--log", "SimulatorSettings.lockstep": "--sim-lockstep",
 }  # fmt: skip
 """The flag each setting of the session and the simulator comes from (``Class.field`` → option)."""
 

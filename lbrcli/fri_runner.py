@@ -46,7 +46,8 @@ def realtime_context(realtime: bool):
 
 LATE_REPLIES_HINT = (
     ": the simulator's connection-quality rule dropped it for late replies, as a controller does (this computer was "
-    "too busy to answer every period in time; --sim-lockstep waits for each reply, see docs/explanations/fri-timing.md)"
+    "too busy to answer every period in time; lock-step (SimulatorSettings.lockstep) waits for each reply, see "
+    "docs/explanations/fri-timing.md)"
 )
 
 

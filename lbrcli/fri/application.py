@@ -34,8 +34,8 @@ from .codec import FriCodec, detect_version
 from .command import LBRCommand
 from .cycle import Cycle, Observer
 from .ending import SessionEnding
-from .constants import DEFAULT_PORT, SessionState
-from .errors import FriDecodeError, FriError
+from .constants import DEFAULT_PORT
+from .errors import FriDecodeError
 from .guard import DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT
 from .interpreter import loop_settings
 from .messages import FriVersion
@@ -44,7 +44,7 @@ from .outcome import EndReason, Outcome, SessionResult
 from .reply import ReplyMessage
 from .replying import Prepared, Replying
 from .state import LBRState
-from .supervision import Supervisor, commanding_end, consistent, joint_bound, robot_side_end
+from .supervision import Supervisor, consistent, joint_bound
 from .transformation import TransformationClient
 from .transport import UdpTransport
 
@@ -164,8 +164,7 @@ class ClientApplication(Replying, SessionEnding):
         self._cycles0 = 0
         # statistics
         self.cycles = self.answered = self.position_commands = 0
-        self.missed = self.stale = self.malformed = 0
-        self.active_cycles = 0
+        self.missed = self.stale = self.malformed = self.active_cycles = 0
         self.prepared_replies = 0  # cycles answered with the reply prepared after the previous one
         self.lost_replies = 0  # commands the controller reported not received (reflected counter) while moving
         self.states_seen: list[int] = []
@@ -183,10 +182,6 @@ class ClientApplication(Replying, SessionEnding):
     @property
     def extrapolated_cycles(self) -> int:
         return self._motion.extrapolated_cycles if self._motion is not None else 0
-
-    def _moving(self) -> bool:
-        """Commands were sent in COMMANDING_ACTIVE and the robot was last seen there: a stop must brake."""
-        return self._last_state == CMD_ACTIVE and self._motion is not None and self._motion.moving
 
     @property
     def period_s(self) -> float | None:
@@ -273,8 +268,7 @@ class ClientApplication(Replying, SessionEnding):
         if due:
             self._send_counter = 0
         client = self.client
-        client.reply_due = due
-        client.skipped = skipped
+        client.reply_due, client.skipped = due, skipped
         # ---- the client's answer, then the guarded reply ---------------------------------------------------
         if not self._ask_client(state, motion):
             return False
@@ -285,23 +279,6 @@ class ClientApplication(Replying, SessionEnding):
         return self._after(now, mon, seq, supervised, answered=True)
 
     # -- the phases of a cycle -------------------------------------------------------------------------------
-    def _stop_on_interrupt(self) -> bool:
-        """Turn a pending interrupt (Ctrl-C, SIGTERM) into a stop; True if that ended the session at once."""
-        text = "interrupted (Ctrl-C)" if self._interrupt is EndReason.SIGINT else "terminated (SIGTERM)"
-        return self._request_stop(Outcome.INTERRUPTED, self._interrupt, text)  # type: ignore[arg-type]
-
-    def _on_silence(self, t_wait: float, now: float) -> bool:
-        """A receive timeout: the controller is quiet since ``t_wait`` [s]; the watchdog may end the session."""
-        if self._clock.quiet_from is None:
-            self._clock.quiet_from = t_wait
-        self._prepared = None
-        if self.watchdog is not None:
-            problem = self.watchdog()
-            if problem:
-                self._ended = True
-                raise FriError(problem)
-        return self._check_clocks(now)
-
     def _decode(self, data: bytes) -> int:
         """Decode ``data`` into the session's monitoring message and check it: the sequence step from the last
         accepted message (0 for the first), or −1 for a datagram never answered (malformed, stale, inconsistent)."""
@@ -381,34 +358,6 @@ class ClientApplication(Replying, SessionEnding):
             transport.expect_period(ci.sendPeriod * 1e-3)  # type: ignore[union-attr]
             transport.warm = self._warm  # type: ignore[union-attr]
 
-    def _robot_side(self, mon: Any, state: int, now: float) -> bool | None:
-        """The session state as the robot reports it: state changes (told to the client), the robot side's ends,
-        IDLE (observed, not answered). The step's result when the cycle ends here, else None."""
-        if not self.states_seen or state != self.states_seen[-1]:
-            self.states_seen.append(state)
-        if state != self._last_state:
-            old, self._last_state = self._last_state, state
-            self._call_client("on_state_change", SessionState(old), SessionState(state))
-        clock = self._clock
-        end = robot_side_end(mon, state, seen_session=self._seen_session, commanding=self._commanding,
-                             was_active=self._was_active, period_key=clock.period_key, waited_s=now - clock.t_first,  # type: ignore[operator]
-                             commanding_timeout_s=self.commanding_timeout_s)  # fmt: skip
-        if end is not None:
-            self._finish(*end, observe=True)
-            return False
-        if state == IDLE:
-            if not self._seen_session:
-                self.cycle.command = tuple(mon.monitorData.measuredJointPosition.value)
-            self._observe()
-            return self._check_clocks(now)
-        self._seen_session = True
-        if state >= CMD_WAIT:
-            self._commanding = True
-        if state == CMD_ACTIVE:
-            self._was_active = True
-            self.active_cycles += 1
-        return None
-
     def _ask_client(self, state: int, motion: ExecutedMotion | None) -> bool:
         """The client's callback for ``state`` into the cleared command (none while braking); False if a stop the
         client side requested ended the session here (nothing to answer)."""
@@ -460,17 +409,6 @@ class ClientApplication(Replying, SessionEnding):
         self._latencies.append(time.perf_counter_ns() - t_rx)
         return True
 
-    def _warm(self) -> None:
-        """Between messages (the transport's busy-wait): decode the last good datagram again into the message it
-        is already in (the same values) and run the checks a prepared reply waits for, so that their code and data
-        are in the CPU's caches when the next message arrives."""
-        data = self._last_data
-        if data is not None:
-            mon = self._codec.decode_monitoring(data, self._mon)  # type: ignore[union-attr]
-            consistent(mon, self._bound)
-            commanding_end(mon, CMD_ACTIVE, True, self._clock.period_key)
-
-    # -- pieces of a cycle (continued) --------------------------------------------------------------------------
     def _open_codec(self, version: FriVersion) -> None:
         self.version = version
         codec = FriCodec(version)
@@ -478,6 +416,5 @@ class ClientApplication(Replying, SessionEnding):
         self._mon = codec.new_monitoring()
         self.state = LBRState(self._mon, version)
         self._cmd = LBRCommand(self.state)
-        self.client.robot_state = self.state
-        self.client.robot_command = self._cmd
+        self.client.robot_state, self.client.robot_command = self.state, self._cmd
         self._reply = ReplyMessage(codec)

@@ -276,6 +276,10 @@ SESSION_FLAGS = {
     "SimConfig.receive_multiplier": "--receive-multiplier", "SimConfig.q0": "--sim-start", "SimConfig.version": "--fri-version",
     "SimConfig.lockstep_timeout_s": "--sim-lockstep", "SimConfig.lockstep_free": "--sim-fast",
     "SessionSettings.realtime": "--realtime", "UdpTransport.robot": "--robot",
+    "ClientApplication.robot": "--robot", "ClientApplication.version": "--fri-version",
+    "TrajectoryPlayer.resample": "--resample", "TrajectoryPlayer.start_tolerance": "--start-tolerance",
+    "TrajectoryPlayer.move_to_start": "--move-to-start", "SwayWatch.threshold": "--start-sway",
+    "SwayWatch.max_wait_s": "--sway-wait", "ExecutionLog.path": "--log", "SimulatorSettings.lockstep": "--sim-lockstep",
 }  # fmt: skip
 """The flag each setting of the session and the simulator comes from (``Class.field`` → option)."""
 

@@ -1,6 +1,7 @@
 """The FRI commands stay a thin edge: their bodies (without the docstring; the signature's options not counted) at
-most 40 lines, and the session code they call at most 80 lines a function (issue #42's goals, for the code that
-meets them; counted by the AST)."""
+most 40 lines, and the session code they call at most 80 lines a function; no function of the library packages
+(lbrcli, planners, trajectories, tracking) over 80 lines, the Typer commands' own functions excepted (issue #42's
+goals; counted by the AST)."""
 
 from __future__ import annotations
 
@@ -44,4 +45,46 @@ def test_the_session_code_has_no_function_over_80_lines():
         for f in _functions(p)
         if _body_lines(f) > 80
     ]
+    assert not long, long
+
+
+LIBRARY_PACKAGES = ("lbrcli", "planners", "trajectories", "tracking")
+# Functions over 80 lines left to the engineers changing them now (issue #42: split them when that work lands, then
+# take them off this list): the tracking pipeline, the fast swing-up and feedback planners, the string penalty, and
+# the cup-and-ball planning.
+LONG_ALLOWED = {
+    ("tracking/synthetic.py", "render_pendulum_video"),
+    ("tracking/pipeline.py", "track_video"),
+    ("tracking/compare.py", "estimate_lag"),
+    ("planners/swingup_fast.py", "simulate_fast"),
+    ("planners/feedback/identify.py", "identify"),
+    ("planners/string_penalty.py", "judge"),
+    ("lbrcli/commands/plan_catch.py", "plan_catch_files"),
+}
+
+
+def _typer_commands(tree: ast.Module) -> set[str]:
+    """The functions a command module registers as Typer commands (``app.command("name")(fn)`` in ``register``)."""
+    return {
+        call.args[0].id
+        for call in ast.walk(tree)
+        if isinstance(call, ast.Call) and isinstance(call.func, ast.Call) and call.args
+        and isinstance(call.args[0], ast.Name) and isinstance(call.func.func, ast.Attribute)
+        and call.func.func.attr == "command"
+    }  # fmt: skip
+
+
+def test_no_library_function_is_over_80_lines():
+    long = []
+    for package in LIBRARY_PACKAGES:
+        for path in sorted((ROOT / package).rglob("*.py")):
+            rel = path.relative_to(ROOT).as_posix()
+            tree = ast.parse(path.read_text())
+            commands = _typer_commands(tree) if rel.startswith("lbrcli/commands/") else set()
+            for f in ast.walk(tree):
+                if not isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef)) or f.name in commands:
+                    continue
+                lines = f.end_lineno - f.lineno + 1  # type: ignore[operator]
+                if lines > 80 and (rel, f.name) not in LONG_ALLOWED:
+                    long.append(f"{rel}:{f.lineno} {f.name}: {lines} lines")
     assert not long, long

@@ -22,7 +22,7 @@ def thesis_plan():
 
 
 def test_from_exact_rest_the_law_does_nothing_and_says_so():
-    with pytest.raises(PlanningError, match="--theta0"):
+    with pytest.raises(PlanningError, match="EnergyParams.theta0"):
         plan_energy(EnergyParams(length=0.25, mass=0.0139, theta_d=2.0), BOUNDS)
 
 

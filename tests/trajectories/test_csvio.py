@@ -82,7 +82,7 @@ def test_missing_file(tmp_path):
 
 def test_headerless_needs_dt(tmp_path):
     p = write(tmp_path, "0.1,0.2,0.3,-1.0,0.5,0.6,0.7\n" * 4)
-    with pytest.raises(CsvFormatError, match="--dt"):
+    with pytest.raises(CsvFormatError, match="read_table.headerless_dt"):
         read_joint_csv(p)
     traj = read_joint_csv(p, dt=0.005)
     assert len(traj) == 4 and traj.t[-1] == pytest.approx(0.015)

@@ -35,7 +35,7 @@ def test_joint_held_at_its_limit_is_named_as_a_fact_of_the_path_from_q0(robot, l
     err = exc.value
     assert err.reason == "position limit" and err.joint == 6 and abs(err.needed) > np.radians(120)
     assert err.kind == "start" and "ran into A7's position limit" in str(err) and t[err.index] > 1.0
-    assert "the pose itself is reachable" in str(err) and "without --q0" in str(err)
+    assert "the pose itself is reachable" in str(err) and "without solve_ik_path.q0" in str(err)
     # a judge of its own: the closed form on a 0.05° grid of arm angles × 8 branches finds the pose inside the limits
     psi = np.radians(np.arange(-180.0, 180.0, 0.05))
     k = err.index

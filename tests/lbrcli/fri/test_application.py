@@ -240,7 +240,7 @@ def test_far_start_is_refused_before_anything_is_sent():
     player = TrajectoryPlayer(traj, LIM, period_s=1e-3, start_tolerance=1e-3)
     res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * 40, player)
     assert err is None and res.outcome is Outcome.REFUSED and res.reason is EndReason.CLIENT_REFUSED
-    assert "--move-to-start" in res.detail and ctl.replies == [] and res.answered == 0
+    assert "TrajectoryPlayer.move_to_start" in res.detail and ctl.replies == [] and res.answered == 0
 
 
 @pytest.mark.heavy

@@ -85,6 +85,7 @@ class TrackerOptions:
     static_lock_s: float = 0.6  # [s] a lock that has not moved for this long may be an object, not the ball:
     recheck_s: float = 0.5  # [s] ... look this often for other candidates and keep the one moving like a pendulum
     plumb_deg: float = 15.0  # a new lock at rest is confirmed only within this of the pivot's vertical (a hanging ball)
+    rest_confirm_s: float = 0.25  # [s] ... and only once followed this long (a codec's ghost of the ball stays put a few frames)
     static_time_constant_s: float = 1.0  # [s] of the map of static objects in the ball's colour (tracking.static_map)
 
 
@@ -125,6 +126,7 @@ class _Follower:
         self.confirmed = False
         self.pending: list[tuple[int, Blob]] = []  # tentative frames (update index, blob) until confirmed
         self.origin = (blob.u, blob.v)
+        self.origin_t = t  # [s] when the lock began
         self.round = True  # acquired by the strict shape gates
         self.recent: deque[tuple[float, float, float, int]] = deque()  # (t, u, v, update index) of the last fixes
         self.string_misses = 0
@@ -308,6 +310,25 @@ class _Follower:
         self.sats.append(blob.saturation)
 
 
+def _last_jump(centres: list[tuple[float, float]], radius_px: float) -> int:
+    """Index where the last continuous stretch of a followed candidate's centres (NaN where not seen) begins: a fix
+    farther than 4 radii + the distance covered at the last velocity from where that velocity would have taken it
+    after a gap starts a new stretch (0 when there is no such jump)."""
+    start, prev, step = 0, None, (0.0, 0.0)  # prev: (frame, u, v); step: last velocity [px/frame]
+    for j, (u, v) in enumerate(centres):
+        if not math.isfinite(u):
+            continue
+        if prev is not None:
+            g = j - prev[0]
+            miss = math.hypot(u - prev[1] - step[0] * g, v - prev[2] - step[1] * g)
+            if miss > 4.0 * radius_px + math.hypot(*step) * g:
+                start, step = j, (0.0, 0.0)
+            else:
+                step = ((u - prev[1]) / g, (v - prev[2]) / g)
+        prev = (j, u, v)
+    return start
+
+
 @dataclass
 class _Hypotheses:
     """Candidates followed side by side until one is chosen."""
@@ -481,11 +502,12 @@ class BallTracker:
             p = [(u, v) for _, u, v, _ in list(f.recent)[-3:]]
             step = math.hypot(p[-2][0] - p[-3][0], p[-2][1] - p[-3][1]) if len(p) == 3 else 0.0
             if math.hypot(p[-1][0] - p[-2][0], p[-1][1] - p[-2][1]) > 4.0 * f.radius() + 2.0 * step:
-                f.pending, f.hits, f.origin = [], 1, (blob.u, blob.v)
+                f.pending, f.hits, f.origin, f.origin_t = [], 1, (blob.u, blob.v), t
                 f.recent = deque([f.recent[-1]])
         if not f.confirmed:
             moved = f.moving(max(3.0, o.confirm_move_radii * f.radius()))
-            at_rest_ok = f.round and (pivot_uv is None or self._plumb(blob, pivot_uv))
+            at_rest_ok = (f.round and (pivot_uv is None or self._plumb(blob, pivot_uv))
+                          and t - f.origin_t >= o.rest_confirm_s)
             if f.hits >= o.confirm_frames and (moved or at_rest_ok):
                 f.confirmed = True
                 self._revision.extend((k, b, CONFIRMED) for k, b in f.pending)
@@ -745,16 +767,22 @@ class BallTracker:
         hangs = last is not None and len(piv) > 0 and self._plumb(last, tuple(piv[-1]))
         # confirmed when it moved like a pendulum, or hangs still below the pivot; else (a held ball, an object) it
         # stays tentative until it moves
-        doubtful = not choice.moving and not (still and hangs) and not (still and len(piv) == 0 and final)
-        if doubtful and final and len(piv) > 0:  # nothing moved and nothing hangs below the pivot: none of them is the ball
+        # hanging still counts once followed for rest_confirm_s (an encoder's ghost of a ball that left stays a few frames)
+        young = still and hangs and hyp.times[-1] - hyp.t0 < self.options.rest_confirm_s
+        doubtful = not choice.moving and not (still and hangs and not young) and not (still and len(piv) == 0 and final)
+        if doubtful and final and len(piv) > 0 and not young:  # nothing moved and nothing hangs below the pivot: none of them is the ball
             self._abandon()
             return None
         f.confirmed = not doubtful
         if not doubtful and f.pending:  # the incumbent lock's tentative frames from before are settled too
             self._revision.extend((j, b, CONFIRMED) for j, b in f.pending)
-        f.pending = (f.pending + [(hyp.first + j, b) for j, b in enumerate(blobs[:-1]) if b is not None]) if doubtful else []
+        # what it followed before its last jump (an encoder's ghost left where the ball was) is not settled with it
+        s = _last_jump(hyp.centres[k], f.radius())
+        f.pending = (f.pending + [(hyp.first + j, b) for j, b in enumerate(blobs[:-1]) if b is not None and j >= s]
+                     if doubtful else [])
         level = TENTATIVE if doubtful else CONFIRMED
-        self._revision.extend((hyp.first + j, b, level if b is not None else 0.0) for j, b in enumerate(blobs[:-1]))
+        self._revision.extend((hyp.first + j, b, (level if j >= s else TENTATIVE) if b is not None else 0.0)
+                              for j, b in enumerate(blobs[:-1]))
         self._follower = f
         self._hyp = None
         return blobs

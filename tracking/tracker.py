@@ -316,19 +316,20 @@ class _Follower:
 
 def _last_jump(centres: list[tuple[float, float]], radius_px: float) -> int:
     """Index where the last continuous stretch of a followed candidate's centres (NaN where not seen) begins: a fix
-    farther than 4 radii + the distance covered at the last velocity from where that velocity would have taken it
-    after a gap starts a new stretch (0 when there is no such jump)."""
-    start, prev, step = 0, None, (0.0, 0.0)  # prev: (frame, u, v); step: last velocity [px/frame]
+    farther than 4 radii + 3 px + the distance covered at the last velocity from where that velocity would have taken
+    it (after a gap) starts a new stretch; judged once a velocity is known (0 when there is no such jump)."""
+    start, prev, step = 0, None, None  # prev: (frame, u, v); step: last velocity [px/frame]
     for j, (u, v) in enumerate(centres):
         if not math.isfinite(u):
             continue
         if prev is not None:
             g = j - prev[0]
-            miss = math.hypot(u - prev[1] - step[0] * g, v - prev[2] - step[1] * g)
-            if miss > 4.0 * radius_px + math.hypot(*step) * g:
-                start, step = j, (0.0, 0.0)
-            else:
-                step = ((u - prev[1]) / g, (v - prev[2]) / g)
+            if step is not None:
+                miss = math.hypot(u - prev[1] - step[0] * g, v - prev[2] - step[1] * g)
+                if miss > 4.0 * radius_px + 3.0 + math.hypot(*step) * g:
+                    start, prev, step = j, (j, u, v), None
+                    continue
+            step = ((u - prev[1]) / g, (v - prev[2]) / g)
         prev = (j, u, v)
     return start
 

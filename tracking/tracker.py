@@ -48,7 +48,8 @@ class TrackerOptions:
 
     gates: BlobGates = field(default_factory=BlobGates)
     window_min_half_px: int = 32  # smallest half-size of the search window [px]
-    window_radius_factor: float = 4.0  # window half-size ≥ this × the ball radius + the gate
+    window_radius_factor: float = 2.5  # window half-size ≥ this × the ball radius + the gate ...
+    window_streak_radii: float = 1.5  # ... + the last frame step (a motion-blurred streak), at most this × the radius
     area_ratio_max: float = 2.5  # once locked, a blob whose area differs by more than this factor is not the ball
     area_history: int = 15  # the learned area is the median of this many last fixes
     area_reset_misses: int = 3  # frames in a row with a blob rejected for its area alone → forget the area
@@ -244,9 +245,12 @@ class _Follower:
         """The fixes of the last span_s seconds (covering most of it) stay within a radius' share of their median."""
         if len(self.recent) < 3 or self.recent[-1][0] - self.recent[0][0] < 0.8 * span_s:
             return False
+        limit = max(1.5, 0.3 * self.radius())
+        (_, u0, v0, _), (_, u1, v1, _) = self.recent[0], self.recent[-1]
+        if math.hypot(u1 - u0, v1 - v0) > 2.0 * limit:  # both within the limit of the median: not at rest (cheap)
+            return False
         p = np.array([(u, v) for _, u, v, _ in self.recent])
-        spread = float(np.max(np.linalg.norm(p - np.median(p, axis=0), axis=1)))
-        return spread <= max(1.5, 0.3 * self.radius())
+        return float(np.max(np.linalg.norm(p - np.median(p, axis=0), axis=1))) <= limit
 
     def moving(self, min_px: float) -> bool:
         """Moved at least min_px [px] from where the lock began, steadily: each of the last 3 frame steps longer
@@ -258,7 +262,9 @@ class _Follower:
 
     def window(self, pred: Prediction, w: int, h: int) -> tuple[int, int, int, int] | None:
         o = self.options
-        half = int(max(o.window_min_half_px, o.window_radius_factor * self.radius() + pred.gate_px))
+        r = self.radius()
+        reach = o.window_radius_factor * r + min(o.window_streak_radii * r, pred.frame_step_px)
+        half = int(max(o.window_min_half_px, reach + pred.gate_px))
         x0, y0 = max(int(pred.u) - half, 0), max(int(pred.v) - half, 0)
         x1, y1 = min(int(pred.u) + half + 1, w), min(int(pred.v) + half + 1, h)
         if x1 - x0 > 4 and y1 - y0 > 4 and (x1 - x0) * (y1 - y0) < w * h // 2:

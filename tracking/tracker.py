@@ -197,9 +197,12 @@ class _Follower:
         return 1.0 + pred.frame_step_px / max(2.0 * self.radius(), 1.0)
 
     def _area_ok(self, b: Blob, pred: Prediction) -> bool:
-        r = b.area_px / self.area
-        smear = self._smear(pred)
-        return 1.0 / self.options.area_ratio_max <= r <= self.options.area_ratio_max * smear
+        """Within area_ratio_max of the learned area (× the smear of a streak), the learned disc's radius taken
+        ± half a pixel first: a ball a few pixels across changes its area by pixelation alone by more than that."""
+        r = self.radius()
+        ratio = self.options.area_ratio_max
+        low, high = math.pi * max(r - 0.5, 0.0) ** 2 / ratio, math.pi * (r + 0.5) ** 2 * ratio * self._smear(pred)
+        return low <= b.area_px <= high
 
     def _saturation_ok(self, b: Blob, pred: Prediction) -> bool:
         """The blob's peak saturation is the ball's, allowing for motion blur (the colour mixed with the
@@ -287,6 +290,8 @@ class _Follower:
             min_circularity=min(o.gates.min_circularity, o.streak_min_circularity if streak else o.locked_min_circularity),
             min_ellipse_fit=min(o.gates.min_ellipse_fit, o.streak_min_ellipse_fit if streak else o.locked_min_ellipse_fit),
             max_area_px=o.gates.max_area_px * self._smear(pred),
+            # a ball of a few pixels, sharp for a moment (a turning point), may outline less than the general floor
+            min_area_px=min(o.gates.min_area_px, max(4.0, self.area / o.area_ratio_max)),
         )
         sub = frame[y0:y1, x0:x1]
         if self.tiny:  # a few pixels across: no blur, no morphology, no shape

@@ -220,3 +220,19 @@ def test_a_codec_ghost_left_where_the_ball_hung_is_not_reported(decoy):
     later = [(b, ball(k)) for k, b in enumerate(got) if k >= 14]
     assert sum(b is not None for b, _ in later) >= 0.95 * len(later)
     assert all(math.hypot(b.u - u, b.v - v) < 0.5 for b, (u, v) in later if b is not None)
+
+
+
+def test_a_ball_5_px_across_is_held_at_its_turning_points(tmp_path):
+    """A ball 5 px across (defocused, a short exposure, mp4v) outlines less area when it is sharp and still for a
+    moment — at a turning point — than while it moves: neither the blob gates' floor nor the learned area may drop
+    it there (on main it was lost at the first turning point)."""
+    from tracking import scenarios
+
+    sc = scenarios.tiny_ball(tmp_path / "ball5.mp4", (960, 540), 2.0, seed=29, radius_px=2.5)
+    track = track_video(sc.path, color_spec("red"), **sc.track_kwargs)
+    err = np.linalg.norm(track.uv - sc.truth.ball_uv, axis=1)
+    assert not np.any(track.found & (err > 5.0))
+    later = sc.counted & (track.t >= 0.2)  # the first frames: a red box is followed until the ball is told apart
+    assert track.found[later].all()
+    assert np.sqrt(np.mean(err[track.found] ** 2)) < 0.6

@@ -71,13 +71,23 @@ def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repe
 
     out = scenarios.score(replace(sc, counted=counted), track)
     row = {
-        "name": sc.name, "key": name, "held_out": held_out, "adversarial": sc.adversarial,
-        "size": f"{size[0]}x{size[1]}", "frames": int(len(sc.truth.t)), "counted": int(counted.sum()),
-        "erased_by_codec": int((sc.counted & ~shown).sum()), "found_percent": out.found_percent,
-        "false_fixes": out.false_fixes, "centre_rms_px": out.centre_rms_px, "theta_rms_deg": out.theta_rms_deg,
+        "name": sc.name,
+        "key": name,
+        "held_out": held_out,
+        "adversarial": sc.adversarial,
+        "size": f"{size[0]}x{size[1]}",
+        "frames": int(len(sc.truth.t)),
+        "counted": int(counted.sum()),
+        "erased_by_codec": int((sc.counted & ~shown).sum()),
+        "found_percent": out.found_percent,
+        "false_fixes": out.false_fixes,
+        "centre_rms_px": out.centre_rms_px,
+        "theta_rms_deg": out.theta_rms_deg,
         "unsure_frames": int(track.unsure.sum()) if track.unsure is not None else 0,
-        "track_over_decode": tracking / decode, "decode_fps": len(sc.truth.t) / decode,
-        "track_over_decode_cpu": tracking_cpu / decode_cpu, "load_1min": os.getloadavg()[0],
+        "track_over_decode": tracking / decode,
+        "decode_fps": len(sc.truth.t) / decode,
+        "track_over_decode_cpu": tracking_cpu / decode_cpu,
+        "load_1min": os.getloadavg()[0],
     }
     if name == "tilted":  # `compare` against the true motion delayed by 0.5 s: the lag must come out right
         from tracking.compare import compare_angles
@@ -88,8 +98,10 @@ def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repe
 
 
 def _table(rows: list[dict]) -> str:
-    head = ("| video | size | counted frames | found | false fixes (> 5 px) | centre RMS | θ RMS | track / decode (wall) "
-            "| track / decode (CPU) |\n")
+    head = (
+        "| video | size | counted frames | found | false fixes (> 5 px) | centre RMS | θ RMS | track / decode (wall) "
+        "| track / decode (CPU) |\n"
+    )
     head += "|---|---|---|---|---|---|---|---|---|\n"
 
     def f(x, fmt):  # noqa: ANN001
@@ -126,10 +138,16 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         (RESULTS / "track_robust.md").write_text(_table(rows))
     figures: list[tuple[str, float, str]] = [(f"videos {size[0]}x{size[1]}", duration, "s each")]
     for r in rows:
-        label = f"{r['name']} {r['size']}" + (" (held out)" if r["held_out"] else " (adversarial)" if r["adversarial"] else "")
-        figures += [(f"{label}: found", r["found_percent"], "%"), (f"{label}: false fixes", r["false_fixes"], "frames"),
-                    (f"{label}: centre RMS", r["centre_rms_px"], "px"), (f"{label}: track / decode", r["track_over_decode"], "x"),
-                    (f"{label}: track / decode CPU", r["track_over_decode_cpu"], "x")]
+        label = f"{r['name']} {r['size']}" + (
+            " (held out)" if r["held_out"] else " (adversarial)" if r["adversarial"] else ""
+        )
+        figures += [
+            (f"{label}: found", r["found_percent"], "%"),
+            (f"{label}: false fixes", r["false_fixes"], "frames"),
+            (f"{label}: centre RMS", r["centre_rms_px"], "px"),
+            (f"{label}: track / decode", r["track_over_decode"], "x"),
+            (f"{label}: track / decode CPU", r["track_over_decode_cpu"], "x"),
+        ]
         if math.isfinite(r["theta_rms_deg"]):
             figures.append((f"{label}: theta RMS", r["theta_rms_deg"], "deg"))
     goal = [r for r in rows if not r["adversarial"] and not r["held_out"]]
@@ -146,9 +164,11 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
     for key, tag in (("track_over_decode", ""), ("track_over_decode_cpu", " CPU")):
         small = [r[key] for r in goal if r["size"] == f"{size[0]}x{size[1]}"]
         large = [r[key] for r in rows if r["size"] in ("3840x2160", "1920x1080")]
-        figures += [(f"worst track / decode{tag} at {size[0]}x{size[1]}", float(np.max(small)), "x"),
-                    (f"median track / decode{tag} at {size[0]}x{size[1]}", float(np.median(small)), "x"),
-                    (f"worst track / decode{tag} at {big}", float(np.max(large)), "x")]
+        figures += [
+            (f"worst track / decode{tag} at {size[0]}x{size[1]}", float(np.max(small)), "x"),
+            (f"median track / decode{tag} at {size[0]}x{size[1]}", float(np.median(small)), "x"),
+            (f"worst track / decode{tag} at {big}", float(np.max(large)), "x"),
+        ]
     figures.append(("machine load (1 min) during the run", float(np.mean([r["load_1min"] for r in rows])), ""))
     return figures
 

@@ -202,6 +202,7 @@ def _reported(tr, frames, pivot):
     return [b if b is not None and c >= tr.options.min_confidence else None for b, c in out]
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("decoy", [False, True])
 def test_a_codec_ghost_left_where_the_ball_hung_is_not_reported(decoy):
     """A low-bitrate encoder leaves the first frame's ball standing still below the pivot for a few frames while
@@ -233,6 +234,7 @@ def test_a_codec_ghost_left_where_the_ball_hung_is_not_reported(decoy):
     assert all(math.hypot(b.u - u, b.v - v) < 0.5 for b, (u, v) in later if b is not None)
 
 
+@pytest.mark.heavy
 def test_a_ball_5_px_across_is_held_at_its_turning_points(tmp_path):
     """A ball 5 px across (defocused, a short exposure, mp4v) outlines less area when it is sharp and still for a
     moment — at a turning point — than while it moves: neither the blob gates' floor nor the learned area may drop

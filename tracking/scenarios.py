@@ -414,6 +414,12 @@ HELD_OUT: dict[str, Callable[..., Scenario]] = {
     "oblique_other_side": lambda p, s, d: oblique(
         p, s, d, seed=26, tilt=(20.0, -42.0, 8.0), fps=30.0, name="held-out: oblique from the other side, 30 fps"
     ),
+    "h264_80k_clutter": lambda p, s, d: clutter(
+        p, s, d, seed=27, codec="h264", bitrate_kbps=80.0, name="held-out: clutter + H.264 80 kbit/s"
+    ),
+    "h264_200k": lambda p, s, d: h264(p, s, d, seed=28, bitrate_kbps=200.0),
+    "ball_5px": lambda p, s, d: tiny_ball(p, s, d, seed=29, radius_px=2.5),
+    "big_ball_fifth": lambda p, s, d: big_ball(p, s, d, seed=30, share=0.2),
 }
 
 

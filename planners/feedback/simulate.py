@@ -47,15 +47,16 @@ class UprightRun:
 def simulate_upright(pendulum: RigidPendulum, limits: CartLimits, duration: float, bounds=None, sensor: Sensor = Sensor(),
                      options: UprightOptions = UprightOptions(), dt: float = 1e-3, actuation_delay: int = 2,
                      pushes: tuple[tuple[float, float], ...] = (), park_at: float | None = None,
-                     model_length: float | None = None, seed: int = 0) -> UprightRun:  # fmt: skip
-    """Run the swing-up and balance for ``duration`` [s]; ``pushes`` (t [s], Δφ [rad]) knock the rod."""
+                     model_length: float | None = None, seed: int = 0, friction: float = 0.0) -> UprightRun:  # fmt: skip
+    """Run the swing-up and balance for ``duration`` [s]; ``pushes`` (t [s], Δφ [rad]) knock the rod; ``friction``
+    μ [rad/s²]: the bearing's dry friction the controller and its observer are told (as the identification would)."""
     rng = random.Random(seed)
     n = int(round(duration / dt))
     cart = Cart(limits, dt, bounds=bounds)
     l_model = model_length or pendulum.equivalent_length
-    ctl = UprightController(l_model, cart, options)
+    ctl = UprightController(l_model, cart, options, friction=friction)
     obs = DelayedObserver(l_model, dt, sensor.delay + 0.5 * sensor.jitter, 1.0 / sensor.rate_hz,
-                          actuation_delay=actuation_delay)
+                          actuation_delay=actuation_delay, coulomb=friction)
     applied = [0.0] * (actuation_delay + 1)
     phi = omega = 0.0
     a_prev = 0.0

@@ -5,7 +5,9 @@ Modes: ``SWING_UP`` pumps energy (Åström–Furuta): the cart acceleration a = 
 ``catch_angle`` of upright with less than ``catch_rate`` and the balance can catch it from there on the rail — LQR
 state feedback on (x, v, a, φ − π, φ̇) with the jerk as input, whose linear closed loop from the state at the catch
 (:func:`catch_reach`) must keep the cart within ``catch_travel`` of the rail's travel (a rod caught near an end, or
-falling toward one, is let swing on and caught on a later pass); back to ``SWING_UP`` if it falls beyond ``drop_angle``. ``PARK`` (after :meth:`park`) stops balancing and
+falling toward one, is let swing on and caught on a later pass); while it balances calmly the cart dithers
+(:func:`dither_amplitude`) so that the bearing's dry friction cannot make the rod stick and slip; back to
+``SWING_UP`` if it falls beyond ``drop_angle``. ``PARK`` (after :meth:`park`) stops balancing and
 brings the cart back to the rail's centre and to rest. ``LOWER`` (after :meth:`lower`) brings a balanced rod down as
 the swing-up brought it up, in reverse: the energy follows a target ramped from the upright's to the hanging rod's
 over ``ramp_s``, so the rod swings down in ever smaller swings instead of falling. Every mode drives the

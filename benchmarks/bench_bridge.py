@@ -152,7 +152,7 @@ def _step_ratios(tab, lim, keep) -> list[np.ndarray]:
 
 
 def _ratios(tab, lim, keep) -> tuple[float, float, float]:
-    return tuple(float(r.max()) for r in _step_ratios(tab, lim, keep))  # type: ignore[return-value]
+    return tuple(float(r.max()) if r.size else float("nan") for r in _step_ratios(tab, lim, keep))  # type: ignore[return-value]
 
 
 def _over(tab, lim, keep) -> int:
@@ -222,6 +222,11 @@ def _bands(quick: bool) -> list[tuple[str, float, str]]:
     return rows
 
 
+def _pct(values, q: float) -> float:
+    """The q-th percentile of ``values``; NaN when there are none (a session the loaded PC cut short)."""
+    return float(np.percentile(values, q)) if len(values) else float("nan")
+
+
 def run(quick: bool = False) -> list[tuple[str, float, str]]:
     from bench_lab import _broker  # a Mosquitto on a free loopback port (benchmarks/ is on the path)
 
@@ -244,12 +249,12 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         v, a, j = _ratios(tab, lim, tab.column("state") == 4)
         rows += [
             ("udp 1 kHz: targets measured", len(ms), ""),
-            ("udp 1 kHz: send -> FRI command p50", float(np.percentile(ms, 50)), "ms"),
-            ("udp 1 kHz: send -> FRI command p99", float(np.percentile(ms, 99)), "ms"),
-            ("udp 1 kHz: send -> FRI command max", float(ms.max()), "ms"),
-            ("udp 1 kHz: share under 1 ms", float(np.mean(ms < 1.0) * 100), "%"),
-            ("udp 1 kHz: bridge work (FRI message -> reply) p50", float(np.percentile(lat.work, 50) * 1e3), "ms"),
-            ("udp 1 kHz: bridge work (FRI message -> reply) p99", float(np.percentile(lat.work, 99) * 1e3), "ms"),
+            ("udp 1 kHz: send -> FRI command p50", _pct(ms, 50), "ms"),
+            ("udp 1 kHz: send -> FRI command p99", _pct(ms, 99), "ms"),
+            ("udp 1 kHz: send -> FRI command max", _pct(ms, 100), "ms"),
+            ("udp 1 kHz: share under 1 ms", float(np.mean(ms < 1.0) * 100) if len(ms) else float("nan"), "%"),
+            ("udp 1 kHz: bridge work (FRI message -> reply) p50", _pct(np.array(lat.work) * 1e3, 50), "ms"),
+            ("udp 1 kHz: bridge work (FRI message -> reply) p99", _pct(np.array(lat.work) * 1e3, 99), "ms"),
             ("udp 1 kHz: commands over the limits", float(_over(tab, lim, tab.column("state") == 4)), ""),
             ("udp 1 kHz: peak velocity / limit", v, ""),
             ("udp 1 kHz: peak acceleration / limit", a, ""),
@@ -281,8 +286,8 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
                     ("mqtt 30 Hz poses: peak acceleration / limit (following)", a, ""),
                     ("mqtt 30 Hz poses: TCP distance from the drawn path max", float(dist.max()), "mm"),
                     ("mqtt 30 Hz poses: TCP distance from the drawn path p50", float(np.median(dist)), "mm"),
-                    ("mqtt 30 Hz poses: send -> FRI command p50 (via broker)", float(np.percentile(ms, 50)), "ms"),
-                    ("mqtt 30 Hz poses: send -> FRI command p99 (via broker)", float(np.percentile(ms, 99)), "ms"),
+                    ("mqtt 30 Hz poses: send -> FRI command p50 (via broker)", _pct(ms, 50), "ms"),
+                    ("mqtt 30 Hz poses: send -> FRI command p99 (via broker)", _pct(ms, 99), "ms"),
                     ("mqtt 30 Hz poses: states received per second", n_states / dur, "Hz"),
                 ]
             finally:
@@ -295,7 +300,7 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         brake = tab.column("phase") == PHASE_BRAKE
         v, a, j = _ratios(tab, lim, tab.column("state") == 4)
         q = np.column_stack([tab.column(f"cmd_q{k}") for k in range(1, 8)])
-        b0, b1 = np.flatnonzero(brake)[[0, -1]]
+        b0, b1 = np.flatnonzero(brake)[[0, -1]] if brake.any() else (0, -1)  # no stop: a zero-length one, reported
         speed0 = np.abs(q[b0] - q[b0 - 1]).max() / 1e-3 if b0 > 0 else 0.0
         rows += [
             ("source loss: ended by the dead-man", 1.0 if "dead-man" in result.detail else 0.0, ""),

@@ -23,7 +23,8 @@ message [µs]: the client's process tree (threads and, for `--log`, the log writ
 first message until the simulator ends, over the replies the simulator received. Ratios to KUKA's client are taken
 within each round (the VM's noise comes and goes over minutes) and reported as medians over the rounds.
 
-Writes benchmarks/results/fri_timing.json. Run: `python benchmarks/bench_fri_timing.py [--quick] [--rounds N]
+Writes benchmarks/results/fri_timing.json and its tables, benchmarks/results/fri_timing.md (:func:`markdown`; the FRI
+timing page includes them). Run: `python benchmarks/bench_fri_timing.py [--quick] [--rounds N]
 [--seconds S] [--kuka-src PATH]` or `python benchmarks/run_all.py fri_timing [--quick]`.
 """
 
@@ -363,6 +364,49 @@ def realtime_run(seconds: float) -> dict[str, Any]:
     return res
 
 
+def _ms(v) -> str:
+    return "—" if v is None else f"{v:.3f}"
+
+
+def _loads(values) -> str:
+    return ", ".join(f"{v:.2f}" for v in values)
+
+
+def markdown(results: dict[str, Any]) -> str:
+    """The tables of a results file (``fri_timing.json``), as the FRI timing page shows them."""
+    lines = [f"Run of {results['date']} ({results['machine']['cpus']} cores, Linux {results['machine']['kernel']}, "
+             f"Python {results['machine']['python']}), {results['rounds']} interleaved rounds × "
+             f"{results['seconds_per_session']:g} s of COMMANDING_ACTIVE per client and condition; KUKA's client: "
+             f"{'measured' if results['kuka_client']['path'] else 'skipped — ' + results['kuka_client']['how']}.", "",
+             "| client | CPU per message, steady commanding [µs] |", "|---|---|"]  # fmt: skip
+    for name, r in results["cpu"]["clients"].items():
+        cpu = r["cpu_us_per_message_steady"]
+        shown = f"{cpu:.0f}" if cpu is not None else f"session did not last ({r['end_reason']})"
+        lines.append(f"| {name} | {shown} |")
+    lines += ["", f"Load average (1, 5, 15 min) at the start of that part: {_loads(results['cpu']['load_average_1_5_15_start'])}."]
+    titles = {"quiet": "Quiet (nothing added; other work on the machine as it was)", "busy": "Busy (two spinning processes added)"}
+    for cond, c in results["conditions"].items():
+        lines += ["", f"**{titles.get(cond, cond)}** — load average at start {_loads(c['load_average_1_5_15_start'])}, at end "
+                  f"{_loads(c['load_average_1_5_15_end'])}", "",
+                  "| client | sessions kept | COMMANDING_ACTIVE cycles reached (per round) | reply p50 / p99 / p99.9 [ms] "
+                  "(medians) | p50 / p99 / p99.9 ÷ KUKA's (median of rounds) |", "|---|---|---|---|---|"]  # fmt: skip
+        for name, s_ in c["clients"].items():
+            cycles = ", ".join(str(r["active_cycles"]) for r in s_["runs"])
+            ratios = [s_.get(f"{q}_ratio_to_kuka_median") for q in ("p50", "p99", "p999")]
+            ratio = "—" if all(r is None for r in ratios) else " / ".join("—" if r is None else f"{r:.2f}" for r in ratios)
+            lines.append(f"| {name} | {s_['sessions_kept']} of {s_['sessions']} | {cycles} | "
+                         f"{_ms(s_['p50_ms_median'])} / {_ms(s_['p99_ms_median'])} / {_ms(s_['p999_ms_median'])} | {ratio} |")
+    rt = results["realtime"]
+    cpu = rt.get("cpu_us_per_message_steady")
+    lines += ["", f"**`lbr execute --log --realtime`, two spinning processes beside it** — load average "
+              f"{_loads(rt['load_average_1_5_15_start'])} → {_loads(rt['load_average_1_5_15_end'])}: session "
+              f"{'kept' if rt['kept'] else 'not kept (' + str(rt['end_reason']) + ')'}, {rt['late_share'] * 100:.3f} % of the "
+              f"COMMANDING_ACTIVE cycles without a timely reply ({rt['active_cycles']} cycles), reply p50 / p99 / p99.9 "
+              f"{_ms(rt['p50_ms'])} / {_ms(rt['p99_ms'])} / {_ms(rt['p999_ms'])} ms, CPU "
+              f"{'—' if cpu is None else f'{cpu:.0f}'} µs per message (the client and its log writer)."]  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
 def run(quick: bool = False, rounds: int | None = None, seconds: float | None = None, kuka_src: str | None = None,
         realtime_seconds: float | None = None) -> list[tuple[str, float, str]]:  # fmt: skip
     rounds = rounds or (2 if quick else 3)
@@ -394,6 +438,9 @@ def run(quick: bool = False, rounds: int | None = None, seconds: float | None = 
     tmp_out = RESULTS.with_suffix(".json.tmp")
     tmp_out.write_text(json.dumps(results, indent=1) + "\n")
     tmp_out.replace(RESULTS)
+    tmp_md = RESULTS.with_suffix(".md.tmp")
+    tmp_md.write_text(markdown(results))
+    tmp_md.replace(RESULTS.with_suffix(".md"))
     rows: list[tuple[str, float, str]] = []
     for cond, c in results["conditions"].items():
         for name, s in c["clients"].items():

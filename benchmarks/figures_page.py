@@ -1,11 +1,13 @@
-"""Write docs/explanations/benchmark-figures.md from benchmarks/results/*.json (written by `run_all.py`).
+"""Write docs/explanations/benchmark-figures.md from benchmarks/results/*.json (written by `run_all.py`), and the
+tables of the benchmarks that render their own results file (``RENDERED``: e.g. benchmarks/results/fri_timing.md).
 
-`python benchmarks/figures_page.py` — the docs' figures point at this page, so they change only when a
-benchmark is rerun, never by hand. `--check` exits 1 when the page differs from what the results give (CI).
+`python benchmarks/figures_page.py` — the docs' figures point at these pages, so they change only when a
+benchmark is rerun, never by hand. `--check` exits 1 when a page differs from what the results give (CI).
 """
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import sys
@@ -14,6 +16,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 PAGE = ROOT / "docs" / "explanations" / "benchmark-figures.md"
+# results files in a benchmark's own layout → (its module, the function that renders them as Markdown)
+RENDERED = {"fri_timing": ("bench_fri_timing", "markdown")}
 
 INTRO = """# Benchmark figures
 
@@ -59,16 +63,30 @@ def render(results: Path = RESULTS) -> str:
     return "".join(parts)
 
 
+def rendered(results: Path = RESULTS) -> dict[Path, str]:
+    """{benchmarks/results/NAME.md: its Markdown} for the ``RENDERED`` results files in ``results``."""
+    out = {}
+    for name, (module_name, function) in RENDERED.items():
+        path = results / f"{name}.json"
+        if path.exists():
+            spec = importlib.util.spec_from_file_location(module_name, Path(__file__).parent / f"{module_name}.py")
+            module = importlib.util.module_from_spec(spec)
+            spec.loader.exec_module(module)  # type: ignore[union-attr]
+            out[path.with_suffix(".md")] = getattr(module, function)(json.loads(path.read_text()))
+    return out
+
+
 def main() -> int:
-    text = render()
+    pages = {PAGE: render(), **rendered()}
     if "--check" in sys.argv:
-        same = PAGE.exists() and PAGE.read_text() == text
-        if not same:
-            print(f"{PAGE.relative_to(ROOT)} is stale: run python benchmarks/figures_page.py", file=sys.stderr)
-        return 0 if same else 1
-    PAGE.parent.mkdir(parents=True, exist_ok=True)
-    PAGE.write_text(text)
-    print(f"wrote {PAGE.relative_to(ROOT)}")
+        stale = [p for p, text in pages.items() if not (p.exists() and p.read_text() == text)]
+        for p in stale:
+            print(f"{p.relative_to(ROOT)} is stale: run python benchmarks/figures_page.py", file=sys.stderr)
+        return 1 if stale else 0
+    for p, text in pages.items():
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_text(text)
+        print(f"wrote {p.relative_to(ROOT)}")
     return 0
 
 

@@ -117,6 +117,10 @@ def _interrupted(argv: list[str]) -> NoReturn:
     if _json_requested(argv) and not json_emitted():
         sys.stdout.write(json.dumps({"ok": False, "exit_code": 130, "error": "interrupted"}) + "\n")
     sys.stdout.flush()
+    # CPython (3.8-3.12) marks a KeyboardInterrupt that ended a string exec/eval (dataclasses, namedtuple, numpy
+    # build code that way) as unhandled even when it was caught, and under `python -m` then dies by SIGINT instead
+    # of exiting 130; a string exec that completes clears the mark.
+    exec("pass", {})
     sys.exit(130)
 
 
@@ -149,12 +153,15 @@ def main(argv: list[str] | None = None) -> None:
     permission) exit 2; Ctrl-C exits 130; an exception lbr did not expect is one line "internal error" (exit 1).
     With --json the error is also one JSON object on stdout: ``{"ok": false, "exit_code": N, "error": "..."}``.
     """
-    from trajectories.errors import LbrError
-
-    from ._click import click_exceptions
-
     argv = list(sys.argv[1:] if argv is None else argv)
-    exc_mod = click_exceptions()
+    try:
+        from trajectories.errors import LbrError
+
+        from ._click import click_exceptions
+
+        exc_mod = click_exceptions()
+    except KeyboardInterrupt:
+        _interrupted(argv)
     try:
         rv = _click_command().main(args=argv, prog_name="lbr", standalone_mode=False)
     except getattr(exc_mod, "NoArgsIsHelpError", ()):  # `lbr` or `lbr plan` alone: the help was printed

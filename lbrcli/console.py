@@ -13,7 +13,6 @@ import sys
 from typing import Any, Callable, Iterator
 
 import numpy as np
-from rich.console import Console
 
 
 def _jsonable(obj: Any) -> Any:
@@ -45,6 +44,8 @@ class Reporter:
     """Where a command prints: text on stdout (stderr with --json), figures as one JSON object."""
 
     def __init__(self, json_mode: bool = False) -> None:
+        from rich.console import Console  # (rich loads when a command prints, not for every `lbr` start-up)
+
         self.json_mode = json_mode
         self.console = Console(stderr=json_mode, highlight=False, soft_wrap=True)
 
@@ -52,6 +53,8 @@ class Reporter:
         self.console.print(*args, **kwargs)
 
     def warn(self, text: str) -> None:
+        from rich.console import Console
+
         Console(stderr=True, highlight=False, soft_wrap=True).print(f"[yellow]warning:[/yellow] {text}")
 
     def emit(self, figures: dict[str, Any]) -> None:

@@ -15,12 +15,13 @@ import typer
 from planners.string_model import Ball, Cup, StringModel
 
 from .options import number
+from .plants.ball import STRING_LENGTH_M
 
 _BALL, _CUP, _MODEL = Ball(), Cup(), StringModel(0.25)
 
 # option → (low, high, low_open, unit): the one range of each value, for the options (parse time) and build_model
 RANGES: dict[str, tuple[float, float, bool, str]] = {
-    "--length": (0.01, 5.0, False, "m"), "--mass": (0.0, 10.0, True, "kg"), "--ball-radius": (0.0, 0.5, True, "m"),
+    "--length": (*STRING_LENGTH_M, False, "m"), "--mass": (0.0, 10.0, True, "kg"), "--ball-radius": (0.0, 0.5, True, "m"),
     "--cup-radius": (0.0, 0.5, True, "m"), "--cup-depth": (0.0, 0.5, True, "m"), "--cup-rim": (0.0, 0.5, True, "m"),
     "--cup-wall": (0.0, 0.1, True, "m"), "--restitution": (0.0, 1.0, False, ""), "--retension": (0.0, 1.0, False, ""),
     "--friction": (0.0, 10.0, False, ""), "--drag": (0.0, 10.0, False, ""),
@@ -158,3 +159,15 @@ def parse_cup_spec(text: str, length: float, option: str = "--cup") -> StringMod
         return build_model(length, **{names[k]: v for k, v in values.items()})  # type: ignore[arg-type]
     except OptionError as exc:
         raise OptionError(f"{option}: {exc}") from None
+
+
+def cup_model(spec: str | None, length: float | None) -> StringModel | None:
+    """The simulated ball's string model with the cup of ``spec`` (--cup) for a string of ``length`` [m] (None
+    without --cup); OptionError when there is no simulated ball."""
+    from trajectories.errors import OptionError
+
+    if spec is None:
+        return None
+    if not length:
+        raise OptionError("--cup needs the simulated ball (--length > 0)")
+    return parse_cup_spec(spec, length)

@@ -2,12 +2,19 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated, Any, Optional, Sequence
 
+import numpy as np
 import typer
 
-from .options import JointVector, choice, joints, number
+from trajectories.start_poses import THESIS_START
+
+from .lab.attach import LabOptions
+from .option_groups import OptionGroup
+from .options import DEFAULT_FLANGE, JointVector, choice, joints, number, string_length
+from .session_settings import SessionSettings, SimulatorSettings
 
 DEFAULT_BALL_LENGTH = 0.25  # [m] string length of the simulated ball without --length
 
@@ -90,8 +97,8 @@ SessionPeriodOpt = Annotated[  # commands that play no file
 ]
 LengthOpt = Annotated[
     Optional[float],
-    number("--length", low=0, high=5, unit="m",
-           help=f"Simulated ball string length \\[m] (default {DEFAULT_BALL_LENGTH}; 0: no ball)."),
+    string_length("--length", zero_is_none=True,
+                  help=f"Simulated ball string length \\[m] (default {DEFAULT_BALL_LENGTH}; 0: no ball)."),
 ]
 SimStartOpt = Annotated[
     Optional[JointVector],
@@ -192,3 +199,127 @@ def check_simulator_only(robot: str | None, options: dict[str, bool]) -> None:
     if robot is not None and any(options.values()):
         names = list(options)
         raise OptionError(f"{', '.join(names[:-1])} and {names[-1]} apply to the simulator only, not with --robot")
+
+
+# ---------------------------------------------------------------- the FRI commands' shared options, one group each
+
+SESSION_FLAGS = {
+    "SessionSettings.port": "--port", "SessionSettings.version": "--fri-version", "SessionSettings.wait_s": "--wait",
+    "SessionSettings.busy_wait_s": "--busy-wait", "SessionSettings.max_tracking_error": "--max-tracking-error",
+    "SimulatorSettings.period_ms": "--period", "SimulatorSettings.start": "--sim-start",
+    "SimulatorSettings.ball": "--length", "BallSpec.length": "--length", "BallSpec.damping": "--damping",
+    "BallSpec.model": "--cup", "BallSpec.io_delay_ms": "--sim-delay", "SimConfig.period_ms": "--period",
+    "SimConfig.receive_multiplier": "--receive-multiplier", "SimConfig.q0": "--sim-start", "SimConfig.version": "--fri-version",
+    "SimConfig.lockstep_timeout_s": "--sim-lockstep", "SimConfig.lockstep_free": "--sim-fast",
+    "SessionSettings.realtime": "--realtime", "UdpTransport.robot": "--robot",
+}  # fmt: skip
+"""The flag each setting of the session and the simulator comes from (``Class.field`` → option)."""
+
+
+@dataclass(frozen=True)
+class FriOptions:
+    """The FRI options every FRI command shares (the session's and the simulator's), as given; ``present``: the
+    parameters this command has. :meth:`session` and :meth:`simulator` make the settings with the command's own."""
+
+    robot: str | None = None
+    port: int = 30200
+    bind: str | None = None
+    log: Path | None = None
+    fri_version: str | None = None
+    wait: float | None = None  # [s]
+    realtime: bool = False
+    busy_wait: float | None = None  # [ms]
+    period: int | None = None  # [ms] send period (None: the command's default)
+    sim_start: np.ndarray | None = None  # [rad] (None: the command's default)
+    length: float | None = None  # [m] the simulated ball's string (None: DEFAULT_BALL_LENGTH; 0: no ball)
+    sim_lenient: bool = True
+    sim_lockstep: bool = False
+    sim_fast: bool = False
+    present: frozenset[str] = frozenset()
+
+    @property
+    def embedded(self) -> bool:
+        """No --robot: the session runs against the built-in simulator."""
+        return self.robot is None
+
+    def check_simulator_only(self, command: dict[str, bool] | None = None, *, length: bool = True) -> None:
+        """OptionError when a simulator-only option was given with --robot: the group's (--sim-start, --length unless
+        ``length`` is False — it also means something with a robot —, --sim-strict, --sim-lockstep, --sim-fast where the
+        command has them), then the command's (flag → given)."""
+        ours = {"sim_start": ("--sim-start", self.sim_start is not None),
+                "length": ("--length", length and self.length is not None),
+                "sim_lenient": ("--sim-strict", not self.sim_lenient), "sim_lockstep": ("--sim-lockstep", self.sim_lockstep),
+                "sim_fast": ("--sim-fast", self.sim_fast)}  # fmt: skip
+        given = {flag: on for name, (flag, on) in ours.items() if name in self.present and (name != "length" or length)}
+        check_simulator_only(self.robot, {**given, **(command or {})})
+
+    def refuse_log_over(self, path: Path) -> None:
+        """OptionError when --log would overwrite ``path`` (the command's input)."""
+        from trajectories.errors import OptionError
+
+        if self.log is not None and self.log.resolve() == Path(path).resolve():
+            raise OptionError(f"--log {self.log} is the trajectory file itself; choose another name")
+
+    def session(self, limits: Any = None, *, duration_s: float | None = None,
+                max_tracking_error: float | None = None) -> SessionSettings:  # fmt: skip
+        """The session's settings (``limits``: the JointLimits the commands are guarded with)."""
+        return SessionSettings(robot=self.robot, port=self.port, bind=self.bind, version=self.fri_version, limits=limits,
+                               log=self.log, wait_s=self.wait, duration_s=duration_s, realtime=self.realtime,
+                               busy_wait_s=busy_wait_seconds(self.busy_wait) or 0.0,
+                               max_tracking_error=max_tracking_error)  # fmt: skip
+
+    def ball_length(self) -> float:
+        """[m] the simulated ball's string: --length, its default where not given (0: no ball)."""
+        return DEFAULT_BALL_LENGTH if self.length is None else self.length
+
+    def ball(self, damping: float = 0.0, model: Any = None):
+        """The simulated ball of :meth:`ball_length` (a BallSpec; None for 0) with ``damping`` [1/s] and ``model``."""
+        from .plants import BallSpec
+
+        length = self.ball_length()
+        return BallSpec(length, damping, model=model) if length else None
+
+    def simulator(self, *, max_runtime_s: float, start: Sequence[float] = THESIS_START, ball: Any = None,
+                  plants: Sequence[Any] = (), lab: LabOptions | None = None, period_ms: int | None = None,
+                  flange: str = DEFAULT_FLANGE, tool: Sequence[float] | None = None, limits: Path | None = None,
+                  receive_multiplier: int = 1) -> SimulatorSettings | None:  # fmt: skip
+        """The embedded simulator's settings (None with --robot): ``start`` [rad] where --sim-start was not given,
+        ``ball`` (BallSpec; None: none), further ``plants`` — the emulated pendulum module when ``lab`` asks for it and
+        no plant was given — ``period_ms`` where --period was not given (default 1), --flange, --tool, --limits."""
+        if self.robot is not None:
+            return None
+        from .plants import PendulumModuleSpec
+
+        if lab is not None and lab.pendulum == "sim" and not plants:
+            plants = (PendulumModuleSpec(),)
+        q0 = self.sim_start if self.sim_start is not None else start
+        return SimulatorSettings(period_ms=self.period or period_ms or 1, receive_multiplier=receive_multiplier,
+                                 start=tuple(q0), flange=flange, tool=tuple(tool) if tool is not None else (0.0,) * 3,
+                                 ball=ball, plants=tuple(plants), limits_path=limits, max_runtime_s=max_runtime_s,
+                                 lenient=self.sim_lenient, lockstep=self.sim_lockstep, fast=self.sim_fast)  # fmt: skip
+
+
+def _fri_options(
+    *, present: frozenset[str] = frozenset(), robot: RobotOpt = None, port: PortOpt = 30200, bind: BindOpt = None,
+    log: LogOpt = None, fri_version: VersionOpt = None, period: SessionPeriodOpt = None, sim_start: SimStartOpt = None,
+    length: LengthOpt = None, wait: WaitOpt = None, realtime: RealtimeOpt = False, busy_wait: BusyWaitOpt = None,
+    sim_lenient: SimLenientOpt = True, sim_lockstep: SimLockstepOpt = False, sim_fast: SimFastOpt = False,
+) -> FriOptions:  # fmt: skip
+    return FriOptions(robot, port, bind, log, fri_version, wait, realtime, busy_wait, period, sim_start, length,
+                      sim_lenient, sim_lockstep, sim_fast, present)  # fmt: skip
+
+
+FRI_OPTIONS = OptionGroup(_fri_options, flags=SESSION_FLAGS)
+"""The FRI commands' shared options; a command leaves out what it does not take (``FRI_OPTIONS.without(...)``)."""
+
+LAB_FLAGS = {"LabOptions.pendulum": "--pendulum", "LabOptions.baud": "--baud", "LabOptions.pendulum_zero": "--pendulum-zero",
+             "LabOptions.mqtt": "--mqtt", "LabOptions.mqtt_rate_hz": "--mqtt-rate", "PendulumReader.port": "--pendulum"}  # fmt: skip
+
+
+def _lab_options(pendulum: PendulumOpt = None, baud: BaudOpt = 115200, pendulum_zero: PendZeroOpt = 0,
+                 mqtt: MqttOpt = None, mqtt_rate: MqttRateOpt = 50.0) -> LabOptions:  # fmt: skip
+    return LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate)
+
+
+LAB_OPTIONS = OptionGroup(_lab_options, flags=LAB_FLAGS)
+"""The lab's attachments: the pendulum module on a serial port and MQTT telemetry (:class:`LabOptions`)."""

@@ -1,47 +1,16 @@
-"""Running an FRI client from the command line: the embedded simulator (no --robot), the log, the lab
-attachments, signals and the summary. The commands `execute`, `monitor` and `ptp` are thin layers over this."""
+"""Running an FRI client from the command line: the embedded simulator (no robot named), the log, the lab
+attachments, signals and the summary. The FRI commands build their settings (:mod:`lbrcli.session_settings`) and
+hand them to :func:`run_client`."""
 
 from __future__ import annotations
 
 import contextlib
-import math
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Callable
 
 import typer
 
-
-LENIENT_TRACKING_LAG_S = 0.1  # [s] the lag at full speed the embedded simulator's robot may show on a loaded PC
-LENIENT_REPLY_GAP_S = 0.5  # [s] replies the embedded simulator may miss in a row on a loaded PC (default; --sim-strict and a robot: 50 ms)
-
-
-LOCKSTEP_WAIT_S = 0.5  # [s] --sim-lockstep: the longest the simulator waits for a reply (below the client's 1 s silence)
-
-
-def simulator_kwargs(*, length: float | None, default_length: float, period_ms: int, sim_start: str | None,
-                     default_start: str | Sequence[float], flange: str, tool: str | None, max_runtime_s: float,
-                     limits=None) -> dict[str, Any]:  # fmt: skip
-    """The embedded simulator's settings from the commands' simulator options: --length [m] (``default_length`` if
-    None), --sim-start (``default_start``: text, or joint positions [rad]); OptionError on a bad one."""
-    from trajectories.errors import OptionError
-    from trajectories.robot import parse_tool
-
-    from .parsing import parse_joint_vector
-
-    ball = default_length if length is None else length
-    if not (math.isfinite(ball) and 0 <= ball <= 5):
-        raise OptionError(f"--length must be 0..5 m, got {ball:g}")
-    return dict(
-        period_ms=period_ms,
-        q0=tuple(float(v) for v in (parse_joint_vector(sim_start, "--sim-start") if sim_start is not None
-                                    else parse_joint_vector(default_start, "--sim-start") if isinstance(default_start, str)
-                                    else default_start)),  # fmt: skip
-        flange=flange,
-        tool=parse_tool(tool),
-        ball_length=ball if ball > 0 else None,
-        limits_path=str(limits) if limits is not None else None,
-        max_runtime_s=max_runtime_s,
-    )
+from .session_settings import LogColumns, SessionSettings, SimulatorSettings
 
 
 class _TapObserver:
@@ -56,139 +25,134 @@ class _TapObserver:
         self.tap(app.cycle.t, app.state.message)
 
 
-def run_client(
-    rep,
-    client,
-    *,
-    robot: str | None,
-    port: int,
-    bind: str | None,
-    version: str | None,
-    limits,
-    log_path: Path | None,
-    wait: float | None,
-    sim_kwargs: dict[str, Any],
-    duration_s: float | None = None,
-    extra_names: Sequence[str] = (),
-    extra: Callable | None = None,
-    commanding_timeout_s: float | None = None,
-    realtime: bool = False,
-    sim_lenient: bool = True,
-    sim_lockstep: bool = False,
-    sim_fast: bool = False,
-    lab=None,
-    observers: Sequence[Any] = (),
-    max_tracking_error: float | None = None,
-    busy_wait_s: float | None = None,
-    plants: Sequence[Any] | None = None,
-):
-    """Bind, start the simulator if no robot was named, attach the log, the pendulum module and telemetry, run the
-    session with Ctrl-C/SIGTERM braking, stop everything; (result, simulator stats or None, lab figures).
-    ``plants``: the simulator's plant specs instead of the ball (and ball-driven module) of ``sim_kwargs``; a client
-    with a ``reader`` attribute gets the pendulum module's reader."""
-    from lbrcli.fri import ClientApplication, SessionFigures, interrupts_brake
-    from lbrcli.fri.logwriter import LogProcess
+def realtime_context(realtime: bool):
+    """The real-time settings for the session (a null context without ``realtime``); RealtimeRefused (exit 2)
+    already here when the system does not permit them, before anything starts."""
+    if not realtime:
+        return contextlib.nullcontext()
+    from lbrcli.fri.realtime import RealtimeRefused
+    from lbrcli.fri.realtime import realtime as realtime_settings
+    from trajectories.errors import SettingError
 
-    embedded = robot is None
-    if realtime:  # refused before anything starts (exit 2), entered for the session below
-        from lbrcli.fri.realtime import realtime as realtime_settings
-
+    try:
         with realtime_settings():
             pass
-    app = ClientApplication(
-        client,
-        "127.0.0.1" if embedded else robot,
-        port,
-        bind_host=bind if bind is not None else ("127.0.0.1" if embedded else ""),
-        version=version or ("1.15" if embedded else None),
-        limits=limits,
-        observers=[SessionFigures(), *observers],
-        first_message_timeout_s=wait if wait is not None else (20.0 if embedded else 60.0),
-        commanding_timeout_s=commanding_timeout_s if commanding_timeout_s is not None else (20.0 if embedded else None),
-        max_tracking_error=max_tracking_error,
-        reply_gap_s=LENIENT_REPLY_GAP_S if embedded and sim_lenient else None,
-        tracking_lag_s=LENIENT_TRACKING_LAG_S if embedded and sim_lenient else None,
-        busy_wait_s=busy_wait_s or 0.0,
-    )
-    if lab is not None:
-        lab.validate(embedded)
-    app.connect()
-    sim = sim_stats = log = attached = None
-    lab_figures: dict[str, Any] = {}
-    extra_names = tuple(extra_names)
-    try:
-        if log_path is not None:
-            log = LogProcess(log_path)  # rows formatted in a child process, off the FRI loop
-        if embedded:
-            from lbrcli.fri.sim import SimConfig, SimulatorProcess
-            from lbrcli.plants import default_plants
+    except RealtimeRefused as exc:
+        raise SettingError(SessionSettings, "realtime", exc.message) from None
+    return realtime_settings()
 
-            kw = dict(sim_kwargs)
-            if realtime:
-                kw["realtime"] = True
-            if sim_lockstep or sim_fast:
-                kw["lockstep_timeout_s"] = LOCKSTEP_WAIT_S
-                kw["lockstep_free"] = sim_fast
-            if sim_lenient:
-                from .fri.sim import lenient_quality
 
-                kw.update(lenient_quality(kw.get("period_ms", 1), kw.get("receive_multiplier", 1)))
-            ball_length, ball_damping = kw.pop("ball_length", None), kw.pop("ball_damping", 0.0)
-            ball_model = kw.pop("ball_model", None)
-            specs = tuple(plants) if plants is not None else default_plants(
-                ball_length, ball_damping, pendulum_pty=lab is not None and lab.pendulum == "sim", model=ball_model)
-            sim = SimulatorProcess(SimConfig(client_port=app.port, version=version or "1.15", plants=specs, **kw))
-            sim.start()
-            rep.print(f"simulator on {sim.address[0]}:{sim.address[1]} → client on 127.0.0.1:{app.port}")
+class _SessionParts:
+    """What a session started besides the application — log writer, simulator, lab attachments — and their stop."""
+
+    def __init__(self, rep, app, session: SessionSettings, simulator: SimulatorSettings | None, lab) -> None:
+        self.rep, self.app, self.session, self.simulator, self.lab = rep, app, session, simulator, lab
+        self.log = self.sim = self.attached = self.sim_stats = None
+        self.lab_figures: dict[str, Any] = {}
+
+    def start(self, client, columns: LogColumns) -> None:
+        """Log, simulator (or the wait for the robot), lab; then the observers in their order."""
+        from lbrcli.fri.logwriter import LogProcess
+
+        if self.session.log is not None:
+            self.log = LogProcess(self.session.log)  # rows formatted in a child process, off the FRI loop
+        if self.simulator is not None:
+            self._start_simulator()
         else:
-            rep.print(f"waiting for FRI messages from {app.transport.robot_ip} on UDP port {app.port} …")
-        if lab is not None and (lab.pendulum or lab.mqtt):
-            from lbrcli.lab.attach import LabAttachments
-
-            path = sim.pendulum_path if lab.pendulum == "sim" else lab.pendulum
-            # in lock-step the module's lines are read in the cycle: they are on the pty before the message
-            attached = LabAttachments(lab, path, polled=embedded and (sim_lockstep or sim_fast) and lab.pendulum == "sim").start()
-            if attached.pendulum is not None:
-                rep.print(f"pendulum module on {path}")
-                if getattr(client, "sway", None) is not None:  # the module's angle is the sway to wait for
-                    client.sway.source = attached.pendulum_sway
-                if hasattr(client, "reader"):  # a feedback client reads the module itself
-                    client.reader = attached.pendulum
-                base_names, base_extra = extra_names, extra
-                extra_names = base_names + attached.extra_names
-                extra = (lambda s: (*base_extra(s), *attached.extra(s))) if base_extra else attached.extra
-            if attached.publisher is not None:
-                rep.print(f"telemetry to {lab.mqtt} at {lab.mqtt_rate_hz:g} Hz")
-                app.observers.append(_TapObserver(attached.tap))
-        if log is not None:
-            log.extra_names, log.extra = extra_names, extra
-            app.observers.insert(0, log)
+            self.rep.print(f"waiting for FRI messages from {self.app.transport.robot_ip} on UDP port {self.app.port} …")
+        columns = self._attach_lab(client, columns)
+        if self.log is not None:
+            self.log.extra_names, self.log.extra = columns.names, columns.values
+            self.app.observers.insert(0, self.log)
         if hasattr(client, "figures"):
-            app.observers.append(client)
-        if sim is not None:
-            app.watchdog = lambda: None if sim.running else "the simulator process ended"
-        with interrupts_brake(app), (realtime_settings() if realtime else contextlib.nullcontext()):
-            result = app.run(duration_s)
-    finally:
-        app.disconnect()
-        if attached is not None:
-            attached.stop()
-            lab_figures = attached.summary()
-            rep.print("lab: " + ", ".join(f"{k} {v}" for k, v in lab_figures.items()))
-        if sim is not None:
+            self.app.observers.append(client)
+        if self.sim is not None:
+            sim = self.sim
+            self.app.watchdog = lambda: None if sim.running else "the simulator process ended"
+
+    def _start_simulator(self) -> None:
+        from lbrcli.fri.sim import SimulatorProcess
+
+        config = self.simulator.config(self.app.port, self.session.version, self.session.realtime)  # type: ignore[union-attr]
+        self.sim = SimulatorProcess(config)
+        self.sim.start()
+        self.rep.print(f"simulator on {self.sim.address[0]}:{self.sim.address[1]} → client on 127.0.0.1:{self.app.port}")
+
+    def _attach_lab(self, client, columns: LogColumns) -> LogColumns:
+        """The pendulum module (read by the client where it wants it, logged) and the telemetry tap."""
+        lab = self.lab
+        if lab is None or not (lab.pendulum or lab.mqtt):
+            return columns
+        from lbrcli.lab.attach import LabAttachments
+
+        emulated = lab.pendulum == "sim"
+        path = self.sim.pendulum_path if emulated else lab.pendulum  # type: ignore[union-attr]
+        # in lock-step the module's lines are read in the cycle: they are on the pty before the message
+        polled = emulated and self.simulator is not None and self.simulator.paced_by_replies
+        attached = self.attached = LabAttachments(lab, path, polled=polled).start()
+        if attached.pendulum is not None:
+            self.rep.print(f"pendulum module on {path}")
+            if getattr(client, "sway", None) is not None:  # the module's angle is the sway to wait for
+                client.sway.source = attached.pendulum_sway
+            if hasattr(client, "reader"):  # a feedback client reads the module itself
+                client.reader = attached.pendulum
+            columns = columns + LogColumns(attached.extra_names, attached.extra)
+        if attached.publisher is not None:
+            self.rep.print(f"telemetry to {lab.mqtt} at {lab.mqtt_rate_hz:g} Hz")
+            self.app.observers.append(_TapObserver(attached.tap))
+        return columns
+
+    def stop(self) -> None:
+        """Everything stopped, the log closed; the lab's and the simulator's figures kept."""
+        if self.attached is not None:
+            self.attached.stop()
+            self.lab_figures = self.attached.summary()
+            self.rep.print("lab: " + ", ".join(f"{k} {v}" for k, v in self.lab_figures.items()))
+        if self.sim is not None:
             try:
-                sim_stats = sim.stop()
+                self.sim_stats = self.sim.stop()
             except Exception as exc:  # the session's own outcome matters more
-                rep.warn(f"simulator: {exc}")
-        if log is not None:
-            log.close()
-    if log is not None and log.error and result.ok:  # the last rows could not be written: not what was asked
+                self.rep.warn(f"simulator: {exc}")
+        if self.log is not None:
+            self.log.close()
+
+    def judged(self, result):
+        """The session's result, failed when the log could not write its last rows (not what was asked)."""
+        if self.log is None or not self.log.error or not result.ok:
+            return result
         import dataclasses
 
         from lbrcli.fri import EndReason, Outcome
 
-        result = dataclasses.replace(result, outcome=Outcome.FAILED, reason=EndReason.OBSERVER_FAILED, detail=log.error)
-    return result, sim_stats, lab_figures
+        return dataclasses.replace(result, outcome=Outcome.FAILED, reason=EndReason.OBSERVER_FAILED, detail=self.log.error)
+
+
+def run_client(rep, client, session: SessionSettings, simulator: SimulatorSettings | None = None, *, lab=None,
+               observers=(), extra: LogColumns = LogColumns()):  # fmt: skip
+    """Bind, start the simulator if no robot was named (``simulator``: its settings, default ones if None), attach
+    the log (with the ``extra`` columns), the pendulum module and telemetry (``lab``: LabOptions), run the session with
+    Ctrl-C/SIGTERM braking, stop everything; (result, simulator stats or None, lab figures). A client with a
+    ``reader`` attribute gets the pendulum module's reader, one with a ``sway`` watch the module's angle."""
+    from lbrcli.fri import SessionFigures, interrupts_brake
+
+    if not session.embedded:
+        simulator = None
+    elif simulator is None:
+        simulator = SimulatorSettings()
+    realtime = realtime_context(session.realtime)  # refused before anything starts (exit 2)
+    if lab is not None:
+        lab.validate(session.embedded)
+    app = session.application(client, [SessionFigures(), *observers], lenient=simulator is not None and simulator.lenient)
+    app.connect()
+    parts = _SessionParts(rep, app, session, simulator, lab)
+    try:
+        parts.start(client, extra)
+        with interrupts_brake(app), realtime:
+            result = app.run(session.duration_s)
+    finally:
+        app.disconnect()
+        parts.stop()
+    return parts.judged(result), parts.sim_stats, parts.lab_figures
 
 
 def print_summary(rep, result, sim_stats, log_path: Path | None) -> dict[str, Any]:

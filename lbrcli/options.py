@@ -80,6 +80,23 @@ class Number:
         return self.check(v)
 
 
+class StringLength(Number):
+    """typer ``parser`` of a ball's string length [m]: the one rule of every such option (and of the simulated ball,
+    :data:`lbrcli.plants.ball.STRING_LENGTH_M`); with ``zero_is_none`` also 0 for "no ball"."""
+
+    def __init__(self, zero_is_none: bool = False) -> None:
+        from lbrcli.plants.ball import STRING_LENGTH_M
+
+        super().__init__(*STRING_LENGTH_M, unit="m")
+        self.zero_is_none = zero_is_none
+
+    def describe(self) -> str:
+        return f"0 (no ball) or {super().describe()}" if self.zero_is_none else super().describe()
+
+    def check(self, value: float) -> float:
+        return 0.0 if self.zero_is_none and value == 0 else super().check(value)
+
+
 class Angle:
     """typer ``parser`` of an angle: a number with an optional deg/°/rad suffix (``default_unit`` without one),
     finite, inside (low_deg, high_deg) [deg]; returns radians."""
@@ -233,6 +250,12 @@ def number(*decls: str, help: str, low: float | None = None, high: float | None 
            high_open: bool = False, unit: str = "", integer: bool = False, **kwargs: Any) -> Any:  # fmt: skip
     """A numeric typer option validated at parse time; its range is appended to the help."""
     spec = Number(low, high, low_open=low_open, high_open=high_open, unit=unit, integer=integer)
+    return typer.Option(*decls, help=f"{help} \\[{_escaped(spec.describe())}]", parser=spec, **kwargs)
+
+
+def string_length(*decls: str, help: str, zero_is_none: bool = False, **kwargs: Any) -> Any:
+    """A ball's string length option [m] (:class:`StringLength`), validated at parse time; its range in the help."""
+    spec = StringLength(zero_is_none)
     return typer.Option(*decls, help=f"{help} \\[{_escaped(spec.describe())}]", parser=spec, **kwargs)
 
 

@@ -56,6 +56,19 @@ class OptionError(InputError):
     """A command-line option value is malformed or out of range."""
 
 
+class SettingError(OptionError):
+    """A field of a settings object is out of range or does not go with the others. ``setting`` names it as
+    ``Class.field`` (e.g. ``BallSpec.length``): library code never names a command-line flag, the CLI edge maps the
+    setting to the option it came from (:mod:`lbrcli.option_groups`). Exit code 2."""
+
+    def __init__(self, owner: type | str, field: str, message: str) -> None:
+        self.setting = f"{owner if isinstance(owner, str) else owner.__name__}.{field}"
+        super().__init__(message)
+
+    def __str__(self) -> str:
+        return f"{self.setting}: {self.message}"
+
+
 class OutputRefused(InputError):
     """An output path the commands do not replace: a symbolic link, a device, a FIFO or a socket. Exit code 2."""
 

@@ -184,7 +184,7 @@ class TargetFollower(LBRClient):
         tl = self.timeline
         if self._tracker is None:  # activation: start from where the controller holds the robot, at rest
             self._t_start = now
-            self._dt = state.sample_time * state.receive_multiplier
+            self._dt = self.command_period_s
             self._tracker = ReferenceTracker(self._limits, self._dt, state.ipo_joint_position)
             self._q = state.ipo_joint_position
             self._posture = np.array(state.ipo_joint_position)

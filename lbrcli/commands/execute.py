@@ -8,35 +8,33 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Any, Optional
+from typing import Annotated, Optional
 
 import typer
 
-from ..fri_options import (
-    DEFAULT_BALL_LENGTH,
-    BaudOpt,
-    BindOpt,
-    LogOpt,
-    MqttOpt,
-    MqttRateOpt,
-    MultiplierOpt,
-    PendulumOpt,
-    PendZeroOpt,
-    PeriodOpt,
-    PlotOpt,
-    PortOpt,
-    RealtimeOpt,
-    BusyWaitOpt,
-    SimLenientOpt,
-    SimFastOpt, SimLockstepOpt,
-    TrackingErrorOpt,
-    RobotOpt,
-    SimStartOpt,
-    VersionOpt,
-    WaitOpt,
-)
-from ..cup_options import CupSpecOpt
-from ..options import DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, MarginOpt, ToolOpt, number
+from trajectories.csvio import read_joint_csv
+from trajectories.errors import InputError
+
+from ..console import Reporter
+from ..cup_options import CupSpecOpt, cup_model
+from ..fri_options import (DEFAULT_BALL_LENGTH, FRI_OPTIONS, LAB_OPTIONS, FriOptions, MultiplierOpt, PeriodOpt, PlotOpt,
+                           TrackingErrorOpt)  # fmt: skip
+from ..fri_runner import exit_for, plot_log, print_summary, run_client
+from ..lab.attach import LabOptions
+from ..option_groups import with_options
+from ..options import (DEFAULT_FLANGE, DtOpt, FlangeOpt, JsonOpt, LimitsOpt, MarginOpt, ToolOpt, limits_from, make_robot,
+                       number, string_length, within_limits)  # fmt: skip
+from ..session_end import FILE_ROWS_COLUMN
+from ..session_settings import LogColumns
+
+ExecuteLengthOpt = Annotated[  # also shapes the move to the start, with --robot too
+    Optional[float],
+    string_length(
+        "--length", zero_is_none=True,
+        help="String length of the ball on the flange \\[m]: the move to the start is input-shaped (ZVD) for its "
+        f"swing period; without --robot also the simulated ball's (default {DEFAULT_BALL_LENGTH}; 0: no ball).",
+    ),
+]
 
 
 def check_or_fail(rep, traj, lim, margin: float, t1: bool, robot, name: str):
@@ -53,23 +51,11 @@ def check_or_fail(rep, traj, lim, margin: float, t1: bool, robot, name: str):
     return report
 
 
-def _resampled(rep, traj, period_s: float, lim, margin: float, t1: bool, model, name: str):
-    from trajectories.resample import resample
-
-    rs = resample(traj, period_s)
-    check_or_fail(rep, rs, lim, margin, t1, model, f"{name} resampled to {period_s * 1e3:g} ms")
-    rep.print(f"resampled to {period_s * 1e3:g} ms: {len(rs)} rows")
-    return rs
-
-
+@with_options(fri=FRI_OPTIONS.replacing(period=PeriodOpt, length=ExecuteLengthOpt), lab=LAB_OPTIONS)
 def execute(
     joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad]; its step must be the FRI period.")],
-    robot: RobotOpt = None,
-    port: PortOpt = 30200,
-    bind: BindOpt = None,
-    log: LogOpt = None,
-    fri_version: VersionOpt = None,
-    period: PeriodOpt = None,
+    fri: FriOptions,
+    lab: LabOptions,
     resample: Annotated[
         bool, typer.Option("--resample", help="Resample the file (cubic spline) to the controller's period if it differs.")
     ] = False,
@@ -88,14 +74,6 @@ def execute(
     settle: Annotated[float, number("--settle", low=0, high=600, unit="s", help="Hold the last row this long before stopping \\[s].")] = 1.0,
     margin: MarginOpt = 0.0,
     t1: Annotated[bool, typer.Option("--t1", help="Also refuse files whose flange speed exceeds T1's 250 mm/s.")] = False,
-    length: Annotated[
-        Optional[float],
-        number(
-            "--length", low=0, high=5, unit="m",
-            help="String length of the ball on the flange \\[m]: the move to the start is input-shaped (ZVD) for its "
-            f"swing period; without --robot also the simulated ball's (default {DEFAULT_BALL_LENGTH}; 0: no ball).",
-        ),
-    ] = None,
     damping: Annotated[
         float, number("--damping", low=0, high=1000, unit="1/s",
                       help="Simulator only: damping of the simulated ball \\[1/s] (0: it swings on).")
@@ -113,21 +91,9 @@ def execute(
         float,
         number("--sway-wait", low=0, high=3600, unit="s", help="Hold it at most this long, then start and report the sway \\[s] (0: only report)."),
     ] = 30.0,
-    sim_start: SimStartOpt = None,
     receive_multiplier: MultiplierOpt = 1,
-    wait: WaitOpt = None,
     plot: PlotOpt = None,
-    realtime: RealtimeOpt = False,
-    busy_wait: BusyWaitOpt = None,
-    sim_lenient: SimLenientOpt = True,
-    sim_lockstep: SimLockstepOpt = False,
-    sim_fast: SimFastOpt = False,
     max_tracking_error: TrackingErrorOpt = None,
-    pendulum: PendulumOpt = None,
-    baud: BaudOpt = 115200,
-    pendulum_zero: PendZeroOpt = 0,
-    mqtt: MqttOpt = None,
-    mqtt_rate: MqttRateOpt = 50.0,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -147,99 +113,111 @@ def execute(
     `lbr compare` tell a completed session from one that stopped early. Exit 0 completed, 1 refused or stopped, 2 bad
     input, 130 Ctrl-C.
     """
-    from lbrcli.fri import TrajectoryPlayer
-    from lbrcli.lab.attach import LabOptions
-    from trajectories.csvio import read_joint_csv
-    from trajectories.errors import InputError, OptionError
-
-    from ..console import Reporter
-    from ..fri_options import busy_wait_seconds, check_simulator_only
-    from ..fri_runner import exit_for, plot_log, print_summary, run_client, simulator_kwargs
-    from ..options import limits_from, make_robot, within_limits
-    from ..session_end import FILE_ROWS_COLUMN
-
     rep = Reporter(json_out)
-    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--damping": damping != 0.0, "--cup": cup is not None,
-                                 "--receive-multiplier": receive_multiplier != 1, "--sim-strict": not sim_lenient, "--sim-lockstep": sim_lockstep, "--sim-fast": sim_fast})  # fmt: skip
-    ball = DEFAULT_BALL_LENGTH if length is None and robot is None else length
-    if log is not None and log.resolve() == joint_csv.resolve():
-        raise OptionError(f"--log {log} is the trajectory file itself; choose another name")
+    fri.check_simulator_only({"--damping": damping != 0.0, "--cup": cup is not None,
+                              "--receive-multiplier": receive_multiplier != 1}, length=False)  # fmt: skip
+    fri.refuse_log_over(joint_csv)
     lim = limits_from(limits)
-    within_limits(sim_start, lim, "--sim-start")
-    name = str(joint_csv)
-    traj = read_joint_csv(joint_csv, dt)
-    model = make_robot(flange, tool) if t1 else None
-    # 1. the file passes the check before any socket exists
-    check_or_fail(rep, traj, lim, margin, t1, model, name)
+    within_limits(fri.sim_start, lim, "--sim-start")
+    name, traj = str(joint_csv), read_joint_csv(joint_csv, dt)
+    check = FileCheck(rep, lim, margin, t1, make_robot(flange, tool) if t1 else None, name)
+    check(traj, name)  # the file passes the check before any socket exists
     rep.print(f"{name}: {len(traj)} rows, step {traj.dt * 1e3:g} ms, {traj.duration:.3f} s — within the limits")
+    traj, period_ms = _at_command_period(traj, fri, receive_multiplier, resample, check)
+    ball_length = fri.ball_length() if fri.embedded else fri.length  # [m] the swing the move to the start is shaped for
+    player = _player(traj, lim, period_ms * receive_multiplier * 1e-3, check if resample else None, ball_length,
+                     make_robot(flange, tool), start_tolerance=start_tolerance, move_to_start=move_to_start, settle_s=settle,
+                     start_sway_rad=math.radians(start_sway), sway_wait_s=sway_wait)  # fmt: skip
+    if move_to_start:
+        rep.print("a move to the start (≤ 20 % of the limits) precedes the file if the robot stands elsewhere")
+    simulator = fri.simulator(max_runtime_s=traj.duration + settle + sway_wait + 120.0, start=traj.q[0], lab=lab,
+                              ball=fri.ball(damping, cup_model(cup, ball_length)) if fri.embedded else None,
+                              period_ms=period_ms, receive_multiplier=receive_multiplier, flange=flange, tool=tool,
+                              limits=limits)  # fmt: skip
+    session = fri.session(lim, max_tracking_error=max_tracking_error)
+    result, sim_stats, lab_figures = run_client(rep, player, session, simulator, lab=lab, extra=LogColumns(
+        (FILE_ROWS_COLUMN,), lambda state: (len(player.rows),)))  # the log tells when it completed  # fmt: skip
+    figures = print_summary(rep, result, sim_stats, fri.log)
+    figures.update(lab_figures)
+    figures.update(file=name, rows=len(traj), duration_s=traj.duration, robot=fri.robot or "simulator")
+    _report_cup(rep, figures, cup, fri.log)
+    if fri.robot is not None and result.figures.get("operation_mode") == "TEST_MODE_1" and not t1:
+        rep.warn("the robot is in T1: the controller limits the flange speed to 250 mm/s (check with --t1)")
+    plot_error = plot_log(plot, fri.log, rep, joint_csv.name, figures)
+    rep.emit(figures)
+    exit_for(result, lab_figures, lab.mqtt, failed=plot_error)
 
-    # 2. the period: the simulator's is ours to choose; with --robot, --period (else the file's step) is assumed and
-    #    the first message must agree
-    send_ms = traj.dt * 1e3 / receive_multiplier
+
+class FileCheck:
+    """`lbr check` of a joint file (and of the file resampled): CheckFailed (exit 1, nothing sent) if it fails."""
+
+    def __init__(self, rep, lim, margin: float, t1: bool, model, name: str) -> None:
+        self.rep, self.lim, self.margin, self.t1, self.model, self.name = rep, lim, margin, t1, model, name
+
+    def __call__(self, traj, name: str):
+        return check_or_fail(self.rep, traj, self.lim, self.margin, self.t1, self.model, name)
+
+    def resampled(self, traj, period_s: float):
+        """``traj`` resampled (cubic spline) to ``period_s`` [s], checked again."""
+        from trajectories.resample import resample
+
+        rs = resample(traj, period_s)
+        self(rs, f"{self.name} resampled to {period_s * 1e3:g} ms")
+        self.rep.print(f"resampled to {period_s * 1e3:g} ms: {len(rs)} rows")
+        return rs
+
+
+def _at_command_period(traj, fri: FriOptions, k: int, resample: bool, check: FileCheck):
+    """(the rows at the command period, the send period [ms]). The simulator's period is ours to choose; with --robot,
+    --period (else the file's step) is assumed and the first message must agree. InputError when the step is not a
+    whole send period × ``k`` (the receive multiplier) and --resample was not given."""
+    from lbrcli.fri.players import whole_send_period_ms
+
+    period = fri.period
     if period is None:
-        whole = round(send_ms) if len(traj) > 1 else 1
-        if len(traj) > 1 and (abs(send_ms - whole) > 1e-6 or not 1 <= whole <= 100) and not (resample and robot is None):
-            raise InputError(
-                f"time step {traj.dt * 1e3:g} ms is not a whole send period of 1..100 ms"
-                + (f" × receive multiplier {receive_multiplier}" if receive_multiplier > 1 else "")
-                + "; use --resample with --period",
-                file=name,
-            )
-        period = int(min(100, max(1, whole)))
-    period_s = period * receive_multiplier * 1e-3
+        whole = whole_send_period_ms(traj.dt, k) if len(traj) > 1 else 1
+        if whole is None and not (resample and fri.embedded):
+            raise InputError(f"time step {traj.dt * 1e3:g} ms is not a whole send period of 1..100 ms"
+                             + (f" × receive multiplier {k}" if k > 1 else "") + "; use --resample with --period",
+                             file=check.name)  # fmt: skip
+        period = whole if whole is not None else int(min(100, max(1, round(traj.dt * 1e3 / k))))
+    period_s = period * k * 1e-3
     if len(traj) > 1 and abs(traj.dt - period_s) > 1e-6:
         if not resample:
-            raise InputError(
-                f"time step {traj.dt * 1e3:g} ms differs from the command period {period_s * 1e3:g} ms "
-                "(send period × receive multiplier); re-plan at that step or use --resample",
-                file=name,
-            )
-        traj = _resampled(rep, traj, period_s, lim, margin, t1, model, name)
+            raise InputError(f"time step {traj.dt * 1e3:g} ms differs from the command period {period_s * 1e3:g} ms "
+                             "(send period × receive multiplier); re-plan at that step or use --resample", file=check.name)  # fmt: skip
+        traj = check.resampled(traj, period_s)
+    return traj, period
 
-    def at_controller_period(period_s: float):
-        """--resample with a robot whose period was not given: resample at the first message (and re-check)."""
-        from lbrcli.fri import StopSession
-        from trajectories.errors import CheckFailed
 
-        try:
-            return _resampled(rep, traj, period_s, lim, margin, t1, model, name).q
-        except CheckFailed as exc:
-            raise StopSession(str(exc), completed=False) from None
-
+def _player(traj, lim, period_s: float, check: FileCheck | None, ball_length: float | None, robot, *,
+            start_tolerance: float, move_to_start: bool, settle_s: float, start_sway_rad: float, sway_wait_s: float):  # fmt: skip
+    """The TrajectoryPlayer of the rows: the move to the start shaped for the ball's swing (if its length is known),
+    the first row held while the sway settles; ``check``: resample at the controller's period if it differs."""
+    from lbrcli.fri import StopSession, TrajectoryPlayer
     from lbrcli.fri.sway import IoSway, SwayWatch, window_for_length
     from planners.pendulum import natural_period
     from planners.shapers import make_shaper
+    from trajectories.errors import CheckFailed
 
-    player = TrajectoryPlayer(
-        traj.q, lim, period_s=period_s, start_tolerance=start_tolerance,
-        move_to_start=move_to_start, settle_s=settle, resample=at_controller_period if resample else None,
-        move_shaper=make_shaper("zvd", natural_period(ball)) if ball else None,
-        move_robot=(model or make_robot(flange, tool)) if ball else None,
-        sway=SwayWatch(IoSway("ball_theta"), math.radians(start_sway), window_for_length(ball), sway_wait),
+    def at_controller_period(period_s: float):
+        """--resample with a robot whose period was not given: resample at the first message (and re-check)."""
+        try:
+            return check.resampled(traj, period_s).q  # type: ignore[union-attr]
+        except CheckFailed as exc:
+            raise StopSession(str(exc), completed=False) from None
+
+    return TrajectoryPlayer(
+        traj.q, lim, period_s=period_s, start_tolerance=start_tolerance, move_to_start=move_to_start, settle_s=settle_s,
+        resample=at_controller_period if check is not None else None,
+        move_shaper=make_shaper("zvd", natural_period(ball_length)) if ball_length else None,
+        move_robot=robot if ball_length else None,
+        sway=SwayWatch(IoSway("ball_theta"), start_sway_rad, window_for_length(ball_length), sway_wait_s),
     )  # fmt: skip
-    if move_to_start:
-        rep.print("a move to the start (≤ 20 % of the limits) precedes the file if the robot stands elsewhere")
 
-    sim_kwargs: dict[str, Any] = {}
-    if robot is None:
-        sim_kwargs = simulator_kwargs(length=ball, default_length=DEFAULT_BALL_LENGTH, period_ms=int(period),
-                                      sim_start=sim_start, default_start=traj.q[0], flange=flange, tool=tool,
-                                      max_runtime_s=traj.duration + settle + sway_wait + 120.0, limits=limits)  # fmt: skip
-        sim_kwargs.update(receive_multiplier=receive_multiplier, ball_damping=damping)
-        if cup is not None:
-            from ..cup_options import parse_cup_spec
 
-            if not ball:
-                raise OptionError("--cup needs the simulated ball (--length > 0)")
-            sim_kwargs["ball_model"] = parse_cup_spec(cup, ball)
-    result, sim_stats, lab_figures = run_client(
-        rep, player, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-        sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, sim_lockstep=sim_lockstep, sim_fast=sim_fast, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait), max_tracking_error=max_tracking_error, lab=LabOptions(pendulum, baud, pendulum_zero, mqtt, mqtt_rate),
-        extra_names=(FILE_ROWS_COLUMN,), extra=lambda state: (len(player.rows),),  # the log tells when it completed
-    )  # fmt: skip
-    figures = print_summary(rep, result, sim_stats, log)
-    figures.update(lab_figures)
-    figures.update(file=name, rows=len(traj), duration_s=traj.duration, robot=robot or "simulator")
+def _report_cup(rep, figures: dict, cup: str | None, log: Path | None) -> None:
+    """The simulated cup-and-ball: caught or not (simulator time), and what the log says (with --cup and --log)."""
     plant = (figures.get("simulator") or {}).get("plants", {}).get("ball", {}).get("cup")
     if plant is not None:
         rep.print("simulated ball: " + ("caught in the cup" if plant["caught"] else f"not caught — {plant['failure']}")
@@ -251,11 +229,6 @@ def execute(
         if summary is not None:
             rep.print(describe(summary))
             figures["cup"] = summary
-    if robot is not None and result.figures.get("operation_mode") == "TEST_MODE_1" and not t1:
-        rep.warn("the robot is in T1: the controller limits the flange speed to 250 mm/s (check with --t1)")
-    plot_error = plot_log(plot, log, rep, joint_csv.name, figures)
-    rep.emit(figures)
-    exit_for(result, lab_figures, mqtt, failed=plot_error)
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -3,30 +3,39 @@ sent back."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
-from typing import Annotated, Any, Optional
+from typing import Annotated, Optional
 
 import typer
 
-from ..fri_options import (
-    DEFAULT_BALL_LENGTH,
-    BindOpt,
-    LengthOpt,
-    LogOpt,
-    SessionPeriodOpt,
-    PortOpt,
-    RealtimeOpt,
-    BusyWaitOpt,
-    RobotOpt,
-    SimLenientOpt,
-    SimStartOpt,
-    VersionOpt,
-    WaitOpt,
-)
-from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt, number
+from trajectories.errors import OptionError
+
+from ..console import Reporter
+from ..fri_options import FRI_OPTIONS, FriOptions
+from ..fri_runner import exit_for, print_summary, run_client
+from ..option_groups import with_options
+from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt, limits_from, make_robot, number, within_limits
 
 
+def parse_sources(text: str | None) -> frozenset[str] | None:
+    """--source: comma-separated IP addresses (the UDP senders allowed to command), checked at parse time."""
+    import ipaddress
+
+    if text is None or isinstance(text, frozenset):
+        return text
+    hosts = [h.strip() for h in str(text).split(",") if h.strip()]
+    if not hosts:
+        raise typer.BadParameter(f"expected comma-separated IP addresses, got {text!r}")
+    try:
+        return frozenset(str(ipaddress.ip_address(h)) for h in hosts)
+    except ValueError as exc:
+        raise typer.BadParameter(f"{exc} (UDP senders are matched by their IP address)") from None
+
+
+@with_options(fri=FRI_OPTIONS.without("sim_lockstep", "sim_fast"))
 def serve(
+    fri: FriOptions,
     listen: Annotated[
         str, typer.Option("--listen", help="HOST:PORT where targets arrive over UDP (the state goes back to the source); 'off': no UDP.")
     ] = "127.0.0.1:30300",
@@ -60,18 +69,6 @@ def serve(
     duration: Annotated[
         Optional[float], number("--duration", low=0, high=86400, low_open=True, unit="s", help="End (braking) after this long \\[s] (default: until the source ends).")
     ] = None,
-    robot: RobotOpt = None,
-    port: PortOpt = 30200,
-    bind: BindOpt = None,
-    fri_version: VersionOpt = None,
-    period: SessionPeriodOpt = None,
-    log: LogOpt = None,
-    sim_start: SimStartOpt = None,
-    length: LengthOpt = None,
-    wait: WaitOpt = None,
-    realtime: RealtimeOpt = False,
-    busy_wait: BusyWaitOpt = None,
-    sim_lenient: SimLenientOpt = True,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -91,100 +88,90 @@ def serve(
     for --timeout (dead-man), the owner sends garbage or a joint target outside the position limits (exit 1), it
     sends {"end": true} or --duration elapses (exit 0), or Ctrl-C.
     """
-    from lbrcli.bridge import MqttTransport, MqttUnavailable, TargetFollower, TargetInbox, TimelineOptions, UdpTransport
-    from lbrcli.lab.telemetry import parse_mqtt_url
-    from trajectories.errors import OptionError
-
-    from ..console import Reporter
-    from ..fri_options import busy_wait_seconds, check_simulator_only
-    from ..fri_runner import exit_for, print_summary, run_client, simulator_kwargs
-    from ..options import THESIS_Q_START, limits_from, make_robot, within_limits
+    from lbrcli.bridge import TargetFollower, TimelineOptions
 
     rep = Reporter(json_out)
-    udp = listen.strip().lower() != "off"
-    host, _, lport = listen.rpartition(":")
-    if udp and (not host or not (lport.isascii() and lport.isdigit()) or not 0 <= int(lport) <= 65535):
-        raise OptionError(f"--listen must be HOST:PORT or off, got {listen!r}")
-    if not udp and mqtt is None:
-        raise OptionError("--listen off needs --mqtt: targets must come from somewhere")
-    mqtt_target = parse_mqtt_url(mqtt) if mqtt is not None else None
+    endpoint = _listen_address(listen, mqtt, source)
     key = _read_secret(secret) if secret is not None else None
     if delay is not None and not delay < timeout:
         raise OptionError(f"--delay must be less than --timeout ({timeout:g} s), got {delay:g}")
-    check_simulator_only(robot, {"--sim-start": sim_start is not None, "--length": length is not None,
-                                 "--sim-strict": not sim_lenient})  # fmt: skip
+    fri.check_simulator_only()
     lim = limits_from(limits)
-    within_limits(sim_start, lim, "--sim-start")
-    allowed = set(source) if source else None
-    sim_kwargs: dict[str, Any] = {}
-    if robot is None:
-        sim_kwargs = simulator_kwargs(length=length, default_length=DEFAULT_BALL_LENGTH, period_ms=period or 1,
-                                      sim_start=sim_start, default_start=THESIS_Q_START, flange=flange, tool=tool,
-                                      max_runtime_s=(duration or 86400.0) + 120.0, limits=limits)  # fmt: skip
-    if allowed and not udp:
-        raise OptionError("--source restricts UDP senders; with --listen off use the broker's ACL or --secret")
-    transports: list = []
-    try:
-        if udp:
-            transports.append(UdpTransport(int(lport), host, allowed))
-            rep.print(f"targets on udp://{host}:{transports[-1].port}"
-                      + (f" from {', '.join(sorted(allowed))}" if allowed else ""))  # fmt: skip
-        if mqtt_target is not None:
-            transports.append(MqttTransport(mqtt_target, state_rate_hz=mqtt_state_hz).start())
-            rep.print(f"targets on mqtt://{mqtt_target.host}:{mqtt_target.port}/{mqtt_target.topic} "
-                      f"(state on {transports[-1].state_topic})")  # fmt: skip
-    except OSError as exc:
-        for tr in transports:
-            tr.close()
-        raise OptionError(f"--listen {listen}: cannot bind ({exc.strerror})") from None
-    except MqttUnavailable as exc:
-        for tr in transports:
-            tr.close()
-        raise OptionError(f"--mqtt: {exc}") from None
-    targets = TargetInbox(transports, key, lim)
+    within_limits(fri.sim_start, lim, "--sim-start")
+    session = fri.session(lim, duration_s=duration)
+    simulator = fri.simulator(max_runtime_s=(duration or 86400.0) + 120.0, ball=fri.ball(), flange=flange, tool=tool,
+                              limits=limits)  # fmt: skip
+    targets, (listening, topic) = _open_targets(rep, endpoint, mqtt, mqtt_state_hz, source, key, lim)
     follower = TargetFollower(targets, lim, robot=make_robot(flange, tool), timeout_s=timeout,
                               first_target_s=first_target, speed_scale=speed_scale, state_every=state_every,
                               timeline=TimelineOptions(delay_s=delay, max_delay_s=timeout))  # fmt: skip
     try:
-        result, sim_stats, _ = run_client(
-            rep, follower, robot=robot, port=port, bind=bind, version=fri_version, limits=lim, log_path=log, wait=wait,
-            sim_kwargs=sim_kwargs, sim_lenient=sim_lenient, duration_s=duration, realtime=realtime, busy_wait_s=busy_wait_seconds(busy_wait),
-        )  # fmt: skip
+        result, sim_stats, _ = run_client(rep, follower, session, simulator)
     finally:
         targets.close()
-    figures = print_summary(rep, result, sim_stats, log)
-    f = result.figures
-    rep.print(f"targets: {f.get('targets_accepted', 0)} accepted, {f.get('targets_bad', 0)} bad, "
-              f"{f.get('targets_foreign', 0)} from other sources, {f.get('targets_stale', 0)} stale"
-              + (f", {f.get('targets_unauthenticated', 0)} unauthenticated" if key is not None else ""))  # fmt: skip
-    if f.get("pose_targets"):
-        rep.print(f"pose targets: {f['pose_targets']}, {f['poses_unreached']} not reached "
-                  f"(closest configuration followed; max TCP error {f['max_ik_position_error_m'] * 1e3:.1f} mm), "
-                  f"IK at most {f['ik_time_max_ms']:.2f} ms in a cycle")  # fmt: skip
-    figures.update(listen=f"{host}:{transports[0].port}" if udp else None, mqtt=mqtt_target.topic if mqtt_target else None,
-                   robot=robot or "simulator")  # fmt: skip
+    figures = print_summary(rep, result, sim_stats, session.log)
+    _print_targets(rep, result.figures, key is not None)
+    figures.update(listen=listening, mqtt=topic, robot=fri.robot or "simulator")
     rep.emit(figures)
     exit_for(result)
-    if not f.get("targets_accepted"):  # the session ended as asked, but nothing was served
-        import sys
-
+    if not result.figures.get("targets_accepted"):  # the session ended as asked, but nothing was served
         sys.stderr.write("lbr: failed: no target arrived during the session (is the source sending to --listen?)\n")
         raise typer.Exit(1)
 
 
-def parse_sources(text: str | None) -> frozenset[str] | None:
-    """--source: comma-separated IP addresses (the UDP senders allowed to command), checked at parse time."""
-    import ipaddress
+def _listen_address(listen: str, mqtt: str | None, source: frozenset | None) -> tuple[str, int] | None:
+    """--listen as (host, port), None for 'off'; OptionError when it does not go with --mqtt and --source."""
+    if listen.strip().lower() == "off":
+        if mqtt is None:
+            raise OptionError("--listen off needs --mqtt: targets must come from somewhere")
+        if source:
+            raise OptionError("--source restricts UDP senders; with --listen off use the broker's ACL or --secret")
+        return None
+    host, _, port = listen.rpartition(":")
+    if not host or not (port.isascii() and port.isdigit()) or not 0 <= int(port) <= 65535:
+        raise OptionError(f"--listen must be HOST:PORT or off, got {listen!r}")
+    return host, int(port)
 
-    if text is None or isinstance(text, frozenset):
-        return text
-    hosts = [h.strip() for h in str(text).split(",") if h.strip()]
-    if not hosts:
-        raise typer.BadParameter(f"expected comma-separated IP addresses, got {text!r}")
+
+def _open_targets(rep, endpoint: tuple[str, int] | None, mqtt: str | None, state_hz: float, source: frozenset | None,
+                  key: bytes | None, lim):  # fmt: skip
+    """The target inbox over UDP at ``endpoint`` and/or the --mqtt topic, and where they are ("HOST:PORT" and the
+    topic, for the figures); OptionError when one cannot be opened."""
+    from lbrcli.bridge import MqttTransport, MqttUnavailable, TargetInbox, UdpTransport
+    from lbrcli.lab.telemetry import parse_mqtt_url
+
+    mqtt_target = parse_mqtt_url(mqtt) if mqtt is not None else None
+    transports: list = []
     try:
-        return frozenset(str(ipaddress.ip_address(h)) for h in hosts)
-    except ValueError as exc:
-        raise typer.BadParameter(f"{exc} (UDP senders are matched by their IP address)") from None
+        if endpoint is not None:
+            host, port = endpoint
+            transports.append(UdpTransport(port, host, set(source) if source else None))
+            rep.print(f"targets on udp://{host}:{transports[-1].port}"
+                      + (f" from {', '.join(sorted(source))}" if source else ""))  # fmt: skip
+        if mqtt_target is not None:
+            transports.append(MqttTransport(mqtt_target, state_rate_hz=state_hz).start())
+            rep.print(f"targets on mqtt://{mqtt_target.host}:{mqtt_target.port}/{mqtt_target.topic} "
+                      f"(state on {transports[-1].state_topic})")  # fmt: skip
+    except (OSError, MqttUnavailable) as exc:
+        for tr in transports:
+            tr.close()
+        if isinstance(exc, MqttUnavailable):
+            raise OptionError(f"--mqtt: {exc}") from None
+        raise OptionError(f"--listen {endpoint[0]}:{endpoint[1]}: cannot bind ({exc.strerror})") from None  # type: ignore[index]
+    where = (f"{endpoint[0]}:{transports[0].port}" if endpoint is not None else None,
+             mqtt_target.topic if mqtt_target is not None else None)  # fmt: skip
+    return TargetInbox(transports, key, lim), where
+
+
+def _print_targets(rep, f: dict, authenticated: bool) -> None:
+    """What the targets did (accepted, bad, foreign, stale, unauthenticated; poses and their IK)."""
+    rep.print(f"targets: {f.get('targets_accepted', 0)} accepted, {f.get('targets_bad', 0)} bad, "
+              f"{f.get('targets_foreign', 0)} from other sources, {f.get('targets_stale', 0)} stale"
+              + (f", {f.get('targets_unauthenticated', 0)} unauthenticated" if authenticated else ""))  # fmt: skip
+    if f.get("pose_targets"):
+        rep.print(f"pose targets: {f['pose_targets']}, {f['poses_unreached']} not reached "
+                  f"(closest configuration followed; max TCP error {f['max_ik_position_error_m'] * 1e3:.1f} mm), "
+                  f"IK at most {f['ik_time_max_ms']:.2f} ms in a cycle")  # fmt: skip
 
 
 def _read_secret(path: Path) -> bytes:

@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Optional
 
 import typer
 
+from trajectories.errors import OptionError
+
 from ..cup_options import CupSpecOpt
 from ..fri_options import parse_host_port, parse_ip
+from ..option_groups import with_options
 from ..options import (DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, Floats, JointVector, JsonOpt, LimitsOpt, ToolOpt,
-                       choice, floats, joints, number)  # fmt: skip
+                       choice, floats, joints, number, string_length)  # fmt: skip
 
 
 def _cartesian_stiffness(text: str | tuple) -> tuple[float, float]:
@@ -20,13 +24,32 @@ def _cartesian_stiffness(text: str | tuple) -> tuple[float, float]:
     return trans, rot
 
 
+SIM_FLAGS = {
+    "BallSpec.length": "--length", "BallSpec.damping": "--damping", "BallSpec.model": "--cup",
+    "default_plants.ball_length": "--length", "SimConfig.period_ms": "--period", "SimConfig.receive_multiplier":
+    "--receive-multiplier", "SimConfig.version": "--fri-version", "SimConfig.loss": "--loss", "SimConfig.malformed":
+    "--malformed", "SimConfig.delay_ms": "--delay", "SimConfig.jitter_ms": "--jitter", "SimConfig.q0": "--q0",
+    "SimConfig.port": "--port", "SimConfig.client_port": "--client", "SimConfig.client_host": "--client",
+    "SimConfig.operation_mode": "--operation-mode", "SimConfig.command_mode": "--mode",
+    "SimConfig.transformations": "--transformation", "SimConfig.joint_stiffness": "--stiffness",
+    "SimConfig.cartesian_stiffness": "--cartesian-stiffness", "SimConfig.damping_ratio": "--damping-ratio",
+    "SimConfig.external_torque": "--external-torque", "SimConfig.external_force": "--external-force",
+    "SimConfig.torque_noise": "--torque-noise", "SimConfig.io": "--io", "IoChannel.name": "--io", "IoChannel.type": "--io",
+    "IoChannel.direction": "--io", "IoChannel.value": "--io", "IoChannel.spec": "--io", "SimConfig.quality_good": "--quality-good",
+    "SimConfig.quality_window": "--quality-window", "SimConfig.session_duration_s": "--duration",
+    "SimConfig.max_runtime_s": "--timeout",
+}  # fmt: skip
+"""The option of each setting `lbr sim` makes (``Class.field`` → flag)."""
+
+
+@with_options(flags=SIM_FLAGS)
 def sim(
     port: Annotated[int, number("--port", low=0, high=65535, integer=True, help="UDP port the simulator sends from and listens on (0: any free port).")] = 0,
     host: Annotated[str, typer.Option("--host", parser=parse_ip, metavar="IP", help="IP address the simulator binds.")] = "127.0.0.1",
     period: Annotated[int, number("--period", low=1, high=100, unit="ms", integer=True, help="Send period \\[ms].")] = 1,
     client: Annotated[tuple, typer.Option("--client", parser=parse_host_port, metavar="HOST:PORT", help="Where monitoring messages go: HOST:PORT of the FRI client.")] = "127.0.0.1:30200",
     q0: Annotated[JointVector, joints("--q0", help="Start joint positions q1..q7 \\[rad, or with deg suffix].")] = THESIS_Q_START,
-    length: Annotated[Optional[float], number("--length", low=0, high=5, low_open=True, unit="m", help="Simulate a ball on a string of this length \\[m] hanging from the TCP.")] = None,
+    length: Annotated[Optional[float], string_length("--length", help="Simulate a ball on a string of this length \\[m] hanging from the TCP.")] = None,
     damping: Annotated[float, number("--damping", low=0, high=1000, unit="1/s", help="Damping of the simulated ball \\[1/s].")] = 0.0,
     cup: CupSpecOpt = None,
     fri_version: Annotated[str, choice("--fri-version", choices=("1.15", "2.7"), help="Wire format: 1.15 (bare protobuf) or 2.7 (length + CRC-32 framing).")] = "1.15",
@@ -77,94 +100,99 @@ def sim(
     from trajectories.robot import parse_flange, parse_tool
 
     from ..console import Reporter
-    from ..fri.constants import ConnectionQuality, SessionState
-    from trajectories.errors import OptionError
-
-    from ..fri.sim import IO_PRESETS, SimConfig, Simulator, parse_io
+    from ..cup_options import cup_model
+    from ..fri.sim import SimConfig
     from ..options import limits_from, within_limits
     from ..plants import default_plants
 
     rep = Reporter(json_out)
+    within_limits(q0, limits_from(limits), "--q0")
     client_host, client_port = client
-    channels = tuple(parse_io(text) for text in io or ())
-    if io_preset is not None:
-        if io_preset not in IO_PRESETS:
-            raise OptionError(f"--io-preset: one of {', '.join(IO_PRESETS)}, got {io_preset!r}")
-        channels = IO_PRESETS[io_preset] + channels
-    cup_model = None
-    if cup is not None:
-        from ..cup_options import parse_cup_spec
-
-        if length is None:
-            raise OptionError("--cup needs the simulated ball (--length)")
-        cup_model = parse_cup_spec(cup, length)
-    extra = {name: value for name, value in (("external_torque", external_torque), ("external_force", external_force),
-                                             ("cartesian_stiffness", cartesian_stiffness)) if value is not None}
-    lim = limits_from(limits)
-    within_limits(q0, lim, "--q0")
+    forces = {name: value for name, value in (("external_torque", external_torque), ("external_force", external_force),
+                                              ("cartesian_stiffness", cartesian_stiffness)) if value is not None}  # fmt: skip
     config = SimConfig(
         client_host=client_host, client_port=client_port, host=host, port=port, period_ms=period,
-        receive_multiplier=receive_multiplier, version=fri_version,
-        q0=tuple(float(x) for x in q0),
+        receive_multiplier=receive_multiplier, version=fri_version, q0=tuple(float(x) for x in q0),
         flange=parse_flange(flange).value, tool=parse_tool(tool),
-        plants=default_plants(length, damping, pendulum_pty=pendulum_pty, model=cup_model),
+        plants=default_plants(length, damping, pendulum_pty=pendulum_pty, model=cup_model(cup, length)),
         commanding_after_s=commanding_after, session_duration_s=duration, max_runtime_s=timeout,
         loss=loss, delay_ms=delay, jitter_ms=jitter, malformed=malformed, seed=seed,
         quality_window=quality_window, quality_good=quality_good,
         quality_fair=min(0.5, quality_good), quality_excellent=max(0.98, quality_good),
         operation_mode=operation_mode, realtime=realtime, limits_path=str(limits) if limits is not None else None,
-        overlay=not no_overlay, command_mode=mode, joint_stiffness=stiffness, damping_ratio=damping_ratio, io=channels,
-        torque_noise=torque_noise, transformations=tuple(transformation or ()), **extra,
-    )
+        overlay=not no_overlay, command_mode=mode, joint_stiffness=stiffness, damping_ratio=damping_ratio,
+        io=_io_channels(io, io_preset), torque_noise=torque_noise, transformations=tuple(transformation or ()), **forces,
+    )  # fmt: skip
     config.validate()
+    stats, pendulum_path, (h, p) = _run_in_foreground(rep, config)
+    if realtime and not stats.realtime:
+        rep.warn("real-time scheduling was not granted (needs CAP_SYS_NICE); ran with normal priority")
+    _print_stats(rep, stats, config.command_mode)
+    rep.emit({"address": f"{h}:{p}", "client": f"{client_host}:{client_port}", "period_ms": period,
+              "fri_version": fri_version, **stats.to_dict(), "pendulum_path": pendulum_path})
+
+
+def _io_channels(io: list[str] | None, preset: str | None) -> tuple:
+    """The application's IO configuration: --io-preset's channels, then each --io."""
+    from ..fri.sim import IO_PRESETS, parse_io
+
+    channels = tuple(parse_io(text) for text in io or ())
+    if preset is None:
+        return channels
+    if preset not in IO_PRESETS:
+        raise OptionError(f"--io-preset: one of {', '.join(IO_PRESETS)}, got {preset!r}")
+    return IO_PRESETS[preset] + channels
+
+
+def _run_in_foreground(rep, config) -> tuple:
+    """Run the simulator here until the session ends or Ctrl-C/SIGTERM (each closes the session with IDLE messages; a
+    second Ctrl-C quits at once), printing the states as they change; (stats, pendulum path, address)."""
+    import signal
+
+    from ..fri.constants import ConnectionQuality, SessionState
+    from ..fri.sim import Simulator
+
     interrupted: list[int] = []  # signals received (SIGINT, SIGTERM)
 
     def on_state(state: SessionState, quality: ConnectionQuality, t: float) -> None:
         rep.print(f"{t:8.3f} s  {SessionState(state).name:<18} quality {ConnectionQuality(quality).name}")
-
-    sim_ = Simulator(config, stop=lambda: bool(interrupted), on_state=on_state)
-    h, p = sim_.address
-    rep.print(f"FRI {fri_version} simulator on {h}:{p}, sending every {period} ms to {client_host}:{client_port}, "
-              f"{config.command_mode} command mode (Ctrl-C stops)")
-    if sim_.pendulum_path is not None:
-        rep.print(f"pendulum module emulated on {sim_.pendulum_path}")
-    import signal
 
     def on_signal(signum: int, frame: object) -> None:
         if interrupted and signum == signal.SIGINT:
             raise KeyboardInterrupt  # a second Ctrl-C: do not wait for the closing IDLE messages
         interrupted.append(signum)
 
+    sim_ = Simulator(config, stop=lambda: bool(interrupted), on_state=on_state)
+    h, p = sim_.address
+    rep.print(f"FRI {config.version} simulator on {h}:{p}, sending every {config.period_ms} ms to {config.client_host}:"
+              f"{config.client_port}, {config.command_mode} command mode (Ctrl-C stops)")  # fmt: skip
+    if sim_.pendulum_path is not None:
+        rep.print(f"pendulum module emulated on {sim_.pendulum_path}")
     previous = signal.signal(signal.SIGINT, on_signal), signal.signal(signal.SIGTERM, on_signal)
     try:
-        stats = sim_.run()
+        return sim_.run(), sim_.pendulum_path, (h, p)
     finally:
         signal.signal(signal.SIGINT, previous[0])
         signal.signal(signal.SIGTERM, previous[1])
-    if realtime and not stats.realtime:
-        rep.warn("real-time scheduling was not granted (needs CAP_SYS_NICE); ran with normal priority")
-    figures = stats.to_dict()
-    figures["pendulum_path"] = sim_.pendulum_path
+
+
+def _print_stats(rep, stats, command_mode: str) -> None:
+    """The session statistics: the end, cycles and replies, timing, what was ignored or refused, the ball."""
     rep.print(
         f"end: {stats.end_reason or '-'}; {stats.cycles} cycles, {stats.replies} replies "
         f"({stats.late_replies} late, {stats.missed_replies} missed), {stats.commanded_rows} commands executed"
     )
     if stats.period_ms_p50 is not None:
-        rep.print(
-            f"send period p50 {stats.period_ms_p50:.3f} ms, p99 {stats.period_ms_p99:.3f} ms, "
-            f"max {stats.period_ms_max:.3f} ms"
-        )
+        rep.print(f"send period p50 {stats.period_ms_p50:.3f} ms, p99 {stats.period_ms_p99:.3f} ms, max {stats.period_ms_max:.3f} ms")
     if stats.reply_latency_ms_p50 is not None:
-        rep.print(
-            f"reply latency p50 {stats.reply_latency_ms_p50:.3f} ms, p99 {stats.reply_latency_ms_p99:.3f} ms, "
-            f"max {stats.reply_latency_ms_max:.3f} ms"
-        )
+        rep.print(f"reply latency p50 {stats.reply_latency_ms_p50:.3f} ms, p99 {stats.reply_latency_ms_p99:.3f} ms, "
+                  f"max {stats.reply_latency_ms_max:.3f} ms")  # fmt: skip
     if stats.foreign_received or stats.malformed_received:
         rep.print(f"ignored: {stats.foreign_received} foreign, {stats.malformed_received} malformed datagrams")
     if stats.io_writes or stats.io_refused:
         rep.print(f"IO: {stats.io_writes} writes applied, {stats.io_refused} refused (input or unknown channel)")
     if stats.incomplete_commands:
-        rep.print(f"{stats.incomplete_commands} commands lacked the {config.command_mode} the mode needs (taken as 0)")
+        rep.print(f"{stats.incomplete_commands} commands lacked the {command_mode} the mode needs (taken as 0)")
     if stats.command_problem:
         rep.print(f"[red]overlay ended[/red]: {stats.command_problem}")
     for name, fig in stats.transformations.items():
@@ -174,14 +202,10 @@ def sim(
     if stats.safety_stop:
         rep.print("[red]safety stop[/red]: a command was outside the position limits (or not a number)")
     if stats.max_ball_theta is not None:
-        import math
-
         rep.print(f"ball: max tilt {math.degrees(stats.max_ball_theta):.2f} deg")
         catch = stats.plants.get("ball", {}).get("cup")
         if catch is not None:
             rep.print("ball: " + ("caught in the cup" if catch["caught"] else f"not caught — {catch['failure']}"))
-    rep.emit({"address": f"{h}:{p}", "client": f"{client_host}:{client_port}", "period_ms": period,
-              "fri_version": fri_version, **figures})
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

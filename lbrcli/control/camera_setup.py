@@ -1,5 +1,6 @@
-"""`lbr control damp --sensor camera`: the camera's options checked and turned into the simulator's camera, the
-geometry the tracker assumes, and the check that this camera can see the sway the move makes."""
+"""`lbr control damp --sensor camera`: the camera's options (checked together at the CLI edge) turned into the
+simulator's camera, the geometry the tracker assumes, and the check that this camera can see the sway the move
+makes."""
 
 from __future__ import annotations
 
@@ -53,33 +54,6 @@ class CameraOptions:
 
     def sim_given(self) -> bool:
         return any(getattr(self, f.name) is not None for f in fields(self) if f.name.startswith("sim_"))
-
-    def validate(self, sensor: str, robot: str | None) -> None:
-        """OptionError on options that do not go together."""
-        if sensor != "camera":
-            if any(getattr(self, f.name) is not None for f in fields(self)):
-                raise OptionError("--camera, --geometry, --camera-* and --sim-camera-* apply to --sensor camera only")
-            return
-        if robot is not None and self.source is None:
-            raise OptionError("--camera SOURCE is needed with --sensor camera and --robot (a device, URL or file)")
-        if self.sim_given() and (robot is not None or self.source is not None):
-            raise OptionError("--sim-camera-* set the simulator's camera; not with --camera or --robot")
-        if self.geometry is not None and (self.position is not None or self.look_at is not None or self.fov is not None):
-            raise OptionError("give the camera's geometry either as --geometry FILE or as --camera-position/"
-                              "--camera-look-at/--camera-fov, not both")  # fmt: skip
-        if self.position is None and (self.look_at is not None or self.fov is not None):
-            raise OptionError("--camera-look-at and --camera-fov need --camera-position")
-        if self.source is not None and self.geometry is None and self.position is None:
-            raise OptionError("--camera needs the camera's geometry: --geometry CAMERA.json (as `lbr track live`) or "
-                              "--camera-position X,Y,Z with --camera-look-at X,Y,Z")  # fmt: skip
-        if self.position is not None and self.look_at is None and self.source is not None:
-            raise OptionError("--camera-position needs --camera-look-at (where the camera looks) with --camera")
-        for name, pos, look in (("--camera", self.position, self.look_at), ("--sim-camera", self.sim_position, self.sim_look_at)):
-            if pos is not None and look is not None and math.dist(pos, look) < 0.05:
-                raise OptionError(f"{name}-look-at must be at least 5 cm from {name}-position")
-        fps = self.sim_fps if self.sim_fps is not None else SIM_FPS
-        if self.sim_exposure_ms is not None and self.sim_exposure_ms > 1e3 / fps:
-            raise OptionError(f"--sim-camera-exposure {self.sim_exposure_ms:g} ms is longer than a frame at {fps:g} fps")
 
 
 def sim_camera_config(opts: CameraOptions, pivots_m: np.ndarray, string_m: float, sway_rad: np.ndarray):

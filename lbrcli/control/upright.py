@@ -78,7 +78,7 @@ class UprightClient(LBRClient):
     def command(self, state: LBRState) -> Sequence[float] | None:
         if self._last is None:
             self._check_start(state)
-            period = state.sample_time * state.receive_multiplier
+            period = self.command_period_s
             self._period = period
             self._move = OnlineMove(self.limits, period, self.move_scale)
             self._move.start(state.ipo_joint_position, self._q_start)

@@ -207,7 +207,7 @@ class ClientApplication(Replying, SessionEnding):
         self.connect()
         self._reset()
         self._clock = SessionClock(self.first_message_timeout_s, self.silence_timeout_s, duration_s)
-        self._started = True
+        self._started, self.client.command_period_s = True, None
         for o in list(self.observers):
             self._call_observer(o, "on_start", self)
 
@@ -312,7 +312,7 @@ class ClientApplication(Replying, SessionEnding):
         if state != IDLE and clock.learn_period(ci):
             self._motion = ExecutedMotion(self.limits, clock.period_s, self.max_force, self.max_moment,  # type: ignore[arg-type]
                                           self.hold_cycles, mon.monitorData.measuredJointPosition.value)  # fmt: skip
-            self.client.executed = self._motion
+            self.client.executed, self.client.command_period_s = self._motion, clock.period_s
             self._sup = Supervisor.from_limits(self.limits.velocity, ci.sendPeriod * 1e-3, clock.period_key[1],  # type: ignore[index]
                                                self.max_tracking_error, self.reply_gap_s, self.tracking_lag_s)  # fmt: skip
             if self.busy_wait_s > 0.0:

@@ -32,6 +32,8 @@ class LBRClient:
     robot_state: LBRState  # set by the application before the first callback
     robot_command: LBRCommand
     reply_due: bool = True  # set by the application: this cycle's command is sent (every k-th message)
+    command_period_s: float | None = None  # set by the application from the first message outside IDLE: [s] send
+    # period × receive multiplier, the period of the commands (None while unknown, or if the controller sends none)
     skipped: int = 0  # set by the application: command periods the controller bridged since the last command
     # (its messages to us were lost; it extrapolated) — a client that follows time should advance by them
     replies_lost: int = 0  # set by the application: our last command had not reached the controller when it sent

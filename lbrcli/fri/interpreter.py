@@ -13,9 +13,10 @@ SWITCH_INTERVAL_S = 1e-4  # [s] Python's GIL hand-over interval during a session
 
 @contextlib.contextmanager
 def loop_settings() -> Iterator[None]:
-    """Collect now, then no automatic collection (its pauses would land in cycles) and the short switch interval;
-    both restored after."""
-    gc.collect()
+    """No automatic collection (its pauses would land in cycles) and the short switch interval; both restored after.
+    The objects that exist are frozen rather than collected first: a full collection of a large heap (a long-lived
+    process, e.g. a notebook or a test worker) holds the GIL for tenths of a second while sensor threads wait."""
+    gc.freeze()
     was = gc.isenabled()
     gc.disable()
     switch = sys.getswitchinterval()
@@ -24,5 +25,6 @@ def loop_settings() -> Iterator[None]:
         yield
     finally:
         sys.setswitchinterval(switch)
+        gc.unfreeze()
         if was:
             gc.enable()

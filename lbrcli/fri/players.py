@@ -32,6 +32,17 @@ PHASE_NONE, PHASE_MOVE, PHASE_TRAJECTORY, PHASE_SETTLE = Phase.NONE, Phase.MOVE,
 PHASE_WAIT = Phase.WAIT
 
 
+MAX_SEND_PERIOD_MS = 100  # [ms] the longest send period a controller's FRI configuration takes (1..100)
+
+
+def whole_send_period_ms(step_s: float, receive_multiplier: int = 1) -> int | None:
+    """The send period [ms], a whole 1..100, at which rows ``step_s`` [s] apart are one per command (send period ×
+    ``receive_multiplier``); None when there is none."""
+    send_ms = step_s * 1e3 / receive_multiplier
+    whole = round(send_ms)
+    return whole if abs(send_ms - whole) <= 1e-6 and 1 <= whole <= MAX_SEND_PERIOD_MS else None
+
+
 class TrajectoryPlayer(LBRClient):
     """Streams ``rows`` (n, 7) [rad], one per sent command, at the controller's command period."""
 
@@ -106,7 +117,7 @@ class TrajectoryPlayer(LBRClient):
         self.operation_mode = state.operation_mode.name
         if self.period_s is None:
             return
-        got = state.sample_time * state.receive_multiplier
+        got = self.command_period_s or 0.0  # [s] (0: the controller sends no period)
         if abs(got - self.period_s) > 1e-9 and self.resample is not None:
             rows = np.asarray(self.resample(got), dtype=float)  # may raise StopSession (e.g. the check fails)
             self.rows = [tuple(r) for r in rows.tolist()]
@@ -160,7 +171,7 @@ class TrajectoryPlayer(LBRClient):
             self._check_start(state, "at activation")
             q0 = state.ipo_joint_position
             self._last = q0
-            period = self.period_s or state.sample_time * state.receive_multiplier
+            period = self.period_s or self.command_period_s
             self._period = period
             if self.settle_s is not None:
                 self.settle_cycles = int(round(self.settle_s / period))

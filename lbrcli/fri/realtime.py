@@ -45,7 +45,7 @@ def _lock_memory() -> None:
     if err == errno.EINVAL and libc.mlockall(MCL_CURRENT | MCL_FUTURE) == 0:  # a kernel before 4.4
         return
     err = ctypes.get_errno() or err
-    raise RealtimeRefused(f"--realtime: locking the memory (mlockall) was refused ({os.strerror(err)}): it needs "
+    raise RealtimeRefused(f"locking the memory (mlockall) was refused ({os.strerror(err)}): it needs "
                           "CAP_IPC_LOCK or a memlock limit above the process size (ulimit -l)")  # fmt: skip
 
 
@@ -54,17 +54,17 @@ def realtime(priority: int = DEFAULT_PRIORITY, cpu: int | None = None, lock_memo
     """SCHED_FIFO at ``priority``, pinned to ``cpu`` (None: the last allowed one), memory locked; yields the CPU.
     RealtimeRefused when the system does not permit one of them (nothing stays changed)."""
     if not hasattr(os, "sched_setscheduler") or not hasattr(os, "sched_setaffinity"):
-        raise RealtimeRefused("--realtime: this system has no SCHED_FIFO scheduling (Linux only)")
+        raise RealtimeRefused("this system has no SCHED_FIFO scheduling (Linux only)")
     old_policy, old_param = os.sched_getscheduler(0), os.sched_getparam(0)
     old_cpus = os.sched_getaffinity(0)
     cpu = max(old_cpus) if cpu is None else cpu
     if cpu not in old_cpus:
-        raise RealtimeRefused(f"--realtime: CPU {cpu} is not one this process may use ({sorted(old_cpus)})")
+        raise RealtimeRefused(f"CPU {cpu} is not one this process may use ({sorted(old_cpus)})")
     try:
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
     except OSError as exc:
-        raise RealtimeRefused(f"--realtime: real-time scheduling (SCHED_FIFO) was refused ({exc.strerror}): it needs "
-                              "root, CAP_SYS_NICE or an rtprio limit (ulimit -r); run without --realtime or grant "
+        raise RealtimeRefused(f"real-time scheduling (SCHED_FIFO) was refused ({exc.strerror}): it needs "
+                              "root, CAP_SYS_NICE or an rtprio limit (ulimit -r); run without real-time or grant "
                               "it") from None  # fmt: skip
     locked = False
     try:

@@ -25,7 +25,9 @@ import time
 from typing import Callable
 
 from .constants import MAX_DATAGRAM
-from .errors import FriError, InputError
+from trajectories.errors import SettingError
+
+from .errors import FriError
 
 RECV_TIMEOUT_S = 0.05  # [s] how often a blocked receive returns to look at clocks and interrupt flags
 DEFAULT_BUSY_WAIT_S = 0.0  # [s] polled before a message is due: none by default (block in the kernel; see above)
@@ -42,7 +44,7 @@ def resolve_ip(host: str) -> str:
     try:
         return socket.getaddrinfo(host, None, socket.AF_INET, socket.SOCK_DGRAM)[0][4][0]
     except (socket.gaierror, IndexError, UnicodeError):
-        raise InputError(f"--robot: cannot resolve {host!r} to an IPv4 address") from None
+        raise SettingError("UdpTransport", "robot", f"cannot resolve {host!r} to an IPv4 address") from None
 
 
 class UdpTransport:

@@ -20,27 +20,36 @@ _STATES = ("IDLE", "MONITORING_WAIT", "MONITORING_READY", "COMMANDING_WAIT", "CO
 
 @dataclass(frozen=True)
 class LabOptions:
-    """What the user attached: a serial port ('sim': the simulator's emulated module), an MQTT URL."""
+    """What the user attached: a serial port ('sim': the simulator's emulated module), an MQTT URL. Checked when
+    made (SettingError naming the field); :meth:`validate` checks them against the session."""
 
-    pendulum: str | None = None
-    baud: int = 115200
+    pendulum: str | None = None  # serial port of the pendulum module; "sim": the simulator's on a pseudo-terminal
+    baud: int = 115200  # [1/s] of the module's serial line
     pendulum_zero: int = 0  # encoder count of the hanging pendulum
-    mqtt: str | None = None
-    mqtt_rate_hz: float = 50.0
+    mqtt: str | None = None  # mqtt://[USER:PASSWORD@]HOST:PORT/TOPIC the state is published to
+    mqtt_rate_hz: float = 50.0  # [Hz] telemetry messages per second
+
+    def __post_init__(self) -> None:
+        from trajectories.errors import OptionError, SettingError
+
+        if self.baud <= 0:
+            raise SettingError(LabOptions, "baud", f"must be positive, got {self.baud}")
+        if not 0 <= self.pendulum_zero < 4096:
+            raise SettingError(LabOptions, "pendulum_zero", f"must be an encoder count 0..4095, got {self.pendulum_zero}")
+        if not (math.isfinite(self.mqtt_rate_hz) and 0 < self.mqtt_rate_hz <= 1000):
+            raise SettingError(LabOptions, "mqtt_rate_hz", f"must be in (0, 1000] Hz, got {self.mqtt_rate_hz:g}")
+        if self.mqtt is not None:
+            try:
+                parse_mqtt_url(self.mqtt, "")
+            except OptionError as exc:
+                raise SettingError(LabOptions, "mqtt", exc.message.lstrip(": ")) from None
 
     def validate(self, embedded: bool) -> None:
-        from trajectories.errors import OptionError
+        """SettingError when the attachments do not go with the session (``embedded``: on the built-in simulator)."""
+        from trajectories.errors import SettingError
 
         if self.pendulum == "sim" and not embedded:
-            raise OptionError("--pendulum sim emulates the module in the built-in simulator; not with --robot")
-        if self.baud <= 0:
-            raise OptionError(f"--baud must be positive, got {self.baud}")
-        if not 0 <= self.pendulum_zero < 4096:
-            raise OptionError(f"--pendulum-zero must be an encoder count 0..4095, got {self.pendulum_zero}")
-        if not (math.isfinite(self.mqtt_rate_hz) and 0 < self.mqtt_rate_hz <= 1000):
-            raise OptionError(f"--mqtt-rate must be in (0, 1000] Hz, got {self.mqtt_rate_hz:g}")
-        if self.mqtt is not None:
-            parse_mqtt_url(self.mqtt)
+            raise SettingError(LabOptions, "pendulum", "'sim' emulates the module in the built-in simulator; not with a robot")
 
 
 def snapshot(mon: Any, pendulum: PendulumReader | None) -> dict[str, Any]:

@@ -87,12 +87,12 @@ class PendulumReader:
         """Open the port (raises OptionError if it cannot be opened) and start reading."""
         import serial
 
-        from trajectories.errors import OptionError
+        from trajectories.errors import SettingError
 
         try:
             self._serial = serial.serial_for_url(self.port, baudrate=self.baud, timeout=0.05)
         except (serial.SerialException, OSError, ValueError) as exc:
-            raise OptionError(f"--pendulum: cannot open serial port {self.port}: {exc}") from None
+            raise SettingError(PendulumReader, "port", f"cannot open serial port {self.port}: {exc}") from None
         if self.threaded:
             self._thread = threading.Thread(target=self._run, name="pendulum-serial", daemon=True)
             self._thread.start()

@@ -21,12 +21,12 @@ def default_plants(
     0: none) with damping [1/s] hanging from the TCP, optionally the pendulum module emulated on a pty at
     ``pendulum_rate_hz`` [Hz]. The ball hangs from the simulator's TCP: the tool offset is ``SimConfig.tool``;
     ``model`` (``planners.string_model.StringModel``) gives another ball and the cup on the flange.
-    OptionError on bad values."""
-    from trajectories.errors import OptionError
+    SettingError naming the field of a bad value."""
+    from trajectories.errors import SettingError
 
     if not ball_length:
         if pendulum_pty:
-            raise OptionError("the pendulum module emulation needs a simulated ball (--length)")
+            raise SettingError("default_plants", "ball_length", "the pendulum module emulation needs a simulated ball")
         return ()
     plants: tuple = (BallSpec(ball_length, ball_damping, model=model),)
     if pendulum_pty:

@@ -16,7 +16,7 @@ import math
 from dataclasses import dataclass
 from typing import Sequence
 
-from trajectories.errors import OptionError
+from trajectories.errors import SettingError
 
 from .tcp_acceleration import TcpAcceleration
 
@@ -24,6 +24,16 @@ BALL_IO_NAMES = ("ball_theta", "ball_phi", "ball_theta_x", "ball_theta_y", "ball
 """The simulated ball's analog inputs (and log columns): angles [rad], position [m] in the base frame, phase (taut,
 slack, in the cup)."""
 MAX_INTERVAL_S = 0.005  # [s] the stepper's longest interval (a longer controller period is split)
+STRING_LENGTH_M = (0.01, 5.0)  # [m] the string lengths (anchor to ball centre) a ball may have: the one rule of the
+# simulated ball's and the damper's string length options (0 where a command takes it for "no ball")
+
+
+def string_length_problem(length: float) -> str | None:
+    """Why ``length`` [m] cannot be a ball's string (outside :data:`STRING_LENGTH_M`), or None."""
+    low, high = STRING_LENGTH_M
+    if math.isfinite(length) and low <= length <= high:
+        return None
+    return f"the string length must be in [{low:g}, {high:g}] m, got {length:g}"
 
 
 @dataclass(frozen=True)
@@ -36,17 +46,22 @@ class BallSpec:
     io_delay_ms: float = 0.0  # [ms] the IO values show the ball this much later (rounded to whole cycles)
     model: object = None  # planners.string_model.StringModel; None: the default ball, no cup
 
+    def __post_init__(self) -> None:
+        self.validate()
+
     def validate(self) -> None:
-        if not (math.isfinite(self.length) and self.length > 0):
-            raise OptionError(f"--length: string length must be > 0 m, got {self.length:g}")
+        """SettingError naming the field (``BallSpec.length`` …) that is out of range."""
+        problem = string_length_problem(self.length)
+        if problem:
+            raise SettingError(BallSpec, "length", problem)
         if not (math.isfinite(self.damping) and self.damping >= 0):
-            raise OptionError(f"--damping: must be >= 0 1/s, got {self.damping:g}")
+            raise SettingError(BallSpec, "damping", f"must be >= 0 1/s, got {self.damping:g}")
         if not (math.isfinite(self.io_delay_ms) and 0 <= self.io_delay_ms <= 1000):
-            raise OptionError(f"--sim-delay: must be 0..1000 ms, got {self.io_delay_ms:g}")
+            raise SettingError(BallSpec, "io_delay_ms", f"must be 0..1000 ms, got {self.io_delay_ms:g}")
         try:
             self.string_model().validate()
         except ValueError as exc:
-            raise OptionError(f"--cup: {exc}") from None
+            raise SettingError(BallSpec, "model", str(exc)) from None
 
     def string_model(self):
         """The string model this ball follows (length and damping from the spec)."""
@@ -57,8 +72,7 @@ class BallSpec:
         base = self.model if self.model is not None else StringModel(self.length, cup=None)
         return replace(base, length=self.length, damping=self.damping)
 
-    def build(self, context) -> "Ball":
-        self.validate()
+    def build(self, context) -> "Ball":  # (checked when it was made)
         pose = context.robot.fk(context.q0)
         return Ball(self, context.period_s, pose.translation.tolist(), pose.rotation)
 

@@ -25,7 +25,7 @@ from typing import Sequence
 
 import numpy as np
 
-from trajectories.errors import OptionError
+from trajectories.errors import OptionError, SettingError
 
 RING_ROWS = 4096  # samples kept (≥ 4 s at 1 ms cycles); a frame looks back at most exposure + latency
 _WAIT_S = 0.05  # [s] longest wait for the simulator to reach a frame's moment (then the newest sample is shown)
@@ -119,7 +119,7 @@ class SimCameraSpec:
         self.validate()
         ball = next((p for p in context.plants if isinstance(p, Ball)), None)
         if ball is None:
-            raise OptionError("the simulated camera needs a simulated ball (--length)")
+            raise SettingError(SimCameraSpec, "ball", "the simulated camera needs a simulated ball before it")
         return SimCamera(SceneRing(self.ring_path), ball, context.robot.fk(context.q0).translation)
 
 

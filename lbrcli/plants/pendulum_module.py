@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass
 from typing import Sequence
 
-from trajectories.errors import OptionError
+from trajectories.errors import OptionError, SettingError
 
 
 @dataclass(frozen=True)
@@ -34,7 +34,7 @@ class PendulumModuleSpec:
         self.validate()
         ball = next((p for p in context.plants if isinstance(p, Ball)), None)
         if ball is None:
-            raise OptionError("the pendulum module emulation needs a simulated ball (--length)")
+            raise SettingError(PendulumModuleSpec, "ball", "the pendulum module emulation needs a simulated ball before it")
         module = PendulumModule(self, ball, context.period_s)
         module._emu.settle_s = LOCKSTEP_SETTLE_S if context.lockstep else 0.0
         return module

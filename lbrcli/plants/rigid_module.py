@@ -27,7 +27,7 @@ import numpy as np
 from lbrcli.lab.pendulum_serial import COUNTS_PER_TURN as COUNTS
 from lbrcli.lab.pendulum_serial import format_line
 from planners.rigid_pendulum import RigidPendulum, rk4_step, wrap_angle
-from trajectories.errors import OptionError
+from trajectories.errors import OptionError, SettingError
 
 from .tcp_acceleration import TcpAcceleration
 
@@ -55,22 +55,24 @@ class RigidModuleSpec:
         try:
             self.pendulum.validate()
         except ValueError as exc:
-            raise OptionError(f"pendulum module: {exc}") from None
+            raise SettingError(RigidModuleSpec, "pendulum", str(exc)) from None
         if not (math.isfinite(self.rate_hz) and 1.0 <= self.rate_hz <= 10000.0):
-            raise OptionError(f"--sensor-rate must be 1..10000 Hz, got {self.rate_hz:g}")
+            raise SettingError(RigidModuleSpec, "rate_hz", f"must be 1..10000 Hz, got {self.rate_hz:g}")
         if not (math.isfinite(self.delay_ms) and 0 <= self.delay_ms <= 500):
-            raise OptionError(f"--sensor-delay must be 0..500 ms, got {self.delay_ms:g}")
+            raise SettingError(RigidModuleSpec, "delay_ms", f"must be 0..500 ms, got {self.delay_ms:g}")
         if not (math.isfinite(self.jitter_ms) and 0 <= self.jitter_ms <= 500):
-            raise OptionError(f"--sensor-jitter must be 0..500 ms, got {self.jitter_ms:g}")
+            raise SettingError(RigidModuleSpec, "jitter_ms", f"must be 0..500 ms, got {self.jitter_ms:g}")
         if not (math.isfinite(self.phi0) and math.isfinite(self.omega0)):
-            raise OptionError("the pendulum's start angle and rate must be finite")
+            raise SettingError(RigidModuleSpec, "phi0", "the pendulum's start angle and rate must be finite")
         for t, d in self.pushes:
             if not (math.isfinite(t) and t >= 0 and math.isfinite(d)):
-                raise OptionError(f"--push: need a time >= 0 s and a finite angle, got {t:g} s, {d:g} rad")
-        if not 0 <= self.noise_counts <= 100 or self.sign not in (1, -1):
-            raise OptionError("--sim-noise must be 0..100 counts and --sim-encoder-sign 1 or -1")
+                raise SettingError(RigidModuleSpec, "pushes", f"need a time >= 0 s and a finite angle, got {t:g} s, {d:g} rad")
+        if not 0 <= self.noise_counts <= 100:
+            raise SettingError(RigidModuleSpec, "noise_counts", f"must be 0..100 counts, got {self.noise_counts}")
+        if self.sign not in (1, -1):
+            raise SettingError(RigidModuleSpec, "sign", f"must be 1 or -1, got {self.sign}")
         if not 0 <= self.zero_count < COUNTS:
-            raise OptionError(f"--pendulum-zero must be an encoder count 0..4095, got {self.zero_count}")
+            raise SettingError(RigidModuleSpec, "zero_count", f"must be an encoder count 0..4095, got {self.zero_count}")
 
     def build(self, context) -> "RigidModule":
         self.validate()

@@ -1,5 +1,5 @@
 """Execution logs and plans as an MCAP file in ROS 2's standard messages (rosbag2's layout: ``cdr`` messages,
-``ros2msg`` schemas), written with Foxglove's SDK. Topics (``lbr`` is ``--prefix``):
+``ros2msg`` schemas), written in bulk (:mod:`.bulk`). Topics (``lbr`` is ``--prefix``):
 
 | topic | type | from |
 |---|---|---|
@@ -20,10 +20,6 @@ its own from 0, with a log placed where the log commanded its first row.
 
 from __future__ import annotations
 
-import errno
-import logging
-import os
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,7 +29,7 @@ from trajectories.description import joint_names, link_names
 from trajectories.trajectory import N_JOINTS
 
 from . import msgs
-from .cdr import stamps
+from .cdr import Layout, stamps
 
 LATCHED_QOS = ("- history: keep_last\n  depth: 1\n  reliability: reliable\n  durability: transient_local\n"
                "  deadline:\n    sec: 0\n    nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n"
@@ -71,8 +67,12 @@ def read_log_series(table) -> LogSeries:
     """The bag's view of an execution log (``table``: trajectories.csvio.Table with LOG_COLUMNS)."""
     ns, clock = log_times(table)
 
-    def joints(prefix: str) -> np.ndarray:
-        return np.column_stack([table.column(f"{prefix}{i}") for i in range(1, N_JOINTS + 1)])
+    def joints(prefix: str) -> np.ndarray:  # (n, 7): a view of the table when the columns are in order
+        names = tuple(f"{prefix}{i}" for i in range(1, N_JOINTS + 1))
+        first = table.names.index(names[0])
+        if table.names[first:first + N_JOINTS] == names:
+            return table.data[:, first:first + N_JOINTS]
+        return np.column_stack([table.column(name) for name in names])
 
     direction = None
     if table.has("ball_theta") and table.has("ball_phi"):
@@ -88,173 +88,133 @@ def read_log_series(table) -> LogSeries:
 
 
 def joint_transforms(robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Parent → child transforms of joints A1..A7 along q (n, 7): translations (n, 7, 3) [m] and quaternions
+    """Parent → child transforms of joints A1..A7 along q (n, 7): translations (7, 3) [m] (fixed) and quaternions
     (n, 7, 4) as (x, y, z, w) — each joint's placement in the model followed by its rotation about z."""
     from scipy.spatial.transform import Rotation
 
-    n = len(q)
-    trans = np.empty((n, N_JOINTS, 3))
-    quat = np.empty((n, N_JOINTS, 4))
+    trans = np.empty((N_JOINTS, 3))
+    quat = np.empty((len(q), N_JOINTS, 4))
     for i in range(N_JOINTS):
         placement = robot.model.jointPlacements[i + 1]
         px, py, pz, pw = Rotation.from_matrix(placement.rotation).as_quat()
         c, s = np.cos(q[:, i] / 2), np.sin(q[:, i] / 2)  # placement ⊗ (c, 0, 0, s)
         quat[:, i] = np.column_stack([px * c + py * s, py * c - px * s, pz * c + pw * s, pw * c - pz * s])
-        trans[:, i] = placement.translation
+        trans[i] = placement.translation
     return trans, quat
 
 
-class _WriterErrors(logging.Handler):
-    """Collects what foxglove-sdk logs about failed writes (it logs the I/O error, then raises a bare RuntimeError
-    at the next write): kept for the error message, not printed."""
+def _rotate(x, y, z, w, v) -> tuple:
+    """v (3,) rotated by unit quaternions with components x, y, z, w (n,): v + w t + u × t with t = 2 u × v."""
+    tx, ty, tz = 2 * (y * v[2] - z * v[1]), 2 * (z * v[0] - x * v[2]), 2 * (x * v[1] - y * v[0])
+    return v[0] + w * tx + (y * tz - z * ty), v[1] + w * ty + (z * tx - x * tz), v[2] + w * tz + (x * ty - y * tx)
 
-    def __init__(self) -> None:
-        super().__init__(logging.WARNING)
-        self.messages: list[str] = []
 
-    def emit(self, record: logging.LogRecord) -> None:
-        self.messages.append(record.getMessage())
+def chain_positions(trans: np.ndarray, quat: np.ndarray, tip: np.ndarray) -> np.ndarray:
+    """(n, 3) [m] in the base: the point ``tip`` (3,) of the last joint's frame through the joint transforms of
+    :func:`joint_transforms` — what a TF client composes from /tf (quaternion products component by component)."""
+    x, y, z, w = quat[:, 0].T
+    p = trans[0]
+    for i in range(1, len(trans)):
+        p = tuple(a + b for a, b in zip(p, _rotate(x, y, z, w, trans[i])))
+        bx, by, bz, bw = quat[:, i].T
+        x, y, z, w = (w * bx + x * bw + y * bz - z * by, w * by - x * bz + y * bw + z * bx,
+                      w * bz + x * by - y * bx + z * bw, w * bw - x * bx - y * by - z * bz)
+    return np.column_stack([a + b for a, b in zip(p, _rotate(x, y, z, w, tip))])
 
 
 class Bag:
-    """An MCAP file being written (foxglove-sdk's writer in a context of its own). A write the medium refuses (a
-    full disk, a quota, a file-size limit) is an OSError with its errno (``atomic_path`` names the user's file)."""
+    """An MCAP file being built (rosbag2's layout, written in bulk by :mod:`.bulk` when closed). A write the medium
+    refuses (a full disk, a quota, a file-size limit) is an OSError with its errno (``atomic_path`` names the file)."""
 
     def __init__(self, path: Path, compression: str = "zstd") -> None:
-        import foxglove
-        from foxglove.mcap import MCAPCompression, MCAPWriteOptions
+        from .bulk import BulkWriter
 
         self.path = path
-        self._errors = _WriterErrors()
-        logging.getLogger("foxglove").addHandler(self._errors)
-        codec = {"zstd": MCAPCompression.Zstd, "lz4": MCAPCompression.Lz4, "none": None}[compression]
-        self.context = foxglove.Context()
-        self.writer = foxglove.open_mcap(str(path), allow_overwrite=True, context=self.context,
-                                         writer_options=MCAPWriteOptions(compression=codec, profile="ros2"))
-        self.channels: dict[str, object] = {}
+        self.writer = BulkWriter(compression, profile="ros2", library="lbr")
+        self.channels: dict[str, int] = {}
         self.counts: dict[str, int] = {}
 
-    def channel(self, topic: str, short_type: str, latched: bool = False):
-        import foxglove
-
+    def channel(self, topic: str, short_type: str, latched: bool = False) -> int:
         if topic not in self.channels:
-            schema = foxglove.Schema(name=msgs.type_name(short_type), encoding="ros2msg",
-                                     data=msgs.definition(short_type).encode())
+            schema = self.writer.schema(msgs.type_name(short_type), "ros2msg", msgs.definition(short_type).encode())
             metadata = {"offered_qos_profiles": LATCHED_QOS} if latched else None
-            self.channels[topic] = foxglove.Channel(topic, schema=schema, message_encoding="cdr",
-                                                    context=self.context, metadata=metadata)
+            self.channels[topic] = self.writer.channel(topic, "cdr", schema, metadata)
             self.counts[topic] = 0
         return self.channels[topic]
 
-    def _write(self, topic: str, short_type: str, times_ns: np.ndarray, data: np.ndarray | list[bytes],
-               latched: bool) -> None:
-        log = self.channel(topic, short_type, latched).base.log  # bytes straight to the writer's core
-        if isinstance(data, list):
-            for when, row in zip(times_ns.tolist(), data):
-                log(row, when, None)
-        else:  # one bytes object, sliced per message (C-speed), not a Python object per row first
-            blob, size = data.tobytes(), data.shape[1]
-            for k, when in enumerate(times_ns.tolist()):
-                log(blob[k * size:(k + 1) * size], when, None)
+    def write(self, topic: str, short_type: str, times_ns: np.ndarray, message: Layout | bytes,
+              values: dict[str, np.ndarray] | None = None, latched: bool = False) -> None:
+        """Messages at ``times_ns``: a layout with its slots' ``values`` (arrays over the messages or constants), or
+        one message's bytes."""
+        layout = message if isinstance(message, Layout) else Layout(bytearray(message))
+        self.writer.add(self.channel(topic, short_type, latched), times_ns, layout.buf, layout.slots, values)
         self.counts[topic] += len(times_ns)
 
-    def write(self, topic: str, short_type: str, times_ns: np.ndarray, data: np.ndarray | list[bytes],
-              latched: bool = False) -> None:
-        """One message per row of ``data`` ((n, size) bytes) at ``times_ns``."""
-        try:
-            self._write(topic, short_type, times_ns, data, latched)
-        except RuntimeError as exc:
-            raise self._failed(exc) from None
+    def attach(self, name: str, media_type: str, data: bytes, time_ns: int) -> None:
+        self.writer.attach(name, media_type, data, log_time=time_ns, create_time=time_ns)
 
     def close(self) -> None:
-        try:
-            self.writer.close()
-        except RuntimeError as exc:
-            raise self._failed(exc) from None
-        finally:
-            logging.getLogger("foxglove").removeHandler(self._errors)
-
-    def _failed(self, exc: RuntimeError) -> OSError:
-        """The OSError behind a failed write: the errno foxglove logged (``Os { code: 28, … }``), else the one a
-        probe write to the (doomed, temporary) file meets — a full disk, a quota, a file-size limit —, else EIO."""
-        logged = " ".join(self._errors.messages)
-        found = re.search(r"Os \{ code: (\d+)", logged)
-        if found:
-            return OSError(int(found.group(1)), f"the MCAP writer failed: {logged}")
-        try:
-            with open(self.path, "ab") as fh:
-                fh.write(b"\0" * 65536)
-                fh.flush()
-                os.fsync(fh.fileno())
-        except OSError as probe:
-            return OSError(probe.errno, f"the MCAP writer failed: {probe.strerror}")
-        return OSError(errno.EIO, f"the MCAP writer failed: {exc}")
+        with open(self.path, "wb") as fh:
+            self.writer.write(fh)
 
 
-def _joint_state_topic(bag: Bag, topic: str, names, ns, sec, nsec, position=None, velocity=None, effort=None):
+def _joint_state_topic(bag: Bag, topic: str, names, ns, stamp, position=None, velocity=None, effort=None):
     layout = msgs.joint_state(names, position=position is not None, velocity=velocity is not None,
                               effort=effort is not None)
-    values = {"stamp.sec": sec, "stamp.nanosec": nsec}
+    values = {"stamp": stamp}
     for key, arr in (("position", position), ("velocity", velocity), ("effort", effort)):
         if arr is not None:
             values[key] = arr
-    bag.write(topic, "sensor_msgs/JointState", ns, layout.fill(len(ns), values))
+    bag.write(topic, "sensor_msgs/JointState", ns, layout, values)
 
 
-def write_tf(bag: Bag, robot, prefix: str, ns: np.ndarray, q: np.ndarray, ball: np.ndarray | None = None) -> None:
-    """/tf of the arm along q (and the ball's frame), /tf_static of the flange and TCP (at the first time)."""
+def write_tf(bag: Bag, robot, prefix: str, ns: np.ndarray, trans: np.ndarray, quat: np.ndarray,
+             ball: np.ndarray | None = None) -> None:
+    """/tf of the arm (the joint transforms of :func:`joint_transforms`) and the ball's frame, /tf_static of the
+    flange and TCP (at the first time)."""
+    from scipy.spatial.transform import Rotation
+
     links = link_names(prefix)
+    stamp = stamps(ns)
     edges = tuple((links[i], links[i + 1]) for i in range(N_JOINTS))
-    trans, quat = joint_transforms(robot, q)
+    values = {}
+    for k in range(N_JOINTS):
+        values[f"stamp{k}"], values[f"t{k}"], values[f"r{k}"] = stamp, trans[k], quat[:, k]
     if ball is not None:
         edges += ((links[0], f"{prefix}_ball"),)
-        trans = np.concatenate([trans, np.nan_to_num(ball)[:, None, :]], axis=1)
-        quat = np.concatenate([quat, np.tile([0.0, 0.0, 0.0, 1.0], (len(q), 1, 1))], axis=1)
-    sec, nsec = stamps(ns)
-    values = {}
-    for k in range(len(edges)):
-        values[f"stamp{k}.sec"], values[f"stamp{k}.nanosec"] = sec, nsec
-        for j, axis in enumerate("xyz"):
-            values[f"t{k}.{axis}"] = trans[:, k, j]
-        for j, axis in enumerate("xyzw"):
-            values[f"r{k}.{axis}"] = quat[:, k, j]
-    bag.write("/tf", "tf2_msgs/TFMessage", ns, msgs.tf_message(edges).fill(len(ns), values))
+        k = N_JOINTS
+        values[f"stamp{k}"], values[f"t{k}"], values[f"r{k}"] = stamp, np.nan_to_num(ball), np.array([0, 0, 0, 1.0])
+    bag.write("/tf", "tf2_msgs/TFMessage", ns, msgs.tf_message(edges), values)
     model = robot.model
     flange = model.frames[robot.flange_id].placement
     tcp = flange.inverse() * model.frames[robot.tcp_id].placement
     static = msgs.tf_message(((links[N_JOINTS], links[-2]), (links[-2], links[-1])))
     fixed = {}
-    from scipy.spatial.transform import Rotation
-
     for k, placement in enumerate((flange, tcp)):
-        fixed[f"stamp{k}.sec"], fixed[f"stamp{k}.nanosec"] = sec[:1], nsec[:1]
-        for j, axis in enumerate("xyz"):
-            fixed[f"t{k}.{axis}"] = placement.translation[j]
-        for j, axis in enumerate("xyzw"):
-            fixed[f"r{k}.{axis}"] = Rotation.from_matrix(placement.rotation).as_quat()[j]
-    bag.write("/tf_static", "tf2_msgs/TFMessage", ns[:1], static.fill(1, fixed), latched=True)
+        fixed[f"stamp{k}"], fixed[f"t{k}"] = stamp[:1], placement.translation
+        fixed[f"r{k}"] = Rotation.from_matrix(placement.rotation).as_quat()
+    bag.write("/tf_static", "tf2_msgs/TFMessage", ns[:1], static, fixed, latched=True)
 
 
 def write_log(bag: Bag, series: LogSeries, robot, prefix: str, length: float) -> None:
     """Every topic of an execution log."""
     names = joint_names(prefix)
     ns = series.time_ns
-    sec, nsec = stamps(ns)
-    _joint_state_topic(bag, f"/{prefix}/joint_states", names, ns, sec, nsec, position=series.msr_q,
+    stamp = stamps(ns)
+    _joint_state_topic(bag, f"/{prefix}/joint_states", names, ns, stamp, position=series.msr_q,
                        effort=series.msr_tau)
-    _joint_state_topic(bag, f"/{prefix}/command/joint_states", names, ns, sec, nsec, position=series.cmd_q,
+    _joint_state_topic(bag, f"/{prefix}/command/joint_states", names, ns, stamp, position=series.cmd_q,
                        effort=series.cmd_tau)
-    _joint_state_topic(bag, f"/{prefix}/ipo/joint_states", names, ns, sec, nsec, position=series.ipo_q)
-    _joint_state_topic(bag, f"/{prefix}/external_torque", names, ns, sec, nsec, effort=series.ext_tau)
+    _joint_state_topic(bag, f"/{prefix}/ipo/joint_states", names, ns, stamp, position=series.ipo_q)
+    _joint_state_topic(bag, f"/{prefix}/external_torque", names, ns, stamp, effort=series.ext_tau)
+    trans, quat = joint_transforms(robot, series.msr_q)
     ball = None
     if series.ball_direction is not None:
-        tcp = robot.link_frames(series.msr_q)[:, N_JOINTS + 1, :3, 3]
+        tcp = chain_positions(trans, quat, robot.model.frames[robot.tcp_id].placement.translation)
         ball = tcp + length * series.ball_direction
-        layout = msgs.point_stamped(link_names(prefix)[0])
-        bag.write(f"/{prefix}/ball", "geometry_msgs/PointStamped", ns,
-                  layout.fill(len(ns), {"stamp.sec": sec, "stamp.nanosec": nsec, "x": ball[:, 0], "y": ball[:, 1],
-                                        "z": ball[:, 2]}))
-    write_tf(bag, robot, prefix, ns, series.msr_q, ball)
+        bag.write(f"/{prefix}/ball", "geometry_msgs/PointStamped", ns, msgs.point_stamped(link_names(prefix)[0]),
+                  {"stamp": stamp, "point": ball})
+    write_tf(bag, robot, prefix, ns, trans, quat, ball)
 
 
 def write_plan(bag: Bag, t: np.ndarray, q: np.ndarray, robot, prefix: str, start_ns: int, with_tf: bool) -> None:
@@ -266,18 +226,16 @@ def write_plan(bag: Bag, t: np.ndarray, q: np.ndarray, robot, prefix: str, start
     qd[[0, -1]] = qdd[[0, -1]] = 0.0  # plans start and end at rest (lbr check)
     names = joint_names(prefix)
     ns = start_ns + np.round(t * 1e9).astype(np.int64)
-    sec, nsec = stamps(ns)
-    _joint_state_topic(bag, f"/{prefix}/plan/joint_states", names, ns, sec, nsec, position=q, velocity=qd)
+    _joint_state_topic(bag, f"/{prefix}/plan/joint_states", names, ns, stamps(ns), position=q, velocity=qd)
     message = msgs.joint_trajectory(names, t, q, qd, qdd)
     bag.write(f"/{prefix}/joint_trajectory_controller/joint_trajectory", "trajectory_msgs/JointTrajectory",
-              ns[:1], [message])
+              ns[:1], message)
     if with_tf:
-        write_tf(bag, robot, prefix, ns, q)
+        write_tf(bag, robot, prefix, ns, *joint_transforms(robot, q))
 
 
 def write_description(bag: Bag, urdf: str, prefix: str, time_ns: int) -> None:
     """The URDF as a latched std_msgs/String and as the attachment robot_description.urdf."""
-    bag.write(f"/{prefix}/robot_description", "std_msgs/String", np.array([time_ns]), [msgs.string_message(urdf)],
+    bag.write(f"/{prefix}/robot_description", "std_msgs/String", np.array([time_ns]), msgs.string_message(urdf),
               latched=True)
-    bag.writer.attach(log_time=time_ns, create_time=time_ns, name="robot_description.urdf",
-                      media_type="application/xml", data=urdf.encode())
+    bag.attach("robot_description.urdf", "application/xml", urdf.encode(), time_ns)

@@ -37,9 +37,9 @@ class Layout:
         self.buf += bytes(size * count)
 
     def stamp(self, name: str) -> None:
-        """builtin_interfaces/Time: int32 sec, uint32 nanosec (slots ``name.sec``, ``name.nanosec``)."""
-        self._slot(f"{name}.sec", "<i4", 1)
-        self._slot(f"{name}.nanosec", "<u4", 1)
+        """builtin_interfaces/Time: int32 sec, uint32 nanosec — one slot ``name`` of two int32 (sec, nanosec), the
+        same bytes since nanosec < 10^9 < 2^31 (values from :func:`stamps`)."""
+        self._slot(name, "<i4", 2)
 
     def string(self, text: str) -> None:
         data = text.encode() + b"\x00"
@@ -63,8 +63,9 @@ class Layout:
         if n:
             self._slot(name, "<f8", n)
 
-    def float64(self, name: str) -> None:
-        self._slot(name, "<f8", 1)
+    def float64(self, name: str, n: int = 1) -> None:
+        """n consecutive float64 fields (a Vector3, a Quaternion, ...) as one slot."""
+        self._slot(name, "<f8", n)
 
     def fill(self, n: int, values: dict[str, np.ndarray]) -> np.ndarray:
         """(n, size) bytes: n messages, slot ``name`` of message k set to ``values[name][k]`` (missing slots 0)."""
@@ -81,7 +82,7 @@ class Layout:
         return out
 
 
-def stamps(ns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(sec, nanosec) of times in integer nanoseconds."""
+def stamps(ns: np.ndarray) -> np.ndarray:
+    """(..., 2) [sec, nanosec] of times in integer nanoseconds (the value of a :meth:`Layout.stamp` slot)."""
     ns = np.asarray(ns, dtype=np.int64)
-    return ns // 1_000_000_000, ns % 1_000_000_000
+    return np.stack([ns // 1_000_000_000, ns % 1_000_000_000], axis=-1)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .cdr import Layout
+from .cdr import Layout, stamps
 
 _DEFS = {
     "builtin_interfaces/Time": "int32 sec\nuint32 nanosec\n",
@@ -78,14 +78,13 @@ def joint_state(names: tuple[str, ...], frame_id: str = "", position: bool = Tru
 def _transform(layout: Layout, k: int, parent: str, child: str) -> None:
     header(layout, f"stamp{k}", parent)
     layout.string(child)
-    for axis in "xyz":
-        layout.float64(f"t{k}.{axis}")
-    for axis in "xyzw":
-        layout.float64(f"r{k}.{axis}")
+    layout.float64(f"t{k}", 3)
+    layout.float64(f"r{k}", 4)
 
 
 def tf_message(edges: tuple[tuple[str, str], ...]) -> Layout:
-    """tf2_msgs/TFMessage of transforms parent → child (slots ``stamp{k}``, ``t{k}.x..z``, ``r{k}.x..w``)."""
+    """tf2_msgs/TFMessage of transforms parent → child (slots ``stamp{k}``, translation ``t{k}`` (x, y, z) [m],
+    rotation ``r{k}`` (x, y, z, w))."""
     layout = Layout()
     layout.count(len(edges))
     for k, (parent, child) in enumerate(edges):
@@ -94,11 +93,10 @@ def tf_message(edges: tuple[tuple[str, str], ...]) -> Layout:
 
 
 def point_stamped(frame_id: str) -> Layout:
-    """geometry_msgs/PointStamped (slots ``stamp``, ``x``, ``y``, ``z``)."""
+    """geometry_msgs/PointStamped (slots ``stamp``, ``point`` (x, y, z) [m])."""
     layout = Layout()
     header(layout, "stamp", frame_id)
-    for axis in "xyz":
-        layout.float64(axis)
+    layout.float64("point", 3)
     return layout
 
 
@@ -123,10 +121,8 @@ def joint_trajectory(names: tuple[str, ...], t: np.ndarray, q: np.ndarray, qd: n
             layout.float64s(f"{field}{k}", n)
         layout.float64s(f"e{k}", 0)
         layout.stamp(f"d{k}")
-    ns = np.round(np.asarray(t, dtype=float) * 1e9).astype(np.int64)
-    values: dict[str, np.ndarray] = {"stamp.sec": np.array(stamp_ns // 1_000_000_000),
-                                     "stamp.nanosec": np.array(stamp_ns % 1_000_000_000)}
+    durations = stamps(np.round(np.asarray(t, dtype=float) * 1e9).astype(np.int64))
+    values: dict[str, np.ndarray] = {"stamp": stamps(stamp_ns)}
     for k in range(len(t)):
-        values[f"p{k}"], values[f"v{k}"], values[f"a{k}"] = q[k], qd[k], qdd[k]
-        values[f"d{k}.sec"], values[f"d{k}.nanosec"] = ns[k] // 1_000_000_000, ns[k] % 1_000_000_000
+        values[f"p{k}"], values[f"v{k}"], values[f"a{k}"], values[f"d{k}"] = q[k], qd[k], qdd[k], durations[k]
     return layout.fill(1, values)[0].tobytes()

@@ -8,8 +8,10 @@ after a crash, or one with a longer grid or more samples.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import signal
 import time
 from pathlib import Path
 from typing import Iterator
@@ -31,6 +33,19 @@ def read_records(path: Path) -> Iterator[dict]:
             if isinstance(rec, dict) and "key" in rec:
                 yield rec
 
+
+
+@contextlib.contextmanager
+def _interrupts_deferred():
+    """SIGINT held back while the block runs (delivered right after it), where the platform allows it."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 class RunStore:
     """The completed runs of a results folder, by key; :meth:`add` appends one."""
@@ -57,9 +72,11 @@ class RunStore:
             self._fh = open(self.path, "a", encoding="utf-8")
             if self._fh.tell() and not self._ends_with_newline():
                 self._fh.write("\n")  # after a torn line: start on a fresh one
-        self._fh.write(json.dumps(rec, separators=(",", ":"), allow_nan=False) + "\n")
-        self._fh.flush()
-        self.records[rec["key"]] = rec
+        line = json.dumps(rec, separators=(",", ":"), allow_nan=False) + "\n"
+        with _interrupts_deferred():  # a Ctrl-C between the write and the record would leave the file a run ahead
+            self._fh.write(line)
+            self._fh.flush()
+            self.records[rec["key"]] = rec
         if time.monotonic() - self._synced >= SYNC_EVERY_S:
             self.sync()
         return True

@@ -22,13 +22,15 @@ CAMERA_LOOK_AT = (0.3, 0.0, 0.55)
 
 def start_server(host: str = "127.0.0.1", port: int = 8080):
     """A viser server bound to ``host`` (loopback by default; port 0: any free port), its banner kept off stdout
-    (``--json`` prints one object there) and its share button hidden (sharing would open a tunnel to the internet).
+    (``--json`` prints one object there), its share button hidden (sharing would open a tunnel to the internet) and
+    its control panel docked to the right edge (collapsible, off the scene).
     """
     import viser
 
     with contextlib.redirect_stdout(io.StringIO()):  # viser's banner: `lbr view` prints the URL itself
         server = viser.ViserServer(host=host, port=port, verbose=False)
-    server.gui.configure_theme(show_share_button=False, control_layout="collapsible")
+    server.gui.configure_theme(show_share_button=False)
+    server.gui.main_panel.dock_right()  # viser ≥ 1.1: replaces configure_theme(control_layout="collapsible")
     server.initial_camera.position = CAMERA_POSITION
     server.initial_camera.look_at = CAMERA_LOOK_AT
     return server

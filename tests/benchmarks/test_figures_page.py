@@ -19,6 +19,10 @@ def _figures_page():
 def test_the_page_is_generated_from_the_results():
     page = _figures_page()
     assert page.PAGE.read_text() == page.render(), "run python benchmarks/figures_page.py"
+    rendered = page.rendered()
+    assert rendered, "no benchmark renders its own results file"
+    for path, text in rendered.items():
+        assert path.read_text() == text, f"{path.name} is stale: run python benchmarks/figures_page.py"
 
 
 def test_every_result_is_on_the_page_with_its_values(tmp_path):

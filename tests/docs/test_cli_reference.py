@@ -4,21 +4,25 @@ import runpy
 from pathlib import Path
 from types import SimpleNamespace
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _generator() -> SimpleNamespace:
-    return SimpleNamespace(**runpy.run_path(str(ROOT / "docs" / "gen_cli_reference.py"), run_name="gen_cli_reference"))
+@pytest.fixture(scope="module")
+def gen() -> SimpleNamespace:
+    """The generator, and the page it renders now (rendered once for both tests)."""
+    module = SimpleNamespace(**runpy.run_path(str(ROOT / "docs" / "gen_cli_reference.py"), run_name="gen_cli_reference"))
+    module.text = module.render()
+    return module
 
 
-def test_committed_reference_is_what_the_app_gives():
-    gen = _generator()
-    assert gen.PAGE.read_text() == gen.render(), f"docs/reference/cli.md is stale: run {gen.REGENERATE}"
+def test_committed_reference_is_what_the_app_gives(gen):
+    assert gen.PAGE.read_text() == gen.text, f"docs/reference/cli.md is stale: run {gen.REGENERATE}"
 
 
-def test_every_command_and_option_is_on_the_page():
-    gen = _generator()
-    text = gen.render()
+def test_every_command_and_option_is_on_the_page(gen):
+    text = gen.text
     commands = list(gen.commands())
     assert len(commands) >= 20
     for path, command in commands:

@@ -14,9 +14,10 @@ ROOT = Path(__file__).resolve().parents[2]
 LIBRARY = ("lbrcli.fri", "lbrcli.bridge", "lbrcli.plants", "lbrcli.control", "planners", "trajectories", "tracking")
 
 
-@pytest.fixture
-def site(tmp_path) -> Path:
-    out = tmp_path / "site"
+@pytest.fixture(scope="session")
+def site(tmp_path_factory) -> Path:
+    """The site, built once for every test that looks at it."""
+    out = tmp_path_factory.mktemp("docs") / "site"
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
     res = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)], cwd=ROOT,
                          capture_output=True, text=True, timeout=300, env=env)
@@ -52,16 +53,17 @@ def _exports() -> dict[str, list[str]]:
 
 
 def test_site_builds_strictly_and_covers_the_api(site):
-    """One build (it takes most of this test's time), three checks: it built, every public name is in the API
-    reference with a docstring, and the pages quote the code rather than copies of it."""
+    """One build (it takes most of this test's time), four checks: it built, every public name is in the API
+    reference with a docstring, and the pages quote the code and the benchmarks' files rather than copies of them."""
     assert (site / "index.html").exists() and (site / "reference" / "cli" / "index.html").exists()
     _every_public_name_is_in_the_api_reference_with_a_docstring(site)
     _pages_quote_the_code_not_copies(site)
+    _pages_quote_the_benchmarks_files(site)
 
 
 def _every_public_name_is_in_the_api_reference_with_a_docstring(site):
     exports, loader = _exports()
-    assert {"lbrcli.fri", "lbrcli.bridge", "planners.feedback"} <= set(exports)
+    assert {"lbrcli.fri", "lbrcli.bridge", "planners", "planners.feedback", "trajectories", "tracking"} <= set(exports)
     inventory = _inventory(site)
     missing, undocumented = [], []
     for module, names in exports.items():
@@ -83,3 +85,14 @@ def _pages_quote_the_code_not_copies(site):
 
     page = (site / "reference" / "file-formats" / "index.html").read_text()
     assert ",".join(JOINT_COLUMNS) in page and "lbr:columns" not in page
+
+
+def _pages_quote_the_benchmarks_files(site):
+    """The view guide's figures are the values in benchmarks/results/view_export.json (hooks.py), no marker left."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("hooks", ROOT / "docs" / "hooks.py")
+    hooks = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hooks)
+    page = (site / "guides" / "view-and-export" / "index.html").read_text()
+    assert hooks.figure("view_export.view_open_s") in page and "lbr:bench" not in page

@@ -1,8 +1,10 @@
 """Every shell block of the tutorials and how-to guides runs as written, in order, in a fresh folder, on the simulator.
 
 A fenced ```bash or ```console block is executed line by line (`lbr …` and `python …` only; `$ ` prompts and `#`
-comments are ignored, a trailing backslash continues the line) and each command must exit 0. An HTML comment on the
-line before a block changes that:
+comments are ignored, a trailing backslash continues the line) and each command must exit 0. An `lbr` line runs the
+`lbr` console script's entry point (`lbrcli.app.main`) in the test's process, in the page's folder — the same code
+and exit code as the script, without a new interpreter and its imports for every line; a `python` line runs in its
+own process. An HTML comment on the line before a block changes that:
 
 - `<!-- robot-only -->`: needs the real robot (or hardware, or another program): never run; every `lbr` command in it
   must name an existing command and only options that command has (so a renamed option fails here);
@@ -15,10 +17,13 @@ line before a block changes that:
 
 from __future__ import annotations
 
+import io
+import os
 import re
 import shlex
 import subprocess
 import sys
+from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -113,6 +118,29 @@ def chains() -> list[list[Path]]:
     return out
 
 
+def run_lbr(argv: tuple[str, ...], cwd: Path) -> tuple[int, str]:
+    """(exit code, stderr) of `lbr ARGS` run by the console script's entry point in this process, in ``cwd``."""
+    from lbrcli.app import main
+
+    err, here = io.StringIO(), os.getcwd()
+    os.chdir(cwd)
+    try:
+        with redirect_stdout(io.StringIO()), redirect_stderr(err):
+            main(list(argv[1:]))
+        code = 0
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 1
+    finally:
+        os.chdir(here)
+    return code, err.getvalue()
+
+
+def run_python(argv: tuple[str, ...], cwd: Path) -> tuple[int, str]:
+    """(exit code, stderr) of `python ARGS` in its own process, in ``cwd``."""
+    res = subprocess.run([sys.executable, *argv[1:]], cwd=cwd, capture_output=True, text=True, timeout=300)
+    return res.returncode, res.stderr
+
+
 def run_page(path: Path, tmp: Path, with_slow: bool, ran_before: list[tuple[str, ...]]) -> list[tuple[str, ...]]:
     """Run the page's blocks in order in ``tmp``; the commands run (appended to ``ran_before``)."""
     if not (tmp / "examples").exists():
@@ -129,11 +157,9 @@ def run_page(path: Path, tmp: Path, with_slow: bool, ran_before: list[tuple[str,
                 continue
             assert argv[0] in ("lbr", "python"), f"{where}: `{argv[0]}` is not run by this test: mark the block"
             check_syntax(argv, where)
-            exe = [sys.executable, "-m", "lbrcli", *argv[1:]] if argv[0] == "lbr" else [sys.executable, *argv[1:]]
-            res = subprocess.run(exe, cwd=tmp, capture_output=True, text=True, timeout=300)
-            assert res.returncode == block.expect, (
-                f"{where}: `{' '.join(argv)}` exited {res.returncode}, the page expects {block.expect}\n"
-                f"{res.stderr[-3000:]}")
+            code, stderr = (run_lbr if argv[0] == "lbr" else run_python)(argv, tmp)
+            assert code == block.expect, (
+                f"{where}: `{' '.join(argv)}` exited {code}, the page expects {block.expect}\n{stderr[-3000:]}")
             ran.append(argv)
     assert not [p.name for p in tmp.iterdir() if ".part" in p.name], "a temporary output was left behind"
     return ran

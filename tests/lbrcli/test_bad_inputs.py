@@ -230,7 +230,8 @@ def _bad_values(parser) -> list[str]:
         if parser.integer:
             vals += ["1.5", "1e3"]
         if parser.low is not None:
-            vals.append(f"{parser.low:.17g}" if parser.low_open else f"{parser.low - max(1e-6, abs(parser.low)):.17g}")
+            below = parser.low / 2 if getattr(parser, "zero_is_none", False) else parser.low - max(1e-6, abs(parser.low))
+            vals.append(f"{parser.low:.17g}" if parser.low_open else f"{below:.17g}")  # (0: "no ball" where it is)
         if parser.high is not None:
             vals.append(f"{parser.high:.17g}" if parser.high_open else f"{parser.high + max(1e-6, abs(parser.high)):.17g}")
         return vals

@@ -149,8 +149,9 @@ def test_damping_rides_through_lost_and_malformed_messages(tmp_path):
     from lbrcli.console import Reporter
     from lbrcli.control import DampingClient
     from lbrcli.control.damping import LOG_COLUMNS
-    from lbrcli.fri_runner import run_client, simulator_kwargs
+    from lbrcli.fri_runner import run_client
     from lbrcli.plants.ball import BallSpec
+    from lbrcli.session_settings import LogColumns, SessionSettings, SimulatorSettings
     from planners.feedback.correction import correction_plan
     from trajectories.csvio import read_joint_csv
     from trajectories.limits import default_limits
@@ -161,14 +162,12 @@ def test_damping_rides_through_lost_and_malformed_messages(tmp_path):
     lim, traj = default_limits(), read_joint_csv(path, None)
     plan = correction_plan(Robot(RobotConfig(flange=Flange("touch-electric"))), traj.q, lim, DT)  # the simulator's
     client = DampingClient(traj.q, lim, DT, 0.25, plan, damp_s=3 * natural_period(0.25), sensor_delay_s=0.015)
-    kw = simulator_kwargs(length=0.0, default_length=0.0, period_ms=5, sim_start=None, default_start=traj.q[0],
-                          flange="touch-electric", tool=None, max_runtime_s=60)  # fmt: skip
-    kw.update(loss=0.03, malformed=0.01, seed=6)
+    # the same closed loop on a busy machine, as fast as it computes
+    sim = SimulatorSettings(period_ms=5, start=traj.q[0], ball=BallSpec(0.30, 0.0, io_delay_ms=10), max_runtime_s=60,
+                            fast=True, loss=0.03, malformed=0.01, seed=6)  # fmt: skip
     log = tmp_path / "run.csv"
-    result, _, _ = run_client(Reporter(True), client, robot=None, port=0, bind=None, version=None, limits=lim,
-                              log_path=log, wait=None, sim_kwargs=kw, plants=(BallSpec(0.30, 0.0, io_delay_ms=10),),
-                              extra_names=LOG_COLUMNS, extra=client.log_values, sim_lenient=True,
-                              sim_fast=True)  # fmt: skip (the same closed loop on a busy machine, as fast as it computes)
+    result, _, _ = run_client(Reporter(True), client, SessionSettings(port=0, limits=lim, log=log), sim,
+                              extra=LogColumns(LOG_COLUMNS, client.log_values))  # fmt: skip
     assert result.outcome.value == "completed", result.detail
     assert result.missed > 10 and client.skipped_rows > 10  # the faults happened and were bridged
     assert _sway_after(_log(log), move_end, 2, 0.30) <= 0.5

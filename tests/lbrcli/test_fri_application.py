@@ -141,11 +141,12 @@ def test_session_streams_every_row_bit_exact_and_logs(tmp_path, version, detect)
 def test_receive_multiplier_calls_every_message_and_sends_every_kth():
     k, n = 3, 30
     traj = min_jerk(n)
-    calls = []
+    calls, periods = [], set()
 
     class Counting(TrajectoryPlayer):
         def command(self, state):
             calls.append(self.reply_due)
+            periods.add(self.command_period_s)  # the application's, not recomputed by the client
             return super().command(state)
 
     player = Counting(traj, LIM, period_s=k * 1e-3, settle_cycles=2)
@@ -158,7 +159,7 @@ def test_receive_multiplier_calls_every_message_and_sends_every_kth():
     assert len(calls) >= 3 * (len(active) - res.braking_cycles) - 3
     assert calls.count(True) == len(active) - res.braking_cycles + 1  # the last call ended the stream
     assert all(calls[i : i + k].count(True) == 1 for i in range(0, len(calls) - k, k))
-    assert res.period_s == pytest.approx(3e-3)
+    assert res.period_s == pytest.approx(3e-3) and periods == {res.period_s}
 
 
 def test_gaps_stale_foreign_and_malformed_are_counted_and_never_answered():

@@ -20,12 +20,12 @@ def test_default_plants_and_validation():
     assert default_plants(0.3, pendulum_pty=True, pendulum_rate_hz=100.0) == (BallSpec(0.3), PendulumModuleSpec(100.0))
     with pytest.raises(OptionError, match="needs a simulated ball"):
         default_plants(None, pendulum_pty=True)
-    with pytest.raises(OptionError, match="--length"):
+    with pytest.raises(OptionError, match="BallSpec.length"):  # the field: the command names its option
         default_plants(-0.2)
     with pytest.raises(OptionError, match="rate"):
         default_plants(0.3, pendulum_pty=True, pendulum_rate_hz=0.0)
-    with pytest.raises(OptionError, match="--damping"):
-        SimConfig(plants=(BallSpec(0.3, -1.0),)).validate()
+    with pytest.raises(OptionError, match="BallSpec.damping"):  # refused when it is made
+        BallSpec(0.3, -1.0)
     specs = default_plants(0.3, pendulum_pty=True)
     assert pickle.loads(pickle.dumps(specs)) == specs  # they cross into the simulator process
 

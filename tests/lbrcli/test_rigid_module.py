@@ -136,8 +136,9 @@ def test_upright_rides_through_lost_and_malformed_messages(robot):
     from lbrcli.console import Reporter
     from lbrcli.control import UprightClient
     from lbrcli.control.upright import LOG_COLUMNS
-    from lbrcli.fri_runner import run_client, simulator_kwargs
+    from lbrcli.fri_runner import run_client
     from lbrcli.lab.attach import LabOptions
+    from lbrcli.session_settings import LogColumns, SessionSettings, SimulatorSettings
     from planners.rail import build_rail
     from trajectories.limits import default_limits
 
@@ -150,13 +151,10 @@ def test_upright_rides_through_lost_and_malformed_messages(robot):
 
     fitter = ProcessFitter()  # the fit outside the cycle, as the CLI does
     client = UprightClient(rail, model.equivalent_length, lim, session=SessionOptions(hold_s=3.0), fitter=fitter)
-    kw = simulator_kwargs(length=0.0, default_length=0.0, period_ms=1, sim_start=None, default_start=tuple(Q_START),
-                          flange="touch-electric", tool=None, max_runtime_s=90)  # fmt: skip
-    kw.update(loss=0.02, malformed=0.01, seed=3)
-    result, _, lab = run_client(Reporter(True), client, robot=None, port=0, bind=None, version=None, limits=lim,
-                                log_path=None, wait=None, sim_kwargs=kw, lab=LabOptions("sim"),
-                                plants=(RigidModuleSpec(model),), extra_names=LOG_COLUMNS, extra=client.log_values,
-                                sim_lenient=True, sim_lockstep=True)  # fmt: skip (the same loop on a busy machine)
+    sim = SimulatorSettings(start=tuple(Q_START), plants=(RigidModuleSpec(model),), max_runtime_s=90, lockstep=True,
+                            loss=0.02, malformed=0.01, seed=3)  # fmt: skip (the same loop on a busy machine)
+    result, _, lab = run_client(Reporter(True), client, SessionSettings(port=0, limits=lim), sim, lab=LabOptions("sim"),
+                                extra=LogColumns(LOG_COLUMNS, client.log_values))  # fmt: skip
     fitter.close()
     assert result.outcome.value == "completed", result.detail
     assert result.missed > 50  # the faults happened

@@ -280,3 +280,33 @@ def test_ctrl_c_ends_the_fast_swing_up_and_its_workers_within_a_second(tmp_path)
 
 
 from test_lab import broker, broker_process  # noqa: E402,F401  (the real Mosquitto fixture)
+
+
+def _mapped(pid: int, name: str) -> bool:
+    try:
+        with open(f"/proc/{pid}/maps") as f:
+            return name in f.read()
+    except OSError:
+        return False
+
+
+@pytest.mark.parametrize("library", ["_multiarray_umath", "pinocchio_pywrap"])
+def test_ctrl_c_while_python_imports_the_app_is_one_line_and_130(tmp_path, library):
+    """A Ctrl-C that lands while the interpreter still imports numpy (the app's import) or pinocchio (inside the
+    command) ends like any other: exit 130, one line, no traceback, the --json object."""
+    if not os.path.exists("/proc/self/maps"):
+        pytest.skip("needs /proc to see which libraries the process has loaded")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "lbrcli", "check", str(tmp_path / "missing.csv"), "--json"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+    )
+    deadline = time.monotonic() + 60
+    while not _mapped(proc.pid, library) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.002)
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=20)
+    if proc.returncode == 2 and "missing.csv" in err:
+        pytest.skip(f"the command ended before the interrupt ({library} loaded after the check)")
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines() == ["lbr: interrupted"]
+    assert json.loads(out) == {"ok": False, "exit_code": 130, "error": "interrupted"}

@@ -309,7 +309,9 @@ def test_foreign_and_malformed_datagrams_are_counted_and_ignored():
         other.close()
         counts.update(foreign=2 + foreign_host, malformed=5)
 
-    run, stats, _ = run_session(before=send_foreign, session_duration_s=0.2)
+    # in lock-step: the quality rule is not what is tested here, and a loaded machine dropped the session to
+    # MONITORING_WAIT once (the counts held)
+    run, stats, _ = run_session(before=send_foreign, session_duration_s=0.2, lockstep_timeout_s=0.5)
     assert stats.foreign_received == counts["foreign"]
     assert stats.malformed_received == counts["malformed"]
     assert_sequence(run.states)
@@ -334,13 +336,13 @@ def test_stop_without_a_client():
 
 
 def test_bad_configuration_is_refused():
-    with pytest.raises(OptionError, match="period"):
+    with pytest.raises(OptionError, match="SimConfig.period_ms"):  # the field (a command names its option)
         SimulatorProcess(SimConfig(period_ms=0)).start()
-    with pytest.raises(OptionError, match="loss"):
+    with pytest.raises(OptionError, match="SimConfig.loss"):
         SimConfig(loss=1.5).validate()
-    with pytest.raises(OptionError, match="fri-version"):
+    with pytest.raises(OptionError, match="SimConfig.version"):
         SimConfig(version="3.0").validate()
-    with pytest.raises(OptionError, match="q0"):
+    with pytest.raises(OptionError, match="SimConfig.q0"):
         SimConfig(q0=(0.0,) * 6).validate()
     taken = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     taken.bind(("127.0.0.1", 0))

@@ -148,3 +148,18 @@ def test_bad_options_exit_2_with_one_line(tmp_path_factory, tmp_path, monkeypatc
         main(["view", str(run.log), *argv])
     err = capsys.readouterr().err
     assert ended.value.code == 2 and message in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_server_starts_on_loopback_with_no_deprecated_viser_call():
+    """viser's current API only (``configure_theme(control_layout=...)`` is deprecated since viser 1.1)."""
+    import warnings
+
+    from lbrcli.view.serve import start_server, stop_server
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)
+        server = start_server(port=0)
+    try:
+        assert server.get_host() == "127.0.0.1" and server.get_port() > 0
+    finally:
+        stop_server(server)

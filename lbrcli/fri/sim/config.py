@@ -1,7 +1,8 @@
 """What the simulated controller is configured with: the robot application, its FRI configuration, faults, timing.
 
-``SimConfig`` is frozen and picklable (it crosses into the simulator process); ``validate()`` raises OptionError
-naming the option. ``IoChannel`` is one IO of the application's FRI IO configuration.
+``SimConfig`` is frozen and picklable (it crosses into the simulator process); ``validate()`` raises SettingError
+naming the field (``SimConfig.period_ms``; the command line names its option). ``IoChannel`` is one IO of the
+application's FRI IO configuration.
 """
 
 from __future__ import annotations
@@ -9,7 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from trajectories.errors import OptionError
+from trajectories.errors import SettingError
 from trajectories.start_poses import THESIS_START
 
 from ..constants import N_JOINTS, OperationMode
@@ -43,27 +44,27 @@ class IoChannel:
 
     def validate(self) -> None:
         if not self.name or len(self.name) > 60:
-            raise OptionError(f"--io: channel name must be 1..60 characters, got {self.name!r}")
+            raise SettingError(IoChannel, "name", f"channel name must be 1..60 characters, got {self.name!r}")
         if self.type not in IO_TYPES:
-            raise OptionError(f"--io {self.name}: type must be one of {', '.join(IO_TYPES)}, got {self.type!r}")
+            raise SettingError(IoChannel, "type", f"{self.name}: type must be one of {', '.join(IO_TYPES)}, got {self.type!r}")
         if self.direction not in IO_DIRECTIONS:
-            raise OptionError(f"--io {self.name}: direction must be in or out, got {self.direction!r}")
+            raise SettingError(IoChannel, "direction", f"{self.name}: direction must be in or out, got {self.direction!r}")
         if not math.isfinite(self.value) or (not self.is_analog and (self.value < 0 or self.value != int(self.value))):
-            raise OptionError(f"--io {self.name}: bad initial value {self.value!r}")
+            raise SettingError(IoChannel, "value", f"{self.name}: bad initial value {self.value!r}")
 
 
 def parse_io(text: str) -> IoChannel:
     """``NAME:TYPE:DIRECTION[:VALUE]`` (TYPE boolean|digital|analog, DIRECTION in|out) → IoChannel.
-    The name may itself contain no colon; OptionError on anything else."""
+    The name may itself contain no colon; SettingError (``IoChannel.spec``) on anything else."""
     parts = text.split(":")
     if len(parts) not in (3, 4):
-        raise OptionError(f"--io: expected NAME:TYPE:DIRECTION[:VALUE], got {text!r}")
+        raise SettingError(IoChannel, "spec", f"expected NAME:TYPE:DIRECTION[:VALUE], got {text!r}")
     value = 0.0
     if len(parts) == 4:
         try:
             value = float(parts[3])
         except ValueError:
-            raise OptionError(f"--io: initial value must be a number, got {parts[3]!r}") from None
+            raise SettingError(IoChannel, "value", f"initial value must be a number, got {parts[3]!r}") from None
     ch = IoChannel(parts[0], parts[1].lower(), parts[2].lower(), value)
     ch.validate()
     return ch
@@ -152,85 +153,91 @@ class SimConfig:
         return FriVersion(self.version)
 
     def validate(self) -> None:
-        """Raise OptionError naming the bad value."""
+        """Raise SettingError naming the bad field (``SimConfig.field``)."""
 
-        def bad(msg: str) -> None:
-            raise OptionError(msg)
+        def bad(field: str, msg: str) -> None:
+            raise SettingError(SimConfig, field, msg)
 
         if not (isinstance(self.period_ms, int) and 1 <= self.period_ms <= 100):
-            bad(f"--period: send period must be an integer 1..100 ms, got {self.period_ms}")
+            bad("period_ms", f"send period must be an integer 1..100 ms, got {self.period_ms}")
         if not (isinstance(self.receive_multiplier, int) and 1 <= self.receive_multiplier <= 100):
-            bad(f"--receive-multiplier: must be an integer 1..100, got {self.receive_multiplier}")
+            bad("receive_multiplier", f"must be an integer 1..100, got {self.receive_multiplier}")
         try:
             FriVersion(self.version)
         except ValueError:
-            bad(f"--fri-version: must be 1.15 or 2.7, got {self.version!r}")
-        for name, p in (("--loss", self.loss), ("--malformed", self.malformed)):
+            bad("version", f"must be 1.15 or 2.7, got {self.version!r}")
+        for name, p in (("loss", self.loss), ("malformed", self.malformed)):
             if not 0.0 <= p <= 1.0:
-                bad(f"{name}: probability must be in [0, 1], got {p:g}")
-        for name, v in (("--delay", self.delay_ms), ("--jitter", self.jitter_ms)):
+                bad(name, f"probability must be in [0, 1], got {p:g}")
+        for name, v in (("delay_ms", self.delay_ms), ("jitter_ms", self.jitter_ms)):
             if not (math.isfinite(v) and 0.0 <= v <= 1000.0):
-                bad(f"{name}: must be 0..1000 ms, got {v:g}")
+                bad(name, f"must be 0..1000 ms, got {v:g}")
         if len(self.q0) != N_JOINTS or not all(math.isfinite(x) for x in self.q0):
-            bad(f"--q0: expected {N_JOINTS} finite joint angles")
-        for name, port in (("--port", self.port), ("--client port", self.client_port)):
+            bad("q0", f"expected {N_JOINTS} finite joint angles")
+        for name, port in (("port", self.port), ("client_port", self.client_port)):
             if not 0 <= port <= 65535:
-                bad(f"{name}: not a UDP port: {port}")
+                bad(name, f"not a UDP port: {port}")
         if self.client_port == 0:
-            bad("--client: the client port must not be 0")
+            bad("client_port", "the client port must not be 0")
         if self.operation_mode not in OPERATION_MODES:
-            bad(f"--operation-mode: one of {', '.join(OPERATION_MODES)}, got {self.operation_mode!r}")
+            bad("operation_mode", f"one of {', '.join(OPERATION_MODES)}, got {self.operation_mode!r}")
         if self.command_mode not in COMMAND_MODES:
-            bad(f"--mode: one of {', '.join(COMMAND_MODES)}, got {self.command_mode!r}")
+            bad("command_mode", f"one of {', '.join(COMMAND_MODES)}, got {self.command_mode!r}")
         if self.command_mode == "cartesian" and self.version != "2.7":
-            bad("--mode cartesian: the CARTESIAN_POSE command mode exists only in FRI 2.7 (--fri-version 2.7)")
+            bad("command_mode", "the CARTESIAN_POSE command mode exists only in FRI 2.7")
         if self.transformations:
-            if self.version != "2.7":
-                bad("--transformation: transformation requests exist only in FRI 2.7 (--fri-version 2.7)")
-            if len(self.transformations) > MAX_TRANSFORMATIONS:
-                bad(f"--transformation: at most {MAX_TRANSFORMATIONS} frames, got {len(self.transformations)}")
-            for name in self.transformations:
-                if not (isinstance(name, str) and 0 < len(name.encode()) < 64):
-                    bad(f"--transformation: a frame name must be 1..63 bytes, got {name!r}")
-            if len(set(self.transformations)) != len(self.transformations):
-                bad("--transformation: a frame is named twice")
+            self._validate_transformations(bad)
         if not (math.isfinite(self.joint_stiffness) and 0.0 < self.joint_stiffness <= 1e5):
-            bad(f"--stiffness: joint stiffness must be in (0, 1e5] Nm/rad, got {self.joint_stiffness:g}")
+            bad("joint_stiffness", f"joint stiffness must be in (0, 1e5] Nm/rad, got {self.joint_stiffness:g}")
         kx, kr = self.cartesian_stiffness
         if not (math.isfinite(kx) and 0.0 < kx <= 1e5 and math.isfinite(kr) and 0.0 < kr <= 1e4):
-            bad(f"--cartesian-stiffness: needs (0, 1e5] N/m and (0, 1e4] Nm/rad, got {kx:g}, {kr:g}")
+            bad("cartesian_stiffness", f"needs (0, 1e5] N/m and (0, 1e4] Nm/rad, got {kx:g}, {kr:g}")
         if not (math.isfinite(self.nullspace_stiffness) and 0.0 <= self.nullspace_stiffness <= 1e4):
-            bad(f"nullspace stiffness must be 0..1e4 Nm/rad, got {self.nullspace_stiffness:g}")
+            bad("nullspace_stiffness", f"nullspace stiffness must be 0..1e4 Nm/rad, got {self.nullspace_stiffness:g}")
         if not (math.isfinite(self.damping_ratio) and 0.0 <= self.damping_ratio <= 10.0):
-            bad(f"--damping-ratio: must be 0..10, got {self.damping_ratio:g}")
+            bad("damping_ratio", f"must be 0..10, got {self.damping_ratio:g}")
         if len(self.external_torque) != N_JOINTS or not all(math.isfinite(x) for x in self.external_torque):
-            bad(f"--external-torque: expected {N_JOINTS} finite values [Nm]")
+            bad("external_torque", f"expected {N_JOINTS} finite values [Nm]")
         if len(self.external_force) != 6 or not all(math.isfinite(x) for x in self.external_force):
-            bad("--external-force: expected 6 finite values [N, Nm]")
+            bad("external_force", "expected 6 finite values [N, Nm]")
         if not (math.isfinite(self.torque_noise) and self.torque_noise >= 0):
-            bad(f"--torque-noise: must be >= 0 Nm, got {self.torque_noise:g}")
+            bad("torque_noise", f"must be >= 0 Nm, got {self.torque_noise:g}")
         names = [c.name for c in self.io]
         for ch in self.io:
             ch.validate()
         if len(set(names)) != len(names):
-            bad(f"--io: channel configured twice: {sorted({n for n in names if names.count(n) > 1})[0]}")
+            bad("io", f"channel configured twice: {sorted({n for n in names if names.count(n) > 1})[0]}")
         for spec in self.plants:
             check = getattr(spec, "validate", None)
             if check is not None:
                 check()
+        self._validate_timing(bad)
+
+    def _validate_transformations(self, bad) -> None:
+        if self.version != "2.7":
+            bad("transformations", "transformation requests exist only in FRI 2.7")
+        if len(self.transformations) > MAX_TRANSFORMATIONS:
+            bad("transformations", f"at most {MAX_TRANSFORMATIONS} frames, got {len(self.transformations)}")
+        for name in self.transformations:
+            if not (isinstance(name, str) and 0 < len(name.encode()) < 64):
+                bad("transformations", f"a frame name must be 1..63 bytes, got {name!r}")
+        if len(set(self.transformations)) != len(self.transformations):
+            bad("transformations", "a frame is named twice")
+
+    def _validate_timing(self, bad) -> None:
         if not 0.0 < self.quality_good <= 1.0:
-            bad(f"--quality-good: share of timely cycles must be in (0, 1], got {self.quality_good:g}")
+            bad("quality_good", f"share of timely cycles must be in (0, 1], got {self.quality_good:g}")
         if not 0.0 <= self.quality_fair <= self.quality_good <= self.quality_excellent <= 1.0:
-            bad("quality thresholds must satisfy 0 <= fair <= good <= excellent <= 1")
+            bad("quality_good", "quality thresholds must satisfy 0 <= fair <= good <= excellent <= 1")
         if not 1 <= self.quality_window <= 100_000:
-            bad(f"--quality-window: must be 1..100000 cycles, got {self.quality_window}")
+            bad("quality_window", f"must be 1..100000 cycles, got {self.quality_window}")
         if self.wait_cycles < 1:
-            bad(f"wait_cycles must be >= 1, got {self.wait_cycles}")
+            bad("wait_cycles", f"must be >= 1, got {self.wait_cycles}")
         if self.lockstep_timeout_s is not None and not (math.isfinite(self.lockstep_timeout_s)
                                                         and 0.0 < self.lockstep_timeout_s <= 60.0):
-            bad(f"--sim-lockstep: the reply wait must be in (0, 60] s, got {self.lockstep_timeout_s:g}")
+            bad("lockstep_timeout_s", f"the reply wait must be in (0, 60] s, got {self.lockstep_timeout_s:g}")
         if self.lockstep_free and self.lockstep_timeout_s is None:
-            bad("--sim-fast runs the simulator in lock-step: it needs the reply wait of --sim-lockstep")
-        for name, v in (("--duration", self.session_duration_s), ("--timeout", self.max_runtime_s)):
+            bad("lockstep_free", "runs the simulator in lock-step: it needs the reply wait of lock-step")
+        for name, v in (("session_duration_s", self.session_duration_s), ("max_runtime_s", self.max_runtime_s)):
             if v is not None and not (math.isfinite(v) and v > 0):
-                bad(f"{name}: must be > 0 s, got {v:g}")
+                bad(name, f"must be > 0 s, got {v:g}")

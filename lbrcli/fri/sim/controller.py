@@ -36,7 +36,7 @@ from typing import Callable
 
 import numpy as np
 
-from trajectories.errors import FriDecodeError, FriForeignMessage, OptionError
+from trajectories.errors import FriDecodeError, FriForeignMessage, SettingError
 
 from ..cartesian import PoseSolver, wire_to_pose
 from ..codec import FriCodec
@@ -85,8 +85,8 @@ class Controller:
         q0 = np.array(cfg.q0, dtype=float)
         if np.any(np.abs(q0) > self.limits.position):
             j = int(np.argmax(np.abs(q0) - self.limits.position))
-            raise OptionError(f"--q0: q{j + 1} = {q0[j]:.4f} rad is outside the position limit "
-                              f"±{self.limits.position[j]:.4f} rad")
+            raise SettingError("SimConfig", "q0", f"q{j + 1} = {q0[j]:.4f} rad is outside the position limit "
+                               f"±{self.limits.position[j]:.4f} rad")  # fmt: skip
         self.robot = Robot(RobotConfig(flange=Flange(cfg.flange), tool=tuple(cfg.tool)))
         self.arm = Arm(self.robot, self.limits.position, q0, np.array(cfg.external_torque),
                        np.array(cfg.external_force))
@@ -117,7 +117,7 @@ class Controller:
                 if ch is None:
                     entries.append(self.io.add(IoChannel(name, "analog", "in")))
                 elif ch.is_output or not ch.is_analog:
-                    raise OptionError(f"--io {name}: the plant {plant.name} drives it, it must be an analog input")
+                    raise SettingError("SimConfig", "io", f"{name}: the plant {plant.name} drives it, it must be an analog input")
                 else:
                     entries.append(self.io.entry(name))
             self._plant_io.append(entries)

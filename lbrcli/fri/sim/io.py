@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any, Iterable
 
-from trajectories.errors import OptionError
+from trajectories.errors import SettingError
 
 from .config import IoChannel
 
@@ -33,7 +33,7 @@ class IoBank:
     def add(self, ch: IoChannel) -> Any:
         """Configure a channel; returns its message entry (set ``analogValue``/``digitalValue`` on it)."""
         if ch.name in self._by_name:
-            raise OptionError(f"--io: channel {ch.name} configured twice")
+            raise SettingError("SimConfig", "io", f"channel {ch.name} configured twice")
         io = self._md.readIORequest.add()
         io.name, io.type, io.direction = ch.name, self._type[ch.type], self._dir[ch.direction]
         if ch.is_analog:

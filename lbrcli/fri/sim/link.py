@@ -20,7 +20,7 @@ from typing import Callable
 
 import numpy as np
 
-from trajectories.errors import FriError, OptionError
+from trajectories.errors import FriError, SettingError
 
 from ..constants import MAX_DATAGRAM
 
@@ -67,7 +67,7 @@ class Link:
         try:
             self.client_ip = socket.gethostbyname(client_host)
         except OSError as exc:
-            raise OptionError(f"--client: cannot resolve {client_host!r} ({exc})") from None
+            raise SettingError("SimConfig", "client_host", f"cannot resolve {client_host!r} ({exc})") from None
         self.client_addr = (self.client_ip, client_port)
         self.faults = faults
         self.framed = framed

@@ -36,6 +36,19 @@ MIN_SEND_SPACING = 0.5  # [periods] least time from a send to the next cycle's s
 CLOSE_BUDGET_S = 0.5  # [s] at most this long sending the closing IDLE messages after a stop or timeout
 
 
+
+def _parent_watch() -> Callable[[], bool]:
+    """A test that is true once the process that started this simulator has ended: the sentinel multiprocessing
+    gives its children (closed when the starter ends, also from a fork server, which outlives the starter and is the
+    simulator's parent), else a change of the parent process id (a simulator run directly by a command)."""
+    import multiprocessing
+
+    parent = multiprocessing.parent_process()
+    if parent is not None:
+        return lambda: not parent.is_alive()
+    ppid = os.getppid()
+    return lambda: os.getppid() != ppid
+
 class Simulator:
     """One simulated controller bound to a UDP socket; ``run()`` drives the session until it ends."""
 
@@ -63,7 +76,7 @@ class Simulator:
         self.overruns = 0
         self._sent_by = 0.0  # [s] perf_counter right after the last send
         self._n_states = 0  # states reported to on_state so far
-        self._ppid = os.getppid()  # taken here: a parent may exit right after start-up, before run()
+        self._parent_gone = _parent_watch()  # taken here: a parent may exit right after start-up, before run()
 
     @property
     def address(self) -> tuple[str, int]:
@@ -104,7 +117,6 @@ class Simulator:
         t0 = time.perf_counter()
         cpu0 = time.process_time()
         grid = send_at = t0  # [s] the cycle's nominal time, and when its message may go out (≥ grid)
-        ppid = self._ppid
         end_reason = ""
         forced = interrupted = False  # the simulator stops before the session ended by itself
         k = 0
@@ -137,7 +149,7 @@ class Simulator:
                         end_reason = "stopped"
                     elif cfg.max_runtime_s is not None and rel >= cfg.max_runtime_s:
                         end_reason = "max_runtime"
-                    elif k % 512 == 0 and os.getppid() != ppid:
+                    elif k % 512 == 0 and self._parent_gone():
                         end_reason = "parent_exited"
                     grid += period
                     # the client gets (almost) its whole period even when this message went out late; the sends

@@ -265,12 +265,34 @@ def _spread(rows: list[dict], friction: float, key: str) -> list[float] | None:
 
 def write_page(result: dict, path: Path) -> None:
     """The docs' page of these figures (published as explanations/results/upright_band.md)."""
-    f, j = result["fast_by_friction"], result["judge_by_friction"]
     lines = ["# Upright band (`python benchmarks/bench_upright_band.py`)", "",
-             f"Measured {result['date']}. The controller assumes the CLI's default rod (0.5 m uniform); every case "
+             "The controller assumes the CLI's default rod (0.5 m uniform); every case "
              f"balances {HOLD_S:g} s and is knocked by 10° once. A case counts when the hold was met without a fall, "
-             "the cart on the rail.", "",
-             "## The band (fast simulation, RK4, dry friction)", "",
+             "the cart on the rail. Each part says when, and on which commit, it was measured (`--parts` runs some "
+             "of them; a `+` after the commit: the work tree had changes).", ""]  # fmt: skip
+    stamps = result.get("measured", {})
+
+    def measured(part: str) -> list[str]:
+        st = stamps.get(part)
+        return ([f"Measured {st['date']} on commit {st['commit']}.", ""] if st else
+                ["Measured by an earlier run that did not stamp its parts (no commit recorded).", ""])  # fmt: skip
+
+    if "fast_by_friction" in result:
+        lines += _fast_section(result, measured("fast"))
+    if "judge" in result:
+        lines += _judge_section(result, measured("judge"))
+    else:
+        lines += ["## The second judge", "", "Not measured yet: `--parts judge`.", ""]
+    if "fri" in result:
+        lines += _fri_section(result, measured("fri"))
+    tmp = path.with_suffix(".md.part")
+    tmp.write_text("\n".join(lines) + "\n")
+    tmp.replace(path)
+
+
+def _fast_section(result: dict, head: list[str]) -> list[str]:
+    f = result["fast_by_friction"]
+    lines = ["## The band (fast simulation, RK4, dry friction)", "", *head,
              "| bearing's dry friction | cases | without a fall | falls |", "|---|---:|---:|---:|"]  # fmt: skip
     lines += [f"| {float(k):.0%} | {v['cases']} | {v['without_fall']} | {v['falls']} |" for k, v in f.items()]
     settled, travel = result["fast_settled_deg_by_friction"], result["fast_cart_m_after_push_by_friction"]
@@ -296,8 +318,13 @@ def write_page(result: dict, path: Path) -> None:
         cell = ["—" if fl[k] is None else f"{fl[k]:.3f}" for k in ("0.0", "0.05")]
         lines.append(f"| {r['scale']:g} | {r['tip_kg']:g} | x = {r['bounds_at_m']:g} m, at rest | {r['accel']:.1f} | "
                      f"{r['jerk']:.0f} | {cell[0]} | {cell[1]} |")  # fmt: skip
-    lines += ["", "## The second judge (Stribeck friction, scipy RK45, other seeds, delays and push times)", "",
-              "| kinetic friction (static 1.3 ×) | cases | without a fall | falls |", "|---|---:|---:|---:|"]
+    return lines + [""]
+
+
+def _judge_section(result: dict, head: list[str]) -> list[str]:
+    j = result["judge_by_friction"]
+    lines = ["## The second judge (Stribeck friction, scipy RK45, other seeds, delays and push times)", "", *head,
+             "| kinetic friction (static 1.3 ×) | cases | without a fall | falls |", "|---|---:|---:|---:|"]
     lines += [f"| {float(k):.0%} | {v['cases']} | {v['without_fall']} | {v['falls']} |" for k, v in j.items()]
     lines += ["", "| rod × | rod mass [kg] | tip [kg] | kinetic | delay [ms] | push | falls | identified dry friction | "
               "verdict |", "|---:|---:|---:|---:|---:|---|---:|---:|---|"]  # fmt: skip
@@ -306,35 +333,47 @@ def write_page(result: dict, path: Path) -> None:
         lines.append(f"| {r['scale']:g} | {r['rod_mass_kg']:g} | {r['tip_kg']:g} | {r['kinetic']:.0%} | {r['delay_ms']:g} | "
                      f"{r['push_deg']:+g}° at {r['push_s']:.2f} s | {r['falls']} | "
                      f"{'—' if share is None else f'{share:.1%}'} | {r['verdict']} |")  # fmt: skip
-    lines += ["", "## The FRI simulator (`lbr control upright --sim-lockstep`, 10 ms delay)", "",
+    return lines + [""]
+
+
+def _fri_section(result: dict, head: list[str]) -> list[str]:
+    lines = ["## The FRI simulator (`lbr control upright --sim-lockstep`, 10 ms delay)", "", *head,
               "| rod × | friction | noise [counts] | exit | falls | swing-up [s] | velocity / limit | acceleration / limit |",
               "|---:|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
     for r in result["fri"]:
         lines.append(f"| {r['sim_scale']:g} | {r['friction']:.0%} | {r['noise']} | {r['exit_code']} | {r['falls']} | "
                      f"{r['swing_up_s'] if r['swing_up_s'] is None else round(r['swing_up_s'], 2)} | "
                      f"{r.get('max_velocity_share', math.nan):.2f} | {r.get('max_acceleration_share', math.nan):.2f} |")  # fmt: skip
-    tmp = path.with_suffix(".md.part")
-    tmp.write_text("\n".join(lines) + "\n")
-    tmp.replace(path)
+    return lines
 
 
-def main(quick: bool = False) -> dict:
+PARTS = ("fast", "fri", "judge")  # the order they run in (the slowest, the judge's RK45 per cycle, last)
+
+
+def _stamp() -> dict:
+    """When and on which code a part was measured (the commit, ``+`` when the work tree had changes)."""
+    def git(*args: str) -> str:
+        p = subprocess.run(["git", *args], capture_output=True, text=True, cwd=ROOT)
+        return p.stdout.strip() if p.returncode == 0 else ""
+
+    dirty = git("status", "--porcelain", "--untracked-files=no")
+    return {"date": time.strftime("%Y-%m-%d %H:%M"), "commit": git("rev-parse", "--short", "HEAD") + ("+" if dirty else "")}
+
+
+def fast_part(pool, quick: bool) -> dict:
+    """The band on the fast simulation, and the travel floor of a 10° knock."""
     from planners.rigid_pendulum import RigidPendulum
 
     scales = (0.8, 1.2) if quick else (0.8, 1.0, 1.2)
     cases = list(itertools.product(scales, (0.0, 0.02), (0.0, 0.05), (0.005, 0.015), (2, 6), (0,) if quick else (0, 1)))
     t0 = time.perf_counter()
-    with Pool(2) as pool:
-        fast = pool.map(fast_case, cases)
-        fast_s = time.perf_counter() - t0
-        judge = [] if quick else pool.map(judge_case, judge_cases())
-    judge_s = time.perf_counter() - t0 - fast_s
+    fast = pool.map(fast_case, cases)
+    fast_s = time.perf_counter() - t0
     ok = [r for r in fast if r["succeeded"] and r["falls"] == 0 and r["on_rail"]]
     settled = [r["max_up_deg_settled"] for r in fast if r.get("max_up_deg_settled") is not None]
     pushed = [r["max_up_deg_after_push"] for r in fast if r.get("max_up_deg_after_push") is not None]
     swing = [r["swing_up_s"] for r in fast if r["swing_up_s"] is not None]
     travel = [r["max_cart_m_after_push"] for r in fast if r.get("max_cart_m_after_push") is not None]
-    fri = [] if quick else [fri_case(1.0, 0.0, 0), fri_case(0.8, 0.05, 2), fri_case(1.2, 0.05, 2)]
     rail = _rail()
     floors = []
     for scale, tip in ((0.8, 0.0), (1.0, 0.0), (1.2, 0.02)):
@@ -343,9 +382,8 @@ def main(quick: bool = False) -> dict:
             _, _, a_hi, _, j_hi = rail.local_bounds(x, 0.0, 0.0)
             floors.append(dict(scale=scale, tip_kg=tip, bounds_at_m=x, accel=a_hi, jerk=j_hi,
                                floor_m={str(fr): push_travel_floor(length, fr, a_hi, j_hi) for fr in (0.0, 0.05)}))
-    result = {
-        "date": time.strftime("%Y-%m-%d"),
-        "rail_travel_m": _rail().limits.travel,
+    return {
+        "rail_travel_m": rail.limits.travel,
         "fast_cases": len(fast),
         "fast_succeeded_without_fall": len(ok),
         "fast_falls_total": sum(r["falls"] for r in fast),
@@ -361,27 +399,71 @@ def main(quick: bool = False) -> dict:
         "push_travel_floor": floors,
         "fast_failures": [r for r in fast if r not in ok],
         "fast": fast,
+    }  # fmt: skip
+
+
+def judge_part(pool) -> dict:
+    """The second judge's cases."""
+    t0 = time.perf_counter()
+    judge = pool.map(judge_case, judge_cases())
+    return {
         "judge_cases": len(judge),
         "judge_succeeded_without_fall": sum(r["succeeded"] and r["falls"] == 0 and r["on_rail"] for r in judge),
         "judge_falls_total": sum(r["falls"] for r in judge),
         "judge_by_friction": _summary(judge, "kinetic"),
-        "judge_wall_s": round(judge_s, 1),
+        "judge_wall_s": round(time.perf_counter() - t0, 1),
         "judge": judge,
-        "fri": fri,
-    }  # fmt: skip
-    print(json.dumps({k: v for k, v in result.items() if k not in ("fast_failures", "judge")}, indent=1))
-    for r in result["fast_failures"]:
+    }
+
+
+def _write(result: dict) -> None:
+    out = ROOT / "benchmarks" / "results" / "upright_band.json"
+    tmp = out.with_suffix(".json.part")
+    tmp.write_text(json.dumps(result, indent=1) + "\n")
+    tmp.replace(out)
+    write_page(result, out.with_suffix(".md"))
+
+
+def main(quick: bool = False, parts: tuple[str, ...] = PARTS) -> dict:
+    """Run ``parts`` (of :data:`PARTS`) and write the results file after each: the parts not run keep what the file
+    had, each part stamped with when and on which commit it was measured (``measured``)."""
+    out = ROOT / "benchmarks" / "results" / "upright_band.json"
+    result = {} if quick or not out.exists() else json.loads(out.read_text())
+    result.setdefault("measured", {})
+    with Pool(2) as pool:
+        for part in (p for p in PARTS if p in parts):
+            if part == "fast":
+                result.update(fast_part(pool, quick))
+            elif part == "judge":
+                if quick:
+                    continue
+                result.update(judge_part(pool))
+            else:
+                if quick:
+                    continue
+                result["fri"] = [fri_case(1.0, 0.0, 0), fri_case(0.8, 0.05, 2), fri_case(1.2, 0.05, 2)]
+            result["measured"][part] = _stamp()
+            result["date"] = time.strftime("%Y-%m-%d")
+            if not quick:
+                _write(result)
+    print(json.dumps({k: v for k, v in result.items() if k not in ("fast", "fast_failures", "judge", "push_travel_floor")},
+                     indent=1))  # fmt: skip
+    for r in result.get("fast_failures", []):
         print("failed:", r)
-    for r in judge:
+    for r in result.get("judge", []):
         print("judge:", r)
-    if not quick:
-        out = ROOT / "benchmarks" / "results" / "upright_band.json"
-        tmp = out.with_suffix(".json.part")
-        tmp.write_text(json.dumps(result, indent=1) + "\n")
-        tmp.replace(out)
-        write_page(result, out.with_suffix(".md"))
     return result
 
 
 if __name__ == "__main__":
-    main("--quick" in sys.argv)
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="a smoke run of a few fast cases; writes nothing")
+    ap.add_argument("--parts", default=",".join(PARTS),
+                    help=f"comma-separated parts to run (of {', '.join(PARTS)}); the others keep what the file has")
+    args = ap.parse_args()
+    chosen = tuple(p.strip() for p in args.parts.split(",") if p.strip())
+    if not chosen or set(chosen) - set(PARTS):
+        ap.error(f"--parts: expected some of {', '.join(PARTS)}, got {args.parts!r}")
+    main(args.quick, chosen)

@@ -323,8 +323,13 @@ def _fast_section(result: dict, head: list[str]) -> list[str]:
 
 def _judge_section(result: dict, head: list[str]) -> list[str]:
     j = result["judge_by_friction"]
-    lines = ["## The second judge (Stribeck friction, scipy RK45, other seeds, delays and push times)", "", *head,
-             "| kinetic friction (static 1.3 ×) | cases | without a fall | falls |", "|---|---:|---:|---:|"]
+    lines = [
+        "## The second judge (Stribeck friction, scipy RK45, other seeds, delays and push times)",
+        "",
+        *head,
+        "| kinetic friction (static 1.3 ×) | cases | without a fall | falls |",
+        "|---|---:|---:|---:|",
+    ]
     lines += [f"| {float(k):.0%} | {v['cases']} | {v['without_fall']} | {v['falls']} |" for k, v in j.items()]
     lines += ["", "| rod × | rod mass [kg] | tip [kg] | kinetic | delay [ms] | push | falls | identified dry friction | "
               "verdict |", "|---:|---:|---:|---:|---:|---|---:|---:|---|"]  # fmt: skip
@@ -352,12 +357,16 @@ PARTS = ("fast", "fri", "judge")  # the order they run in (the slowest, the judg
 
 def _stamp() -> dict:
     """When and on which code a part was measured (the commit, ``+`` when the work tree had changes)."""
+
     def git(*args: str) -> str:
         p = subprocess.run(["git", *args], capture_output=True, text=True, cwd=ROOT)
         return p.stdout.strip() if p.returncode == 0 else ""
 
     dirty = git("status", "--porcelain", "--untracked-files=no")
-    return {"date": time.strftime("%Y-%m-%d %H:%M"), "commit": git("rev-parse", "--short", "HEAD") + ("+" if dirty else "")}
+    return {
+        "date": time.strftime("%Y-%m-%d %H:%M"),
+        "commit": git("rev-parse", "--short", "HEAD") + ("+" if dirty else ""),
+    }
 
 
 def fast_part(pool, quick: bool) -> dict:
@@ -380,8 +389,16 @@ def fast_part(pool, quick: bool) -> dict:
         length = RigidPendulum(rod_length=NOMINAL_ROD * scale, tip_mass=tip).equivalent_length
         for x in (0.0, 0.2):  # the rail's bounds at rest at its centre and 0.2 m out
             _, _, a_hi, _, j_hi = rail.local_bounds(x, 0.0, 0.0)
-            floors.append(dict(scale=scale, tip_kg=tip, bounds_at_m=x, accel=a_hi, jerk=j_hi,
-                               floor_m={str(fr): push_travel_floor(length, fr, a_hi, j_hi) for fr in (0.0, 0.05)}))
+            floors.append(
+                dict(
+                    scale=scale,
+                    tip_kg=tip,
+                    bounds_at_m=x,
+                    accel=a_hi,
+                    jerk=j_hi,
+                    floor_m={str(fr): push_travel_floor(length, fr, a_hi, j_hi) for fr in (0.0, 0.05)},
+                )
+            )
     return {
         "rail_travel_m": rail.limits.travel,
         "fast_cases": len(fast),
@@ -460,8 +477,11 @@ if __name__ == "__main__":
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="a smoke run of a few fast cases; writes nothing")
-    ap.add_argument("--parts", default=",".join(PARTS),
-                    help=f"comma-separated parts to run (of {', '.join(PARTS)}); the others keep what the file has")
+    ap.add_argument(
+        "--parts",
+        default=",".join(PARTS),
+        help=f"comma-separated parts to run (of {', '.join(PARTS)}); the others keep what the file has",
+    )
     args = ap.parse_args()
     chosen = tuple(p.strip() for p in args.parts.split(",") if p.strip())
     if not chosen or set(chosen) - set(PARTS):

@@ -106,6 +106,10 @@ def release_score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
         penalty += 100.0 + 100.0 * (max_travel - problem.travel)
     after = np.flatnonzero(plan.tension[k:] <= 0.0)
     t_release = float(plan.t[k + after[0]]) if after.size else problem.horizon + 3.0
-    cost = (penalty + t_release + goal.spread_weight * max(0.0, spread - goal.spread_target)
-            + 1000.0 * max(0.0, t_release - goal.deadline))
+    cost = (
+        penalty
+        + t_release
+        + goal.spread_weight * max(0.0, spread - goal.spread_target)
+        + 1000.0 * max(0.0, t_release - goal.deadline)
+    )
     return FastOutcome(t_release if after.size else None, spread, max_travel, min_tension, cost)

@@ -141,8 +141,9 @@ class UprightController:
         self.o = options
         self.gain = gain if gain is not None else balance_gain(length, options)
         # the catch's prediction (pass it in to keep the matrix exponential out of a real-time cycle)
-        self._reach = reach if reach is not None or not any(self.gain) else catch_reach(length, self.gain,
-                                                                                         options.catch_horizon)
+        self._reach = (
+            reach if reach is not None or not any(self.gain) else catch_reach(length, self.gain, options.catch_horizon)
+        )
         if limit is None:  # (pass it in, computed with the gain, to keep its eigenvalues out of a real-time cycle)
             limit = damping_limit(length, self.gain) if friction > 0.0 and any(self.gain) else math.inf
         self.dither_amplitude = dither_amplitude(length, friction, limit, options)  # [m/s²] (before the cap)
@@ -169,8 +170,12 @@ class UprightController:
         """One cycle with the estimate φ [rad] (0 hanging, π upright), φ̇ [rad/s]: step the cart."""
         o, cart = self.o, self.cart
         theta = wrap_angle(phi - math.pi)
-        if (self.mode is Mode.SWING_UP and abs(theta) < o.catch_angle and abs(omega) < o.catch_rate
-                and self._catchable(theta, omega)):
+        if (
+            self.mode is Mode.SWING_UP
+            and abs(theta) < o.catch_angle
+            and abs(omega) < o.catch_rate
+            and self._catchable(theta, omega)
+        ):
             self.mode = Mode.BALANCE
             self.catches += 1
             self._av = cart.a

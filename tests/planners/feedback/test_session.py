@@ -53,7 +53,12 @@ def test_a_reversed_encoder_is_refused_not_guessed():
 def test_it_always_ends_and_says_why_it_failed():
     # no reading ever: the wait runs out
     run = simulate_session(_rod(), LIM, NOMINAL.equivalent_length, SessionOptions(wait_s=1.0), Sensor(rate_hz=0.001))
-    assert run.session.done and not run.session.succeeded and "hang still" in run.session.verdict or "no reading" in run.session.verdict
+    assert (
+        run.session.done
+        and not run.session.succeeded
+        and "hang still" in run.session.verdict
+        or "no reading" in run.session.verdict
+    )
     # a cart too weak to swing it up: the swing-up's time runs out, the rod is lowered, the arm parks
     weak = CartLimits(0.3, 0.8, 0.3, 60.0)
     run = simulate_session(_rod(), weak, NOMINAL.equivalent_length, SessionOptions(swing_timeout_s=5.0), Sensor())
@@ -63,7 +68,9 @@ def test_it_always_ends_and_says_why_it_failed():
 
 
 @pytest.mark.parametrize("scale, push, when", [(1.2, 10.0, 6.0), (0.8, -10.0, 7.0)])
-def test_with_5_percent_dry_friction_a_push_of_10_degrees_is_recovered_on_the_arms_rail(robot, limits, scale, push, when):
+def test_with_5_percent_dry_friction_a_push_of_10_degrees_is_recovered_on_the_arms_rail(
+    robot, limits, scale, push, when
+):
     # the rail's own bounds at its state (as lbr control upright uses them); without the dither both fall once: the
     # stick-slip limit cycle has the cart near an end when the push comes
     from conftest import Q_START

@@ -19,8 +19,10 @@ seconds after the catch (so that they meet the balance's 3 Hz dither at other ph
 FRI simulator (``lbr control upright --sim-lockstep``, the real arm model, the module's serial lines on a pty): the
 nominal rod and the rod 20 % short and long with friction and noise, 60 s hold and the push.
 
-``python benchmarks/bench_upright_band.py [--quick]`` writes benchmarks/results/upright_band.json and
-benchmarks/results/upright_band.md (the docs' page; ``--quick`` writes neither: a smoke run).
+``python benchmarks/bench_upright_band.py [--quick] [--parts fast,fri,judge]`` writes
+benchmarks/results/upright_band.json and benchmarks/results/upright_band.md (the docs' page) after each part it runs
+(the parts not run keep what the file had; each part is stamped with its date and commit; ``--quick`` writes
+nothing: a smoke run). The judge is the slowest part (scipy's RK45 over every 1 ms cycle, ≈ 2 min of CPU a case).
 """
 
 from __future__ import annotations
@@ -169,7 +171,9 @@ def fri_case(sim_scale: float, friction: float, noise: int) -> dict:
         fig = json.loads(p.stdout) if p.stdout.strip().startswith("{") else {}
         out = dict(sim_scale=sim_scale, friction=friction, noise=noise, exit_code=p.returncode, wall_s=round(wall, 1),
                    falls=fig.get("falls"), swing_up_s=fig.get("swing_up_s"),
-                   longest_balance_s=fig.get("longest_balance_s"), verdict=fig.get("verdict"))  # fmt: skip
+                   longest_balance_s=fig.get("longest_balance_s"), verdict=fig.get("verdict"),
+                   outcome=fig.get("outcome"), reason=fig.get("reason"), detail=fig.get("detail"),
+                   stderr_tail=p.stderr.strip().splitlines()[-3:])  # fmt: skip
         if log.exists():
             import csv
 

@@ -23,7 +23,7 @@ import typer
 from trajectories.errors import CheckFailed, InputError, OptionError
 
 from ..console import Reporter
-from ..fri_options import DEFAULT_BALL_LENGTH, FRI_OPTIONS, LAB_OPTIONS, FriOptions, PlotOpt
+from ..fri_options import DEFAULT_BALL_LENGTH, FRI_OPTIONS, LAB_OPTIONS, FriOptions, PlotOpt, StartToleranceOpt
 from ..fri_runner import exit_for, plot_log, print_summary, run_client
 from ..lab.attach import LabOptions
 from ..option_groups import OptionGroup, with_options
@@ -615,16 +615,7 @@ def damp(
             help="If the robot stands elsewhere, first move there (jerk-limited, input-shaped for the swing).",
         ),
     ] = False,
-    start_tolerance: Annotated[
-        float,
-        number(
-            "--start-tolerance",
-            low=0,
-            high=0.1,
-            unit="rad",
-            help="Largest |first row − measured position| accepted \\[rad].",
-        ),
-    ] = 1e-3,
+    start_tolerance: StartToleranceOpt = 1e-3,
     start_sway: Annotated[
         float,
         number(

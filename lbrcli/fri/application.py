@@ -74,6 +74,7 @@ class ClientApplication(Replying, SessionEnding):
         reply_gap_s: float | None = None,
         tracking_lag_s: float | None = None,
         busy_wait_s: float = 0.0,
+        send_period_s: float | None = None,
         prepare: bool = True,
         transformation_client: TransformationClient | None = None,
         tcp_robot: Any = None,
@@ -99,6 +100,7 @@ class ClientApplication(Replying, SessionEnding):
         self.reply_gap_s = reply_gap_s  # [s] None: 50 ms
         self.tracking_lag_s = tracking_lag_s  # [s] the default tracking bound's lag at full speed (None: 20 ms)
         self.busy_wait_s = busy_wait_s  # [s] the receive polls this long before each message is due (transport)
+        self.send_period_s = send_period_s  # [s] the send period the controller must have (None: whatever it sends)
         self.transport: UdpTransport | None = None
         self.cycle = Cycle()
         self.state: LBRState | None = None  # view of the last accepted message
@@ -319,6 +321,7 @@ class ClientApplication(Replying, SessionEnding):
             if self.busy_wait_s > 0.0:
                 transport.expect_period(ci.sendPeriod * 1e-3)  # type: ignore[union-attr]
                 transport.warm = self._warm  # type: ignore[union-attr]
+            self._check_send_period(ci.sendPeriod)
         # what the supervision after the reply judges this message against: the command in force when it was sent
         motion = self._motion
         supervised = (state == CMD_ACTIVE and motion is not None and not motion.braking,

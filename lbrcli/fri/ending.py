@@ -34,6 +34,7 @@ class SessionEnding:
     _cycles0: int
     _answered_any: bool
     _unanswered_at_start: int
+    send_period_s: float | None
 
     def _moving(self) -> bool:
         raise NotImplementedError
@@ -46,6 +47,13 @@ class SessionEnding:
         self._stop = (outcome, reason, text)
         if self._moving():
             self._motion.begin_braking()  # type: ignore[union-attr]
+
+    def _check_send_period(self, send_period_ms: int) -> None:
+        """A controller at another send period than ``send_period_s`` ends the session before it commands (BAD_INPUT)."""
+        if self.send_period_s is not None and abs(send_period_ms * 1e-3 - self.send_period_s) > 1e-9:
+            self._stop_braking(Outcome.REFUSED, EndReason.BAD_INPUT,
+                               f"the controller's send period is {send_period_ms} ms, not the {self.send_period_s * 1e3:g} ms "
+                               "asked; set it in the robot's FRI configuration or ask for that period")  # fmt: skip
 
     def _request_stop(self, outcome: Outcome, reason: EndReason, text: str) -> bool:
         """Remember a client-side stop; brake when commanding. True if the session ended at once."""

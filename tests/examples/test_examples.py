@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from tests.helpers.cli import Q_START
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 sys.path.insert(0, str(EXAMPLES))
@@ -19,6 +20,7 @@ def test_every_example_is_short():
         assert len(path.read_text().splitlines()) <= 60, path.name
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("version", ["1.15", "2.7"])
 def test_joint_sine_overlay_moves_the_measured_position_by_the_sine(version):
     import joint_sine_overlay
@@ -37,6 +39,7 @@ def test_joint_sine_overlay_moves_the_measured_position_by_the_sine(version):
     assert np.ptp(commanded[:, 0]) == 0.0
 
 
+@pytest.mark.heavy
 def test_torque_sine_moves_the_joint_and_wrench_sine_moves_the_flange():
     import torque_sine_overlay
     import wrench_sine_overlay
@@ -50,6 +53,7 @@ def test_torque_sine_moves_the_joint_and_wrench_sine_moves_the_flange():
     assert np.ptp(np.array(client.measured), axis=0).max() > 1e-5
 
 
+@pytest.mark.heavy
 def test_stream_csv_and_monitor_write_logs_the_project_reads(tmp_path):
     import monitor_to_file
     import stream_csv
@@ -59,7 +63,7 @@ def test_stream_csv_and_monitor_write_logs_the_project_reads(tmp_path):
 
     t = np.arange(0, 1.0 + 1e-9, 0.005)
     s = 10 * (t / t[-1]) ** 3 - 15 * (t / t[-1]) ** 4 + 6 * (t / t[-1]) ** 5
-    q = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0]) + 0.1 * s[:, None]
+    q = Q_START + 0.1 * s[:, None]
     csv = tmp_path / "move.csv"
     np.savetxt(csv, np.column_stack([t, q]), delimiter=",", header="t,q1,q2,q3,q4,q5,q6,q7", comments="", fmt="%.12g")
     result, player = stream_csv.main([str(csv), "--log", str(tmp_path / "run.csv"), "--sim-lenient"])
@@ -71,6 +75,7 @@ def test_stream_csv_and_monitor_write_logs_the_project_reads(tmp_path):
     assert result.ok and rows == len(read_table(tmp_path / "mon.csv", LOG_COLUMNS, time="increasing").data) > 50
 
 
+@pytest.mark.heavy
 def test_damp_ball_feedback_removes_the_sway_open_loop_keeps():
     import damp_ball
 
@@ -85,6 +90,7 @@ def test_damp_ball_feedback_removes_the_sway_open_loop_keeps():
     assert late[0.9] < late[0.0] / 4
 
 
+@pytest.mark.heavy
 def test_io_access_writes_the_clock_and_reads_it_back():
     import io_access
 
@@ -100,6 +106,7 @@ def test_io_access_writes_the_clock_and_reads_it_back():
     assert set(later) <= set(client.written) | {(0, 0.0)}  # never anything that was not written
 
 
+@pytest.mark.heavy
 def test_bridge_pose_source_draws_the_circle_and_ends_the_session():
     import bridge_pose_source
 

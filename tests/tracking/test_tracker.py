@@ -35,6 +35,7 @@ def centre_errors(track, gt):
     return np.linalg.norm(track.uv - gt.ball_uv, axis=1)
 
 
+@pytest.mark.heavy
 def test_goals_fixed_pivot(video_720p):
     path, gt = video_720p
     track = track_video(path, color_spec("red"), pivot_uv=PIVOT)
@@ -48,6 +49,7 @@ def test_goals_fixed_pivot(video_720p):
     assert track.full_frame_searches <= 3  # the window search holds the ball
 
 
+@pytest.mark.heavy
 def test_goals_tracked_pivot_marker(video_720p):
     path, gt = video_720p
     track = track_video(path, color_spec("red"), pivot_color=color_spec("green"))
@@ -66,6 +68,7 @@ def test_timestamps_are_decoder_times(video_720p):
     np.testing.assert_allclose(t, gt.t, atol=1e-6)
 
 
+@pytest.mark.heavy
 def test_moving_pivot_and_lost_frames_not_invented(tmp_path):
     """The pivot moves (as the robot's flange does) and the ball leaves the image: those frames are not found."""
     size = (640, 360)
@@ -118,6 +121,7 @@ def _distance_to_polyline(p, line):
     return float(np.min(np.linalg.norm(a + s[:, None] * ab - p, axis=1)))
 
 
+@pytest.mark.heavy
 def test_ball_crossing_a_red_cable_next_to_a_red_box(tmp_path):
     """Where the ball merges with a red cable it is lost (not found), and it is never swapped for the cable
     or a red box next to its path; away from the cable it is always found."""

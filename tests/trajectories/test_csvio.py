@@ -173,6 +173,7 @@ def test_not_utf8_names_the_row(tmp_path):
     assert exc.value.row == 5 and "not UTF-8" in str(exc.value)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("rows", [10, 3000, 5001])
 def test_large_files_read_exactly_and_name_the_first_fault(tmp_path, rows):
     rng = np.random.default_rng(rows)
@@ -287,6 +288,7 @@ def test_the_large_file_reader_reads_exactly_what_the_small_file_reader_reads(tm
         assert small[1] == big[1]
 
 
+@pytest.mark.heavy
 def test_the_large_file_reader_is_used_and_equals_numpys(tmp_path):
     from trajectories import csvio
 

@@ -71,13 +71,14 @@ def test_it_always_ends_and_says_why_it_failed():
     assert run.t[-1] < 40.0  # the whole session is bounded
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("scale, push, when", [(1.2, 10.0, 6.0), (0.8, -10.0, 7.0)])
 def test_with_5_percent_dry_friction_a_push_of_10_degrees_is_recovered_on_the_arms_rail(
     robot, limits, scale, push, when
 ):
     # the rail's own bounds at its state (as lbr control upright uses them); without the dither both fall once: the
     # stick-slip limit cycle has the cart near an end when the push comes
-    from conftest import Q_START
+    from tests.helpers.cli import Q_START
     from planners.rail import build_rail
 
     rail = build_rail(robot, Q_START, limits, 0.3)

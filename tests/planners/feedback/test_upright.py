@@ -69,6 +69,7 @@ def _settled(run, after: float = 8.0) -> tuple[float, float]:
     return float(_from_upright_deg(run.phi)[late].max()), float(np.abs(run.x[late]).max())
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("length", [0.4, 0.6])
 def test_the_dither_keeps_a_rod_with_dry_friction_from_stick_slip(rail, length):
     # 5 % dry friction: without the dither the balance runs a stick-slip limit cycle of ≈ 4.5° and ±0.25 m (below)
@@ -78,6 +79,7 @@ def test_the_dither_keeps_a_rod_with_dry_friction_from_stick_slip(rail, length):
     assert run.falls == 0 and angle < 1.2 and travel < 0.02, (angle, travel)
 
 
+@pytest.mark.heavy
 def test_without_the_dither_the_same_rod_sticks_and_slips(rail):
     rod, mu = _with_friction(0.4, 0.05)
     run = simulate_upright(rod, rail.limits, 22.0, bounds=rail.local_bounds, sensor=Sensor(delay=0.010), friction=mu,

@@ -25,7 +25,7 @@ from ..rigid_pendulum import wrap_angle
 from .cart import Cart
 from .identify import DECAY_S, QUIET_S, IdentificationError, RodIdentification, excitation, identify
 from .observer import DelayedObserver
-from .upright import Mode, UprightController, UprightOptions, balance_gain, catch_reach
+from .upright import Mode, UprightController, UprightOptions, balance_gain, catch_reach, damping_limit
 
 WAIT, IDENTIFY, FIT, SWING, BALANCE, LOWER, PARK, DONE = (
     "wait", "identify", "fit", "swing", "balance", "lower", "park", "done")  # fmt: skip
@@ -64,14 +64,16 @@ class FitResult:
     rod: RodIdentification
     gain: tuple[float, ...]
     reach: np.ndarray | None = None  # the balance's catch prediction (upright.catch_reach)
+    damping_limit: float = math.inf  # [1/s] the rod damping the balance tolerates (upright.damping_limit)
 
 
 def fit_rod(t_readings: np.ndarray, readings: np.ndarray, accel: np.ndarray, dt: float, nominal_length: float,
             t0: float, options: UprightOptions) -> FitResult:  # fmt: skip
     """Identify the rod and compute its balance gain (picklable: runs in a worker process)."""
     rod = identify(t_readings, readings, accel, dt, nominal_length, t0)
-    gain = balance_gain(rod.equivalent_length, options)
-    return FitResult(rod, gain, catch_reach(rod.equivalent_length, gain, options.catch_horizon))
+    length = rod.equivalent_length
+    gain = balance_gain(length, options)
+    return FitResult(rod, gain, catch_reach(length, gain, options.catch_horizon), damping_limit(length, gain))
 
 
 class UprightSession:
@@ -237,17 +239,26 @@ class UprightSession:
             return
         self.offset = rod.offset
         sensor_delay = max(0.0, rod.delay - self.o.actuation_cycles * self.dt)
-        self._start_control(rod.equivalent_length, res.gain, sensor_delay, rod.damping, rod.coulomb, res.reach)
+        self._start_control(
+            rod.equivalent_length, res.gain, sensor_delay, rod.damping, rod.coulomb, res.reach, res.damping_limit
+        )
 
     def _start_control(
-        self, length: float, gain, sensor_delay: float, damping: float, coulomb: float, reach: np.ndarray | None = None
+        self,
+        length: float,
+        gain,
+        sensor_delay: float,
+        damping: float,
+        coulomb: float,
+        reach: np.ndarray | None = None,
+        limit: float = math.inf,
     ) -> None:
         phi0 = 0.0
         if self._rec_y:
             phi0 = self.sign * (self._rec_y[-1] - self.offset)
         self.obs = DelayedObserver(length, self.dt, sensor_delay, self.reading_interval, friction=damping,
                                    actuation_delay=self.o.actuation_cycles, phi0=phi0, coulomb=coulomb)  # fmt: skip
-        self.ctl = UprightController(length, self.cart, self.co, gain, friction=coulomb, reach=reach)
+        self.ctl = UprightController(length, self.cart, self.co, gain, friction=coulomb, reach=reach, limit=limit)
         self._swing_t0 = self.t
         self._enter(SWING)
 

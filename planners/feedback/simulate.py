@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import random
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -46,15 +47,21 @@ class UprightRun:
 def simulate_upright(pendulum: RigidPendulum, limits: CartLimits, duration: float, bounds=None, sensor: Sensor = Sensor(),
                      options: UprightOptions = UprightOptions(), dt: float = 1e-3, actuation_delay: int = 2,
                      pushes: tuple[tuple[float, float], ...] = (), park_at: float | None = None,
-                     model_length: float | None = None, seed: int = 0) -> UprightRun:  # fmt: skip
-    """Run the swing-up and balance for ``duration`` [s]; ``pushes`` (t [s], Δφ [rad]) knock the rod."""
+                     model_length: float | None = None, seed: int = 0, friction: float = 0.0) -> UprightRun:  # fmt: skip
+    """Run the swing-up and balance for ``duration`` [s]; ``pushes`` (t [s], Δφ [rad]) knock the rod; ``friction``
+    μ [rad/s²]: the bearing's dry friction the controller and its observer are told (as the identification would)."""
     rng = random.Random(seed)
     n = int(round(duration / dt))
     cart = Cart(limits, dt, bounds=bounds)
     l_model = model_length or pendulum.equivalent_length
-    ctl = UprightController(l_model, cart, options)
+    ctl = UprightController(l_model, cart, options, friction=friction)
     obs = DelayedObserver(
-        l_model, dt, sensor.delay + 0.5 * sensor.jitter, 1.0 / sensor.rate_hz, actuation_delay=actuation_delay
+        l_model,
+        dt,
+        sensor.delay + 0.5 * sensor.jitter,
+        1.0 / sensor.rate_hz,
+        actuation_delay=actuation_delay,
+        coulomb=friction,
     )
     applied = [0.0] * (actuation_delay + 1)
     phi = omega = 0.0
@@ -106,10 +113,13 @@ class SessionRun:
 def simulate_session(pendulum: RigidPendulum, limits: CartLimits, model_length: float, options=None,
                      sensor: Sensor = Sensor(), duration: float | None = None, dt: float = 1e-3,
                      actuation_delay: int = 2, pushes: tuple[tuple[float, float], ...] = (), bounds=None,
-                     seed: int = 0, controller: UprightOptions = UprightOptions()) -> SessionRun:  # fmt: skip
+                     seed: int = 0, controller: UprightOptions = UprightOptions(),
+                     plant_step: Callable[[float, float, float, float, float], tuple[float, float]] | None = None,
+                     ) -> SessionRun:  # fmt: skip
     """Run :class:`~.session.UprightSession` (options ``options``) for the rod ``pendulum`` while the controller
     assumes ``model_length`` [m]: until the session is done (or ``duration`` [s]); ``pushes`` (t [s] after the
-    first catch, Δφ [rad]) knock the rod."""
+    first catch, Δφ [rad]) knock the rod. ``plant_step(φ, φ̇, a0, a1, h) -> (φ, φ̇)`` integrates the rod over one
+    cycle with the pivot's acceleration going from a0 to a1 [m/s²] (default: RK4 of ``pendulum``)."""
     from .session import SessionOptions, UprightSession
 
     rng = random.Random(seed)
@@ -129,7 +139,10 @@ def simulate_session(pendulum: RigidPendulum, limits: CartLimits, model_length: 
     while not session.done and k * dt < limit:
         t = k * dt
         a_now = applied[k % len(applied)]
-        phi, omega = rk4_step(pendulum, phi, omega, (a_prev, 0.0), (a_now, 0.0), dt)
+        if plant_step is None:
+            phi, omega = rk4_step(pendulum, phi, omega, (a_prev, 0.0), (a_now, 0.0), dt)
+        else:
+            phi, omega = plant_step(phi, omega, a_prev, a_now, dt)
         a_prev = a_now
         if session.swing_up_s is not None:
             caught = session._swing_t0 + session.swing_up_s

@@ -69,3 +69,24 @@ def test_it_always_ends_and_says_why_it_failed():
     s = run.session
     assert s.done and not s.succeeded and "no catch upright within 5 s" in s.verdict
     assert run.t[-1] < 40.0  # the whole session is bounded
+
+
+@pytest.mark.heavy
+@pytest.mark.parametrize("scale, push, when", [(1.2, 10.0, 6.0), (0.8, -10.0, 7.0)])
+def test_with_5_percent_dry_friction_a_push_of_10_degrees_is_recovered_on_the_arms_rail(
+    robot, limits, scale, push, when
+):
+    # the rail's own bounds at its state (as lbr control upright uses them); without the dither both fall once: the
+    # stick-slip limit cycle has the cart near an end when the push comes
+    from tests.helpers.cli import Q_START
+    from planners.rail import build_rail
+
+    rail = build_rail(robot, Q_START, limits, 0.3)
+    rod = RigidPendulum(rod_length=0.5 * scale)
+    rod = RigidPendulum(rod_length=0.5 * scale, coulomb=0.05 * rod.mass * rod.com * 9.81)
+    run = simulate_session(rod, rail.limits, RigidPendulum(rod_length=0.5).equivalent_length, SessionOptions(hold_s=12.0),
+                           Sensor(noise=2, delay=0.015, offset=25), pushes=((when, math.radians(push)),),
+                           bounds=rail.local_bounds)  # fmt: skip
+    s = run.session
+    assert s.succeeded and s.falls == 0, s.figures()
+    assert np.all(np.abs(run.x) <= rail.limits.travel + 1e-9)

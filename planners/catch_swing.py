@@ -35,6 +35,7 @@ class ReleaseGoal:
     spread_weight: float = 1000.0  # [s/m]: each mm beyond the target costs as much as 1 s of swing-up
     deadline: float = math.inf  # [s] a release later than this costs 1000 per second late (a hard limit)
     min_apex_clearance: float = 0.03  # [m] the flight's apex must clear the landing height by this
+    lateral_speed: float = math.inf  # [m/s] the balls' mean lateral speed over the ground at the landing height
 
 
 @dataclass(frozen=True)
@@ -70,12 +71,27 @@ def free_swing_landing(theta: float, theta_dot: float, length: float, height: fl
     return Landing(side * ts, y0 + vy * t, vy, vz - G * t, t, apex)
 
 
+def _release_time(t: np.ndarray, tension: np.ndarray) -> float | None:
+    """First time [s] the tension margin crosses zero (linear between samples), None if it never does."""
+    after = np.flatnonzero(tension <= 0.0)
+    if not after.size:
+        return None
+    i = int(after[0])
+    if i == 0:
+        return float(t[0])
+    w = tension[i - 1] / (tension[i - 1] - tension[i])
+    return float(t[i - 1] + w * (t[i] - t[i - 1]))
+
+
 def release_score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
     """``FastProblem.scorer`` of the cup-and-ball swing-up (``goal``: a ReleaseGoal). Cost: the nominal release time
     [s] + spread_weight × the landing spread over the band beyond the target [m], + 1000 per second past the deadline,
-    + 100 and more when the landings' centre is beyond
-    the cup's reach, when a string of the band does not fly high enough, or goes slack before the pivot rests, +1000
-    and more when the claimed tension drops below ``min_tension`` while the pivot moves."""
+    + 100 and more when the landings' centre is beyond the cup's reach of the pivot (cruising at its final constant
+    velocity) when they land, when they fly over the ground faster than ``lateral_speed`` there (the cup could not
+    move with them), when the pivot would leave its travel by then, when a string of the band does not fly
+    high enough, or goes slack before the pivot's final velocity, +1000 and more when the claimed tension drops below
+    ``min_tension`` while the pivot accelerates. Each string's flight is the closed-form free swing in the pivot's
+    frame (constant velocity: as at rest) from its state when the pivot's acceleration ends."""
     goal: ReleaseGoal = problem.goal  # type: ignore[assignment]
     k = min(int(np.searchsorted(plan.t, plan.t_rest - 1e-9)), len(plan.t) - 1)
     band = plan.info["band"]
@@ -83,29 +99,38 @@ def release_score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
     thetas = np.vstack([plan.theta[None, :], band["theta"]])
     rates = np.vstack([plan.theta_dot[None, :], band["theta_dot"]])
     moving = plan.t <= plan.t_rest + 1e-9
+    x_rest, v_end, t_rest = float(plan.x[k]), float(plan.v[k]), float(plan.t[k])
     penalty = 0.0
     min_tension = math.inf
-    ys = []
+    ys, ts, vys, releases = [], [], [], []
     for ln, th, om in zip(lengths, thetas, rates):
-        tension = tension_margin(th[moving], om[moving], plan.u[moving], 0.0, ln)
-        min_tension = min(min_tension, float(tension.min()))
+        tension = tension_margin(th, om, plan.u, 0.0, ln)
+        min_tension = min(min_tension, float(tension[moving].min()))
+        t_rel = _release_time(plan.t[k:], tension[k:])
         land = free_swing_landing(float(th[k]), float(om[k]), ln, goal.height)
-        if land is None or land.apex < goal.height + goal.min_apex_clearance:
+        if t_rel is None or land is None or land.apex < goal.height + goal.min_apex_clearance:
             miss = goal.height + goal.min_apex_clearance - (land.apex if land is not None else -ln)
-            penalty += 100.0 + 10.0 * miss
+            penalty += 100.0 + 10.0 * max(miss, 0.0)
             continue
-        ys.append(land.y)
+        releases.append(t_rel)
+        vys.append(v_end + land.vy)
+        ts.append(t_rel + land.t)
+        ys.append(x_rest + v_end * (t_rel + land.t - t_rest) + land.y)
     if min_tension < problem.min_tension:
         penalty += 1000.0 + (problem.min_tension - min_tension)
     spread = float(np.ptp(ys)) if len(ys) > 1 else 0.0
-    centre = float(np.mean(ys)) + float(plan.x[k]) if ys else 0.0
-    if abs(centre - plan.x[k]) > goal.reach:
-        penalty += 100.0 + 100.0 * (abs(centre - plan.x[k]) - goal.reach)
-    max_travel = float(np.max(np.abs(plan.x)))
+    t_land = float(np.mean(ts)) if ts else t_rest
+    anchor = x_rest + v_end * (t_land - t_rest)  # [m] where the cruising pivot is when the band lands
+    centre = float(np.mean(ys)) if ys else anchor
+    if abs(centre - anchor) > goal.reach:
+        penalty += 100.0 + 100.0 * (abs(centre - anchor) - goal.reach)
+    lateral = abs(float(np.mean(vys))) if vys else 0.0
+    if lateral > goal.lateral_speed:  # the cup could not move with the ball: a slanted entry into a moving cup
+        penalty += 100.0 + 100.0 * (lateral - goal.lateral_speed)
+    max_travel = max(float(np.max(np.abs(plan.x[: k + 1]))), abs(anchor))
     if max_travel > problem.travel:
         penalty += 100.0 + 100.0 * (max_travel - problem.travel)
-    after = np.flatnonzero(plan.tension[k:] <= 0.0)
-    t_release = float(plan.t[k + after[0]]) if after.size else problem.horizon + 3.0
+    t_release = releases[0] if releases else problem.horizon + 3.0
     cost = (penalty + t_release + goal.spread_weight * max(0.0, spread - goal.spread_target)
             + 1000.0 * max(0.0, t_release - goal.deadline))
-    return FastOutcome(t_release if after.size else None, spread, max_travel, min_tension, cost)
+    return FastOutcome(releases[0] if releases else None, spread, max_travel, min_tension, cost)

@@ -1,13 +1,16 @@
-"""The cup-and-ball swing-up: pump the swing (taut), stop the pivot, and let the free swing release the ball.
+"""The cup-and-ball swing-up: pump the swing (taut), end the pivot's acceleration, and let the free swing release the ball.
 
 The pumping is the fast method's (``swingup_fast``: bang-bang energy pumping, jerk-limited by ruckig) with the
-tension governor on, so that the string stays taut while the pivot moves and the planar model is exact there. The
-pivot then rests, and the ball's free swing goes slack by itself where l·θ̇² + g·cos θ = 0, i.e. at
-cos θ_s = −2E/(3·g·l) for the swing energy E = ½·l²·θ̇² − g·l·cos θ (per unit mass): with the pivot at rest the whole
-flight that follows depends on E and l only, not on when the ball gets there. The search (differential evolution
-over the pumping's tuning) minimises the release time plus the spread of the landing points over the string-length
-band — the same pivot path drives every length of the band (``FastProblem.band``) — so that one cup position catches
-them all.
+tension governor on, so that the string stays taut while the pivot accelerates and the planar model is exact there.
+The pivot then moves at a constant velocity (``FastParams.cruise``; 0: at rest), and the ball's free swing goes
+slack by itself where l·θ̇² + g·cos θ = 0, i.e. at cos θ_s = −2E/(3·g·l) for the swing energy
+E = ½·l²·θ̇² − g·l·cos θ (per unit mass): in the pivot's frame — inertial, at constant velocity — the whole flight
+that follows depends on E and l only, not on when the ball gets there. Cruising toward where the ball comes down lets
+the release be low (θ_s nearer the horizontal, where the landing point hardly depends on E: the strings of the band,
+pumped by the same pivot path, end with energies some per cent apart) while the cup is already on its way under it.
+The search (differential evolution over the pumping's tuning and the cruise) minimises the release time plus the
+spread of the landing points over the string-length band — the same pivot path drives every length of the band
+(``FastProblem.band``) — so that one cup position catches them all.
 """
 
 from __future__ import annotations

@@ -32,8 +32,13 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
     repeats = 1 if quick else 3
     rows = []
     plan_layout(pts, 0.25, 2.0, DEFAULT_Z, 0.005, AntiSwayOptions())  # warm-up (scipy imports)
-    configs = (("auto", 0.1, 0.005), ("auto", 0.0, 0.005), ("auto", 0.2, 0.005), ("accel", 0.0, 0.005),
-               ("auto", 0.1, 0.001))
+    configs = (
+        ("auto", 0.1, 0.005),
+        ("auto", 0.0, 0.005),
+        ("auto", 0.2, 0.005),
+        ("accel", 0.0, 0.005),
+        ("auto", 0.1, 0.001),
+    )
     for shaper, tol, dt in configs:
         opts = AntiSwayOptions(shaper=shaper, length_tolerance=tol)
         label = f"{shaper}{f' tol {tol:g}' if shaper != 'accel' else ''} dt {dt * 1e3:g} ms"
@@ -58,10 +63,17 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
             (f"anti-sway {label}: plan + IK + check ({len(joints)} samples)", t_all, "s"),
             (f"anti-sway {label}: nonlinear prediction", t_pred, "s"),
             (f"anti-sway {label}: moving time", plan.stop_time, "s"),
-            (f"anti-sway {label}: predicted residual sway", float(np.degrees(run_.theta[run_.t >= plan.stop_time].max())), "deg"),
+            (
+                f"anti-sway {label}: predicted residual sway",
+                float(np.degrees(run_.theta[run_.t >= plan.stop_time].max())),
+                "deg",
+            ),
             (f"anti-sway {label}: residual with the string 10 % off (worst)", worst, "deg"),
-            (f"anti-sway {label}: worst residual over the string ±10 % (−10, −5, 0, +5, +10 %)",
-             max(residual.values()), "deg"),
+            (
+                f"anti-sway {label}: worst residual over the string ±10 % (−10, −5, 0, +5, +10 %)",
+                max(residual.values()),
+                "deg",
+            ),
         ]
         assert report.ok
     return rows

@@ -81,8 +81,9 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
             claim_err.append(max(abs(a - b) for a, b in zip(res, figs["band_residual_sway_deg"])))
             if i % 4 == 0:
                 try:
-                    fs = plan_anti_sway_files(pts, length, a_max, None, "auto", dt, Path(tmp) / f"s{i}.csv",
-                                              max_sway=math.radians(4.0))
+                    fs = plan_anti_sway_files(
+                        pts, length, a_max, None, "auto", dt, Path(tmp) / f"s{i}.csv", max_sway=math.radians(4.0)
+                    )
                 except PlanningError:
                     continue
                 pos_s = robot.fk_path(read_joint_csv(Path(tmp) / f"s{i}.csv").q)[0]
@@ -103,8 +104,16 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         ("anti-sway robust: moving time / baseline, median", float(np.median(r)), "-"),
         ("anti-sway robust: moving time / baseline, max", float(r.max()), "-"),
         ("anti-sway robust: JSON residual claims vs judge, max error", float(max(claim_err)), "deg"),
-        ("anti-sway robust: --max-sway 4 deg plans within it (judge)", float(np.mean(sway_ok)) if sway_ok else math.nan, "-"),
-        ("anti-sway robust: --max-sway 4 deg, largest judged peak", float(max(sway_peaks)) if sway_peaks else math.nan, "deg"),
+        (
+            "anti-sway robust: --max-sway 4 deg plans within it (judge)",
+            float(np.mean(sway_ok)) if sway_ok else math.nan,
+            "-",
+        ),
+        (
+            "anti-sway robust: --max-sway 4 deg, largest judged peak",
+            float(max(sway_peaks)) if sway_peaks else math.nan,
+            "deg",
+        ),
     ]
 
 

@@ -214,7 +214,9 @@ def _bands(quick: bool) -> list[tuple[str, float, str]]:
                     delays.append(d * 1e3)
                     vs.append(v)
                     accs.append(a)
-                name = f"lock step {rate:g} Hz {'ff' if ff else 'positions'}, {drop:.0%} replies lost, {late_ms:g} ms late"
+                name = (
+                    f"lock step {rate:g} Hz {'ff' if ff else 'positions'}, {drop:.0%} replies lost, {late_ms:g} ms late"
+                )
                 rows += [(f"{name}: max error behind the delay", worst, "deg"),
                          (f"{name}: delay", max(delays), "ms"),
                          (f"{name}: peak velocity / limit", max(vs), ""),

@@ -31,9 +31,11 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 DOCS = HERE.parent / "docs" / "guides" / "results"
 OTHER_POSE = ("--sim-camera-position", "0.9,-0.9,1.0", "--sim-camera-look-at", "0.5,0,0.2", "--sim-camera-fov", "60")
-TIMINGS = {"120 fps / 15 ms": ("--sim-camera-fps", "120", "--sim-camera-latency", "15"),
-           "60 fps / 30 ms": ("--sim-camera-fps", "60", "--sim-camera-latency", "30", "--sim-camera-exposure", "6"),
-           "30 fps / 50 ms": ("--sim-camera-fps", "30", "--sim-camera-latency", "50", "--sim-camera-exposure", "8")}
+TIMINGS = {
+    "120 fps / 15 ms": ("--sim-camera-fps", "120", "--sim-camera-latency", "15"),
+    "60 fps / 30 ms": ("--sim-camera-fps", "60", "--sim-camera-latency", "30", "--sim-camera-exposure", "6"),
+    "30 fps / 50 ms": ("--sim-camera-fps", "30", "--sim-camera-latency", "50", "--sim-camera-exposure", "8"),
+}
 
 
 def _log(path: Path) -> dict[str, np.ndarray]:
@@ -66,7 +68,12 @@ def _case(crane: Path, move_end: float, true_length: float, args: tuple[str, ...
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
         fig = json.loads(p.stdout) if p.stdout.strip().startswith("{") else {}
         d = _log(log) if log.exists() else None
-    out = {"exit": p.returncode, "load": load, "fig": fig, "why": p.stderr.strip().splitlines()[-1] if p.returncode else ""}
+    out = {
+        "exit": p.returncode,
+        "load": load,
+        "fig": fig,
+        "why": p.stderr.strip().splitlines()[-1] if p.returncode else "",
+    }
     if d is not None and np.any(d["phase"] == 2):
         t, phase = d["t"], d["phase"]
         t0 = t[np.flatnonzero(phase == 2)[0]]
@@ -99,11 +106,16 @@ def _cases(quick: bool) -> list[tuple[str, tuple[str, ...]]]:
     cases = [("default pose, 320x240, 120 fps / 15 ms", goal)]
     if quick:
         return cases
-    cases += [("default pose, 640x480, 120 fps / 15 ms", (*goal, "--sim-camera-size", "640x480")),
-              ("default pose, 320x240, 120 fps / 15 ms, no frame stamps", (*goal, "--no-sim-camera-stamp")),
-              ("other pose, 320x240, 120 fps / 15 ms", (*goal, *OTHER_POSE))]
+    cases += [
+        ("default pose, 640x480, 120 fps / 15 ms", (*goal, "--sim-camera-size", "640x480")),
+        ("default pose, 320x240, 120 fps / 15 ms, no frame stamps", (*goal, "--no-sim-camera-stamp")),
+        ("other pose, 320x240, 120 fps / 15 ms", (*goal, *OTHER_POSE)),
+    ]
     for name in ("60 fps / 30 ms", "30 fps / 50 ms"):
-        cases += [(f"default pose, 320x240, {name}", TIMINGS[name]), (f"other pose, 320x240, {name}", (*TIMINGS[name], *OTHER_POSE))]
+        cases += [
+            (f"default pose, 320x240, {name}", TIMINGS[name]),
+            (f"other pose, 320x240, {name}", (*TIMINGS[name], *OTHER_POSE)),
+        ]
     return cases
 
 
@@ -125,24 +137,36 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
                       f"(open loop {r['open_2T']:.3f}°), load {r['load']:.1f}, failed before: {r['failures']}", file=sys.stderr)  # fmt: skip
     rows: list[tuple[str, float, str]] = []
     for L in lengths:
-        rows.append((f"open loop, string {L:g} m (plan 0.25): sway 2 periods after the move", open_loop[L].get("sway_2T", math.nan), "deg"))
+        rows.append(
+            (
+                f"open loop, string {L:g} m (plan 0.25): sway 2 periods after the move",
+                open_loop[L].get("sway_2T", math.nan),
+                "deg",
+            )
+        )
     for r in results:
         f = r["fig"]
         tag = f"{r['case']}, string {r['length']:g} m"
-        rows += [(f"{tag}: exit code", float(r["exit"]), ""),
-                 (f"{tag}: runs that failed before (a loaded PC)", float(len(r["failures"])), ""),
-                 (f"{tag}: sway 1 period after the move", r.get("sway_1T", math.nan), "deg"),
-                 (f"{tag}: sway 2 periods after the move", r.get("sway_2T", math.nan), "deg"),
-                 (f"{tag}: camera string measured", f.get("camera_string_m") or math.nan, "m"),
-                 (f"{tag}: a 1° tilt moves the ball (x, least)", (f.get("camera_px_per_deg") or [math.nan])[0], "px"),
-                 (f"{tag}: a 1° tilt moves the ball (y, least)", (f.get("camera_px_per_deg") or [math.nan, math.nan])[1], "px"),
-                 (f"{tag}: capture → result p50", f.get("camera_latency_ms_p50") or math.nan, "ms"),
-                 (f"{tag}: reading age p50", f.get("camera_age_ms_p50") or math.nan, "ms"),
-                 (f"{tag}: reading age p95", f.get("camera_age_ms_p95") or math.nan, "ms"),
-                 (f"{tag}: frames dropped", float(f.get("camera_frames_dropped", math.nan)), ""),
-                 (f"{tag}: largest offset from the path", 1e3 * (f.get("max_offset_m") or math.nan), "mm"),
-                 (f"{tag}: missed FRI cycles", float(f.get("missed", math.nan)), ""),
-                 (f"{tag}: machine load (1 min) at the start", r["load"], "")]
+        rows += [
+            (f"{tag}: exit code", float(r["exit"]), ""),
+            (f"{tag}: runs that failed before (a loaded PC)", float(len(r["failures"])), ""),
+            (f"{tag}: sway 1 period after the move", r.get("sway_1T", math.nan), "deg"),
+            (f"{tag}: sway 2 periods after the move", r.get("sway_2T", math.nan), "deg"),
+            (f"{tag}: camera string measured", f.get("camera_string_m") or math.nan, "m"),
+            (f"{tag}: a 1° tilt moves the ball (x, least)", (f.get("camera_px_per_deg") or [math.nan])[0], "px"),
+            (
+                f"{tag}: a 1° tilt moves the ball (y, least)",
+                (f.get("camera_px_per_deg") or [math.nan, math.nan])[1],
+                "px",
+            ),
+            (f"{tag}: capture → result p50", f.get("camera_latency_ms_p50") or math.nan, "ms"),
+            (f"{tag}: reading age p50", f.get("camera_age_ms_p50") or math.nan, "ms"),
+            (f"{tag}: reading age p95", f.get("camera_age_ms_p95") or math.nan, "ms"),
+            (f"{tag}: frames dropped", float(f.get("camera_frames_dropped", math.nan)), ""),
+            (f"{tag}: largest offset from the path", 1e3 * (f.get("max_offset_m") or math.nan), "mm"),
+            (f"{tag}: missed FRI cycles", float(f.get("missed", math.nan)), ""),
+            (f"{tag}: machine load (1 min) at the start", r["load"], ""),
+        ]
     if not quick:
         _write_table(results, open_loop)
     return rows
@@ -150,9 +174,11 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
 
 def _write_table(results: list[dict], open_loop: dict) -> None:
     DOCS.mkdir(parents=True, exist_ok=True)
-    md = ["| camera | string | sway 2 periods after the move | 1 period after | a 1° tilt moves the ball (x / y) | "
-          "reading age p50 / p95 | frames dropped | largest offset | exit | runs failed before |",
-          "|---|---|---|---|---|---|---|---|---|---|"]
+    md = [
+        "| camera | string | sway 2 periods after the move | 1 period after | a 1° tilt moves the ball (x / y) | "
+        "reading age p50 / p95 | frames dropped | largest offset | exit | runs failed before |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for r in results:
         f = r["fig"]
         px = f.get("camera_px_per_deg") or [math.nan, math.nan]
@@ -160,13 +186,20 @@ def _write_table(results: list[dict], open_loop: dict) -> None:
                   f"{px[0]:.2f} / {px[1]:.2f} px | {f.get('camera_age_ms_p50') or math.nan:.1f} / "
                   f"{f.get('camera_age_ms_p95') or math.nan:.1f} ms | {f.get('camera_frames_dropped', '–')} | "
                   f"{1e3 * (f.get('max_offset_m') or math.nan):.1f} mm | {r['exit']} | {len(r['failures'])} |")  # fmt: skip
-    md += ["", "| open loop (the plan alone) | string | sway 2 periods after the move | runs failed before |", "|---|---|---|---|"]
+    md += [
+        "",
+        "| open loop (the plan alone) | string | sway 2 periods after the move | runs failed before |",
+        "|---|---|---|---|",
+    ]
     md += [f"| `--sensor io --open-loop` | {L:g} m | {o.get('sway_2T', math.nan):.3f}° | {len(o['failures'])} |"
            for L, o in open_loop.items()]  # fmt: skip
     loads = [r["load"] for r in results]
     failed = [w for r in [*results, *open_loop.values()] for w in r["failures"]]
-    md += ["", f"Machine load (1 min) at the start of the runs: {min(loads):.1f}–{max(loads):.1f} on {os.cpu_count()} cores. "
-           f"{len(failed)} runs failed and were run again (up to {ATTEMPTS} per case); their reasons:"]
+    md += [
+        "",
+        f"Machine load (1 min) at the start of the runs: {min(loads):.1f}–{max(loads):.1f} on {os.cpu_count()} cores. "
+        f"{len(failed)} runs failed and were run again (up to {ATTEMPTS} per case); their reasons:",
+    ]
     md += [f"- {w}" for w in failed] if failed else ["- none"]
     (DOCS / "camera_damp.md").write_text("\n".join(md) + "\n")
 

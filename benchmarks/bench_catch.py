@@ -35,7 +35,9 @@ def _plan(length: float, folder: Path, max_time: float | None) -> dict:
     t0, c0 = time.perf_counter(), time.process_time()
     figures = plan_catch_files(length, out=out, max_time=max_time, workers=1)
     figures["wall_s"] = time.perf_counter() - t0
-    figures["cpu_s"] = time.process_time() - c0  # one worker: the planning's CPU time (a shared machine's wall time is not)
+    figures["cpu_s"] = (
+        time.process_time() - c0
+    )  # one worker: the planning's CPU time (a shared machine's wall time is not)
     figures["csv"] = str(out)
     return figures
 
@@ -118,8 +120,18 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
                     (f"{tag}: planning time, one worker", f["wall_s"], "s"),
                     (f"{tag}: planning CPU time, one worker", f["cpu_s"], "s"),
                 ]
-                entry = {k: f[k] for k in ("caught", "catch_time_s", "rest_in_cup_s", "entry_margin_m",
-                                           "relative_entry_speed_m_s", "limits_ok", "planning_time_s")}
+                entry = {
+                    k: f[k]
+                    for k in (
+                        "caught",
+                        "catch_time_s",
+                        "rest_in_cup_s",
+                        "entry_margin_m",
+                        "relative_entry_speed_m_s",
+                        "limits_ok",
+                        "planning_time_s",
+                    )
+                }
                 entry["planning_cpu_s"] = f["cpu_s"]
                 entry["band_success"] = rob["success_fraction"]
                 if not quick or max_time is None:
@@ -127,12 +139,16 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
                     entry["map_success"] = float(grid.mean())
                     rows.append((f"{tag}: band map caught ({grid.size} cases, 1 ms steps)", float(grid.mean()), "-"))
                     if length == 0.25 and max_time is None:
-                        report["map"] = {"lengths": list(length * (1 + 0.03 * np.linspace(-1, 1, grid.shape[0]))),
-                                         "success_by_length": grid.mean(axis=(1, 2)).tolist(),
-                                         "success_by_mass": grid.mean(axis=(0, 2)).tolist(),
-                                         "success_by_timing": grid.mean(axis=(0, 1)).tolist()}
+                        report["map"] = {
+                            "lengths": list(length * (1 + 0.03 * np.linspace(-1, 1, grid.shape[0]))),
+                            "success_by_length": grid.mean(axis=(1, 2)).tolist(),
+                            "success_by_mass": grid.mean(axis=(0, 2)).tolist(),
+                            "success_by_timing": grid.mean(axis=(0, 1)).tolist(),
+                        }
                     held_out = length == 0.25 and max_time is None and not quick
-                    judged = _penalty(f["csv"], length, variants if held_out else {"as planned": variants["as planned"]})
+                    judged = _penalty(
+                        f["csv"], length, variants if held_out else {"as planned": variants["as planned"]}
+                    )
                     entry["penalty"] = {k: v.tolist() for k, v in judged.items()}
                     for name, caught in judged.items():
                         rows.append((f"{tag}: penalty judge, {name} (5 lengths)", float(np.mean(caught)), "-"))
@@ -151,17 +167,26 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
 def _write(report: dict, rows: list) -> None:
     out = HERE / "results"
     out.mkdir(exist_ok=True)
-    lines = ["# Cup-and-ball benchmark (`python benchmarks/bench_catch.py`)", "",
-             "| figure | value | unit |", "|---|---|---|"]
+    lines = [
+        "# Cup-and-ball benchmark (`python benchmarks/bench_catch.py`)",
+        "",
+        "| figure | value | unit |",
+        "|---|---|---|",
+    ]
     lines += [f"| {k} | {v:.4g} | {u} |" for k, v, u in rows]
     if report["map"]:
         m = report["map"]
-        lines += ["", "Map of the robust plan for l = 0.25 m (share caught, stepped model at 1 ms):", "",
-                  "| string length [m] | " + " | ".join(f"{x:.4f}" for x in m["lengths"]) + " |",
-                  "|---|" + "---|" * len(m["lengths"]),
-                  "| caught | " + " | ".join(f"{x:.2f}" for x in m["success_by_length"]) + " |", "",
-                  f"By mass 0.8 / 1.0 / 1.2 × 13.9 g: {', '.join(f'{x:.2f}' for x in m['success_by_mass'])}; by the cup's "
-                  f"timing −1 / 0 / +1 period: {', '.join(f'{x:.2f}' for x in m['success_by_timing'])}."]
+        lines += [
+            "",
+            "Map of the robust plan for l = 0.25 m (share caught, stepped model at 1 ms):",
+            "",
+            "| string length [m] | " + " | ".join(f"{x:.4f}" for x in m["lengths"]) + " |",
+            "|---|" + "---|" * len(m["lengths"]),
+            "| caught | " + " | ".join(f"{x:.2f}" for x in m["success_by_length"]) + " |",
+            "",
+            f"By mass 0.8 / 1.0 / 1.2 × 13.9 g: {', '.join(f'{x:.2f}' for x in m['success_by_mass'])}; by the cup's "
+            f"timing −1 / 0 / +1 period: {', '.join(f'{x:.2f}' for x in m['success_by_timing'])}.",
+        ]
     (out / "catch.md").write_text("\n".join(lines) + "\n")
     (out / "catch.json").write_text(json.dumps(report, indent=1, default=float))
 

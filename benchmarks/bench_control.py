@@ -47,8 +47,25 @@ def case(rod: float, delay_ms: float, hold: float, push_at: float) -> list[tuple
     tag = f"rod {rod:g} m, delay {delay_ms:g} ms"
     with tempfile.TemporaryDirectory() as tmp:
         log = Path(tmp) / "run.csv"
-        cmd = [sys.executable, "-m", "lbrcli", "control", "upright", "--rod-length", str(rod), "--hold", str(hold),
-               "--sim-delay", str(delay_ms), "--push", f"10deg@{push_at}", "--log", str(log), "--json", "--sim-lenient"]
+        cmd = [
+            sys.executable,
+            "-m",
+            "lbrcli",
+            "control",
+            "upright",
+            "--rod-length",
+            str(rod),
+            "--hold",
+            str(hold),
+            "--sim-delay",
+            str(delay_ms),
+            "--push",
+            f"10deg@{push_at}",
+            "--log",
+            str(log),
+            "--json",
+            "--sim-lenient",
+        ]
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=hold + 200)
         fig = json.loads(p.stdout) if p.stdout.strip().startswith("{") else {}
         d = _log(log) if log.exists() else None
@@ -134,8 +151,10 @@ def damp_case(crane: Path, move_end: float, true_length: float, delay_ms: float,
         m = (t >= t0 + move_end + n * period) & (phase >= 2)
         return float(np.degrees(col[m].max())) if m.any() else math.nan
 
-    out += [(f"{tag}: sway 1 period after the move", after(1), "deg"),
-            (f"{tag}: sway 2 periods after the move", after(2), "deg")]
+    out += [
+        (f"{tag}: sway 1 period after the move", after(1), "deg"),
+        (f"{tag}: sway 2 periods after the move", after(2), "deg"),
+    ]
     if not open_loop:
         lim = default_limits()
         q = np.column_stack([d[f"cmd_q{j}"] for j in range(1, 8)])[d["state"] == 4]
@@ -143,7 +162,11 @@ def damp_case(crane: Path, move_end: float, true_length: float, delay_ms: float,
         out += [
             (f"{tag}: largest offset from the path", 1e3 * fig.get("max_offset_m", math.nan), "mm"),
             (f"{tag}: max joint velocity / limit", float(np.max(np.abs(np.diff(q, axis=0)) / dt / lim.velocity)), ""),
-            (f"{tag}: max joint acceleration / limit", float(np.max(np.abs(np.diff(q, 2, axis=0)) / dt**2 / lim.acceleration)), ""),
+            (
+                f"{tag}: max joint acceleration / limit",
+                float(np.max(np.abs(np.diff(q, 2, axis=0)) / dt**2 / lim.acceleration)),
+                "",
+            ),
             (f"{tag}: damper per cycle p50", fig.get("controller_us_p50") or math.nan, "µs"),
             (f"{tag}: damper per cycle p99", fig.get("controller_us_p99") or math.nan, "µs"),
             (f"{tag}: missed FRI cycles", float(fig.get("missed", -1)), ""),
@@ -155,9 +178,9 @@ def run_damp(quick: bool = False) -> list[tuple[str, float, str]]:
     out: list[tuple[str, float, str]] = []
     with tempfile.TemporaryDirectory() as tmp:
         crane, end = _crane(Path(tmp))
-        for true_length in ((0.3,) if quick else (0.2, 0.3)):
+        for true_length in (0.3,) if quick else (0.2, 0.3):
             out += damp_case(crane, end, true_length, 0.0, "io", open_loop=True)
-            for delay in ((10.0,) if quick else (5.0, 10.0)):
+            for delay in (10.0,) if quick else (5.0, 10.0):
                 out += damp_case(crane, end, true_length, delay, "io")
             if not quick:
                 out += damp_case(crane, end, true_length, 10.0, "module")

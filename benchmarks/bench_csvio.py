@@ -21,8 +21,12 @@ def _log_like(rows: int, seed: int = 0, sparse: bool = False) -> tuple[tuple[str
     from lbrcli.fri.log import CONTROL_COLUMNS, CTL_Q_COLUMNS, LOG_COLUMNS
 
     rng = np.random.default_rng(seed)
-    names = tuple(LOG_COLUMNS + CONTROL_COLUMNS + CTL_Q_COLUMNS) + ("ball_theta", "ball_phi", "ball_theta_x",
-                                                                     "ball_theta_y")
+    names = tuple(LOG_COLUMNS + CONTROL_COLUMNS + CTL_Q_COLUMNS) + (
+        "ball_theta",
+        "ball_phi",
+        "ball_theta_x",
+        "ball_theta_y",
+    )
     data = rng.normal(scale=1.0, size=(rows, len(names)))
     data[:, 0] = np.arange(rows) * 1e-3
     counters = [names.index(c) for c in CONTROL_COLUMNS]  # integer counters and codes, as the logger writes them

@@ -65,8 +65,11 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
 if __name__ == "__main__":
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     rs = results("--quick" in sys.argv, tuple(args), verbose=True)
-    table = write(rs) if not args and "--quick" not in sys.argv else __import__(
-        "lbrcli.fri.testing.campaign", fromlist=["summarize"]).summarize(rs)
+    table = (
+        write(rs)
+        if not args and "--quick" not in sys.argv
+        else __import__("lbrcli.fri.testing.campaign", fromlist=["summarize"]).summarize(rs)
+    )
     print(f"\n{'surface':<10} {'cases':>5} {'ok':>5} {'v/lim':>6} {'a/lim':>6} {'j/lim':>7} {'non-brk':>7} {'tb':>3} "
           f"{'log':>3} {'unexp':>5} {'clamped':>8}")  # fmt: skip
     for s, f in table.items():

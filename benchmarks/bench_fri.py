@@ -95,7 +95,13 @@ class _Controller:
         m.robotInfo.driveState.extend([2] * 7)
         md = m.monitorData
         self.has_commanded = "commandedJointPosition" in md.DESCRIPTOR.fields_by_name  # 1.15 only
-        for f in ("measuredJointPosition", "measuredTorque", "externalTorque", "commandedTorque", "commandedJointPosition"):
+        for f in (
+            "measuredJointPosition",
+            "measuredTorque",
+            "externalTorque",
+            "commandedTorque",
+            "commandedJointPosition",
+        ):
             if f in md.DESCRIPTOR.fields_by_name:
                 getattr(md, f).value.extend(Q0.tolist() if "Position" in f else [0.0] * 7)
         for name in ("ball_theta", "ball_phi", "ball_theta_x", "ball_theta_y"):
@@ -171,8 +177,15 @@ class _Controller:
         return (t_rx - t_send) * 1e-9 if t_rx <= t_send + int(self.period * 1e9) else None
 
 
-def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = False, extra_args: tuple[str, ...] = (),
-             tag: str | None = None, kuka: str | None = None) -> list[tuple[str, float, str]]:
+def _measure(
+    period_ms: int,
+    duration_s: float,
+    workdir: Path,
+    realtime: bool = False,
+    extra_args: tuple[str, ...] = (),
+    tag: str | None = None,
+    kuka: str | None = None,
+) -> list[tuple[str, float, str]]:
     """One run against ``lbr execute`` — or, with ``kuka``, against that KUKA example client binary (FRI version
     from its path: 2.7 if it contains "2.7"), which binds the default port 30200."""
     traj = workdir / f"traj_{period_ms}ms.csv"
@@ -233,7 +246,9 @@ def _measure(period_ms: int, duration_s: float, workdir: Path, realtime: bool = 
         (f"{tag}: missed replies of {total}", float(missed), "cycles"),
     ]
     if kuka is None:
-        rows.append((f"{tag}: trajectory rows commanded of {n_rows}", float(figures.get("trajectory_rows", -1)), "rows"))
+        rows.append(
+            (f"{tag}: trajectory rows commanded of {n_rows}", float(figures.get("trajectory_rows", -1)), "rows")
+        )
         if figures.get("answered"):
             rows.append((f"{tag}: replies prepared a cycle ahead (TrajectoryPlayer.prepare_command)",
                          figures.get("prepared_replies", 0) / figures["answered"], "fraction"))  # fmt: skip
@@ -415,8 +430,13 @@ def run(quick: bool = False, kuka: Sequence[str] = ()) -> list[tuple[str, float,
     with tempfile.TemporaryDirectory() as tmp:
         for kind in ("C", "Python"):
             rows += _echo_floor(kind, Path(tmp), int(duration * 1000))
-        for period_ms, realtime, extra in ((1, False, ()), (1, False, ("--busy-wait", "0.2")), (1, False, ("--busy-wait", "0")),
-                                           (1, True, ()), (5, False, ())):
+        for period_ms, realtime, extra in (
+            (1, False, ()),
+            (1, False, ("--busy-wait", "0.2")),
+            (1, False, ("--busy-wait", "0")),
+            (1, True, ()),
+            (5, False, ()),
+        ):
             tag = f"{period_ms} ms" + (" --realtime" if realtime else "") + (" " + " ".join(extra) if extra else "")
             rows += _measure(period_ms, duration, Path(tmp), realtime, extra, tag)
         if kuka:
@@ -435,6 +455,7 @@ def _interleaved(kuka: Sequence[str], workdir: Path, rounds: int, round_s: float
     """``lbr execute`` (defaults) and each KUKA client in turn, ``rounds`` times for ``round_s`` [s] each at 1 ms:
     on a shared VM the noise comes and goes over minutes, so each comparison is made within a round and the
     figures are medians over the rounds."""
+
     def figures(rows: list[tuple[str, float, str]]) -> tuple[float, float, float]:
         get = {name.rsplit(": ", 1)[1]: value for name, value, _ in rows}
         missed = next(v for k, v in get.items() if k.startswith("missed replies"))

@@ -156,21 +156,28 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
                 runs += 1
                 ok += stats.end_reason == "duration" and not stats.command_problem
                 if stats.end_reason != "duration":
-                    print(f"ours {period} ms R {radius} m {name}: simulator ended by {stats.end_reason!r} "
-                          f"{stats.command_problem}; client: {result.detail}", file=sys.stderr)
+                    print(
+                        f"ours {period} ms R {radius} m {name}: simulator ended by {stats.end_reason!r} "
+                        f"{stats.command_problem}; client: {result.detail}",
+                        file=sys.stderr,
+                    )
                 tag = f"ours {period} ms R {radius * 1e3:g} mm {name}"
-                rows += [(f"{tag}: ended by duration", float(stats.end_reason == "duration"), "bool"),
-                         (f"{tag}: DH position error max", pos * 1e3, "mm"),
-                         (f"{tag}: DH rotation error max", math.degrees(rot), "deg"),
-                         (f"{tag}: min tracking performance", stats.min_tracking_performance, "-")]
+                rows += [
+                    (f"{tag}: ended by duration", float(stats.end_reason == "duration"), "bool"),
+                    (f"{tag}: DH position error max", pos * 1e3, "mm"),
+                    (f"{tag}: DH rotation error max", math.degrees(rot), "deg"),
+                    (f"{tag}: min tracking performance", stats.min_tracking_performance, "-"),
+                ]
                 worst["pos"], worst["rot"] = max(worst["pos"], pos), max(worst["rot"], rot)
                 worst["wrong"] = min(worst["wrong"], wrong)
                 worst["track"] = min(worst["track"], stats.min_tracking_performance)
-    rows += [("ours: runs ended by the application's duration", float(ok), f"of {runs}"),
-             ("ours: DH position error, worst run", worst["pos"] * 1e3, "mm"),
-             ("ours: DH rotation error, worst run", math.degrees(worst["rot"]), "deg"),
-             ("ours: wrong DH (d3, d5 +10 %) position error, least over all poses", worst["wrong"] * 1e3, "mm"),
-             ("ours: min tracking performance, worst run", worst["track"], "-")]
+    rows += [
+        ("ours: runs ended by the application's duration", float(ok), f"of {runs}"),
+        ("ours: DH position error, worst run", worst["pos"] * 1e3, "mm"),
+        ("ours: DH rotation error, worst run", math.degrees(worst["rot"]), "deg"),
+        ("ours: wrong DH (d3, d5 +10 %) position error, least over all poses", worst["wrong"] * 1e3, "mm"),
+        ("ours: min tracking performance, worst run", worst["track"], "-"),
+    ]
     from kuka_sdk import kuka_app  # (tests/lbrcli is on the path: _helpers)
 
     exe, why = kuka_app("LBRCartesianOverlay")
@@ -178,8 +185,8 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         print(f"KUKA's LBRCartesianOverlay skipped: {why}")
         rows.append(("KUKA LBRCartesianOverlay: skipped (no build)", 1.0, "bool"))
         return rows
-    for period in ((2,) if quick else (1, 2, 5)):
-        for amp in ((30.0,) if quick else (10.0, 30.0, 60.0)):
+    for period in (2,) if quick else (1, 2, 5):
+        for amp in (30.0,) if quick else (10.0, 30.0, 60.0):
             stats, mons, cmds = kuka_overlay(exe, period, amp, 2.0 if quick else 5.0)
             pos, rot, wrong, n, peak = judge(mons, cmds, dh_fk, steady=True)
             pos_all = judge(mons, cmds, dh_fk, steady=False)[0]
@@ -191,15 +198,20 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
                 phi = (phi + 2 * math.pi * 0.15 * period * 1e-3) % (2 * math.pi)
                 formula = max(formula, abs(off))
             tag = f"KUKA {period} ms A {amp:g} mm"
-            rows += [(f"{tag}: session ended on IDLE by duration",
-                      float(stats.end_reason == "duration" and stats.states_seen[-1] == 0), "bool"),
-                     (f"{tag}: measured peak x offset (on time) / amplitude", peak / amp, "-"),
-                     (f"{tag}: measured peak x offset (on time) / its source's filtered peak", peak / formula, "-"),
-                     (f"{tag}: commands executed on time (tracking 1)", n / max(1, len(active)), "share"),
-                     (f"{tag}: DH position error max (on time)", pos * 1e3, "mm"),
-                     (f"{tag}: DH rotation error max (on time)", math.degrees(rot), "deg"),
-                     (f"{tag}: DH position error max (all, clipped included)", pos_all * 1e3, "mm"),
-                     (f"{tag}: poses refused by the controller", float(bool(stats.command_problem)), "bool")]
+            rows += [
+                (
+                    f"{tag}: session ended on IDLE by duration",
+                    float(stats.end_reason == "duration" and stats.states_seen[-1] == 0),
+                    "bool",
+                ),
+                (f"{tag}: measured peak x offset (on time) / amplitude", peak / amp, "-"),
+                (f"{tag}: measured peak x offset (on time) / its source's filtered peak", peak / formula, "-"),
+                (f"{tag}: commands executed on time (tracking 1)", n / max(1, len(active)), "share"),
+                (f"{tag}: DH position error max (on time)", pos * 1e3, "mm"),
+                (f"{tag}: DH rotation error max (on time)", math.degrees(rot), "deg"),
+                (f"{tag}: DH position error max (all, clipped included)", pos_all * 1e3, "mm"),
+                (f"{tag}: poses refused by the controller", float(bool(stats.command_problem)), "bool"),
+            ]
     return rows
 
 

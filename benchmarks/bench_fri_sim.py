@@ -52,8 +52,14 @@ def _kuka_client_module() -> None:
         sys.path.insert(0, path)
 
 
-def measure(duration_s: float, period_ms: int = 1, version: str = "1.15", ball: bool = True, realtime: bool = False,
-            mode: str = "position"):
+def measure(
+    duration_s: float,
+    period_ms: int = 1,
+    version: str = "1.15",
+    ball: bool = True,
+    realtime: bool = False,
+    mode: str = "position",
+):
     from lbrcli.fri.sim import SimConfig, SimulatorProcess
     from lbrcli.plants import default_plants
 
@@ -62,9 +68,19 @@ def measure(duration_s: float, period_ms: int = 1, version: str = "1.15", ball: 
     client = ctx.Process(target=_echo_client, args=(q, version, duration_s + 30.0, mode), daemon=True)
     client.start()
     port = q.get(timeout=30)
-    cfg = SimConfig(client_port=port, period_ms=period_ms, version=version, max_runtime_s=duration_s,
-                    plants=default_plants(0.5 if ball else None), commanding_after_s=0.1, realtime=realtime,
-                    command_mode=mode, quality_window=500, quality_good=0.3, quality_fair=0.2)  # keep commanding
+    cfg = SimConfig(
+        client_port=port,
+        period_ms=period_ms,
+        version=version,
+        max_runtime_s=duration_s,
+        plants=default_plants(0.5 if ball else None),
+        commanding_after_s=0.1,
+        realtime=realtime,
+        command_mode=mode,
+        quality_window=500,
+        quality_good=0.3,
+        quality_fair=0.2,
+    )  # keep commanding
     with SimulatorProcess(cfg) as sim:
         stats = sim.wait(duration_s + 30.0) or sim.stop()
     client.join(5)
@@ -99,8 +115,16 @@ def controller_cost(mode: str, version: str = "1.15", cycles: int = 3000, period
     from lbrcli.fri.sim.controller import Controller
     from lbrcli.plants import default_plants
 
-    ctl = Controller(SimConfig(period_ms=period_ms, version=version, command_mode=mode, commanding_after_s=0.01,
-                               quality_window=5, plants=default_plants(0.5)))
+    ctl = Controller(
+        SimConfig(
+            period_ms=period_ms,
+            version=version,
+            command_mode=mode,
+            commanding_after_s=0.01,
+            quality_window=5,
+            plants=default_plants(0.5),
+        )
+    )
     codec = ctl.codec
     mon, cmd = codec.new_monitoring(), codec.new_command()
     cmd.header.messageIdentifier = COMMAND_MESSAGE_ID
@@ -113,7 +137,7 @@ def controller_cost(mode: str, version: str = "1.15", cycles: int = 3000, period
         ctl.on_datagram(codec.encode(cmd), 0.0)
         times[k] = time.perf_counter() - t0
     ctl.close()
-    return float(np.median(times[cycles // 2:]) * 1e6)
+    return float(np.median(times[cycles // 2 :]) * 1e6)
 
 
 def kuka_sine(duration_s: float, period_ms: int, version: str) -> tuple[float, float, bool, float, float]:
@@ -128,9 +152,17 @@ def kuka_sine(duration_s: float, period_ms: int, version: str) -> tuple[float, f
     from lbrcli.fri.sim import SimConfig, SimulatorProcess
 
     client = KukaLikeClient(version)
-    cfg = SimConfig(client_port=client.port, period_ms=period_ms, version=version, session_duration_s=duration_s,
-                    commanding_after_s=0.1, max_runtime_s=duration_s + 30.0, quality_window=max(25, 500 // period_ms),
-                    quality_good=0.3, quality_fair=0.2)
+    cfg = SimConfig(
+        client_port=client.port,
+        period_ms=period_ms,
+        version=version,
+        session_duration_s=duration_s,
+        commanding_after_s=0.1,
+        max_runtime_s=duration_s + 30.0,
+        quality_window=max(25, 500 // period_ms),
+        quality_good=0.3,
+        quality_fair=0.2,
+    )
     try:
         with SimulatorProcess(cfg) as sim:
             run = client.run(joint_sine(3, 0.04, 0.25, 0.99), timeout=duration_s + 40.0)
@@ -138,11 +170,15 @@ def kuka_sine(duration_s: float, period_ms: int, version: str) -> tuple[float, f
     finally:
         client.close()
     pairs = [(s, m) for s, m in run.executed_pairs(steady=3) if m.connectionInfo.sessionState == CA]
-    err = max((float(np.abs(np.array(m.monitorData.measuredJointPosition.value) - s.q).max()) for s, m in pairs),
-              default=float("nan"))
+    err = max(
+        (float(np.abs(np.array(m.monitorData.measuredJointPosition.value) - s.q).max()) for s, m in pairs),
+        default=float("nan"),
+    )
     active = run.active()
-    reach = max((abs(m.monitorData.measuredJointPosition.value[3] - m.ipoData.jointPosition.value[3]) for m in active),
-                default=0.0)
+    reach = max(
+        (abs(m.monitorData.measuredJointPosition.value[3] - m.ipoData.jointPosition.value[3]) for m in active),
+        default=0.0,
+    )
     return err, len(pairs) / max(1, len(active)), stats.safety_stop, reach, stats.active_cycles * period_ms * 1e-3
 
 
@@ -151,14 +187,20 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
     out = _figures(measure(duration), "")
     for version in ("1.15", "2.7"):
         for mode in ("position", "torque", "wrench"):
-            out.append((f"FRI sim controller cycle, {mode} mode, FRI {version} (no sockets, with a ball)",
-                        controller_cost(mode, version, 1000 if quick else 5000), "us"))
+            out.append(
+                (
+                    f"FRI sim controller cycle, {mode} mode, FRI {version} (no sockets, with a ball)",
+                    controller_cost(mode, version, 1000 if quick else 5000),
+                    "us",
+                )
+            )
     for mode in ("torque", "wrench"):
         s = measure(duration / 2, mode=mode)
-        out += [(f"FRI sim 1 ms {mode} mode: cycle work p50", s.work_us_p50, "us"),
-                (f"FRI sim 1 ms {mode} mode: cycle work p99", s.work_us_p99, "us"),
-                (f"FRI sim 1 ms {mode} mode: late + missed replies", float(s.late_replies + s.missed_replies),
-                 "replies")]
+        out += [
+            (f"FRI sim 1 ms {mode} mode: cycle work p50", s.work_us_p50, "us"),
+            (f"FRI sim 1 ms {mode} mode: cycle work p99", s.work_us_p99, "us"),
+            (f"FRI sim 1 ms {mode} mode: late + missed replies", float(s.late_replies + s.missed_replies), "replies"),
+        ]
     rt = measure(duration, realtime=True)
     if rt.realtime:  # only where the OS grants SCHED_FIFO
         out += _figures(rt, " (realtime)")
@@ -167,11 +209,13 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         for period in (1, 2, 5):
             err, share, safety, reach, active_s = kuka_sine(sine_s, period, version)
             tag = f"KUKA joint sine {sine_s:g} s, FRI {version}, {period} ms"
-            out += [(f"{tag}: max |msr - (ipo + sine)|", err, "rad"),
-                    (f"{tag}: commands in time (checked)", share * 100.0, "%"),
-                    (f"{tag}: sine reach on A4", reach, "rad"),
-                    (f"{tag}: time in COMMANDING_ACTIVE", active_s, "s"),
-                    (f"{tag}: safety stop", float(safety), "yes=1")]
+            out += [
+                (f"{tag}: max |msr - (ipo + sine)|", err, "rad"),
+                (f"{tag}: commands in time (checked)", share * 100.0, "%"),
+                (f"{tag}: sine reach on A4", reach, "rad"),
+                (f"{tag}: time in COMMANDING_ACTIVE", active_s, "s"),
+                (f"{tag}: safety stop", float(safety), "yes=1"),
+            ]
     return out
 
 

@@ -67,14 +67,19 @@ def build_kuka(src: str | None) -> tuple[str | None, str]:
     if exe.exists():
         return str(exe), f"cached build {exe}"
     if not src:
-        return None, "no KUKA SDK source: pass --kuka-src PATH (a checkout of github.com/lbr-stack/fri) or set LBR_KUKA_FRI_SRC"
+        return (
+            None,
+            "no KUKA SDK source: pass --kuka-src PATH (a checkout of github.com/lbr-stack/fri) or set LBR_KUKA_FRI_SRC",
+        )
     missing = [t for t in ("cmake", "g++", "git") if shutil.which(t) is None]
     if missing:
         return None, f"cannot build KUKA's client: {', '.join(missing)} not found"
     tree = BUILD_DIR / "src"
     shutil.rmtree(BUILD_DIR, ignore_errors=True)
     tree.mkdir(parents=True)
-    git = subprocess.run(f"git -C {src} archive fri-1.15 | tar -x -C {tree}", shell=True, capture_output=True, text=True)
+    git = subprocess.run(
+        f"git -C {src} archive fri-1.15 | tar -x -C {tree}", shell=True, capture_output=True, text=True
+    )
     if git.returncode != 0:  # not a git checkout: take the tree as it is
         shutil.rmtree(tree)
         shutil.copytree(src, tree)
@@ -215,12 +220,16 @@ def clients(kuka: str | None, work: Path, seconds: float) -> dict[str, Callable[
     out: dict[str, Callable[[int], list[str]]] = {}
     if kuka:
         out[KUKA_NAME] = lambda p: [kuka]
-    out["lbr execute --log"] = lambda p: LBR + ["execute", str(traj), *robot, "--port", str(p), "--log", str(work / f"log{p}.csv"), "--json"]
+    out["lbr execute --log"] = lambda p: (
+        LBR + ["execute", str(traj), *robot, "--port", str(p), "--log", str(work / f"log{p}.csv"), "--json"]
+    )
     out["lbr execute --log --busy-wait 0.1"] = lambda p: LBR + ["execute", str(traj), *robot, "--port", str(p), "--log",
                                                                 str(work / f"log{p}.csv"), "--busy-wait", "0.1", "--json"]  # fmt: skip
     out["lbr serve"] = lambda p: LBR + ["serve", *robot, "--port", str(p), "--listen", f"127.0.0.1:{_free_port()}",
                                         "--first-target", "600", "--json"]  # fmt: skip
-    out["lbr control damp"] = lambda p: LBR + ["control", "damp", str(traj), *robot, "--port", str(p), "--length", "0.5", "--json"]
+    out["lbr control damp"] = lambda p: (
+        LBR + ["control", "damp", str(traj), *robot, "--port", str(p), "--length", "0.5", "--json"]
+    )
     out["lbr ptp"] = lambda p: LBR + ["ptp", target, "--time", str(seconds + 30.0), *robot, "--port", str(p), "--json"]
     out["examples/joint_sine_overlay.py"] = lambda p: PY + [str(ROOT / "examples" / "joint_sine_overlay.py"), "--robot",
                                                             "127.0.0.1", "--port", str(p), "--duration", "600"]  # fmt: skip
@@ -234,8 +243,9 @@ def session(argv: Callable[[int], list[str]], kuka: bool, seconds: float, ball: 
     """One client against `lbr sim --realtime` for ``seconds`` of COMMANDING_ACTIVE: the figures."""
     port = KUKA_PORT if kuka else _free_port()
     # every process in its own session (as from its own terminal: Linux's autogroups share the CPU by session)
-    client = subprocess.Popen(argv(port), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=ROOT,
-                              start_new_session=True)
+    client = subprocess.Popen(
+        argv(port), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=ROOT, start_new_session=True
+    )
     try:
         _wait_idle(client)
         tree = TreeCpu(client.pid)
@@ -285,8 +295,9 @@ def session(argv: Callable[[int], list[str]], kuka: bool, seconds: float, ball: 
         "p999_ms": s.get("reply_latency_ms_p999"),
         "cpu_us_per_message": (cpu1 - cpu0) * 1e-3 / replies,  # the whole session, its start included
         # in COMMANDING_ACTIVE from 1 s after it began (one message per 1 ms period); None if it did not last 2 s
-        "cpu_us_per_message_steady": ((steady[-1][1] - steady[0][1]) * 1e-3 / ((steady[-1][0] - steady[0][0]) * 1e3)
-                                      if len(steady) > 10 else None),
+        "cpu_us_per_message_steady": (
+            (steady[-1][1] - steady[0][1]) * 1e-3 / ((steady[-1][0] - steady[0][0]) * 1e3) if len(steady) > 10 else None
+        ),
         "sim_realtime": s["realtime"],
         "sim_cpu_fraction": s["cpu_fraction"],  # of one core: the simulator's own load (the ball adds to it)
         "sim_period_ms_max": s["period_ms_max"],
@@ -299,7 +310,7 @@ def condition(names: dict[str, Callable[[int], list[str]]], rounds: int, seconds
     per: dict[str, list[dict[str, Any]]] = {n: [] for n in names}
     order = list(names)
     for r in range(rounds):
-        for name in order[r % len(order):] + order[: r % len(order)]:
+        for name in order[r % len(order) :] + order[: r % len(order)]:
             res = session(names[name], name == KUKA_NAME, seconds, ball=name == "lbr control damp")
             res["round"] = r
             per[name].append(res)
@@ -383,8 +394,14 @@ def markdown(results: dict[str, Any]) -> str:
         cpu = r["cpu_us_per_message_steady"]
         shown = f"{cpu:.0f}" if cpu is not None else f"session did not last ({r['end_reason']})"
         lines.append(f"| {name} | {shown} |")
-    lines += ["", f"Load average (1, 5, 15 min) at the start of that part: {_loads(results['cpu']['load_average_1_5_15_start'])}."]
-    titles = {"quiet": "Quiet (nothing added; other work on the machine as it was)", "busy": "Busy (two spinning processes added)"}
+    lines += [
+        "",
+        f"Load average (1, 5, 15 min) at the start of that part: {_loads(results['cpu']['load_average_1_5_15_start'])}.",
+    ]
+    titles = {
+        "quiet": "Quiet (nothing added; other work on the machine as it was)",
+        "busy": "Busy (two spinning processes added)",
+    }
     for cond, c in results["conditions"].items():
         lines += ["", f"**{titles.get(cond, cond)}** — load average at start {_loads(c['load_average_1_5_15_start'])}, at end "
                   f"{_loads(c['load_average_1_5_15_end'])}", "",
@@ -393,9 +410,13 @@ def markdown(results: dict[str, Any]) -> str:
         for name, s_ in c["clients"].items():
             cycles = ", ".join(str(r["active_cycles"]) for r in s_["runs"])
             ratios = [s_.get(f"{q}_ratio_to_kuka_median") for q in ("p50", "p99", "p999")]
-            ratio = "—" if all(r is None for r in ratios) else " / ".join("—" if r is None else f"{r:.2f}" for r in ratios)
-            lines.append(f"| {name} | {s_['sessions_kept']} of {s_['sessions']} | {cycles} | "
-                         f"{_ms(s_['p50_ms_median'])} / {_ms(s_['p99_ms_median'])} / {_ms(s_['p999_ms_median'])} | {ratio} |")
+            ratio = (
+                "—" if all(r is None for r in ratios) else " / ".join("—" if r is None else f"{r:.2f}" for r in ratios)
+            )
+            lines.append(
+                f"| {name} | {s_['sessions_kept']} of {s_['sessions']} | {cycles} | "
+                f"{_ms(s_['p50_ms_median'])} / {_ms(s_['p99_ms_median'])} / {_ms(s_['p999_ms_median'])} | {ratio} |"
+            )
     rt = results["realtime"]
     cpu = rt.get("cpu_us_per_message_steady")
     lines += ["", f"**`lbr execute --log --realtime`, two spinning processes beside it** — load average "
@@ -445,16 +466,28 @@ def run(quick: bool = False, rounds: int | None = None, seconds: float | None = 
     for cond, c in results["conditions"].items():
         for name, s in c["clients"].items():
             rows.append((f"{cond}: {name}: sessions kept of {s['sessions']}", float(s["sessions_kept"]), "sessions"))
-            rows.append((f"{cond}: {name}: CPU per message, whole session (median)", s["cpu_us_per_message_median"], "µs"))
-            rows.append((f"{cond}: {name}: CPU per message, steady commanding (median)",
-                         s["cpu_us_per_message_steady_median"] or float("nan"), "µs"))
+            rows.append(
+                (f"{cond}: {name}: CPU per message, whole session (median)", s["cpu_us_per_message_median"], "µs")
+            )
+            rows.append(
+                (
+                    f"{cond}: {name}: CPU per message, steady commanding (median)",
+                    s["cpu_us_per_message_steady_median"] or float("nan"),
+                    "µs",
+                )
+            )
             rows.append((f"{cond}: {name}: reply p99 (median)", s["p99_ms_median"] or float("nan"), "ms"))
             if s.get("p99_ratio_to_kuka_median") is not None:
                 rows.append((f"{cond}: {name}: p99 / KUKA's (median of rounds)", s["p99_ratio_to_kuka_median"], "×"))
     for name, r in results["cpu"]["clients"].items():
-        rows.append((f"CPU per message in steady commanding: {name}", r["cpu_us_per_message_steady"] or float("nan"), "µs"))
+        rows.append(
+            (f"CPU per message in steady commanding: {name}", r["cpu_us_per_message_steady"] or float("nan"), "µs")
+        )
     rt = results["realtime"]
-    rows += [("--realtime: session kept", float(rt["kept"]), "bool"), ("--realtime: late or missed replies", rt["late_share"] * 100, "%")]
+    rows += [
+        ("--realtime: session kept", float(rt["kept"]), "bool"),
+        ("--realtime: late or missed replies", rt["late_share"] * 100, "%"),
+    ]
     return rows
 
 

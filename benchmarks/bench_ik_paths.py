@@ -48,7 +48,10 @@ def _pink_solver(robot, limits):
             task.set_target(target)
             for _ in range(PINK_ITERATIONS if k else 50 * PINK_ITERATIONS):  # the first pose from afar
                 err = target.actInv(config.get_transform_frame_to_world("tcp"))
-                if np.linalg.norm(err.translation) <= POSITION_TOL * 0.1 and np.linalg.norm(pin.log3(err.rotation)) <= ROTATION_TOL * 0.1:
+                if (
+                    np.linalg.norm(err.translation) <= POSITION_TOL * 0.1
+                    and np.linalg.norm(pin.log3(err.rotation)) <= ROTATION_TOL * 0.1
+                ):
                     break
                 step, v = (dt if k else 0.05), None  # [s] the first pose is a plain IK: no need to creep
                 for _ in range(4):  # daqp sometimes reports an infeasible step: retry with shorter ones
@@ -185,7 +188,11 @@ def _run(quick: bool) -> list[tuple[str, float, str]]:
         ("IK suite: lbr ik worst position error", worst_p, "m"),
         ("IK suite: lbr ik worst rotation error", worst_r, "rad"),
         ("IK suite: --smooth, paths above the acceleration limit retried", len(smoothed), "paths"),
-        ("IK suite: --smooth, of those with a lower peak acceleration", sum(a < b - 1e-9 for b, a in smoothed), "paths"),
+        (
+            "IK suite: --smooth, of those with a lower peak acceleration",
+            sum(a < b - 1e-9 for b, a in smoothed),
+            "paths",
+        ),
         ("IK suite: pink solved", int(sum(ok_pink)) if has_pink else -1, "paths"),
         ("IK suite: pink outputs above the speed limit", pink_over_speed if has_pink else -1, "paths"),
         ("IK suite: pink solved paths above the acceleration limit", pink_over_acc if has_pink else -1, "paths"),

@@ -45,8 +45,14 @@ def _per_frame_ms(size: tuple[int, int], scenario: str, duration_s: float) -> di
         ms = np.array(ms)
         if best is None or np.median(ms) < np.median(best):
             best = ms
-    return {"scenario": scenario, "size": f"{size[0]}x{size[1]}", "p50_ms": float(np.median(best)),
-            "p99_ms": float(np.percentile(best, 99)), "max_ms": float(best.max()), "mean_ms": float(best.mean())}
+    return {
+        "scenario": scenario,
+        "size": f"{size[0]}x{size[1]}",
+        "p50_ms": float(np.median(best)),
+        "p99_ms": float(np.percentile(best, 99)),
+        "max_ms": float(best.max()),
+        "mean_ms": float(best.mean()),
+    }
 
 
 def _chain(size: tuple[int, int], fps: float, latency_s: float, seconds: float) -> dict:
@@ -56,21 +62,39 @@ def _chain(size: tuple[int, int], fps: float, latency_s: float, seconds: float) 
     from tracking.live import LiveTracker, TiltSetup
 
     grid = np.arange(0.0, seconds + 3.0, 0.001)
-    run = simulate(grid, lambda t: np.zeros(3), STRING_M, s0=direction_from_angles(math.radians(14), math.radians(-6)),
-                   sdot0=np.array([0.0, 0.7, 0.0]))
+    run = simulate(
+        grid,
+        lambda t: np.zeros(3),
+        STRING_M,
+        s0=direction_from_angles(math.radians(14), math.radians(-6)),
+        sdot0=np.array([0.0, 0.7, 0.0]),
+    )
 
     def scene(t):
         k = min(max(t, 0.0), grid[-1] - 2e-3) / 1e-3
         i = int(k)
         return PIVOT_M + STRING_M * ((1 - (k - i)) * run.s[i] + (k - i) * run.s[i + 1]), PIVOT_M
 
-    cfg = CameraConfig(position_m=(1.3, -0.6, 1.0), look_at_m=(0.5, 0.0, 0.35), fov_deg=45.0, size=size, fps=fps,
-                       exposure_s=min(0.004, 0.5 / fps), latency_s=latency_s, stamp=True)
+    cfg = CameraConfig(
+        position_m=(1.3, -0.6, 1.0),
+        look_at_m=(0.5, 0.0, 0.35),
+        fov_deg=45.0,
+        size=size,
+        fps=fps,
+        exposure_s=min(0.004, 0.5 / fps),
+        latency_s=latency_s,
+        stamp=True,
+    )
     results, stamps = [], {}
     with CameraProcess(scene, cfg) as cam:
         tilt = TiltSetup(cam.geometry, tuple(PIVOT_M), STRING_M)
-        with LiveTracker(cam.url, color_spec("red"), tilt=tilt, on_result=results.append,
-                         on_frame=lambda seq, frame: stamps.__setitem__(seq, read_stamp(frame))) as live:
+        with LiveTracker(
+            cam.url,
+            color_spec("red"),
+            tilt=tilt,
+            on_result=results.append,
+            on_frame=lambda seq, frame: stamps.__setitem__(seq, read_stamp(frame)),
+        ) as live:
             time.sleep(seconds)
         t_start = cam.t_start
     st = live.stats
@@ -82,11 +106,19 @@ def _chain(size: tuple[int, int], fps: float, latency_s: float, seconds: float) 
     lat = np.array(st.latency_s) * 1e3
     frames_sent = (max(stamps.values()) - min(stamps.values()) + 1) if stamps else 0
     return {
-        "size": f"{size[0]}x{size[1]}", "fps": fps, "camera_latency_ms": latency_s * 1e3, "seconds": seconds,
-        "frames_sent": int(frames_sent), "frames_read": st.read, "frames_tracked": st.tracked, "dropped": st.dropped,
+        "size": f"{size[0]}x{size[1]}",
+        "fps": fps,
+        "camera_latency_ms": latency_s * 1e3,
+        "seconds": seconds,
+        "frames_sent": int(frames_sent),
+        "frames_read": st.read,
+        "frames_tracked": st.tracked,
+        "dropped": st.dropped,
         "found_percent": 100.0 * st.found / max(st.tracked, 1),
-        "latency_ms_p50": float(np.percentile(lat, 50)), "latency_ms_p95": float(np.percentile(lat, 95)),
-        "latency_ms_max": float(lat.max()), "track_ms_p50": float(np.median(st.track_s) * 1e3),
+        "latency_ms_p50": float(np.percentile(lat, 50)),
+        "latency_ms_p95": float(np.percentile(lat, 95)),
+        "latency_ms_max": float(lat.max()),
+        "track_ms_p50": float(np.median(st.track_s) * 1e3),
         "frame_to_capture_ms_p50": float(np.median(delay) * 1e3) if len(delay) else math.nan,
         "frame_to_result_ms_p50": float(np.median(delay) * 1e3 + np.percentile(lat, 50)) if len(delay) else math.nan,
         "tilt_x_rms_deg": math.degrees(math.sqrt(float(np.mean(ex**2)))) if len(ex) else math.nan,
@@ -102,32 +134,49 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
     finally:
         os.sched_setaffinity(0, cores)
     seconds = 2.0 if quick else 5.0
-    chains = [_chain((1280, 720), 60.0, 0.015, seconds), _chain((320, 240), 120.0, 0.015, seconds),
-              _chain((320, 240), 240.0, 0.0, seconds), _chain((640, 480), 30.0, 0.05, seconds)]
+    chains = [
+        _chain((1280, 720), 60.0, 0.015, seconds),
+        _chain((320, 240), 120.0, 0.015, seconds),
+        _chain((320, 240), 240.0, 0.0, seconds),
+        _chain((640, 480), 30.0, 0.05, seconds),
+    ]
     if not quick:
         RESULTS.mkdir(parents=True, exist_ok=True)
         (RESULTS / "live.json").write_text(json.dumps({"per_frame": per_frame, "chain": chains}, indent=1) + "\n")
         md = ["| tracking one 720p frame, one core | p50 | p99 | max |", "|---|---|---|---|"]
-        md += [f"| {p['scenario']} | {p['p50_ms']:.2f} ms | {p['p99_ms']:.2f} ms | {p['max_ms']:.2f} ms |" for p in per_frame]
-        md += ["", "| camera | camera latency | frames sent / tracked / dropped | capture → result p50 / p95 | frame → result p50 | "
-               "tilt RMS θx / θy |", "|---|---|---|---|---|---|"]
+        md += [
+            f"| {p['scenario']} | {p['p50_ms']:.2f} ms | {p['p99_ms']:.2f} ms | {p['max_ms']:.2f} ms |"
+            for p in per_frame
+        ]
+        md += [
+            "",
+            "| camera | camera latency | frames sent / tracked / dropped | capture → result p50 / p95 | frame → result p50 | "
+            "tilt RMS θx / θy |",
+            "|---|---|---|---|---|---|",
+        ]
         md += [
             f"| {c['size']} {c['fps']:.0f} fps | {c['camera_latency_ms']:.0f} ms | {c['frames_sent']} / {c['frames_tracked']} / "
             f"{c['dropped']} | {c['latency_ms_p50']:.2f} / {c['latency_ms_p95']:.2f} ms | {c['frame_to_result_ms_p50']:.1f} ms | "
-            f"{c['tilt_x_rms_deg']:.3f}° / {c['tilt_y_rms_deg']:.3f}° |" for c in chains
+            f"{c['tilt_x_rms_deg']:.3f}° / {c['tilt_y_rms_deg']:.3f}° |"
+            for c in chains
         ]
         (RESULTS / "live.md").write_text("\n".join(md) + "\n")
     rows: list[tuple[str, float, str]] = []
     for p in per_frame:
-        rows += [(f"720p frame, one core, {p['scenario']}: p50", p["p50_ms"], "ms"),
-                 (f"720p frame, one core, {p['scenario']}: p99", p["p99_ms"], "ms")]
+        rows += [
+            (f"720p frame, one core, {p['scenario']}: p50", p["p50_ms"], "ms"),
+            (f"720p frame, one core, {p['scenario']}: p99", p["p99_ms"], "ms"),
+        ]
     for c in chains:
         tag = f"{c['size']} {c['fps']:.0f} fps, camera {c['camera_latency_ms']:.0f} ms"
-        rows += [(f"{tag}: capture → result p50", c["latency_ms_p50"], "ms"),
-                 (f"{tag}: capture → result p95", c["latency_ms_p95"], "ms"),
-                 (f"{tag}: frame → result p50", c["frame_to_result_ms_p50"], "ms"),
-                 (f"{tag}: dropped", c["dropped"], "frames"),
-                 (f"{tag}: tilt x RMS", c["tilt_x_rms_deg"], "deg"), (f"{tag}: tilt y RMS", c["tilt_y_rms_deg"], "deg")]
+        rows += [
+            (f"{tag}: capture → result p50", c["latency_ms_p50"], "ms"),
+            (f"{tag}: capture → result p95", c["latency_ms_p95"], "ms"),
+            (f"{tag}: frame → result p50", c["frame_to_result_ms_p50"], "ms"),
+            (f"{tag}: dropped", c["dropped"], "frames"),
+            (f"{tag}: tilt x RMS", c["tilt_x_rms_deg"], "deg"),
+            (f"{tag}: tilt y RMS", c["tilt_y_rms_deg"], "deg"),
+        ]
     return rows
 
 

@@ -142,12 +142,20 @@ def judges(tmp: Path, quick: bool) -> dict:
         diffs, sways = [], []
         for a, b in zip(tables["project"], tables["independent"]):
             if a["status"] == "ok":
-                ja, jb = json.loads(a["judged_residual_sway_by_error_deg"]), json.loads(b["judged_residual_sway_by_error_deg"])
+                ja, jb = (
+                    json.loads(a["judged_residual_sway_by_error_deg"]),
+                    json.loads(b["judged_residual_sway_by_error_deg"]),
+                )
                 diffs += [abs(x - y) for x, y in zip(ja, jb)]
                 sways += jb
         big = [d / s for d, s in zip(diffs, sways) if s >= 0.1]
-        out[shaper] = {"runs": len(tables["project"]), "judged": len(diffs), "max_abs_diff_deg": max(diffs),
-                       "largest_sway_deg": max(sways), "max_rel_diff_above_0_1_deg": max(big) if big else None}
+        out[shaper] = {
+            "runs": len(tables["project"]),
+            "judged": len(diffs),
+            "max_abs_diff_deg": max(diffs),
+            "largest_sway_deg": max(sways),
+            "max_rel_diff_above_0_1_deg": max(big) if big else None,
+        }
     return out
 
 
@@ -168,7 +176,9 @@ def study_10k(tmp: Path, quick: bool) -> dict:
             "overhead_per_run_ms": 1e3 * f["overhead_per_run_s"], "load_before": load, "load_after": _load()}  # fmt: skip
 
 
-def run(quick: bool = False, parts: tuple[str, ...] = ("throughput", "cost", "judges", "10k")) -> list[tuple[str, float, str]]:
+def run(
+    quick: bool = False, parts: tuple[str, ...] = ("throughput", "cost", "judges", "10k")
+) -> list[tuple[str, float, str]]:
     figures = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
     figures.update(cores=os.cpu_count(), quick=quick)
     figures.pop("date", None)
@@ -198,9 +208,14 @@ def run(quick: bool = False, parts: tuple[str, ...] = ("throughput", "cost", "ju
     for shaper, r in figures.get("judges", {}).items():
         if shaper == "date":
             continue
-        rows += [(f"sweep judged residual, {shaper}: project vs independent judge, max |diff| ({r['judged']} values)",
-                  r["max_abs_diff_deg"], "deg"),
-                 (f"sweep judged residual, {shaper}: largest judged sway", r["largest_sway_deg"], "deg")]
+        rows += [
+            (
+                f"sweep judged residual, {shaper}: project vs independent judge, max |diff| ({r['judged']} values)",
+                r["max_abs_diff_deg"],
+                "deg",
+            ),
+            (f"sweep judged residual, {shaper}: largest judged sway", r["largest_sway_deg"], "deg"),
+        ]
     if "study_10k" in figures:
         r = figures["study_10k"]
         rows += [(f"sweep 10k anti-sway: runs ({r['ok']} ok, {r['crashed']} crashed)", r["rows"], ""),

@@ -61,12 +61,21 @@ def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repe
 
     out = scenarios.score(replace(sc, counted=counted), track)
     row = {
-        "name": sc.name, "key": name, "held_out": held_out, "adversarial": sc.adversarial,
-        "size": f"{size[0]}x{size[1]}", "frames": int(len(sc.truth.t)), "counted": int(counted.sum()),
-        "erased_by_codec": int((sc.counted & ~shown).sum()), "found_percent": out.found_percent,
-        "false_fixes": out.false_fixes, "centre_rms_px": out.centre_rms_px, "theta_rms_deg": out.theta_rms_deg,
+        "name": sc.name,
+        "key": name,
+        "held_out": held_out,
+        "adversarial": sc.adversarial,
+        "size": f"{size[0]}x{size[1]}",
+        "frames": int(len(sc.truth.t)),
+        "counted": int(counted.sum()),
+        "erased_by_codec": int((sc.counted & ~shown).sum()),
+        "found_percent": out.found_percent,
+        "false_fixes": out.false_fixes,
+        "centre_rms_px": out.centre_rms_px,
+        "theta_rms_deg": out.theta_rms_deg,
         "unsure_frames": int(track.unsure.sum()) if track.unsure is not None else 0,
-        "track_over_decode": tracking / decode, "decode_fps": len(sc.truth.t) / decode,
+        "track_over_decode": tracking / decode,
+        "decode_fps": len(sc.truth.t) / decode,
     }
     if name == "tilted":  # `compare` against the true motion delayed by 0.5 s: the lag must come out right
         from tracking.compare import compare_angles
@@ -114,9 +123,15 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         (RESULTS / "track_robust.md").write_text(_table(rows))
     figures: list[tuple[str, float, str]] = [(f"videos {size[0]}x{size[1]}", duration, "s each")]
     for r in rows:
-        label = f"{r['name']} {r['size']}" + (" (held out)" if r["held_out"] else " (adversarial)" if r["adversarial"] else "")
-        figures += [(f"{label}: found", r["found_percent"], "%"), (f"{label}: false fixes", r["false_fixes"], "frames"),
-                    (f"{label}: centre RMS", r["centre_rms_px"], "px"), (f"{label}: track / decode", r["track_over_decode"], "x")]
+        label = f"{r['name']} {r['size']}" + (
+            " (held out)" if r["held_out"] else " (adversarial)" if r["adversarial"] else ""
+        )
+        figures += [
+            (f"{label}: found", r["found_percent"], "%"),
+            (f"{label}: false fixes", r["false_fixes"], "frames"),
+            (f"{label}: centre RMS", r["centre_rms_px"], "px"),
+            (f"{label}: track / decode", r["track_over_decode"], "x"),
+        ]
         if math.isfinite(r["theta_rms_deg"]):
             figures.append((f"{label}: theta RMS", r["theta_rms_deg"], "deg"))
     goal = [r for r in rows if not r["adversarial"] and not r["held_out"]]
@@ -131,8 +146,10 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         ]
     small = [r["track_over_decode"] for r in goal if r["size"] == f"{size[0]}x{size[1]}"]
     large = [r["track_over_decode"] for r in rows if r["size"] in ("3840x2160", "1920x1080")]
-    figures += [(f"worst track / decode at {size[0]}x{size[1]}", float(np.max(small)), "x"),
-                ("worst track / decode at 4K" if not quick else "worst track / decode at 1080p", float(np.max(large)), "x")]
+    figures += [
+        (f"worst track / decode at {size[0]}x{size[1]}", float(np.max(small)), "x"),
+        ("worst track / decode at 4K" if not quick else "worst track / decode at 1080p", float(np.max(large)), "x"),
+    ]
     return figures
 
 

@@ -40,7 +40,9 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench.mp4"
         t = np.arange(0.0, duration, 0.001)
-        gt = render_pendulum_video(path, t, _model(t - LAG_S), PIVOT, 380.0, 6.5, (1280, 720), 60.0, pivot_marker="green")
+        gt = render_pendulum_video(
+            path, t, _model(t - LAG_S), PIVOT, 380.0, 6.5, (1280, 720), 60.0, pivot_marker="green"
+        )
         _decode_only(path)  # warm the file cache
         red, green = color_spec("red"), color_spec("green")
         decode = best = with_marker = math.inf

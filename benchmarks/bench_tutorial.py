@@ -70,8 +70,11 @@ def run(quick: bool = False, cold: bool = False) -> list[tuple[str, float, str]]
         t1 = time.perf_counter()
         subprocess.run(["bash", "-c", install], cwd=clone, check=True)
         t_install = time.perf_counter() - t1
-        env = {**os.environ, "PATH": f"{clone / '.venv' / 'bin'}{os.pathsep}{os.environ['PATH']}",
-               "VIRTUAL_ENV": str(clone / ".venv")}
+        env = {
+            **os.environ,
+            "PATH": f"{clone / '.venv' / 'bin'}{os.pathsep}{os.environ['PATH']}",
+            "VIRTUAL_ENV": str(clone / ".venv"),
+        }
         env.pop("PYTHONPATH", None)
         work = Path(tmp) / "work"
         work.mkdir()
@@ -82,8 +85,10 @@ def run(quick: bool = False, cold: bool = False) -> list[tuple[str, float, str]]
             proc = subprocess.run(["bash", "-c", line], cwd=work, env=env, capture_output=True, text=True)
             if proc.returncode != expect:
                 failed += 1
-                print(f"  failed ({proc.returncode}): {shlex.split(line)[:3]} {proc.stderr.strip()[-200:]}",
-                      file=sys.stderr)
+                print(
+                    f"  failed ({proc.returncode}): {shlex.split(line)[:3]} {proc.stderr.strip()[-200:]}",
+                    file=sys.stderr,
+                )
         t_steps = time.perf_counter() - t2
     total = t_clone + t_install + t_steps
     return [

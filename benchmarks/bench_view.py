@@ -30,8 +30,9 @@ AXES = np.array([0.35, 0.2, -0.15, 0.3, 0.1, -0.25, 0.4])  # [rad]
 
 
 def _lbr(*args: str, cwd: Path, timeout: float = 900) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "lbrcli", *map(str, args)], cwd=cwd, capture_output=True,
-                          text=True, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "lbrcli", *map(str, args)], cwd=cwd, capture_output=True, text=True, timeout=timeout
+    )
 
 
 def make_log(folder: Path, seconds: float) -> Path:
@@ -44,8 +45,22 @@ def make_log(folder: Path, seconds: float) -> Path:
     s = (1 - np.cos(2 * np.pi * max(1, round(seconds / 10)) * t / seconds)) / 2
     write_joint_csv(folder / "path.csv", JointTrajectory(t=t, q=Q0 + s[:, None] * AXES))
     for _ in range(3):
-        proc = _lbr("execute", "path.csv", "--port", "0", "--log", "log.csv", "--length", "0.25", "--settle", "1",
-                    "--sim-lenient", "--realtime", "--json", cwd=folder)
+        proc = _lbr(
+            "execute",
+            "path.csv",
+            "--port",
+            "0",
+            "--log",
+            "log.csv",
+            "--length",
+            "0.25",
+            "--settle",
+            "1",
+            "--sim-lenient",
+            "--realtime",
+            "--json",
+            cwd=folder,
+        )
         if proc.returncode == 0:
             return folder / "log.csv"
     raise RuntimeError(f"lbr execute failed: {proc.stderr[-400:]}")
@@ -70,8 +85,13 @@ def measure_view(log: Path, folder: Path) -> dict[str, float]:
         pg.goto("about:blank")  # the browser is up and idle, as a user's is, before `lbr view` starts
         time.sleep(BROWSER_SETTLE_S)
         t0 = time.perf_counter()
-        proc = subprocess.Popen([sys.executable, "-m", "lbrcli", "view", str(log), "--port", "0", "--duration", "120", "--json"],
-                                cwd=folder, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "lbrcli", "view", str(log), "--port", "0", "--duration", "120", "--json"],
+            cwd=folder,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         try:
             lines = []
             for line in proc.stderr:
@@ -122,13 +142,21 @@ def measure_export(log: Path, folder: Path, repeats: int) -> dict[str, float]:
         figures = json.loads(buf.getvalue())
         if seconds < t_export:
             t_export, best = seconds, figures
-    return {"export_s": t_export, "read_csv_s": t_read, "export_over_read": t_export / t_read,
-            # CPU time of the process (all its threads): less sensitive to the other work on the machine
-            "export_cpu_s": cpu_export, "read_csv_cpu_s": cpu_read, "export_over_read_cpu": cpu_export / cpu_read,
-            # of the best run: the command's own CSV read, and the rest (series, TF, CDR, chunks, compression, file)
-            "export_own_read_s": best["read_s"], "export_write_s": best["seconds"] - best["read_s"],
-            "export_us_per_message": 1e6 * t_export / figures["messages"],
-            "export_messages": float(figures["messages"]), "export_mb": figures["size_bytes"] / 1e6}
+    return {
+        "export_s": t_export,
+        "read_csv_s": t_read,
+        "export_over_read": t_export / t_read,
+        # CPU time of the process (all its threads): less sensitive to the other work on the machine
+        "export_cpu_s": cpu_export,
+        "read_csv_cpu_s": cpu_read,
+        "export_over_read_cpu": cpu_export / cpu_read,
+        # of the best run: the command's own CSV read, and the rest (series, TF, CDR, chunks, compression, file)
+        "export_own_read_s": best["read_s"],
+        "export_write_s": best["seconds"] - best["read_s"],
+        "export_us_per_message": 1e6 * t_export / figures["messages"],
+        "export_messages": float(figures["messages"]),
+        "export_mb": figures["size_bytes"] / 1e6,
+    }
 
 
 def verify_export(log: Path, mcap_path: Path) -> dict[str, float]:
@@ -146,10 +174,12 @@ def verify_export(log: Path, mcap_path: Path) -> dict[str, float]:
         return np.column_stack([table.column(f"{prefix}{i}") for i in range(1, 8)])
 
     stamps = table.column("stamp_sec").astype(np.int64) * 1_000_000_000 + table.column("stamp_nsec").astype(np.int64)
-    want = {"/lbr/joint_states": ("position", joints("msr_q"), "effort", joints("msr_tau")),
-            "/lbr/command/joint_states": ("position", joints("cmd_q"), "effort", joints("cmd_tau")),
-            "/lbr/ipo/joint_states": ("position", joints("ipo_q"), None, None),
-            "/lbr/external_torque": ("effort", joints("ext_tau"), None, None)}
+    want = {
+        "/lbr/joint_states": ("position", joints("msr_q"), "effort", joints("msr_tau")),
+        "/lbr/command/joint_states": ("position", joints("cmd_q"), "effort", joints("cmd_tau")),
+        "/lbr/ipo/joint_states": ("position", joints("ipo_q"), None, None),
+        "/lbr/external_torque": ("effort", joints("ext_tau"), None, None),
+    }
     total = equal_rosbags = equal_mcap = 0
     seen: dict[str, int] = {}
 
@@ -169,12 +199,17 @@ def verify_export(log: Path, mcap_path: Path) -> dict[str, float]:
     seen.clear()
     with open(mcap_path, "rb") as fh:
         for _, channel, message, msg in make_reader(fh, decoder_factories=[DecoderFactory()]).iter_decoded_messages(
-                topics=list(want)):
+            topics=list(want)
+        ):
             k = seen.get(channel.topic, 0)
             seen[channel.topic] = k + 1
             equal_mcap += check(channel.topic, k, message.log_time, msg)
-    return {"joint_state_messages": float(total), "equal_rosbags": float(equal_rosbags),
-            "equal_mcap": float(equal_mcap), "log_rows": float(len(stamps))}
+    return {
+        "joint_state_messages": float(total),
+        "equal_rosbags": float(equal_rosbags),
+        "equal_mcap": float(equal_mcap),
+        "log_rows": float(len(stamps)),
+    }
 
 
 def measure_offline(log: Path, folder: Path) -> dict[str, float]:
@@ -182,8 +217,10 @@ def measure_offline(log: Path, folder: Path) -> dict[str, float]:
     proc = _lbr("view", log.name, "-o", "log_view.html", "--json", cwd=folder)
     if proc.returncode != 0:
         raise RuntimeError(proc.stderr[-400:])
-    return {"offline_60s_mb": json.loads(proc.stdout)["size_bytes"] / 1e6,
-            "offline_60s_write_s": time.perf_counter() - t0}
+    return {
+        "offline_60s_mb": json.loads(proc.stdout)["size_bytes"] / 1e6,
+        "offline_60s_write_s": time.perf_counter() - t0,
+    }
 
 
 def measure_demo(folder: Path) -> dict[str, float]:
@@ -217,8 +254,15 @@ def run(quick: bool = False, export_only: bool = False) -> list[tuple[str, float
             fig.update(measure_offline(log, folder))
             if not quick:
                 fig.update(measure_demo(folder))
-    units = {"_s": "s", "_mb": "MB", "rate": "× real time", "over_read": "×", "over_read_cpu": "×",
-             "_us_per_message": "µs", "_measured_at": "s since 1970"}
+    units = {
+        "_s": "s",
+        "_mb": "MB",
+        "rate": "× real time",
+        "over_read": "×",
+        "over_read_cpu": "×",
+        "_us_per_message": "µs",
+        "_measured_at": "s since 1970",
+    }
     return [(k, float(v), next((u for suffix, u in units.items() if k.endswith(suffix)), "")) for k, v in fig.items()]
 
 

@@ -80,10 +80,12 @@ class LoopbackSniffer:
             sport, dport = struct.unpack_from("!HH", ip, ihl)
             if port not in (sport, dport):
                 continue
-            out.append((kernel_time_ns(anc) or 0, sport, dport, bytes(ip[ihl + 8:])))
+            out.append((kernel_time_ns(anc) or 0, sport, dport, bytes(ip[ihl + 8 :])))
 
 
-def latencies(records: Sequence[tuple[int, int, int, bytes]], version: str, port: int = FRI_PORT) -> tuple[np.ndarray, int]:
+def latencies(
+    records: Sequence[tuple[int, int, int, bytes]], version: str, port: int = FRI_PORT
+) -> tuple[np.ndarray, int]:
     """Reply latencies [ms] of the COMMANDING_ACTIVE messages answered, and how many such messages were sent."""
     from lbrcli.fri.codec import FriCodec
 
@@ -135,7 +137,11 @@ def _round(client: list[str] | None, version: str, seconds: float, workdir: Path
     lat, active = latencies(sniffer.records, version)
     if len(lat) == 0:
         return float("nan"), float("nan"), False
-    return float(np.percentile(lat, 50)), float(np.percentile(lat, 99)), active >= 0.9 * seconds * 1000  # (the simulator drops a slot now and then)
+    return (
+        float(np.percentile(lat, 50)),
+        float(np.percentile(lat, 99)),
+        active >= 0.9 * seconds * 1000,
+    )  # (the simulator drops a slot now and then)
 
 
 def interleaved(kuka: Sequence[str], rounds: int = 3, seconds: float = 10.0) -> list[tuple[str, float, str]]:
@@ -169,5 +175,7 @@ def interleaved(kuka: Sequence[str], rounds: int = 3, seconds: float = 10.0) -> 
 if __name__ == "__main__":
     if not available():
         sys.exit("needs root or CAP_NET_RAW (a packet socket on lo)")
-    for n, v, u in interleaved([a for a in sys.argv[1:] if not a.startswith("-")], rounds=2 if "--quick" in sys.argv else 3):
+    for n, v, u in interleaved(
+        [a for a in sys.argv[1:] if not a.startswith("-")], rounds=2 if "--quick" in sys.argv else 3
+    ):
         print(f"  {n:<100} {v:>10.4g} {u}")

@@ -56,8 +56,13 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="shorter runs (smoke test)")
     parser.add_argument("--json", action="store_true", help="print all figures as one JSON object")
-    parser.add_argument("--kuka", action="append", default=[], metavar="PATH",
-                        help="fri: also measure this KUKA example client (built from KUKA's FRI client SDK)")
+    parser.add_argument(
+        "--kuka",
+        action="append",
+        default=[],
+        metavar="PATH",
+        help="fri: also measure this KUKA example client (built from KUKA's FRI client SDK)",
+    )
     parser.add_argument("--no-save", action="store_true", help="do not write benchmarks/results/NAME.json")
     parser.add_argument("only", nargs="*", help="names of benchmarks to run (e.g. ik fri)")
     args = parser.parse_args()

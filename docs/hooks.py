@@ -32,12 +32,33 @@ _MARKER = re.compile(r"<!-- lbr:(columns|value|docstring) ([A-Za-z0-9_.]+)((?: +
 BENCH_MARKER = re.compile(r"<!-- lbr:bench ((?:[^\"\s>-]|\"[^\"]*\"|-(?!->))+)((?: +[a-z]+(?:=[^\s]+)?)*) -->")
 
 # a key's unit from its last unit-like word (``p99_ms_median`` → ms); units as the pages write them
-_KEY_UNITS = {"s": "s", "ms": "ms", "us": "µs", "deg": "°", "rad": "rad", "m": "m", "mm": "mm", "px": "px",
-              "percent": "%", "mb": "MB", "fps": "frames/s"}
+_KEY_UNITS = {
+    "s": "s",
+    "ms": "ms",
+    "us": "µs",
+    "deg": "°",
+    "rad": "rad",
+    "m": "m",
+    "mm": "mm",
+    "px": "px",
+    "percent": "%",
+    "mb": "MB",
+    "fps": "frames/s",
+}
 _UNIT_ALIASES = {"deg": "°", "us": "µs", "-": "", "bool": "", "ratio": "×", "x": "×", "fraction": "", "share": ""}
 # display-unit conversions: (stored, shown) → factor
-_CONVERT = {("s", "ms"): 1e3, ("s", "µs"): 1e6, ("ms", "µs"): 1e3, ("ms", "s"): 1e-3, ("µs", "ms"): 1e-3,
-            ("m", "mm"): 1e3, ("mm", "m"): 1e-3, ("rad", "°"): 180 / math.pi, ("", "%"): 100.0, ("×", "%"): 100.0}
+_CONVERT = {
+    ("s", "ms"): 1e3,
+    ("s", "µs"): 1e6,
+    ("ms", "µs"): 1e3,
+    ("ms", "s"): 1e-3,
+    ("µs", "ms"): 1e-3,
+    ("m", "mm"): 1e3,
+    ("mm", "m"): 1e-3,
+    ("rad", "°"): 180 / math.pi,
+    ("", "%"): 100.0,
+    ("×", "%"): 100.0,
+}
 _NO_SPACE = ("°", "×")  # 0.17°, 1.26× — every other unit after a space (10 %, 6.68 s)
 
 
@@ -80,8 +101,11 @@ def _results_file(name: str) -> Path:
     found = [folder / f"{name}.json" for folder in RESULT_FOLDERS if (folder / f"{name}.json").exists()]
     if len(found) != 1:
         where = " or ".join(str(f.relative_to(ROOT) if f.is_relative_to(ROOT) else f) for f in RESULT_FOLDERS)
-        raise FigureError(f"lbr:bench: no results file {name}.json in {where}" if not found else
-                          f"lbr:bench: {name}.json is in more than one results folder")
+        raise FigureError(
+            f"lbr:bench: no results file {name}.json in {where}"
+            if not found
+            else f"lbr:bench: {name}.json is in more than one results folder"
+        )
     return found[0]
 
 
@@ -111,8 +135,15 @@ def _matching(node, pattern: str) -> list:
     if isinstance(node, dict):
         return [v for k, v in node.items() if fnmatch.fnmatchcase(str(k), pattern)]
     if isinstance(node, list):
-        return [e for e in node if pattern == "*" or isinstance(e, dict) and any(
-            isinstance(e.get(f), str) and fnmatch.fnmatchcase(e[f], pattern) for f in ("name", "key", "scenario"))]
+        return [
+            e
+            for e in node
+            if pattern == "*"
+            or isinstance(e, dict)
+            and any(
+                isinstance(e.get(f), str) and fnmatch.fnmatchcase(e[f], pattern) for f in ("name", "key", "scenario")
+            )
+        ]
     return []
 
 

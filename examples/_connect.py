@@ -14,8 +14,18 @@ def arguments(description: str, duration_s: float = 5.0) -> argparse.ArgumentPar
     p.add_argument("--duration", type=float, default=duration_s, help="session length [s]")
     p.add_argument("--period", type=int, default=5, help="simulator send period [ms]")
     p.add_argument("--fri-version", default="1.15", choices=("1.15", "2.7"), help="simulator wire format")
-    p.add_argument("--sim-lenient", action=argparse.BooleanOptionalAction, default=True,
-                   help="simulator tolerant of a loaded PC (1 s quality window; --no-sim-lenient: as strict as a robot)")
+    p.add_argument(
+        "--sim-lenient",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="simulator tolerant of a loaded PC (1 s quality window; --no-sim-lenient: as strict as a robot)",
+    )
+    p.add_argument(
+        "--sim-fast",
+        action="store_true",
+        help="simulator in lock-step as fast as the client answers: it waits for each reply, so a loaded PC behaves as "
+        "an idle one; simulated time runs faster than --duration's wall-clock seconds",
+    )
     return p
 
 
@@ -28,6 +38,8 @@ def run(client, args, observers=(), **sim_options) -> SessionResult:
 
     if args.sim_lenient:
         sim_options = {**lenient_quality(args.period), **sim_options}
+    if args.sim_fast:
+        sim_options = {"lockstep_timeout_s": 0.5, "lockstep_free": True, **sim_options}
 
     with ClientApplication(client, "127.0.0.1", 0, bind_host="127.0.0.1", version=args.fri_version, observers=observers,
                            first_message_timeout_s=20, reply_gap_s=0.5 if args.sim_lenient else None) as app:  # fmt: skip

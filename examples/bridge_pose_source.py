@@ -39,7 +39,7 @@ def source(port: int, seconds: float, log: list) -> None:
     log.append(np.array(state.tcp[:3]) if state else None)
     client.end()
     client.close()
-# --8<-- [end:source]
+    # --8<-- [end:source]
 
 
 def main(argv=None):

@@ -17,7 +17,8 @@ from lbrcli.fri import LBRClient
 
 class BallDamper(LBRClient):
     def __init__(self, gain: float, radius: float, excite_s: float = 2.0, accel: float = 2.0):
-        self.gain, self.radius, self.excite_s, self.accel = gain, radius, excite_s, accel  # [m/s/rad], [m], [s], [rad/s²]
+        self.gain, self.radius = gain, radius  # [m/s/rad], [m]
+        self.excite_s, self.accel = excite_s, accel  # [s], [rad/s²]
         self.t = self.omega = 0.0  # [s], A1 velocity [rad/s]
         self.q: list[float] | None = None
         self.sway: list[tuple[float, float]] = []  # (t [s], θy [rad])
@@ -48,7 +49,7 @@ def main(argv=None):
 
     client = BallDamper(args.gain, radius=0.576)
     result = run(client, args, plants=default_plants(args.length))
-    late = [abs(th) for t, th in client.sway if t > args.duration - 1.5]
+    late = [abs(th) for t, th in client.sway if t > client.t - 1.5]  # its last 1.5 s of commanding
     print(f"{result.outcome.value}: {result.detail}; sway in the last 1.5 s ≤ {math.degrees(max(late or [0])):.3f}°")
     return result, client
 

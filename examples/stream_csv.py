@@ -25,8 +25,10 @@ def main(argv=None):
     player = TrajectoryPlayer(traj.q, default_limits(), period_s=traj.dt, settle_s=0.2)
     with LogProcess(args.log) as log:  # rows formatted by a child process, off the FRI loop
         result = run(player, args, observers=[log], q0=tuple(traj.q[0]))
-    print(f"{result.outcome.value}: {result.detail}; {player.trajectory_rows} rows streamed, "
-          f"{result.prepared_replies} of {result.answered} replies prepared a cycle ahead")
+    print(
+        f"{result.outcome.value}: {result.detail}; {player.trajectory_rows} rows streamed, "
+        f"{result.prepared_replies} of {result.answered} replies prepared a cycle ahead"
+    )
     return result, player
 
 

@@ -142,9 +142,16 @@ class AntiSwayResult:
         c = band.clearance
         figs["obstacles"] = [o.name for o in self.obstacles]
         figs["min_clearance_m"] = None if c is None else c.clearance
-        figs["nearest_obstacle"] = None if c is None else {
-            "name": c.obstacle, "t_s": c.time, "string_length_m": c.length, "ball_m": list(c.position),
-        }
+        figs["nearest_obstacle"] = (
+            None
+            if c is None
+            else {
+                "name": c.obstacle,
+                "t_s": c.time,
+                "string_length_m": c.length,
+                "ball_m": list(c.position),
+            }
+        )
         return figs
 
 
@@ -193,8 +200,10 @@ def check_reach(points, z: float, robot, limits) -> None:
     if frac in (0.0, 1.0):
         place = f"point {seg} ({x:.3f}, {y:.3f})"
     else:
-        place = (f"first at ({x:.3f}, {y:.3f}) on segment {seg} from point {seg - 1} ({pts[seg - 1][0]:.3f}, "
-                 f"{pts[seg - 1][1]:.3f}) to point {seg} ({pts[seg][0]:.3f}, {pts[seg][1]:.3f})")
+        place = (
+            f"first at ({x:.3f}, {y:.3f}) on segment {seg} from point {seg - 1} ({pts[seg - 1][0]:.3f}, "
+            f"{pts[seg - 1][1]:.3f}) to point {seg} ({pts[seg][0]:.3f}, {pts[seg][1]:.3f})"
+        )
     raise PlanningError(
         f"the layout is out of reach at z = {z:g} m with the flange pointing down: {place}: {fact.describe()}; "
         f"move the points or change --z"
@@ -230,7 +239,11 @@ def predict_band(joints, robot, lengths, stop_time: float, obstacles=(), ball_ra
         tpk.append(float(run.t[k]))
         pivot = pos[np.minimum(np.arange(len(run.t)), len(pos) - 1)]
         paths.append(ball_path(pivot, run.s, float(ln)))
-    clear = clearance(runs[0].t, dict(zip(map(float, lengths), paths)), tuple(obstacles), ball_radius) if obstacles else None
+    clear = (
+        clearance(runs[0].t, dict(zip(map(float, lengths), paths)), tuple(obstacles), ball_radius)
+        if obstacles
+        else None
+    )
     dense = ()
     dres = dpeak = np.empty(0)
     if len(lengths) > 1:  # the residual swings between the simulated lengths: judge the band densely
@@ -239,8 +252,18 @@ def predict_band(joints, robot, lengths, stop_time: float, obstacles=(), ball_ra
 
         dense = np.linspace(float(min(lengths)), float(max(lengths)), DENSE_LENGTHS)
         dres, dpeak = band_sweep(joints.t, pos, dense, stop_time, end, substep=0.0025)
-    return BandPrediction(tuple(map(float, lengths)), tuple(runs), tuple(res), tuple(peak), tuple(tpk), tuple(paths),
-                          clear, tuple(map(float, dense)), tuple(map(float, dres)), tuple(map(float, dpeak)))
+    return BandPrediction(
+        tuple(map(float, lengths)),
+        tuple(runs),
+        tuple(res),
+        tuple(peak),
+        tuple(tpk),
+        tuple(paths),
+        clear,
+        tuple(map(float, dense)),
+        tuple(map(float, dres)),
+        tuple(map(float, dpeak)),
+    )
 
 
 def _failing_segments(plan, report) -> list[int]:
@@ -311,10 +334,15 @@ def _attempt(setup: _Setup, a_max, options, progress=None) -> AntiSwayResult:
     tol = options.length_tolerance
     lengths = band_lengths(setup.length, tol)
     band = predict_band(joints, setup.robot, lengths, plan.stop_time, setup.obstacles, setup.ball_radius)
-    run = band.runs[list(lengths).index(setup.length)] if setup.length in list(lengths) else predict_sway(
-        joints, setup.robot, setup.length, plan.stop_time)
+    run = (
+        band.runs[list(lengths).index(setup.length)]
+        if setup.length in list(lengths)
+        else predict_sway(joints, setup.robot, setup.length, plan.stop_time)
+    )
     timings["prediction"] = time.perf_counter() - t0
-    baseline = plan_layout(setup.points, setup.length, a_max, setup.z, setup.dt, type(options)(shaper="accel")).stop_time
+    baseline = plan_layout(
+        setup.points, setup.length, a_max, setup.z, setup.dt, type(options)(shaper="accel")
+    ).stop_time
     failure = None
     if not report.ok:
         failing = _failing_segments(plan, report)
@@ -344,8 +372,20 @@ def _attempt(setup: _Setup, a_max, options, progress=None) -> AntiSwayResult:
             f"string {c.length:.3f} m, ball centre ({c.position[0]:.3f},{c.position[1]:.3f},{c.position[2]:.3f}) m, "
             f"ball radius {setup.ball_radius:g} m)"
         )
-    return AntiSwayResult(plan, joints, ik_error, report, run, plan.stop_time, baseline, timings, band,
-                          setup.obstacles, setup.max_sway, failure)
+    return AntiSwayResult(
+        plan,
+        joints,
+        ik_error,
+        report,
+        run,
+        plan.stop_time,
+        baseline,
+        timings,
+        band,
+        setup.obstacles,
+        setup.max_sway,
+        failure,
+    )
 
 
 def _largest_fitting_accel(setup: _Setup, a_max: float, options) -> float:
@@ -431,8 +471,12 @@ def plan_anti_sway(
     if not (math.isfinite(ball_radius) and 0 <= ball_radius < 1):
         raise OptionError(f"--ball-radius must be in [0, 1) m, got {ball_radius:g}")
     options = AntiSwayOptions(
-        shaper=shaper, j_max=None if j_max is None else float(j_max), v_max=float(v_max),
-        length_tolerance=tol, tune=tune, max_sway=max_sway,
+        shaper=shaper,
+        j_max=None if j_max is None else float(j_max),
+        v_max=float(v_max),
+        length_tolerance=tol,
+        tune=tune,
+        max_sway=max_sway,
     )
     lim = limits if limits is not None else load_limits(None)
     robot = make_robot(flange, tool)
@@ -440,8 +484,20 @@ def plan_anti_sway(
     if q_ref.shape != (7,):
         raise OptionError("--q0: expected 7 joint angles")
     check_reach(pts, z, robot, lim)
-    setup = _Setup(pts, float(length), z, float(dt), robot, q_ref, lim, margin, jerk, max_sway, tuple(obstacles),
-                   float(ball_radius))
+    setup = _Setup(
+        pts,
+        float(length),
+        z,
+        float(dt),
+        robot,
+        q_ref,
+        lim,
+        margin,
+        jerk,
+        max_sway,
+        tuple(obstacles),
+        float(ball_radius),
+    )
     result = _attempt(setup, a_max, options, progress)
     if result.failure is None:
         return result
@@ -460,26 +516,35 @@ def plan_anti_sway(
                     alt = replace(found[0], baseline_duration=result.baseline_duration)  # at the user's a_max
                     tried.append((alt, f" (a_max {_accel_text(found[1])} m/s² per segment)"))
                 continue
-            alt_opts = (replace(options, shaper="robust", v_max=min(options.v_max, 0.75 * peak_speed))
-                        if design == "robust-slow" else replace(options, shaper=design))
+            alt_opts = (
+                replace(options, shaper="robust", v_max=min(options.v_max, 0.75 * peak_speed))
+                if design == "robust-slow"
+                else replace(options, shaper=design)
+            )
             alt = _attempt(setup, a_max, alt_opts)
             if alt.failure is None and (tol == 0 or alt.band.worst_residual[0] <= FALLBACK_RESIDUAL):
                 tried.append((alt, ""))
         if tried:
             alt, note = min(tried, key=lambda r: r[0].stop_time)
-            to = alt.plan.shaper if math.isinf(alt.plan.options.v_max) else (
-                f"{alt.plan.shaper} (pivot speed ≤ {alt.plan.options.v_max:.2f} m/s)")
+            to = (
+                alt.plan.shaper
+                if math.isinf(alt.plan.options.v_max)
+                else (f"{alt.plan.shaper} (pivot speed ≤ {alt.plan.options.v_max:.2f} m/s)")
+            )
             to += note
             return replace(alt, fallback={"from": shaper, "to": to, "reason": result.failure})
     msg = result.failure
     if fallback and shaper == "auto":
-        msg += (f"; no fallback design ({', '.join(FALLBACK_DESIGNS)}) plans either with ≤ "
-                f"{math.degrees(FALLBACK_RESIDUAL):g}° residual across the length band")
+        msg += (
+            f"; no fallback design ({', '.join(FALLBACK_DESIGNS)}) plans either with ≤ "
+            f"{math.degrees(FALLBACK_RESIDUAL):g}° residual across the length band"
+        )
     if suggest and result.failure.startswith("a_max") or (suggest and "sway" in result.failure):
         best = _largest_fitting_accel(setup, a_max, options)
         msg += (
             f"; the largest a_max that plans is {best:.2f} m/s² (re-planned with that single a_max)"
-            if best > 0 else "; no a_max plans (the layout is outside the joint limits at any acceleration)"
+            if best > 0
+            else "; no a_max plans (the layout is outside the joint limits at any acceleration)"
         )
     raise PlanningError(msg + " (an anti-sway plan is never re-timed)")
 
@@ -511,8 +576,13 @@ def _validate(pts, length, a_max, dt, shaper, tol, margin) -> None:
     check_number("--margin", margin, 0, 1, high_open=True)
 
 
-def write_outputs(result: AntiSwayResult, out: Path, task_out: Path | None = None, prediction: Path | None = None,
-                  plot: Path | None = None) -> None:
+def write_outputs(
+    result: AntiSwayResult,
+    out: Path,
+    task_out: Path | None = None,
+    prediction: Path | None = None,
+    plot: Path | None = None,
+) -> None:
     """Joint CSV, and optionally the pivot path (task CSV), the predicted sway CSV and the PNG."""
     import numpy as np
 
@@ -552,6 +622,12 @@ def plan_anti_sway_files(
     result = plan_anti_sway(points, length, a_max, z, shaper, dt, **kwargs)
     write_outputs(result, Path(out), task_out, prediction, plot)
     figs = result.figures()
-    figs.update({"out": str(out), "task_out": str(task_out) if task_out else None,
-                 "prediction": str(prediction) if prediction else None, "plot": str(plot) if plot else None})
+    figs.update(
+        {
+            "out": str(out),
+            "task_out": str(task_out) if task_out else None,
+            "prediction": str(prediction) if prediction else None,
+            "plot": str(plot) if plot else None,
+        }
+    )
     return figs

@@ -36,8 +36,9 @@ app = typer.Typer(
 groups: dict[str, typer.Typer] = {
     "plan": typer.Typer(help="Plan trajectories (anti-sway crane moves, swing-up).", no_args_is_help=True),
     "track": typer.Typer(help="Track the ball in experiment videos; calibrate the camera.", no_args_is_help=True),
-    "control": typer.Typer(help="Feedback control at the FRI rate (pendulum module upright, sway damping).",
-                           no_args_is_help=True),
+    "control": typer.Typer(
+        help="Feedback control at the FRI rate (pendulum module upright, sway damping).", no_args_is_help=True
+    ),
 }
 for _name, _group in groups.items():
     app.add_typer(_group, name=_name)

@@ -25,10 +25,16 @@ def cup_summary(log_path: str | Path) -> dict[str, Any] | None:
     t0 = float(t[moving[0]]) if moving.size else None
     first = np.flatnonzero(inside)
     if not first.size:
-        return {"entered_s": None, "entered_after_start_s": None, "left_s": [], "stayed": False, "released": bool(
-            np.any(ball == 1.0)), "trajectory_start_s": t0}
+        return {
+            "entered_s": None,
+            "entered_after_start_s": None,
+            "left_s": [],
+            "stayed": False,
+            "released": bool(np.any(ball == 1.0)),
+            "trajectory_start_s": t0,
+        }
     k = int(first[0])
-    exits = np.flatnonzero(inside[k:-1] & ~inside[k + 1:]) + k + 1
+    exits = np.flatnonzero(inside[k:-1] & ~inside[k + 1 :]) + k + 1
     return {
         "entered_s": float(t[k]),
         "entered_after_start_s": float(t[k] - t0) if t0 is not None else None,
@@ -44,7 +50,9 @@ def describe(summary: dict[str, Any]) -> str:
     if summary["entered_s"] is None:
         return "ball: never entered the cup" + ("" if summary["released"] else " (the string never went slack)")
     after = summary["entered_after_start_s"]
-    when = f"t = {summary['entered_s']:.3f} s" + (f" ({after:.3f} s after the first trajectory row)" if after is not None else "")
+    when = f"t = {summary['entered_s']:.3f} s" + (
+        f" ({after:.3f} s after the first trajectory row)" if after is not None else ""
+    )
     if summary["stayed"]:
         hops = len(summary["left_s"])
         return f"ball: entered the cup at {when} and stayed" + (f" (it hopped above the rim {hops}×)" if hops else "")

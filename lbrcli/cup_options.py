@@ -63,17 +63,35 @@ def _spec(text: Any) -> str:
 BallRadiusOpt = Annotated[float, model_number("--ball-radius", help="Ball radius \\[m].")]
 CupRadiusOpt = Annotated[float, model_number("--cup-radius", help="Inner radius of the cup \\[m].")]
 CupDepthOpt = Annotated[float, model_number("--cup-depth", help="Inside depth of the cup, bottom to rim \\[m].")]
-CupRimOpt = Annotated[float, model_number("--cup-rim", help="Height of the rim above the string anchor at the cup's bottom \\[m] (≥ --cup-depth).")]
+CupRimOpt = Annotated[
+    float,
+    model_number(
+        "--cup-rim", help="Height of the rim above the string anchor at the cup's bottom \\[m] (≥ --cup-depth)."
+    ),
+]
 CupWallOpt = Annotated[float, model_number("--cup-wall", help="Wall thickness \\[m].")]
-CupAxisOpt = Annotated[tuple, typer.Option("--cup-axis", parser=_axis, metavar="X,Y,Z", help="Opening direction of the cup in the flange frame x,y,z (-1,0,0: straight up at the thesis start pose).")]
+CupAxisOpt = Annotated[
+    tuple,
+    typer.Option(
+        "--cup-axis",
+        parser=_axis,
+        metavar="X,Y,Z",
+        help="Opening direction of the cup in the flange frame x,y,z (-1,0,0: straight up at the thesis start pose).",
+    ),
+]
 RestitutionOpt = Annotated[float, model_number("--restitution", help="Ball–cup restitution.")]
-RetensionOpt = Annotated[float, model_number("--retension", help="Restitution of the jerk when the slack string tightens, 0 (inelastic) .. 1.")]
+RetensionOpt = Annotated[
+    float,
+    model_number("--retension", help="Restitution of the jerk when the slack string tightens, 0 (inelastic) .. 1."),
+]
 FrictionOpt = Annotated[float, model_number("--friction", help="Ball–cup Coulomb friction.")]
 DragOpt = Annotated[float, model_number("--drag", help="Drag coefficient C_d of the ball in air (0: no drag).")]
 CupSpecOpt = Annotated[
     str | None,
     typer.Option(
-        "--cup", parser=_spec, metavar="SPEC",
+        "--cup",
+        parser=_spec,
+        metavar="SPEC",
         help="Simulate the cup-and-ball toy: 'default', or comma-separated key=value in metres/SI — radius, depth, rim, "
         "wall, axis (x:y:z in the flange frame), ball (radius), mass, e (restitution), retension, mu, cd "
         "(`lbr plan cup-and-ball` prints the spec of its plan).",
@@ -83,11 +101,20 @@ CupSpecOpt = Annotated[
 SPEC_KEYS = ("radius", "depth", "rim", "wall", "axis", "ball", "mass", "e", "retension", "mu", "cd")
 
 
-def build_model(length: float, mass: float = _BALL.mass, ball_radius: float = _BALL.radius,
-                cup_radius: float = _CUP.inner_radius, cup_depth: float = _CUP.depth, cup_rim: float = _CUP.rim_height,
-                cup_wall: float = _CUP.wall, cup_axis: tuple[float, float, float] = _CUP.axis,
-                restitution: float = _MODEL.restitution, retension: float = _MODEL.retension,
-                friction: float = _MODEL.friction, drag: float = _BALL.drag_coefficient) -> StringModel:
+def build_model(
+    length: float,
+    mass: float = _BALL.mass,
+    ball_radius: float = _BALL.radius,
+    cup_radius: float = _CUP.inner_radius,
+    cup_depth: float = _CUP.depth,
+    cup_rim: float = _CUP.rim_height,
+    cup_wall: float = _CUP.wall,
+    cup_axis: tuple[float, float, float] = _CUP.axis,
+    restitution: float = _MODEL.restitution,
+    retension: float = _MODEL.retension,
+    friction: float = _MODEL.friction,
+    drag: float = _BALL.drag_coefficient,
+) -> StringModel:
     """The string model from the options (SI units); OptionError naming the option when a value is out of range."""
     from trajectories.errors import OptionError
 
@@ -99,8 +126,14 @@ def build_model(length: float, mass: float = _BALL.mass, ball_radius: float = _B
     for option, value in values.items():
         low, high, low_open, unit = RANGES[option]
         check_number(option, value, low, high, low_open=low_open, unit=unit)
-    model = StringModel(length, Ball(ball_radius, mass, drag), Cup(cup_radius, cup_depth, cup_rim, cup_wall, cup_axis),
-                        retension, restitution, friction)
+    model = StringModel(
+        length,
+        Ball(ball_radius, mass, drag),
+        Cup(cup_radius, cup_depth, cup_rim, cup_wall, cup_axis),
+        retension,
+        restitution,
+        friction,
+    )
     try:
         model.validate()
     except ValueError as exc:
@@ -128,9 +161,11 @@ def cup_spec(model: StringModel) -> str:
     """The ``--cup`` spec of a model (round trip with ``parse_cup_spec``)."""
     c, b = model.cup, model.ball
     axis = ":".join(f"{x:g}" for x in c.axis)
-    return (f"radius={c.inner_radius:g},depth={c.depth:g},rim={c.rim_height:g},wall={c.wall:g},axis={axis},"
-            f"ball={b.radius:g},mass={b.mass:g},e={model.restitution:g},retension={model.retension:g},"
-            f"mu={model.friction:g},cd={b.drag_coefficient:g}")
+    return (
+        f"radius={c.inner_radius:g},depth={c.depth:g},rim={c.rim_height:g},wall={c.wall:g},axis={axis},"
+        f"ball={b.radius:g},mass={b.mass:g},e={model.restitution:g},retension={model.retension:g},"
+        f"mu={model.friction:g},cd={b.drag_coefficient:g}"
+    )
 
 
 def parse_cup_spec(text: str, length: float, option: str = "--cup") -> StringModel:
@@ -152,9 +187,19 @@ def parse_cup_spec(text: str, length: float, option: str = "--cup") -> StringMod
                 values[key] = plain_float(value)
             except NotANumber:
                 raise OptionError(f"{option}: {key} must be a number, got {value!r}") from None
-    names = {"radius": "cup_radius", "depth": "cup_depth", "rim": "cup_rim", "wall": "cup_wall", "axis": "cup_axis",
-             "ball": "ball_radius", "mass": "mass", "e": "restitution", "retension": "retension", "mu": "friction",
-             "cd": "drag"}
+    names = {
+        "radius": "cup_radius",
+        "depth": "cup_depth",
+        "rim": "cup_rim",
+        "wall": "cup_wall",
+        "axis": "cup_axis",
+        "ball": "ball_radius",
+        "mass": "mass",
+        "e": "restitution",
+        "retension": "retension",
+        "mu": "friction",
+        "cd": "drag",
+    }
     try:
         return build_model(length, **{names[k]: v for k, v in values.items()})  # type: ignore[arg-type]
     except OptionError as exc:

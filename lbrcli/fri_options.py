@@ -58,18 +58,29 @@ RobotOpt = Annotated[
     ),
 ]
 PortOpt = Annotated[
-    int, number("--port", low=0, high=65535, integer=True,
-                help="Local UDP port from the robot's FRI configuration (0: any free port, simulator).")
+    int,
+    number(
+        "--port",
+        low=0,
+        high=65535,
+        integer=True,
+        help="Local UDP port from the robot's FRI configuration (0: any free port, simulator).",
+    ),
 ]
 BindOpt = Annotated[
     Optional[str],
-    typer.Option("--bind", parser=parse_ip, metavar="IP",
-                 help="Local IP address to bind (default: all interfaces; 127.0.0.1 with the simulator)."),
+    typer.Option(
+        "--bind",
+        parser=parse_ip,
+        metavar="IP",
+        help="Local IP address to bind (default: all interfaces; 127.0.0.1 with the simulator).",
+    ),
 ]
 VersionOpt = Annotated[
     Optional[str],
     choice(
-        "--fri-version", choices=("1.15", "2.7"),
+        "--fri-version",
+        choices=("1.15", "2.7"),
         help="FRI wire format: 1.15 or 2.7. Default: detected from the first datagram with --robot (2.7 frames carry "
         "a length and a CRC); 1.15 for the simulator.",
     ),
@@ -80,33 +91,60 @@ LogOpt = Annotated[
 ]
 WaitOpt = Annotated[
     Optional[float],
-    number("--wait", low=0, high=3600, low_open=True, unit="s",
-           help="Seconds to wait for the first FRI message \\[s] (default 60 with --robot, 20 simulated)."),
+    number(
+        "--wait",
+        low=0,
+        high=3600,
+        low_open=True,
+        unit="s",
+        help="Seconds to wait for the first FRI message \\[s] (default 60 with --robot, 20 simulated).",
+    ),
 ]
 PeriodOpt = Annotated[
     Optional[int],
-    number("--period", low=1, high=100, unit="ms", integer=True,
-           help="Send period \\[ms]: the simulator's (default: the file's step), or with --robot the period the "
-           "controller must have."),
+    number(
+        "--period",
+        low=1,
+        high=100,
+        unit="ms",
+        integer=True,
+        help="Send period \\[ms]: the simulator's (default: the file's step), or with --robot the period the "
+        "controller must have.",
+    ),
 ]
 SessionPeriodOpt = Annotated[  # commands that play no file
     Optional[int],
-    number("--period", low=1, high=100, unit="ms", integer=True,
-           help="Send period \\[ms]: the simulator's (default 1), or with --robot the period the controller must have "
-           "(default: whatever it sends)."),
+    number(
+        "--period",
+        low=1,
+        high=100,
+        unit="ms",
+        integer=True,
+        help="Send period \\[ms]: the simulator's (default 1), or with --robot the period the controller must have "
+        "(default: whatever it sends).",
+    ),
 ]
 LengthOpt = Annotated[
     Optional[float],
-    string_length("--length", zero_is_none=True,
-                  help=f"Simulated ball string length \\[m] (default {DEFAULT_BALL_LENGTH}; 0: no ball)."),
+    string_length(
+        "--length",
+        zero_is_none=True,
+        help=f"Simulated ball string length \\[m] (default {DEFAULT_BALL_LENGTH}; 0: no ball).",
+    ),
 ]
 SimStartOpt = Annotated[
     Optional[JointVector],
     joints("--sim-start", help="Simulator only: where the simulated robot stands at start (7 angles, deg/rad)."),
 ]
 MultiplierOpt = Annotated[
-    int, number("--receive-multiplier", low=1, high=100, integer=True,
-                help="Simulator only: the client answers every k-th message.")
+    int,
+    number(
+        "--receive-multiplier",
+        low=1,
+        high=100,
+        integer=True,
+        help="Simulator only: the client answers every k-th message.",
+    ),
 ]
 RealtimeOpt = Annotated[
     bool,
@@ -120,7 +158,10 @@ RealtimeOpt = Annotated[
 BusyWaitOpt = Annotated[
     Optional[float],
     number(
-        "--busy-wait", low=0, high=5, unit="ms",
+        "--busy-wait",
+        low=0,
+        high=5,
+        unit="ms",
         help="Sleep-then-spin: poll the socket for this long before each controller message is due \\[ms] instead "
         "of sleeping until it arrives (default 0: block in the kernel, as KUKA's client does, ≈ 0.1 ms of CPU per "
         "message). Can shorten the reply on a quiet PC; costs that much CPU per period and, on a busy PC, makes the "
@@ -159,7 +200,11 @@ SimFastOpt = Annotated[
 TrackingErrorOpt = Annotated[
     Optional[float],
     number(
-        "--max-tracking-error", low=0, high=3, low_open=True, unit="rad",
+        "--max-tracking-error",
+        low=0,
+        high=3,
+        low_open=True,
+        unit="rad",
         help="End the stream with a braking stop when a joint's measured position is farther than this from the "
         "command \\[rad] (default: its velocity limit × max(20 ms, 8 command periods)).",
     ),
@@ -171,19 +216,28 @@ PlotOpt = Annotated[
 ]
 PendulumOpt = Annotated[
     Optional[str],
-    typer.Option("--pendulum", help="Serial port of the pendulum module (thesis ch. 6, e.g. /dev/ttyUSB0); 'sim': the "
-                 "simulator's emulated module on a pseudo-terminal. Logs pend_theta \\[rad], pend_omega \\[rad/s]."),
+    typer.Option(
+        "--pendulum",
+        help="Serial port of the pendulum module (thesis ch. 6, e.g. /dev/ttyUSB0); 'sim': the "
+        "simulator's emulated module on a pseudo-terminal. Logs pend_theta \\[rad], pend_omega \\[rad/s].",
+    ),
 ]
-BaudOpt = Annotated[int, number("--baud", low=50, high=4_000_000, integer=True,
-                                 help="Baud rate of the pendulum module's serial port.")]
-PendZeroOpt = Annotated[int, number("--pendulum-zero", low=0, high=4095, integer=True,
-                                    help="Encoder count of the hanging pendulum.")]
+BaudOpt = Annotated[
+    int, number("--baud", low=50, high=4_000_000, integer=True, help="Baud rate of the pendulum module's serial port.")
+]
+PendZeroOpt = Annotated[
+    int, number("--pendulum-zero", low=0, high=4095, integer=True, help="Encoder count of the hanging pendulum.")
+]
 MqttOpt = Annotated[
     Optional[str],
-    typer.Option("--mqtt", help="Publish the state as JSON to mqtt://HOST:PORT/TOPIC (off the FRI loop; see `lbr listen`)."),
+    typer.Option(
+        "--mqtt", help="Publish the state as JSON to mqtt://HOST:PORT/TOPIC (off the FRI loop; see `lbr listen`)."
+    ),
 ]
-MqttRateOpt = Annotated[float, number("--mqtt-rate", low=0, high=1000, low_open=True, unit="Hz",
-                                      help="Telemetry messages per second \\[Hz].")]
+MqttRateOpt = Annotated[
+    float,
+    number("--mqtt-rate", low=0, high=1000, low_open=True, unit="Hz", help="Telemetry messages per second \\[Hz]."),
+]
 
 
 def busy_wait_seconds(busy_wait_ms: float | None) -> float | None:

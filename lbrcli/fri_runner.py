@@ -42,6 +42,12 @@ def realtime_context(realtime: bool):
     return realtime_settings()
 
 
+LATE_REPLIES_HINT = (
+    ": the simulator's connection-quality rule dropped it for late replies, as a controller does (this computer was "
+    "too busy to answer every period in time; --sim-lockstep waits for each reply, see docs/explanations/fri-timing.md)"
+)
+
+
 class _SessionParts:
     """What a session started besides the application — log writer, simulator, lab attachments — and their stop."""
 
@@ -76,7 +82,9 @@ class _SessionParts:
         config = self.simulator.config(self.app.port, self.session.version, self.session.realtime)  # type: ignore[union-attr]
         self.sim = SimulatorProcess(config)
         self.sim.start()
-        self.rep.print(f"simulator on {self.sim.address[0]}:{self.sim.address[1]} → client on 127.0.0.1:{self.app.port}")
+        self.rep.print(
+            f"simulator on {self.sim.address[0]}:{self.sim.address[1]} → client on 127.0.0.1:{self.app.port}"
+        )
 
     def _attach_lab(self, client, columns: LogColumns) -> LogColumns:
         """The pendulum module (read by the client where it wants it, logged) and the telemetry tap."""
@@ -117,14 +125,26 @@ class _SessionParts:
             self.log.close()
 
     def judged(self, result):
-        """The session's result, failed when the log could not write its last rows (not what was asked)."""
-        if self.log is None or not self.log.error or not result.ok:
-            return result
+        """The session's result, failed when the log could not write its last rows (not what was asked); when the
+        embedded simulator dropped the session for late replies, the detail says why and how to avoid it."""
         import dataclasses
 
         from lbrcli.fri import EndReason, Outcome
 
-        return dataclasses.replace(result, outcome=Outcome.FAILED, reason=EndReason.OBSERVER_FAILED, detail=self.log.error)
+        if not result.ok and self._dropped_for_late_replies():
+            return dataclasses.replace(result, detail=result.detail + LATE_REPLIES_HINT)
+        if self.log is None or not self.log.error or not result.ok:
+            return result
+        return dataclasses.replace(
+            result, outcome=Outcome.FAILED, reason=EndReason.OBSERVER_FAILED, detail=self.log.error
+        )
+
+    def _dropped_for_late_replies(self) -> bool:
+        """The embedded simulator, on the period's grid, ended the session for its connection quality."""
+        stats, sim = self.sim_stats, self.simulator
+        if stats is None or sim is None or sim.paced_by_replies or sim.loss > 0 or sim.malformed > 0:
+            return False  # (injected faults are their own explanation)
+        return stats.end_reason == "quality"
 
 
 def run_client(rep, client, session: SessionSettings, simulator: SimulatorSettings | None = None, *, lab=None,
@@ -142,7 +162,9 @@ def run_client(rep, client, session: SessionSettings, simulator: SimulatorSettin
     realtime = realtime_context(session.realtime)  # refused before anything starts (exit 2)
     if lab is not None:
         lab.validate(session.embedded)
-    app = session.application(client, [SessionFigures(), *observers], lenient=simulator is not None and simulator.lenient)
+    app = session.application(
+        client, [SessionFigures(), *observers], lenient=simulator is not None and simulator.lenient
+    )
     app.connect()
     parts = _SessionParts(rep, app, session, simulator, lab)
     try:
@@ -183,9 +205,13 @@ def print_summary(rep, result, sim_stats, log_path: Path | None) -> dict[str, An
                 "an undamped simulated one does not)"
             )
         else:
-            rep.print(f"start sway {f['start_sway_deg']:.3f}° (below {f['sway_threshold_deg']:g}° after waiting {waited:.2f} s)")
+            rep.print(
+                f"start sway {f['start_sway_deg']:.3f}° (below {f['sway_threshold_deg']:g}° after waiting {waited:.2f} s)"
+            )
     if r.braking_cycles:
-        rep.print(f"braking stop: {r.braking_cycles} cycles ({r.braking_cycles * (r.period_s or 0):.3f} s) within the limits")
+        rep.print(
+            f"braking stop: {r.braking_cycles} cycles ({r.braking_cycles * (r.period_s or 0):.3f} s) within the limits"
+        )
     if f.get("min_tracking") is not None:
         rep.print(f"min tracking performance {f['min_tracking']:.4f} over {r.active_cycles} COMMANDING_ACTIVE cycles")
     if f.get("max_tracking_error") is not None:
@@ -209,8 +235,9 @@ def print_summary(rep, result, sim_stats, log_path: Path | None) -> dict[str, An
     return figures
 
 
-def exit_for(result, lab_figures: dict[str, Any] | None = None, mqtt: str | None = None,
-             failed: str | None = None) -> None:
+def exit_for(
+    result, lab_figures: dict[str, Any] | None = None, mqtt: str | None = None, failed: str | None = None
+) -> None:
     """Exit 2 for bad input found in the session, 1 for any other end that is not what was asked (the session's,
     lab telemetry that never reached its broker, or ``failed``: an output the command could not write, e.g. the
     plot), 130 for Ctrl-C."""
@@ -234,8 +261,14 @@ def exit_for(result, lab_figures: dict[str, Any] | None = None, mqtt: str | None
     raise typer.Exit(130 if result.outcome is Outcome.INTERRUPTED else 1)
 
 
-def plot_log(path: Path | None, log_path: Path | None, rep, title: str, figures: dict[str, Any] | None = None,
-             draw: Callable | None = None) -> str | None:
+def plot_log(
+    path: Path | None,
+    log_path: Path | None,
+    rep,
+    title: str,
+    figures: dict[str, Any] | None = None,
+    draw: Callable | None = None,
+) -> str | None:
     """Draw the plot of a session's log (``draw(log, path)``; default: the execution plot). A plot that fails is
     reported (and in ``figures['plot_error']``), never an exception after the session: what failed, or None."""
     if path is None:

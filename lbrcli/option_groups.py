@@ -95,7 +95,9 @@ def with_options(*, flags: Mapping[str, str] | None = None, **groups: OptionGrou
         sig = inspect.signature(fn)
         params: list[inspect.Parameter] = []
         for p in _parameters(fn, set(groups)).values():
-            params.extend(groups[p.name].parameters() if p.name in groups else [p.replace(kind=inspect.Parameter.KEYWORD_ONLY)])
+            params.extend(
+                groups[p.name].parameters() if p.name in groups else [p.replace(kind=inspect.Parameter.KEYWORD_ONLY)]
+            )
         owned = {name: [p.name for p in g.parameters()] for name, g in groups.items()}
         names = {k: v for g in groups.values() for k, v in g.flags.items()} | dict(flags or {})
 

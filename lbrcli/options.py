@@ -187,7 +187,6 @@ class Joints:
     """typer ``parser`` of 7 joint angles (deg/rad suffixes, radians without), each within ±360°; returns a (7,)
     array [rad]. Whether they are inside the joint limits is for the command to check (see :func:`within_limits`)."""
 
-
     def __call__(self, value: Any) -> np.ndarray | None:
         from trajectories.errors import OptionError
 
@@ -317,24 +316,39 @@ JsonOpt = Annotated[
 ]
 FlangeOpt = Annotated[
     str,
-    choice("--flange", choices=FLANGES, metavar="FLANGE",
-           help="Media flange: touch-electric (d7 = 0.152 m), standard (0.126 m), touch-pneumatic (0.187 m)."),
+    choice(
+        "--flange",
+        choices=FLANGES,
+        metavar="FLANGE",
+        help="Media flange: touch-electric (d7 = 0.152 m), standard (0.126 m), touch-pneumatic (0.187 m).",
+    ),
 ]
 ToolOpt = Annotated[
     Optional[tuple],
-    floats("--tool", count=3, low=-MAX_TOOL_OFFSET, high=MAX_TOOL_OFFSET, unit="m", metavar="X,Y,Z",
-           help="Tool offset x,y,z \\[m] in the flange frame (e.g. the string attachment)."),
+    floats(
+        "--tool",
+        count=3,
+        low=-MAX_TOOL_OFFSET,
+        high=MAX_TOOL_OFFSET,
+        unit="m",
+        metavar="X,Y,Z",
+        help="Tool offset x,y,z \\[m] in the flange frame (e.g. the string attachment).",
+    ),
 ]
 LimitsOpt = Annotated[
     Optional[Path], typer.Option("--limits", help="TOML file overriding the limit tables (see trajectories/data).")
 ]
 DtOpt = Annotated[
-    Optional[float], number("--dt", low=1e-4, high=1.0, unit="s", help="Sample step \\[s] of a headerless 7-column "
-                            "joint file.")  # fmt: skip
+    Optional[float],
+    number(
+        "--dt", low=1e-4, high=1.0, unit="s", help="Sample step \\[s] of a headerless 7-column joint file."
+    ),  # fmt: skip
 ]
 MarginOpt = Annotated[
-    float, number("--margin", low=0.0, high=1.0, high_open=True,
-                  help="Check against the limits scaled by (1 − margin).")  # fmt: skip
+    float,
+    number(
+        "--margin", low=0.0, high=1.0, high_open=True, help="Check against the limits scaled by (1 − margin)."
+    ),  # fmt: skip
 ]
 
 DEFAULT_FLANGE = "touch-electric"

@@ -46,10 +46,14 @@ def guard_outputs(inputs: Named, outputs: Named) -> None:
     for k, (aname, apath) in enumerate(outs):
         for bname, bpath in outs[k + 1 :]:
             if _same_file(apath, bpath):
-                raise OptionError(f"{aname} {apath} and {bname} {bpath} are the same file: give each output its own name")
+                raise OptionError(
+                    f"{aname} {apath} and {bname} {bpath} are the same file: give each output its own name"
+                )
 
 
-INPUT_OPTIONS = frozenset({"limits", "calibration", "plane", "obstacles", "secret", "geometry"})  # Path options that are read
+INPUT_OPTIONS = frozenset(
+    {"limits", "calibration", "plane", "obstacles", "secret", "geometry"}
+)  # Path options that are read
 
 
 def _path_roles(fn) -> dict[str, tuple[str, str]]:

@@ -34,7 +34,9 @@ def parse_angle(text: str | float, option: str) -> float:
         try:
             value = plain_float(s)
         except NotANumber:
-            raise OptionError(f"{_where(option)}not an angle: {text!r} (a plain number, optionally with deg or rad)") from None
+            raise OptionError(
+                f"{_where(option)}not an angle: {text!r} (a plain number, optionally with deg or rad)"
+            ) from None
     if not math.isfinite(value):
         raise OptionError(f"{_where(option)}not a finite angle: {text!r}")
     return value * factor

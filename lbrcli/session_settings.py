@@ -62,7 +62,9 @@ class SessionSettings:
         if not (isinstance(self.port, int) and 0 <= self.port <= 65535):
             raise SettingError(SessionSettings, "port", f"must be a UDP port 0..65535, got {self.port!r}")
         if self.version not in (None, *FRI_VERSIONS):
-            raise SettingError(SessionSettings, "version", f"must be one of {', '.join(FRI_VERSIONS)}, got {self.version!r}")
+            raise SettingError(
+                SessionSettings, "version", f"must be one of {', '.join(FRI_VERSIONS)}, got {self.version!r}"
+            )
         _check_positive(SessionSettings, {"wait_s": self.wait_s, "duration_s": self.duration_s,
                                           "commanding_timeout_s": self.commanding_timeout_s}, "s")  # fmt: skip
         _check_positive(SessionSettings, {"max_tracking_error": self.max_tracking_error}, "rad")
@@ -135,7 +137,11 @@ class SimulatorSettings:
         """The :class:`~lbrcli.fri.sim.SimConfig` of these settings for a client on loopback ``client_port``."""
         from lbrcli.fri.sim import SimConfig, lenient_quality
 
-        paced = isinstance(self.period_ms, int) and isinstance(self.receive_multiplier, int) and self.period_ms * self.receive_multiplier > 0
+        paced = (
+            isinstance(self.period_ms, int)
+            and isinstance(self.receive_multiplier, int)
+            and self.period_ms * self.receive_multiplier > 0
+        )
         quality = lenient_quality(self.period_ms, self.receive_multiplier) if self.lenient and paced else {}
         return SimConfig(
             client_port=client_port, version=version or SIMULATED_VERSION, period_ms=self.period_ms,

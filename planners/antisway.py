@@ -227,7 +227,13 @@ def robust_spec(length: float, a_max: float, tolerance: float, residual: float, 
 
 
 def _robust_segment(
-    s: float, length: float, a_max: float, j_max: float, options: AntiSwayOptions, budget: float, cap: float | None,
+    s: float,
+    length: float,
+    a_max: float,
+    j_max: float,
+    options: AntiSwayOptions,
+    budget: float,
+    cap: float | None,
     total_budget: float,
 ) -> tuple[RampProfile, float, float]:
     """Robust design of one segment checked on the nonlinear pendulum → (profile, band residual, band peak) [rad].
@@ -276,14 +282,26 @@ def _robust_segment(
         sway = None if sway_ok else spec.max_sway * min(0.9, 0.95 * options.max_sway / pk)
         at_grid = float(np.abs(z).max())
         target = spec.residual if res <= budget or at_grid > budget else spec.residual * 0.97 * budget / res
-        spec = RobustSpec(spec.omega_lo, spec.omega_hi, target, sway if sway is not None else spec.max_sway,
-                          spec.n_freq, tuple(offset))
+        spec = RobustSpec(
+            spec.omega_lo,
+            spec.omega_hi,
+            target,
+            sway if sway is not None else spec.max_sway,
+            spec.n_freq,
+            tuple(offset),
+        )
     return best
 
 
 def design_segment(
-    index: int, start: np.ndarray, end: np.ndarray, length: float, a_max: float, options: AntiSwayOptions,
-    budget: float, total_budget: float | None = None,
+    index: int,
+    start: np.ndarray,
+    end: np.ndarray,
+    length: float,
+    a_max: float,
+    options: AntiSwayOptions,
+    budget: float,
+    total_budget: float | None = None,
 ) -> SegmentPlan:
     """Choose (``auto``), correct and tune the design of one segment; ``budget`` [rad] is its residual share."""
     s = float(np.linalg.norm(end - start))
@@ -334,8 +352,7 @@ def plan_layout(
     # a capped segment may spend what the others leave: at most the whole budget minus the others' shares
     total = options.robust_budget - budget * (nseg - 1) * 0.5
     segments = tuple(
-        design_segment(i + 1, pts[i], pts[i + 1], length, float(accels[i]), options, budget, total)
-        for i in range(nseg)
+        design_segment(i + 1, pts[i], pts[i + 1], length, float(accels[i]), options, budget, total) for i in range(nseg)
     )
     return sample_plan(segments, length, float(accels.max()), z, dt, options)
 
@@ -384,7 +401,19 @@ def baseline_duration(points: np.ndarray, length: float, a_max: float) -> float:
 
 
 __all__ = [
-    "AntiSwayOptions", "AntiSwayPlan", "SegmentPlan", "SHAPERS", "DEFAULT_LAYOUT", "DEFAULT_Z", "plan_layout",
-    "effective_period", "linear_residual", "planar_midpoint_angle", "design_profile", "baseline_duration", "Shaper",
-    "simulate_path", "residual_sway",
+    "AntiSwayOptions",
+    "AntiSwayPlan",
+    "SegmentPlan",
+    "SHAPERS",
+    "DEFAULT_LAYOUT",
+    "DEFAULT_Z",
+    "plan_layout",
+    "effective_period",
+    "linear_residual",
+    "planar_midpoint_angle",
+    "design_profile",
+    "baseline_duration",
+    "Shaper",
+    "simulate_path",
+    "residual_sway",
 ]

@@ -54,8 +54,16 @@ class BandMember:
         return replace(base, length=self.length, ball=replace(base.ball, mass=self.mass))
 
 
-def band_members(length: float, mass: float, dt: float, length_tol: float = 0.03, mass_tol: float = 0.2,
-                 n_length: int = 3, n_mass: int = 3, timing: bool = True) -> tuple[BandMember, ...]:
+def band_members(
+    length: float,
+    mass: float,
+    dt: float,
+    length_tol: float = 0.03,
+    mass_tol: float = 0.2,
+    n_length: int = 3,
+    n_mass: int = 3,
+    timing: bool = True,
+) -> tuple[BandMember, ...]:
     """A grid over the band: n_length lengths across ±length_tol, n_mass masses across ±mass_tol, timing errors −dt, 0,
     +dt (one FRI period) — every combination."""
     lengths = length * (1.0 + length_tol * np.linspace(-1.0, 1.0, n_length)) if n_length > 1 else [length]
@@ -64,8 +72,16 @@ def band_members(length: float, mass: float, dt: float, length_tol: float = 0.03
     return tuple(BandMember(float(ln), float(m), s) for ln in lengths for m in masses for s in shifts)
 
 
-def cup_path(swing_x: np.ndarray, swing_v: np.ndarray, swing_u: np.ndarray, dt: float, move: CatchMove,
-             bounds_y: TaskBounds, bounds_z: TaskBounds, settle: float = 0.5) -> tuple[np.ndarray, float]:
+def cup_path(
+    swing_x: np.ndarray,
+    swing_v: np.ndarray,
+    swing_u: np.ndarray,
+    dt: float,
+    move: CatchMove,
+    bounds_y: TaskBounds,
+    bounds_z: TaskBounds,
+    settle: float = 0.5,
+) -> tuple[np.ndarray, float]:
     """The pivot's displacements (n, 2) [m] along base y and z, every dt [s] from 0: the swing-up (y only) up to
     t_start, the move, the brake, ``settle`` [s] at rest. Also the time [s] the move actually reaches its target."""
     from ruckig import ControlInterface, InputParameter, Result, Ruckig, Trajectory
@@ -77,8 +93,10 @@ def cup_path(swing_x: np.ndarray, swing_v: np.ndarray, swing_u: np.ndarray, dt: 
     inp.current_velocity = [float(swing_v[k]), 0.0]
     inp.current_acceleration = [float(np.clip(swing_u[k], -bounds_y.a_max, bounds_y.a_max)), 0.0]
     inp.target_position = [move.y, move.z]
-    inp.target_velocity = [float(np.clip(move.vy, -0.999 * vmax[0], 0.999 * vmax[0])),
-                           float(np.clip(move.vz, -0.999 * vmax[1], 0.999 * vmax[1]))]
+    inp.target_velocity = [
+        float(np.clip(move.vy, -0.999 * vmax[0], 0.999 * vmax[0])),
+        float(np.clip(move.vz, -0.999 * vmax[1], 0.999 * vmax[1])),
+    ]
     inp.target_acceleration = [0.0, 0.0]
     inp.max_velocity = vmax
     inp.max_acceleration = [bounds_y.a_max, bounds_z.a_max]
@@ -124,8 +142,9 @@ class BandState:
     t: float
 
 
-def prepare_band(base: StringModel, members: tuple[BandMember, ...], pivot: PivotMotion, t: float,
-                 substeps: int = 1) -> BandState:
+def prepare_band(
+    base: StringModel, members: tuple[BandMember, ...], pivot: PivotMotion, t: float, substeps: int = 1
+) -> BandState:
     """Step each distinct (length, mass) of the band along ``pivot`` up to t [s] (the timing error acts only later)."""
     cache: dict[tuple[float, float], StringStepper] = {}
     steppers = []
@@ -137,8 +156,9 @@ def prepare_band(base: StringModel, members: tuple[BandMember, ...], pivot: Pivo
     return BandState(members, steppers, t)
 
 
-def judge_band(base: StringModel, band: BandState, pivot: PivotMotion, t_end: float,
-               substeps: int = 1) -> list[CatchOutcome]:
+def judge_band(
+    base: StringModel, band: BandState, pivot: PivotMotion, t_end: float, substeps: int = 1
+) -> list[CatchOutcome]:
     """Continue every member from the band state along ``pivot`` to t_end [s] and summarise each run."""
     out = []
     for member, st0 in zip(band.members, band.steppers):
@@ -154,11 +174,21 @@ def band_score(outcomes: list[CatchOutcome], radius_clearance: float) -> float:
     """What the search maximises: the share caught, then the entry margins (clipped to ±clearance, averaged, in
     clearances) and small relative entry speeds as tie-breakers."""
     caught = np.mean([o.caught for o in outcomes])
-    margins = [max(-1.0, min(1.0, (o.margin if o.margin is not None else -radius_clearance) / radius_clearance))
-               for o in outcomes]
+    margins = [
+        max(-1.0, min(1.0, (o.margin if o.margin is not None else -radius_clearance) / radius_clearance))
+        for o in outcomes
+    ]
     speeds = [o.relative_speed for o in outcomes if o.relative_speed is not None]
     return float(caught + 0.2 * np.mean(margins) - 0.02 * (np.mean(speeds) if speeds else 3.0))
 
 
-__all__ = ["CatchMove", "BandMember", "band_members", "cup_path", "pivot_motion", "prepare_band", "judge_band",
-           "band_score"]
+__all__ = [
+    "CatchMove",
+    "BandMember",
+    "band_members",
+    "cup_path",
+    "pivot_motion",
+    "prepare_band",
+    "judge_band",
+    "band_score",
+]

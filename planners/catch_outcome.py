@@ -31,9 +31,17 @@ class CatchOutcome:
     failure: str | None
 
     def figures(self) -> dict:
-        return {"caught": self.caught, "t_release_s": self.t_release, "t_entry_s": self.t_entry,
-                "t_rest_s": self.t_rest, "entry_margin_m": self.margin, "relative_entry_speed_m_s": self.relative_speed,
-                "relative_lateral_speed_m_s": self.lateral_speed, "contacts": self.contacts, "failure": self.failure}
+        return {
+            "caught": self.caught,
+            "t_release_s": self.t_release,
+            "t_entry_s": self.t_entry,
+            "t_rest_s": self.t_rest,
+            "entry_margin_m": self.margin,
+            "relative_entry_speed_m_s": self.relative_speed,
+            "relative_lateral_speed_m_s": self.lateral_speed,
+            "contacts": self.contacts,
+            "failure": self.failure,
+        }
 
 
 def outcome(events: Sequence[BallEvent], resting: bool, inside: bool) -> CatchOutcome:
@@ -45,8 +53,11 @@ def outcome(events: Sequence[BallEvent], resting: bool, inside: bool) -> CatchOu
     t_entry = entries[0].t if entries else None
     rests = [e for e in events if e.kind == "rest"]
     t_release = slack[0].t if slack else None
-    retension = [e for e in events if e.kind == "retension" and t_release is not None and e.t > t_release
-                 and (first is None or e.t < first.t)]
+    retension = [
+        e
+        for e in events
+        if e.kind == "retension" and t_release is not None and e.t > t_release and (first is None or e.t < first.t)
+    ]
     caught = resting and inside
     failure = None
     if not caught:
@@ -65,10 +76,15 @@ def outcome(events: Sequence[BallEvent], resting: bool, inside: bool) -> CatchOu
         else:
             failure = f"ball entered at t = {t_entry:.2f} s and bounced out"
     return CatchOutcome(
-        caught=caught, t_release=t_release, t_entry=t_entry, t_rest=rests[-1].t if rests and caught else None,
+        caught=caught,
+        t_release=t_release,
+        t_entry=t_entry,
+        t_rest=rests[-1].t if rests and caught else None,
         margin=first.info["margin_m"] if first else None,
         relative_speed=(entries[0] if entries else first).info["relative_speed_m_s"] if first else None,
         lateral_speed=(entries[0] if entries else first).info["relative_lateral_speed_m_s"] if first else None,
-        t_crossing=first.t if first else None, contacts=sum(e.kind == "contact" for e in events),
-        retension_before_entry=retension[0].t if retension else None, failure=failure,
+        t_crossing=first.t if first else None,
+        contacts=sum(e.kind == "contact" for e in events),
+        retension_before_entry=retension[0].t if retension else None,
+        failure=failure,
     )

@@ -32,7 +32,14 @@ from trajectories.robot import Robot
 from trajectories.trajectory import JointTrajectory
 
 from .catch_move import (
-    BandMember, CatchMove, band_members, band_score, cup_path, judge_band, pivot_motion, prepare_band,
+    BandMember,
+    CatchMove,
+    band_members,
+    band_score,
+    cup_path,
+    judge_band,
+    pivot_motion,
+    prepare_band,
 )
 from .catch_outcome import CatchOutcome, outcome
 from .catch_swing import ReleaseGoal, release_score
@@ -90,6 +97,7 @@ class BandResult:
 
     def worst(self) -> tuple[BandMember, CatchOutcome]:
         """The member caught with the least margin, or (when some are missed) the one missed by the most."""
+
         def key(i):
             o = self.outcomes[i]
             return (o.caught, o.margin if o.margin is not None else -1.0)
@@ -133,7 +141,9 @@ class CatchResult:
                 f"timing {1e3 * member.shift:+.0f} ms: {o.failure or 'caught'}"
             )
         if r.max_time is not None and self.nominal.t_entry is not None and self.nominal.t_entry > r.max_time:
-            reasons.append(f"the ball enters the cup at {self.nominal.t_entry:.2f} s, after --max-time {r.max_time:g} s")
+            reasons.append(
+                f"the ball enters the cup at {self.nominal.t_entry:.2f} s, after --max-time {r.max_time:g} s"
+            )
         return "; ".join(reasons) or None
 
     def figures(self) -> dict:
@@ -158,29 +168,49 @@ class CatchResult:
                 "mass_tolerance": r.mass_tol,
                 "timing_error_s": r.dt if r.timing else 0.0,
                 "min_success": r.min_success,
-                "worst": {"length_m": member.length, "mass_kg": member.mass, "timing_s": member.shift,
-                          **worst.figures()},
-                "min_entry_margin_m": min((o.margin for o in self.band.outcomes if o.caught and o.margin is not None),
-                                          default=None),
-                "max_relative_entry_speed_m_s": max((o.relative_speed for o in self.band.outcomes
-                                                     if o.caught and o.relative_speed is not None), default=None),
+                "worst": {
+                    "length_m": member.length,
+                    "mass_kg": member.mass,
+                    "timing_s": member.shift,
+                    **worst.figures(),
+                },
+                "min_entry_margin_m": min(
+                    (o.margin for o in self.band.outcomes if o.caught and o.margin is not None), default=None
+                ),
+                "max_relative_entry_speed_m_s": max(
+                    (o.relative_speed for o in self.band.outcomes if o.caught and o.relative_speed is not None),
+                    default=None,
+                ),
             },
             "length_m": m.length,
             "mass_kg": m.ball.mass,
             "ball_radius_m": m.ball.radius,
-            "cup": {"inner_radius_m": cup.inner_radius, "depth_m": cup.depth, "rim_height_m": cup.rim_height,
-                    "wall_m": cup.wall, "axis": list(cup.axis)},
+            "cup": {
+                "inner_radius_m": cup.inner_radius,
+                "depth_m": cup.depth,
+                "rim_height_m": cup.rim_height,
+                "wall_m": cup.wall,
+                "axis": list(cup.axis),
+            },
             "restitution": m.restitution,
             "retension": m.retension,
             "drag_coefficient": m.ball.drag_coefficient,
             **self.check.plan_figures(self.trajectory),
             "max_time_s": r.max_time,
             "swing_up_rest_s": self.swing.t_rest,
-            "catch_move": {"t_start_s": self.move.t_start, "t_catch_s": self.move.t_catch, "y_m": self.move.y,
-                           "z_m": self.move.z, "vy_m_s": self.move.vy, "vz_m_s": self.move.vz},
+            "catch_move": {
+                "t_start_s": self.move.t_start,
+                "t_catch_s": self.move.t_catch,
+                "y_m": self.move.y,
+                "z_m": self.move.z,
+                "vy_m_s": self.move.vy,
+                "vz_m_s": self.move.vz,
+            },
             "max_travel_m": {"y": float(np.max(np.abs(self.path[:, 0]))), "z": float(np.max(np.abs(self.path[:, 1])))},
-            "bounds": {axis: {"v_max_m_s": b.v_max, "a_max_m_s2": b.a_max, "j_max_m_s3": b.j_max}
-                       for axis, b in zip(("swing_y", "move_y", "move_z"), self.bounds)},
+            "bounds": {
+                axis: {"v_max_m_s": b.v_max, "a_max_m_s2": b.a_max, "j_max_m_s3": b.j_max}
+                for axis, b in zip(("swing_y", "move_y", "move_z"), self.bounds)
+            },
             "max_ik_error_m": self.max_ik_error,
             "planning_time_s": self.planning_time,
             "notes": list(self.notes),
@@ -197,12 +227,25 @@ def _swing_up(r: CatchRequest, bounds: TaskBounds, move: TaskBounds) -> PivotPla
     m = r.model
     window = 2.0 * (m.cup.inner_radius - m.ball.radius)  # lateral width of the opening the ball centre fits through
     deadline = math.inf if r.max_time is None else r.max_time - FLIGHT_ALLOWANCE
-    goal = ReleaseGoal(height=m.cup.rim_height, reach=0.06, spread_target=SPREAD_SHARE * window, deadline=deadline,
-                       lateral_speed=LATERAL_SHARE * move.v_max)
-    problem = FastProblem(length=m.length, theta_d=r.release_apex, bounds=bounds, travel=r.travel, dt=r.dt,
-                          horizon=SWING_HORIZON if r.max_time is None else r.max_time + 1.0, release=True,
-                          band=(1.0 - r.length_tol, 1.0 + r.length_tol) if r.length_tol > 0 else (),
-                          scorer=release_score, goal=goal)
+    goal = ReleaseGoal(
+        height=m.cup.rim_height,
+        reach=0.06,
+        spread_target=SPREAD_SHARE * window,
+        deadline=deadline,
+        lateral_speed=LATERAL_SHARE * move.v_max,
+    )
+    problem = FastProblem(
+        length=m.length,
+        theta_d=r.release_apex,
+        bounds=bounds,
+        travel=r.travel,
+        dt=r.dt,
+        horizon=SWING_HORIZON if r.max_time is None else r.max_time + 1.0,
+        release=True,
+        band=(1.0 - r.length_tol, 1.0 + r.length_tol) if r.length_tol > 0 else (),
+        scorer=release_score,
+        goal=goal,
+    )
     params, _ = optimise(problem, r.search)
     return simulate_fast(problem, params)
 
@@ -248,22 +291,27 @@ def _landings(model: StringModel, pivot: PivotMotion, lengths) -> list[tuple[flo
         t, b = np.array(rec[0]), np.array(rec[1])
         rel_z = b[:, 2] - pivot.x[-1, 2]
         top = int(np.argmax(rel_z))
-        down = np.flatnonzero((rel_z[top:-1] >= model.cup.rim_height) & (rel_z[top + 1:] < model.cup.rim_height))
+        down = np.flatnonzero((rel_z[top:-1] >= model.cup.rim_height) & (rel_z[top + 1 :] < model.cup.rim_height))
         if down.size:
             i = top + int(down[0])
             w = (rel_z[i] - model.cup.rim_height) / (rel_z[i] - rel_z[i + 1])
             y = b[i, 1] + w * (b[i + 1, 1] - b[i, 1]) - pivot.x[0, 1]
-            out.append((float(t[i] + w * (t[i + 1] - t[i])), float(y), float((b[i + 1, 1] - b[i, 1]) / (t[i + 1] - t[i]))))
+            out.append(
+                (float(t[i] + w * (t[i + 1] - t[i])), float(y), float((b[i + 1, 1] - b[i, 1]) / (t[i + 1] - t[i])))
+            )
     return out
 
 
-def _search_catch(r: CatchRequest, rel: Release, p0: np.ndarray, axis: np.ndarray, by: TaskBounds,
-                  bz: TaskBounds) -> CatchMove:
+def _search_catch(
+    r: CatchRequest, rel: Release, p0: np.ndarray, axis: np.ndarray, by: TaskBounds, bz: TaskBounds
+) -> CatchMove:
     """Grid, then Nelder–Mead, over the catch move's time, position and velocity; judged on the length band."""
     from scipy.optimize import minimize
 
     m = r.model
-    lengths = tuple(m.length * (1 + r.length_tol * np.linspace(-1.0, 1.0, SEARCH_LENGTHS))) if r.length_tol else (m.length,)
+    lengths = (
+        tuple(m.length * (1 + r.length_tol * np.linspace(-1.0, 1.0, SEARCH_LENGTHS))) if r.length_tol else (m.length,)
+    )
     shifts = (-r.dt, 0.0, r.dt) if r.timing else (0.0,)
     members = tuple(BandMember(float(ln), m.ball.mass, s) for ln in lengths for s in shifts)
     t_start = rel.t_start
@@ -278,8 +326,14 @@ def _search_catch(r: CatchRequest, rel: Release, p0: np.ndarray, axis: np.ndarra
     cache: dict[tuple, float] = {}
 
     def move_of(x) -> CatchMove:
-        return CatchMove(t_start, max(float(x[0]), t_start + r.dt), float(np.clip(x[1], -r.travel, r.travel)),
-                         float(np.clip(x[2], -r.z_travel, r.z_travel)), float(x[3]), float(x[4]))
+        return CatchMove(
+            t_start,
+            max(float(x[0]), t_start + r.dt),
+            float(np.clip(x[1], -r.travel, r.travel)),
+            float(np.clip(x[2], -r.z_travel, r.z_travel)),
+            float(x[3]),
+            float(x[4]),
+        )
 
     def score(x) -> float:
         key = tuple(np.round(x, 5))
@@ -306,8 +360,12 @@ def _search_catch(r: CatchRequest, rel: Release, p0: np.ndarray, axis: np.ndarra
                     best = (s, x)
     x0 = best[1]
     simplex = [x0] + [x0 + d for d in np.diag([0.02, 0.01, 0.01, 0.2, 0.1])]
-    res = minimize(lambda x: -score(x), x0, method="Nelder-Mead",
-                   options={"maxfev": r.catch_evaluations, "initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-3})
+    res = minimize(
+        lambda x: -score(x),
+        x0,
+        method="Nelder-Mead",
+        options={"maxfev": r.catch_evaluations, "initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-3},
+    )
     return move_of(res.x if -res.fun >= best[0] else x0)
 
 
@@ -327,8 +385,9 @@ def _rescaled(bounds: TaskBounds, peaks: dict[str, float], target: float) -> Tas
     return TaskBounds(bounds.v_max * f["velocity"], bounds.a_max * f["acceleration"], bounds.j_max * f["jerk"])
 
 
-def judge_path(r: CatchRequest, traj: JointTrajectory, robot: Robot, t_start: float,
-               members: tuple[BandMember, ...] | None = None) -> tuple[BallRun, CatchOutcome, BandResult]:
+def judge_path(
+    r: CatchRequest, traj: JointTrajectory, robot: Robot, t_start: float, members: tuple[BandMember, ...] | None = None
+) -> tuple[BallRun, CatchOutcome, BandResult]:
     """The verdict on a joint path: the event-driven prediction of the nominal ball under the TCP path the joints
     realise, and every band member stepped along the same path (from ``t_start`` on they share nothing)."""
     pos, rot = robot.fk_path(traj.q)
@@ -337,9 +396,16 @@ def judge_path(r: CatchRequest, traj: JointTrajectory, robot: Robot, t_start: fl
     end = float(traj.t[-1])
     run = simulate_string(r.model, pivot, end)
     nominal = outcome(run.events, run.final_phase == RESTING, run.final_inside)
-    members = members or band_members(r.model.length, r.model.ball.mass, r.dt, r.length_tol, r.mass_tol,
-                                      n_length=BAND_LENGTHS if r.length_tol else 1, n_mass=3 if r.mass_tol else 1,
-                                      timing=r.timing)
+    members = members or band_members(
+        r.model.length,
+        r.model.ball.mass,
+        r.dt,
+        r.length_tol,
+        r.mass_tol,
+        n_length=BAND_LENGTHS if r.length_tol else 1,
+        n_mass=3 if r.mass_tol else 1,
+        timing=r.timing,
+    )
     band = prepare_band(r.model, members, pivot, min(t_start, end))
     return run, nominal, BandResult(members, tuple(judge_band(r.model, band, pivot, end)))
 
@@ -353,8 +419,10 @@ def plan_catch(r: CatchRequest, robot: Robot, limits: JointLimits, progress=None
     axis = cup_axis_at_start(robot, r.model, r.q_start)
     tilt = math.acos(max(-1.0, min(1.0, float(axis[2]))))
     if tilt > MAX_AXIS_TILT:
-        raise PlanningError(f"the cup opens {math.degrees(tilt):.0f}° away from straight up at the start pose; the "
-                            f"catch needs it within {math.degrees(MAX_AXIS_TILT):.0f}° (--cup-axis, --q-start)")
+        raise PlanningError(
+            f"the cup opens {math.degrees(tilt):.0f}° away from straight up at the start pose; the "
+            f"catch needs it within {math.degrees(MAX_AXIS_TILT):.0f}° (--cup-axis, --q-start)"
+        )
     setup = ArmSetup(q_start=tuple(float(v) for v in r.q_start), orientation="follow")
     p0 = robot.fk(np.asarray(r.q_start, dtype=float)).translation
     try:
@@ -397,6 +465,18 @@ def plan_catch(r: CatchRequest, robot: Robot, limits: JointLimits, progress=None
             my, bz = _rescaled(my, move_peak, target), _rescaled(bz, move_peak, target)
     swing, move, path, traj, ik_err, report, t_start, (by, my, bz) = last
     run, nominal, band = judge_path(r, traj, robot, t_start)
-    return CatchResult(request=r, swing=swing, move=move, path=path, trajectory=traj, check=report, prediction=run,
-                       nominal=nominal, band=band, bounds=(by, my, bz), max_ik_error=ik_err,
-                       planning_time=time.perf_counter() - start, notes=tuple(notes))
+    return CatchResult(
+        request=r,
+        swing=swing,
+        move=move,
+        path=path,
+        trajectory=traj,
+        check=report,
+        prediction=run,
+        nominal=nominal,
+        band=band,
+        bounds=(by, my, bz),
+        max_ik_error=ik_err,
+        planning_time=time.perf_counter() - start,
+        notes=tuple(notes),
+    )

@@ -136,8 +136,10 @@ def release_score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
     thetas = np.vstack([plan.theta[None, :], band["theta"]])
     rates = np.vstack([plan.theta_dot[None, :], band["theta_dot"]])
     moving = plan.t <= plan.t_rest + 1e-9
-    min_tension = min(float(tension_margin(th[moving], om[moving], plan.u[moving], 0.0, ln).min())
-                      for ln, th, om in zip(lengths, thetas, rates))
+    min_tension = min(
+        float(tension_margin(th[moving], om[moving], plan.u[moving], 0.0, ln).min())
+        for ln, th, om in zip(lengths, thetas, rates)
+    )
     penalty = 0.0
     landed = []
     for ln, g in zip(lengths, ground_landings(problem, plan, goal.height)):
@@ -162,6 +164,10 @@ def release_score(problem: FastProblem, plan: PivotPlan) -> FastOutcome:
     if max_travel > problem.travel:
         penalty += 100.0 + 100.0 * (max_travel - problem.travel)
     t_release = landed[0].t_release if landed else problem.horizon + 3.0
-    cost = (penalty + t_release + goal.spread_weight * max(0.0, spread - goal.spread_target)
-            + 1000.0 * max(0.0, t_release - goal.deadline))
+    cost = (
+        penalty
+        + t_release
+        + goal.spread_weight * max(0.0, spread - goal.spread_target)
+        + 1000.0 * max(0.0, t_release - goal.deadline)
+    )
     return FastOutcome(landed[0].t_release if landed else None, spread, max_travel, min_tension, cost)

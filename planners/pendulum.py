@@ -33,7 +33,11 @@ def direction_from_angles(theta_x: float = 0.0, theta_y: float = 0.0) -> np.ndar
 
 
 def rhs(
-    s: np.ndarray, sdot: np.ndarray, pivot_acc: np.ndarray, length: float, damping: float = 0.0,
+    s: np.ndarray,
+    sdot: np.ndarray,
+    pivot_acc: np.ndarray,
+    length: float,
+    damping: float = 0.0,
     constraint_rate: float = 0.0,
 ) -> np.ndarray:
     """s̈ for string direction s, its rate ṡ [1/s] and pivot acceleration p̈ [m/s²]; ``damping`` [1/s] on ṡ.
@@ -182,7 +186,13 @@ def simulate(
 
     times = np.asarray(times, dtype=float)
     sol = solve_ivp(
-        f, (times[0], times[-1]), np.concatenate([s0, v0]), method="DOP853", t_eval=times, rtol=rtol, atol=atol,
+        f,
+        (times[0], times[-1]),
+        np.concatenate([s0, v0]),
+        method="DOP853",
+        t_eval=times,
+        rtol=rtol,
+        atol=atol,
         max_step=max_step,
     )
     if not sol.success:

@@ -64,10 +64,16 @@ class Rail:
         # per-segment spline coefficients and joint bounds as Python lists: local_bounds runs every FRI cycle, and
         # on 7 numbers plain floats are several times faster than numpy calls
         c = self.coeffs
-        object.__setattr__(self, "_segments", [(c[0, i].tolist(), c[1, i].tolist(), c[2, i].tolist(), c[3, i].tolist())
-                                               for i in range(c.shape[1])])
-        object.__setattr__(self, "_joint_bounds", list(zip(self.joint_velocity.tolist(), self.joint_acceleration.tolist(),
-                                                           self.joint_jerk.tolist())))
+        object.__setattr__(
+            self,
+            "_segments",
+            [(c[0, i].tolist(), c[1, i].tolist(), c[2, i].tolist(), c[3, i].tolist()) for i in range(c.shape[1])],
+        )
+        object.__setattr__(
+            self,
+            "_joint_bounds",
+            list(zip(self.joint_velocity.tolist(), self.joint_acceleration.tolist(), self.joint_jerk.tolist())),
+        )
 
     def local_bounds(self, x: float, v: float, a: float) -> tuple[float, float, float, float, float]:
         """Cart bounds at position x [m], velocity v [m/s], acceleration a [m/s²] from the joints' own:
@@ -130,5 +136,13 @@ def build_rail(robot: Robot, q_start, limits: JointLimits, travel: float = 0.3, 
     spline = CubicSpline(x, q, axis=0, bc_type="natural")
     b = axis_bounds(robot, setup, limits, travel, margin=margin)
     lim = limits.scaled(1.0 - margin)
-    return Rail(setup.q_start, x, np.ascontiguousarray(spline.c), CartLimits(travel, b.v_max, b.a_max, b.j_max),
-                orientation, lim.velocity, lim.acceleration, lim.jerk)
+    return Rail(
+        setup.q_start,
+        x,
+        np.ascontiguousarray(spline.c),
+        CartLimits(travel, b.v_max, b.a_max, b.j_max),
+        orientation,
+        lim.velocity,
+        lim.acceleration,
+        lim.jerk,
+    )

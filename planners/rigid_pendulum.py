@@ -37,8 +37,12 @@ class RigidPendulum:
             raise ValueError(f"rod length must be 0.05..2 m, got {self.rod_length:g}")
         if not (math.isfinite(self.rod_mass) and self.rod_mass >= 0 and math.isfinite(self.tip_mass)
                 and self.tip_mass >= 0 and self.rod_mass + self.tip_mass > 0):  # fmt: skip
-            raise ValueError(f"rod mass and tip mass must be >= 0 kg and not both 0, got {self.rod_mass:g}, {self.tip_mass:g}")
-        if not (math.isfinite(self.viscous) and self.viscous >= 0 and math.isfinite(self.coulomb) and self.coulomb >= 0):
+            raise ValueError(
+                f"rod mass and tip mass must be >= 0 kg and not both 0, got {self.rod_mass:g}, {self.tip_mass:g}"
+            )
+        if not (
+            math.isfinite(self.viscous) and self.viscous >= 0 and math.isfinite(self.coulomb) and self.coulomb >= 0
+        ):
             raise ValueError(f"bearing friction must be >= 0, got {self.viscous:g} N·m·s/rad, {self.coulomb:g} N·m")
 
     @property

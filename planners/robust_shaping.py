@@ -123,7 +123,12 @@ def solve_at_duration(
     cost = np.zeros(nv)
     cost[-1] = 1.0
     res = linprog(
-        cost, A_ub=vstack(A_ub).tocsr(), b_ub=np.concatenate(b_ub), A_eq=A_eq, b_eq=b_eq, bounds=bounds,
+        cost,
+        A_ub=vstack(A_ub).tocsr(),
+        b_ub=np.concatenate(b_ub),
+        A_eq=A_eq,
+        b_eq=b_eq,
+        bounds=bounds,
         method="highs",
     )
     if res.status != 0:
@@ -145,8 +150,14 @@ def _normalised(prof: RampProfile) -> RampProfile:
 
 
 def robust_profile(
-    s: float, spec: RobustSpec, a_max: float, j_max: float, v_max: float, max_duration: float | None = None,
-    min_duration: float = 0.0, rel_tol: float = 0.01,
+    s: float,
+    spec: RobustSpec,
+    a_max: float,
+    j_max: float,
+    v_max: float,
+    max_duration: float | None = None,
+    min_duration: float = 0.0,
+    rel_tol: float = 0.01,
 ) -> tuple[RampProfile, float]:
     """Shortest profile (bisection on D) whose band residual is ≤ spec.residual → (profile, residual bound [rad]).
 
@@ -245,6 +256,12 @@ def nonlinear_phasor(profile, omega: np.ndarray, step: float = 0.004) -> tuple[n
 
 
 __all__ = [
-    "RobustSpec", "robust_profile", "solve_at_duration", "planar_band", "planar_run", "free_amplitude",
-    "linear_residual_phasor", "nonlinear_phasor",
+    "RobustSpec",
+    "robust_profile",
+    "solve_at_duration",
+    "planar_band",
+    "planar_run",
+    "free_amplitude",
+    "linear_residual_phasor",
+    "nonlinear_phasor",
 ]

@@ -42,7 +42,9 @@ PHASE_NAMES = {TAUT: "taut", SLACK: "slack", IN_CUP: "in the cup"}
 class Ball:
     """A sphere: radius [m], mass [kg], drag coefficient C_d [-] and air density [kg/m³]."""
 
-    radius: float = 0.01  # [m] (assumed: the thesis gives the mass, not the size; see docs/explanations/string-physics.md)
+    radius: float = (
+        0.01  # [m] (assumed: the thesis gives the mass, not the size; see docs/explanations/string-physics.md)
+    )
     mass: float = 0.0139  # [kg] thesis §5.2
     drag_coefficient: float = 0.47  # smooth sphere
     air_density: float = 1.2  # [kg/m³]
@@ -103,13 +105,29 @@ class StringModel:
     def validate(self) -> None:
         """ValueError naming the first value out of range."""
         checks = [
-            (all(math.isfinite(v) for v in (self.length, self.ball.radius, self.ball.mass, self.retension,
-                                            self.restitution, self.friction, self.rest_speed, self.damping)),
-             "values must be finite"),
+            (
+                all(
+                    math.isfinite(v)
+                    for v in (
+                        self.length,
+                        self.ball.radius,
+                        self.ball.mass,
+                        self.retension,
+                        self.restitution,
+                        self.friction,
+                        self.rest_speed,
+                        self.damping,
+                    )
+                ),
+                "values must be finite",
+            ),
             (self.length > 0, f"string length must be > 0 m, got {self.length:g}"),
             (self.ball.radius > 0, f"ball radius must be > 0 m, got {self.ball.radius:g}"),
             (self.ball.mass > 0, f"ball mass must be > 0 kg, got {self.ball.mass:g}"),
-            (self.ball.drag_coefficient >= 0 and self.ball.air_density >= 0, "drag coefficient and air density must be >= 0"),
+            (
+                self.ball.drag_coefficient >= 0 and self.ball.air_density >= 0,
+                "drag coefficient and air density must be >= 0",
+            ),
             (0.0 <= self.retension <= 1.0, f"re-tension coefficient must be in [0, 1], got {self.retension:g}"),
             (0.0 <= self.restitution <= 1.0, f"restitution must be in [0, 1], got {self.restitution:g}"),
             (self.friction >= 0.0, f"friction must be >= 0, got {self.friction:g}"),
@@ -120,14 +138,21 @@ class StringModel:
         if c is not None:
             n = math.sqrt(sum(x * x for x in c.axis))
             checks += [
-                (c.inner_radius > self.ball.radius, f"the cup's inner radius {c.inner_radius:g} m must exceed the "
-                                                    f"ball radius {self.ball.radius:g} m"),
+                (
+                    c.inner_radius > self.ball.radius,
+                    f"the cup's inner radius {c.inner_radius:g} m must exceed the ball radius {self.ball.radius:g} m",
+                ),
                 (c.wall > 0, f"cup wall must be > 0 m, got {c.wall:g}"),
-                (0 < c.depth <= c.rim_height, f"cup depth must be in (0, rim height {c.rim_height:g}] m, got {c.depth:g}"),
+                (
+                    0 < c.depth <= c.rim_height,
+                    f"cup depth must be in (0, rim height {c.rim_height:g}] m, got {c.depth:g}",
+                ),
                 (n > 0.5, "cup axis must be a non-zero direction"),
-                (self.length > c.extent + self.ball.radius,
-                 f"string length {self.length:g} m must exceed the cup's extent + ball radius "
-                 f"({c.extent + self.ball.radius:.3f} m)"),
+                (
+                    self.length > c.extent + self.ball.radius,
+                    f"string length {self.length:g} m must exceed the cup's extent + ball radius "
+                    f"({c.extent + self.ball.radius:.3f} m)",
+                ),
             ]
         for ok, message in checks:
             if not ok:
@@ -148,6 +173,7 @@ class StringModel:
 
 # -- small vector helpers on 3-tuples ------------------------------------------------------------------------------
 
+
 def dot(a: Vec3, b: Vec3) -> float:
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
@@ -167,6 +193,7 @@ def axpy(k: float, x: Vec3, y: Vec3) -> Vec3:
 
 # -- the laws ------------------------------------------------------------------------------------------------------
 
+
 def drag_accel(v: Vec3, drag: float) -> Vec3:
     """Air drag acceleration −k·|v|·v [m/s²] of a ball moving at v [m/s] in still air."""
     if drag == 0.0:
@@ -175,8 +202,9 @@ def drag_accel(v: Vec3, drag: float) -> Vec3:
     return (k * v[0], k * v[1], k * v[2])
 
 
-def taut_accel(s: Vec3, sdot: Vec3, pivot_vel: Vec3, pivot_acc: Vec3, length: float, drag: float,
-               damping: float = 0.0) -> Vec3:
+def taut_accel(
+    s: Vec3, sdot: Vec3, pivot_vel: Vec3, pivot_acc: Vec3, length: float, drag: float, damping: float = 0.0
+) -> Vec3:
     """s̈ [1/s²] of the taut string: the spherical pendulum (``pendulum.rhs``, viscous ``damping`` [1/s]) plus the
     tangential drag / l."""
     sdd = _rhs_floats(s, sdot, pivot_acc, length, damping)
@@ -268,7 +296,9 @@ def entry_margin(rel: Vec3, axis: Vec3, cup: Cup, ball_radius: float) -> float:
     return cup.inner_radius - ball_radius - norm(axpy(-z, axis, rel))
 
 
-def contact_outcome(rel: Vec3, v_rel: Vec3, pivot_acc: Vec3, axis: Vec3, model: StringModel) -> tuple[bool, Vec3, int, float]:
+def contact_outcome(
+    rel: Vec3, v_rel: Vec3, pivot_acc: Vec3, axis: Vec3, model: StringModel
+) -> tuple[bool, Vec3, int, float]:
     """What a touch of the cup does to the ball at ``rel`` = b − p with relative velocity ``v_rel``:
     (rests, new relative velocity, profile segment, normal approach speed [m/s]).
 

@@ -64,9 +64,17 @@ def cup_sdf(rel: np.ndarray, axis: np.ndarray, model: StringModel) -> np.ndarray
     return np.minimum(bottom, wall)
 
 
-def judge(models: list[StringModel], t: np.ndarray, positions: np.ndarray, axes: np.ndarray, t_end: float,
-          dt: float = 4e-5, shifts: np.ndarray | None = None, sample_every: float = 0.005,
-          v0: np.ndarray | None = None) -> PenaltyRun:
+def judge(
+    models: list[StringModel],
+    t: np.ndarray,
+    positions: np.ndarray,
+    axes: np.ndarray,
+    t_end: float,
+    dt: float = 4e-5,
+    shifts: np.ndarray | None = None,
+    sample_every: float = 0.005,
+    v0: np.ndarray | None = None,
+) -> PenaltyRun:
     """Simulate each case (a model: length, ball, cup, coefficients) from the ball hanging under the anchor (at rest,
     or with velocity ``v0`` (k, 3) [m/s]) along the anchor path sampled at times t (n,) [s] with positions (n, 3) [m]
     and cup axes (n, 3) (base frame), to t_end [s]. ``shifts`` (k,) [s]: once a case's string first goes slack its
@@ -133,7 +141,9 @@ def judge(models: list[StringModel], t: np.ndarray, positions: np.ndarray, axes:
                 for c in range(3):
                     dp = np.zeros((len(j), 3))
                     dp[:, c] = eps
-                    grad[:, c] = (cup_sdf(rel[j] + dp, axis[j], models[0]) - cup_sdf(rel[j] - dp, axis[j], models[0])) / (2 * eps)
+                    grad[:, c] = (
+                        cup_sdf(rel[j] + dp, axis[j], models[0]) - cup_sdf(rel[j] - dp, axis[j], models[0])
+                    ) / (2 * eps)
                 nrm = grad / np.maximum(np.linalg.norm(grad, axis=1), 1e-12)[:, None]
                 vn = np.einsum("ij,ij->i", vrel[j], nrm)
                 fn = np.maximum(w_c**2 * pen[j] - 2 * zeta_c[j] * w_c * vn, 0.0)
@@ -149,8 +159,11 @@ def judge(models: list[StringModel], t: np.ndarray, positions: np.ndarray, axes:
                 rho_cross[down] = rho[down]
                 speed_cross[down] = np.linalg.norm(vrel[down], axis=1)
             prev_height = height
-            inside = (height < 0) & (height > models[0].cup.bottom_height - models[0].cup.rim_height) & (
-                rho < models[0].cup.inner_radius)
+            inside = (
+                (height < 0)
+                & (height > models[0].cup.bottom_height - models[0].cup.rim_height)
+                & (rho < models[0].cup.inner_radius)
+            )
             t_inside[np.isnan(t_inside) & inside] = tt
         v = v + dt * acc
         b = b + dt * v
@@ -166,5 +179,4 @@ def judge(models: list[StringModel], t: np.ndarray, positions: np.ndarray, axes:
         rho = np.linalg.norm(rel - z[:, None] * axis, axis=1)
         slow = np.linalg.norm(v - path_v[n], axis=1) < 0.05
         caught = (z > c.bottom_height) & (z < c.rim_height) & (rho < c.inner_radius) & slow
-    return PenaltyRun(caught, t_inside, t_cross, rho_cross, speed_cross, t_slack, np.array(out_t),
-                      np.array(out_b))
+    return PenaltyRun(caught, t_inside, t_cross, rho_cross, speed_cross, t_slack, np.array(out_t), np.array(out_b))

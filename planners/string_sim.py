@@ -17,8 +17,25 @@ import numpy as np
 
 from .pendulum import HANGING, SampledAcceleration
 from .string_model import (
-    IN_CUP, RESTING, SLACK, TAUT, StringModel, Vec3, axpy, contact_outcome, cup_gap, dot, entry_margin, flight_accel,
-    in_cup, norm, rest_load, retension_outcome, sub, taut_accel, tension_per_mass,
+    IN_CUP,
+    RESTING,
+    SLACK,
+    TAUT,
+    StringModel,
+    Vec3,
+    axpy,
+    contact_outcome,
+    cup_gap,
+    dot,
+    entry_margin,
+    flight_accel,
+    in_cup,
+    norm,
+    rest_load,
+    retension_outcome,
+    sub,
+    taut_accel,
+    tension_per_mass,
 )
 
 MAX_EVENTS = 400  # contacts, releases and re-tensions in one run before it is cut short (a chattering ball)
@@ -170,8 +187,17 @@ class _Runner:
             return tension_per_mass(_as_tuple(y, 0), _as_tuple(y, 3), pvel, pacc, l, k)
 
         tension.terminal, tension.direction = True, -1
-        sol = solve_ivp(f, (t, self.t_end), (*s, *sd), method="DOP853", events=tension, dense_output=True,
-                        rtol=self.rtol, atol=self.atol, max_step=pv.h)
+        sol = solve_ivp(
+            f,
+            (t, self.t_end),
+            (*s, *sd),
+            method="DOP853",
+            events=tension,
+            dense_output=True,
+            rtol=self.rtol,
+            atol=self.atol,
+            max_step=pv.h,
+        )
         if sol.status < 0:
             raise RuntimeError(f"string simulation (taut) failed: {sol.message}")
         t1 = float(sol.t[-1])
@@ -186,8 +212,13 @@ class _Runner:
             p, pvel, _ = pv.state(te)
             b = axpy(self.l - _NUDGE, s1, p)
             v = axpy(self.l, sd1, pvel)
-            self.events.append(BallEvent(te, "slack", {"theta_deg": math.degrees(math.acos(max(-1.0, min(1.0, -s1[2])))),
-                                                       "speed_m_s": norm(v)}))
+            self.events.append(
+                BallEvent(
+                    te,
+                    "slack",
+                    {"theta_deg": math.degrees(math.acos(max(-1.0, min(1.0, -s1[2])))), "speed_m_s": norm(v)},
+                )
+            )
             return te, b, v
         return None
 
@@ -207,6 +238,7 @@ class _Runner:
         string.terminal, string.direction = True, 1
         events = [string]
         if cup is not None:
+
             def contact(tt, y):
                 return cup_gap(sub(_as_tuple(y, 0), pv.state(tt)[0]), pv.axis(tt), cup)[0] - r
 
@@ -216,8 +248,17 @@ class _Runner:
             contact.terminal, contact.direction = True, -1
             rim_plane.terminal, rim_plane.direction = False, -1
             events += [contact, rim_plane]
-        sol = solve_ivp(f, (t, self.t_end), (*b, *v), method="RK45", events=events, dense_output=True,
-                        rtol=self.rtol, atol=self.atol, max_step=min(pv.h, 1e-3))
+        sol = solve_ivp(
+            f,
+            (t, self.t_end),
+            (*b, *v),
+            method="RK45",
+            events=events,
+            dense_output=True,
+            rtol=self.rtol,
+            atol=self.atol,
+            max_step=min(pv.h, 1e-3),
+        )
         if sol.status < 0:
             raise RuntimeError(f"string simulation (slack) failed: {sol.message}")
         t1 = float(sol.t[-1])
@@ -237,12 +278,18 @@ class _Runner:
         p, pvel, _ = self.pv.state(t)
         ax = self.pv.axis(t)
         rel_v = sub(v, pvel)
-        self.events.append(BallEvent(t, "entry", {
-            "margin_m": entry_margin(sub(b, p), ax, self.cup, self.m.ball.radius),
-            "relative_speed_m_s": norm(rel_v),
-            "relative_axial_speed_m_s": -dot(rel_v, ax),
-            "relative_lateral_speed_m_s": norm(axpy(-dot(rel_v, ax), ax, rel_v)),
-        }))
+        self.events.append(
+            BallEvent(
+                t,
+                "entry",
+                {
+                    "margin_m": entry_margin(sub(b, p), ax, self.cup, self.m.ball.radius),
+                    "relative_speed_m_s": norm(rel_v),
+                    "relative_axial_speed_m_s": -dot(rel_v, ax),
+                    "relative_lateral_speed_m_s": norm(axpy(-dot(rel_v, ax), ax, rel_v)),
+                },
+            )
+        )
 
     # -- in the cup ---------------------------------------------------------------------------------------------
     def rest(self, t: float, offset: Vec3) -> tuple[float, Vec3, Vec3] | None:
@@ -396,6 +443,15 @@ def simulate_string(
         elif last[2] == SLACK:
             y = last[3](min(float(t_end), last[1]))
             inside = in_cup(sub(_as_tuple(y, 0), p), runner.pv.axis(float(t_end)), model.cup)
-    return BallRun(t=times, position=pos, velocity=vel, phase=phase, tension=tension, pivot=piv,
-                   events=tuple(sorted(runner.events, key=lambda e: e.t)), model=model, final_phase=final,
-                   final_inside=inside)
+    return BallRun(
+        t=times,
+        position=pos,
+        velocity=vel,
+        phase=phase,
+        tension=tension,
+        pivot=piv,
+        events=tuple(sorted(runner.events, key=lambda e: e.t)),
+        model=model,
+        final_phase=final,
+        final_inside=inside,
+    )

@@ -16,8 +16,25 @@ from __future__ import annotations
 import math
 
 from .string_model import (
-    IN_CUP, RESTING, SLACK, TAUT, StringModel, Vec3, axpy, contact_outcome, cup_gap, dot, entry_margin, flight_accel,
-    in_cup, norm, rest_load, retension_outcome, sub, taut_accel, tension_per_mass,
+    IN_CUP,
+    RESTING,
+    SLACK,
+    TAUT,
+    StringModel,
+    Vec3,
+    axpy,
+    contact_outcome,
+    cup_gap,
+    dot,
+    entry_margin,
+    flight_accel,
+    in_cup,
+    norm,
+    rest_load,
+    retension_outcome,
+    sub,
+    taut_accel,
+    tension_per_mass,
 )
 from .string_sim import BallEvent
 
@@ -37,10 +54,15 @@ class Interval:
     def at(self, tau: float) -> tuple[Vec3, Vec3, Vec3]:
         p0, v0, a0, j = self.p0, self.v0, self.a0, self.j
         t2, t3 = 0.5 * tau * tau, tau * tau * tau / 6.0
-        return ((p0[0] + v0[0] * tau + a0[0] * t2 + j[0] * t3, p0[1] + v0[1] * tau + a0[1] * t2 + j[1] * t3,
-                 p0[2] + v0[2] * tau + a0[2] * t2 + j[2] * t3),
-                (v0[0] + a0[0] * tau + j[0] * t2, v0[1] + a0[1] * tau + j[1] * t2, v0[2] + a0[2] * tau + j[2] * t2),
-                (a0[0] + j[0] * tau, a0[1] + j[1] * tau, a0[2] + j[2] * tau))
+        return (
+            (
+                p0[0] + v0[0] * tau + a0[0] * t2 + j[0] * t3,
+                p0[1] + v0[1] * tau + a0[1] * t2 + j[1] * t3,
+                p0[2] + v0[2] * tau + a0[2] * t2 + j[2] * t3,
+            ),
+            (v0[0] + a0[0] * tau + j[0] * t2, v0[1] + a0[1] * tau + j[1] * t2, v0[2] + a0[2] * tau + j[2] * t2),
+            (a0[0] + j[0] * tau, a0[1] + j[1] * tau, a0[2] + j[2] * tau),
+        )
 
 
 def _add(a: Vec3, b: Vec3, k: float) -> Vec3:
@@ -82,8 +104,14 @@ class StringStepper:
     changes). ``events`` collects what happened (``string_sim.BallEvent``).
     """
 
-    def __init__(self, model: StringModel, p0: Vec3, axis: Vec3 = (0.0, 0.0, 1.0), s0: Vec3 = (0.0, 0.0, -1.0),
-                 sdot0: Vec3 = (0.0, 0.0, 0.0)) -> None:
+    def __init__(
+        self,
+        model: StringModel,
+        p0: Vec3,
+        axis: Vec3 = (0.0, 0.0, 1.0),
+        s0: Vec3 = (0.0, 0.0, -1.0),
+        sdot0: Vec3 = (0.0, 0.0, 0.0),
+    ) -> None:
         model.validate()
         self.m = model
         self.l, self.k, self.cup, self.r = model.length, model.drag, model.cup, model.ball.radius
@@ -193,8 +221,13 @@ class StringStepper:
         s, sd = self.s, self.sd
         self.b, self.v = axpy(self.l - _NUDGE, s, p), axpy(self.l, sd, pv)
         self.phase = SLACK
-        self.events.append(BallEvent(self.t + tau, "slack", {
-            "theta_deg": math.degrees(math.acos(max(-1.0, min(1.0, -s[2])))), "speed_m_s": norm(self.v)}))
+        self.events.append(
+            BallEvent(
+                self.t + tau,
+                "slack",
+                {"theta_deg": math.degrees(math.acos(max(-1.0, min(1.0, -s[2])))), "speed_m_s": norm(self.v)},
+            )
+        )
 
     def _slack(self, iv: Interval, tau: float, h: float) -> float:
         k, l, cup, r = self.k, self.l, self.cup, self.r
@@ -266,12 +299,18 @@ class StringStepper:
             p, pv, _ = iv.at(tau + u * dt)
             rel_v = sub(v, pv)
             ax = self.axis
-            self.events.append(BallEvent(self.t + tau + u * dt, "entry", {
-                "margin_m": entry_margin(sub(b, p), ax, cup, self.r),
-                "relative_speed_m_s": norm(rel_v),
-                "relative_axial_speed_m_s": -dot(rel_v, ax),
-                "relative_lateral_speed_m_s": norm(axpy(-dot(rel_v, ax), ax, rel_v)),
-            }))
+            self.events.append(
+                BallEvent(
+                    self.t + tau + u * dt,
+                    "entry",
+                    {
+                        "margin_m": entry_margin(sub(b, p), ax, cup, self.r),
+                        "relative_speed_m_s": norm(rel_v),
+                        "relative_axial_speed_m_s": -dot(rel_v, ax),
+                        "relative_lateral_speed_m_s": norm(axpy(-dot(rel_v, ax), ax, rel_v)),
+                    },
+                )
+            )
 
     def _rest(self, iv: Interval, tau: float, h: float) -> float:
         _, _, a1 = iv.at(h)
@@ -307,9 +346,18 @@ def _root(f) -> float:
     return hi
 
 
-def step_path(model: StringModel, pivot, t_end: float, substeps: int = 1, *, s0: Vec3 = (0.0, 0.0, -1.0),
-              sdot0: Vec3 = (0.0, 0.0, 0.0), state: StringStepper | None = None, shift: float = 0.0,
-              record: bool = False):
+def step_path(
+    model: StringModel,
+    pivot,
+    t_end: float,
+    substeps: int = 1,
+    *,
+    s0: Vec3 = (0.0, 0.0, -1.0),
+    sdot0: Vec3 = (0.0, 0.0, 0.0),
+    state: StringStepper | None = None,
+    shift: float = 0.0,
+    record: bool = False,
+):
     """Step the ball along a ``string_sim.PivotMotion`` to ``t_end`` [s], ``substeps`` intervals per sample step:
     from the pivot's first sample (hanging, or s0, ṡ0), or on from ``state`` (a stepper at its time ``t``, which is
     advanced in place). ``shift`` [s]: once the ball is slack the anchor is read at t − shift — the cup's motion

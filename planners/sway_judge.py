@@ -29,8 +29,9 @@ def judge_sway(pos: np.ndarray, dt: float, length: float, stop_time: float, sett
         return np.concatenate([v, force - (s @ force) * s - (v @ v) * s])
 
     end = max(t[-1], stop_time) + settle_periods * 2 * math.pi * math.sqrt(length / 9.81)
-    sol = solve_ivp(f, (0.0, end), [0, 0, -1, 0, 0, 0], method="DOP853", rtol=1e-10, atol=1e-12, max_step=dt,
-                    dense_output=True)
+    sol = solve_ivp(
+        f, (0.0, end), [0, 0, -1, 0, 0, 0], method="DOP853", rtol=1e-10, atol=1e-12, max_step=dt, dense_output=True
+    )
     tt = np.arange(0.0, end, dt / 2)
     s = sol.sol(tt)[:3]
     theta = np.degrees(np.arccos(np.clip(-s[2] / np.linalg.norm(s, axis=0), -1.0, 1.0)))

@@ -48,8 +48,9 @@ def simulate_sampled(
     return PendulumRun(t=times, s=S, sdot=Vd, tension=tension_per_mass(S, Vd, a[1:], length), length=length)
 
 
-def band_sweep(t: np.ndarray, positions: np.ndarray, lengths: np.ndarray, stop_time: float, end_time: float,
-               substep: float = 0.001) -> tuple[np.ndarray, np.ndarray]:
+def band_sweep(
+    t: np.ndarray, positions: np.ndarray, lengths: np.ndarray, stop_time: float, end_time: float, substep: float = 0.001
+) -> tuple[np.ndarray, np.ndarray]:
     """The same driven spherical pendulum for many string lengths (k,) [m] at once (numpy, RK4 sub-steps ≤ ``substep``
     [s]): the largest tilt after ``stop_time`` (the residual) and over the whole run (the peak), both (k,) [rad].
 

@@ -125,8 +125,11 @@ class SwingUpResult:
             **self.check.plan_figures(self.trajectory),
             "t_rest_s": plan.t_rest,
             "max_travel_m": float(np.max(np.abs(plan.x))),
-            "bounds": {"v_max_m_s": self.bounds.v_max, "a_max_m_s2": self.bounds.a_max,
-                       "j_max_m_s3": self.bounds.j_max},
+            "bounds": {
+                "v_max_m_s": self.bounds.v_max,
+                "a_max_m_s2": self.bounds.a_max,
+                "j_max_m_s3": self.bounds.j_max,
+            },
             "max_ik_error_m": self.max_ik_error,
             "planning_time_s": self.planning_time,
             "claimed": {
@@ -144,8 +147,12 @@ class SwingUpResult:
             )
         if plan.method == "fast":
             p = plan.info["params"]
-            figures["fast_params"] = {"speed": p.speed, "first_speed": p.first_speed, "centring": p.centring,
-                                      "apex_offset_deg": math.degrees(p.apex_offset)}
+            figures["fast_params"] = {
+                "speed": p.speed,
+                "first_speed": p.first_speed,
+                "centring": p.centring,
+                "apex_offset_deg": math.degrees(p.apex_offset),
+            }
             figures["attempts"] = self.attempts
         if self.notes:
             figures["notes"] = list(self.notes)
@@ -163,20 +170,42 @@ class SwingUpResult:
         if not self.check.ok:
             reasons.append("joint limits violated: " + "; ".join(v.describe() for v in self.check.failing[:3]))
         if self.request.taut and not self.taut_until_reach:
-            reasons.append(f"the string goes slack at {self.verification.first_slack:.3f} s, "
-                           f"{math.degrees(self.verification.max_taut_theta):.1f}° high, before θ_d")
+            reasons.append(
+                f"the string goes slack at {self.verification.first_slack:.3f} s, "
+                f"{math.degrees(self.verification.max_taut_theta):.1f}° high, before θ_d"
+            )
         return "; ".join(reasons) or None
 
 
 def _energy_params(r: SwingUpRequest, theta_d: float) -> EnergyParams:
-    return EnergyParams(length=r.length, mass=r.mass, theta_d=theta_d, k_e=r.k_e, k_p=r.k_p, k_d=r.k_d,
-                        theta0=r.theta0, push=r.push, duration=r.duration or 60.0, dt=r.dt, tolerance=r.tolerance)
+    return EnergyParams(
+        length=r.length,
+        mass=r.mass,
+        theta_d=theta_d,
+        k_e=r.k_e,
+        k_p=r.k_p,
+        k_d=r.k_d,
+        theta0=r.theta0,
+        push=r.push,
+        duration=r.duration or 60.0,
+        dt=r.dt,
+        tolerance=r.tolerance,
+    )
 
 
 def _fast_problem(r: SwingUpRequest, bounds: TaskBounds) -> FastProblem:
-    return FastProblem(length=r.length, theta_d=r.theta_d, bounds=bounds, travel=r.travel, dt=r.dt,
-                       horizon=r.duration or 10.0, tolerance=r.tolerance, theta0=r.theta0, taut=r.taut,
-                       min_tension=r.min_tension)
+    return FastProblem(
+        length=r.length,
+        theta_d=r.theta_d,
+        bounds=bounds,
+        travel=r.travel,
+        dt=r.dt,
+        horizon=r.duration or 10.0,
+        tolerance=r.tolerance,
+        theta0=r.theta0,
+        taut=r.taut,
+        min_tension=r.min_tension,
+    )
 
 
 def _highest_taut_energy(r: SwingUpRequest, bounds: TaskBounds) -> tuple[PivotPlan, float | None]:
@@ -197,8 +226,17 @@ def _highest_taut_energy(r: SwingUpRequest, bounds: TaskBounds) -> tuple[PivotPl
     return best, best.max_theta
 
 
-def _fast_on_arm(r: SwingUpRequest, robot: Robot, setup: ArmSetup, limits: JointLimits, bounds: TaskBounds,
-                 notes: list[str], progress=None, max_attempts: int = 4, governor: bool = False):
+def _fast_on_arm(
+    r: SwingUpRequest,
+    robot: Robot,
+    setup: ArmSetup,
+    limits: JointLimits,
+    bounds: TaskBounds,
+    notes: list[str],
+    progress=None,
+    max_attempts: int = 4,
+    governor: bool = False,
+):
     """Fast plan whose joint path passes the check (jerk included), with the bounds fitted to the arm.
 
     The first bounds come from the Jacobian over the band (first order, optimistic); while the joint path breaks
@@ -223,12 +261,15 @@ def _fast_on_arm(r: SwingUpRequest, robot: Robot, setup: ArmSetup, limits: Joint
         factor = {q: min(1.5, target / max(v, 1e-6)) for q, v in ratios.items()}
         if not report.ok:
             factor = {q: min(1.0, f) for q, f in factor.items()}
-        notes.append(f"attempt {attempt}: reach {_fmt(plan.t_reach)}, limits {'ok' if report.ok else 'violated'}, "
-                     "peak ratios " + ", ".join(f"{q} {v:.2f}" for q, v in ratios.items()))
+        notes.append(
+            f"attempt {attempt}: reach {_fmt(plan.t_reach)}, limits {'ok' if report.ok else 'violated'}, "
+            "peak ratios " + ", ".join(f"{q} {v:.2f}" for q, v in ratios.items())
+        )
         if report.ok and max(ratios.values()) >= 0.85 * target:
             break  # within the limits and one of them nearly used: the bounds fit the arm
-        bounds = TaskBounds(bounds.v_max * factor["velocity"], bounds.a_max * factor["acceleration"],
-                            bounds.j_max * factor["jerk"])
+        bounds = TaskBounds(
+            bounds.v_max * factor["velocity"], bounds.a_max * factor["acceleration"], bounds.j_max * factor["jerk"]
+        )
     return best if best is not None else last
 
 
@@ -274,8 +315,10 @@ def plan_swing_up(r: SwingUpRequest, robot: Robot, limits: JointLimits, progress
         plan = _on_side(r, plan, notes)
         travel = float(np.max(np.abs(plan.x)))
         if travel > r.travel:
-            raise PlanningError(f"the energy law moves the pivot {travel:.2f} m from its start, beyond the "
-                                f"±{r.travel:g} m band (--max-travel); raise --kp/--kd or lower --push")
+            raise PlanningError(
+                f"the energy law moves the pivot {travel:.2f} m from its start, beyond the "
+                f"±{r.travel:g} m band (--max-travel); raise --kp/--kd or lower --push"
+            )
         traj, ik_err = joint_path(robot, setup, plan.t, plan.x, limits, progress)
         report = check_trajectory(traj, limits)
     else:
@@ -291,6 +334,16 @@ def plan_swing_up(r: SwingUpRequest, robot: Robot, limits: JointLimits, progress
     ver = verify(robot, traj, r.length, r.theta0, mass=r.mass)
     if r.taut and r.method == "fast":
         highest = ver.max_taut_theta  # what the string really holds taut, not the planar claim
-    return SwingUpResult(request=r, plan=plan, trajectory=traj, check=report, verification=ver, bounds=bounds,
-                         max_ik_error=ik_err, planning_time=time.perf_counter() - start, highest_taut_theta=highest,
-                         attempts=attempts, notes=tuple(notes))
+    return SwingUpResult(
+        request=r,
+        plan=plan,
+        trajectory=traj,
+        check=report,
+        verification=ver,
+        bounds=bounds,
+        max_ik_error=ik_err,
+        planning_time=time.perf_counter() - start,
+        highest_taut_theta=highest,
+        attempts=attempts,
+        notes=tuple(notes),
+    )

@@ -92,8 +92,17 @@ def plan_energy(p: EnergyParams, bounds: TaskBounds) -> PivotPlan:
 
     y0 = np.array([0.0, 0.0, p.theta0, p.theta_dot0])
     max_step = min(0.02, p.dt)
-    pump = solve_ivp(f, (0.0, p.duration), y0, method="DOP853", events=(reach, slack), dense_output=True,
-                     rtol=p.rtol, atol=p.atol, max_step=max_step)
+    pump = solve_ivp(
+        f,
+        (0.0, p.duration),
+        y0,
+        method="DOP853",
+        events=(reach, slack),
+        dense_output=True,
+        rtol=p.rtol,
+        atol=p.atol,
+        max_step=max_step,
+    )
     if pump.status < 0:
         raise PlanningError(f"energy-shaping integration failed: {pump.message}")
     t_sw = float(pump.t[-1])
@@ -106,8 +115,9 @@ def plan_energy(p: EnergyParams, bounds: TaskBounds) -> PivotPlan:
         return rhs(y, float(stop.at(t - t_sw)[2][0]), l)
 
     t_end = t_sw + stop.duration + 0.5 * t0
-    coast = solve_ivp(g, (t_sw, t_end), y_sw, method="DOP853", dense_output=True, rtol=p.rtol, atol=p.atol,
-                      max_step=max_step)
+    coast = solve_ivp(
+        g, (t_sw, t_end), y_sw, method="DOP853", dense_output=True, rtol=p.rtol, atol=p.atol, max_step=max_step
+    )
     if coast.status < 0:
         raise PlanningError(f"energy-shaping integration failed while stopping: {coast.message}")
 

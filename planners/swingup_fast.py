@@ -95,8 +95,9 @@ class FastOutcome:
     cost: float
 
 
-def tension_window(theta: float, theta_dot: float, length: float, min_tension: float, a_max: float,
-                   lookahead: float) -> tuple[float, float]:
+def tension_window(
+    theta: float, theta_dot: float, length: float, min_tension: float, a_max: float, lookahead: float
+) -> tuple[float, float]:
     """Pivot accelerations (lo, hi) [m/s²] along the swing axis that keep l·θ̇² + g·cos θ − u·sin θ ≥ min_tension
     [m/s²] now and at the angle ``lookahead`` [s] ahead (the jerk limit makes a cap act late), within ±a_max. The
     window may exclude 0: near an apex above 90° the pivot must accelerate away from the ball."""
@@ -189,15 +190,20 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
             target = max(-pb.v_max, min(pb.v_max, target))
             # band governor: brake if a stop started now would leave the band
             if abs(x) > problem.travel - (v * v / pb.a_max + abs(v) * pb.a_max / pb.j_max + 0.02):
-                if StopProfile(v, a, pb).distance + x > problem.travel and v > 0 or \
-                        StopProfile(v, a, pb).distance + x < -problem.travel and v < 0:
+                if (
+                    StopProfile(v, a, pb).distance + x > problem.travel
+                    and v > 0
+                    or StopProfile(v, a, pb).distance + x < -problem.travel
+                    and v < 0
+                ):
                     target = 0.0
         if phase in ("stop", "rest"):
             target = v_end
         forced = None
         if problem.governed and phase != "rest":
-            lo, hi = tension_window(th, om, l, problem.min_tension + problem.governor_margin, pb.a_max,
-                                    pb.a_max / pb.j_max)
+            lo, hi = tension_window(
+                th, om, l, problem.min_tension + problem.governor_margin, pb.a_max, pb.a_max / pb.j_max
+            )
             if lo > 0.0 or hi < 0.0:  # the pivot must accelerate away from the ball: as hard as the jerk allows
                 forced = lo if lo > 0.0 else hi
             else:
@@ -243,9 +249,17 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
         reach_angle=reach_angle,
         t_reach=first_reach(tt, theta, reach_angle),
         t_rest=float(t_rest),
-        info={"params": params, "bounds": pb, "travel_m": problem.travel, "t_stop": t_stop if t_stop is not None else t_rest,
-              "band": {"lengths": tuple(band_l), "theta": np.array([r[0] for r in band_rec]).reshape(len(band_l), len(ts)),
-                       "theta_dot": np.array([r[1] for r in band_rec]).reshape(len(band_l), len(ts))}},
+        info={
+            "params": params,
+            "bounds": pb,
+            "travel_m": problem.travel,
+            "t_stop": t_stop if t_stop is not None else t_rest,
+            "band": {
+                "lengths": tuple(band_l),
+                "theta": np.array([r[0] for r in band_rec]).reshape(len(band_l), len(ts)),
+                "theta_dot": np.array([r[1] for r in band_rec]).reshape(len(band_l), len(ts)),
+            },
+        },
     )
 
 
@@ -309,8 +323,9 @@ class SearchSettings:
     coarse_dt: float = 0.005  # [s] step used while searching (the final plan uses the problem's dt)
 
 
-def optimise(problem: FastProblem, settings: SearchSettings = SearchSettings(),
-             start: FastParams | None = None) -> tuple[FastParams, FastOutcome]:
+def optimise(
+    problem: FastProblem, settings: SearchSettings = SearchSettings(), start: FastParams | None = None
+) -> tuple[FastParams, FastOutcome]:
     """Tune FastParams for the soonest reach (scipy differential evolution, parallel candidates).
 
     ``start`` seeds the population (e.g. the best of a previous search with other bounds).
@@ -319,8 +334,16 @@ def optimise(problem: FastProblem, settings: SearchSettings = SearchSettings(),
 
     coarse = replace(problem, dt=max(problem.dt, settings.coarse_dt))
     ranges = param_ranges(problem)
-    kwargs = dict(args=(coarse,), popsize=settings.popsize, maxiter=settings.maxiter, seed=settings.seed,
-                  polish=False, tol=1e-3, init="sobol", updating="deferred")
+    kwargs = dict(
+        args=(coarse,),
+        popsize=settings.popsize,
+        maxiter=settings.maxiter,
+        seed=settings.seed,
+        polish=False,
+        tol=1e-3,
+        init="sobol",
+        updating="deferred",
+    )
     if start is not None:
         x0 = [start.speed, start.first_speed, start.centring, start.apex_offset, start.cruise][: len(ranges)]
         kwargs["x0"] = np.clip(x0, [r[0] for r in ranges], [r[1] for r in ranges])

@@ -70,17 +70,27 @@ def pivot_poses(robot: Robot, setup: ArmSetup, x: np.ndarray) -> tuple[np.ndarra
     return pos, rot
 
 
-def joint_path(robot: Robot, setup: ArmSetup, t: np.ndarray, x: np.ndarray, limits: JointLimits,
-               progress=None) -> tuple[JointTrajectory, float]:
+def joint_path(
+    robot: Robot, setup: ArmSetup, t: np.ndarray, x: np.ndarray, limits: JointLimits, progress=None
+) -> tuple[JointTrajectory, float]:
     """IK of the pivot path (thesis §5.3.2, one pose per sample) → joint trajectory and max TCP error [m]."""
     pos, rot = pivot_poses(robot, setup, x)
-    res = solve_ik_path(robot, pos, rot, np.asarray(setup.q_start, dtype=float), limits, IK_OPTIONS, times=t,
-                        progress=progress)
+    res = solve_ik_path(
+        robot, pos, rot, np.asarray(setup.q_start, dtype=float), limits, IK_OPTIONS, times=t, progress=progress
+    )
     return JointTrajectory(t=np.asarray(t, dtype=float), q=res.q), res.max_position_error
 
 
-def axis_bounds(robot: Robot, setup: ArmSetup, limits: JointLimits, travel: float, margin: float = 0.1,
-                samples: int = 41, first_order: bool = False, axis: str = "y") -> TaskBounds:
+def axis_bounds(
+    robot: Robot,
+    setup: ArmSetup,
+    limits: JointLimits,
+    travel: float,
+    margin: float = 0.1,
+    samples: int = 41,
+    first_order: bool = False,
+    axis: str = "y",
+) -> TaskBounds:
     """Pivot speed, acceleration and jerk along base y (``axis`` "z": base z) that keep every joint within
     (1 − margin)·limits.
 
@@ -147,8 +157,15 @@ class Verification:
         return float(np.max(np.abs(self.theta[taut]))) if taut.any() else 0.0
 
 
-def verify(robot: Robot, traj: JointTrajectory, length: float, theta0: float = 0.0, theta_dot0: float = 0.0,
-           damping: float = 0.0, mass: float | None = None) -> Verification:
+def verify(
+    robot: Robot,
+    traj: JointTrajectory,
+    length: float,
+    theta0: float = 0.0,
+    theta_dot0: float = 0.0,
+    damping: float = 0.0,
+    mass: float | None = None,
+) -> Verification:
     """Simulate the ball (the string model, no cup; the default ball, of ``mass`` [kg] if given) under the TCP path
     the joint trajectory realises."""
     from .string_model import Ball, StringModel
@@ -158,7 +175,21 @@ def verify(robot: Robot, traj: JointTrajectory, length: float, theta0: float = 0
     s0 = direction_from_angles(0.0, theta0)
     sdot0 = np.array([0.0, math.cos(theta0), math.sin(theta0)]) * theta_dot0
     ball = Ball() if mass is None else Ball(mass=mass)
-    run = simulate_string(StringModel(length, ball=ball, cup=None, damping=damping), PivotMotion(traj.t, pos),
-                          float(traj.t[-1]), traj.t, s0, sdot0, rtol=1e-9, atol=1e-10)
-    return Verification(t=traj.t, theta=run.theta_y, tension=run.tension, pivot=pos,
-                        pivot_acc=SampledAcceleration(traj.t, pos).samples(), run=run)
+    run = simulate_string(
+        StringModel(length, ball=ball, cup=None, damping=damping),
+        PivotMotion(traj.t, pos),
+        float(traj.t[-1]),
+        traj.t,
+        s0,
+        sdot0,
+        rtol=1e-9,
+        atol=1e-10,
+    )
+    return Verification(
+        t=traj.t,
+        theta=run.theta_y,
+        tension=run.tension,
+        pivot=pos,
+        pivot_acc=SampledAcceleration(traj.t, pos).samples(),
+        run=run,
+    )

@@ -2,11 +2,18 @@
 
 from __future__ import annotations
 
+import signal
 import subprocess
 import sys
 
 import numpy as np
 import pytest
+
+# A suite started as a background job of a non-interactive shell (`bash .ci/run &`, nohup) inherits SIGINT ignored,
+# and so would every `lbr` the tests start: the tests of Ctrl-C would send it to a process that, as a background job
+# should, ignores it. The tests' processes get Ctrl-C as a terminal's foreground job does.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 Q_START = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # [rad], thesis §5.3.2
 

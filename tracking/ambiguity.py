@@ -103,6 +103,7 @@ def choose_pendulum(
     piv_ok = pivots is not None and np.any(np.all(np.isfinite(pivots), axis=1))
     if piv_ok:
         if moving:
+
             def cv(k: int) -> float:
                 r = np.linalg.norm(centres[k] - pivots, axis=1)
                 r = r[np.isfinite(r)]
@@ -116,7 +117,9 @@ def choose_pendulum(
             return abs(math.atan2(d[0], d[1]))
 
         best = min(pool, key=tilt)
-        return Choice(best, f"none moves; it hangs closest to straight below the pivot ({math.degrees(tilt(best)):.1f}°)")
+        return Choice(
+            best, f"none moves; it hangs closest to straight below the pivot ({math.degrees(tilt(best)):.1f}°)"
+        )
     if final:
         best = max(pool, key=lambda k: fits[k])
         return Choice(best, "none could be told apart by motion; took the roundest")

@@ -35,7 +35,9 @@ class CameraGeometry:
     image_size: tuple[int, int]  # (width, height) [px]
 
     @classmethod
-    def from_pose(cls, position, look_at, fov_deg: float, size: tuple[int, int], up=(0.0, 0.0, 1.0)) -> "CameraGeometry":
+    def from_pose(
+        cls, position, look_at, fov_deg: float, size: tuple[int, int], up=(0.0, 0.0, 1.0)
+    ) -> "CameraGeometry":
         """A distortion-free camera at position [m] looking at look_at [m] with a horizontal field of view fov_deg
         [deg], image size (w, h) [px], the image's up toward the base's up."""
         c = np.asarray(position, float)
@@ -67,8 +69,9 @@ class CameraGeometry:
         out = np.full((len(X), 2), np.nan)
         front = cam[:, 2] > 1e-9
         if front.any():
-            px, _ = cv2.projectPoints(cam[front].reshape(-1, 1, 3), np.zeros(3), np.zeros(3), self.camera_matrix,
-                                      self.dist_coeffs)
+            px, _ = cv2.projectPoints(
+                cam[front].reshape(-1, 1, 3), np.zeros(3), np.zeros(3), self.camera_matrix, self.dist_coeffs
+            )
             out[front] = px.reshape(-1, 2)
         return out
 
@@ -194,8 +197,16 @@ def sway_view(geometry: CameraGeometry, pivots_m, string_m: float, sway_rad=None
     return SwayView((float(shift[worst[0], 0]), float(shift[worst[1], 1])), worst, int(out[0]) if len(out) else None)
 
 
-def camera_pose_for(pivots_m, string_m: float, sway_rad=None, fov_deg: float = 50.0, size: tuple[int, int] = (640, 480),
-                    elevation_deg: float = 30.0, azimuth_deg: float = 45.0, margin: float = 0.08) -> tuple[np.ndarray, np.ndarray]:
+def camera_pose_for(
+    pivots_m,
+    string_m: float,
+    sway_rad=None,
+    fov_deg: float = 50.0,
+    size: tuple[int, int] = (640, 480),
+    elevation_deg: float = 30.0,
+    azimuth_deg: float = 45.0,
+    margin: float = 0.08,
+) -> tuple[np.ndarray, np.ndarray]:
     """(position, look_at) [m] of a camera that sees the whole of a pendulum's path: it looks at the middle of the
     ball's positions (pivots_m (n, 3) [m], string_m [m], tilted by sway_rad (n, 2) [rad]) from elevation_deg above
     and azimuth_deg around from the line from the base's origin to that middle (both sway axes then show in the
@@ -233,7 +244,12 @@ def geometry_to_dict(g: CameraGeometry) -> dict:
 def save_geometry(path: str | Path, g: CameraGeometry, **extra) -> None:
     """Write the geometry as JSON (extra fields, e.g. pivot_m and string_m, alongside)."""
     d = geometry_to_dict(g)
-    d.update({k: (np.asarray(v, float).tolist() if isinstance(v, (np.ndarray, list, tuple)) else v) for k, v in extra.items()})
+    d.update(
+        {
+            k: (np.asarray(v, float).tolist() if isinstance(v, (np.ndarray, list, tuple)) else v)
+            for k, v in extra.items()
+        }
+    )
     Path(path).write_text(json.dumps(d, indent=2) + "\n")
 
 
@@ -263,9 +279,15 @@ def load_geometry(path: str | Path) -> tuple[CameraGeometry, dict]:
 
     size = arr("image_size", (2,))
     if "position_m" in d:
-        g = CameraGeometry.from_pose(arr("position_m", (3,)), arr("look_at_m", (3,)), float(arr("fov_deg", ())),
-                                     (int(size[0]), int(size[1])))
+        g = CameraGeometry.from_pose(
+            arr("position_m", (3,)), arr("look_at_m", (3,)), float(arr("fov_deg", ())), (int(size[0]), int(size[1]))
+        )
     else:
-        g = CameraGeometry(arr("camera_matrix", (3, 3)), arr("dist_coeffs", None).ravel(), arr("rotation", (3, 3)),
-                           arr("centre_m", (3,)), (int(size[0]), int(size[1])))
+        g = CameraGeometry(
+            arr("camera_matrix", (3, 3)),
+            arr("dist_coeffs", None).ravel(),
+            arr("rotation", (3, 3)),
+            arr("centre_m", (3,)),
+            (int(size[0]), int(size[1])),
+        )
     return g, d

@@ -18,7 +18,9 @@ _MIN_WINDOW_S = 2.0  # [s] the default lag window is at least ± this
 _RIVAL_SEPARATION_S = 0.15  # [s] a rival peak lies at least this far from the chosen lag
 UNCOVERED_WEIGHT = 0.5  # measured samples outside the model's span count this share of their energy as misfit
 _REFINED_MINIMA = 4  # the best local minima of the misfit on the grid refined to sub-sample before ranking
-AMBIGUOUS_RMS_RATIO = 1.5  # a rival lag whose RMS misfit is within this factor of the best one's makes the lag ambiguous
+AMBIGUOUS_RMS_RATIO = (
+    1.5  # a rival lag whose RMS misfit is within this factor of the best one's makes the lag ambiguous
+)
 
 
 @dataclass(frozen=True)
@@ -31,7 +33,9 @@ class LagEstimate:
     window_s: float = math.inf  # the lag was searched within ± this [s]
     rival_lag_s: float = math.nan  # the best other peak of the score (NaN when none) [s]
     rival_correlation: float = math.nan  # its score
-    rms_rad: float = math.nan  # RMS of (measured − model) over the whole measurement at the lag, 0 outside the model [rad]
+    rms_rad: float = (
+        math.nan
+    )  # RMS of (measured − model) over the whole measurement at the lag, 0 outside the model [rad]
     rival_rms_rad: float = math.nan  # the same at the rival lag [rad]
     at_window_edge: bool = False  # the best lag lies on the edge of the window: the true one may be outside
     overlap_misfit: float = math.nan  # Σ(y − model)² / Σy² over the overlap alone at the lag
@@ -184,7 +188,9 @@ def estimate_lag(
         lo, hi = float(lags[j] - step), float(lags[j] + step)
         res = minimize_scalar(
             lambda lag: _misfit(t_model, theta_model, t_meas, theta_meas, lag, (lo, hi))[0],
-            bounds=(lo, hi), method="bounded", options={"xatol": step * 1e-3},
+            bounds=(lo, hi),
+            method="bounded",
+            options={"xatol": step * 1e-3},
         )
         lag = float(res.x)
         if _misfit(t_model, theta_model, t_meas, theta_meas, float(lags[j]), (lo, hi))[0] < res.fun:

@@ -26,9 +26,17 @@ class PositionComparison:
     measured: np.ndarray  # (m, 2) tracked (lateral, up) [m]
 
 
-def compare_positions(t_model: np.ndarray, rel_model: np.ndarray, slack_model: np.ndarray, taut_length_m: float,
-                      t_track: np.ndarray, rel_track_px: np.ndarray, string_px: float, lag_s: float,
-                      flip: bool = False) -> PositionComparison:
+def compare_positions(
+    t_model: np.ndarray,
+    rel_model: np.ndarray,
+    slack_model: np.ndarray,
+    taut_length_m: float,
+    t_track: np.ndarray,
+    rel_track_px: np.ndarray,
+    string_px: float,
+    lag_s: float,
+    flip: bool = False,
+) -> PositionComparison:
     """Compare over the track frames at which the model's ball is slack.
 
     rel_model (n, 2): ball − anchor in the model's swing plane (lateral, up) [m]; slack_model (n,) bool;
@@ -41,13 +49,18 @@ def compare_positions(t_model: np.ndarray, rel_model: np.ndarray, slack_model: n
     k = np.clip(np.searchsorted(t_model, tm), 1, len(t_model) - 1)
     near = np.where(np.abs(t_model[k] - tm) < np.abs(t_model[k - 1] - tm), k, k - 1)
     use = inside & np.asarray(slack_model, bool)[near] & np.all(np.isfinite(rel_track_px), axis=1)
-    model = np.column_stack([np.interp(tm[use], t_model, rel_model[:, 0]), np.interp(tm[use], t_model, rel_model[:, 1])])
+    model = np.column_stack(
+        [np.interp(tm[use], t_model, rel_model[:, 0]), np.interp(tm[use], t_model, rel_model[:, 1])]
+    )
     sign = -1.0 if flip else 1.0
     measured = np.column_stack([sign * rel_track_px[use, 0], -rel_track_px[use, 1]]) / scale
     err = np.hypot(*(measured - model).T) if use.any() else np.empty(0)
     return PositionComparison(
-        px_per_m=float(scale), frames=int(use.sum()),
+        px_per_m=float(scale),
+        frames=int(use.sum()),
         rms_m=float(np.sqrt(np.mean(err**2))) if err.size else float("nan"),
-        max_m=float(err.max()) if err.size else float("nan"), t=np.asarray(t_track, float)[use], model=model,
+        max_m=float(err.max()) if err.size else float("nan"),
+        t=np.asarray(t_track, float)[use],
+        model=model,
         measured=measured,
     )

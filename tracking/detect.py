@@ -119,7 +119,9 @@ def ellipse_fit(contour: np.ndarray) -> float:
     cs = np.zeros((h, w + 1), np.int32)
     np.cumsum(fill, axis=1, out=cs[:, 1:])
     r = rows[inbox]
-    both = float((cs[r, np.clip(hi[inbox], 0, w).astype(np.intp)] - cs[r, np.clip(lo[inbox], 0, w).astype(np.intp)]).sum())
+    both = float(
+        (cs[r, np.clip(hi[inbox], 0, w).astype(np.intp)] - cs[r, np.clip(lo[inbox], 0, w).astype(np.intp)]).sum()
+    )
     union = m["m00"] + float((hi - lo).sum()) - both
     return both / union if union > 0 else 0.0
 
@@ -229,7 +231,8 @@ def find_blobs_coarse(
     longest = 1.5 * 2.0 * math.sqrt(gates.max_area_px / math.pi) / factor + 2.0
     least = 0.25 * gates.min_area_px / (factor * factor)
     boxes = [
-        r for r, c in ((cv2.boundingRect(c), c) for c in contours)
+        r
+        for r, c in ((cv2.boundingRect(c), c) for c in contours)
         if max(r[2], r[3]) <= longest and max(cv2.contourArea(c), 1.0) >= least
     ]
     if len(boxes) > _COARSE_MAX_REGIONS:
@@ -291,7 +294,12 @@ def find_tiny(
         ys, xs = np.mgrid[cy0:cy1, cx0:cx1]
         u = float((patch * xs).sum() / total) + x0
         v = float((patch * ys).sum() / total) + y0
-        clipped = (x0 > 0 and bx <= 0) or (y0 > 0 and by <= 0) or (x0 + w < fw and bx + bw >= w) or (y0 + h < fh and by + bh >= h)
+        clipped = (
+            (x0 > 0 and bx <= 0)
+            or (y0 > 0 and by <= 0)
+            or (x0 + w < fw and bx + bw >= w)
+            or (y0 + h < fh and by + bh >= h)
+        )
         # area of the equivalent sharp disc: the saturation mass over the peak (a blurred dot spreads, not grows)
         peak = float(patch.max())
         rx0, ry0, rx1, ry1 = max(bx - 5, 0), max(by - 5, 0), min(bx + bw + 5, w), min(by + bh + 5, h)

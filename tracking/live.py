@@ -267,13 +267,17 @@ class LiveTracker:
 
     def _track_loop(self) -> None:
         ball_tracker = BallTracker(self.ball, self.options)
-        pivot_tracker = BallTracker(self.pivot_color, replace(self.options, start_uv=None)) if self.pivot_color else None
+        pivot_tracker = (
+            BallTracker(self.pivot_color, replace(self.options, start_uv=None)) if self.pivot_color else None
+        )
         angle = None
         sure = self.options.min_confidence
         try:
             while not self._stop.is_set():
                 with self._slot_cond:
-                    self._slot_cond.wait_for(lambda: self._slot is not None or self._stop.is_set() or self._eof.is_set())
+                    self._slot_cond.wait_for(
+                        lambda: self._slot is not None or self._stop.is_set() or self._eof.is_set()
+                    )
                     if self._slot is None:
                         if self._eof.is_set() or self._stop.is_set():
                             break
@@ -295,16 +299,28 @@ class LiveTracker:
                 if found and pivot is not None:
                     theta = float(angle(np.array([blob.u, blob.v]), np.array(pivot)))
                 if found and self.tilt is not None and self._pivot_m is not None:
-                    est = tilt_from_pixel(self.tilt.geometry, (blob.u, blob.v), self._pivot_m, self.tilt.string_m,
-                                          self._prev_ball_m)
+                    est = tilt_from_pixel(
+                        self.tilt.geometry, (blob.u, blob.v), self._pivot_m, self.tilt.string_m, self._prev_ball_m
+                    )
                     tx, ty, ambiguous = est.theta_x, est.theta_y, est.ambiguous
                     self._prev_ball_m = est.ball
                 dt = time.perf_counter() - t0
                 res = LiveResult(
-                    seq=seq, t_capture=t_cap, t_source=t_src, t_result=time.monotonic(), found=found, confidence=conf,
-                    u=blob.u if found else math.nan, v=blob.v if found else math.nan,
-                    radius_px=blob.radius_px if found else math.nan, theta=theta, theta_x=tx, theta_y=ty,
-                    tilt_ambiguous=ambiguous, dropped=self.stats.dropped, track_s=dt,
+                    seq=seq,
+                    t_capture=t_cap,
+                    t_source=t_src,
+                    t_result=time.monotonic(),
+                    found=found,
+                    confidence=conf,
+                    u=blob.u if found else math.nan,
+                    v=blob.v if found else math.nan,
+                    radius_px=blob.radius_px if found else math.nan,
+                    theta=theta,
+                    theta_x=tx,
+                    theta_y=ty,
+                    tilt_ambiguous=ambiguous,
+                    dropped=self.stats.dropped,
+                    track_s=dt,
                 )
                 self.stats.tracked += 1
                 self.stats.found += int(found)
@@ -349,10 +365,22 @@ def track_from_results(results: list[LiveResult], source: str, size: tuple[int, 
     rs = [r for r, k in zip(results, keep) if k]
     arr = lambda name: np.array([getattr(r, name) for r in rs], float)  # noqa: E731
     return Track(
-        t=t[keep], frame=np.array([r.seq for r in rs]), uv=np.column_stack([arr("u"), arr("v")]),
-        found=np.array([r.found for r in rs]), theta=arr("theta") if has_pivot else None, pivot_uv=None, xy_m=None,
-        radius_px=arr("radius_px"), info=VideoInfo(str(source), size[0], size[1], fps, len(rs)), full_frame_searches=0,
-        confidence=arr("confidence"), unsure=np.array([(not r.found) and r.confidence > 0 for r in rs]),
-        extra=(("theta_x", arr("theta_x")), ("theta_y", arr("theta_y")), ("latency_s", arr("latency_s")),
-               ("t_source", arr("t_source"))),
+        t=t[keep],
+        frame=np.array([r.seq for r in rs]),
+        uv=np.column_stack([arr("u"), arr("v")]),
+        found=np.array([r.found for r in rs]),
+        theta=arr("theta") if has_pivot else None,
+        pivot_uv=None,
+        xy_m=None,
+        radius_px=arr("radius_px"),
+        info=VideoInfo(str(source), size[0], size[1], fps, len(rs)),
+        full_frame_searches=0,
+        confidence=arr("confidence"),
+        unsure=np.array([(not r.found) and r.confidence > 0 for r in rs]),
+        extra=(
+            ("theta_x", arr("theta_x")),
+            ("theta_y", arr("theta_y")),
+            ("latency_s", arr("latency_s")),
+            ("t_source", arr("t_source")),
+        ),
     )

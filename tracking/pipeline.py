@@ -55,7 +55,9 @@ class Track:
     theta_in_plane: bool = False  # θ measured in the calibrated plane of motion (else in the image)
     confidence: np.ndarray | None = None  # (n,) 0–1 of the frame's fix (0 when nothing was seen)
     unsure: np.ndarray | None = None  # (n,) bool: a candidate was seen but not trusted (reported not found)
-    extra: tuple[tuple[str, np.ndarray], ...] = ()  # more (name, (n,) values) columns, written last (live: tilt, latency)
+    extra: tuple[
+        tuple[str, np.ndarray], ...
+    ] = ()  # more (name, (n,) values) columns, written last (live: tilt, latency)
 
     @property
     def found_fraction(self) -> float:
@@ -169,7 +171,9 @@ def track_video(
     if calibration is not None and calibration.plane is not None:
         xy = to_plane(calibration, uv_a)
     has_pivot = pivot_tracker is not None or fixed is not None
-    notes = tuple(ball_tracker.notes) + tuple(f"pivot marker: {n}" for n in (pivot_tracker.notes if pivot_tracker else ()))
+    notes = tuple(ball_tracker.notes) + tuple(
+        f"pivot marker: {n}" for n in (pivot_tracker.notes if pivot_tracker else ())
+    )
     return Track(
         t=np.array(ts),
         frame=np.arange(len(ts)),

@@ -45,8 +45,9 @@ class Scenario:
     lossy: bool = False  # a low-bitrate codec may erase the ball in some frames: count only where it shows (ball_shown)
 
 
-def _swing(duration_s: float, amplitude_deg: float = 30.0, period_s: float = 1.0, lead_s: float = 0.0,
-           held: bool = False):
+def _swing(
+    duration_s: float, amplitude_deg: float = 30.0, period_s: float = 1.0, lead_s: float = 0.0, held: bool = False
+):
     """A slowly decaying swing starting at lead_s [s]: from the bottom at full speed, or (held) released at
     rest from the amplitude, where it was held until then."""
     t = np.arange(int(round(duration_s * 1000)) + 1) / 1000.0
@@ -55,7 +56,9 @@ def _swing(duration_s: float, amplitude_deg: float = 30.0, period_s: float = 1.0
     return t, np.radians(amplitude_deg) * np.exp(-0.1 * s) * wave(2 * np.pi * s / period_s)
 
 
-def _geometry(size: tuple[int, int], pivot_y: float = 0.15, string: float = 0.6) -> tuple[tuple[float, float], float, float]:
+def _geometry(
+    size: tuple[int, int], pivot_y: float = 0.15, string: float = 0.6
+) -> tuple[tuple[float, float], float, float]:
     w, h = size
     return (w / 2.0, pivot_y * h), string * h, max(4.0, 0.017 * h)
 
@@ -94,7 +97,9 @@ def red_disc(path: Path, size, duration_s: float, seed: int = 2) -> Scenario:
     """A static red disc as round as the ball, beside the swing (the ball starts at rest for 0.3 s)."""
     piv, L, r = _geometry(size)
     t, th = _swing(duration_s, lead_s=0.3)
-    disc = Distractor("disc", np.array([piv[0] - L * math.sin(math.radians(50)), piv[1] + L * 0.85]), radius_px=r * 1.05)
+    disc = Distractor(
+        "disc", np.array([piv[0] - L * math.sin(math.radians(50)), piv[1] + L * 0.85]), radius_px=r * 1.05
+    )
     gt = render_pendulum_video(path, t, th, piv, L, r, size, 60.0, distractors=[disc], seed=seed)
     return Scenario("static red disc", path, gt, {"pivot_uv": piv}, _visible(gt))
 
@@ -122,15 +127,29 @@ def tilted(path: Path, size, duration_s: float, seed: int = 4) -> Scenario:
     m_per_plane_px = 0.25 / L  # a 25 cm string
     to_m = np.diag([m_per_plane_px, m_per_plane_px, 1.0]) @ np.linalg.inv(H)
     cal = CameraCalibration(
-        camera_matrix=K, dist_coeffs=np.zeros(5), image_size=(w, h), rms_px=0.0, board=(9, 6), square_m=0.025, views=0,
+        camera_matrix=K,
+        dist_coeffs=np.zeros(5),
+        image_size=(w, h),
+        rms_px=0.0,
+        board=(9, 6),
+        square_m=0.025,
+        views=0,
         plane=PlaneCalibration(to_m / to_m[2, 2], m_per_plane_px, np.zeros(3), np.zeros(3)),
     )
     pivot_image = tuple(float(c) for c in gt.pivot_uv[0])
-    return Scenario("tilted camera + calibration", path, gt, {"pivot_uv": pivot_image, "calibration": cal}, _visible(gt),
-                    extra={"metres_per_plane_px": m_per_plane_px})
+    return Scenario(
+        "tilted camera + calibration",
+        path,
+        gt,
+        {"pivot_uv": pivot_image, "calibration": cal},
+        _visible(gt),
+        extra={"metres_per_plane_px": m_per_plane_px},
+    )
 
 
-def fast_swing_up(path: Path, size, duration_s: float, fps: float = 60.0, exposure: float = 0.5, seed: int = 5) -> Scenario:
+def fast_swing_up(
+    path: Path, size, duration_s: float, fps: float = 60.0, exposure: float = 0.5, seed: int = 5
+) -> Scenario:
     """A swing-up to ±150° (≈ 4 m/s on a 25 cm string) filmed at fps with the shutter open exposure of a frame."""
     piv, L, r = _geometry(size, pivot_y=0.45, string=0.4)
     t, th = swing_up(duration_s, 150.0, 1.0)
@@ -145,7 +164,9 @@ def orange_hand(path: Path, size, duration_s: float, seed: int = 6) -> Scenario:
     t, th = _swing(duration_s, lead_s=0.5, held=True)
     hand = hand_beside_ball((3.2 * r, 0.4 * r), 0.5, scale_px=1.6 * r)
     gt = render_pendulum_video(path, t, th, piv, L, r, size, 60.0, ball_bgr=ORANGE_BGR, foreground=[hand], seed=seed)
-    return Scenario("orange ball, skin-coloured hand", path, gt, {"pivot_uv": piv, "ball": color_spec("orange")}, _visible(gt))
+    return Scenario(
+        "orange ball, skin-coloured hand", path, gt, {"pivot_uv": piv, "ball": color_spec("orange")}, _visible(gt)
+    )
 
 
 def occluding_rod(path: Path, size, duration_s: float, seed: int = 7) -> Scenario:
@@ -206,8 +227,14 @@ def _clutter(size, piv, L, r, bgr=None, seed: int = 0) -> tuple:
     xs = px + 0.92 * L * math.sin(math.radians(36)) + 0.04 * w * np.sin(ys / (0.11 * h) + rng.uniform(0, 3))
     out.append(Distractor("cable", np.column_stack([xs, ys]), thickness_px=max(2, int(round(0.8 * r))), bgr=col))
     xt = np.linspace(0.02 * w, 0.6 * w, 40)
-    out.append(Distractor("cable", np.column_stack([xt, 0.93 * h + 0.015 * h * np.sin(xt / (0.05 * w))]),
-                          thickness_px=max(2, int(round(0.6 * r))), bgr=col))
+    out.append(
+        Distractor(
+            "cable",
+            np.column_stack([xt, 0.93 * h + 0.015 * h * np.sin(xt / (0.05 * w))]),
+            thickness_px=max(2, int(round(0.6 * r))),
+            bgr=col,
+        )
+    )
     out.append(Distractor("tool", np.array([0.72 * w, 0.955 * h]), radius_px=2.2 * r, bgr=col, angle_deg=-8.0))
     return tuple(out)
 
@@ -228,16 +255,25 @@ def _clear_of_clutter(gt: GroundTruth, margin_px: float = 2.0) -> np.ndarray:
     return dist[v, u] > gt.ball_radius_px + margin_px
 
 
-def clutter(path: Path, size, duration_s: float, seed: int = 11, codec: str = "mp4v", bitrate_kbps=None,
-            ball_bgr=None, name: str = "clutter: labels, cables, a tool in the ball's colour") -> Scenario:
+def clutter(
+    path: Path,
+    size,
+    duration_s: float,
+    seed: int = 11,
+    codec: str = "mp4v",
+    bitrate_kbps=None,
+    ball_bgr=None,
+    name: str = "clutter: labels, cables, a tool in the ball's colour",
+) -> Scenario:
     """The issue's cluttered lab: red labels, a thick red cable beside the swing, a red-handled screwdriver; the
     ball starts at rest for 0.3 s, hanging among them."""
     piv, L, r = _geometry(size)
     t, th = _swing(duration_s, amplitude_deg=32.0, lead_s=0.3)
     dis = _clutter(size, piv, L, r, ball_bgr)
     kw = {} if ball_bgr is None else {"ball_bgr": ball_bgr}
-    gt = render_pendulum_video(path, t, th, piv, L, r, size, 60.0, distractors=dis, codec=codec,
-                               bitrate_kbps=bitrate_kbps, seed=seed, **kw)
+    gt = render_pendulum_video(
+        path, t, th, piv, L, r, size, 60.0, distractors=dis, codec=codec, bitrate_kbps=bitrate_kbps, seed=seed, **kw
+    )
     track = {"pivot_uv": piv}
     if ball_bgr == ORANGE_BGR:
         track["ball"] = color_spec("orange")
@@ -252,8 +288,15 @@ def h264(path: Path, size, duration_s: float, seed: int = 12, bitrate_kbps: floa
     return Scenario(f"H.264 {bitrate_kbps:.0f} kbit/s", path, gt, {"pivot_uv": piv}, _visible(gt), lossy=True)
 
 
-def oblique(path: Path, size, duration_s: float, seed: int = 13, tilt=(-30.0, 38.0, -5.0), fps: float = 60.0,
-            name: str = "oblique camera, sharp ball + calibration") -> Scenario:
+def oblique(
+    path: Path,
+    size,
+    duration_s: float,
+    seed: int = 13,
+    tilt=(-30.0, 38.0, -5.0),
+    fps: float = 60.0,
+    name: str = "oblique camera, sharp ball + calibration",
+) -> Scenario:
     """A camera far off the plane's normal, short exposure (the ball sharp at the turning points), calibrated."""
     w, h = size
     piv, L, r = _geometry(size, pivot_y=0.2, string=0.5)
@@ -265,7 +308,13 @@ def oblique(path: Path, size, duration_s: float, seed: int = 13, tilt=(-30.0, 38
     m_per_plane_px = 0.3 / L
     to_m = np.diag([m_per_plane_px, m_per_plane_px, 1.0]) @ np.linalg.inv(H)
     cal = CameraCalibration(
-        camera_matrix=K, dist_coeffs=np.zeros(5), image_size=(w, h), rms_px=0.0, board=(9, 6), square_m=0.025, views=0,
+        camera_matrix=K,
+        dist_coeffs=np.zeros(5),
+        image_size=(w, h),
+        rms_px=0.0,
+        board=(9, 6),
+        square_m=0.025,
+        views=0,
         plane=PlaneCalibration(to_m / to_m[2, 2], m_per_plane_px, np.zeros(3), np.zeros(3)),
     )
     pivot_image = tuple(float(c) for c in gt.pivot_uv[0])
@@ -278,18 +327,40 @@ def dark_start_30(path: Path, size, duration_s: float, seed: int = 14) -> Scenar
     t, th = _swing(duration_s, amplitude_deg=40.0, period_s=0.9)
     gain = lambda tk: float(np.interp(tk, [0.0, 0.5, 0.8], [0.2, 0.2, 1.0]))  # noqa: E731
     gt = render_pendulum_video(path, t, th, piv, L, r, size, 30.0, gain=gain, exposure=0.3, seed=seed)
-    return Scenario("30 fps, dark start: whole-frame searches", path, gt, {"pivot_uv": piv}, _visible(gt) & (gt.t >= 0.8))
+    return Scenario(
+        "30 fps, dark start: whole-frame searches", path, gt, {"pivot_uv": piv}, _visible(gt) & (gt.t >= 0.8)
+    )
 
 
-def tiny_ball(path: Path, size, duration_s: float, seed: int = 15, radius_px: float = 1.5, codec: str = "mp4v",
-              bitrate_kbps=None) -> Scenario:
+def tiny_ball(
+    path: Path, size, duration_s: float, seed: int = 15, radius_px: float = 1.5, codec: str = "mp4v", bitrate_kbps=None
+) -> Scenario:
     """A ball 3 px across (radius_px), red box and cable in view, no size given."""
     piv, L, _ = _geometry(size)
     t, th = _swing(duration_s, amplitude_deg=30.0)
-    gt = render_pendulum_video(path, t, th, piv, L, radius_px, size, 60.0, exposure=0.3, defocus_px=0.4, codec=codec,
-                               bitrate_kbps=bitrate_kbps, seed=seed)
-    return Scenario(f"ball {2 * radius_px:.1f} px across" + (f", {codec} {bitrate_kbps:.0f} kbit/s" if bitrate_kbps else ""),
-                    path, gt, {"pivot_uv": piv}, _visible(gt), lossy=bitrate_kbps is not None)
+    gt = render_pendulum_video(
+        path,
+        t,
+        th,
+        piv,
+        L,
+        radius_px,
+        size,
+        60.0,
+        exposure=0.3,
+        defocus_px=0.4,
+        codec=codec,
+        bitrate_kbps=bitrate_kbps,
+        seed=seed,
+    )
+    return Scenario(
+        f"ball {2 * radius_px:.1f} px across" + (f", {codec} {bitrate_kbps:.0f} kbit/s" if bitrate_kbps else ""),
+        path,
+        gt,
+        {"pivot_uv": piv},
+        _visible(gt),
+        lossy=bitrate_kbps is not None,
+    )
 
 
 def big_ball(path: Path, size, duration_s: float, seed: int = 16, share: float = 0.25) -> Scenario:
@@ -319,8 +390,9 @@ ALL: dict[str, Callable[..., Scenario]] = {
     "compressed": compressed,
     "clutter": clutter,
     "h264_100k": h264,
-    "h264_clutter": lambda p, s, d: clutter(p, s, d, seed=17, codec="h264", bitrate_kbps=100.0,
-                                            name="clutter + H.264 100 kbit/s"),
+    "h264_clutter": lambda p, s, d: clutter(
+        p, s, d, seed=17, codec="h264", bitrate_kbps=100.0, name="clutter + H.264 100 kbit/s"
+    ),
     "oblique": oblique,
     "dark_start_30": dark_start_30,
     "tiny_ball": tiny_ball,
@@ -329,15 +401,25 @@ ALL: dict[str, Callable[..., Scenario]] = {
 
 # Held-out style variations: not used to tune the tracker, only to report how it does on cases like the above
 HELD_OUT: dict[str, Callable[..., Scenario]] = {
-    "orange_clutter_vp9": lambda p, s, d: clutter(p, s, d, seed=21, codec="vp9", bitrate_kbps=150.0, ball_bgr=ORANGE_BGR,
-                                                  name="held-out: orange ball, orange clutter, VP9 150 kbit/s"),
+    "orange_clutter_vp9": lambda p, s, d: clutter(
+        p,
+        s,
+        d,
+        seed=21,
+        codec="vp9",
+        bitrate_kbps=150.0,
+        ball_bgr=ORANGE_BGR,
+        name="held-out: orange ball, orange clutter, VP9 150 kbit/s",
+    ),
     "h264_60k": lambda p, s, d: h264(p, s, d, seed=22, bitrate_kbps=60.0),
-    "hevc_clutter": lambda p, s, d: clutter(p, s, d, seed=23, codec="hevc", bitrate_kbps=120.0,
-                                            name="held-out: clutter + HEVC 120 kbit/s"),
+    "hevc_clutter": lambda p, s, d: clutter(
+        p, s, d, seed=23, codec="hevc", bitrate_kbps=120.0, name="held-out: clutter + HEVC 120 kbit/s"
+    ),
     "tiny_ball_h264": lambda p, s, d: tiny_ball(p, s, d, seed=24, radius_px=1.3, codec="h264", bitrate_kbps=400.0),
     "big_ball_third": lambda p, s, d: big_ball(p, s, d, seed=25, share=0.33),
-    "oblique_other_side": lambda p, s, d: oblique(p, s, d, seed=26, tilt=(20.0, -42.0, 8.0), fps=30.0,
-                                                  name="held-out: oblique from the other side, 30 fps"),
+    "oblique_other_side": lambda p, s, d: oblique(
+        p, s, d, seed=26, tilt=(20.0, -42.0, 8.0), fps=30.0, name="held-out: oblique from the other side, 30 fps"
+    ),
 }
 
 

@@ -21,8 +21,9 @@ def string_length_px(distance: np.ndarray) -> float:
     return float(np.percentile(d, STRING_PERCENTILE)) if d.size else float("nan")
 
 
-def slack_frames(ball_uv: np.ndarray, pivot_uv: np.ndarray, tolerance: float = 0.3,
-                 min_px: float = 3.0) -> tuple[np.ndarray, np.ndarray, float]:
+def slack_frames(
+    ball_uv: np.ndarray, pivot_uv: np.ndarray, tolerance: float = 0.3, min_px: float = 3.0
+) -> tuple[np.ndarray, np.ndarray, float]:
     """(slack mask (n,), ball–pivot distance (n,) [px], string length [px]): a frame is slack when the ball is nearer
     than (1 − tolerance)·length − min_px to the pivot. ``pivot_uv`` (n, 2) or (2,) [px]."""
     d = np.hypot(*(np.asarray(ball_uv, float) - np.asarray(pivot_uv, float)).T)

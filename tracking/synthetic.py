@@ -79,7 +79,9 @@ def _background(size: tuple[int, int], rng: np.random.Generator) -> np.ndarray:
     w, h = size
     yy = np.linspace(0.0, 1.0, h, dtype=np.float32)[:, None]
     base = 175.0 - 40.0 * yy  # brighter at the top
-    tex = cv2.resize(rng.normal(0.0, 10.0, (h // 40 + 2, w // 40 + 2)).astype(np.float32), (w, h), interpolation=cv2.INTER_CUBIC)
+    tex = cv2.resize(
+        rng.normal(0.0, 10.0, (h // 40 + 2, w // 40 + 2)).astype(np.float32), (w, h), interpolation=cv2.INTER_CUBIC
+    )
     gray = np.clip(base + tex, 0, 255)
     bg = np.stack([gray * 0.97, gray * 0.99, gray], axis=2)  # slightly warm white
     table = int(h * 0.9)
@@ -135,10 +137,22 @@ def _draw_distractors(frame: np.ndarray, distractors: Sequence[Distractor]) -> N
             L = float(d.radius_px)
             e = np.array([math.cos(math.radians(d.angle_deg)), math.sin(math.radians(d.angle_deg))])
             tip = c + e * 2.6 * L
-            cv2.line(frame, tuple(int(x * 16) for x in c), tuple(int(x * 16) for x in tip), (150, 150, 155),
-                     max(2, int(0.25 * L)), cv2.LINE_AA, 4)
-            cv2.ellipse(frame, (tuple(float(x) for x in c), (2.0 * L, 2.0 * L / 2.8), float(d.angle_deg)), d.bgr, -1,
-                        cv2.LINE_AA)
+            cv2.line(
+                frame,
+                tuple(int(x * 16) for x in c),
+                tuple(int(x * 16) for x in tip),
+                (150, 150, 155),
+                max(2, int(0.25 * L)),
+                cv2.LINE_AA,
+                4,
+            )
+            cv2.ellipse(
+                frame,
+                (tuple(float(x) for x in c), (2.0 * L, 2.0 * L / 2.8), float(d.angle_deg)),
+                d.bgr,
+                -1,
+                cv2.LINE_AA,
+            )
         else:
             cv2.polylines(frame, [p.reshape(-1, 1, 2)], False, d.bgr, d.thickness_px, cv2.LINE_AA, 4)
 
@@ -175,10 +189,17 @@ def _draw_ball(frame: np.ndarray, centres: np.ndarray, r: float, color: tuple[in
     frame[cy0:cy1, cx0:cx1] = np.clip(patch * (1.0 - a) + ball * a + 0.5, 0, 255).astype(np.uint8)
 
 
-def draw_pendulum(frame: np.ndarray, pivot_uv: np.ndarray, ball_centres: np.ndarray, radius_px: float,
-                  ball_bgr: tuple[int, int, int] = BALL_BGR, pivot_marker: str | None = None,
-                  pivot_marker_radius_px: float = 9.0, ball_uv: np.ndarray | None = None,
-                  string_px: float | None = None) -> None:
+def draw_pendulum(
+    frame: np.ndarray,
+    pivot_uv: np.ndarray,
+    ball_centres: np.ndarray,
+    radius_px: float,
+    ball_bgr: tuple[int, int, int] = BALL_BGR,
+    pivot_marker: str | None = None,
+    pivot_marker_radius_px: float = 9.0,
+    ball_uv: np.ndarray | None = None,
+    string_px: float | None = None,
+) -> None:
     """Draw in place the robot's flange above the pivot [px], the pivot marker (a colour name, or None), the string
     to the ball (at ball_uv [px], default the middle of its centres; with string_px, its length [px], drawn sagging
     when the ball is nearer — a slack string) and the ball, motion-blurred over its centres during the exposure
@@ -193,12 +214,14 @@ def draw_pendulum(frame: np.ndarray, pivot_uv: np.ndarray, ball_centres: np.ndar
     c = np.asarray(ball_centres, float).reshape(-1, 2)
     b = c.mean(axis=0) if ball_uv is None else np.asarray(ball_uv, float)
     if string_px is None or np.hypot(*(b - p)) >= 0.99 * string_px:  # taut: a straight string
-        cv2.line(frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1,
-                 cv2.LINE_AA, 4)
+        cv2.line(
+            frame, (int(p[0] * 16), int(p[1] * 16)), (int(b[0] * 16), int(b[1] * 16)), (45, 45, 50), 1, cv2.LINE_AA, 4
+        )
     else:
         string = _string_polyline(p, b, string_px)
-        cv2.polylines(frame, [np.round(string * 16).astype(np.int32).reshape(-1, 1, 2)], False, (45, 45, 50), 1,
-                      cv2.LINE_AA, 4)
+        cv2.polylines(
+            frame, [np.round(string * 16).astype(np.int32).reshape(-1, 1, 2)], False, (45, 45, 50), 1, cv2.LINE_AA, 4
+        )
     _draw_ball(frame, c, radius_px, ball_bgr)
 
 
@@ -219,8 +242,9 @@ def _string_polyline(p: np.ndarray, b: np.ndarray, length: float, n: int = 12) -
     return line + np.array([0.0, 1.0]) * (4.0 * sag * u * (1.0 - u))
 
 
-def rod_occluder(p0: Sequence[float], p1: Sequence[float], width_px: float = 6.0,
-                 bgr: tuple[int, int, int] = ROD_BGR) -> Foreground:
+def rod_occluder(
+    p0: Sequence[float], p1: Sequence[float], width_px: float = 6.0, bgr: tuple[int, int, int] = ROD_BGR
+) -> Foreground:
     """A static rod from p0 to p1 [px] drawn in front of the ball (it hides the ball where they cross)."""
     import cv2
 
@@ -233,8 +257,9 @@ def rod_occluder(p0: Sequence[float], p1: Sequence[float], width_px: float = 6.0
     return draw
 
 
-def hand_beside_ball(offset_px: Sequence[float], release_s: float, scale_px: float = 14.0,
-                     bgr: tuple[int, int, int] = SKIN_BGR) -> Foreground:
+def hand_beside_ball(
+    offset_px: Sequence[float], release_s: float, scale_px: float = 14.0, bgr: tuple[int, int, int] = SKIN_BGR
+) -> Foreground:
     """A skin-coloured hand (palm and four fingers) held at offset_px [px] from the ball until release_s [s],
     then lowered by 3.5 × scale_px over 0.15 s, out of the swing's way, and left in view."""
     import cv2
@@ -270,8 +295,13 @@ def homography_scale(H: np.ndarray, pts: np.ndarray) -> np.ndarray:
     return np.sqrt(np.abs(jx[:, 0] * jy[:, 1] - jx[:, 1] * jy[:, 0]))
 
 
-def tilted_view(size: tuple[int, int], focal_px: float, tilt_deg: Sequence[float], centre_plane_px: Sequence[float],
-                distance_px: float | None = None) -> np.ndarray:
+def tilted_view(
+    size: tuple[int, int],
+    focal_px: float,
+    tilt_deg: Sequence[float],
+    centre_plane_px: Sequence[float],
+    distance_px: float | None = None,
+) -> np.ndarray:
     """Homography plane px → image px of a pinhole camera (focal_px, principal point at the image centre) looking at
     the plane of motion from a direction tilted by (about x, about y, about the optical axis) [deg], aimed at
     centre_plane_px, at distance_px (plane px; default: focal_px, so the scale there is ≈ 1 image px per plane px)."""
@@ -405,8 +435,17 @@ def render_pendulum_video(
             rk = r if H is None else r * float(homography_scale(H, centres.mean(axis=0))[0])
             centres = to_image(centres)
             b = ball_f[k]
-            draw_pendulum(frame, p, centres, rk, ball_bgr, pivot_marker, pivot_marker_radius_px, b,
-                          None if ball_path is None else L)
+            draw_pendulum(
+                frame,
+                p,
+                centres,
+                rk,
+                ball_bgr,
+                pivot_marker,
+                pivot_marker_radius_px,
+                b,
+                None if ball_path is None else L,
+            )
             for draw in foreground:
                 draw(frame, float(tf[k] - t[0]), b)
             if gain is not None:
@@ -440,8 +479,9 @@ def render_pendulum_video(
     )
 
 
-def swing_up(duration_s: float, max_deg: float = 150.0, period_s: float = 1.0,
-             rate_hz: float = 1000.0) -> tuple[np.ndarray, np.ndarray]:
+def swing_up(
+    duration_s: float, max_deg: float = 150.0, period_s: float = 1.0, rate_hz: float = 1000.0
+) -> tuple[np.ndarray, np.ndarray]:
     """A test signal like a pumped swing-up: θ(t) [rad] oscillating with period_s [s], its amplitude growing
     linearly from 0 to max_deg [deg] over the first half of duration_s [s], then held (at 150° and 1 s a 25 cm
     string moves the ball at ≈ 4 m/s)."""

@@ -31,7 +31,15 @@ import numpy as np
 from .ambiguity import choose_pendulum
 from .color import ColorSpec, with_min_saturation
 from .detect import (
-    TINY_MAX_AREA_PX, Blob, BlobGates, coarse_factor, coarse_hsv, find_blobs, find_blobs_coarse, find_tiny, to_hsv,
+    TINY_MAX_AREA_PX,
+    Blob,
+    BlobGates,
+    coarse_factor,
+    coarse_hsv,
+    find_blobs,
+    find_blobs_coarse,
+    find_tiny,
+    to_hsv,
 )
 from .static_map import StaticMap
 
@@ -62,7 +70,9 @@ class TrackerOptions:
     locked_min_ellipse_fit: float = 0.75
     streak_min_circularity: float = 0.2  # ... and more so for a streak (moving more than its diameter per frame)
     streak_min_ellipse_fit: float = 0.65
-    learned_saturation_factor: float = 0.55  # in the window, first try pixels this saturated relative to the ball's peak
+    learned_saturation_factor: float = (
+        0.55  # in the window, first try pixels this saturated relative to the ball's peak
+    )
     acquire_min_saturation: int = 170  # on a free search finding nothing, retry with only this saturated pixels
     blur_min_step_radii: float = 0.5  # moving more than this many radii per frame, the ball is a blurred streak:
     blur_saturation_factor: float = 0.5  # ... its pixels are taken from this × its expected peak saturation
@@ -78,9 +88,13 @@ class TrackerOptions:
     max_aspect: float = 2.5  # acquisition: a blob longer than this × its width is not a ball (a tool's handle)
     tiny_search: bool = True  # when nothing else is found, look for balls a few pixels across (detect.find_tiny)
     confirm_frames: int = 3  # a new lock is tentative (unsure) until followed this many frames ...
-    confirm_move_radii: float = 1.0  # ... and moved this many radii (at least 3 px), or hangs at rest (round, plumb when a pivot is known)
+    confirm_move_radii: float = (
+        1.0  # ... and moved this many radii (at least 3 px), or hangs at rest (round, plumb when a pivot is known)
+    )
     min_confidence: float = 0.5  # a fix below this confidence is reported unsure (not found)
-    string_tolerance: float = 0.25  # with a pivot: a fix farther than (1 + this) × the learned string length is rejected
+    string_tolerance: float = (
+        0.25  # with a pivot: a fix farther than (1 + this) × the learned string length is rejected
+    )
     string_min_fixes: int = 20  # the string length [px] is learned from this many confident fixes
     static_lock_s: float = 0.6  # [s] a lock that has not moved for this long may be an object, not the ball:
     recheck_s: float = 0.5  # [s] ... look this often for other candidates and keep the one moving like a pendulum
@@ -96,7 +110,9 @@ class Prediction:
     v: float
     step_px: float
     gate_px: float  # inf when the ball was not seen recently (free search)
-    frame_step_px: float = 0.0  # displacement between the last two fixes [px] (the length of a motion-blur streak at most)
+    frame_step_px: float = (
+        0.0  # displacement between the last two fixes [px] (the length of a motion-blur streak at most)
+    )
 
 
 @dataclass
@@ -206,17 +222,18 @@ class _Follower:
 
     def choose(self, blobs: list[Blob], pred: Prediction) -> Blob | None:
         """The blob nearest the prediction inside the gate and of a plausible area; counts area-only rejections."""
-        inside = sorted(
-            ((math.hypot(b.u - pred.u, b.v - pred.v), b) for b in blobs), key=lambda db: db[0]
-        )
+        inside = sorted(((math.hypot(b.u - pred.u, b.v - pred.v), b) for b in blobs), key=lambda db: db[0])
         inside = [(d, b) for d, b in inside if d <= pred.gate_px]
         for _, b in inside:
             if self._area_ok(b, pred) and self._saturation_ok(b, pred):
                 return b
         g = self.options.gates
         round_ = [
-            b for _, b in inside
-            if b.circularity >= g.min_circularity and b.ellipse_fit >= g.min_ellipse_fit and self._saturation_ok(b, pred)
+            b
+            for _, b in inside
+            if b.circularity >= g.min_circularity
+            and b.ellipse_fit >= g.min_ellipse_fit
+            and self._saturation_ok(b, pred)
         ]
         if round_:  # as round as a ball and where the ball should be, only its area is off
             self.area_misses += 1
@@ -245,7 +262,10 @@ class _Follower:
     def moving(self, min_px: float) -> bool:
         """Moved at least min_px [px] from where the lock began, steadily: each of the last 3 frame steps longer
         than centroid noise (a fragment flickering in a dark frame hops once)."""
-        if math.hypot(self.fixes[-1].u - self.origin[0], self.fixes[-1].v - self.origin[1]) < min_px or len(self.recent) < 4:
+        if (
+            math.hypot(self.fixes[-1].u - self.origin[0], self.fixes[-1].v - self.origin[1]) < min_px
+            or len(self.recent) < 4
+        ):
             return False
         p = np.array([(u, v) for _, u, v, _ in list(self.recent)[-4:]])
         return bool(np.all(np.linalg.norm(np.diff(p, axis=0), axis=1) > 0.3))
@@ -272,8 +292,12 @@ class _Follower:
         streak = pred.frame_step_px > 2.0 * self.radius()  # blurred over more than its own size: ragged
         gates = replace(
             o.gates,
-            min_circularity=min(o.gates.min_circularity, o.streak_min_circularity if streak else o.locked_min_circularity),
-            min_ellipse_fit=min(o.gates.min_ellipse_fit, o.streak_min_ellipse_fit if streak else o.locked_min_ellipse_fit),
+            min_circularity=min(
+                o.gates.min_circularity, o.streak_min_circularity if streak else o.locked_min_circularity
+            ),
+            min_ellipse_fit=min(
+                o.gates.min_ellipse_fit, o.streak_min_ellipse_fit if streak else o.locked_min_ellipse_fit
+            ),
             max_area_px=o.gates.max_area_px * self._smear(pred),
         )
         sub = frame[y0:y1, x0:x1]
@@ -323,7 +347,9 @@ class _Hypotheses:
     shown: list[Blob | None]  # what was returned for each frame meanwhile
     starts: list[tuple[float, float]]  # where every candidate was first seen [px]
     merged: bool = False  # some candidates' followers converged onto another's blob and were dropped
-    incumbent_frames: list[int] = field(default_factory=list)  # frames of the lock (follower 0) at rest before: withdrawn if it loses
+    incumbent_frames: list[int] = field(
+        default_factory=list
+    )  # frames of the lock (follower 0) at rest before: withdrawn if it loses
 
 
 class BallTracker:
@@ -412,8 +438,11 @@ class BallTracker:
         else:
             f = self._follower
             pred = f.predict(t) if f is not None else None
-            if f is not None and not f.confirmed and (f.tiny or not f.round) and self._candidates(
-                self._whole(frame, self.spec), t
+            if (
+                f is not None
+                and not f.confirmed
+                and (f.tiny or not f.round)
+                and self._candidates(self._whole(frame, self.spec), t)
             ):  # a tentative lock on a ragged or tiny blob gives way to a ball-shaped blob anywhere
                 f = pred = None
             if f is not None and pred is not None and math.isfinite(pred.gate_px):
@@ -497,7 +526,9 @@ class BallTracker:
             conf *= _ON_STATIC
         g = o.gates
         if not f.tiny and (blob.ellipse_fit < g.min_ellipse_fit - 0.05 or blob.circularity < g.min_circularity - 0.1):
-            pred_step = math.hypot(f.fixes[-1].u - f.fixes[0].u, f.fixes[-1].v - f.fixes[0].v) if len(f.fixes) == 2 else 0.0
+            pred_step = (
+                math.hypot(f.fixes[-1].u - f.fixes[0].u, f.fixes[-1].v - f.fixes[0].v) if len(f.fixes) == 2 else 0.0
+            )
             if pred_step < 2.0 * f.radius():  # not a motion-blurred streak: just a ragged blob
                 conf *= _WEAK_SHAPE
         self.confidence = conf
@@ -520,13 +551,21 @@ class BallTracker:
         r = f.radius()
         away = (blob.u, blob.v, 2.0 * r + 2.0)
         if f.confirmed:
-            others = [b for b in self._candidates(self._whole(frame, self.spec), t)
-                      if math.hypot(b.u - blob.u, b.v - blob.v) > away[2]]
+            others = [
+                b
+                for b in self._candidates(self._whole(frame, self.spec), t)
+                if math.hypot(b.u - blob.u, b.v - blob.v) > away[2]
+            ]
         else:  # a tentative lock: whatever could be the ball instead
             others = self._find_candidates(frame, t, away)[0]
         if others:
-            self._start_hypotheses([f] + [_Follower(self.spec, o, b, t) for b in others[: o.max_candidates - 1]],
-                                   [blob] + others, t, index, pivot_uv)
+            self._start_hypotheses(
+                [f] + [_Follower(self.spec, o, b, t) for b in others[: o.max_candidates - 1]],
+                [blob] + others,
+                t,
+                index,
+                pivot_uv,
+            )
             self._hyp.incumbent_frames = [k for _, _, _, k in f.recent if k != index]
             self.confidence = TENTATIVE
         return blob
@@ -556,8 +595,9 @@ class BallTracker:
             out.append(b)
         return out
 
-    def _find_candidates(self, frame: np.ndarray, t: float, away: tuple[float, float, float] | None = None
-                         ) -> tuple[list[Blob], bool]:
+    def _find_candidates(
+        self, frame: np.ndarray, t: float, away: tuple[float, float, float] | None = None
+    ) -> tuple[list[Blob], bool]:
         """(candidates on the whole frame, found by the strict gates): the strict gates first, else blobs only
         roughly round (a ball turned into blocks by a low-bitrate codec) and after them balls a few pixels across;
         the roundest first, tiny ones by saturation.
@@ -579,12 +619,18 @@ class BallTracker:
             blobs = roundest(keep(self._whole(frame, self._acquire_spec)))
         if blobs or o.start_uv is not None:
             return blobs, True
-        loose = replace(o.gates, min_circularity=min(o.gates.min_circularity, o.loose_circularity),
-                        min_ellipse_fit=min(o.gates.min_ellipse_fit, o.loose_ellipse_fit))
+        loose = replace(
+            o.gates,
+            min_circularity=min(o.gates.min_circularity, o.loose_circularity),
+            min_ellipse_fit=min(o.gates.min_ellipse_fit, o.loose_ellipse_fit),
+        )
         blobs = roundest(keep(self._whole(frame, self.spec, loose)))
         if o.tiny_search and o.gates.min_area_px <= TINY_MAX_AREA_PX:  # and, side by side, balls a few pixels across
-            tiny = [b for b in keep(find_tiny(frame, self.spec))
-                    if all(math.hypot(b.u - c.u, b.v - c.v) > c.radius_px + 2.0 for c in blobs)]
+            tiny = [
+                b
+                for b in keep(find_tiny(frame, self.spec))
+                if all(math.hypot(b.u - c.u, b.v - c.v) > c.radius_px + 2.0 for c in blobs)
+            ]
             blobs += sorted(tiny, key=lambda b: -b.saturation)
         return blobs, False
 
@@ -724,10 +770,16 @@ class BallTracker:
             f"t = {hyp.t0:.3f} s: {len(hyp.starts)} ball-like candidates; took the one at "
             f"({start[0]:.0f}, {start[1]:.0f}) px, not {others}: {reason}"
         )
-        for j, f in enumerate(hyp.followers):  # a candidate that lost and never moved is an object to ignore from now on
+        for j, f in enumerate(
+            hyp.followers
+        ):  # a candidate that lost and never moved is an object to ignore from now on
             c = np.array(hyp.centres[j], float)
             c = c[np.all(np.isfinite(c), axis=1)]
-            if j != k and len(c) and float(np.max(np.linalg.norm(c - np.median(c, axis=0), axis=1))) <= max(1.5, 0.3 * f.radius()):
+            if (
+                j != k
+                and len(c)
+                and float(np.max(np.linalg.norm(c - np.median(c, axis=0), axis=1))) <= max(1.5, 0.3 * f.radius())
+            ):
                 u, v = np.median(c, axis=0)
                 self._excluded.append((float(u), float(v), 1.5 * f.radius() + 3.0))
         if k != 0 and hyp.incumbent_frames:  # the lock sat on an object, not the ball
@@ -746,13 +798,17 @@ class BallTracker:
         # confirmed when it moved like a pendulum, or hangs still below the pivot; else (a held ball, an object) it
         # stays tentative until it moves
         doubtful = not choice.moving and not (still and hangs) and not (still and len(piv) == 0 and final)
-        if doubtful and final and len(piv) > 0:  # nothing moved and nothing hangs below the pivot: none of them is the ball
+        if (
+            doubtful and final and len(piv) > 0
+        ):  # nothing moved and nothing hangs below the pivot: none of them is the ball
             self._abandon()
             return None
         f.confirmed = not doubtful
         if not doubtful and f.pending:  # the incumbent lock's tentative frames from before are settled too
             self._revision.extend((j, b, CONFIRMED) for j, b in f.pending)
-        f.pending = (f.pending + [(hyp.first + j, b) for j, b in enumerate(blobs[:-1]) if b is not None]) if doubtful else []
+        f.pending = (
+            (f.pending + [(hyp.first + j, b) for j, b in enumerate(blobs[:-1]) if b is not None]) if doubtful else []
+        )
         level = TENTATIVE if doubtful else CONFIRMED
         self._revision.extend((hyp.first + j, b, level if b is not None else 0.0) for j, b in enumerate(blobs[:-1]))
         self._follower = f

@@ -80,12 +80,16 @@ def read_track_csv(path: str | Path) -> TrackTable:
     bad = np.flatnonzero((found != 0) & (found != 1))
     if bad.size:
         k = int(bad[0])
-        raise CsvFormatError(f"found must be 0 or 1, got {found[k]:g}", file=table.path, row=k + 2, column=5, column_name="found")
+        raise CsvFormatError(
+            f"found must be 0 or 1, got {found[k]:g}", file=table.path, row=k + 2, column=5, column_name="found"
+        )
     uv = table.data[:, 2:4]
     bad = np.flatnonzero((found == 1) & ~np.all(np.isfinite(uv), axis=1))
     if bad.size:
         k = int(bad[0])
-        raise CsvFormatError("found = 1 but the position is empty", file=table.path, row=k + 2, column=3, column_name="u")
+        raise CsvFormatError(
+            "found = 1 but the position is empty", file=table.path, row=k + 2, column=3, column_name="u"
+        )
 
     def opt(*names: str) -> np.ndarray | None:
         if not all(table.has(n) for n in names):

@@ -78,8 +78,9 @@ def check_video_name(path: str | Path, option: str) -> None:
         raise OptionError(f"{option} {path}: a video name must end in {', '.join(VIDEO_SUFFIXES)}")
 
 
-def open_writer(path: str | Path, fps: float, size: tuple[int, int], target: str | Path | None = None,
-                codec: str = "mp4v"):
+def open_writer(
+    path: str | Path, fps: float, size: tuple[int, int], target: str | Path | None = None, codec: str = "mp4v"
+):
     """A ``cv2.VideoWriter`` (FourCC ``codec``) on ``path``; OutputError (exit 1) naming ``target`` when it cannot be
     opened (a full disk, a quota, no encoder)."""
     import cv2
@@ -221,8 +222,15 @@ class VideoSink:
     low-bandwidth stream: encoder ghosts, blocking, smeared colour). A writer that cannot start (a full disk, a
     quota, no encoder) is an OutputError naming ``target`` (the user's name when ``path`` is a temporary)."""
 
-    def __init__(self, path: str | Path, codec: str, fps: float, size: tuple[int, int],
-                 bitrate_kbps: float | None = None, target: str | Path | None = None) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        codec: str,
+        fps: float,
+        size: tuple[int, int],
+        bitrate_kbps: float | None = None,
+        target: str | Path | None = None,
+    ) -> None:
         from trajectories.errors import OutputError
 
         self.path = str(path)

@@ -13,8 +13,17 @@ from .trajectory import JointTrajectory
 QUANTITIES = ("position", "velocity", "acceleration", "jerk")
 STEP_QUANTITIES = ("step velocity", "step acceleration", "step jerk")  # forward differences, robot at rest around
 JERKS = ("jerk", "step jerk")  # fail only when jerk is enforced
-UNITS = {"position": "rad", "velocity": "rad/s", "acceleration": "rad/s^2", "jerk": "rad/s^3", "cartesian speed": "m/s",
-         "step velocity": "rad/s", "step acceleration": "rad/s^2", "step jerk": "rad/s^3", "rest": "rad/s"}
+UNITS = {
+    "position": "rad",
+    "velocity": "rad/s",
+    "acceleration": "rad/s^2",
+    "jerk": "rad/s^3",
+    "cartesian speed": "m/s",
+    "step velocity": "rad/s",
+    "step acceleration": "rad/s^2",
+    "step jerk": "rad/s^3",
+    "rest": "rad/s",
+}
 REL_TOL = 1e-9  # a value exactly at its limit passes (the file's decimals round either way)
 
 
@@ -208,7 +217,10 @@ def rest_violations(traj: JointTrajectory, limits: JointLimits) -> list[Violatio
     h = traj.dt
     tol = limits.acceleration * h * (1.0 + REL_TOL)
     out = []
-    for where, v, t in (("start", (traj.q[1] - traj.q[0]) / h, traj.t[0]), ("end", (traj.q[-1] - traj.q[-2]) / h, traj.t[-1])):
+    for where, v, t in (
+        ("start", (traj.q[1] - traj.q[0]) / h, traj.t[0]),
+        ("end", (traj.q[-1] - traj.q[-2]) / h, traj.t[-1]),
+    ):
         for j in np.flatnonzero(np.abs(v) > tol):
             out.append(Violation(int(j) + 1, "rest", float(t), float(v[j]), float(limits.acceleration[j] * h),
                                  float(abs(v[j])), float(t), 1, note=where))  # fmt: skip

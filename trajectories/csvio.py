@@ -75,7 +75,9 @@ def _check_time(t: np.ndarray, path: str, rule: TimeRule, first_row: int) -> Non
     if rule == "none" or len(t) == 0:
         return
     if abs(t[0]) > _UNIFORM_ABS_TOL:
-        raise CsvFormatError(f"time must start at 0, got {t[0]:g} s", file=path, row=first_row, column=1, column_name="t")
+        raise CsvFormatError(
+            f"time must start at 0, got {t[0]:g} s", file=path, row=first_row, column=1, column_name="t"
+        )
     if len(t) < 2:
         return
     dt = np.diff(t)
@@ -83,7 +85,11 @@ def _check_time(t: np.ndarray, path: str, rule: TimeRule, first_row: int) -> Non
     if bad.size:
         k = int(bad[0]) + 1
         raise CsvFormatError(
-            f"time not increasing ({t[k - 1]:g} s then {t[k]:g} s)", file=path, row=first_row + k, column=1, column_name="t"
+            f"time not increasing ({t[k - 1]:g} s then {t[k]:g} s)",
+            file=path,
+            row=first_row + k,
+            column=1,
+            column_name="t",
         )
     if rule == "uniform":
         h = (t[-1] - t[0]) / (len(t) - 1)
@@ -177,8 +183,9 @@ def _fast_body(raw: bytes, start: int, width: int, nan_ok: set[int]) -> np.ndarr
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("error")  # e.g. "input contained no data"
-                data = np.loadtxt(io.BytesIO(raw[start:end]), delimiter=",", comments=None, dtype=float, ndmin=2,
-                                  encoding="utf-8")
+                data = np.loadtxt(
+                    io.BytesIO(raw[start:end]), delimiter=",", comments=None, dtype=float, ndmin=2, encoding="utf-8"
+                )
         except (ValueError, UserWarning):  # UnicodeDecodeError is a ValueError
             return None
     if data is None:
@@ -193,8 +200,9 @@ def _fast_body(raw: bytes, start: int, width: int, nan_ok: set[int]) -> np.ndarr
     return data
 
 
-def _parse_rows(rows: list[tuple[int, list[str]]], width: int, names: Sequence[str], nan_ok: set[int],
-                spath: str, block: int = 2048) -> np.ndarray:
+def _parse_rows(
+    rows: list[tuple[int, list[str]]], width: int, names: Sequence[str], nan_ok: set[int], spath: str, block: int = 2048
+) -> np.ndarray:
     """The strict reader: blocks of rows converted at once, a block with any fault cell by cell, so that the first
     fault in the file is named by file, row and column."""
     data = np.empty((len(rows), width), dtype=float)

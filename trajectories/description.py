@@ -25,8 +25,14 @@ BASE_BODY = 0  # the fixed base (lbr_link_0)
 FLANGE_BODY = N_JOINTS + 1  # the flange frame (shapes of the tool)
 JOINT_HOUSING = {2: (0.070, 0.16), 4: (0.066, 0.15), 6: (0.058, 0.13)}  # joint: (radius, length) [m]
 # Tubes along the upright arm (q = 0): body, z from, z to [m] along the base z, radius [m]
-_TUBES = ((0, 0.0, 0.1575, 0.090), (1, 0.1575, 0.34, 0.068), (2, 0.34, 0.54, 0.064), (3, 0.54, 0.74, 0.064),
-          (4, 0.74, 0.94, 0.058), (5, 0.94, 1.14, 0.058))
+_TUBES = (
+    (0, 0.0, 0.1575, 0.090),
+    (1, 0.1575, 0.34, 0.068),
+    (2, 0.34, 0.54, 0.064),
+    (3, 0.54, 0.74, 0.064),
+    (4, 0.74, 0.94, 0.058),
+    (5, 0.94, 1.14, 0.058),
+)
 
 
 @dataclass(frozen=True)
@@ -79,8 +85,12 @@ def link_shapes(robot: Robot) -> tuple[Shape, ...]:
 
 def link_names(prefix: str = "lbr") -> tuple[str, ...]:
     """TF/URDF frame names: base, the 7 links moved by A1..A7, the flange and the TCP."""
-    return (f"{prefix}_link_0", *(f"{prefix}_link_{i}" for i in range(1, N_JOINTS + 1)), f"{prefix}_flange",
-            f"{prefix}_tcp")
+    return (
+        f"{prefix}_link_0",
+        *(f"{prefix}_link_{i}" for i in range(1, N_JOINTS + 1)),
+        f"{prefix}_flange",
+        f"{prefix}_tcp",
+    )
 
 
 def joint_names(prefix: str = "lbr") -> tuple[str, ...]:
@@ -90,8 +100,12 @@ def joint_names(prefix: str = "lbr") -> tuple[str, ...]:
 
 def _origin(parent: ET.Element, m: np.ndarray) -> None:
     rpy = pin.rpy.matrixToRpy(m[:3, :3])
-    ET.SubElement(parent, "origin", xyz=" ".join(f"{v + 0.0:.12g}" for v in m[:3, 3]),
-                  rpy=" ".join(f"{v + 0.0:.12g}" for v in rpy))
+    ET.SubElement(
+        parent,
+        "origin",
+        xyz=" ".join(f"{v + 0.0:.12g}" for v in m[:3, 3]),
+        rpy=" ".join(f"{v + 0.0:.12g}" for v in rpy),
+    )
 
 
 def _visual(link: ET.Element, shape: Shape) -> None:
@@ -125,8 +139,16 @@ def urdf(robot: Robot, limits: JointLimits | None = None, prefix: str = "lbr") -
             _origin(inertial, pin.SE3(np.eye(3), inertia.lever).homogeneous)
             ET.SubElement(inertial, "mass", value=f"{inertia.mass:.17g}")
             i3 = inertia.inertia
-            ET.SubElement(inertial, "inertia", ixx=f"{i3[0, 0]:.17g}", ixy=f"{i3[0, 1]:.17g}", ixz=f"{i3[0, 2]:.17g}",
-                          iyy=f"{i3[1, 1]:.17g}", iyz=f"{i3[1, 2]:.17g}", izz=f"{i3[2, 2]:.17g}")
+            ET.SubElement(
+                inertial,
+                "inertia",
+                ixx=f"{i3[0, 0]:.17g}",
+                ixy=f"{i3[0, 1]:.17g}",
+                ixz=f"{i3[0, 2]:.17g}",
+                iyy=f"{i3[1, 1]:.17g}",
+                iyz=f"{i3[1, 2]:.17g}",
+                izz=f"{i3[2, 2]:.17g}",
+            )
         for shape in shapes:
             if shape.body == body:
                 _visual(link, shape)
@@ -136,8 +158,14 @@ def urdf(robot: Robot, limits: JointLimits | None = None, prefix: str = "lbr") -
         ET.SubElement(joint, "child", link=names[i + 1])
         _origin(joint, model.jointPlacements[i + 1].homogeneous)
         ET.SubElement(joint, "axis", xyz="0 0 1")
-        ET.SubElement(joint, "limit", lower=f"{-lim.position[i]:.17g}", upper=f"{lim.position[i]:.17g}",
-                      velocity=f"{lim.velocity[i]:.17g}", effort=f"{lim.torque[i]:.17g}")
+        ET.SubElement(
+            joint,
+            "limit",
+            lower=f"{-lim.position[i]:.17g}",
+            upper=f"{lim.position[i]:.17g}",
+            velocity=f"{lim.velocity[i]:.17g}",
+            effort=f"{lim.torque[i]:.17g}",
+        )
     for parent, child, fid in ((names[N_JOINTS], names[-2], robot.flange_id), (names[-2], names[-1], robot.tcp_id)):
         joint = ET.SubElement(root, "joint", name=f"{child}_joint", type="fixed")
         ET.SubElement(joint, "parent", link=parent)

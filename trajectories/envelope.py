@@ -175,7 +175,9 @@ class BrakingEnvelope:
         relative to them. ``reason`` is set (and ``q`` is meaningless) when the history itself leaves no admissible
         command (the robot must brake) or ``q`` is not 7 finite values."""
         if q is None or len(q) != 7:
-            return Admission(tuple(q1), 0.0, -1, f"the joint position command has {0 if q is None else len(q)} values, not 7")
+            return Admission(
+                tuple(q1), 0.0, -1, f"the joint position command has {0 if q is None else len(q)} values, not 7"
+            )
         dt = self.dt
         idt2 = 1.0 / (dt * dt)
         out: list[float] | None = None
@@ -225,7 +227,7 @@ class BrakingEnvelope:
         worst, worst_j = first.clamped, first.joint
         for j in range(7):
             lo = hi = math.nan
-            for with_jerk in ((True, False) if jerk else (False,)):
+            for with_jerk in (True, False) if jerk else (False,):
                 lo, hi = -math.inf, math.inf
                 for k, h in enumerate(histories):
                     iv = self._interval(j, h[0][j], h[1][j], h[2][j], with_jerk and k == 0)

@@ -121,10 +121,16 @@ class IkError(LbrError):
 
     def figures(self) -> dict:
         """The refusal as JSON figures."""
-        return {"index": self.index, "t_s": self.t, "reason": self.reason, "kind": self.kind,
-                "joint": None if self.joint is None else self.joint + 1, "needed": self.needed,
-                "position_error_m": None if self.position_error != self.position_error else self.position_error,
-                "rotation_error_rad": None if self.rotation_error != self.rotation_error else self.rotation_error}
+        return {
+            "index": self.index,
+            "t_s": self.t,
+            "reason": self.reason,
+            "kind": self.kind,
+            "joint": None if self.joint is None else self.joint + 1,
+            "needed": self.needed,
+            "position_error_m": None if self.position_error != self.position_error else self.position_error,
+            "rotation_error_rad": None if self.rotation_error != self.rotation_error else self.rotation_error,
+        }
 
 
 class PlanningError(LbrError):

@@ -185,8 +185,16 @@ class PathSolver:
         return lo_a, hi_a, bool(clash.any())
 
     def track(
-        self, k: int, q: np.ndarray, lo: np.ndarray, hi: np.ndarray, q_ref: np.ndarray, gain: float, budget: int,
-        first: bool = False, loose: bool = False,
+        self,
+        k: int,
+        q: np.ndarray,
+        lo: np.ndarray,
+        hi: np.ndarray,
+        q_ref: np.ndarray,
+        gain: float,
+        budget: int,
+        first: bool = False,
+        loose: bool = False,
     ) -> tuple[np.ndarray, float, float, int]:
         """Newton steps toward target k inside [lo, hi] → (q, position error [m], rotation error [rad], steps).
 
@@ -298,8 +306,11 @@ class PathSolver:
                 it += it2
                 relaxed += 1
             if (
-                (ep > tol_p or er > tol_r) and i >= 2 and self.speed
-                and repairs.get(i, 0) < len(REPAIR_BACK) and sum(repairs.values()) < MAX_REPAIRS
+                (ep > tol_p or er > tol_r)
+                and i >= 2
+                and self.speed
+                and repairs.get(i, 0) < len(REPAIR_BACK)
+                and sum(repairs.values()) < MAX_REPAIRS
             ):
                 # too fast here from where the redundancy has led: go back and steer the self-motion early
                 # toward the configuration this pose needs (reached from the previous sample, limits ignored)
@@ -414,7 +425,9 @@ class PathSolver:
             return held(
                 f"the path {origin} ran into A{j + 1}'s position limit here (the arm angle it followed would need "
                 f"A{j + 1} at {math.degrees(wrapped[j]):.2f}°, limit ±{math.degrees(self.limits.position[j]):.2f}°)",
-                "position limit", j, float(wrapped[j]),
+                "position limit",
+                j,
+                float(wrapped[j]),
             )
         if stall.q_prev is not None and self.speed and ep <= 1e-6 and er <= 1e-5:
             speed = np.abs(q - stall.q_prev) / stall.dt
@@ -424,7 +437,9 @@ class PathSolver:
                 return held(
                     f"the path {origin} needs A{j + 1} at {speed[j]:.2f} rad/s, above its limit "
                     f"{self.limits.velocity[j]:.2f} rad/s (×{ratio[j]:.1f}) here",
-                    "velocity limit", j, float(speed[j]),
+                    "velocity limit",
+                    j,
+                    float(speed[j]),
                 )
         return IkError(f"{where}: the path {origin} did not converge inside the joint limits here; {reachable}; "
                        f"{remaining}{hint}", **kw)  # fmt: skip
@@ -444,8 +459,15 @@ class PathSolver:
             dt = float(np.median(np.diff(self.times))) if self.times is not None else 0.0
             stride = max(1, int(round(self.options.coarse_dt / dt))) if dt > 0 else NO_TIMES_STRIDE
         found = first_unreachable(
-            ArmGeometry.of(self.robot), self.positions, self.rotations, self.times, self.limits,
-            self.options.limit_margin, speed=self.speed, acceleration=self.acceleration_facts, stride=stride,
+            ArmGeometry.of(self.robot),
+            self.positions,
+            self.rotations,
+            self.times,
+            self.limits,
+            self.options.limit_margin,
+            speed=self.speed,
+            acceleration=self.acceleration_facts,
+            stride=stride,
         )
         if stride == 1:
             self._full_fact = (found,)
@@ -466,21 +488,32 @@ class PathSolver:
         k, t = fact.index, self.time(fact.index)
         before = (
             "every pose before it is within reach and has an arm angle inside the position limits"
-            + (f", and A4 keeps its speed{' and acceleration' if self.acceleration_facts else ''} limit up to it"
-               if self.speed else "")
-            if k else "it is the first pose"
+            + (
+                f", and A4 keeps its speed{' and acceleration' if self.acceleration_facts else ''} limit up to it"
+                if self.speed
+                else ""
+            )
+            if k
+            else "it is the first pose"
         )
         moving = {"velocity limit": f"from pose {k - 1} it ", "acceleration limit": f"from poses {k - 2}, {k - 1} it "}
         why = (
             "; the task path starts and ends at rest, so its joint file must keep the acceleration limit to pass "
-            "`lbr check`" if fact.reason == "acceleration limit" else ""
+            "`lbr check`"
+            if fact.reason == "acceleration limit"
+            else ""
         )
         return IkError(
             f"pose {k} (t = {t:.4f} s) cannot be reached inside the joint limits: {moving.get(fact.reason, '')}"
             f"{fact.describe()} ({before}){why}",
-            index=k, t=t, position_error=fact.needed if fact.reason == "out of reach" else math.nan,
-            rotation_error=math.nan, reason=fact.reason, joint=fact.joint,
-            needed=fact.needed, kind="pose" if fact.of_pose else "path",
+            index=k,
+            t=t,
+            position_error=fact.needed if fact.reason == "out of reach" else math.nan,
+            rotation_error=math.nan,
+            reason=fact.reason,
+            joint=fact.joint,
+            needed=fact.needed,
+            kind="pose" if fact.of_pose else "path",
         )
 
     def prefix(self, m: int) -> "PathSolver":
@@ -539,7 +572,11 @@ class PathSolver:
         return self.through(idx, qc, relaxed, steps_c)
 
     def through(
-        self, idx: np.ndarray, qc: np.ndarray, relaxed: int, steps_c: np.ndarray | None = None,
+        self,
+        idx: np.ndarray,
+        qc: np.ndarray,
+        relaxed: int,
+        steps_c: np.ndarray | None = None,
         any_acceleration: bool = False,
     ) -> IkResult | None:
         """The path through solutions ``qc`` (m, 7) [rad] of the samples ``idx``: cubic spline to every sample and

@@ -107,7 +107,9 @@ def random_joint_path(
     for j in range(7):
         for _ in range(3):
             f = rng.uniform(0.1, 0.6)  # [Hz]
-            q[:, j] += rng.normal() * (1 - np.cos(2 * np.pi * f * t)) + rng.normal() * 0.3 * np.sin(2 * np.pi * f * t) ** 2
+            q[:, j] += (
+                rng.normal() * (1 - np.cos(2 * np.pi * f * t)) + rng.normal() * 0.3 * np.sin(2 * np.pi * f * t) ** 2
+            )
     q -= q[0]
     peak = np.abs(q).max(axis=0) + 1e-12
     q *= amplitude / peak
@@ -240,7 +242,10 @@ def build_suite(robot: Robot, limits: JointLimits, seed: int = 0, quick: bool = 
             ("line", dict(center=(0.4, -0.15, 0.4), size=0.15, plane="xy", timing="smooth", duration=6.0)),
             ("line", dict(center=(0.45, 0.0, 0.3), size=0.15, plane="xz", timing="smooth", tilt_deg=30)),
             ("line", dict(center=(0.4, -0.2, 0.5), size=0.2, plane="yz", timing="smooth", yaw_deg=90, duration=8.0)),
-            ("line", dict(center=(0.35, 0.0, 0.25), size=0.1, plane="xy", timing="smooth", tilt_deg=45, tilt_axis_deg=90)),
+            (
+                "line",
+                dict(center=(0.35, 0.0, 0.25), size=0.1, plane="xy", timing="smooth", tilt_deg=45, tilt_axis_deg=90),
+            ),
             ("circle", dict(yaw_deg=30.0)),
             ("circle", dict(center=(0.5, 0.1, 0.35), size=0.1, plane="xy", tilt_deg=20)),
             ("circle", dict(center=(0.55, 0.0, 0.5), size=0.15, plane="yz", tilt_deg=45, tilt_axis_deg=-90)),
@@ -248,7 +253,18 @@ def build_suite(robot: Robot, limits: JointLimits, seed: int = 0, quick: bool = 
             ("circle", dict(center=(0.5, -0.2, 0.4), size=0.1, plane="xy", tilt_deg=45, yaw_deg=60, timing="smooth")),
             ("figure8", dict(center=(0.55, 0.0, 0.4), size=0.15, plane="yz")),
             ("figure8", dict(center=(0.5, 0.0, 0.3), size=0.12, plane="xy", tilt_deg=30, yaw_deg=45)),
-            ("figure8", dict(center=(-0.3, 0.45, 0.45), size=0.12, plane="xz", tilt_deg=45, tilt_axis_deg=45, yaw_deg=90, yaw_offset_deg=120)),
+            (
+                "figure8",
+                dict(
+                    center=(-0.3, 0.45, 0.45),
+                    size=0.12,
+                    plane="xz",
+                    tilt_deg=45,
+                    tilt_axis_deg=45,
+                    yaw_deg=90,
+                    yaw_offset_deg=120,
+                ),
+            ),
         ]
         for shape, kw in shapes:
             paths.append(cartesian_path(shape, dt, **{"duration": 4.0, **kw}))
@@ -395,18 +411,39 @@ def build_rest_suite(limits: JointLimits, quick: bool = False) -> list[TaskPath]
         paths += [
             drawing_path(f"write-table-pen-{ms}", "loops", dt, 6.0, (0.5, 0.0, 0.15), "table", 0.36),
             drawing_path(f"write-board-{ms}", "loops", dt, 6.0, (0.62, 0.0, 0.55), "board", 0.4, RobotConfig()),
-            drawing_path(f"write-board-longpen-tilt20-{ms}", "loops", dt, 5.0, (0.7, 0.05, 0.45), "board", 0.32,
-                         LONG_PEN, pen_tilt_deg=20.0),
-            drawing_path(f"rose-table-offsetpen-{ms}", "rose", dt, 5.0, (0.62, 0.1, 0.12), "table", 0.3,
-                         OFFSET_PEN, yaw_deg=40.0),
+            drawing_path(
+                f"write-board-longpen-tilt20-{ms}",
+                "loops",
+                dt,
+                5.0,
+                (0.7, 0.05, 0.45),
+                "board",
+                0.32,
+                LONG_PEN,
+                pen_tilt_deg=20.0,
+            ),
+            drawing_path(
+                f"rose-table-offsetpen-{ms}", "rose", dt, 5.0, (0.62, 0.1, 0.12), "table", 0.3, OFFSET_PEN, yaw_deg=40.0
+            ),
             drawing_path(f"spiral-table-{ms}", "spiral", dt, 4.0, (0.6, -0.15, 0.2), "table", 0.3),
-            drawing_path(f"heart-board-pen-tilt30-{ms}", "heart", dt, 4.0, (0.6, -0.1, 0.5), "board", 0.3,
-                         pen_tilt_deg=30.0),
+            drawing_path(
+                f"heart-board-pen-tilt30-{ms}", "heart", dt, 4.0, (0.6, -0.1, 0.5), "board", 0.3, pen_tilt_deg=30.0
+            ),
             drawing_path(f"spiral-board-fast-{ms}", "spiral", dt, 1.5, (0.78, 0.1, 0.55), "board", 0.3, LONG_PEN),
-            drawing_path(f"write-table-moving-ends-{ms}", "loops", dt, 5.0, (0.5, 0.0, 0.15), "table", 0.36,
-                         rest=False),
-            drawing_path(f"rose-board-moving-ends-{ms}", "rose", dt, 4.0, (0.6, 0.0, 0.5), "board", 0.3,
-                         RobotConfig(), rest=False),
+            drawing_path(
+                f"write-table-moving-ends-{ms}", "loops", dt, 5.0, (0.5, 0.0, 0.15), "table", 0.36, rest=False
+            ),
+            drawing_path(
+                f"rose-board-moving-ends-{ms}",
+                "rose",
+                dt,
+                4.0,
+                (0.6, 0.0, 0.5),
+                "board",
+                0.3,
+                RobotConfig(),
+                rest=False,
+            ),
         ]
         # near-singular passes: over the base axis (shoulder), at full stretch (elbow), forearm along the flange
         paths += [
@@ -417,8 +454,18 @@ def build_rest_suite(limits: JointLimits, quick: bool = False) -> list[TaskPath]
         # orientation-heavy moves at rest at both ends
         paths += [
             move_path(f"spin-flange-170-{ms}", dt, 3.0, (0.55, 0.0, 0.4), kind="orientation", angle_deg=170.0),
-            move_path(f"tumble-to-horizontal-{ms}", dt, 3.0, (0.5, 0.1, 0.45), kind="orientation", axis=(0, 1, 0), angle_deg=-90.0),
-            move_path(f"tilt-pen-50-{ms}", dt, 2.0, (0.5, -0.2, 0.25), None, DOWN, PEN, "orientation", (1, -1, 0), 50.0),
+            move_path(
+                f"tumble-to-horizontal-{ms}",
+                dt,
+                3.0,
+                (0.5, 0.1, 0.45),
+                kind="orientation",
+                axis=(0, 1, 0),
+                angle_deg=-90.0,
+            ),
+            move_path(
+                f"tilt-pen-50-{ms}", dt, 2.0, (0.5, -0.2, 0.25), None, DOWN, PEN, "orientation", (1, -1, 0), 50.0
+            ),
             move_path(f"spin-pen-300-{ms}", dt, 4.0, (0.5, 0.0, 0.3), None, DOWN, PEN, "orientation", angle_deg=300.0),
         ]
         # FK-built joint paths time-warped to rest: random, through singularities, brushing a limit
@@ -436,7 +483,9 @@ def build_rest_suite(limits: JointLimits, quick: bool = False) -> list[TaskPath]
             move_path(f"leave-reach-outward-{ms}", dt, 3.0, (0.5, 0.0, 0.3), (1.0, 0.0, 0.3), kind="leave"),
             move_path(f"leave-reach-upward-pen-{ms}", dt, 3.0, (0.3, 0.2, 0.6), (0.3, 0.2, 1.2), DOWN, PEN, "leave"),
             move_path(f"leave-to-shoulder-{ms}", dt, 3.0, (0.5, 0.0, 0.3), (0.12, 0.0, 0.3), kind="leave"),
-            move_path(f"leave-tumble-up-{ms}", dt, 3.0, (0.45, 0.0, 0.15), kind="leave", axis=(0, 1, 0), angle_deg=150.0),
+            move_path(
+                f"leave-tumble-up-{ms}", dt, 3.0, (0.45, 0.0, 0.15), kind="leave", axis=(0, 1, 0), angle_deg=150.0
+            ),
             move_path(f"leave-a4-too-fast-{ms}", dt, 0.25, (0.45, 0.0, 0.45), (0.75, 0.0, 0.45), kind="leave"),
         ]
     if quick:
@@ -455,12 +504,18 @@ def long_writing(dt: float, duration: float, leave_at: float | None = None) -> T
     sigma = rest_timing(t, 0.5)
     theta = 2 * np.pi * 120 * sigma
     loop = 0.012  # [m]
-    pos = np.column_stack([0.60 - 0.15 * sigma - loop * (1 - np.cos(theta)),
-                           0.25 * np.sin(2 * np.pi * 3 * sigma) - loop * np.sin(theta), np.full(len(t), 0.15)])
+    pos = np.column_stack(
+        [
+            0.60 - 0.15 * sigma - loop * (1 - np.cos(theta)),
+            0.25 * np.sin(2 * np.pi * 3 * sigma) - loop * np.sin(theta),
+            np.full(len(t), 0.15),
+        ]
+    )
     name = f"write-60s-{dt * 1e3:g}ms"
     if leave_at is not None:
         pos[:, 0] += 0.04 * np.clip(t - leave_at, 0.0, None) ** 2
         name = f"write-60s-leaving-at-{leave_at:g}s-{dt * 1e3:g}ms"
     rot = np.broadcast_to(_frame([0.0, 0.0, -1.0]), (len(t), 3, 3)).copy()
-    return TaskPath(name=name, kind="drawing" if leave_at is None else "leave", t=t, position=pos, rotation=rot,
-                    config=PEN)
+    return TaskPath(
+        name=name, kind="drawing" if leave_at is None else "leave", t=t, position=pos, rotation=rot, config=PEN
+    )

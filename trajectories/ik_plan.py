@@ -126,8 +126,13 @@ def _plan(path: PlanTargets, idx: np.ndarray, q: np.ndarray, psi: np.ndarray, br
     speed = np.abs(np.diff(q, axis=0)) / (np.diff(path.times[idx])[:, None] * path.limits.velocity)
     stage, joint = np.unravel_index(int(np.argmax(speed)), speed.shape) if len(speed) else (0, 0)
     return ArmAnglePlan(
-        indices=idx, q=q, psi=psi, branch=branch,
-        peak_speed=float(speed.max()) if len(speed) else 0.0, peak_joint=int(joint), peak_stage=int(stage) + 1,
+        indices=idx,
+        q=q,
+        psi=psi,
+        branch=branch,
+        peak_speed=float(speed.max()) if len(speed) else 0.0,
+        peak_joint=int(joint),
+        peak_stage=int(stage) + 1,
     )
 
 
@@ -187,13 +192,14 @@ def refine_plan(
         q = joints(intermediate_result.x)
         vel = np.diff(q, axis=0) / dt[:, None]
         acc = np.diff(vel, axis=0) / (0.5 * (dt[1:] + dt[:-1]))[:, None]
-        if (np.abs(vel) / limits.velocity).max(initial=0.0) <= stop_speed and (
-            np.abs(acc) / limits.acceleration
-        ).max(initial=0.0) <= 1.0:
+        if (np.abs(vel) / limits.velocity).max(initial=0.0) <= stop_speed and (np.abs(acc) / limits.acceleration).max(
+            initial=0.0
+        ) <= 1.0:
             raise StopIteration
 
-    res = minimize(cost, plan.psi, jac=grad, method="L-BFGS-B", callback=good_enough,
-                   options={"maxiter": max_iterations})
+    res = minimize(
+        cost, plan.psi, jac=grad, method="L-BFGS-B", callback=good_enough, options={"maxiter": max_iterations}
+    )
     psi = res.x if res.fun <= cost(plan.psi) else plan.psi
     return _plan(path, idx, joints(psi), psi, branch)
 

@@ -70,21 +70,29 @@ class PathFact:
     def describe(self) -> str:
         """What makes the sample unreachable, as a sentence fragment."""
         if self.reason == "out of reach":
-            return (f"out of reach by {self.needed * 1e3:.1f} mm (the wrist would be {self.limit + self.needed:.3f} m "
-                    f"from the shoulder; the arm reaches {self.limit:.3f} m)")
+            return (
+                f"out of reach by {self.needed * 1e3:.1f} mm (the wrist would be {self.limit + self.needed:.3f} m "
+                f"from the shoulder; the arm reaches {self.limit:.3f} m)"
+            )
         j = self.joint + 1  # type: ignore[operator]
         if self.reason in ("velocity limit", "acceleration limit"):
             unit = "rad/s" if self.reason == "velocity limit" else "rad/s²"
-            return (f"needs A{j} at {self.needed:.4g} {unit}, above its limit {self.limit:.4g} {unit} (×"
-                    f"{self.needed / self.limit:.3f}); A4's angle is set by the pose alone (the wrist's distance from "
-                    f"the shoulder), whatever the arm angle")
+            return (
+                f"needs A{j} at {self.needed:.4g} {unit}, above its limit {self.limit:.4g} {unit} (×"
+                f"{self.needed / self.limit:.3f}); A4's angle is set by the pose alone (the wrist's distance from "
+                f"the shoulder), whatever the arm angle"
+            )
         if self.joint == 3:
-            return (f"needs A4 at ±{math.degrees(abs(self.needed)):.2f}° (limit ±{math.degrees(self.limit):.2f}°) at "
-                    f"every arm angle: the wrist is too close to the shoulder")
+            return (
+                f"needs A4 at ±{math.degrees(abs(self.needed)):.2f}° (limit ±{math.degrees(self.limit):.2f}°) at "
+                f"every arm angle: the wrist is too close to the shoulder"
+            )
         signs = "".join("+" if b > 0 else "−" for b in self.branch) if self.branch else "?"
-        return (f"needs a joint beyond its position limit at every arm angle of every branch (the closest: A{j} at "
-                f"{math.degrees(self.needed):.2f}°, limit ±{math.degrees(self.limit):.2f}°, at arm angle "
-                f"{math.degrees(self.psi or 0.0):.1f}° in branch {signs} of A2/A4/A6)")
+        return (
+            f"needs a joint beyond its position limit at every arm angle of every branch (the closest: A{j} at "
+            f"{math.degrees(self.needed):.2f}°, limit ±{math.degrees(self.limit):.2f}°, at arm angle "
+            f"{math.degrees(self.psi or 0.0):.1f}° in branch {signs} of A2/A4/A6)"
+        )
 
 
 def _frames(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -161,7 +169,9 @@ def _feasible(forms: np.ndarray, phi: np.ndarray) -> np.ndarray:
     return (mask != 0).any(axis=1)
 
 
-def wrist_geometry(geometry: ArmGeometry, positions: np.ndarray, rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def wrist_geometry(
+    geometry: ArmGeometry, positions: np.ndarray, rotations: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """The wrist's distance from the shoulder (n,) [m] and |A4| (n,) [rad] of each pose (clipped where out of reach)."""
     d1, d3, d5 = geometry.base_shoulder, geometry.shoulder_elbow, geometry.elbow_wrist
     flange = positions - np.einsum("nij,j->ni", rotations, geometry.tool)
@@ -264,7 +274,7 @@ def _a4_signs(a4, times, first: int, last: int, vmax: float, amax: float, accele
         nxt: dict = {}
         blocked = None
         h = float(times[k] - times[k - 1])
-        for (sp, sc) in states:
+        for sp, sc in states:
             for sn in (1.0, -1.0):
                 v = abs(sn * a4[k] - sc * a4[k - 1]) / h
                 if v > vmax * tol:
@@ -342,5 +352,4 @@ def _pose_fact(geometry, positions, rotations, limits, bound, k: int, length: fl
     if a4 > bound[3]:
         return PathFact(k, "position limit", 3, float(a4), float(limits.position[3]))
     j, value, psi, branch = closest_configuration(geometry, positions[k], rotations[k], bound)
-    return PathFact(k, "position limit", j, value, float(limits.position[j]), psi,
-                    tuple(float(b) for b in branch))  # type: ignore[arg-type]
+    return PathFact(k, "position limit", j, value, float(limits.position[j]), psi, tuple(float(b) for b in branch))  # type: ignore[arg-type]

@@ -110,10 +110,25 @@ def _round(solver, q: np.ndarray, lo: int, hi: int, rest: tuple[bool, bool]) -> 
     qf, bound = qf[near], bound[near]
     nu = max(nf - 2, 0)
     k = np.arange(nu)
-    curv = sp.csr_matrix((np.concatenate([np.ones(nu), -2 * np.ones(nu), np.ones(nu), -np.ones(nu)]),
-                          (np.tile(k, 4), np.concatenate([k, k + 1, k + 2, nf + 1 + k]))), shape=(nu, nvar))
-    a_ub = sp.vstack([d2 + s_col, -d2 + s_col, d1, -d1, pos, -pos, curv, -curv - 2 * sp.csr_matrix(
-        (np.ones(nu), (k, nf + 1 + k)), shape=(nu, nvar))]).tocsr()
+    curv = sp.csr_matrix(
+        (
+            np.concatenate([np.ones(nu), -2 * np.ones(nu), np.ones(nu), -np.ones(nu)]),
+            (np.tile(k, 4), np.concatenate([k, k + 1, k + 2, nf + 1 + k])),
+        ),
+        shape=(nu, nvar),
+    )
+    a_ub = sp.vstack(
+        [
+            d2 + s_col,
+            -d2 + s_col,
+            d1,
+            -d1,
+            pos,
+            -pos,
+            curv,
+            -curv - 2 * sp.csr_matrix((np.ones(nu), (k, nf + 1 + k)), shape=(nu, nvar)),
+        ]
+    ).tocsr()
     b_ub = np.concatenate([-base2, base2, v_rows - base1, v_rows + base1, bound - qf, bound + qf, np.zeros(2 * nu)])
     cost = np.zeros(nvar)
     cost[nf] = 1.0
@@ -127,7 +142,9 @@ def _round(solver, q: np.ndarray, lo: int, hi: int, rest: tuple[bool, bool]) -> 
     moved = q.copy()
     moved[idx] = q[idx] + alpha[:, None] * n
     out, ep, er = solver.refine(moved, solver.options.refine_iterations + 5, idx)
-    if ep.max() > max(solver.options.position_tolerance, 1e-7) or er.max() > max(solver.options.rotation_tolerance, 1e-6):
+    if ep.max() > max(solver.options.position_tolerance, 1e-7) or er.max() > max(
+        solver.options.rotation_tolerance, 1e-6
+    ):
         return None
     return out
 

@@ -219,8 +219,14 @@ def _solve_with_auto_start(solver: PathSolver, progress: Callable[[int], None] |
 def _noted(error: IkError, note: str) -> IkError:
     """The same error with ``note`` appended to its message."""
     return IkError(
-        str(error) + note, index=error.index, t=error.t, position_error=error.position_error,
-        rotation_error=error.rotation_error, reason=error.reason, joint=error.joint, needed=error.needed,
+        str(error) + note,
+        index=error.index,
+        t=error.t,
+        position_error=error.position_error,
+        rotation_error=error.rotation_error,
+        reason=error.reason,
+        joint=error.joint,
+        needed=error.needed,
         kind=error.kind,
     )
 

@@ -24,8 +24,14 @@ def _size_text(n: int) -> str:
     return f"{n / MIB:g} MiB" if n >= MIB else f"{n} bytes"
 
 
-def read_input(path: str | Path, limit: int = MAX_CSV_BYTES, *, text: bool = True,
-               error: type[InputError] = InputError, what: str = "file") -> bytes:
+def read_input(
+    path: str | Path,
+    limit: int = MAX_CSV_BYTES,
+    *,
+    text: bool = True,
+    error: type[InputError] = InputError,
+    what: str = "file",
+) -> bytes:
     """The bytes of ``path`` (at most ``limit``); ``error`` (an InputError) naming the file when it is missing, a
     folder, unreadable, larger than ``limit``, or (``text``) holds a NUL byte."""
     spath = str(path)

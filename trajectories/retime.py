@@ -90,8 +90,9 @@ def sampled_ratios(traj: JointTrajectory, limits: JointLimits) -> dict[str, floa
     }
 
 
-def retime_within(traj: JointTrajectory, limits: JointLimits, dt: float, *, scale: float = 0.98,
-                  attempts: int = 5) -> tuple[RetimeResult, dict[str, float]]:
+def retime_within(
+    traj: JointTrajectory, limits: JointLimits, dt: float, *, scale: float = 0.98, attempts: int = 5
+) -> tuple[RetimeResult, dict[str, float]]:
     """:func:`retime`, then verify the samples; while a velocity or acceleration ratio exceeds 1 (toppra bounds the
     continuous spline, the samples of a sharp path can overshoot by a few %), retime again with the scale lowered
     by the excess. Returns the result and its :func:`sampled_ratios`; raises CheckFailed when the samples stay

@@ -100,9 +100,7 @@ def _build_model(flange: Flange, tool: np.ndarray) -> pin.Model:
     pin.forwardKinematics(model, data, np.zeros(N_JOINTS))
     urdf_pos = np.cumsum(np.array(_URDF_JOINT_XYZ), axis=0)
     for i, (mass, com, (ixx, iyy, izz, ixy, ixz, iyz)) in enumerate(_URDF_INERTIA):
-        inertia_urdf = pin.Inertia(
-            mass, np.array(com), np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-        )
+        inertia_urdf = pin.Inertia(mass, np.array(com), np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]))
         urdf_frame = pin.SE3(np.eye(3), urdf_pos[i])
         body_from_urdf = data.oMi[i + 1].inverse() * urdf_frame
         model.appendBodyToJoint(i + 1, body_from_urdf.act(inertia_urdf), pin.SE3.Identity())

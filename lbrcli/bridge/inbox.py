@@ -37,6 +37,7 @@ from .protocol import (
     verify,
 )
 
+
 class Transport(Protocol):
     """Where messages come from and states go back to."""
 
@@ -108,7 +109,9 @@ class TargetInbox:
                 self.received += 1
                 self._handle(tr, data, sender)
 
-    def _identity(self, tr: Transport, sender: Hashable | None, source: int | None) -> tuple[Transport, Hashable] | None:
+    def _identity(
+        self, tr: Transport, sender: Hashable | None, source: int | None
+    ) -> tuple[Transport, Hashable] | None:
         if sender is not None:
             return (tr, sender)
         return None if source is None else (tr, source)

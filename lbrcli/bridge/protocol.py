@@ -68,7 +68,11 @@ TAG_SIZE = 32  # HMAC-SHA256
 _TARGET = struct.Struct(TARGET_FORMAT)
 _STATE = struct.Struct(STATE_FORMAT)
 _NAN7 = (math.nan,) * 7
-_JSON_KINDS = (("q", KIND_JOINT, 7, "v", 7), ("pose", KIND_POSE, 7, "twist", 6), ("pose_zyx", KIND_POSE_ZYX, 6, "twist", 6))
+_JSON_KINDS = (
+    ("q", KIND_JOINT, 7, "v", 7),
+    ("pose", KIND_POSE, 7, "twist", 6),
+    ("pose_zyx", KIND_POSE_ZYX, 6, "twist", 6),
+)
 
 
 class BadTarget(ValueError):

@@ -65,8 +65,9 @@ class LockStepSource:
             q, v = self.motion(ts)
             dq = np.zeros(7)
             dq[0] = v
-            self.latest = Target(tuple(self.q0 + np.eye(7)[0] * q), tuple(dq) if self.feed_forward else None,
-                                 seq=self.i, t=ts + 100.0)  # (the source's clock need not start at 0)
+            self.latest = Target(
+                tuple(self.q0 + np.eye(7)[0] * q), tuple(dq) if self.feed_forward else None, seq=self.i, t=ts + 100.0
+            )  # (the source's clock need not start at 0)
             self.latest_time, self.fresh = arrival, True
 
     def send(self, data: bytes) -> None:

@@ -52,8 +52,18 @@ def execute_cases() -> list[Case]:
     fin, stop = (EndReason.FINISHED,), (EndReason.FINISHED, EndReason.SUPERVISION, EndReason.GUARD)
     out: list[Case] = []
 
-    def add(name, category, script, rows=R, expect=fin, period_s=1e-3, move_to_start=False, on_cycle=None,
-            q_start=None, **kw):
+    def add(
+        name,
+        category,
+        script,
+        rows=R,
+        expect=fin,
+        period_s=1e-3,
+        move_to_start=False,
+        on_cycle=None,
+        q_start=None,
+        **kw,
+    ):
         rows = np.asarray(rows, dtype=float)
 
         def client(rows=rows, period_s=period_s, move_to_start=move_to_start):
@@ -61,8 +71,20 @@ def execute_cases() -> list[Case]:
 
         hook = (lambda i, run, f=on_cycle: f(i, run.app)) if on_cycle is not None else None
         start = tuple(float(x) for x in (q_start if q_start is not None else Q0))
-        out.append(Case(name, category, script, client, expect, surface="execute", period_s=period_s,
-                        on_cycle=hook, q_start=start, **kw))
+        out.append(
+            Case(
+                name,
+                category,
+                script,
+                client,
+                expect,
+                surface="execute",
+                period_s=period_s,
+                on_cycle=hook,
+                q_start=start,
+                **kw,
+            )
+        )
 
     full = lambda rows, at=None, **kw: preamble() + active(len(rows) + 300, at, **kw)  # noqa: E731
     # loss of monitoring messages (the controller bridges by extrapolation; the client rejoins in step)
@@ -80,7 +102,9 @@ def execute_cases() -> list[Case]:
         S, stop)  # fmt: skip
     add("burst: 100 lost at once", "bursts", full(R, {450: Cycle(state=CA, seq_jump=100)}), R, stop)
     # duplicates and reordering (stale: ignored)
-    add("duplicate at speed", "duplicates", full(R, {500: [Cycle(state=CA), Cycle(state=CA, repeat_seq=True)]}), R, stop)
+    add(
+        "duplicate at speed", "duplicates", full(R, {500: [Cycle(state=CA), Cycle(state=CA, repeat_seq=True)]}), R, stop
+    )
     add("5 duplicates", "duplicates", full(S, {300: [Cycle(state=CA)] + [Cycle(state=CA, repeat_seq=True)] * 5}), S)
     add("reordered by 1", "reordering", full(R, {500: [Cycle(state=CA), Cycle(state=CA, stale_by=1)]}), R, stop)
     add("reordered by 3", "reordering", full(S, {300: [Cycle(state=CA), Cycle(state=CA, stale_by=3)]}), S)
@@ -92,24 +116,68 @@ def execute_cases() -> list[Case]:
         + active(len(S) + 300), S)  # fmt: skip
     # replies lost (the controller never sees them)
     for n in (1, 2):
-        add(f"{n} replies lost at speed", "replies lost", full(R, {500: [Cycle(state=CA, drop_reply=True)] * n}), R, stop)
+        add(
+            f"{n} replies lost at speed",
+            "replies lost",
+            full(R, {500: [Cycle(state=CA, drop_reply=True)] * n}),
+            R,
+            stop,
+        )
     add("replies lost: the controller falls back", "replies lost",
         full(R, {500: [Cycle(state=CA, drop_reply=True)] * 10}), R, (EndReason.QUALITY_POOR,),
         controller=dict(max_bridge=2, tolerate_unanswered=1000, reply_timeout=0.3))  # fmt: skip
     # malformed datagrams and wrong-but-decodable messages (never answered)
     add("garbage datagram", "malformed", full(R, {500: [Cycle(raw=b"\x00\x01garbage"), Cycle(state=CA)]}), R, stop)
     add("empty datagram", "malformed", full(S, {300: [Cycle(raw=b""), Cycle(state=CA)]}), S)
-    add("6 ipo values", "wrong but decodable",
-        full(R, {500: _mutate(lambda m: m.ipoData.jointPosition.value.__delitem__(slice(6, 7)))}), R, stop)
-    add("no ipo values", "wrong but decodable", full(S, {300: _mutate(lambda m: m.ipoData.ClearField("jointPosition"))}), S, stop)
-    add("ipo 1e6", "wrong but decodable", full(R, {500: _mutate(lambda m: m.ipoData.jointPosition.value.__setitem__(3, 1e6))}), R, stop)
-    add("measured NaN", "wrong but decodable",
-        full(R, {500: _mutate(lambda m: m.monitorData.measuredJointPosition.value.__setitem__(0, math.nan))}), R, stop)
-    add("measured inf", "wrong but decodable",
-        full(S, {300: _mutate(lambda m: m.monitorData.measuredJointPosition.value.__setitem__(2, math.inf))}), S, stop)
-    add("no connection info", "wrong but decodable", full(R, {500: _mutate(lambda m: m.ClearField("connectionInfo"))}), R, stop)
-    add("6 measured values", "wrong but decodable",
-        full(S, {300: _mutate(lambda m: m.monitorData.measuredJointPosition.value.__delitem__(slice(0, 1)))}), S, stop)
+    add(
+        "6 ipo values",
+        "wrong but decodable",
+        full(R, {500: _mutate(lambda m: m.ipoData.jointPosition.value.__delitem__(slice(6, 7)))}),
+        R,
+        stop,
+    )
+    add(
+        "no ipo values",
+        "wrong but decodable",
+        full(S, {300: _mutate(lambda m: m.ipoData.ClearField("jointPosition"))}),
+        S,
+        stop,
+    )
+    add(
+        "ipo 1e6",
+        "wrong but decodable",
+        full(R, {500: _mutate(lambda m: m.ipoData.jointPosition.value.__setitem__(3, 1e6))}),
+        R,
+        stop,
+    )
+    add(
+        "measured NaN",
+        "wrong but decodable",
+        full(R, {500: _mutate(lambda m: m.monitorData.measuredJointPosition.value.__setitem__(0, math.nan))}),
+        R,
+        stop,
+    )
+    add(
+        "measured inf",
+        "wrong but decodable",
+        full(S, {300: _mutate(lambda m: m.monitorData.measuredJointPosition.value.__setitem__(2, math.inf))}),
+        S,
+        stop,
+    )
+    add(
+        "no connection info",
+        "wrong but decodable",
+        full(R, {500: _mutate(lambda m: m.ClearField("connectionInfo"))}),
+        R,
+        stop,
+    )
+    add(
+        "6 measured values",
+        "wrong but decodable",
+        full(S, {300: _mutate(lambda m: m.monitorData.measuredJointPosition.value.__delitem__(slice(0, 1)))}),
+        S,
+        stop,
+    )
     for bit in (63, 62, 55, 52, 40):
         add(f"measured A1 bit {bit} flipped", "wrong but decodable", full(R, {500: _mutate(_flip(bit))}), R, stop)
     add("6 values in COMMANDING_WAIT", "wrong but decodable",
@@ -120,10 +188,21 @@ def execute_cases() -> list[Case]:
         + active(len(S) + 300), S)  # fmt: skip
     # foreign senders (ignored)
     add("foreign sender once", "foreign", full(R, {500: [Cycle(state=CA, foreign=True), Cycle(state=CA)]}), R, stop)
-    add("foreign sender 10 times", "foreign", full(S, {300: [Cycle(state=CA, foreign=True)] * 10 + [Cycle(state=CA)]}), S)
+    add(
+        "foreign sender 10 times",
+        "foreign",
+        full(S, {300: [Cycle(state=CA, foreign=True)] * 10 + [Cycle(state=CA)]}),
+        S,
+    )
     # robot-side ends at speed (the controller stops the robot itself: the client stops answering)
-    side = {"safety stop": dict(safety=2), "drives off": dict(drive=1), "quality POOR": dict(quality=0),
-            "back to MONITORING_READY": dict(state=MR), "back to COMMANDING_WAIT": dict(state=CW), "IDLE": dict(state=IDLE)}
+    side = {
+        "safety stop": dict(safety=2),
+        "drives off": dict(drive=1),
+        "quality POOR": dict(quality=0),
+        "back to MONITORING_READY": dict(state=MR),
+        "back to COMMANDING_WAIT": dict(state=CW),
+        "IDLE": dict(state=IDLE),
+    }
     reasons = {"safety stop": EndReason.SAFETY_STOP, "drives off": EndReason.DRIVES_OFF,
                "quality POOR": EndReason.QUALITY_POOR, "IDLE": EndReason.IDLE}  # fmt: skip
     for name, kw in side.items():
@@ -133,7 +212,13 @@ def execute_cases() -> list[Case]:
     add("safety stop in COMMANDING_WAIT", "robot side", preamble()[:-1] + [Cycle(state=CW, safety=1)] + active(100), S,
         (EndReason.SAFETY_STOP,))  # fmt: skip
     # period and clock
-    add("period change at speed", "period", full(R, {500: Cycle(state=CA, send_period=2)}), R, (EndReason.PERIOD_CHANGED,))
+    add(
+        "period change at speed",
+        "period",
+        full(R, {500: Cycle(state=CA, send_period=2)}),
+        R,
+        (EndReason.PERIOD_CHANGED,),
+    )
     add("receive multiplier change", "period", full(S, {300: Cycle(state=CA, receive_multiplier=2)}), S,
         (EndReason.PERIOD_CHANGED,))  # fmt: skip
     add("5 ms claimed, 2 ms real", "clock", preamble(send_period=5, clock_ms=2) + active(700, send_period=5, clock_ms=2),
@@ -156,7 +241,14 @@ def execute_cases() -> list[Case]:
             add(f"{reason.name} {label}", "signals", full(rows), rows, (reason,), on_cycle=_interrupt(at, reason))
     # a full disk
     for at, rows, label in ((200, R, "accelerating"), (600, R, "at speed"), (3, S, "at the start")):
-        add(f"disk full {label}", "full disk", full(rows), rows, (EndReason.OBSERVER_FAILED,), full_disk_at=PREAMBLE + at)
+        add(
+            f"disk full {label}",
+            "full disk",
+            full(rows),
+            rows,
+            (EndReason.OBSERVER_FAILED,),
+            full_disk_at=PREAMBLE + at,
+        )
     # bad files (the library level: what the CLI's checks would refuse before, the guard refuses here)
     jump = R.copy()
     jump[450:, 3] += 0.05

@@ -80,24 +80,53 @@ def controller_faults() -> list[Fault]:
         Fault("loss 1", "loss", _at(Cycle(state=CA, seq_jump=1)), N + STOP),
         Fault("loss 5", "loss", _at(Cycle(state=CA, seq_jump=5)), N + STOP),
         Fault("loss 30", "loss", _at(Cycle(state=CA, seq_jump=30)), N + STOP),
-        Fault("burst: every other lost", "bursts",
-              lambda n, at: preamble() + active(n, {k: Cycle(state=CA, seq_jump=1) for k in range(at, at + 40, 2)}),
-              N + STOP),  # fmt: skip
-        Fault("burst: 3 × loss 7", "bursts",
-              lambda n, at: preamble() + active(n, {at: Cycle(state=CA, seq_jump=7), at + 2: Cycle(state=CA, seq_jump=7),
-                                                    at + 4: Cycle(state=CA, seq_jump=7)}), N + STOP),  # fmt: skip
+        Fault(
+            "burst: every other lost",
+            "bursts",
+            lambda n, at: preamble() + active(n, {k: Cycle(state=CA, seq_jump=1) for k in range(at, at + 40, 2)}),
+            N + STOP,
+        ),  # fmt: skip
+        Fault(
+            "burst: 3 × loss 7",
+            "bursts",
+            lambda n, at: (
+                preamble()
+                + active(
+                    n,
+                    {
+                        at: Cycle(state=CA, seq_jump=7),
+                        at + 2: Cycle(state=CA, seq_jump=7),
+                        at + 4: Cycle(state=CA, seq_jump=7),
+                    },
+                )
+            ),
+            N + STOP,
+        ),  # fmt: skip
         Fault("100 lost at once", "bursts", _at(Cycle(state=CA, seq_jump=100)), N + STOP),
         Fault("duplicate", "duplicates", _at([Cycle(state=CA), Cycle(state=CA, repeat_seq=True)]), N + STOP),
         Fault("reordered by 3", "reordering", _at([Cycle(state=CA), Cycle(state=CA, stale_by=3)]), N + STOP),
         Fault("controller pauses 50 ms", "delay", _at(Cycle(state=CA, pause_s=0.05)), N + STOP),
         Fault("2 replies lost", "replies lost", _at([Cycle(state=CA, drop_reply=True)] * 2), N + STOP),
         Fault("garbage datagram", "malformed", _at([Cycle(raw=b"\x00\x01garbage"), Cycle(state=CA)]), N + STOP),
-        Fault("measured NaN", "lying messages",
-              _at(_mutate(lambda m: m.monitorData.measuredJointPosition.value.__setitem__(0, math.nan))), N + STOP),
-        Fault("6 ipo values", "lying messages",
-              _at(_mutate(lambda m: m.ipoData.jointPosition.value.__delitem__(slice(6, 7)))), N + STOP),
+        Fault(
+            "measured NaN",
+            "lying messages",
+            _at(_mutate(lambda m: m.monitorData.measuredJointPosition.value.__setitem__(0, math.nan))),
+            N + STOP,
+        ),
+        Fault(
+            "6 ipo values",
+            "lying messages",
+            _at(_mutate(lambda m: m.ipoData.jointPosition.value.__delitem__(slice(6, 7)))),
+            N + STOP,
+        ),
         Fault("measured A1 bit 55 flipped", "lying messages", _at(_mutate(_flip(55))), N + STOP),
-        Fault("foreign sender 10 times", "foreign", _at([Cycle(state=CA, foreign=True)] * 10 + [Cycle(state=CA)]), N + STOP),
+        Fault(
+            "foreign sender 10 times",
+            "foreign",
+            _at([Cycle(state=CA, foreign=True)] * 10 + [Cycle(state=CA)]),
+            N + STOP,
+        ),
         Fault("safety stop", "robot side", _at(Cycle(state=CA, safety=2)), (EndReason.SAFETY_STOP,)),
         Fault("drives off", "robot side", _at(Cycle(state=CA, drive=1)), (EndReason.DRIVES_OFF,)),
         Fault("quality POOR", "robot side", _at(Cycle(state=CA, quality=0)), (EndReason.QUALITY_POOR,)),
@@ -106,13 +135,24 @@ def controller_faults() -> list[Fault]:
         Fault("period change", "period", _at(Cycle(state=CA, send_period=2)), (EndReason.PERIOD_CHANGED,)),
         Fault("timestamps frozen", "clock", _frozen_from, (EndReason.SUPERVISION,)),
         Fault("timestamp back 100 ms", "clock", _at(_mutate(_stamps(-100.0))), (EndReason.SUPERVISION,)),
-        Fault("timestamps at 0.4 of the period", "clock",
-              lambda n, at: preamble(clock_ms=0.4) + active(n, clock_ms=0.4), (EndReason.SUPERVISION,)),
-        Fault("pushed 0.3 rad", "pushed", lambda n, at: preamble() + active(n, {k: Cycle(state=CA, push=0.3)
-                                                                               for k in range(at, at + 20)}),
-              (EndReason.SUPERVISION,)),  # fmt: skip
+        Fault(
+            "timestamps at 0.4 of the period",
+            "clock",
+            lambda n, at: preamble(clock_ms=0.4) + active(n, clock_ms=0.4),
+            (EndReason.SUPERVISION,),
+        ),
+        Fault(
+            "pushed 0.3 rad",
+            "pushed",
+            lambda n, at: preamble() + active(n, {k: Cycle(state=CA, push=0.3) for k in range(at, at + 20)}),
+            (EndReason.SUPERVISION,),
+        ),  # fmt: skip
         Fault("SIGINT", "signals", lambda n, at: preamble() + active(n), (EndReason.SIGINT,), signal=EndReason.SIGINT),
-        Fault("SIGTERM", "signals", lambda n, at: preamble() + active(n), (EndReason.SIGTERM,), signal=EndReason.SIGTERM),
-        Fault("disk full", "full disk", lambda n, at: preamble() + active(n), (EndReason.OBSERVER_FAILED,), full_disk=True),
+        Fault(
+            "SIGTERM", "signals", lambda n, at: preamble() + active(n), (EndReason.SIGTERM,), signal=EndReason.SIGTERM
+        ),
+        Fault(
+            "disk full", "full disk", lambda n, at: preamble() + active(n), (EndReason.OBSERVER_FAILED,), full_disk=True
+        ),
     ]
     return out

@@ -103,10 +103,22 @@ def ptp_surface() -> Surface:
     lossy = {k: Cycle(state=CA, seq_jump=1) for k in range(0, 1700, 20)}  # 5 % of the messages lost
     s.own = [
         _case(s, "5 % of messages lost", "loss", preamble() + active(1800, lossy), (EndReason.FINISHED,)),
-        _case(s, "2 s move with 5 % lost", "loss", preamble() + active(3000, lossy), (EndReason.FINISHED,),
-              client=make(goal, 2.0)),  # fmt: skip
-        _case(s, "goal 1e-6 rad inside A4's limit", "limits", preamble() + active(2500), (EndReason.FINISHED,),
-              client=make(tuple(Q0[:3]) + (-LIM.position[3] + 1e-6,) + tuple(Q0[4:]), 1.0)),  # fmt: skip
+        _case(
+            s,
+            "2 s move with 5 % lost",
+            "loss",
+            preamble() + active(3000, lossy),
+            (EndReason.FINISHED,),
+            client=make(goal, 2.0),
+        ),  # fmt: skip
+        _case(
+            s,
+            "goal 1e-6 rad inside A4's limit",
+            "limits",
+            preamble() + active(2500),
+            (EndReason.FINISHED,),
+            client=make(tuple(Q0[:3]) + (-LIM.position[3] + 1e-6,) + tuple(Q0[4:]), 1.0),
+        ),  # fmt: skip
     ]
     return s
 

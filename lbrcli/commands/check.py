@@ -25,8 +25,10 @@ def print_report(rep, report, name: str) -> None:
 
     from trajectories.check import JERKS
 
-    table = Table(title=f"{name}: peak / limit [%] (limits × {1 - report.margin:.2f}); central differences (thesis) "
-                        "and per step (forward, from and to rest: what the controller executes)")
+    table = Table(
+        title=f"{name}: peak / limit [%] (limits × {1 - report.margin:.2f}); central differences (thesis) "
+        "and per step (forward, from and to rest: what the controller executes)"
+    )
     table.add_column("joint")
     columns = ("position", "velocity", "acceleration", "jerk", "step velocity", "step acceleration", "step jerk")
     for qname in columns:
@@ -49,15 +51,23 @@ def print_report(rep, report, name: str) -> None:
         fails = v.quantity not in JERKS or report.jerk_enforced
         tag = "[red]violation[/red]" if fails else "[yellow]note (jerk not enforced)[/yellow]"
         rep.print(f"{tag}: {v.describe()}")
-    rep.print("[green]OK[/green]: within limits" if report.ok else f"[red]FAILED[/red]: {len(report.failing)} violations")
+    rep.print(
+        "[green]OK[/green]: within limits" if report.ok else f"[red]FAILED[/red]: {len(report.failing)} violations"
+    )
 
 
 def check(
     joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad].")],
-    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of joint velocity and acceleration with the limits.")] = None,
+    plot: Annotated[
+        Optional[Path], typer.Option("--plot", help="PNG of joint velocity and acceleration with the limits.")
+    ] = None,
     margin: MarginOpt = 0.0,
-    jerk: Annotated[bool, typer.Option("--jerk", help="Fail on jerk violations too (jerk is always reported).")] = False,
-    t1: Annotated[bool, typer.Option("--t1", help="Also check the Cartesian flange speed against T1's 250 mm/s.")] = False,
+    jerk: Annotated[
+        bool, typer.Option("--jerk", help="Fail on jerk violations too (jerk is always reported).")
+    ] = False,
+    t1: Annotated[
+        bool, typer.Option("--t1", help="Also check the Cartesian flange speed against T1's 250 mm/s.")
+    ] = False,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,

@@ -13,14 +13,57 @@ MIN_COVERAGE = 0.5  # share of the prediction's time span the track must overlap
 
 
 def compare(
-    prediction: Annotated[Path, typer.Argument(help="Prediction t,theta \\[s, rad] (`lbr plan ... --prediction`), or a simulated execution log with --column.")],
+    prediction: Annotated[
+        Path,
+        typer.Argument(
+            help="Prediction t,theta \\[s, rad] (`lbr plan ... --prediction`), or a simulated execution log with --column."
+        ),
+    ],
     track: Annotated[Path, typer.Argument(help="Track CSV from `lbr track video` with a theta column.")],
-    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG overlaying model and experiment θ \\[deg] over time, and their difference.")] = None,
-    lag: Annotated[Optional[float], number("--lag", low=-86400, high=86400, unit="s", help="Track time − prediction time \\[s]; estimated from the model when omitted.")] = None,
-    max_lag: Annotated[Optional[float], number("--max-lag", low=0, high=86400, low_open=True, unit="s", help="Search the lag only within ± this \\[s] (default: half the longer of the two series, at least 2 s; a better lag beyond it makes the lag ambiguous).")] = None,
-    flip: Annotated[bool, typer.Option("--flip", help="Negate the track's θ (camera looking at the plane of motion from the other side).")] = False,
-    column: Annotated[str, typer.Option("--column", help="Angle column \\[rad] of the prediction file (e.g. ball_theta in an execution log).")] = "theta",
-    partial: Annotated[bool, typer.Option("--partial", help="Compare even when the track covers less than half of the prediction, or the execution log's session stopped early (refused otherwise).")] = False,
+    plot: Annotated[
+        Optional[Path],
+        typer.Option("--plot", help="PNG overlaying model and experiment θ \\[deg] over time, and their difference."),
+    ] = None,
+    lag: Annotated[
+        Optional[float],
+        number(
+            "--lag",
+            low=-86400,
+            high=86400,
+            unit="s",
+            help="Track time − prediction time \\[s]; estimated from the model when omitted.",
+        ),
+    ] = None,
+    max_lag: Annotated[
+        Optional[float],
+        number(
+            "--max-lag",
+            low=0,
+            high=86400,
+            low_open=True,
+            unit="s",
+            help="Search the lag only within ± this \\[s] (default: half the longer of the two series, at least 2 s; a better lag beyond it makes the lag ambiguous).",
+        ),
+    ] = None,
+    flip: Annotated[
+        bool,
+        typer.Option(
+            "--flip", help="Negate the track's θ (camera looking at the plane of motion from the other side)."
+        ),
+    ] = False,
+    column: Annotated[
+        str,
+        typer.Option(
+            "--column", help="Angle column \\[rad] of the prediction file (e.g. ball_theta in an execution log)."
+        ),
+    ] = "theta",
+    partial: Annotated[
+        bool,
+        typer.Option(
+            "--partial",
+            help="Compare even when the track covers less than half of the prediction, or the execution log's session stopped early (refused otherwise).",
+        ),
+    ] = False,
     json_out: JsonOpt = False,
 ) -> None:
     """Compare the model's θ with the tracked θ: align in time, report RMS and max error over the overlap.
@@ -82,15 +125,21 @@ def compare(
     if cmp.lag_estimated:
         rep.print(f"model fit over the whole track: RMS {cmp.rms_fit_deg:.3f}° (score {cmp.correlation:.3f})")
         if math.isfinite(cmp.rival_lag_s):
-            rep.print(f"next best peak at {cmp.rival_lag_s:+.3f} s: RMS {cmp.rival_rms_fit_deg:.3f}° (score {cmp.rival_correlation:.3f})")
+            rep.print(
+                f"next best peak at {cmp.rival_lag_s:+.3f} s: RMS {cmp.rival_rms_fit_deg:.3f}° (score {cmp.rival_correlation:.3f})"
+            )
         if cmp.ambiguous:
             if abs(cmp.rival_lag_s) > cmp.lag_window_s:
-                ambiguous_why = (f"a lag of {cmp.rival_lag_s:+.3f} s beyond the default window ±{cmp.lag_window_s:.2f} s fits "
-                                 f"{'better' if cmp.rival_rms_fit_deg < cmp.rms_fit_deg else 'nearly as well'}")
+                ambiguous_why = (
+                    f"a lag of {cmp.rival_lag_s:+.3f} s beyond the default window ±{cmp.lag_window_s:.2f} s fits "
+                    f"{'better' if cmp.rival_rms_fit_deg < cmp.rms_fit_deg else 'nearly as well'}"
+                )
             elif math.isfinite(cmp.rival_lag_s) and cmp.rival_rms_fit_deg <= AMBIGUOUS_RMS_RATIO * cmp.rms_fit_deg:
                 ambiguous_why = f"{cmp.rival_lag_s:+.3f} s fits nearly as well as {cmp.lag_s:+.3f} s"
             else:
-                ambiguous_why = f"the best lag {cmp.lag_s:+.3f} s lies on the edge of the window ±{cmp.lag_window_s:.2f} s"
+                ambiguous_why = (
+                    f"the best lag {cmp.lag_s:+.3f} s lies on the edge of the window ±{cmp.lag_window_s:.2f} s"
+                )
     samples = sample_report(tr.t, tr.theta)
     if samples.uneven:
         rep.warn(
@@ -107,7 +156,9 @@ def compare(
         f"over {cmp.overlap_s:.3f} s ({cmp.samples} frames): RMS error {cmp.rms_deg:.3f}°, max {cmp.max_deg:.3f}°"
     )
     if cmp.mirrored:
-        rep.warn("the track's θ matches the prediction much better negated: the camera sees the motion mirrored — try --flip")
+        rep.warn(
+            "the track's θ matches the prediction much better negated: the camera sees the motion mirrored — try --flip"
+        )
     span = float(t_model[-1] - t_model[0])
     coverage = cmp.overlap_s / span if span > 0 else 0.0
     short = coverage < MIN_COVERAGE
@@ -116,9 +167,11 @@ def compare(
     positions = _slack_positions(pred, tr, cmp.lag_s, flip) if column == "theta" else None
     if positions is not None:
         if positions.frames:
-            rep.print(f"slack string (free flight) over {positions.frames} frames: ball position RMS error "
-                      f"{1e3 * positions.rms_m:.1f} mm, max {1e3 * positions.max_m:.1f} mm (scale "
-                      f"{positions.px_per_m:.0f} px/m from the string's length)")
+            rep.print(
+                f"slack string (free flight) over {positions.frames} frames: ball position RMS error "
+                f"{1e3 * positions.rms_m:.1f} mm, max {1e3 * positions.max_m:.1f} mm (scale "
+                f"{positions.px_per_m:.0f} px/m from the string's length)"
+            )
         else:
             rep.print("the prediction's slack phase and the track do not overlap: no positions compared")
     if plot is not None:
@@ -154,9 +207,14 @@ def compare(
             "timing_jitter": samples.jitter,
             "frames_without_theta": samples.missing,
             "longest_without_theta_s": samples.longest_missing_s,
-            "slack_position": None if positions is None else {
-                "frames": positions.frames, "rms_m": positions.rms_m, "max_m": positions.max_m,
-                "px_per_m": positions.px_per_m},
+            "slack_position": None
+            if positions is None
+            else {
+                "frames": positions.frames,
+                "rms_m": positions.rms_m,
+                "max_m": positions.max_m,
+                "px_per_m": positions.px_per_m,
+            },
             "coverage": coverage,
             "ok": (not short or partial) and ambiguous_why is None,
         }
@@ -181,14 +239,17 @@ def _slack_positions(pred, tr, lag: float, flip: bool):
     if not all(pred.has(c) for c in needed) or tr.pivot_uv is None:
         return None
     phase = pred.column("phase")
-    rel = np.column_stack([pred.column("ball_y") - pred.column("anchor_y"), pred.column("ball_z") - pred.column("anchor_z")])
+    rel = np.column_stack(
+        [pred.column("ball_y") - pred.column("anchor_y"), pred.column("ball_z") - pred.column("anchor_z")]
+    )
     taut = phase == 0
     if not taut.any() or not (phase == 1).any():
         return None
     length = float(np.median(np.hypot(*rel[taut].T)))
     rel_px = tr.uv - tr.pivot_uv
-    return compare_positions(pred.column("t"), rel, phase == 1, length, tr.t, rel_px,
-                             string_length_px(np.hypot(*rel_px.T)), lag, flip)
+    return compare_positions(
+        pred.column("t"), rel, phase == 1, length, tr.t, rel_px, string_length_px(np.hypot(*rel_px.T)), lag, flip
+    )
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

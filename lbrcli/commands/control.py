@@ -36,12 +36,27 @@ if TYPE_CHECKING:  # imported where used: lbrcli.control loads the planners (not
     from ..control.camera_setup import CameraOptions
     from ..control.damp_setup import CameraSetup, DampSetup
 
-UPRIGHT_LAB = LAB_OPTIONS.without("mqtt", "mqtt_rate").replacing(pendulum=Annotated[Optional[str], typer.Option(
-    "--pendulum", help="Serial port of the pendulum module (needed with --robot); default: the simulator's.")])
-DAMP_LAB = LAB_OPTIONS.without("mqtt", "mqtt_rate").replacing(pendulum=Annotated[Optional[str], typer.Option(
-    "--pendulum", help="Serial port of the pendulum module (--sensor module with --robot); default: the simulator's.")])
-DampSimStartOpt = Annotated[Optional[JointVector], joints(
-    "--sim-start", help="Simulator: where the robot stands at start (7 angles); default the first row.")]
+UPRIGHT_LAB = LAB_OPTIONS.without("mqtt", "mqtt_rate").replacing(
+    pendulum=Annotated[
+        Optional[str],
+        typer.Option(
+            "--pendulum", help="Serial port of the pendulum module (needed with --robot); default: the simulator's."
+        ),
+    ]
+)
+DAMP_LAB = LAB_OPTIONS.without("mqtt", "mqtt_rate").replacing(
+    pendulum=Annotated[
+        Optional[str],
+        typer.Option(
+            "--pendulum",
+            help="Serial port of the pendulum module (--sensor module with --robot); default: the simulator's.",
+        ),
+    ]
+)
+DampSimStartOpt = Annotated[
+    Optional[JointVector],
+    joints("--sim-start", help="Simulator: where the robot stands at start (7 angles); default the first row."),
+]
 
 
 def _pushes(texts: list[str] | None) -> tuple[tuple[float, float], ...]:
@@ -76,26 +91,156 @@ def _pushes(texts: list[str] | None) -> tuple[tuple[float, float], ...]:
 def upright(
     fri: FriOptions,
     lab: LabOptions,
-    rod_length: Annotated[float, number("--rod-length", low=0.1, high=1.5, unit="m", help="Length of the module's rod \\[m] (uniform rod).")] = 0.5,
+    rod_length: Annotated[
+        float,
+        number("--rod-length", low=0.1, high=1.5, unit="m", help="Length of the module's rod \\[m] (uniform rod)."),
+    ] = 0.5,
     rod_mass: Annotated[float, number("--rod-mass", low=0, high=5, unit="kg", help="Mass of the rod \\[kg].")] = 0.1,
-    tip_mass: Annotated[float, number("--tip-mass", low=0, high=5, unit="kg", help="Mass at the rod's end \\[kg].")] = 0.0,
-    hold: Annotated[float, number("--hold", low=0, high=3600, unit="s", help="Balance upright this long in one run without a fall: the goal \\[s].")] = 60.0,
-    swing_timeout: Annotated[float, number("--swing-timeout", low=1, high=600, unit="s", help="Give up if not caught upright within this long of swinging \\[s].")] = 30.0,
-    recatch: Annotated[float, number("--recatch", low=1, high=600, unit="s", help="After a fall, give up if not caught again within this long \\[s].")] = 20.0,
-    identify: Annotated[bool, typer.Option("--identify/--no-identify", help="Identify the rod (length, friction, the encoder's offset and sign, the delay) from a short push before the swing-up (default), or trust --rod-length and --sensor-delay.")] = True,
-    encoder_sign: Annotated[int, number("--encoder-sign", low=-1, high=1, integer=True, help="The sign the module's encoder counts with: 1, or -1 for one mounted reversed (the identification refuses to go on when they disagree).")] = 1,
-    travel: Annotated[float, number("--travel", low=0.05, high=0.5, unit="m", help="The cart's travel along base y either side of the start \\[m].")] = 0.3,
-    q_start: Annotated[JointVector, joints("--q-start", help="The rail's centre pose: 7 joint angles (deg/rad).")] = THESIS_Q_START,
-    move_to_start: Annotated[bool, typer.Option("--move-to-start", help="Reach --q-start first by a jerk-limited move.")] = False,
-    sensor_rate: Annotated[float, number("--sensor-rate", low=10, high=10000, unit="Hz", help="Encoder readings per second on the serial line \\[Hz].")] = 200.0,
-    sensor_delay: Annotated[Optional[float], number("--sensor-delay", low=0, high=100, unit="ms", help="Delay the observer assumes from the encoder sample to its line \\[ms] (default: --sim-delay + half --sim-jitter; 6 with --robot).")] = None,
-    sim_delay: Annotated[float, number("--sim-delay", low=0, high=100, unit="ms", help="Simulator: encoder-to-serial delay \\[ms] (radio + USB).")] = 5.0,
-    sim_jitter: Annotated[float, number("--sim-jitter", low=0, high=50, unit="ms", help="Simulator: extra delay, uniform in \\[0, jitter] \\[ms].")] = 1.0,
-    push: Annotated[Optional[list[str]], typer.Option("--push", metavar="ANGLE@SECONDS", help="Simulator: knock the rod by ANGLE at SECONDS after the start, e.g. 10deg@20 (repeatable).")] = None,
-    sim_rod_length: Annotated[Optional[float], number("--sim-rod-length", low=0.1, high=1.5, unit="m", help="Simulator: the simulated rod's length \\[m] (default: --rod-length) — a rod the controller does not know.")] = None,
-    sim_friction: Annotated[float, number("--sim-friction", low=0, high=0.5, help="Simulator: the bearing's dry friction as a share of the rod's peak gravity torque.")] = 0.0,
-    sim_noise: Annotated[int, number("--sim-noise", low=0, high=100, integer=True, help="Simulator: encoder noise, up to ± this many counts per reading.")] = 0,
-    sim_encoder_sign: Annotated[int, number("--sim-encoder-sign", low=-1, high=1, integer=True, help="Simulator: -1 mounts the simulated encoder reversed.")] = 1,
+    tip_mass: Annotated[
+        float, number("--tip-mass", low=0, high=5, unit="kg", help="Mass at the rod's end \\[kg].")
+    ] = 0.0,
+    hold: Annotated[
+        float,
+        number(
+            "--hold",
+            low=0,
+            high=3600,
+            unit="s",
+            help="Balance upright this long in one run without a fall: the goal \\[s].",
+        ),
+    ] = 60.0,
+    swing_timeout: Annotated[
+        float,
+        number(
+            "--swing-timeout",
+            low=1,
+            high=600,
+            unit="s",
+            help="Give up if not caught upright within this long of swinging \\[s].",
+        ),
+    ] = 30.0,
+    recatch: Annotated[
+        float,
+        number(
+            "--recatch",
+            low=1,
+            high=600,
+            unit="s",
+            help="After a fall, give up if not caught again within this long \\[s].",
+        ),
+    ] = 20.0,
+    identify: Annotated[
+        bool,
+        typer.Option(
+            "--identify/--no-identify",
+            help="Identify the rod (length, friction, the encoder's offset and sign, the delay) from a short push before the swing-up (default), or trust --rod-length and --sensor-delay.",
+        ),
+    ] = True,
+    encoder_sign: Annotated[
+        int,
+        number(
+            "--encoder-sign",
+            low=-1,
+            high=1,
+            integer=True,
+            help="The sign the module's encoder counts with: 1, or -1 for one mounted reversed (the identification refuses to go on when they disagree).",
+        ),
+    ] = 1,
+    travel: Annotated[
+        float,
+        number(
+            "--travel",
+            low=0.05,
+            high=0.5,
+            unit="m",
+            help="The cart's travel along base y either side of the start \\[m].",
+        ),
+    ] = 0.3,
+    q_start: Annotated[
+        JointVector, joints("--q-start", help="The rail's centre pose: 7 joint angles (deg/rad).")
+    ] = THESIS_Q_START,
+    move_to_start: Annotated[
+        bool, typer.Option("--move-to-start", help="Reach --q-start first by a jerk-limited move.")
+    ] = False,
+    sensor_rate: Annotated[
+        float,
+        number(
+            "--sensor-rate",
+            low=10,
+            high=10000,
+            unit="Hz",
+            help="Encoder readings per second on the serial line \\[Hz].",
+        ),
+    ] = 200.0,
+    sensor_delay: Annotated[
+        Optional[float],
+        number(
+            "--sensor-delay",
+            low=0,
+            high=100,
+            unit="ms",
+            help="Delay the observer assumes from the encoder sample to its line \\[ms] (default: --sim-delay + half --sim-jitter; 6 with --robot).",
+        ),
+    ] = None,
+    sim_delay: Annotated[
+        float,
+        number(
+            "--sim-delay", low=0, high=100, unit="ms", help="Simulator: encoder-to-serial delay \\[ms] (radio + USB)."
+        ),
+    ] = 5.0,
+    sim_jitter: Annotated[
+        float,
+        number(
+            "--sim-jitter", low=0, high=50, unit="ms", help="Simulator: extra delay, uniform in \\[0, jitter] \\[ms]."
+        ),
+    ] = 1.0,
+    push: Annotated[
+        Optional[list[str]],
+        typer.Option(
+            "--push",
+            metavar="ANGLE@SECONDS",
+            help="Simulator: knock the rod by ANGLE at SECONDS after the start, e.g. 10deg@20 (repeatable).",
+        ),
+    ] = None,
+    sim_rod_length: Annotated[
+        Optional[float],
+        number(
+            "--sim-rod-length",
+            low=0.1,
+            high=1.5,
+            unit="m",
+            help="Simulator: the simulated rod's length \\[m] (default: --rod-length) — a rod the controller does not know.",
+        ),
+    ] = None,
+    sim_friction: Annotated[
+        float,
+        number(
+            "--sim-friction",
+            low=0,
+            high=0.5,
+            help="Simulator: the bearing's dry friction as a share of the rod's peak gravity torque.",
+        ),
+    ] = 0.0,
+    sim_noise: Annotated[
+        int,
+        number(
+            "--sim-noise",
+            low=0,
+            high=100,
+            integer=True,
+            help="Simulator: encoder noise, up to ± this many counts per reading.",
+        ),
+    ] = 0,
+    sim_encoder_sign: Annotated[
+        int,
+        number(
+            "--sim-encoder-sign",
+            low=-1,
+            high=1,
+            integer=True,
+            help="Simulator: -1 mounts the simulated encoder reversed.",
+        ),
+    ] = 1,
     plot: PlotOpt = None,
     limits: LimitsOpt = None,
     json_out: JsonOpt = False,
@@ -127,7 +272,8 @@ def upright(
     q0 = within_limits(q_start, lim, "--q-start")
     model = RigidPendulum(rod_length=rod_length, rod_mass=rod_mass, tip_mass=tip_mass)
     rail = _rail(q0, lim, travel)
-    assumed_ms = sensor_delay if sensor_delay is not None else (sim_delay + 0.5 * sim_jitter if fri.robot is None else 6.0)
+    assumed_ms = sensor_delay if sensor_delay is not None else (
+        sim_delay + 0.5 * sim_jitter if fri.robot is None else 6.0)  # fmt: skip
     plan = SessionOptions(hold_s=hold, swing_timeout_s=swing_timeout, recatch_s=recatch, identify=identify,
                           encoder_sign=encoder_sign, sensor_delay_s=assumed_ms * 1e-3)  # fmt: skip
     client = UprightClient(rail, model.equivalent_length, lim, session=plan, sensor_rate_hz=sensor_rate,
@@ -135,12 +281,12 @@ def upright(
     _print_rail(rep, model, rail, rod_length, travel)
     rod = RigidModuleSpec(simulated_rod(model, sim_rod_length, sim_friction), sensor_rate, sim_delay, sim_jitter, pushes=pushes,
                           zero_count=lab.pendulum_zero, noise_counts=sim_noise, sign=sim_encoder_sign)  # fmt: skip
-    simulator = fri.simulator(max_runtime_s=hold + swing_timeout + 3 * recatch + 180.0, start=q0, plants=(rod,), limits=limits)
+    simulator = fri.simulator(max_runtime_s=hold + swing_timeout + 3 * recatch + 180.0, start=q0, plants=(rod,),
+                              limits=limits)  # fmt: skip
     with contextlib.closing(ProcessFitter()) if identify else contextlib.nullcontext() as client.fitter:
         result, sim_stats, lab_figures = run_client(rep, client, fri.session(lim), simulator, lab=replace(lab, pendulum=lab.pendulum or "sim"),
                                                     extra=LogColumns(LOG_COLUMNS, client.log_values))  # fmt: skip
-    figures = print_summary(rep, result, sim_stats, fri.log)
-    figures.update(lab_figures)  # the client's figures are merged into the session's
+    figures = print_summary(rep, result, sim_stats, fri.log) | lab_figures  # the client's figures join the session's
     _print_upright(rep, figures, model, sim_stats)
     figures.update(rod_length_m=rod_length, equivalent_length_m=model.equivalent_length, hold_s=hold,
                    robot=fri.robot or "simulator", rail_velocity_m_s=rail.limits.velocity,
@@ -150,7 +296,9 @@ def upright(
     exit_for(result, lab_figures, failed=plot_error)
 
 
-def _check_upright(fri: FriOptions, lab: LabOptions, mass: float, signs: tuple[int, int], sim_only: dict[str, bool]) -> None:
+def _check_upright(
+    fri: FriOptions, lab: LabOptions, mass: float, signs: tuple[int, int], sim_only: dict[str, bool]
+) -> None:
     """The upright options that do not go together: OptionError (exit 2) naming them."""
     if mass <= 0:
         raise OptionError("--rod-mass and --tip-mass cannot both be 0")
@@ -179,7 +327,9 @@ def simulated_rod(model, length: float | None, friction_share: float):
     (one the controller does not know), with dry friction of at least ``friction_share`` of its peak gravity torque."""
     from planners.rigid_pendulum import RigidPendulum
 
-    rod = model if length is None else RigidPendulum(rod_length=length, rod_mass=model.rod_mass, tip_mass=model.tip_mass)
+    rod = (
+        model if length is None else RigidPendulum(rod_length=length, rod_mass=model.rod_mass, tip_mass=model.tip_mass)
+    )
     return replace(rod, coulomb=max(rod.coulomb, friction_share * rod.mass * rod.com * 9.81))
 
 
@@ -202,26 +352,158 @@ def _print_upright(rep, f: dict, model, sim_stats) -> None:
         rep.print(f"controller per cycle: p50 {f['controller_us_p50']:.1f} µs, p99 {f['controller_us_p99']:.1f} µs")
     mod = sim_stats.plants.get("pendulum_module", {}) if sim_stats is not None else {}
     if mod:
-        rep.print(f"simulated rod: final angle {mod.get('final_phi_deg', math.nan):.2f}° from hanging, "
-                  f"{mod.get('lines_sent', 0)} encoder lines sent")
+        rep.print(
+            f"simulated rod: final angle {mod.get('final_phi_deg', math.nan):.2f}° from hanging, "
+            f"{mod.get('lines_sent', 0)} encoder lines sent"
+        )
 
 
 def _camera_options(
-    camera: Annotated[Optional[str], typer.Option("--camera", metavar="SOURCE", help="With --sensor camera: a V4L2 device index (0) or path (/dev/video0), a stream URL (http://…/stream.mjpg, rtsp://…) or a video file played at its frame rate; default with the simulator: its own camera (--sim-camera-*).")] = None,
-    geometry: Annotated[Optional[Path], typer.Option("--geometry", help="The camera's pose JSON, as `lbr track live --geometry` reads (camera_matrix, dist_coeffs, rotation, centre_m, image_size — or position_m, look_at_m, fov_deg, image_size); its pivot_m and string_m are not used: the pivot is the robot's TCP, the string is measured.")] = None,
-    camera_position: Annotated[Optional[tuple], floats("--camera-position", count=3, low=-20, high=20, unit="m", metavar="X,Y,Z", help="Instead of --geometry: the camera's centre in the base frame \\[m] (with --camera-look-at, --camera-fov; image size from the source).")] = None,
-    camera_look_at: Annotated[Optional[tuple], floats("--camera-look-at", count=3, low=-20, high=20, unit="m", metavar="X,Y,Z", help="The point at the image centre \\[m], base frame.")] = None,
-    camera_fov: Annotated[Optional[float], number("--camera-fov", low=1, high=170, unit="deg", help="Horizontal field of view \\[deg] (default 50).")] = None,
-    camera_delay: Annotated[Optional[float], number("--camera-delay", low=0, high=1000, unit="ms", help="The camera's own delay from the middle of a frame's exposure to its arrival here \\[ms], which the tracker cannot see (default: the simulated camera's exposure/2 + latency + 1 ms; 20 with --camera — measure yours).")] = None,
-    sim_camera_position: Annotated[Optional[tuple], floats("--sim-camera-position", count=3, low=-20, high=20, unit="m", metavar="X,Y,Z", help="Simulator: its camera's centre \\[m], base frame (default: 30° above the ball's path, 45° around from the base's line to it, as close as sees it whole).")] = None,
-    sim_camera_look_at: Annotated[Optional[tuple], floats("--sim-camera-look-at", count=3, low=-20, high=20, unit="m", metavar="X,Y,Z", help="Simulator: the point at its camera's image centre \\[m] (default: the middle of the ball's path).")] = None,
-    sim_camera_fov: Annotated[Optional[float], number("--sim-camera-fov", low=5, high=120, unit="deg", help="Simulator: its camera's horizontal field of view \\[deg] (default 50).")] = None,
-    sim_camera_size: Annotated[Optional[tuple], grid("--sim-camera-size", low=64, high=4096, metavar="WxH", help="Simulator: its camera's image size \\[px] (default 320x240).")] = None,
-    sim_camera_fps: Annotated[Optional[float], number("--sim-camera-fps", low=10, high=500, unit="1/s", help="Simulator: its camera's frame rate \\[1/s] (default 120; 30–240 tested).")] = None,
-    sim_camera_exposure: Annotated[Optional[float], number("--sim-camera-exposure", low=0, high=100, unit="ms", help="Simulator: its camera's exposure \\[ms] (motion blur; default 4, at most one frame).")] = None,
-    sim_camera_latency: Annotated[Optional[float], number("--sim-camera-latency", low=0, high=500, unit="ms", help="Simulator: from the end of an exposure to the frame leaving its camera \\[ms] (default 15).")] = None,
-    sim_camera_stamp: Annotated[Optional[bool], typer.Option("--sim-camera-stamp/--no-sim-camera-stamp", help="Simulator: its camera writes each frame's index into the frame's corner (a camera's embedded frame counter), so a frame's moment is known exactly (default); without it, as with --camera, a frame shows its arrival − --camera-delay.")] = None,
-    sim_camera_stop: Annotated[Optional[float], number("--sim-camera-stop", low=0, high=3600, low_open=True, unit="s", help="Simulator: its camera stops streaming this long after the simulator started \\[s] (a failure drill).")] = None,
+    camera: Annotated[
+        Optional[str],
+        typer.Option(
+            "--camera",
+            metavar="SOURCE",
+            help="With --sensor camera: a V4L2 device index (0) or path (/dev/video0), a stream URL (http://…/stream.mjpg, rtsp://…) or a video file played at its frame rate; default with the simulator: its own camera (--sim-camera-*).",
+        ),
+    ] = None,
+    geometry: Annotated[
+        Optional[Path],
+        typer.Option(
+            "--geometry",
+            help="The camera's pose JSON, as `lbr track live --geometry` reads (camera_matrix, dist_coeffs, rotation, centre_m, image_size — or position_m, look_at_m, fov_deg, image_size); its pivot_m and string_m are not used: the pivot is the robot's TCP, the string is measured.",
+        ),
+    ] = None,
+    camera_position: Annotated[
+        Optional[tuple],
+        floats(
+            "--camera-position",
+            count=3,
+            low=-20,
+            high=20,
+            unit="m",
+            metavar="X,Y,Z",
+            help="Instead of --geometry: the camera's centre in the base frame \\[m] (with --camera-look-at, --camera-fov; image size from the source).",
+        ),
+    ] = None,
+    camera_look_at: Annotated[
+        Optional[tuple],
+        floats(
+            "--camera-look-at",
+            count=3,
+            low=-20,
+            high=20,
+            unit="m",
+            metavar="X,Y,Z",
+            help="The point at the image centre \\[m], base frame.",
+        ),
+    ] = None,
+    camera_fov: Annotated[
+        Optional[float],
+        number("--camera-fov", low=1, high=170, unit="deg", help="Horizontal field of view \\[deg] (default 50)."),
+    ] = None,
+    camera_delay: Annotated[
+        Optional[float],
+        number(
+            "--camera-delay",
+            low=0,
+            high=1000,
+            unit="ms",
+            help="The camera's own delay from the middle of a frame's exposure to its arrival here \\[ms], which the tracker cannot see (default: the simulated camera's exposure/2 + latency + 1 ms; 20 with --camera — measure yours).",
+        ),
+    ] = None,
+    sim_camera_position: Annotated[
+        Optional[tuple],
+        floats(
+            "--sim-camera-position",
+            count=3,
+            low=-20,
+            high=20,
+            unit="m",
+            metavar="X,Y,Z",
+            help="Simulator: its camera's centre \\[m], base frame (default: 30° above the ball's path, 45° around from the base's line to it, as close as sees it whole).",
+        ),
+    ] = None,
+    sim_camera_look_at: Annotated[
+        Optional[tuple],
+        floats(
+            "--sim-camera-look-at",
+            count=3,
+            low=-20,
+            high=20,
+            unit="m",
+            metavar="X,Y,Z",
+            help="Simulator: the point at its camera's image centre \\[m] (default: the middle of the ball's path).",
+        ),
+    ] = None,
+    sim_camera_fov: Annotated[
+        Optional[float],
+        number(
+            "--sim-camera-fov",
+            low=5,
+            high=120,
+            unit="deg",
+            help="Simulator: its camera's horizontal field of view \\[deg] (default 50).",
+        ),
+    ] = None,
+    sim_camera_size: Annotated[
+        Optional[tuple],
+        grid(
+            "--sim-camera-size",
+            low=64,
+            high=4096,
+            metavar="WxH",
+            help="Simulator: its camera's image size \\[px] (default 320x240).",
+        ),
+    ] = None,
+    sim_camera_fps: Annotated[
+        Optional[float],
+        number(
+            "--sim-camera-fps",
+            low=10,
+            high=500,
+            unit="1/s",
+            help="Simulator: its camera's frame rate \\[1/s] (default 120; 30–240 tested).",
+        ),
+    ] = None,
+    sim_camera_exposure: Annotated[
+        Optional[float],
+        number(
+            "--sim-camera-exposure",
+            low=0,
+            high=100,
+            unit="ms",
+            help="Simulator: its camera's exposure \\[ms] (motion blur; default 4, at most one frame).",
+        ),
+    ] = None,
+    sim_camera_latency: Annotated[
+        Optional[float],
+        number(
+            "--sim-camera-latency",
+            low=0,
+            high=500,
+            unit="ms",
+            help="Simulator: from the end of an exposure to the frame leaving its camera \\[ms] (default 15).",
+        ),
+    ] = None,
+    sim_camera_stamp: Annotated[
+        Optional[bool],
+        typer.Option(
+            "--sim-camera-stamp/--no-sim-camera-stamp",
+            help="Simulator: its camera writes each frame's index into the frame's corner (a camera's embedded frame counter), so a frame's moment is known exactly (default); without it, as with --camera, a frame shows its arrival − --camera-delay.",
+        ),
+    ] = None,
+    sim_camera_stop: Annotated[
+        Optional[float],
+        number(
+            "--sim-camera-stop",
+            low=0,
+            high=3600,
+            low_open=True,
+            unit="s",
+            help="Simulator: its camera stops streaming this long after the simulator started \\[s] (a failure drill).",
+        ),
+    ] = None,
 ) -> CameraOptions:
     from ..control.camera_setup import CameraOptions
 
@@ -234,29 +516,144 @@ CAMERA_OPTIONS = OptionGroup(_camera_options)
 """`lbr control damp --sensor camera`: the camera (or the simulator's) and its geometry (:class:`CameraOptions`)."""
 
 
-@with_options(fri=FRI_OPTIONS.without("period", "length").replacing(sim_start=DampSimStartOpt), lab=DAMP_LAB,
-              cam=CAMERA_OPTIONS, flags={"BallSpec.length": "--sim-length"})
+@with_options(
+    fri=FRI_OPTIONS.without("period", "length").replacing(sim_start=DampSimStartOpt),
+    lab=DAMP_LAB,
+    cam=CAMERA_OPTIONS,
+    flags={"BallSpec.length": "--sim-length"},
+)
 def damp(
-    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad]; its step must be the FRI period.")],
+    joint_csv: Annotated[
+        Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad]; its step must be the FRI period.")
+    ],
     fri: FriOptions,
     lab: LabOptions,
     cam: CameraOptions,
-    length: Annotated[Optional[float], string_length("--length", help="String length the damper assumes (pivot to ball centre) \\[m]; default the simulated ball's.")] = None,
-    damp_time: Annotated[Optional[float], number("--damp-time", low=0, high=600, unit="s", help="Keep damping this long after the last row \\[s] (default 3 swing periods).")] = None,
-    sensor: Annotated[str, choice("--sensor", choices=("io", "module", "camera"), help="Where the sway comes from: io (the controller's analog inputs --io-names), module (the pendulum module on --pendulum; one axis) or camera (the ball tracked live in --camera, or the simulator's camera).")] = "io",
-    color: Annotated[str, typer.Option("--color", help="With --sensor camera: the ball's colour (red, orange, yellow, green, cyan, blue, magenta, or a hue range H1-H2).")] = "red",
-    io_names: Annotated[str, typer.Option("--io-names", help="Analog inputs with θx, θy \\[rad] (atan2(s_x, −s_z), atan2(s_y, −s_z) of the string direction s).")] = "ball_theta_x,ball_theta_y",
-    module_axis: Annotated[str, choice("--module-axis", choices=("x", "y"), help="With --sensor module: the base axis the module swings along (x or y).")] = "y",
-    sensor_delay: Annotated[Optional[float], number("--sensor-delay", low=0, high=500, unit="ms", help="Age of a reading when it arrives \\[ms] (default: --sim-delay + one period; one period with --robot; with --sensor camera each reading's own age is used, this only where it is unknown; default --camera-delay + 6).")] = None,
-    sensor_rate: Annotated[float, number("--sensor-rate", low=10, high=10000, unit="Hz", help="With --sensor module: readings per second \\[Hz].")] = 200.0,
-    open_loop: Annotated[bool, typer.Option("--open-loop", help="Estimate and log the sway but do not correct (the plan alone, for comparison).")] = False,
-    target: Annotated[float, number("--target", low=0.001, high=45, unit="deg", help="The goal: residual sway at most this, fitted over the last swing period of --damp-time \\[deg]; exit 1 above it.")] = 0.3,
-    move_to_start: Annotated[bool, typer.Option("--move-to-start", help="If the robot stands elsewhere, first move there (jerk-limited, input-shaped for the swing).")] = False,
-    start_tolerance: Annotated[float, number("--start-tolerance", low=0, high=0.1, unit="rad", help="Largest |first row − measured position| accepted \\[rad].")] = 1e-3,
-    start_sway: Annotated[float, number("--start-sway", low=1e-3, high=45, unit="deg", help="With --move-to-start, hold the first row until the sway stayed below this \\[deg].")] = 0.2,
-    sway_wait: Annotated[float, number("--sway-wait", low=0, high=3600, unit="s", help="Hold it at most this long \\[s].")] = 30.0,
-    sim_length: Annotated[Optional[float], string_length("--sim-length", help="Simulator: the ball's true string length \\[m] (default --length, else 0.25).")] = None,
-    sim_delay: Annotated[float, number("--sim-delay", low=0, high=200, unit="ms", help="Simulator: the ball IO shows the ball this much later \\[ms] (camera/encoder link).")] = 0.0,
+    length: Annotated[
+        Optional[float],
+        string_length(
+            "--length",
+            help="String length the damper assumes (pivot to ball centre) \\[m]; default the simulated ball's.",
+        ),
+    ] = None,
+    damp_time: Annotated[
+        Optional[float],
+        number(
+            "--damp-time",
+            low=0,
+            high=600,
+            unit="s",
+            help="Keep damping this long after the last row \\[s] (default 3 swing periods).",
+        ),
+    ] = None,
+    sensor: Annotated[
+        str,
+        choice(
+            "--sensor",
+            choices=("io", "module", "camera"),
+            help="Where the sway comes from: io (the controller's analog inputs --io-names), module (the pendulum module on --pendulum; one axis) or camera (the ball tracked live in --camera, or the simulator's camera).",
+        ),
+    ] = "io",
+    color: Annotated[
+        str,
+        typer.Option(
+            "--color",
+            help="With --sensor camera: the ball's colour (red, orange, yellow, green, cyan, blue, magenta, or a hue range H1-H2).",
+        ),
+    ] = "red",
+    io_names: Annotated[
+        str,
+        typer.Option(
+            "--io-names",
+            help="Analog inputs with θx, θy \\[rad] (atan2(s_x, −s_z), atan2(s_y, −s_z) of the string direction s).",
+        ),
+    ] = "ball_theta_x,ball_theta_y",
+    module_axis: Annotated[
+        str,
+        choice(
+            "--module-axis",
+            choices=("x", "y"),
+            help="With --sensor module: the base axis the module swings along (x or y).",
+        ),
+    ] = "y",
+    sensor_delay: Annotated[
+        Optional[float],
+        number(
+            "--sensor-delay",
+            low=0,
+            high=500,
+            unit="ms",
+            help="Age of a reading when it arrives \\[ms] (default: --sim-delay + one period; one period with --robot; with --sensor camera each reading's own age is used, this only where it is unknown; default --camera-delay + 6).",
+        ),
+    ] = None,
+    sensor_rate: Annotated[
+        float,
+        number(
+            "--sensor-rate", low=10, high=10000, unit="Hz", help="With --sensor module: readings per second \\[Hz]."
+        ),
+    ] = 200.0,
+    open_loop: Annotated[
+        bool,
+        typer.Option(
+            "--open-loop", help="Estimate and log the sway but do not correct (the plan alone, for comparison)."
+        ),
+    ] = False,
+    target: Annotated[
+        float,
+        number(
+            "--target",
+            low=0.001,
+            high=45,
+            unit="deg",
+            help="The goal: residual sway at most this, fitted over the last swing period of --damp-time \\[deg]; exit 1 above it.",
+        ),
+    ] = 0.3,
+    move_to_start: Annotated[
+        bool,
+        typer.Option(
+            "--move-to-start",
+            help="If the robot stands elsewhere, first move there (jerk-limited, input-shaped for the swing).",
+        ),
+    ] = False,
+    start_tolerance: Annotated[
+        float,
+        number(
+            "--start-tolerance",
+            low=0,
+            high=0.1,
+            unit="rad",
+            help="Largest |first row − measured position| accepted \\[rad].",
+        ),
+    ] = 1e-3,
+    start_sway: Annotated[
+        float,
+        number(
+            "--start-sway",
+            low=1e-3,
+            high=45,
+            unit="deg",
+            help="With --move-to-start, hold the first row until the sway stayed below this \\[deg].",
+        ),
+    ] = 0.2,
+    sway_wait: Annotated[
+        float, number("--sway-wait", low=0, high=3600, unit="s", help="Hold it at most this long \\[s].")
+    ] = 30.0,
+    sim_length: Annotated[
+        Optional[float],
+        string_length(
+            "--sim-length", help="Simulator: the ball's true string length \\[m] (default --length, else 0.25)."
+        ),
+    ] = None,
+    sim_delay: Annotated[
+        float,
+        number(
+            "--sim-delay",
+            low=0,
+            high=200,
+            unit="ms",
+            help="Simulator: the ball IO shows the ball this much later \\[ms] (camera/encoder link).",
+        ),
+    ] = 0.0,
     plot: PlotOpt = None,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
@@ -284,7 +681,8 @@ def damp(
     from lbrcli.control.damping import LOG_COLUMNS
 
     rep = Reporter(json_out)
-    names = _check_damp(fri, lab, cam, sensor, io_names, length, {"--sim-length": sim_length is not None, "--sim-delay": sim_delay != 0.0})
+    names = _check_damp(fri, lab, cam, sensor, io_names, length,
+                        {"--sim-length": sim_length is not None, "--sim-delay": sim_delay != 0.0})  # fmt: skip
     fri.refuse_log_over(joint_csv)
     lim = limits_from(limits)
     within_limits(fri.sim_start, lim, "--sim-start")
@@ -329,7 +727,9 @@ def _check_damp(fri: FriOptions, lab: LabOptions, cam: CameraOptions, sensor: st
         flag = "--sim-fast" if fri.sim_fast else "--sim-lockstep"
         raise OptionError(f"{flag}: the simulator's camera films in real time; run --sensor camera without it")
     if sensor == "camera" and sim_only["--sim-delay"]:
-        raise OptionError("--sim-delay delays the simulator's ball IO and module; its camera's delay is --sim-camera-latency")
+        raise OptionError(
+            "--sim-delay delays the simulator's ball IO and module; its camera's delay is --sim-camera-latency"
+        )
     names = tuple(n.strip() for n in io_names.split(","))
     if len(names) != 2 or not all(names):
         raise OptionError(f"--io-names: expected two analog input names 'theta_x,theta_y', got {io_names!r}")
@@ -365,7 +765,10 @@ def _check_camera(cam: CameraOptions, sensor: str, robot: str | None) -> None:
                           "--camera-position X,Y,Z with --camera-look-at X,Y,Z")  # fmt: skip
     if cam.position is not None and cam.look_at is None and cam.source is not None:
         raise OptionError("--camera-position needs --camera-look-at (where the camera looks) with --camera")
-    for name, pos, look in (("--camera", cam.position, cam.look_at), ("--sim-camera", cam.sim_position, cam.sim_look_at)):
+    for name, pos, look in (
+        ("--camera", cam.position, cam.look_at),
+        ("--sim-camera", cam.sim_position, cam.sim_look_at),
+    ):
         if pos is not None and look is not None and math.dist(pos, look) < 0.05:
             raise OptionError(f"{name}-look-at must be at least 5 cm from {name}-position")
     fps = cam.sim_fps if cam.sim_fps is not None else SIM_FPS
@@ -412,7 +815,11 @@ def _open_camera(setup: DampSetup, cam: CameraOptions, rep, stack, robot_factory
     from lbrcli.control.damp_setup import CameraSetup
 
     q = setup.traj.q
-    q_rest = (fri.sim_start if fri.sim_start is not None else q[0]) if fri.robot is None else (None if move_to_start else q[0])
+    q_rest = (
+        (fri.sim_start if fri.sim_start is not None else q[0])
+        if fri.robot is None
+        else (None if move_to_start else q[0])
+    )
     return CameraSetup(*camera_sensor_for(
         cam, rep, stack, robot_factory=robot_factory, rows=q, t=setup.traj.t, period_s=setup.period_s,
         accel=setup.plan.planned_accel, model_len=setup.model_length, true_len=setup.true_length,
@@ -424,7 +831,9 @@ def _print_damp_plan(rep, name: str, setup: DampSetup, period_ms: int) -> None:
     rep.print(f"{name}: {len(setup.traj)} rows, step {period_ms} ms, {setup.traj.duration:.3f} s — within the limits; "
               f"string {setup.model_length:g} m (period {setup.swing_period_s:.3f} s), damping {setup.damp_s:.2f} s after "
               "the last row" + (" (open loop: no correction)" if setup.open_loop else ""))  # fmt: skip
-    rep.print(f"offset room: up to {travel * 1e3:.0f} mm, {low:.2f}–{high:.2f} m/s² along the file (the joints' headroom)")
+    rep.print(
+        f"offset room: up to {travel * 1e3:.0f} mm, {low:.2f}–{high:.2f} m/s² along the file (the joints' headroom)"
+    )
 
 
 def _print_damping(rep, f: dict, camera: bool, target: float) -> None:

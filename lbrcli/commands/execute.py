@@ -30,7 +30,8 @@ from ..session_settings import LogColumns
 ExecuteLengthOpt = Annotated[  # also shapes the move to the start, with --robot too
     Optional[float],
     string_length(
-        "--length", zero_is_none=True,
+        "--length",
+        zero_is_none=True,
         help="String length of the ball on the flange \\[m]: the move to the start is input-shaped (ZVD) for its "
         f"swing period; without --robot also the simulated ball's (default {DEFAULT_BALL_LENGTH}; 0: no ball).",
     ),
@@ -53,15 +54,24 @@ def check_or_fail(rep, traj, lim, margin: float, t1: bool, robot, name: str):
 
 @with_options(fri=FRI_OPTIONS.replacing(period=PeriodOpt, length=ExecuteLengthOpt), lab=LAB_OPTIONS)
 def execute(
-    joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad]; its step must be the FRI period.")],
+    joint_csv: Annotated[
+        Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad]; its step must be the FRI period.")
+    ],
     fri: FriOptions,
     lab: LabOptions,
     resample: Annotated[
-        bool, typer.Option("--resample", help="Resample the file (cubic spline) to the controller's period if it differs.")
+        bool,
+        typer.Option("--resample", help="Resample the file (cubic spline) to the controller's period if it differs."),
     ] = False,
     start_tolerance: Annotated[
-        float, number("--start-tolerance", low=0, high=0.1, unit="rad",
-                      help="Largest |first row − measured position| accepted \\[rad].")
+        float,
+        number(
+            "--start-tolerance",
+            low=0,
+            high=0.1,
+            unit="rad",
+            help="Largest |first row − measured position| accepted \\[rad].",
+        ),
     ] = 1e-3,
     move_to_start: Annotated[
         bool,
@@ -71,25 +81,45 @@ def execute(
             "the ball's swing with --length or the simulator's ball).",
         ),
     ] = False,
-    settle: Annotated[float, number("--settle", low=0, high=600, unit="s", help="Hold the last row this long before stopping \\[s].")] = 1.0,
+    settle: Annotated[
+        float, number("--settle", low=0, high=600, unit="s", help="Hold the last row this long before stopping \\[s].")
+    ] = 1.0,
     margin: MarginOpt = 0.0,
-    t1: Annotated[bool, typer.Option("--t1", help="Also refuse files whose flange speed exceeds T1's 250 mm/s.")] = False,
+    t1: Annotated[
+        bool, typer.Option("--t1", help="Also refuse files whose flange speed exceeds T1's 250 mm/s.")
+    ] = False,
     damping: Annotated[
-        float, number("--damping", low=0, high=1000, unit="1/s",
-                      help="Simulator only: damping of the simulated ball \\[1/s] (0: it swings on).")
+        float,
+        number(
+            "--damping",
+            low=0,
+            high=1000,
+            unit="1/s",
+            help="Simulator only: damping of the simulated ball \\[1/s] (0: it swings on).",
+        ),
     ] = 0.0,
     cup: CupSpecOpt = None,
     start_sway: Annotated[
         float,
         number(
-            "--start-sway", low=0, high=45, low_open=True, unit="deg",
+            "--start-sway",
+            low=0,
+            high=45,
+            low_open=True,
+            unit="deg",
             help="With --move-to-start, hold the first row until the measured sway (the simulated ball, or --pendulum) "
             "has stayed below this for 0.6 of a swing period \\[deg].",
         ),
     ] = 0.2,
     sway_wait: Annotated[
         float,
-        number("--sway-wait", low=0, high=3600, unit="s", help="Hold it at most this long, then start and report the sway \\[s] (0: only report)."),
+        number(
+            "--sway-wait",
+            low=0,
+            high=3600,
+            unit="s",
+            help="Hold it at most this long, then start and report the sway \\[s] (0: only report).",
+        ),
     ] = 30.0,
     receive_multiplier: MultiplierOpt = 1,
     plot: PlotOpt = None,
@@ -220,8 +250,11 @@ def _report_cup(rep, figures: dict, cup: str | None, log: Path | None) -> None:
     """The simulated cup-and-ball: caught or not (simulator time), and what the log says (with --cup and --log)."""
     plant = (figures.get("simulator") or {}).get("plants", {}).get("ball", {}).get("cup")
     if plant is not None:
-        rep.print("simulated ball: " + ("caught in the cup" if plant["caught"] else f"not caught — {plant['failure']}")
-                  + " (simulator time)")
+        rep.print(
+            "simulated ball: "
+            + ("caught in the cup" if plant["caught"] else f"not caught — {plant['failure']}")
+            + " (simulator time)"
+        )
     if cup is not None and log is not None:
         from ..cup_log import cup_summary, describe
 

@@ -20,11 +20,40 @@ def _ros_name(text: str) -> str:
 
 
 def export(
-    files: Annotated[list[Path], typer.Argument(metavar="FILE...", help="An execution log (`lbr execute --log`) and/or a plan (joint trajectory t,q1..q7).")],
+    files: Annotated[
+        list[Path],
+        typer.Argument(
+            metavar="FILE...", help="An execution log (`lbr execute --log`) and/or a plan (joint trajectory t,q1..q7)."
+        ),
+    ],
     out: Annotated[Path, typer.Option("-o", "--out", help="MCAP file to write (.mcap).")],
-    prefix: Annotated[str, typer.Option("--prefix", parser=_ros_name, metavar="NAME", help="Robot name: topic namespace, joint names <prefix>_A1..A7 and frames <prefix>_link_0.. as lbr-stack's driver uses them.")] = "lbr",
-    length: Annotated[float, number("--length", low=0.01, high=5, unit="m", help="String length \\[m] from the TCP to the simulated ball's centre (the log's ball angles).")] = 0.25,
-    compression: Annotated[str, choice("--compression", choices=("zstd", "lz4", "none"), help="Chunk compression (1 MiB chunks): zstd (level 1, libmcap's and rosbag2's default), lz4 (less CPU, ≈ 30 % larger) or none.")] = "zstd",
+    prefix: Annotated[
+        str,
+        typer.Option(
+            "--prefix",
+            parser=_ros_name,
+            metavar="NAME",
+            help="Robot name: topic namespace, joint names <prefix>_A1..A7 and frames <prefix>_link_0.. as lbr-stack's driver uses them.",
+        ),
+    ] = "lbr",
+    length: Annotated[
+        float,
+        number(
+            "--length",
+            low=0.01,
+            high=5,
+            unit="m",
+            help="String length \\[m] from the TCP to the simulated ball's centre (the log's ball angles).",
+        ),
+    ] = 0.25,
+    compression: Annotated[
+        str,
+        choice(
+            "--compression",
+            choices=("zstd", "lz4", "none"),
+            help="Chunk compression (1 MiB chunks): zstd (level 1, libmcap's and rosbag2's default), lz4 (less CPU, ≈ 30 % larger) or none.",
+        ),
+    ] = "zstd",
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -99,11 +128,23 @@ def export(
     messages = sum(bag.counts.values())
     for topic, count in bag.counts.items():
         rep.print(f"  {topic}: {count} messages")
-    rep.print(f"wrote {out}: {messages} messages on {len(bag.counts)} topics, {size / 1e6:.1f} MB in {seconds:.2f} s"
-              + (f" (clock: {series.clock} timestamps)" if series is not None else ""))
-    rep.emit({"out": str(out), "messages": messages, "topics": bag.counts, "size_bytes": size, "seconds": seconds,
-              "read_s": t_read, "clock": series.clock if series is not None else "plan",
-              "log": str(logs[0]) if logs else None, "plan": str(plans[0]) if plans else None})
+    rep.print(
+        f"wrote {out}: {messages} messages on {len(bag.counts)} topics, {size / 1e6:.1f} MB in {seconds:.2f} s"
+        + (f" (clock: {series.clock} timestamps)" if series is not None else "")
+    )
+    rep.emit(
+        {
+            "out": str(out),
+            "messages": messages,
+            "topics": bag.counts,
+            "size_bytes": size,
+            "seconds": seconds,
+            "read_s": t_read,
+            "clock": series.clock if series is not None else "plan",
+            "log": str(logs[0]) if logs else None,
+            "plan": str(plans[0]) if plans else None,
+        }
+    )
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -14,13 +14,45 @@ TRUTH_COLUMNS = ("t", "u", "v", "pivot_u", "pivot_v", "theta")
 
 
 def film(
-    log: Annotated[Path, typer.Argument(metavar="LOG", help="Execution log of `lbr execute` on the simulator (ball_theta_y, msr_q1..7).")],
+    log: Annotated[
+        Path,
+        typer.Argument(
+            metavar="LOG", help="Execution log of `lbr execute` on the simulator (ball_theta_y, msr_q1..7)."
+        ),
+    ],
     out: Annotated[Path, typer.Option("-o", "--out", help="Video to write (.mp4).")],
-    length: Annotated[float, number("--length", low=0.01, high=5.0, unit="m", help="String length \\[m] the simulator used (`lbr execute --length`).")] = 0.25,
-    size: Annotated[tuple, grid("--size", low=64, high=7680, metavar="WIDTHxHEIGHT", help="Frame size WIDTHxHEIGHT \\[px] (height at most 4320); the scale follows the width (1300 px/m at 1280).")] = "1280x720",
+    length: Annotated[
+        float,
+        number(
+            "--length",
+            low=0.01,
+            high=5.0,
+            unit="m",
+            help="String length \\[m] the simulator used (`lbr execute --length`).",
+        ),
+    ] = 0.25,
+    size: Annotated[
+        tuple,
+        grid(
+            "--size",
+            low=64,
+            high=7680,
+            metavar="WIDTHxHEIGHT",
+            help="Frame size WIDTHxHEIGHT \\[px] (height at most 4320); the scale follows the width (1300 px/m at 1280).",
+        ),
+    ] = "1280x720",
     fps: Annotated[float, number("--fps", low=1, high=1000, unit="1/s", help="Frame rate \\[1/s].")] = 60.0,
-    truth: Annotated[Optional[Path], typer.Option("--truth", help="Write what was drawn per frame: t,u,v,pivot_u,pivot_v,theta \\[s, px, rad].")] = None,
-    partial: Annotated[bool, typer.Option("--partial", help="Film a log whose session stopped early too (refused otherwise: the film would not show the experiment).")] = False,
+    truth: Annotated[
+        Optional[Path],
+        typer.Option("--truth", help="Write what was drawn per frame: t,u,v,pivot_u,pivot_v,theta \\[s, px, rad]."),
+    ] = None,
+    partial: Annotated[
+        bool,
+        typer.Option(
+            "--partial",
+            help="Film a log whose session stopped early too (refused otherwise: the film would not show the experiment).",
+        ),
+    ] = False,
     cup: CupSpecOpt = None,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
@@ -64,16 +96,26 @@ def film(
     table = read_film_log(log)
     require_complete(table, partial, rep)
     with atomic_path(out) as tmp, rep.progress("film", None) as update:
-        footage = film_execution_log(table, tmp, length, camera, flange=flange, tool=parse_tool(tool),
-                                     progress=update, cup=model, target=out)
+        footage = film_execution_log(
+            table, tmp, length, camera, flange=flange, tool=parse_tool(tool), progress=update, cup=model, target=out
+        )
         check_written(tmp, len(footage.truth.t), out)  # OpenCV does not report a full disk
     gt = footage.truth
     if truth is not None:
         write_table(truth, TRUTH_COLUMNS, np.column_stack([gt.t, gt.ball_uv, gt.pivot_uv, gt.theta]), fmt="%.6f")
-    rep.print(f"wrote {out}: {len(gt.t)} frames, {w}x{h} px at {fps:g} FPS, {gt.t[-1]:.2f} s from log time "
-              f"{footage.t0_log:.3f} s")
-    rep.emit({"out": str(out), "frames": int(len(gt.t)), "video_s": float(gt.t[-1]), "t0_log_s": footage.t0_log,
-              "truth": str(truth) if truth is not None else None})
+    rep.print(
+        f"wrote {out}: {len(gt.t)} frames, {w}x{h} px at {fps:g} FPS, {gt.t[-1]:.2f} s from log time "
+        f"{footage.t0_log:.3f} s"
+    )
+    rep.emit(
+        {
+            "out": str(out),
+            "frames": int(len(gt.t)),
+            "video_s": float(gt.t[-1]),
+            "t0_log_s": footage.t0_log,
+            "truth": str(truth) if truth is not None else None,
+        }
+    )
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

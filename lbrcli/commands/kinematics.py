@@ -40,7 +40,9 @@ def fk(
 
 
 def ik(
-    task_csv: Annotated[Path, typer.Argument(help="Task trajectory t,x,y,z,qw,qx,qy,qz \\[s, m] of the flange (or tool).")],
+    task_csv: Annotated[
+        Path, typer.Argument(help="Task trajectory t,x,y,z,qw,qx,qy,qz \\[s, m] of the flange (or tool).")
+    ],
     out: Annotated[Path, typer.Option("-o", "--out", help="Joint trajectory to write: t,q1..q7 \\[s, rad].")],
     q0: Annotated[
         Optional[JointVector],
@@ -55,8 +57,14 @@ def ik(
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
     nullspace_rate: Annotated[
-        float, number("--nullspace-rate", low=0, high=1e4, unit="1/s",
-                      help="Pull toward the start configuration in the null space \\[1/s].")
+        float,
+        number(
+            "--nullspace-rate",
+            low=0,
+            high=1e4,
+            unit="1/s",
+            help="Pull toward the start configuration in the null space \\[1/s].",
+        ),
     ] = 1.0,
     no_speed_limits: Annotated[
         bool, typer.Option("--no-speed-limits", help="Bound joint positions only, not joint speeds and accelerations.")
@@ -131,13 +139,23 @@ def ik(
             rep.warn(f"the joint path violates limits ({violations} violations); see `lbr check {out}`")
     rep.emit(figures)
     if contract and not figures["limits_ok"]:
-        raise CheckFailed(f"{out}: written, but it fails `lbr check` although the task path starts and ends at rest: "
-                          f"{figures['first_violation']}")
+        raise CheckFailed(
+            f"{out}: written, but it fails `lbr check` although the task path starts and ends at rest: "
+            f"{figures['first_violation']}"
+        )
 
 
-def ik_path(task, q0: str | Sequence[float] | None = None, flange: str = DEFAULT_FLANGE, tool: str | None = None,
-            limits: Path | None = None, nullspace_rate: float = 1.0, no_speed_limits: bool = False,
-            smooth: bool = False, progress=None):
+def ik_path(
+    task,
+    q0: str | Sequence[float] | None = None,
+    flange: str = DEFAULT_FLANGE,
+    tool: str | None = None,
+    limits: Path | None = None,
+    nullspace_rate: float = 1.0,
+    no_speed_limits: bool = False,
+    smooth: bool = False,
+    progress=None,
+):
     """`lbr ik` of a read task trajectory without the output file: (JointTrajectory, the JSON figures but ``out``;
     ``violations`` counts the limit check's findings, ``first_violation`` describes the first). IkError (exit 1)
     for a path no joint path follows. ``lbr sweep`` calls it too (its values as typed: --q0 as text, checked

@@ -12,12 +12,25 @@ from ..options import JsonOpt, number
 
 def listen(
     url: Annotated[str, typer.Argument(help="mqtt://HOST:PORT/TOPIC published by `lbr execute/monitor --mqtt`.")],
-    duration: Annotated[Optional[float], number("--duration", low=0, high=1e7, low_open=True, unit="s", help="Stop after this many seconds \\[s].")] = None,
-    count: Annotated[Optional[int], number("--count", low=1, high=10**12, integer=True, help="Stop after this many messages.")] = None,
+    duration: Annotated[
+        Optional[float],
+        number("--duration", low=0, high=1e7, low_open=True, unit="s", help="Stop after this many seconds \\[s]."),
+    ] = None,
+    count: Annotated[
+        Optional[int], number("--count", low=1, high=10**12, integer=True, help="Stop after this many messages.")
+    ] = None,
     out: Annotated[Optional[Path], typer.Option("-o", "--out", help="Record every message as one JSON line.")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", help="Do not print each message.")] = False,
     connect_timeout: Annotated[
-        float, number("--connect-timeout", low=0, high=600, low_open=True, unit="s", help="Exit 1 when the broker is not reached within this time \\[s].")
+        float,
+        number(
+            "--connect-timeout",
+            low=0,
+            high=600,
+            low_open=True,
+            unit="s",
+            help="Exit 1 when the broker is not reached within this time \\[s].",
+        ),
     ] = 5.0,
     json_out: JsonOpt = False,
 ) -> None:
@@ -55,7 +68,9 @@ def listen(
                 q = data.get("msr_q")
                 qtext = " ".join(f"{x:+.3f}" for x in q) if isinstance(q, list) else ""
                 extra = "".join(
-                    f" {k}={data[k]:+.3f}" for k in ("ball_theta", "pend_theta") if isinstance(data.get(k), (int, float))
+                    f" {k}={data[k]:+.3f}"
+                    for k in ("ball_theta", "pend_theta")
+                    if isinstance(data.get(k), (int, float))
                 )
                 rep.print(f"t={data.get('t', float('nan')):8.3f} {state:<18} q=[{qtext}]{extra}")
             if count is not None and n >= count:
@@ -76,7 +91,9 @@ def listen(
             listener.stop()  # no more callbacks: the recording can be closed and renamed
         elapsed = time.monotonic() - t0
         connected = listener.connected.is_set()
-        rep.print(f"received {listener.received} messages ({listener.malformed} malformed) from {url} in {elapsed:.1f} s")
+        rep.print(
+            f"received {listener.received} messages ({listener.malformed} malformed) from {url} in {elapsed:.1f} s"
+        )
         failure = None
         if not connected:
             failure = f"could not reach the MQTT broker {target.host}:{target.port} within {connect_timeout:g} s"
@@ -86,8 +103,16 @@ def listen(
             failure = f"nothing received on '{target.topic}' from {target.host}:{target.port} in {elapsed:.1f} s"
         elif count is not None and listener.received < count:
             failure = f"received {listener.received} of {count} messages in {elapsed:.1f} s"
-        rep.emit({"received": listener.received, "malformed": listener.malformed, "connected": connected,
-                  "seconds": elapsed, "ok": failure is None and not interrupted, "failure": failure})
+        rep.emit(
+            {
+                "received": listener.received,
+                "malformed": listener.malformed,
+                "connected": connected,
+                "seconds": elapsed,
+                "ok": failure is None and not interrupted,
+                "failure": failure,
+            }
+        )
         if failure and n == 0:
             raise CheckFailed(failure + ("; nothing recorded" if out is not None else ""))  # no empty recording
     if failure:

@@ -15,9 +15,11 @@ from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, ToolOpt, make_robot, n
 from ..session_settings import LogColumns
 
 
-@with_options(fri=FRI_OPTIONS.without("sim_lockstep", "sim_fast"), lab=LAB_OPTIONS)
+@with_options(fri=FRI_OPTIONS.without("sim_fast"), lab=LAB_OPTIONS)
 def monitor(
-    duration: Annotated[float, number("--duration", low=0, high=86400, low_open=True, unit="s", help="How long to monitor \\[s].")],
+    duration: Annotated[
+        float, number("--duration", low=0, high=86400, low_open=True, unit="s", help="How long to monitor \\[s].")
+    ],
     fri: FriOptions,
     lab: LabOptions,
     plot: PlotOpt = None,

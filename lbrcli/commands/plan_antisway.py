@@ -20,32 +20,119 @@ from ..options import (DEFAULT_FLANGE, FlangeOpt, JointVector, JsonOpt, LimitsOp
 
 def plan_anti_sway_command(
     out: Annotated[Path, typer.Option("-o", "--out", help="Joint trajectory to write: t,q1..q7 \\[s, rad].")],
-    length: Annotated[float, number("--length", low=0.01, high=3.0, unit="m", help="String length from the pivot (flange + --tool) to the ball centre \\[m].")],
-    a_max: Annotated[float, number("--a-max", low=0, high=20, low_open=True, unit="m/s²", help="Maximum pivot acceleration \\[m/s²].")],
+    length: Annotated[
+        float,
+        number(
+            "--length",
+            low=0.01,
+            high=3.0,
+            unit="m",
+            help="String length from the pivot (flange + --tool) to the ball centre \\[m].",
+        ),
+    ],
+    a_max: Annotated[
+        float,
+        number("--a-max", low=0, high=20, low_open=True, unit="m/s²", help="Maximum pivot acceleration \\[m/s²]."),
+    ],
     points: Annotated[
         np.ndarray,
-        typer.Option("--points", parser=Points(), metavar="X0,Y0;X1,Y1;...", help="Start and turning points 'x0,y0;x1,y1;...' in the base frame \\[m]; default: a thesis-like layout."),
+        typer.Option(
+            "--points",
+            parser=Points(),
+            metavar="X0,Y0;X1,Y1;...",
+            help="Start and turning points 'x0,y0;x1,y1;...' in the base frame \\[m]; default: a thesis-like layout.",
+        ),
     ] = DEFAULT_POINTS_TEXT,
-    z: Annotated[Optional[float], number("--z", low=Z_RANGE[0], high=Z_RANGE[1], unit="m", help="Flange (pivot) height \\[m]; default 0.45.")] = None,
+    z: Annotated[
+        Optional[float],
+        number("--z", low=Z_RANGE[0], high=Z_RANGE[1], unit="m", help="Flange (pivot) height \\[m]; default 0.45."),
+    ] = None,
     shaper: Annotated[
         str,
-        typer.Option("--shaper", help="auto (default: per segment the quickest move robust to --length-tolerance, capped at the baseline's time; other designs as fallback), robust, accel (thesis baseline), box, zv, zvd, zvdd, mzv, ei, ei2, box-zv, box-zvd, box-ei."),
+        typer.Option(
+            "--shaper",
+            help="auto (default: per segment the quickest move robust to --length-tolerance, capped at the baseline's time; other designs as fallback), robust, accel (thesis baseline), box, zv, zvd, zvdd, mzv, ei, ei2, box-zv, box-zvd, box-ei.",
+        ),
     ] = "auto",
-    dt: Annotated[float, number("--dt", low=1e-4, high=0.05, unit="s", help="Joint sample step \\[s] (thesis FRI period 0.005).")] = DEFAULT_DT,
+    dt: Annotated[
+        float, number("--dt", low=1e-4, high=0.05, unit="s", help="Joint sample step \\[s] (thesis FRI period 0.005).")
+    ] = DEFAULT_DT,
     length_tolerance: Annotated[
-        float, number("--length-tolerance", low=0, high=0.9, high_open=True, help="Relative string-length uncertainty the plan must tolerate (0.2 = ±20 %); 0: nominal length only (fastest).")
+        float,
+        number(
+            "--length-tolerance",
+            low=0,
+            high=0.9,
+            high_open=True,
+            help="Relative string-length uncertainty the plan must tolerate (0.2 = ±20 %); 0: nominal length only (fastest).",
+        ),
     ] = 0.1,
-    max_sway: Annotated[Optional[float], angle("--max-sway", low_deg=0, high_deg=90, low_open=True, high_open=True, default_unit="deg", help="Largest tilt of the string during the move, for every length in the band \\[deg; a plain number is degrees, 'rad' suffix for radians]: a planning constraint of the default design, a check for all.")] = None,
-    obstacles: Annotated[Optional[Path], typer.Option("--obstacles", help="CSV of boxes on the table: name,x_min,y_min,z_min,x_max,y_max,z_max \\[m, base frame]; the ball's predicted paths (string ±tolerance) must clear them.")] = None,
-    ball_radius: Annotated[float, number("--ball-radius", low=0, high=1, high_open=True, unit="m", help="Ball radius for the obstacle clearance \\[m].")] = DEFAULT_BALL_RADIUS,
-    no_fallback: Annotated[bool, typer.Option("--no-fallback", help="With auto: do not try other designs when the default cannot plan.")] = False,
-    j_max: Annotated[Optional[float], number("--j-max", low=0.1, high=1e4, unit="m/s³", help="Pivot jerk limit of the shaped profiles \\[m/s³]; default a_max/(0.04·T): jerk ramps of 4 % of the period.")] = None,
-    v_max: Annotated[Optional[float], number("--v-max", low=0.01, high=10, unit="m/s", help="Pivot speed limit \\[m/s]; default none.")] = None,
-    no_tune: Annotated[bool, typer.Option("--no-tune", help="Skip the per-segment nonlinear tuning of the period.")] = False,
-    task_out: Annotated[Optional[Path], typer.Option("--task-out", help="Planned pivot path t,x,y,z,qw,qx,qy,qz \\[s, m].")] = None,
-    prediction: Annotated[Optional[Path], typer.Option("--prediction", help="Predicted sway t,theta,phi,theta_x,theta_y \\[s, rad].")] = None,
-    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: top view, pivot acceleration, predicted sway.")] = None,
-    q0: Annotated[Optional[JointVector], joints("--q0", help=f"IK reference configuration (7 angles, deg/rad; inside the position limits); default {ANTISWAY_Q0}.")] = None,
+    max_sway: Annotated[
+        Optional[float],
+        angle(
+            "--max-sway",
+            low_deg=0,
+            high_deg=90,
+            low_open=True,
+            high_open=True,
+            default_unit="deg",
+            help="Largest tilt of the string during the move, for every length in the band \\[deg; a plain number is degrees, 'rad' suffix for radians]: a planning constraint of the default design, a check for all.",
+        ),
+    ] = None,
+    obstacles: Annotated[
+        Optional[Path],
+        typer.Option(
+            "--obstacles",
+            help="CSV of boxes on the table: name,x_min,y_min,z_min,x_max,y_max,z_max \\[m, base frame]; the ball's predicted paths (string ±tolerance) must clear them.",
+        ),
+    ] = None,
+    ball_radius: Annotated[
+        float,
+        number(
+            "--ball-radius",
+            low=0,
+            high=1,
+            high_open=True,
+            unit="m",
+            help="Ball radius for the obstacle clearance \\[m].",
+        ),
+    ] = DEFAULT_BALL_RADIUS,
+    no_fallback: Annotated[
+        bool, typer.Option("--no-fallback", help="With auto: do not try other designs when the default cannot plan.")
+    ] = False,
+    j_max: Annotated[
+        Optional[float],
+        number(
+            "--j-max",
+            low=0.1,
+            high=1e4,
+            unit="m/s³",
+            help="Pivot jerk limit of the shaped profiles \\[m/s³]; default a_max/(0.04·T): jerk ramps of 4 % of the period.",
+        ),
+    ] = None,
+    v_max: Annotated[
+        Optional[float],
+        number("--v-max", low=0.01, high=10, unit="m/s", help="Pivot speed limit \\[m/s]; default none."),
+    ] = None,
+    no_tune: Annotated[
+        bool, typer.Option("--no-tune", help="Skip the per-segment nonlinear tuning of the period.")
+    ] = False,
+    task_out: Annotated[
+        Optional[Path], typer.Option("--task-out", help="Planned pivot path t,x,y,z,qw,qx,qy,qz \\[s, m].")
+    ] = None,
+    prediction: Annotated[
+        Optional[Path], typer.Option("--prediction", help="Predicted sway t,theta,phi,theta_x,theta_y \\[s, rad].")
+    ] = None,
+    plot: Annotated[
+        Optional[Path], typer.Option("--plot", help="PNG: top view, pivot acceleration, predicted sway.")
+    ] = None,
+    q0: Annotated[
+        Optional[JointVector],
+        joints(
+            "--q0",
+            help=f"IK reference configuration (7 angles, deg/rad; inside the position limits); default {ANTISWAY_Q0}.",
+        ),
+    ] = None,
     margin: MarginOpt = 0.0,
     jerk: Annotated[bool, typer.Option("--jerk", help="Fail on joint jerk too (always reported).")] = False,
     flange: FlangeOpt = DEFAULT_FLANGE,
@@ -65,13 +152,31 @@ def plan_anti_sway_command(
 
     rep = Reporter(json_out)
     inputs = _plan_inputs(
-        length, a_max, points, z, shaper, dt, length_tolerance=length_tolerance, max_sway=max_sway,
-        obstacles=obstacles, ball_radius=ball_radius, no_fallback=no_fallback, j_max=j_max, v_max=v_max,
-        no_tune=no_tune, q0=q0, margin=margin, jerk=jerk, flange=flange, tool=tool, limits=limits,
+        length,
+        a_max,
+        points,
+        z,
+        shaper,
+        dt,
+        length_tolerance=length_tolerance,
+        max_sway=max_sway,
+        obstacles=obstacles,
+        ball_radius=ball_radius,
+        no_fallback=no_fallback,
+        j_max=j_max,
+        v_max=v_max,
+        no_tune=no_tune,
+        q0=q0,
+        margin=margin,
+        jerk=jerk,
+        flange=flange,
+        tool=tool,
+        limits=limits,
     )
     with rep.progress("IK", None) as update:
-        figs = plan_anti_sway_files(**inputs, out=out, task_out=task_out, prediction=prediction, plot=plot,
-                                    progress=update)
+        figs = plan_anti_sway_files(
+            **inputs, out=out, task_out=task_out, prediction=prediction, plot=plot, progress=update
+        )
     if figs["fallback"]:
         fb = figs["fallback"]
         rep.print(f"fallback: {fb['from']} could not plan ({fb['reason']}); used {fb['to']}")
@@ -92,7 +197,9 @@ def plan_anti_sway_command(
         )
     if figs["nearest_obstacle"] is not None:
         nb = figs["nearest_obstacle"]
-        rep.print(f"obstacles: least clearance {figs['min_clearance_m'] * 1000:.1f} mm ({nb['name']} at t = {nb['t_s']:.2f} s)")
+        rep.print(
+            f"obstacles: least clearance {figs['min_clearance_m'] * 1000:.1f} mm ({nb['name']} at t = {nb['t_s']:.2f} s)"
+        )
     jr = figs["jerk_ratio"]
     rep.print(
         f"limits: {'OK' if figs['limits_ok'] else 'FAILED'}; peak joint jerk {jr * 100:.0f} % of the limit"
@@ -141,10 +248,29 @@ def anti_sway_inputs(
     return _plan_inputs(**parsed)
 
 
-def _plan_inputs(length: float, a_max: float, points, z, shaper: str, dt: float, *, length_tolerance: float,
-                 max_sway: float | None, obstacles: Path | None, ball_radius: float, no_fallback: bool,
-                 j_max: float | None, v_max: float | None, no_tune: bool, q0, margin: float, jerk: bool, flange: str,
-                 tool, limits: Path | None) -> dict:
+def _plan_inputs(
+    length: float,
+    a_max: float,
+    points,
+    z,
+    shaper: str,
+    dt: float,
+    *,
+    length_tolerance: float,
+    max_sway: float | None,
+    obstacles: Path | None,
+    ball_radius: float,
+    no_fallback: bool,
+    j_max: float | None,
+    v_max: float | None,
+    no_tune: bool,
+    q0,
+    margin: float,
+    jerk: bool,
+    flange: str,
+    tool,
+    limits: Path | None,
+) -> dict:
     """The parsed options (as the command's validators give them) → keyword arguments of
     :func:`lbrcli.antisway.plan_anti_sway`: the limits and obstacles read, --q0 checked against the limits."""
     from ..obstacle_file import read_obstacles
@@ -152,11 +278,26 @@ def _plan_inputs(length: float, a_max: float, points, z, shaper: str, dt: float,
 
     lim = limits_from(limits)
     return dict(
-        points=points, length=length, a_max=a_max, z=z, shaper=shaper, dt=dt, flange=flange, tool=tool,
-        q0=within_limits(q0, lim, "--q0"), limits=lim, margin=margin, jerk=jerk, j_max=j_max,
-        v_max=math.inf if v_max is None else v_max, length_tolerance=length_tolerance, tune=not no_tune,
-        max_sway=max_sway, obstacles=read_obstacles(obstacles) if obstacles is not None else (),
-        ball_radius=ball_radius, fallback=not no_fallback,
+        points=points,
+        length=length,
+        a_max=a_max,
+        z=z,
+        shaper=shaper,
+        dt=dt,
+        flange=flange,
+        tool=tool,
+        q0=within_limits(q0, lim, "--q0"),
+        limits=lim,
+        margin=margin,
+        jerk=jerk,
+        j_max=j_max,
+        v_max=math.inf if v_max is None else v_max,
+        length_tolerance=length_tolerance,
+        tune=not no_tune,
+        max_sway=max_sway,
+        obstacles=read_obstacles(obstacles) if obstacles is not None else (),
+        ball_radius=ball_radius,
+        fallback=not no_fallback,
     )
 
 

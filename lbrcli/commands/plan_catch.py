@@ -16,10 +16,32 @@ if TYPE_CHECKING:
     import numpy as np
 
 from ..cup_options import (
-    _BALL, _CUP, _MODEL, BallRadiusOpt, CupAxisOpt, CupDepthOpt, CupRadiusOpt, CupRimOpt, CupWallOpt, DragOpt, FrictionOpt, RestitutionOpt,
-    RetensionOpt, model_number,
+    _BALL,
+    _CUP,
+    _MODEL,
+    BallRadiusOpt,
+    CupAxisOpt,
+    CupDepthOpt,
+    CupRadiusOpt,
+    CupRimOpt,
+    CupWallOpt,
+    DragOpt,
+    FrictionOpt,
+    RestitutionOpt,
+    RetensionOpt,
+    model_number,
 )
-from ..options import DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, JointVector, JsonOpt, LimitsOpt, ToolOpt, joints, number
+from ..options import (
+    DEFAULT_FLANGE,
+    THESIS_Q_START,
+    FlangeOpt,
+    JointVector,
+    JsonOpt,
+    LimitsOpt,
+    ToolOpt,
+    joints,
+    number,
+)
 
 PREDICTION_COLUMNS = ("t", "theta", "phase", "ball_x", "ball_y", "ball_z", "anchor_x", "anchor_y", "anchor_z")
 
@@ -72,10 +94,19 @@ def plan_catch_files(
     q0 = within_limits(parse_joint_vector(q_start, "--q-start"), lim, "--q-start")
     robot = make_robot(flange, tool)
     _check_axis(robot, model, q0)
-    request = CatchRequest(model=model, q_start=tuple(float(v) for v in q0), dt=dt, max_time=max_time,
-                           length_tol=length_tol, mass_tol=mass_tol, timing=timing, min_success=min_success,
-                           travel=travel, limit_margin=margin,
-                           search=SearchSettings(popsize=6, maxiter=14, workers=int(workers)))
+    request = CatchRequest(
+        model=model,
+        q_start=tuple(float(v) for v in q0),
+        dt=dt,
+        max_time=max_time,
+        length_tol=length_tol,
+        mass_tol=mass_tol,
+        timing=timing,
+        min_success=min_success,
+        travel=travel,
+        limit_margin=margin,
+        search=SearchSettings(popsize=6, maxiter=14, workers=int(workers)),
+    )
     result = plan_catch(request, robot, lim, progress=progress)
     write_joint_csv(out, result.trajectory)
     figures: dict[str, Any] = {"out": str(out), **result.figures(), "cup_spec": cup_spec(model)}
@@ -83,9 +114,12 @@ def plan_catch_files(
     if prediction is not None:
         run = result.prediction
         anchor = run.pivot
-        write_table(prediction, PREDICTION_COLUMNS,
-                    np.column_stack([run.t, run.theta_y, run.phase, run.position, anchor]),
-                    fmt=["%.6f", "%.9f", "%d"] + ["%.7f"] * 6)
+        write_table(
+            prediction,
+            PREDICTION_COLUMNS,
+            np.column_stack([run.t, run.theta_y, run.phase, run.position, anchor]),
+            fmt=["%.6f", "%.9f", "%d"] + ["%.7f"] * 6,
+        )
         figures["prediction"] = str(prediction)
     if plot is not None:
         from ..plots.catch import plot_catch
@@ -106,8 +140,10 @@ def _check_axis(robot, model, q0) -> None:
 
     tilt = math.degrees(math.acos(max(-1.0, min(1.0, float(cup_axis_at_start(robot, model, q0)[2])))))
     if tilt > math.degrees(MAX_AXIS_TILT):
-        raise OptionError(f"--cup-axis: the cup opens {tilt:.0f}° away from straight up at the start pose; the catch "
-                          f"needs it within {math.degrees(MAX_AXIS_TILT):.0f}° (--cup-axis, --q-start)")
+        raise OptionError(
+            f"--cup-axis: the cup opens {tilt:.0f}° away from straight up at the start pose; the catch "
+            f"needs it within {math.degrees(MAX_AXIS_TILT):.0f}° (--cup-axis, --q-start)"
+        )
 
 
 def _summary(rep, f: dict) -> None:
@@ -115,21 +151,29 @@ def _summary(rep, f: dict) -> None:
         return "—" if v is None else f"{v:.3f} s"
 
     rb = f["robustness"]
-    rep.print(f"cup-and-ball: l = {f['length_m']:g} m, ball {1e3 * f['mass_kg']:.1f} g r = {1e3 * f['ball_radius_m']:.0f} mm, "
-              f"cup r = {1e3 * f['cup']['inner_radius_m']:.0f} mm deep {1e3 * f['cup']['depth_m']:.0f} mm, "
-              f"restitution {f['restitution']:g}")
+    rep.print(
+        f"cup-and-ball: l = {f['length_m']:g} m, ball {1e3 * f['mass_kg']:.1f} g r = {1e3 * f['ball_radius_m']:.0f} mm, "
+        f"cup r = {1e3 * f['cup']['inner_radius_m']:.0f} mm deep {1e3 * f['cup']['depth_m']:.0f} mm, "
+        f"restitution {f['restitution']:g}"
+    )
     if f["caught"]:
-        rep.print(f"  caught: released {sec(f['release_time_s'])}, enters the cup {sec(f['catch_time_s'])} "
-                  f"(margin to the rim {1e3 * f['entry_margin_m']:.1f} mm, relative speed "
-                  f"{f['relative_entry_speed_m_s']:.2f} m/s), at rest in it {sec(f['rest_in_cup_s'])}")
+        rep.print(
+            f"  caught: released {sec(f['release_time_s'])}, enters the cup {sec(f['catch_time_s'])} "
+            f"(margin to the rim {1e3 * f['entry_margin_m']:.1f} mm, relative speed "
+            f"{f['relative_entry_speed_m_s']:.2f} m/s), at rest in it {sec(f['rest_in_cup_s'])}"
+        )
     else:
         rep.print(f"  NOT caught: {f['nominal_failure']}")
     w = rb["worst"]
-    rep.print(f"  band (string ±{100 * rb['length_tolerance']:g} %, mass ±{100 * rb['mass_tolerance']:g} %, timing "
-              f"±{1e3 * rb['timing_error_s']:g} ms; {rb['members']} cases): {100 * rb['success_fraction']:.0f} % caught; "
-              f"worst l = {w['length_m']:.4f} m, m = {1e3 * w['mass_kg']:.1f} g, {1e3 * w['timing_s']:+.0f} ms: "
-              f"{w['failure'] or 'caught, margin %.1f mm' % (1e3 * w['entry_margin_m'])}")
-    ratios = ", ".join(f"{k} {100 * v:.0f}%" for k, v in f["max_ratio"].items() if k in ("velocity", "acceleration", "jerk"))
+    rep.print(
+        f"  band (string ±{100 * rb['length_tolerance']:g} %, mass ±{100 * rb['mass_tolerance']:g} %, timing "
+        f"±{1e3 * rb['timing_error_s']:g} ms; {rb['members']} cases): {100 * rb['success_fraction']:.0f} % caught; "
+        f"worst l = {w['length_m']:.4f} m, m = {1e3 * w['mass_kg']:.1f} g, {1e3 * w['timing_s']:+.0f} ms: "
+        f"{w['failure'] or 'caught, margin %.1f mm' % (1e3 * w['entry_margin_m'])}"
+    )
+    ratios = ", ".join(
+        f"{k} {100 * v:.0f}%" for k, v in f["max_ratio"].items() if k in ("velocity", "acceleration", "jerk")
+    )
     rep.print(f"  joints: peak/limit {ratios} — {'within limits' if f['limits_ok'] else 'LIMITS VIOLATED'}")
     rep.print(f"  wrote {f['out']} ({f['samples']} samples, {f['duration_s']:.2f} s) in {f['planning_time_s']:.1f} s")
     rep.print(f"  rehearse: {f['rehearse']}")
@@ -137,8 +181,13 @@ def _summary(rep, f: dict) -> None:
 
 def cup_and_ball(
     out: Annotated[Path, typer.Option("-o", "--out", help="Joint trajectory to write: t,q1..q7 \\[s, rad].")],
-    length: Annotated[float, model_number("--length", help="String length \\[m], anchor (the TCP, at the cup's bottom) to ball centre.")],
-    mass: Annotated[float, model_number("--mass", help="Ball mass \\[kg] (thesis 0.0139); it acts through the air drag.")] = 0.0139,
+    length: Annotated[
+        float,
+        model_number("--length", help="String length \\[m], anchor (the TCP, at the cup's bottom) to ball centre."),
+    ],
+    mass: Annotated[
+        float, model_number("--mass", help="Ball mass \\[kg] (thesis 0.0139); it acts through the air drag.")
+    ] = 0.0139,
     ball_radius: BallRadiusOpt = _BALL.radius,
     cup_radius: CupRadiusOpt = _CUP.inner_radius,
     cup_depth: CupDepthOpt = _CUP.depth,
@@ -149,18 +198,72 @@ def cup_and_ball(
     retension: RetensionOpt = _MODEL.retension,
     friction: FrictionOpt = _MODEL.friction,
     drag: DragOpt = _BALL.drag_coefficient,
-    max_time: Annotated[Optional[float], number("--max-time", low=0.5, high=30.0, unit="s", help="The ball must enter the cup within this time from rest \\[s] (default: as soon as the robustness band allows).")] = None,
-    length_tol: Annotated[float, number("--length-tol", low=0.0, high=0.2, help="Robustness band: string length ± this share (0.03 = ±3 %).")] = 0.03,
-    mass_tol: Annotated[float, number("--mass-tol", low=0.0, high=0.9, help="Robustness band: ball mass ± this share.")] = 0.2,
-    timing: Annotated[bool, typer.Option("--timing/--no-timing", help="Robustness band: the cup's motion after the release one FRI period early or late.")] = True,
-    min_success: Annotated[float, number("--min-success", low=0.0, high=1.0, help="Exit 1 unless at least this share of the band is caught.")] = 0.95,
-    dt: Annotated[float, number("--dt", low=1e-3, high=0.02, unit="s", help="Sample step \\[s] (the FRI period).")] = 0.005,
-    q_start: Annotated[JointVector, joints("--q-start", help="Start configuration (7 angles, deg/rad suffixes; inside the position limits); thesis pose by default.")] = THESIS_Q_START,
-    max_travel: Annotated[float, number("--max-travel", low=0.05, high=0.5, unit="m", help="The pivot stays within ±this along base y \\[m].")] = 0.3,
-    margin: Annotated[float, number("--margin", low=0.0, high=1.0, high_open=True, help="Pivot bounds keep joints within (1 − margin)·limits.")] = 0.1,
-    prediction: Annotated[Optional[Path], typer.Option("--prediction", help="Write t,theta,phase,ball_x,ball_y,ball_z,anchor_x,anchor_y,anchor_z \\[s, rad, 0 taut / 1 slack / 2 in the cup, m].")] = None,
-    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG: side view of the ball and cup paths with the phases, and the joint rates against their limits.")] = None,
-    workers: Annotated[int, number("--workers", low=1, high=64, integer=True, help="Processes evaluating swing-up candidates in parallel.")] = 2,
+    max_time: Annotated[
+        Optional[float],
+        number(
+            "--max-time",
+            low=0.5,
+            high=30.0,
+            unit="s",
+            help="The ball must enter the cup within this time from rest \\[s] (default: as soon as the robustness band allows).",
+        ),
+    ] = None,
+    length_tol: Annotated[
+        float,
+        number("--length-tol", low=0.0, high=0.2, help="Robustness band: string length ± this share (0.03 = ±3 %)."),
+    ] = 0.03,
+    mass_tol: Annotated[
+        float, number("--mass-tol", low=0.0, high=0.9, help="Robustness band: ball mass ± this share.")
+    ] = 0.2,
+    timing: Annotated[
+        bool,
+        typer.Option(
+            "--timing/--no-timing",
+            help="Robustness band: the cup's motion after the release one FRI period early or late.",
+        ),
+    ] = True,
+    min_success: Annotated[
+        float,
+        number("--min-success", low=0.0, high=1.0, help="Exit 1 unless at least this share of the band is caught."),
+    ] = 0.95,
+    dt: Annotated[
+        float, number("--dt", low=1e-3, high=0.02, unit="s", help="Sample step \\[s] (the FRI period).")
+    ] = 0.005,
+    q_start: Annotated[
+        JointVector,
+        joints(
+            "--q-start",
+            help="Start configuration (7 angles, deg/rad suffixes; inside the position limits); thesis pose by default.",
+        ),
+    ] = THESIS_Q_START,
+    max_travel: Annotated[
+        float,
+        number("--max-travel", low=0.05, high=0.5, unit="m", help="The pivot stays within ±this along base y \\[m]."),
+    ] = 0.3,
+    margin: Annotated[
+        float,
+        number(
+            "--margin", low=0.0, high=1.0, high_open=True, help="Pivot bounds keep joints within (1 − margin)·limits."
+        ),
+    ] = 0.1,
+    prediction: Annotated[
+        Optional[Path],
+        typer.Option(
+            "--prediction",
+            help="Write t,theta,phase,ball_x,ball_y,ball_z,anchor_x,anchor_y,anchor_z \\[s, rad, 0 taut / 1 slack / 2 in the cup, m].",
+        ),
+    ] = None,
+    plot: Annotated[
+        Optional[Path],
+        typer.Option(
+            "--plot",
+            help="PNG: side view of the ball and cup paths with the phases, and the joint rates against their limits.",
+        ),
+    ] = None,
+    workers: Annotated[
+        int,
+        number("--workers", low=1, high=64, integer=True, help="Processes evaluating swing-up candidates in parallel."),
+    ] = 2,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -179,15 +282,41 @@ def cup_and_ball(
     from trajectories.errors import PlanningError
 
     from ..console import Reporter
+
     rep = Reporter(json_out)
-    options = dict(mass=mass, ball_radius=ball_radius, cup_radius=cup_radius, cup_depth=cup_depth, cup_rim=cup_rim,
-                   cup_wall=cup_wall, cup_axis=cup_axis, restitution=restitution, retension=retension,
-                   friction=friction, drag=drag)
+    options = dict(
+        mass=mass,
+        ball_radius=ball_radius,
+        cup_radius=cup_radius,
+        cup_depth=cup_depth,
+        cup_rim=cup_rim,
+        cup_wall=cup_wall,
+        cup_axis=cup_axis,
+        restitution=restitution,
+        retension=retension,
+        friction=friction,
+        drag=drag,
+    )
     with rep.progress("cup-and-ball: swing-up, catch, IK, judge", None) as update:
         figures = plan_catch_files(
-            length, out=out, model_options=options, prediction=prediction, plot=plot, max_time=max_time,
-            length_tol=length_tol, mass_tol=mass_tol, timing=timing, min_success=min_success, dt=dt, q_start=q_start,
-            travel=max_travel, margin=margin, workers=workers, flange=flange, tool=tool, limits=limits,
+            length,
+            out=out,
+            model_options=options,
+            prediction=prediction,
+            plot=plot,
+            max_time=max_time,
+            length_tol=length_tol,
+            mass_tol=mass_tol,
+            timing=timing,
+            min_success=min_success,
+            dt=dt,
+            q_start=q_start,
+            travel=max_travel,
+            margin=margin,
+            workers=workers,
+            flange=flange,
+            tool=tool,
+            limits=limits,
             progress=update,
         )
     _summary(rep, figures)

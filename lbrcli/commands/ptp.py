@@ -55,15 +55,41 @@ NoBallLengthOpt = Annotated[  # a simulated ball only when asked for
 ]
 
 
-@with_options(fri=FRI_OPTIONS.without("sim_lockstep", "sim_fast").replacing(length=NoBallLengthOpt))
+@with_options(fri=FRI_OPTIONS.without("sim_fast").replacing(length=NoBallLengthOpt))
 def ptp(
-    q: Annotated[JointVector, joints(metavar="Q", argument=True, help="Target joint position: 7 comma-separated angles (deg/rad suffixes; default rad).")],
-    time_s: Annotated[float, number("--time", low=0, high=600, low_open=True, unit="s", help="Duration of the move \\[s] (jerk-limited, rest to rest).")],
+    q: Annotated[
+        JointVector,
+        joints(
+            metavar="Q",
+            argument=True,
+            help="Target joint position: 7 comma-separated angles (deg/rad suffixes; default rad).",
+        ),
+    ],
+    time_s: Annotated[
+        float,
+        number(
+            "--time",
+            low=0,
+            high=600,
+            low_open=True,
+            unit="s",
+            help="Duration of the move \\[s] (jerk-limited, rest to rest).",
+        ),
+    ],
     fri: FriOptions,
     speed_scale: Annotated[
-        float, number("--speed-scale", low=0, high=0.5, low_open=True, help="Fraction of the velocity/acceleration/jerk limits the move may use.")
+        float,
+        number(
+            "--speed-scale",
+            low=0,
+            high=0.5,
+            low_open=True,
+            help="Fraction of the velocity/acceleration/jerk limits the move may use.",
+        ),
     ] = 0.2,
-    settle: Annotated[float, number("--settle", low=0, high=60, unit="s", help="Hold the target this long before stopping \\[s].")] = 0.2,
+    settle: Annotated[
+        float, number("--settle", low=0, high=60, unit="s", help="Hold the target this long before stopping \\[s].")
+    ] = 0.2,
     plot: PlotOpt = None,
     max_tracking_error: TrackingErrorOpt = None,
     limits: LimitsOpt = None,

@@ -14,11 +14,25 @@ def retime(
     joint_csv: Annotated[Path, typer.Argument(help="Joint trajectory t,q1..q7 \\[s, rad] (an ordinary path).")],
     out: Annotated[Path, typer.Option("-o", "--out", help="Re-timed joint trajectory to write.")],
     step: Annotated[
-        Optional[float], number("--step", low=1e-4, high=1.0, unit="s",
-                                help="Output sample step \\[s] (default: the input's step, e.g. the FRI period).")
+        Optional[float],
+        number(
+            "--step",
+            low=1e-4,
+            high=1.0,
+            unit="s",
+            help="Output sample step \\[s] (default: the input's step, e.g. the FRI period).",
+        ),
     ] = None,
-    margin: Annotated[float, number("--margin", low=0, high=1, high_open=True,
-                                    help="Use the limits scaled by (1 − margin); the samples are verified against them.")] = 0.02,
+    margin: Annotated[
+        float,
+        number(
+            "--margin",
+            low=0,
+            high=1,
+            high_open=True,
+            help="Use the limits scaled by (1 − margin); the samples are verified against them.",
+        ),
+    ] = 0.02,
     limits: LimitsOpt = None,
     dt: DtOpt = None,
     json_out: JsonOpt = False,
@@ -69,8 +83,16 @@ def retime(
         f"(limits × {1 - margin:.2f}; toppra at {result.scale:.3f} of them after {result.attempts} attempt(s))"
     )
     rep.emit(
-        {"duration_in_s": result.duration_in, "duration_s": result.duration_out, "step_s": h, "limits_ok": report.ok,
-         "ratios": ratios, "toppra_scale": result.scale, "attempts": result.attempts, "out": str(out)}
+        {
+            "duration_in_s": result.duration_in,
+            "duration_s": result.duration_out,
+            "step_s": h,
+            "limits_ok": report.ok,
+            "ratios": ratios,
+            "toppra_scale": result.scale,
+            "attempts": result.attempts,
+            "out": str(out),
+        }
     )
 
 

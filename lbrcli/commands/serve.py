@@ -15,7 +15,17 @@ from ..console import Reporter
 from ..fri_options import FRI_OPTIONS, FriOptions
 from ..fri_runner import exit_for, print_summary, run_client
 from ..option_groups import with_options
-from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt, limits_from, make_robot, number, within_limits
+from ..options import (
+    DEFAULT_FLANGE,
+    FlangeOpt,
+    JsonOpt,
+    LimitsOpt,
+    ToolOpt,
+    limits_from,
+    make_robot,
+    number,
+    within_limits,
+)
 
 
 def parse_sources(text: str | None) -> frozenset[str] | None:
@@ -33,41 +43,105 @@ def parse_sources(text: str | None) -> frozenset[str] | None:
         raise typer.BadParameter(f"{exc} (UDP senders are matched by their IP address)") from None
 
 
-@with_options(fri=FRI_OPTIONS.without("sim_lockstep", "sim_fast"))
+@with_options(fri=FRI_OPTIONS.without("sim_fast"))
 def serve(
     fri: FriOptions,
     listen: Annotated[
-        str, typer.Option("--listen", help="HOST:PORT where targets arrive over UDP (the state goes back to the source); 'off': no UDP.")
+        str,
+        typer.Option(
+            "--listen",
+            help="HOST:PORT where targets arrive over UDP (the state goes back to the source); 'off': no UDP.",
+        ),
     ] = "127.0.0.1:30300",
     mqtt: Annotated[
-        Optional[str], typer.Option("--mqtt", help="Also take targets from this MQTT topic: mqtt://[USER:PASSWORD@]HOST:PORT/TOPIC (mqtts:// for TLS); the state is published on TOPIC/state.")
+        Optional[str],
+        typer.Option(
+            "--mqtt",
+            help="Also take targets from this MQTT topic: mqtt://[USER:PASSWORD@]HOST:PORT/TOPIC (mqtts:// for TLS); the state is published on TOPIC/state.",
+        ),
     ] = None,
     mqtt_state_hz: Annotated[
-        float, number("--mqtt-state-hz", low=0, high=1000, unit="Hz", help="Publish the state on MQTT at most this often \\[Hz] (0: never).")
+        float,
+        number(
+            "--mqtt-state-hz",
+            low=0,
+            high=1000,
+            unit="Hz",
+            help="Publish the state on MQTT at most this often \\[Hz] (0: never).",
+        ),
     ] = 50.0,
     secret: Annotated[
-        Optional[Path], typer.Option("--secret", help="File with a shared secret (>= 16 bytes): every target must end with its HMAC-SHA256 tag; others are ignored.")
+        Optional[Path],
+        typer.Option(
+            "--secret",
+            help="File with a shared secret (>= 16 bytes): every target must end with its HMAC-SHA256 tag; others are ignored.",
+        ),
     ] = None,
     source: Annotated[
-        Optional[frozenset], typer.Option("--source", parser=parse_sources, metavar="IP,IP,...", help="Comma-separated IP addresses that may command (default: any; the first owns the session).")
+        Optional[frozenset],
+        typer.Option(
+            "--source",
+            parser=parse_sources,
+            metavar="IP,IP,...",
+            help="Comma-separated IP addresses that may command (default: any; the first owns the session).",
+        ),
     ] = None,
     timeout: Annotated[
-        float, number("--timeout", low=0.005, high=10, unit="s", help="Dead-man: brake when no target arrived for this long \\[s].")
+        float,
+        number(
+            "--timeout",
+            low=0.005,
+            high=10,
+            unit="s",
+            help="Dead-man: brake when no target arrived for this long \\[s].",
+        ),
     ] = 0.1,
     first_target: Annotated[
-        float, number("--first-target", low=0.1, high=3600, unit="s", help="Stop if no target arrived this long after commanding started \\[s].")
+        float,
+        number(
+            "--first-target",
+            low=0.1,
+            high=3600,
+            unit="s",
+            help="Stop if no target arrived this long after commanding started \\[s].",
+        ),
     ] = 30.0,
     delay: Annotated[
-        Optional[float], number("--delay", low=0, high=10, unit="s", help="Follow the targets this long behind the newest, on the source's clock \\[s] (default: automatic, from the source's gaps and jitter, 2 ms to --timeout).")
+        Optional[float],
+        number(
+            "--delay",
+            low=0,
+            high=10,
+            unit="s",
+            help="Follow the targets this long behind the newest, on the source's clock \\[s] (default: automatic, from the source's gaps and jitter, 2 ms to --timeout).",
+        ),
     ] = None,
     speed_scale: Annotated[
-        float, number("--speed-scale", low=0, high=1, low_open=True, help="Share of the velocity, acceleration and jerk limits ruckig may use.")
+        float,
+        number(
+            "--speed-scale",
+            low=0,
+            high=1,
+            low_open=True,
+            help="Share of the velocity, acceleration and jerk limits ruckig may use.",
+        ),
     ] = 0.5,
     state_every: Annotated[
-        int, number("--state-every", low=0, high=1000, integer=True, help="Send the state back every N FRI messages (0: never).")
+        int,
+        number(
+            "--state-every", low=0, high=1000, integer=True, help="Send the state back every N FRI messages (0: never)."
+        ),
     ] = 1,
     duration: Annotated[
-        Optional[float], number("--duration", low=0, high=86400, low_open=True, unit="s", help="End (braking) after this long \\[s] (default: until the source ends).")
+        Optional[float],
+        number(
+            "--duration",
+            low=0,
+            high=86400,
+            low_open=True,
+            unit="s",
+            help="End (braking) after this long \\[s] (default: until the source ends).",
+        ),
     ] = None,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,

@@ -44,40 +44,250 @@ SIM_FLAGS = {
 
 @with_options(flags=SIM_FLAGS)
 def sim(
-    port: Annotated[int, number("--port", low=0, high=65535, integer=True, help="UDP port the simulator sends from and listens on (0: any free port).")] = 0,
-    host: Annotated[str, typer.Option("--host", parser=parse_ip, metavar="IP", help="IP address the simulator binds.")] = "127.0.0.1",
-    period: Annotated[int, number("--period", low=1, high=100, unit="ms", integer=True, help="Send period \\[ms].")] = 1,
-    client: Annotated[tuple, typer.Option("--client", parser=parse_host_port, metavar="HOST:PORT", help="Where monitoring messages go: HOST:PORT of the FRI client.")] = "127.0.0.1:30200",
-    q0: Annotated[JointVector, joints("--q0", help="Start joint positions q1..q7 \\[rad, or with deg suffix].")] = THESIS_Q_START,
-    length: Annotated[Optional[float], string_length("--length", help="Simulate a ball on a string of this length \\[m] hanging from the TCP.")] = None,
-    damping: Annotated[float, number("--damping", low=0, high=1000, unit="1/s", help="Damping of the simulated ball \\[1/s].")] = 0.0,
+    port: Annotated[
+        int,
+        number(
+            "--port",
+            low=0,
+            high=65535,
+            integer=True,
+            help="UDP port the simulator sends from and listens on (0: any free port).",
+        ),
+    ] = 0,
+    host: Annotated[
+        str, typer.Option("--host", parser=parse_ip, metavar="IP", help="IP address the simulator binds.")
+    ] = "127.0.0.1",
+    period: Annotated[
+        int, number("--period", low=1, high=100, unit="ms", integer=True, help="Send period \\[ms].")
+    ] = 1,
+    client: Annotated[
+        tuple,
+        typer.Option(
+            "--client",
+            parser=parse_host_port,
+            metavar="HOST:PORT",
+            help="Where monitoring messages go: HOST:PORT of the FRI client.",
+        ),
+    ] = "127.0.0.1:30200",
+    q0: Annotated[
+        JointVector, joints("--q0", help="Start joint positions q1..q7 \\[rad, or with deg suffix].")
+    ] = THESIS_Q_START,
+    length: Annotated[
+        Optional[float],
+        string_length("--length", help="Simulate a ball on a string of this length \\[m] hanging from the TCP."),
+    ] = None,
+    damping: Annotated[
+        float, number("--damping", low=0, high=1000, unit="1/s", help="Damping of the simulated ball \\[1/s].")
+    ] = 0.0,
     cup: CupSpecOpt = None,
-    fri_version: Annotated[str, choice("--fri-version", choices=("1.15", "2.7"), help="Wire format: 1.15 (bare protobuf) or 2.7 (length + CRC-32 framing).")] = "1.15",
-    receive_multiplier: Annotated[int, number("--receive-multiplier", low=1, high=100, integer=True, help="The client answers every k-th message.")] = 1,
-    duration: Annotated[Optional[float], number("--duration", low=0, high=86400 * 365, low_open=True, unit="s", help="COMMANDING_ACTIVE time \\[s] after which the robot application ends the session (default: until the client stops); with --no-overlay the time from the first MONITORING_READY.")] = None,
-    timeout: Annotated[Optional[float], number("--timeout", low=0, high=86400 * 365, low_open=True, unit="s", help="Stop the simulator after this wall time \\[s] (it closes the session: IDLE).")] = None,
-    commanding_after: Annotated[float, number("--commanding-after", low=0, high=3600, unit="s", help="Time \\[s] from the first MONITORING_READY until the overlay starts (at quality GOOD).")] = 0.2,
-    quality_window: Annotated[int, number("--quality-window", low=1, high=100_000, integer=True, help="Cycles in the sliding window of the connection quality.")] = 50,
-    quality_good: Annotated[float, number("--quality-good", low=0, high=1, low_open=True, help="Share of timely cycles in the window for GOOD (commanding allowed); FAIR from 0.5, EXCELLENT from 0.98.")] = 0.9,
-    operation_mode: Annotated[str, choice("--operation-mode", choices=("T1", "T2", "AUT"), fold=str.upper, help="Reported operation mode: T1, T2 or AUT.")] = "T1",
-    loss: Annotated[float, number("--loss", low=0, high=1, help="Fault injection: probability of dropping a monitoring message.")] = 0.0,
-    delay: Annotated[float, number("--delay", low=0, high=1000, unit="ms", help="Fault injection: delay of every monitoring message \\[ms].")] = 0.0,
-    jitter: Annotated[float, number("--jitter", low=0, high=1000, unit="ms", help="Fault injection: extra random delay, uniform 0..J \\[ms].")] = 0.0,
-    malformed: Annotated[float, number("--malformed", low=0, high=1, help="Fault injection: probability of sending a corrupted datagram instead.")] = 0.0,
-    seed: Annotated[int, number("--seed", low=0, high=2**32 - 1, integer=True, help="Seed of the fault injection.")] = 0,
-    realtime: Annotated[bool, typer.Option("--realtime", help="Run the loop with real-time scheduling (SCHED_FIFO) if permitted: steadier 1 ms under load.")] = False,
-    pendulum_pty: Annotated[bool, typer.Option("--pendulum-pty", help="Also emulate the thesis's pendulum module: the ball's planar angle θy as AS5600 lines on a pseudo-terminal (its path is printed; read it with --pendulum PATH). Needs --length.")] = False,
-    no_overlay: Annotated[bool, typer.Option("--no-overlay", help="The application only monitors the session (never commands; --duration counts from the first MONITORING_READY), e.g. for KUKA's IOAccess example, which mirrors no positions.")] = False,
-    mode: Annotated[str, choice("--mode", choices=("position", "torque", "wrench", "cartesian"), fold=str.lower, help="Client command mode of the simulated FRI overlay: position (joint position, position control), torque (joint impedance + commanded torque), wrench (Cartesian impedance + commanded wrench) or cartesian (FRI 2.7 CARTESIAN_POSE: the client commands the TCP pose and E1 = A3, turned into joints by IK; an unreachable or jumping pose ends the overlay).")] = "position",
-    transformation: Annotated[Optional[list[str]], typer.Option("--transformation", metavar="NAME", help="FRI 2.7: a frame the robot application asks the client to provide (requestedTransformations; repeatable, at most 5). The values the client sends are reported per frame (received, last value \\[m], timestamp).")] = None,
-    stiffness: Annotated[float, number("--stiffness", low=0, high=1e5, low_open=True, unit="Nm/rad", help="Joint impedance stiffness \\[Nm/rad] (--mode torque), every joint.")] = 1000.0,
-    cartesian_stiffness: Annotated[tuple, typer.Option("--cartesian-stiffness", parser=_cartesian_stiffness, metavar="TRANS,ROT", help="Cartesian impedance stiffness TRANS,ROT \\[N/m, Nm/rad] along the TCP axes (--mode wrench).")] = "2000,200",
-    damping_ratio: Annotated[float, number("--damping-ratio", low=0, high=10, help="Damping ratio ζ of the impedance controllers (KUKA's default 0.7).")] = 0.7,
-    io: Annotated[Optional[list[str]], typer.Option("--io", metavar="NAME:TYPE:DIR[:VALUE]", help="An IO channel of the application's FRI IO configuration: NAME:TYPE:DIRECTION\\[:VALUE], TYPE boolean|digital|analog, DIRECTION in|out (repeatable).")] = None,
-    io_preset: Annotated[Optional[str], typer.Option("--io-preset", help="A ready IO configuration: kuka-ioaccess (the channels KUKA's IOAccess example uses).")] = None,
-    external_torque: Annotated[Optional[tuple], floats("--external-torque", count=7, low=-1000, high=1000, unit="Nm", metavar="T1,...,T7", help="A constant push of the environment on the joints τ1..τ7 \\[Nm].")] = None,
-    external_force: Annotated[Optional[tuple], floats("--external-force", count=6, low=-1e4, high=1e4, metavar="FX,FY,FZ,MX,MY,MZ", help="A constant external wrench on the TCP Fx,Fy,Fz,Mx,My,Mz \\[N, Nm], base-frame axes.")] = None,
-    torque_noise: Annotated[float, number("--torque-noise", low=0, high=1000, unit="Nm", help="Standard deviation of the noise on the measured torques \\[Nm].")] = 0.0,
+    fri_version: Annotated[
+        str,
+        choice(
+            "--fri-version",
+            choices=("1.15", "2.7"),
+            help="Wire format: 1.15 (bare protobuf) or 2.7 (length + CRC-32 framing).",
+        ),
+    ] = "1.15",
+    receive_multiplier: Annotated[
+        int,
+        number("--receive-multiplier", low=1, high=100, integer=True, help="The client answers every k-th message."),
+    ] = 1,
+    duration: Annotated[
+        Optional[float],
+        number(
+            "--duration",
+            low=0,
+            high=86400 * 365,
+            low_open=True,
+            unit="s",
+            help="COMMANDING_ACTIVE time \\[s] after which the robot application ends the session (default: until the client stops); with --no-overlay the time from the first MONITORING_READY.",
+        ),
+    ] = None,
+    timeout: Annotated[
+        Optional[float],
+        number(
+            "--timeout",
+            low=0,
+            high=86400 * 365,
+            low_open=True,
+            unit="s",
+            help="Stop the simulator after this wall time \\[s] (it closes the session: IDLE).",
+        ),
+    ] = None,
+    commanding_after: Annotated[
+        float,
+        number(
+            "--commanding-after",
+            low=0,
+            high=3600,
+            unit="s",
+            help="Time \\[s] from the first MONITORING_READY until the overlay starts (at quality GOOD).",
+        ),
+    ] = 0.2,
+    quality_window: Annotated[
+        int,
+        number(
+            "--quality-window",
+            low=1,
+            high=100_000,
+            integer=True,
+            help="Cycles in the sliding window of the connection quality.",
+        ),
+    ] = 50,
+    quality_good: Annotated[
+        float,
+        number(
+            "--quality-good",
+            low=0,
+            high=1,
+            low_open=True,
+            help="Share of timely cycles in the window for GOOD (commanding allowed); FAIR from 0.5, EXCELLENT from 0.98.",
+        ),
+    ] = 0.9,
+    operation_mode: Annotated[
+        str,
+        choice(
+            "--operation-mode",
+            choices=("T1", "T2", "AUT"),
+            fold=str.upper,
+            help="Reported operation mode: T1, T2 or AUT.",
+        ),
+    ] = "T1",
+    loss: Annotated[
+        float, number("--loss", low=0, high=1, help="Fault injection: probability of dropping a monitoring message.")
+    ] = 0.0,
+    delay: Annotated[
+        float,
+        number(
+            "--delay", low=0, high=1000, unit="ms", help="Fault injection: delay of every monitoring message \\[ms]."
+        ),
+    ] = 0.0,
+    jitter: Annotated[
+        float,
+        number(
+            "--jitter", low=0, high=1000, unit="ms", help="Fault injection: extra random delay, uniform 0..J \\[ms]."
+        ),
+    ] = 0.0,
+    malformed: Annotated[
+        float,
+        number(
+            "--malformed", low=0, high=1, help="Fault injection: probability of sending a corrupted datagram instead."
+        ),
+    ] = 0.0,
+    seed: Annotated[
+        int, number("--seed", low=0, high=2**32 - 1, integer=True, help="Seed of the fault injection.")
+    ] = 0,
+    realtime: Annotated[
+        bool,
+        typer.Option(
+            "--realtime",
+            help="Run the loop with real-time scheduling (SCHED_FIFO) if permitted: steadier 1 ms under load.",
+        ),
+    ] = False,
+    pendulum_pty: Annotated[
+        bool,
+        typer.Option(
+            "--pendulum-pty",
+            help="Also emulate the thesis's pendulum module: the ball's planar angle θy as AS5600 lines on a pseudo-terminal (its path is printed; read it with --pendulum PATH). Needs --length.",
+        ),
+    ] = False,
+    no_overlay: Annotated[
+        bool,
+        typer.Option(
+            "--no-overlay",
+            help="The application only monitors the session (never commands; --duration counts from the first MONITORING_READY), e.g. for KUKA's IOAccess example, which mirrors no positions.",
+        ),
+    ] = False,
+    mode: Annotated[
+        str,
+        choice(
+            "--mode",
+            choices=("position", "torque", "wrench", "cartesian"),
+            fold=str.lower,
+            help="Client command mode of the simulated FRI overlay: position (joint position, position control), torque (joint impedance + commanded torque), wrench (Cartesian impedance + commanded wrench) or cartesian (FRI 2.7 CARTESIAN_POSE: the client commands the TCP pose and E1 = A3, turned into joints by IK; an unreachable or jumping pose ends the overlay).",
+        ),
+    ] = "position",
+    transformation: Annotated[
+        Optional[list[str]],
+        typer.Option(
+            "--transformation",
+            metavar="NAME",
+            help="FRI 2.7: a frame the robot application asks the client to provide (requestedTransformations; repeatable, at most 5). The values the client sends are reported per frame (received, last value \\[m], timestamp).",
+        ),
+    ] = None,
+    stiffness: Annotated[
+        float,
+        number(
+            "--stiffness",
+            low=0,
+            high=1e5,
+            low_open=True,
+            unit="Nm/rad",
+            help="Joint impedance stiffness \\[Nm/rad] (--mode torque), every joint.",
+        ),
+    ] = 1000.0,
+    cartesian_stiffness: Annotated[
+        tuple,
+        typer.Option(
+            "--cartesian-stiffness",
+            parser=_cartesian_stiffness,
+            metavar="TRANS,ROT",
+            help="Cartesian impedance stiffness TRANS,ROT \\[N/m, Nm/rad] along the TCP axes (--mode wrench).",
+        ),
+    ] = "2000,200",
+    damping_ratio: Annotated[
+        float,
+        number(
+            "--damping-ratio", low=0, high=10, help="Damping ratio ζ of the impedance controllers (KUKA's default 0.7)."
+        ),
+    ] = 0.7,
+    io: Annotated[
+        Optional[list[str]],
+        typer.Option(
+            "--io",
+            metavar="NAME:TYPE:DIR[:VALUE]",
+            help="An IO channel of the application's FRI IO configuration: NAME:TYPE:DIRECTION\\[:VALUE], TYPE boolean|digital|analog, DIRECTION in|out (repeatable).",
+        ),
+    ] = None,
+    io_preset: Annotated[
+        Optional[str],
+        typer.Option(
+            "--io-preset", help="A ready IO configuration: kuka-ioaccess (the channels KUKA's IOAccess example uses)."
+        ),
+    ] = None,
+    external_torque: Annotated[
+        Optional[tuple],
+        floats(
+            "--external-torque",
+            count=7,
+            low=-1000,
+            high=1000,
+            unit="Nm",
+            metavar="T1,...,T7",
+            help="A constant push of the environment on the joints τ1..τ7 \\[Nm].",
+        ),
+    ] = None,
+    external_force: Annotated[
+        Optional[tuple],
+        floats(
+            "--external-force",
+            count=6,
+            low=-1e4,
+            high=1e4,
+            metavar="FX,FY,FZ,MX,MY,MZ",
+            help="A constant external wrench on the TCP Fx,Fy,Fz,Mx,My,Mz \\[N, Nm], base-frame axes.",
+        ),
+    ] = None,
+    torque_noise: Annotated[
+        float,
+        number(
+            "--torque-noise",
+            low=0,
+            high=1000,
+            unit="Nm",
+            help="Standard deviation of the noise on the measured torques \\[Nm].",
+        ),
+    ] = 0.0,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     limits: LimitsOpt = None,
@@ -129,7 +339,7 @@ def sim(
         rep.warn("real-time scheduling was not granted (needs CAP_SYS_NICE); ran with normal priority")
     _print_stats(rep, stats, config.command_mode)
     rep.emit({"address": f"{h}:{p}", "client": f"{client_host}:{client_port}", "period_ms": period,
-              "fri_version": fri_version, **stats.to_dict(), "pendulum_path": pendulum_path})
+              "fri_version": fri_version, **stats.to_dict(), "pendulum_path": pendulum_path})  # fmt: skip
 
 
 def _io_channels(io: list[str] | None, preset: str | None) -> tuple:
@@ -183,7 +393,9 @@ def _print_stats(rep, stats, command_mode: str) -> None:
         f"({stats.late_replies} late, {stats.missed_replies} missed), {stats.commanded_rows} commands executed"
     )
     if stats.period_ms_p50 is not None:
-        rep.print(f"send period p50 {stats.period_ms_p50:.3f} ms, p99 {stats.period_ms_p99:.3f} ms, max {stats.period_ms_max:.3f} ms")
+        rep.print(
+            f"send period p50 {stats.period_ms_p50:.3f} ms, p99 {stats.period_ms_p99:.3f} ms, max {stats.period_ms_max:.3f} ms"
+        )
     if stats.reply_latency_ms_p50 is not None:
         rep.print(f"reply latency p50 {stats.reply_latency_ms_p50:.3f} ms, p99 {stats.reply_latency_ms_p99:.3f} ms, "
                   f"max {stats.reply_latency_ms_max:.3f} ms")  # fmt: skip

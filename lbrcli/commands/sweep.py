@@ -43,8 +43,9 @@ def parse_selection(text: str, n: int, option: str, words: tuple[str, ...] = ())
         try:
             a, b = int(lo), int(hi) if sep else int(lo)
         except ValueError:
-            raise OptionError(f"{option}: expected run numbers like 0-9,15{' or ' + ', '.join(words) if words else ''}, "
-                              f"got {part!r}") from None
+            raise OptionError(
+                f"{option}: expected run numbers like 0-9,15{' or ' + ', '.join(words) if words else ''}, got {part!r}"
+            ) from None
         if not (0 <= a <= b < n):
             raise OptionError(f"{option}: {part} is outside the study's runs 0-{n - 1}")
         picked.update(range(a, b + 1))
@@ -74,18 +75,86 @@ def _prepare_folder(out: Path) -> None:
 
 
 def sweep(
-    study_file: Annotated[Path, typer.Argument(help="Study file (TOML): kind, fixed options, parameters to vary, figures; see docs/guides/sweep.md.")],
-    out: Annotated[Path, typer.Option("-o", "--out", help="Results folder: runs.jsonl (the cache), results.parquet, results.csv, plots/, joints/.")],
-    scheduler: Annotated[Optional[str], typer.Option("--scheduler", help="Dask scheduler address (tcp://HOST:8786 or a scheduler file); 'inline' runs in this process without Dask. Default: a local cluster of --workers processes.")] = None,
-    workers: Annotated[Optional[int], number("--workers", low=1, high=512, integer=True, help="Worker processes of the local cluster (one run each at a time); default: the CPU count.")] = None,
-    batch: Annotated[Optional[int], number("--batch", low=1, high=10_000, integer=True, help="Runs per Dask task; default: 1, or enough for ≈ 100 tasks per worker in large studies (a task costs the scheduler ≈ 1–10 ms).")] = None,
-    runs_sel: Annotated[Optional[str], typer.Option("--runs", help="Only these runs of the study, e.g. 0-9,15 (try a study before the cluster).")] = None,
-    joints: Annotated[Optional[str], typer.Option("--joints", help="Write the joint files of these runs to RESULTS/joints/: run numbers (0-9,15), ok, failed or all; cached runs are re-run for them.")] = None,
-    fresh: Annotated[bool, typer.Option("--fresh", help="Ignore the cache: run everything again (the new records replace nothing; the table uses them).")] = False,
-    dry_run: Annotated[bool, typer.Option("--dry-run", help="Check the study and show its runs (how many, how many cached, the first command lines); run nothing.")] = False,
-    strict: Annotated[bool, typer.Option("--strict", help="Exit 1 when any run did not exit 0 (default: only when runs crashed).")] = False,
-    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Draw the study's \\[\\[plot]] maps (default: success map and figures over the first two varied options).")] = True,
-    kinds: Annotated[bool, typer.Option("--kinds", callback=_list_kinds, is_eager=True, help="List the run kinds and their options, and exit.")] = False,
+    study_file: Annotated[
+        Path,
+        typer.Argument(
+            help="Study file (TOML): kind, fixed options, parameters to vary, figures; see docs/guides/sweep.md."
+        ),
+    ],
+    out: Annotated[
+        Path,
+        typer.Option(
+            "-o", "--out", help="Results folder: runs.jsonl (the cache), results.parquet, results.csv, plots/, joints/."
+        ),
+    ],
+    scheduler: Annotated[
+        Optional[str],
+        typer.Option(
+            "--scheduler",
+            help="Dask scheduler address (tcp://HOST:8786 or a scheduler file); 'inline' runs in this process without Dask. Default: a local cluster of --workers processes.",
+        ),
+    ] = None,
+    workers: Annotated[
+        Optional[int],
+        number(
+            "--workers",
+            low=1,
+            high=512,
+            integer=True,
+            help="Worker processes of the local cluster (one run each at a time); default: the CPU count.",
+        ),
+    ] = None,
+    batch: Annotated[
+        Optional[int],
+        number(
+            "--batch",
+            low=1,
+            high=10_000,
+            integer=True,
+            help="Runs per Dask task; default: 1, or enough for ≈ 100 tasks per worker in large studies (a task costs the scheduler ≈ 1–10 ms).",
+        ),
+    ] = None,
+    runs_sel: Annotated[
+        Optional[str],
+        typer.Option("--runs", help="Only these runs of the study, e.g. 0-9,15 (try a study before the cluster)."),
+    ] = None,
+    joints: Annotated[
+        Optional[str],
+        typer.Option(
+            "--joints",
+            help="Write the joint files of these runs to RESULTS/joints/: run numbers (0-9,15), ok, failed or all; cached runs are re-run for them.",
+        ),
+    ] = None,
+    fresh: Annotated[
+        bool,
+        typer.Option(
+            "--fresh",
+            help="Ignore the cache: run everything again (the new records replace nothing; the table uses them).",
+        ),
+    ] = False,
+    dry_run: Annotated[
+        bool,
+        typer.Option(
+            "--dry-run",
+            help="Check the study and show its runs (how many, how many cached, the first command lines); run nothing.",
+        ),
+    ] = False,
+    strict: Annotated[
+        bool, typer.Option("--strict", help="Exit 1 when any run did not exit 0 (default: only when runs crashed).")
+    ] = False,
+    plots: Annotated[
+        bool,
+        typer.Option(
+            "--plots/--no-plots",
+            help="Draw the study's \\[\\[plot]] maps (default: success map and figures over the first two varied options).",
+        ),
+    ] = True,
+    kinds: Annotated[
+        bool,
+        typer.Option(
+            "--kinds", callback=_list_kinds, is_eager=True, help="List the run kinds and their options, and exit."
+        ),
+    ] = False,
     json_out: JsonOpt = False,
 ) -> None:
     """Run a parameter study: every combination of the varied options (grids, lists, seeded random samples) as one run
@@ -125,8 +194,11 @@ def sweep(
         rep.print(f"{study.path}: {study.name} — {len(runs)} runs of {study.kind} ({len(cached)} cached in {out})")
         for r in kind_runs:
             line = kind.shell_line({k: plain(v) for k, v in r.options})
-            rep.print(f"  {r.index}: " + (line or "(no single lbr command: " + ", ".join(
-                f"{k}={plain(v)}" for k, v in r.options) + ")"), markup=False)
+            rep.print(
+                f"  {r.index}: "
+                + (line or "(no single lbr command: " + ", ".join(f"{k}={plain(v)}" for k, v in r.options) + ")"),
+                markup=False,
+            )
         rep.emit({"runs": len(runs), "cached": len(cached), "kind": study.kind, "study": study.name})
         return
     _prepare_folder(out)
@@ -150,13 +222,16 @@ def sweep(
 
     def ready(text: str, n: int) -> None:
         where.update(text=text, workers=n)
-        rep.print(f"{study.name}: {len(runs)} runs of {study.kind}, {cached_n} cached, {len(todo)} to run on {text}"
-                  + ("" if "local" in text or "inline" in text else f" ({n} workers)"))
+        rep.print(
+            f"{study.name}: {len(runs)} runs of {study.kind}, {cached_n} cached, {len(todo)} to run on {text}"
+            + ("" if "local" in text or "inline" in text else f" ({n} workers)")
+        )
 
     t0 = time.perf_counter()
     interrupted = False
     execution = None
     with rep.progress(f"sweep {study.name}", len(todo)) as update:
+
         def on_result(res) -> None:
             if store.add(res.record):
                 counts["computed"] += 1
@@ -178,8 +253,14 @@ def sweep(
     wall = time.perf_counter() - t0
     figures = _finish(study, all_runs, runs, store, out, plots and not interrupted)
     figures.update(
-        cached=cached_n, computed=counts["computed"], wall_s=wall, where=where["text"], workers=where["workers"],
-        startup_s=execution.startup_s if execution else None, joint_files=joint_files, interrupted=interrupted,
+        cached=cached_n,
+        computed=counts["computed"],
+        wall_s=wall,
+        where=where["text"],
+        workers=where["workers"],
+        startup_s=execution.startup_s if execution else None,
+        joint_files=joint_files,
+        interrupted=interrupted,
     )
     if execution and counts["computed"]:
         busy = execution.wall_s * execution.workers
@@ -187,13 +268,21 @@ def sweep(
         figures["run_s_mean"] = counts["run_seconds"] / counts["computed"]
         figures["overhead_per_run_s"] = (busy - counts["run_seconds"]) / counts["computed"]
     if interrupted:
-        rep.print(f"interrupted: {counts['computed']} runs completed in this session are kept in {store.path}; "
-                  "run the same command again to continue")
+        rep.print(
+            f"interrupted: {counts['computed']} runs completed in this session are kept in {store.path}; "
+            "run the same command again to continue"
+        )
         rep.emit(figures)
         raise KeyboardInterrupt
-    rep.print(f"{figures['rows']} rows ({figures['ok']} ok, {figures['failed']} failed, {figures['bad_input']} bad input, "
-              f"{figures['crashed']} crashed); {counts['computed']} computed in {wall:.1f} s"
-              + (f", {figures['overhead_per_run_s'] * 1e3:.1f} ms overhead per run" if "overhead_per_run_s" in figures else ""))
+    rep.print(
+        f"{figures['rows']} rows ({figures['ok']} ok, {figures['failed']} failed, {figures['bad_input']} bad input, "
+        f"{figures['crashed']} crashed); {counts['computed']} computed in {wall:.1f} s"
+        + (
+            f", {figures['overhead_per_run_s'] * 1e3:.1f} ms overhead per run"
+            if "overhead_per_run_s" in figures
+            else ""
+        )
+    )
     rep.print(f"table: {out / TABLE_NAMES[0]}, {out / TABLE_NAMES[1]}" + (f"; plots: {len(figures['plots'])} in {out / 'plots'}"
                                                                          if figures["plots"] else ""))  # fmt: skip
     rep.emit(figures)
@@ -222,8 +311,12 @@ def _joint_keys(runs, idx: set[int], words: set[str], store) -> set[str]:
     for r in runs:
         rec = store.records.get(r.key)
         status = rec["status"] if rec else None
-        if r.index in idx or "all" in words or ("ok" in words and status in (None, "ok")) or (
-                "failed" in words and status in (None, "failed")):
+        if (
+            r.index in idx
+            or "all" in words
+            or ("ok" in words and status in (None, "ok"))
+            or ("failed" in words and status in (None, "failed"))
+        ):
             keys.add(r.key)
     return keys
 
@@ -254,10 +347,18 @@ def _finish(study, all_runs, runs, store, out: Path, draw: bool) -> dict:
     by_status = {s: sum(r["status"] == s for r in table_rows) for s in ("ok", "failed", "bad-input", "crashed")}
     plot_files = _plots(study, table_rows, out) if draw and table_rows else []
     return {
-        "study": study.name, "kind": study.kind, "runs": len(runs), "rows": len(table_rows),
-        "missing": sum(r.key not in store for r in runs), "ok": by_status["ok"], "failed": by_status["failed"],
-        "bad_input": by_status["bad-input"], "crashed": by_status["crashed"],
-        "table": [str(out / n) for n in TABLE_NAMES], "plots": plot_files, "store": str(store.path),
+        "study": study.name,
+        "kind": study.kind,
+        "runs": len(runs),
+        "rows": len(table_rows),
+        "missing": sum(r.key not in store for r in runs),
+        "ok": by_status["ok"],
+        "failed": by_status["failed"],
+        "bad_input": by_status["bad-input"],
+        "crashed": by_status["crashed"],
+        "table": [str(out / n) for n in TABLE_NAMES],
+        "plots": plot_files,
+        "store": str(store.path),
     }
 
 

@@ -20,23 +20,139 @@ def _check_out(path: Path | None, option: str) -> None:
 
 
 def video(
-    video_path: Annotated[Path, typer.Argument(metavar="VIDEO", help="Experiment video (any format OpenCV/FFmpeg reads).")],
-    out: Annotated[Path, typer.Option("-o", "--out", help="Track CSV to write: t,frame,u,v,found\\[,theta,...] \\[s, -, px, px, 0/1, rad].")],
-    pivot: Annotated[Optional[tuple], floats("--pivot", count=2, low=0, high=100_000, unit="px", metavar="U,V", help="Fixed pivot (string attachment) U,V \\[px] in the video image.")] = None,
-    pivot_color: Annotated[Optional[str], typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame (e.g. green).")] = None,
-    color: Annotated[str, typer.Option("--color", help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or an OpenCV hue range H1-H2 (0–179).")] = "red",
-    radius: Annotated[Optional[float], number("--radius", low=0, high=10_000, low_open=True, unit="px", help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: learned, from a 3 px ball to a radius of 1/6 of the frame height).")] = None,
-    min_circularity: Annotated[float, number("--min-circularity", low=0, high=1, help="Minimum 4π·area/perimeter² of the ball blob (disc ≈ 0.9, cable ≈ 0.1).")] = 0.6,
-    min_fit: Annotated[float, number("--min-fit", low=0, high=1, help="Minimum overlap (IoU) of the blob with its moment ellipse (disc ≥ 0.9, any box ≈ 0.83).")] = 0.88,
-    calibration: Annotated[Optional[Path], typer.Option("--calibration", help="Camera JSON from `lbr track calibrate`: undistort points; with a plane, θ in the plane of motion and x_m,y_m \\[m].")] = None,
-    start: Annotated[Optional[tuple], floats("--start", count=2, low=0, high=100_000, unit="px", metavar="U,V", help="Where the ball is when first seen, U,V \\[px]: the ball is the candidate nearest to it (names it among round objects of its colour).")] = None,
-    fps: Annotated[Optional[float], number("--fps", low=0, high=100_000, low_open=True, unit="1/s", help="Capture frame rate \\[1/s] when the container's is wrong (slow-motion videos state their playback rate): times = frame / fps.")] = None,
-    min_saturation: Annotated[Optional[int], number("--min-saturation", low=1, high=255, integer=True, help="Minimum HSV saturation of ball pixels (default 100, or 80 for green, cyan, blue); lowered automatically inside the search window for motion-blurred balls.")] = None,
-    min_found: Annotated[float, number("--min-found", low=0, high=100, unit="%", help="Exit 1 with a warning when the ball is found in fewer than this share of frames \\[%].")] = 90.0,
-    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of θ \\[deg] and u, v \\[px] over time with lost frames marked.")] = None,
-    preview: Annotated[Optional[Path], typer.Option("--preview", help="Video (mp4) with the detection drawn over it: ball circle, pivot, string, θ.")] = None,
-    candidates: Annotated[Optional[Path], typer.Option("--candidates", help="PNG of the first frame with every ball-like blob circled and labelled U,V \\[px] (pick one for --start).")] = None,
-    slack: Annotated[bool, typer.Option("--slack/--no-slack", help="With a pivot: frames where the ball is nearer to the pivot than the string's length (estimated from the track) are slack — position kept, θ left empty.")] = True,
+    video_path: Annotated[
+        Path, typer.Argument(metavar="VIDEO", help="Experiment video (any format OpenCV/FFmpeg reads).")
+    ],
+    out: Annotated[
+        Path,
+        typer.Option(
+            "-o", "--out", help="Track CSV to write: t,frame,u,v,found\\[,theta,...] \\[s, -, px, px, 0/1, rad]."
+        ),
+    ],
+    pivot: Annotated[
+        Optional[tuple],
+        floats(
+            "--pivot",
+            count=2,
+            low=0,
+            high=100_000,
+            unit="px",
+            metavar="U,V",
+            help="Fixed pivot (string attachment) U,V \\[px] in the video image.",
+        ),
+    ] = None,
+    pivot_color: Annotated[
+        Optional[str],
+        typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame (e.g. green)."),
+    ] = None,
+    color: Annotated[
+        str,
+        typer.Option(
+            "--color",
+            help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or an OpenCV hue range H1-H2 (0–179).",
+        ),
+    ] = "red",
+    radius: Annotated[
+        Optional[float],
+        number(
+            "--radius",
+            low=0,
+            high=10_000,
+            low_open=True,
+            unit="px",
+            help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: learned, from a 3 px ball to a radius of 1/6 of the frame height).",
+        ),
+    ] = None,
+    min_circularity: Annotated[
+        float,
+        number(
+            "--min-circularity",
+            low=0,
+            high=1,
+            help="Minimum 4π·area/perimeter² of the ball blob (disc ≈ 0.9, cable ≈ 0.1).",
+        ),
+    ] = 0.6,
+    min_fit: Annotated[
+        float,
+        number(
+            "--min-fit",
+            low=0,
+            high=1,
+            help="Minimum overlap (IoU) of the blob with its moment ellipse (disc ≥ 0.9, any box ≈ 0.83).",
+        ),
+    ] = 0.88,
+    calibration: Annotated[
+        Optional[Path],
+        typer.Option(
+            "--calibration",
+            help="Camera JSON from `lbr track calibrate`: undistort points; with a plane, θ in the plane of motion and x_m,y_m \\[m].",
+        ),
+    ] = None,
+    start: Annotated[
+        Optional[tuple],
+        floats(
+            "--start",
+            count=2,
+            low=0,
+            high=100_000,
+            unit="px",
+            metavar="U,V",
+            help="Where the ball is when first seen, U,V \\[px]: the ball is the candidate nearest to it (names it among round objects of its colour).",
+        ),
+    ] = None,
+    fps: Annotated[
+        Optional[float],
+        number(
+            "--fps",
+            low=0,
+            high=100_000,
+            low_open=True,
+            unit="1/s",
+            help="Capture frame rate \\[1/s] when the container's is wrong (slow-motion videos state their playback rate): times = frame / fps.",
+        ),
+    ] = None,
+    min_saturation: Annotated[
+        Optional[int],
+        number(
+            "--min-saturation",
+            low=1,
+            high=255,
+            integer=True,
+            help="Minimum HSV saturation of ball pixels (default 100, or 80 for green, cyan, blue); lowered automatically inside the search window for motion-blurred balls.",
+        ),
+    ] = None,
+    min_found: Annotated[
+        float,
+        number(
+            "--min-found",
+            low=0,
+            high=100,
+            unit="%",
+            help="Exit 1 with a warning when the ball is found in fewer than this share of frames \\[%].",
+        ),
+    ] = 90.0,
+    plot: Annotated[
+        Optional[Path],
+        typer.Option("--plot", help="PNG of θ \\[deg] and u, v \\[px] over time with lost frames marked."),
+    ] = None,
+    preview: Annotated[
+        Optional[Path],
+        typer.Option("--preview", help="Video (mp4) with the detection drawn over it: ball circle, pivot, string, θ."),
+    ] = None,
+    candidates: Annotated[
+        Optional[Path],
+        typer.Option(
+            "--candidates",
+            help="PNG of the first frame with every ball-like blob circled and labelled U,V \\[px] (pick one for --start).",
+        ),
+    ] = None,
+    slack: Annotated[
+        bool,
+        typer.Option(
+            "--slack/--no-slack",
+            help="With a pivot: frames where the ball is nearer to the pivot than the string's length (estimated from the track) are slack — position kept, θ left empty.",
+        ),
+    ] = True,
     json_out: JsonOpt = False,
 ) -> None:
     """Track a coloured ball in every frame of a video; θ from the pivot when one is known.
@@ -115,7 +231,9 @@ def video(
 
             def on_frame(frame, res):  # noqa: ANN001
                 b = res.ball
-                draw_overlay(frame, res.t, (b.u, b.v) if b else None, b.radius_px if b else None, res.pivot_uv, res.theta)
+                draw_overlay(
+                    frame, res.t, (b.u, b.v) if b else None, b.radius_px if b else None, res.pivot_uv, res.theta
+                )
                 writer.write(frame)
                 written[0] += 1
 
@@ -182,14 +300,18 @@ def video(
         figures["theta_max_deg"] = float(np.degrees(th.max())) if len(th) else math.nan
         where = "in the calibrated plane of motion" if track.theta_in_plane else "in the image"
         if len(th):
-            rep.print(f"θ ({where}) in {len(th)} frames, from {figures['theta_min_deg']:.2f}° to {figures['theta_max_deg']:.2f}°")
+            rep.print(
+                f"θ ({where}) in {len(th)} frames, from {figures['theta_min_deg']:.2f}° to {figures['theta_max_deg']:.2f}°"
+            )
         else:
             rep.print("θ in no frame")
     if slack_info is not None:
         figures.update(slack_info)
         if slack_info["slack_frames"]:
-            rep.print(f"string slack in {slack_info['slack_frames']} frames (ball nearer than the string's "
-                      f"{slack_info['string_px']:.1f} px): position only, no θ there")
+            rep.print(
+                f"string slack in {slack_info['slack_frames']} frames (ball nearer than the string's "
+                f"{slack_info['string_px']:.1f} px): position only, no θ there"
+            )
     if track.pivot_uv is not None:
         figures["pivot_found"] = int(np.all(np.isfinite(track.pivot_uv), axis=1).sum())
         rep.print(f"pivot marker found in {figures['pivot_found']} frames")
@@ -206,7 +328,9 @@ def video(
         rep.print(f"preview: {preview}")
     rep.emit(figures)
     if found == 0:
-        rep.warn(f"the {color} ball was not found in any frame (try --color, --radius, --min-circularity, --min-fit or --min-saturation)")
+        rep.warn(
+            f"the {color} ball was not found in any frame (try --color, --radius, --min-circularity, --min-fit or --min-saturation)"
+        )
         raise typer.Exit(1)
     if figures["found_percent"] < min_found:
         rep.warn(
@@ -215,7 +339,9 @@ def video(
         )
         raise typer.Exit(1)
     if track.pivot_uv is not None and figures["pivot_found"] == 0:
-        rep.warn(f"the {pivot_color} pivot marker was not found in any frame: no θ (try another --pivot-color or --pivot U,V)")
+        rep.warn(
+            f"the {pivot_color} pivot marker was not found in any frame: no θ (try another --pivot-color or --pivot U,V)"
+        )
         raise typer.Exit(1)
 
 
@@ -246,13 +372,44 @@ def _write_candidates(video_path: Path, spec, gates, png: Path) -> int:  # noqa:
 
 
 def calibrate(
-    inputs: Annotated[list[Path], typer.Argument(metavar="IMAGES_OR_VIDEO...", help="Checkerboard images, folders of images, or videos.")],
+    inputs: Annotated[
+        list[Path],
+        typer.Argument(metavar="IMAGES_OR_VIDEO...", help="Checkerboard images, folders of images, or videos."),
+    ],
     out: Annotated[Path, typer.Option("-o", "--out", help="Camera calibration JSON to write.")],
-    board: Annotated[tuple, grid("--board", low=2, high=1000, metavar="COLSxROWS", help="Inner corners COLSxROWS of the checkerboard (a 10x7-square board is 9x6).")] = "9x6",
-    square: Annotated[float, number("--square", low=0, high=10, low_open=True, unit="m", help="Side of one square \\[m].")] = 0.025,
-    plane: Annotated[Optional[Path], typer.Option("--plane", help="Image (or video: first frame with the board) of the board lying in the plane of motion: metres per pixel.")] = None,
-    stride: Annotated[int, number("--stride", low=1, high=100_000, integer=True, help="Use every N-th frame of videos.")] = 15,
-    max_views: Annotated[int, number("--max-views", low=3, high=10_000, integer=True, help="At most this many views (evenly chosen) go into the calibration.")] = 40,
+    board: Annotated[
+        tuple,
+        grid(
+            "--board",
+            low=2,
+            high=1000,
+            metavar="COLSxROWS",
+            help="Inner corners COLSxROWS of the checkerboard (a 10x7-square board is 9x6).",
+        ),
+    ] = "9x6",
+    square: Annotated[
+        float, number("--square", low=0, high=10, low_open=True, unit="m", help="Side of one square \\[m].")
+    ] = 0.025,
+    plane: Annotated[
+        Optional[Path],
+        typer.Option(
+            "--plane",
+            help="Image (or video: first frame with the board) of the board lying in the plane of motion: metres per pixel.",
+        ),
+    ] = None,
+    stride: Annotated[
+        int, number("--stride", low=1, high=100_000, integer=True, help="Use every N-th frame of videos.")
+    ] = 15,
+    max_views: Annotated[
+        int,
+        number(
+            "--max-views",
+            low=3,
+            high=10_000,
+            integer=True,
+            help="At most this many views (evenly chosen) go into the calibration.",
+        ),
+    ] = 40,
     json_out: JsonOpt = False,
 ) -> None:
     """Camera calibration from checkerboard views (OpenCV findChessboardCorners, cornerSubPix, calibrateCamera).
@@ -290,7 +447,9 @@ def calibrate(
                 names.append(name)
             update(len(views) + rejected)
     if len(views) < 3:
-        raise InputError(f"the {board} board was found in {len(views)} of {len(views) + rejected} views; need at least 3")
+        raise InputError(
+            f"the {board} board was found in {len(views)} of {len(views) + rejected} views; need at least 3"
+        )
     if len(views) > max_views:
         keep = np.round(np.linspace(0, len(views) - 1, max_views)).astype(int)
         views = [views[k] for k in keep]
@@ -299,7 +458,9 @@ def calibrate(
         pl = None
         for name, img in iter_images([plane], 1):
             if img.shape[1::-1] != tuple(cal.image_size):
-                raise InputError(f"image is {img.shape[1]}x{img.shape[0]}, the calibration is for {size[0]}x{size[1]}", file=name)
+                raise InputError(
+                    f"image is {img.shape[1]}x{img.shape[0]}, the calibration is for {size[0]}x{size[1]}", file=name
+                )
             c = find_board(img, cols_rows)
             if c is not None:
                 pl = plane_from_corners(cal, c)
@@ -313,8 +474,10 @@ def calibrate(
         f"board {board} found in {len(names)} of {len(names) + rejected} views; {cal.views} used; "
         f"RMS reprojection error {cal.rms_px:.3f} px"
     )
-    rep.print(f"fx {K[0, 0]:.1f} px, fy {K[1, 1]:.1f} px, cx {K[0, 2]:.1f} px, cy {K[1, 2]:.1f} px; "
-              f"distortion {np.array2string(cal.dist_coeffs, precision=4)}")
+    rep.print(
+        f"fx {K[0, 0]:.1f} px, fy {K[1, 1]:.1f} px, cx {K[0, 2]:.1f} px, cy {K[1, 2]:.1f} px; "
+        f"distortion {np.array2string(cal.dist_coeffs, precision=4)}"
+    )
     if cal.rms_px > 1.0:
         rep.warn(f"reprojection error {cal.rms_px:.2f} px is high: check --board and the images")
     figures = {
@@ -338,22 +501,129 @@ def calibrate(
 
 
 def live(
-    source: Annotated[str, typer.Argument(metavar="SOURCE", help="Camera: a V4L2 device index (0) or path (/dev/video0), a stream URL (http://…/stream.mjpg, rtsp://…), or a video file played at its frame rate.")],
-    out: Annotated[Optional[Path], typer.Option("-o", "--out", help="Track CSV as `track video` writes, plus theta_x,theta_y \\[rad], latency_s, t_source \\[s]; t from the first frame's capture.")] = None,
-    duration: Annotated[Optional[float], number("--duration", low=0, high=86400, low_open=True, unit="s", help="Stop after this long \\[s] (default: when the source ends, or Ctrl-C).")] = None,
-    pivot: Annotated[Optional[tuple], floats("--pivot", count=2, low=0, high=100_000, unit="px", metavar="U,V", help="Fixed pivot U,V \\[px] in the image.")] = None,
-    pivot_color: Annotated[Optional[str], typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame.")] = None,
-    color: Annotated[str, typer.Option("--color", help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or a hue range H1-H2 (0–179).")] = "red",
-    radius: Annotated[Optional[float], number("--radius", low=0, high=10_000, low_open=True, unit="px", help="Approximate ball radius \\[px] (default: learned, 1.5 px to 1/6 of the frame height).")] = None,
-    calibration: Annotated[Optional[Path], typer.Option("--calibration", help="Camera JSON from `lbr track calibrate` (undistortion; θ in the plane of motion).")] = None,
-    geometry: Annotated[Optional[Path], typer.Option("--geometry", help="Camera pose JSON (tracking.camera_geometry: camera_matrix, rotation, centre_m — or position_m, look_at_m, fov_deg — and pivot_m, string_m): adds the tilt components θx, θy in the base frame.")] = None,
-    udp: Annotated[Optional[tuple], typer.Option("--udp", parser=parse_host_port, metavar="HOST:PORT", help="Send every result to HOST:PORT as one UDP datagram (see --udp-format).")] = None,
-    udp_format: Annotated[str, choice("--udp-format", choices=("binary", "json"), help="binary (64 bytes little-endian, layout in docs/guides/camera.md) or json.")] = "binary",
-    mqtt: Annotated[Optional[str], typer.Option("--mqtt", help="Publish results as JSON to mqtt://HOST:PORT/TOPIC (at most --mqtt-rate per second).")] = None,
-    mqtt_rate: Annotated[float, number("--mqtt-rate", low=0, high=1000, low_open=True, unit="Hz", help="MQTT messages per second \\[Hz].")] = 50.0,
-    fps: Annotated[Optional[float], number("--fps", low=0, high=100_000, low_open=True, unit="1/s", help="Playback rate \\[1/s] of a video file SOURCE (default: its own).")] = None,
-    min_found: Annotated[float, number("--min-found", low=0, high=100, unit="%", help="Exit 1 when the ball is found in fewer than this share of the tracked frames \\[%].")] = 50.0,
-    plot: Annotated[Optional[Path], typer.Option("--plot", help="PNG of θ and u, v over time, lost frames marked.")] = None,
+    source: Annotated[
+        str,
+        typer.Argument(
+            metavar="SOURCE",
+            help="Camera: a V4L2 device index (0) or path (/dev/video0), a stream URL (http://…/stream.mjpg, rtsp://…), or a video file played at its frame rate.",
+        ),
+    ],
+    out: Annotated[
+        Optional[Path],
+        typer.Option(
+            "-o",
+            "--out",
+            help="Track CSV as `track video` writes, plus theta_x,theta_y \\[rad], latency_s, t_source \\[s]; t from the first frame's capture.",
+        ),
+    ] = None,
+    duration: Annotated[
+        Optional[float],
+        number(
+            "--duration",
+            low=0,
+            high=86400,
+            low_open=True,
+            unit="s",
+            help="Stop after this long \\[s] (default: when the source ends, or Ctrl-C).",
+        ),
+    ] = None,
+    pivot: Annotated[
+        Optional[tuple],
+        floats(
+            "--pivot",
+            count=2,
+            low=0,
+            high=100_000,
+            unit="px",
+            metavar="U,V",
+            help="Fixed pivot U,V \\[px] in the image.",
+        ),
+    ] = None,
+    pivot_color: Annotated[
+        Optional[str], typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame.")
+    ] = None,
+    color: Annotated[
+        str,
+        typer.Option(
+            "--color",
+            help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or a hue range H1-H2 (0–179).",
+        ),
+    ] = "red",
+    radius: Annotated[
+        Optional[float],
+        number(
+            "--radius",
+            low=0,
+            high=10_000,
+            low_open=True,
+            unit="px",
+            help="Approximate ball radius \\[px] (default: learned, 1.5 px to 1/6 of the frame height).",
+        ),
+    ] = None,
+    calibration: Annotated[
+        Optional[Path],
+        typer.Option(
+            "--calibration", help="Camera JSON from `lbr track calibrate` (undistortion; θ in the plane of motion)."
+        ),
+    ] = None,
+    geometry: Annotated[
+        Optional[Path],
+        typer.Option(
+            "--geometry",
+            help="Camera pose JSON (tracking.camera_geometry: camera_matrix, rotation, centre_m — or position_m, look_at_m, fov_deg — and pivot_m, string_m): adds the tilt components θx, θy in the base frame.",
+        ),
+    ] = None,
+    udp: Annotated[
+        Optional[tuple],
+        typer.Option(
+            "--udp",
+            parser=parse_host_port,
+            metavar="HOST:PORT",
+            help="Send every result to HOST:PORT as one UDP datagram (see --udp-format).",
+        ),
+    ] = None,
+    udp_format: Annotated[
+        str,
+        choice(
+            "--udp-format",
+            choices=("binary", "json"),
+            help="binary (64 bytes little-endian, layout in docs/guides/camera.md) or json.",
+        ),
+    ] = "binary",
+    mqtt: Annotated[
+        Optional[str],
+        typer.Option(
+            "--mqtt", help="Publish results as JSON to mqtt://HOST:PORT/TOPIC (at most --mqtt-rate per second)."
+        ),
+    ] = None,
+    mqtt_rate: Annotated[
+        float,
+        number("--mqtt-rate", low=0, high=1000, low_open=True, unit="Hz", help="MQTT messages per second \\[Hz]."),
+    ] = 50.0,
+    fps: Annotated[
+        Optional[float],
+        number(
+            "--fps",
+            low=0,
+            high=100_000,
+            low_open=True,
+            unit="1/s",
+            help="Playback rate \\[1/s] of a video file SOURCE (default: its own).",
+        ),
+    ] = None,
+    min_found: Annotated[
+        float,
+        number(
+            "--min-found",
+            low=0,
+            high=100,
+            unit="%",
+            help="Exit 1 when the ball is found in fewer than this share of the tracked frames \\[%].",
+        ),
+    ] = 50.0,
+    plot: Annotated[
+        Optional[Path], typer.Option("--plot", help="PNG of θ and u, v over time, lost frames marked.")
+    ] = None,
     json_out: JsonOpt = False,
 ) -> None:
     """Track the ball live in a camera's stream at the camera's rate; print latency and figures, publish results.
@@ -417,8 +687,17 @@ def live(
 
             mqtt_pub.offer(r.t_capture, lambda r=r: result_dict(r))
 
-    tracker = LiveTracker(source, ball_spec, options=options, pivot_uv=piv_uv, pivot_color=piv_spec, tilt=tilt,
-                          calibration=cal, on_result=on_result, file_fps=fps)
+    tracker = LiveTracker(
+        source,
+        ball_spec,
+        options=options,
+        pivot_uv=piv_uv,
+        pivot_color=piv_spec,
+        tilt=tilt,
+        calibration=cal,
+        on_result=on_result,
+        file_fps=fps,
+    )
     interrupted = False
 
     def _interrupt(signum, frame) -> None:  # noqa: ANN001
@@ -450,22 +729,37 @@ def live(
 
     n = st.tracked
     figures = {
-        "source": str(source), "frames_read": st.read, "frames_tracked": n, "frames_dropped": st.dropped,
-        "found": st.found, "found_percent": 100.0 * st.found / n if n else 0.0, "duration_s": elapsed,
-        "rate_fps": n / elapsed if elapsed > 0 else math.nan, "source_fps": st.read / elapsed if elapsed > 0 else math.nan,
-        "width": tracker.size[0] if tracker.size else None, "height": tracker.size[1] if tracker.size else None,
-        "latency_ms_p50": pct(lat, 50), "latency_ms_p95": pct(lat, 95), "latency_ms_p99": pct(lat, 99),
+        "source": str(source),
+        "frames_read": st.read,
+        "frames_tracked": n,
+        "frames_dropped": st.dropped,
+        "found": st.found,
+        "found_percent": 100.0 * st.found / n if n else 0.0,
+        "duration_s": elapsed,
+        "rate_fps": n / elapsed if elapsed > 0 else math.nan,
+        "source_fps": st.read / elapsed if elapsed > 0 else math.nan,
+        "width": tracker.size[0] if tracker.size else None,
+        "height": tracker.size[1] if tracker.size else None,
+        "latency_ms_p50": pct(lat, 50),
+        "latency_ms_p95": pct(lat, 95),
+        "latency_ms_p99": pct(lat, 99),
         "latency_ms_max": float(lat.max()) if len(lat) else math.nan,
-        "track_ms_p50": pct(trk, 50), "track_ms_p99": pct(trk, 99), "udp_sent": udp_pub.sent if udp_pub else 0,
-        "mqtt_published": mqtt_pub.published if mqtt_pub else 0, "interrupted": interrupted, "errors": st.errors,
+        "track_ms_p50": pct(trk, 50),
+        "track_ms_p99": pct(trk, 99),
+        "udp_sent": udp_pub.sent if udp_pub else 0,
+        "mqtt_published": mqtt_pub.published if mqtt_pub else 0,
+        "interrupted": interrupted,
+        "errors": st.errors,
     }
     rep.print(
         f"{source}: {st.read} frames read in {elapsed:.2f} s ({figures['source_fps']:.1f} fps), {n} tracked, "
         f"{st.dropped} dropped while busy; ball found in {st.found} ({figures['found_percent']:.1f} %)"
     )
     if n:
-        rep.print(f"latency capture → result: p50 {figures['latency_ms_p50']:.2f} ms, p95 {figures['latency_ms_p95']:.2f} ms, "
-                  f"max {figures['latency_ms_max']:.2f} ms; tracking p50 {figures['track_ms_p50']:.2f} ms per frame")
+        rep.print(
+            f"latency capture → result: p50 {figures['latency_ms_p50']:.2f} ms, p95 {figures['latency_ms_p95']:.2f} ms, "
+            f"max {figures['latency_ms_max']:.2f} ms; tracking p50 {figures['track_ms_p50']:.2f} ms per frame"
+        )
     th = np.array([r.theta for r in results])
     if np.isfinite(th).any():
         figures["theta_min_deg"] = float(np.degrees(np.nanmin(th)))
@@ -474,8 +768,13 @@ def live(
     for e in st.errors:
         rep.warn(e)
     if results and (out is not None or plot is not None):
-        track = track_from_results(results, source, tracker.size, tracker.fps_nominal,
-                                   piv_uv is not None or piv_spec is not None or tilt is not None)
+        track = track_from_results(
+            results,
+            source,
+            tracker.size,
+            tracker.fps_nominal,
+            piv_uv is not None or piv_spec is not None or tilt is not None,
+        )
         if out is not None:
             write_track_csv(out, track)
             figures["out"] = str(out)
@@ -491,7 +790,9 @@ def live(
         rep.warn(f"no frame was tracked from {source}")
         raise typer.Exit(1)
     if figures["found_percent"] < min_found:
-        rep.warn(f"the ball was found in only {figures['found_percent']:.1f} % of the frames (--min-found {min_found:g} %)")
+        rep.warn(
+            f"the ball was found in only {figures['found_percent']:.1f} % of the frames (--min-found {min_found:g} %)"
+        )
         raise typer.Exit(1)
 
 
@@ -503,8 +804,12 @@ def _tracker_options(radius: float | None, min_circularity: float, min_fit: floa
 
     shape = {"min_circularity": min_circularity, "min_ellipse_fit": min_fit}
     if radius:
-        return TrackerOptions(gates=BlobGates.for_radius(radius, **shape), start_uv=start_uv, max_radius_share=None,
-                              tiny_search=radius < 3.0)
+        return TrackerOptions(
+            gates=BlobGates.for_radius(radius, **shape),
+            start_uv=start_uv,
+            max_radius_share=None,
+            tiny_search=radius < 3.0,
+        )
     return TrackerOptions(gates=BlobGates(**shape), start_uv=start_uv)
 
 

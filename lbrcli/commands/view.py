@@ -31,18 +31,90 @@ def _offset(item: str | tuple) -> tuple[str, float]:
 
 
 def view(
-    files: Annotated[list[Path], typer.Argument(metavar="FILE...", help="Files lbr wrote: joint and task trajectories, execution logs, predictions, tracks, obstacle files (recognised by their header).")],
-    out: Annotated[Optional[Path], typer.Option("-o", "--out", help="Write the replay as one self-contained HTML file (opens in any browser, offline, without lbr) instead of serving it.")] = None,
+    files: Annotated[
+        list[Path],
+        typer.Argument(
+            metavar="FILE...",
+            help="Files lbr wrote: joint and task trajectories, execution logs, predictions, tracks, obstacle files (recognised by their header).",
+        ),
+    ],
+    out: Annotated[
+        Optional[Path],
+        typer.Option(
+            "-o",
+            "--out",
+            help="Write the replay as one self-contained HTML file (opens in any browser, offline, without lbr) instead of serving it.",
+        ),
+    ] = None,
     serve: Annotated[bool, typer.Option("--serve", help="With -o: also serve the view.")] = False,
-    host: Annotated[str, typer.Option("--host", parser=parse_ip, metavar="IP", help="IP address the view's server binds (loopback by default; another address opens the view to that network).")] = "127.0.0.1",
-    port: Annotated[int, number("--port", low=0, high=65535, integer=True, help="TCP port of the view's server (0: any free port).")] = 8080,
-    duration: Annotated[Optional[float], number("--duration", low=0, high=1e7, low_open=True, unit="s", help="Stop serving after this many seconds \\[s] (default: until Ctrl-C).")] = None,
+    host: Annotated[
+        str,
+        typer.Option(
+            "--host",
+            parser=parse_ip,
+            metavar="IP",
+            help="IP address the view's server binds (loopback by default; another address opens the view to that network).",
+        ),
+    ] = "127.0.0.1",
+    port: Annotated[
+        int, number("--port", low=0, high=65535, integer=True, help="TCP port of the view's server (0: any free port).")
+    ] = 8080,
+    duration: Annotated[
+        Optional[float],
+        number(
+            "--duration",
+            low=0,
+            high=1e7,
+            low_open=True,
+            unit="s",
+            help="Stop serving after this many seconds \\[s] (default: until Ctrl-C).",
+        ),
+    ] = None,
     open_browser: Annotated[bool, typer.Option("--open", help="Open the view in the default web browser.")] = False,
-    fps: Annotated[float, number("--fps", low=1, high=240, unit="1/s", help="Frames per second of the replay \\[1/s]; the files are sampled on this grid.")] = 30.0,
-    length: Annotated[float, number("--length", low=0.01, high=5, unit="m", help="String length \\[m] from the TCP to the ball centre (balls given by angles).")] = 0.25,
-    ball_radius: Annotated[float, number("--ball-radius", low=0.001, high=0.5, unit="m", help="Radius of the drawn ball \\[m].")] = 0.02,
-    cup: Annotated[Optional[tuple], floats("--cup", count=2, low=0.005, high=0.5, unit="m", metavar="RADIUS,DEPTH", help="Draw a cup on the TCP: RADIUS,DEPTH \\[m] of a translucent cylinder from the TCP along the flange's z axis.")] = None,
-    offset: Annotated[Optional[list[tuple]], typer.Option("--offset", parser=_offset, metavar="FILE=SECONDS", help="Place a file on the time line by hand (view time = file time + SECONDS, before the time line is shifted to start at 0). Repeatable.")] = None,
+    fps: Annotated[
+        float,
+        number(
+            "--fps",
+            low=1,
+            high=240,
+            unit="1/s",
+            help="Frames per second of the replay \\[1/s]; the files are sampled on this grid.",
+        ),
+    ] = 30.0,
+    length: Annotated[
+        float,
+        number(
+            "--length",
+            low=0.01,
+            high=5,
+            unit="m",
+            help="String length \\[m] from the TCP to the ball centre (balls given by angles).",
+        ),
+    ] = 0.25,
+    ball_radius: Annotated[
+        float, number("--ball-radius", low=0.001, high=0.5, unit="m", help="Radius of the drawn ball \\[m].")
+    ] = 0.02,
+    cup: Annotated[
+        Optional[tuple],
+        floats(
+            "--cup",
+            count=2,
+            low=0.005,
+            high=0.5,
+            unit="m",
+            metavar="RADIUS,DEPTH",
+            help="Draw a cup on the TCP: RADIUS,DEPTH \\[m] of a translucent cylinder from the TCP along the flange's z axis.",
+        ),
+    ] = None,
+    offset: Annotated[
+        Optional[list[tuple]],
+        typer.Option(
+            "--offset",
+            parser=_offset,
+            metavar="FILE=SECONDS",
+            help="Place a file on the time line by hand (view time = file time + SECONDS, before the time line is shifted to start at 0). Repeatable.",
+        ),
+    ] = None,
     flange: FlangeOpt = DEFAULT_FLANGE,
     tool: ToolOpt = None,
     json_out: JsonOpt = False,
@@ -92,11 +164,22 @@ def view(
         place = f", at {alignment.offsets[f.path]:+.3f} s: {how}" if how else ""
         rep.print(f"{f.path}: {f.kind}{place}")
     figures = {
-        "files": [{"file": f.path, "kind": f.kind, "offset_s": alignment.offsets.get(f.path), "placed": alignment.how.get(f.path)}
-                  for f in inputs],
-        "duration_s": scene.duration, "frames": len(scene.t), "fps": fps,
-        "arms": [a.key for a in scene.arms], "balls": [b.key for b in scene.balls],
-        "turning_points": len(scene.turning_points), "obstacles": len(scene.obstacles),
+        "files": [
+            {
+                "file": f.path,
+                "kind": f.kind,
+                "offset_s": alignment.offsets.get(f.path),
+                "placed": alignment.how.get(f.path),
+            }
+            for f in inputs
+        ],
+        "duration_s": scene.duration,
+        "frames": len(scene.t),
+        "fps": fps,
+        "arms": [a.key for a in scene.arms],
+        "balls": [b.key for b in scene.balls],
+        "turning_points": len(scene.turning_points),
+        "obstacles": len(scene.obstacles),
     }
     if out is not None:
         from ..view.serve import write_offline

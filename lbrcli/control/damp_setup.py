@@ -76,7 +76,11 @@ class DampSetup:
         from planners.feedback.damping import DampingOptions
         from planners.shapers import make_shaper
 
-        options = DampingOptions() if camera is None else DampingOptions(bandwidth=observer_bandwidth(1.0 / camera.sensor.interval_s))
+        options = (
+            DampingOptions()
+            if camera is None
+            else DampingOptions(bandwidth=observer_bandwidth(1.0 / camera.sensor.interval_s))
+        )
         sway = (SwayWatch(IoSway("ball_theta"), start_sway_rad, window_for_length(self.model_length), sway_wait_s)
                 if self.sensor == "io" else None)  # fmt: skip
         return DampingClient(

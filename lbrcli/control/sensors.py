@@ -110,6 +110,8 @@ class CameraSensor:
 
     def figures(self) -> dict:
         a = np.array(self.ages) * 1e3
-        return {"camera_age_ms_p50": float(np.percentile(a, 50)) if len(a) else None,
-                "camera_age_ms_p95": float(np.percentile(a, 95)) if len(a) else None,
-                "camera_late_readings": self.late}
+        return {
+            "camera_age_ms_p50": float(np.percentile(a, 50)) if len(a) else None,
+            "camera_age_ms_p95": float(np.percentile(a, 95)) if len(a) else None,
+            "camera_late_readings": self.late,
+        }

@@ -63,8 +63,11 @@ class UprightClient(LBRClient):
         q = state.measured_joint_position
         d = max(abs(a - b) for a, b in zip(q, self._q_start))
         if d > self.start_tolerance and not self.move_to_start:
-            raise StopSession(f"the robot is {d:.4f} rad from the rail's start pose (more than {self.start_tolerance:g} "
-                              "rad); move it there first (lbr ptp) or use --move-to-start", completed=False)
+            raise StopSession(
+                f"the robot is {d:.4f} rad from the rail's start pose (more than {self.start_tolerance:g} "
+                "rad); move it there first (lbr ptp) or use --move-to-start",
+                completed=False,
+            )
 
     def monitor(self, state: LBRState) -> None:
         self._check_start(state)

@@ -30,9 +30,7 @@ def prepare_out(out: Path) -> str | None:
     except OSError:
         previous = False
     if not previous:
-        raise OptionError(
-            f"--out: {out} is not empty and holds no previous demo (no summary.md): choose a new folder"
-        )
+        raise OptionError(f"--out: {out} is not empty and holds no previous demo (no summary.md): choose a new folder")
     n = sum(1 for p in out.iterdir() if p.is_file())
     return f"{n} files"
 

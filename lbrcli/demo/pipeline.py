@@ -69,8 +69,12 @@ def _tracking_error(out: Path, results: dict[str, StepResult]) -> dict[str, Any]
 
     from trajectories.csvio import read_table
 
-    track = read_table(out / "swingup_track.csv", ("t", "frame", "u", "v", "found"), time="increasing",
-                       nan_columns=("u", "v", "theta", "pivot_u", "pivot_v"))
+    track = read_table(
+        out / "swingup_track.csv",
+        ("t", "frame", "u", "v", "found"),
+        time="increasing",
+        nan_columns=("u", "v", "theta", "pivot_u", "pivot_v"),
+    )
     truth = np.loadtxt(out / "swingup_video_truth.csv", delimiter=",", skiprows=1)
     n = min(len(truth), len(track.data))
     found = track.column("found")[:n] > 0.5
@@ -96,60 +100,243 @@ def demo_steps() -> list[Step]:
     crane = []
     for name, shaper in (("baseline", "accel"), ("shaped", "auto")):
         crane += [
-            Step(f"plan_{name}", f"plan crane move ({shaper})",
-                 ("plan", "anti-sway", "--length", L, "--a-max", str(CRANE_A_MAX), "--shaper", shaper,
-                  "-o", f"crane_{name}.csv", "--prediction", f"crane_{name}_prediction.csv",
-                  "--task-out", f"crane_{name}_pivot.csv", "--plot", f"crane_{name}_plan.png")),
-            Step(f"check_{name}", f"check crane move ({shaper})",
-                 ("check", f"crane_{name}.csv", "--plot", f"crane_{name}_check.png"), needs=(f"plan_{name}",)),
-            Step(f"execute_{name}", f"execute crane move ({shaper}) on the simulator",
-                 ("execute", f"crane_{name}.csv", "--port", "0", *rt, "--sim-lenient", "--length", L, "--settle", "3",
-                  "--log", f"crane_{name}_log.csv", "--plot", f"crane_{name}_execution.png"),
-                 needs=(f"check_{name}",)),
+            Step(
+                f"plan_{name}",
+                f"plan crane move ({shaper})",
+                (
+                    "plan",
+                    "anti-sway",
+                    "--length",
+                    L,
+                    "--a-max",
+                    str(CRANE_A_MAX),
+                    "--shaper",
+                    shaper,
+                    "-o",
+                    f"crane_{name}.csv",
+                    "--prediction",
+                    f"crane_{name}_prediction.csv",
+                    "--task-out",
+                    f"crane_{name}_pivot.csv",
+                    "--plot",
+                    f"crane_{name}_plan.png",
+                ),
+            ),
+            Step(
+                f"check_{name}",
+                f"check crane move ({shaper})",
+                ("check", f"crane_{name}.csv", "--plot", f"crane_{name}_check.png"),
+                needs=(f"plan_{name}",),
+            ),
+            Step(
+                f"execute_{name}",
+                f"execute crane move ({shaper}) on the simulator",
+                (
+                    "execute",
+                    f"crane_{name}.csv",
+                    "--port",
+                    "0",
+                    *rt,
+                    "--sim-lenient",
+                    "--length",
+                    L,
+                    "--settle",
+                    "3",
+                    "--log",
+                    f"crane_{name}_log.csv",
+                    "--plot",
+                    f"crane_{name}_execution.png",
+                ),
+                needs=(f"check_{name}",),
+            ),
         ]
     swing = [
-        Step("plan_swingup", "plan swing-up (fast)",
-             ("plan", "swing-up", "--method", "fast", "--length", L, "--mass", str(BALL_MASS), "--theta-d",
-              SWING_THETA_D, "--side", "+y", "-o", "swingup.csv", "--prediction", "swingup_prediction.csv",
-              "--plot", "swingup_plan.png")),
-        Step("execute_swingup", "execute swing-up on the simulator",
-             ("execute", "swingup.csv", "--port", "0", *rt, "--sim-lenient", "--length", L, "--settle", "1.5", "--log", "swingup_log.csv",
-              "--plot", "swingup_execution.png"), needs=("plan_swingup",)),
-        Step("film", "film the simulated ball (render swingup.mp4)",
-             ("track", "film", "swingup_log.csv", "-o", "swingup.mp4", "--length", L,
-              "--truth", "swingup_video_truth.csv"), needs=("execute_swingup",)),
-        Step("track", "track the ball in the video",
-             ("track", "video", "swingup.mp4", "-o", "swingup_track.csv", "--pivot-color", "green",
-              "--plot", "swingup_track.png", "--preview", "swingup_preview.mp4"), needs=("film",)),
+        Step(
+            "plan_swingup",
+            "plan swing-up (fast)",
+            (
+                "plan",
+                "swing-up",
+                "--method",
+                "fast",
+                "--length",
+                L,
+                "--mass",
+                str(BALL_MASS),
+                "--theta-d",
+                SWING_THETA_D,
+                "--side",
+                "+y",
+                "-o",
+                "swingup.csv",
+                "--prediction",
+                "swingup_prediction.csv",
+                "--plot",
+                "swingup_plan.png",
+            ),
+        ),
+        Step(
+            "execute_swingup",
+            "execute swing-up on the simulator",
+            (
+                "execute",
+                "swingup.csv",
+                "--port",
+                "0",
+                *rt,
+                "--sim-lenient",
+                "--length",
+                L,
+                "--settle",
+                "1.5",
+                "--log",
+                "swingup_log.csv",
+                "--plot",
+                "swingup_execution.png",
+            ),
+            needs=("plan_swingup",),
+        ),
+        Step(
+            "film",
+            "film the simulated ball (render swingup.mp4)",
+            (
+                "track",
+                "film",
+                "swingup_log.csv",
+                "-o",
+                "swingup.mp4",
+                "--length",
+                L,
+                "--truth",
+                "swingup_video_truth.csv",
+            ),
+            needs=("execute_swingup",),
+        ),
+        Step(
+            "track",
+            "track the ball in the video",
+            (
+                "track",
+                "video",
+                "swingup.mp4",
+                "-o",
+                "swingup_track.csv",
+                "--pivot-color",
+                "green",
+                "--plot",
+                "swingup_track.png",
+                "--preview",
+                "swingup_preview.mp4",
+            ),
+            needs=("film",),
+        ),
         Step("tracking_error", "tracked ball vs what was drawn", action=_tracking_error, needs=("track",)),
-        Step("compare", "compare model and experiment",
-             ("compare", "swingup_prediction.csv", "swingup_track.csv", "--plot", "swingup_compare.png"),
-             needs=("track",)),
-        Step("view", "3D replay of the swing-up (one offline HTML file)",
-             ("view", "swingup.csv", "swingup_log.csv", "swingup_prediction.csv", "swingup_track.csv", "--length", L,
-              "-o", "swingup_view.html"), needs=("track",)),
+        Step(
+            "compare",
+            "compare model and experiment",
+            ("compare", "swingup_prediction.csv", "swingup_track.csv", "--plot", "swingup_compare.png"),
+            needs=("track",),
+        ),
+        Step(
+            "view",
+            "3D replay of the swing-up (one offline HTML file)",
+            (
+                "view",
+                "swingup.csv",
+                "swingup_log.csv",
+                "swingup_prediction.csv",
+                "swingup_track.csv",
+                "--length",
+                L,
+                "-o",
+                "swingup_view.html",
+            ),
+            needs=("track",),
+        ),
     ]
     catch = [
-        Step("plan_catch", "plan the cup-and-ball catch",
-             ("plan", "cup-and-ball", "--length", L, "--min-success", "0", "-o", "catch.csv", "--prediction",
-              "catch_prediction.csv", "--plot", "catch_plan.png")),
-        Step("execute_catch", "execute the catch on the simulator (ball and cup simulated)",
-             ("execute", "catch.csv", "--port", "0", *rt, "--sim-lenient", "--length", L, "--cup", CUP,
-              "--settle", "1", "--log", "catch_log.csv", "--plot", "catch_execution.png"), needs=("plan_catch",)),
-        Step("film_catch", "film the catch (render catch.mp4 with the cup)",
-             ("track", "film", "catch_log.csv", "-o", "catch.mp4", "--length", L, "--cup", CUP, "--size", "960x540",
-              "--truth", "catch_video_truth.csv"), needs=("execute_catch",)),
-        Step("track_catch", "track the ball through the flight",
-             ("track", "video", "catch.mp4", "-o", "catch_track.csv", "--pivot-color", "green"), needs=("film_catch",)),
-        Step("compare_catch", "compare model and experiment, positions in the flight",
-             ("compare", "catch_prediction.csv", "catch_track.csv", "--plot", "catch_compare.png"),
-             needs=("track_catch",)),
+        Step(
+            "plan_catch",
+            "plan the cup-and-ball catch",
+            (
+                "plan",
+                "cup-and-ball",
+                "--length",
+                L,
+                "--min-success",
+                "0",
+                "-o",
+                "catch.csv",
+                "--prediction",
+                "catch_prediction.csv",
+                "--plot",
+                "catch_plan.png",
+            ),
+        ),
+        Step(
+            "execute_catch",
+            "execute the catch on the simulator (ball and cup simulated)",
+            (
+                "execute",
+                "catch.csv",
+                "--port",
+                "0",
+                *rt,
+                "--sim-lenient",
+                "--length",
+                L,
+                "--cup",
+                CUP,
+                "--settle",
+                "1",
+                "--log",
+                "catch_log.csv",
+                "--plot",
+                "catch_execution.png",
+            ),
+            needs=("plan_catch",),
+        ),
+        Step(
+            "film_catch",
+            "film the catch (render catch.mp4 with the cup)",
+            (
+                "track",
+                "film",
+                "catch_log.csv",
+                "-o",
+                "catch.mp4",
+                "--length",
+                L,
+                "--cup",
+                CUP,
+                "--size",
+                "960x540",
+                "--truth",
+                "catch_video_truth.csv",
+            ),
+            needs=("execute_catch",),
+        ),
+        Step(
+            "track_catch",
+            "track the ball through the flight",
+            ("track", "video", "catch.mp4", "-o", "catch_track.csv", "--pivot-color", "green"),
+            needs=("film_catch",),
+        ),
+        Step(
+            "compare_catch",
+            "compare model and experiment, positions in the flight",
+            ("compare", "catch_prediction.csv", "catch_track.csv", "--plot", "catch_compare.png"),
+            needs=("track_catch",),
+        ),
     ]
     return crane + swing + catch
 
 
-def run_demo(out: Path, on_step: Callable[[Step, int], None] | None = None,
-             on_done: Callable[[Step, StepResult], None] | None = None) -> dict[str, StepResult]:
+def run_demo(
+    out: Path,
+    on_step: Callable[[Step, int], None] | None = None,
+    on_done: Callable[[Step, StepResult], None] | None = None,
+) -> dict[str, StepResult]:
     """Run every step in order (skipping those whose inputs failed); results by step name."""
     out.mkdir(parents=True, exist_ok=True)
     results: dict[str, StepResult] = {}
@@ -218,8 +405,11 @@ def summary_figures(results: dict[str, StepResult]) -> dict[str, Any]:
     f["tracking"] = dict(results["tracking_error"].figures) if "tracking_error" in results else {}
     f["compare"] = {k: _get(results, "compare", k) for k in ("lag_s", "rms_deg", "max_deg", "overlap_s")}
     missed = [f[k]["fri_missed"] for k in ("crane_baseline", "crane_shaped", "swingup", "catch")]
-    f["fri_missed_total"] = sum(m for m in missed if isinstance(m, (int, float))) if any(
-        isinstance(m, (int, float)) for m in missed) else None
+    f["fri_missed_total"] = (
+        sum(m for m in missed if isinstance(m, (int, float)))
+        if any(isinstance(m, (int, float)) for m in missed)
+        else None
+    )
     f["steps_failed"] = [n for n, r in results.items() if not r.ok]
     f["ok"] = not f["steps_failed"]
     return f
@@ -241,36 +431,57 @@ def summary_rows(f: dict[str, Any]) -> list[tuple[str, str]]:
     missed = f["fri_missed_total"]
     return [
         ("crane duration, baseline / shaped [s]", f"{fmt(b['duration_s'])} / {fmt(s['duration_s'])}"),
-        ("crane peak sway (simulated), baseline / shaped [°]",
-         f"{fmt(b['executed_peak_sway_deg'])} / {fmt(s['executed_peak_sway_deg'])}"),
-        ("crane residual sway (simulated), baseline / shaped [°]",
-         f"{fmt(b['executed_residual_sway_deg'], '.3f')} / {fmt(s['executed_residual_sway_deg'], '.3f')}"),
-        ("crane residual sway (plan's prediction), baseline / shaped [°]",
-         f"{fmt(b['predicted_residual_sway_deg'], '.3f')} / {fmt(s['predicted_residual_sway_deg'], '.3f')}"),
-        ("swing-up max θ, planned / simulated [°]",
-         f"{fmt(sw['max_theta_deg'], '.1f')} / {fmt(sw['executed_max_theta_deg'], '.1f')}"),
+        (
+            "crane peak sway (simulated), baseline / shaped [°]",
+            f"{fmt(b['executed_peak_sway_deg'])} / {fmt(s['executed_peak_sway_deg'])}",
+        ),
+        (
+            "crane residual sway (simulated), baseline / shaped [°]",
+            f"{fmt(b['executed_residual_sway_deg'], '.3f')} / {fmt(s['executed_residual_sway_deg'], '.3f')}",
+        ),
+        (
+            "crane residual sway (plan's prediction), baseline / shaped [°]",
+            f"{fmt(b['predicted_residual_sway_deg'], '.3f')} / {fmt(s['predicted_residual_sway_deg'], '.3f')}",
+        ),
+        (
+            "swing-up max θ, planned / simulated [°]",
+            f"{fmt(sw['max_theta_deg'], '.1f')} / {fmt(sw['executed_max_theta_deg'], '.1f')}",
+        ),
         ("swing-up time to θ_d − 2° [s]", fmt(sw["t_reach_s"])),
-        ("tracking: found / centre RMS / θ RMS",
-         f"{fmt(100 * found if found is not None else None, '.1f', ' %')} / "
-         f"{fmt(tr.get('centre_rms_px'), '.2f', ' px')} / {fmt(tr.get('theta_rms_deg'), '.3f', '°')}"),
+        (
+            "tracking: found / centre RMS / θ RMS",
+            f"{fmt(100 * found if found is not None else None, '.1f', ' %')} / "
+            f"{fmt(tr.get('centre_rms_px'), '.2f', ' px')} / {fmt(tr.get('theta_rms_deg'), '.3f', '°')}",
+        ),
         ("model vs experiment: θ RMS / max error [°]", f"{fmt(cp['rms_deg'])} / {fmt(cp['max_deg'])}"),
         ("model vs experiment: lag [s]", fmt(cp["lag_s"], ".3f")),
-        ("cup-and-ball: caught / enters the cup (plan) [s]",
-         f"{fmt(ct['caught'])} / {fmt(ct['catch_time_s'])}"),
-        ("cup-and-ball: share of the robustness band caught",
-         fmt(100 * ct["band_success"] if ct["band_success"] is not None else None, ".0f", " %")),
-        ("cup-and-ball executed: enters (after the first row) [s] / stayed",
-         f"{fmt(ct['executed_entered_s'])} / {fmt(ct['executed_stayed'])}"),
-        ("cup-and-ball: flight position model vs video, RMS",
-         fmt(1e3 * ct["flight_position_rms_m"] if ct["flight_position_rms_m"] is not None else None, ".1f", " mm")),
+        ("cup-and-ball: caught / enters the cup (plan) [s]", f"{fmt(ct['caught'])} / {fmt(ct['catch_time_s'])}"),
+        (
+            "cup-and-ball: share of the robustness band caught",
+            fmt(100 * ct["band_success"] if ct["band_success"] is not None else None, ".0f", " %"),
+        ),
+        (
+            "cup-and-ball executed: enters (after the first row) [s] / stayed",
+            f"{fmt(ct['executed_entered_s'])} / {fmt(ct['executed_stayed'])}",
+        ),
+        (
+            "cup-and-ball: flight position model vs video, RMS",
+            fmt(1e3 * ct["flight_position_rms_m"] if ct["flight_position_rms_m"] is not None else None, ".1f", " mm"),
+        ),
         ("FRI cycles missed (all runs)", fmt(missed, ".0f")),
     ]
 
 
 def write_summary(out: Path, results: dict[str, StepResult], f: dict[str, Any], seconds: float) -> Path:
     """`summary.md`: the table, every step with its command, time and outcome, and the files."""
-    lines = ["# lbr demo", "", f"The user's loop on the built-in FRI simulator, {seconds:.0f} s in all.", "",
-             "| figure | value |", "|---|---|"]
+    lines = [
+        "# lbr demo",
+        "",
+        f"The user's loop on the built-in FRI simulator, {seconds:.0f} s in all.",
+        "",
+        "| figure | value |",
+        "|---|---|",
+    ]
     lines += [f"| {a} | {b} |" for a, b in summary_rows(f)]
     lines += ["", "## Steps", "", "| step | command | time [s] | outcome |", "|---|---|---|---|"]
     for name, r in results.items():

@@ -52,9 +52,18 @@ def read_film_log(log_csv: str | Path):
     return table
 
 
-def film_execution_log(log_csv, video: str | Path, length: float, camera: Camera = Camera(),
-                       lead_s: float = 0.3, flange: str = "touch-electric", tool=(0.0, 0.0, 0.0),
-                       progress=None, cup=None, target: str | Path | None = None) -> Footage:
+def film_execution_log(
+    log_csv,
+    video: str | Path,
+    length: float,
+    camera: Camera = Camera(),
+    lead_s: float = 0.3,
+    flange: str = "touch-electric",
+    tool=(0.0, 0.0, 0.0),
+    progress=None,
+    cup=None,
+    target: str | Path | None = None,
+) -> Footage:
     """Render ``video`` from an execution log (a path, or the table of :func:`read_film_log`) with the simulator's
     ``ball_theta_y`` [rad] and ``msr_q1..7``.
 
@@ -94,8 +103,18 @@ def film_execution_log(log_csv, video: str | Path, length: float, camera: Camera
         foreground = (cup_drawer(t - t[0], pivot_uv, np.column_stack([axes[:, 1], -axes[:, 2]]), cup.cup, k),)
         radius = cup.ball.radius
     truth = render_pendulum_video(
-        video, t - t[0], theta, pivot_uv, string_px=k * length, ball_radius_px=k * radius, size=camera.size,
-        fps=camera.fps, pivot_marker="green", progress=progress, ball_path=ball_path, foreground=foreground,
+        video,
+        t - t[0],
+        theta,
+        pivot_uv,
+        string_px=k * length,
+        ball_radius_px=k * radius,
+        size=camera.size,
+        fps=camera.fps,
+        pivot_marker="green",
+        progress=progress,
+        ball_path=ball_path,
+        foreground=foreground,
         target=target,
     )
     return Footage(path=str(video), t0_log=float(t[0]), truth=truth)

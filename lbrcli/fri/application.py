@@ -75,7 +75,8 @@ class ClientApplication(Replying, SessionEnding):
         tracking_lag_s: float | None = None,
         busy_wait_s: float = 0.0,
         prepare: bool = True,
-        transformation_client: TransformationClient | None = None, tcp_robot: Any = None,
+        transformation_client: TransformationClient | None = None,
+        tcp_robot: Any = None,
     ) -> None:
         self.client = client
         self.transformation_client, self.tcp_robot = transformation_client, tcp_robot
@@ -392,7 +393,9 @@ class ClientApplication(Replying, SessionEnding):
         try:
             transport.send(reply.datagram(self._client_seq, seq))  # type: ignore[union-attr]
         except OSError as exc:
-            self._finish(Outcome.STOPPED, EndReason.SILENT, f"cannot send to the controller: {exc.strerror}", observe=True)
+            self._finish(
+                Outcome.STOPPED, EndReason.SILENT, f"cannot send to the controller: {exc.strerror}", observe=True
+            )
             return False
         self._latencies.append(time.perf_counter_ns() - t_rx)
         return self._after(now, mon, seq, supervised, answered=True)

@@ -85,8 +85,11 @@ class PoseSolver:
 
     def __init__(self, robot: Robot, limits: JointLimits, period_s: float, jump_cycles: int = JUMP_CYCLES) -> None:
         self.limits = limits
-        self.ik = OnlineIk(robot, limits, OnlineIkOptions(max_iterations=12, position_tolerance=1e-10,
-                                                          rotation_tolerance=1e-10, limit_margin=1e-4))
+        self.ik = OnlineIk(
+            robot,
+            limits,
+            OnlineIkOptions(max_iterations=12, position_tolerance=1e-10, rotation_tolerance=1e-10, limit_margin=1e-4),
+        )
         self.max_jump = np.asarray(limits.velocity, dtype=float) * period_s * jump_cycles  # [rad]
 
     def solve(self, seed: Sequence[float], position: np.ndarray, rotation: np.ndarray, e1: float) -> PoseSolution:
@@ -104,9 +107,13 @@ class PoseSolver:
         step = np.abs(res.q - seed)
         j = int(np.argmax(step / self.max_jump))
         if step[j] > self.max_jump[j]:
-            return PoseSolution(res.q, res.position_error, res.rotation_error,
-                                f"Cartesian pose jumps: A{j + 1} would move {step[j]:.4f} rad in one command "
-                                f"(more than {self.max_jump[j]:.4f} rad, {JUMP_CYCLES} periods at its velocity limit)")
+            return PoseSolution(
+                res.q,
+                res.position_error,
+                res.rotation_error,
+                f"Cartesian pose jumps: A{j + 1} would move {step[j]:.4f} rad in one command "
+                f"(more than {self.max_jump[j]:.4f} rad, {JUMP_CYCLES} periods at its velocity limit)",
+            )
         return PoseSolution(res.q, res.position_error, res.rotation_error)
 
     def tcp(self, q: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:

@@ -84,7 +84,9 @@ class FriCodec:
 
     def decode_monitoring(self, data: bytes, into: Any | None = None) -> Any:
         """Parse a monitoring message (controller → client) into ``into`` (or a new message)."""
-        return self._decode(data, into if into is not None else self.msgs.Monitoring(), MONITORING_MESSAGE_ID, "monitoring")
+        return self._decode(
+            data, into if into is not None else self.msgs.Monitoring(), MONITORING_MESSAGE_ID, "monitoring"
+        )
 
     def decode_command(self, data: bytes, into: Any | None = None) -> Any:
         """Parse a command message (client → controller) into ``into`` (or a new message)."""

@@ -10,6 +10,7 @@ if TYPE_CHECKING:
     from .application import ClientApplication
 
 from .constants import STATE_IDLE as IDLE
+
 _ZERO7 = (0.0,) * 7
 
 

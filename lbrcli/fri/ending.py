@@ -63,7 +63,11 @@ class SessionEnding:
             return getattr(self.client if on is None else on, method)(*args)
         except StopSession as s:
             outcome = Outcome.COMPLETED if s.completed else Outcome.REFUSED
-            reason = EndReason.FINISHED if s.completed else (EndReason.BAD_INPUT if s.bad_input else EndReason.CLIENT_REFUSED)
+            reason = (
+                EndReason.FINISHED
+                if s.completed
+                else (EndReason.BAD_INPUT if s.bad_input else EndReason.CLIENT_REFUSED)
+            )
             self._stop_braking(outcome, reason, s.reason)  # the first stop of the session counts
         except Exception as exc:  # noqa: BLE001 - a client bug ends the session, reported
             if self._stop is None:
@@ -115,7 +119,9 @@ class SessionEnding:
         if ending or self._stop is not None or self._ended:
             return
         self.error = exc
-        self._request_stop(Outcome.FAILED, EndReason.OBSERVER_FAILED, f"{getattr(o, 'name', type(o).__name__)} failed: {exc}")
+        self._request_stop(
+            Outcome.FAILED, EndReason.OBSERVER_FAILED, f"{getattr(o, 'name', type(o).__name__)} failed: {exc}"
+        )
 
     def _finish(self, outcome: Outcome, reason: EndReason, text: str, observe: bool = False) -> None:
         """End the session; with ``observe`` the observers see this cycle first (its log row, its figures)."""

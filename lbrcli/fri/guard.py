@@ -79,7 +79,9 @@ class CommandGuard:
                 problem = self._joint_problem(j, x, step, second, room_to_stop)  # also NaN
                 if problem is not None:
                     return problem
-            elif room_to_stop and not env.joint_ok(j, x, step / self.period_s, second / (self.period_s * self.period_s)):
+            elif room_to_stop and not env.joint_ok(
+                j, x, step / self.period_s, second / (self.period_s * self.period_s)
+            ):
                 return self._envelope_problem(j, x, step, second)
             j += 1
         return None

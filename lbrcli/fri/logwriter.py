@@ -243,8 +243,8 @@ def _serve(fd_out: int, path: str) -> int:
                     break
                 if buf[i + 4] == _START:
                     k = buf[i + 5]
-                    version = FriVersion(bytes(buf[i + 6:i + 6 + k]).decode())
-                    names = bytes(buf[i + 6 + k:i + size]).decode()
+                    version = FriVersion(bytes(buf[i + 6 : i + 6 + k]).decode())
+                    names = bytes(buf[i + 6 + k : i + size]).decode()
                     extra_names = tuple(names.split("\x1f")) if names else ()
                     codec = FriCodec(version)
                     mon = codec.new_monitoring()
@@ -252,7 +252,7 @@ def _serve(fd_out: int, path: str) -> int:
                     _, _, t, cseq, answered, sent, phase, row, *rest = _HEAD.unpack_from(buf, i)
                     n = rest[7]
                     extra = struct.unpack_from(f"<{n}d", buf, i + hs) if n else ()
-                    codec.decode_monitoring(bytes(buf[i + hs + 8 * n:i + size]), mon)  # type: ignore[union-attr]
+                    codec.decode_monitoring(bytes(buf[i + hs + 8 * n : i + size]), mon)  # type: ignore[union-attr]
                     if layout is None:
                         layout = LogLayout(mon, codec.version, extra_names)  # type: ignore[union-attr]
                         log.start(layout)

@@ -32,7 +32,9 @@ BENT_CYCLES = 50  # after a clamp of the bridged history's making, an exact clie
 # the path (not refused) for this many commands
 ALT_CYCLES = 3  # commands judged also against the bridged history after a reply the controller reported missing
 EFFORT_RAMP_MIN_S = 0.05  # [s] the shortest effort ramp of a stop
-EFFORT_RANGE_S = 0.25  # [s] a stop ramps an effort down at most at its whole range (torque limit, wrench bound) per this
+EFFORT_RANGE_S = (
+    0.25  # [s] a stop ramps an effort down at most at its whole range (torque limit, wrench bound) per this
+)
 
 
 class Refused(Exception):

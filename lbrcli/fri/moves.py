@@ -29,8 +29,9 @@ def _move_input(limits: JointLimits, scale: float, minimum_duration: float | Non
     return inp
 
 
-def _plan_to_rest(otg: Ruckig, inp: InputParameter, q_from: Sequence[float], q_to: Sequence[float],
-                  v_from: Sequence[float] | None) -> Trajectory:
+def _plan_to_rest(
+    otg: Ruckig, inp: InputParameter, q_from: Sequence[float], q_to: Sequence[float], v_from: Sequence[float] | None
+) -> Trajectory:
     """The ruckig trajectory from ``q_from`` [rad] (moving at ``v_from`` [rad/s], or at rest) to rest at ``q_to``."""
     inp.current_position = list(q_from)
     inp.current_velocity = list(v_from) if v_from is not None else [0.0] * 7
@@ -52,7 +53,9 @@ class OnlineMove:
     between the controller's extrapolation and the plan (≈ the move's acceleration × period², well inside the
     limits of a move at a fraction of them)."""
 
-    def __init__(self, limits: JointLimits, period_s: float, scale: float, minimum_duration: float | None = None) -> None:
+    def __init__(
+        self, limits: JointLimits, period_s: float, scale: float, minimum_duration: float | None = None
+    ) -> None:
         self._otg = Ruckig(7)
         self._inp = _move_input(limits, scale, minimum_duration)
         self.period_s = period_s
@@ -104,8 +107,16 @@ class ShapedMove:
     them); the move is longer by the shaper's last time. A restart from motion (``v_from``, after lost messages) is
     not shaped. ≈ 90 µs a cycle with the correction."""
 
-    def __init__(self, limits: JointLimits, period_s: float, scale: float, amplitudes: Sequence[float],
-                 times: Sequence[float], minimum_duration: float | None = None, robot: Any = None) -> None:
+    def __init__(
+        self,
+        limits: JointLimits,
+        period_s: float,
+        scale: float,
+        amplitudes: Sequence[float],
+        times: Sequence[float],
+        minimum_duration: float | None = None,
+        robot: Any = None,
+    ) -> None:
         self._otg = Ruckig(7)
         self._inp = _move_input(limits, scale, minimum_duration)
         self.period_s = period_s
@@ -195,8 +206,16 @@ def extrapolated(last: Sequence[float], before: Sequence[float], n: int, period_
     return q, tuple(a - v * period_s for a, v in zip(q, vel)), vel
 
 
-def rejoin(limits: JointLimits, period_s: float, q: Sequence[float], v: Sequence[float], rows: Sequence[Sequence[float]],
-           first: int, max_tries: int = 20, share: float = 1.0) -> tuple[list[tuple[float, ...]], int]:
+def rejoin(
+    limits: JointLimits,
+    period_s: float,
+    q: Sequence[float],
+    v: Sequence[float],
+    rows: Sequence[Sequence[float]],
+    first: int,
+    max_tries: int = 20,
+    share: float = 1.0,
+) -> tuple[list[tuple[float, ...]], int]:
     """The commands that bring the robot from ``q`` [rad] moving at ``v`` [rad/s] (where the controller's
     extrapolation left it) back onto ``rows`` in step: jerk-limited (ruckig, at the limits), ``m`` commands for rows
     ``first`` … ``first + m − 1``, the last one exactly that row (with its velocity and acceleration). Returns (the
@@ -239,4 +258,6 @@ def rejoin(limits: JointLimits, period_s: float, q: Sequence[float], v: Sequence
         if res in (Result.Working, Result.Finished) and traj.duration <= m * dt * (1 + 1e-12):
             return [tuple(traj.at_time(i * dt)[0]) for i in range(1, m)] + [tuple(b)], r + 1
         m = int(math.ceil(m * 1.25))  # (the time-optimal rejoin is not monotonic in m: no jump to its duration)
-    raise StopSession(f"messages were lost at row {first}: the rows cannot be rejoined within the limits", completed=False)
+    raise StopSession(
+        f"messages were lost at row {first}: the rows cannot be rejoined within the limits", completed=False
+    )

@@ -236,8 +236,9 @@ class TrajectoryPlayer(LBRClient):
             move.skip(n)
         elif self._queue or self._i < len(self.rows):
             first = self._i + n - len(self._queue)  # the row due now (a rejoin in progress: its rows)
-            self._queue, self._i = rejoin(self.limits, dt, q, vel, self.rows, min(first, len(self.rows)),
-                                          share=self.rejoin_share)
+            self._queue, self._i = rejoin(
+                self.limits, dt, q, vel, self.rows, min(first, len(self.rows)), share=self.rejoin_share
+            )
             self._queue.reverse()  # popped from the end
 
     def _advance(self) -> bool:

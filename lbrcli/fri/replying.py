@@ -29,6 +29,7 @@ from .outcome import EndReason, Outcome
 from .supervision import Supervisor, commanding_end
 
 from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE
+
 CLIENT_CLAMP = 1e-4  # [rad] a clamp the client is told about (``LBRClient.clamped``)
 _POSITION = int(ClientCommandMode.POSITION)
 _TORQUE = int(ClientCommandMode.TORQUE)
@@ -228,7 +229,12 @@ class Replying:
         the session ended instead (a refusal, nothing sent)."""
         motion = self._motion
         if motion is None:
-            self._finish(Outcome.REFUSED, EndReason.GUARD, "the controller did not send its send period; no command is safe", observe=True)
+            self._finish(
+                Outcome.REFUSED,
+                EndReason.GUARD,
+                "the controller did not send its send period; no command is safe",
+                observe=True,
+            )
             return False
         mode = mon.ipoData.clientCommandMode
         client = self.client

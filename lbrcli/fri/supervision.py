@@ -15,6 +15,7 @@ from .outcome import EndReason, Outcome
 from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE
 from .constants import STATE_COMMANDING_WAIT as CMD_WAIT
 from .constants import STATE_IDLE as IDLE
+
 _DRIVE_ACTIVE = int(DriveState.ACTIVE)
 _POOR = int(ConnectionQuality.POOR)
 POSITION_SLACK = 0.05  # [rad] a reported position beyond the limits by more than this is not a real robot's
@@ -51,8 +52,17 @@ def consistent(mon: Any, bound: Sequence[float]) -> bool:
     return state < CMD_WAIT or within(mon.ipoData.jointPosition.value, bound)
 
 
-def robot_side_end(mon: Any, state: int, *, seen_session: bool, commanding: bool, was_active: bool,
-                   period_key: tuple[int, int] | None, waited_s: float, commanding_timeout_s: float | None) -> End | None:
+def robot_side_end(
+    mon: Any,
+    state: int,
+    *,
+    seen_session: bool,
+    commanding: bool,
+    was_active: bool,
+    period_key: tuple[int, int] | None,
+    waited_s: float,
+    commanding_timeout_s: float | None,
+) -> End | None:
     """Why the robot side ended the session with this message (None: it did not). ``waited_s`` [s] since the
     first message, for ``commanding_timeout_s``."""
     if state == IDLE:
@@ -178,7 +188,9 @@ class Supervisor:
                     self._frozen += steps
                     limit = FROZEN_MESSAGES if not self._coarse else int(1.0 / period) + FROZEN_MESSAGES
                     if self._frozen >= limit:
-                        problem = f"the controller's timestamp stood still over {self._frozen} messages: its clock froze"
+                        problem = (
+                            f"the controller's timestamp stood still over {self._frozen} messages: its clock froze"
+                        )
                 else:
                     self._frozen = 0
                     ahead = (ts - self._ts_last) * 1e-9 - steps * period

@@ -50,8 +50,9 @@ def resolve_ip(host: str) -> str:
 class UdpTransport:
     """A bound UDP socket that receives from one controller address and answers the last sender."""
 
-    def __init__(self, robot_ip: str, port: int, bind_host: str = "", timeout_s: float = RECV_TIMEOUT_S,
-                 busy_wait_s: float = 0.0) -> None:
+    def __init__(
+        self, robot_ip: str, port: int, bind_host: str = "", timeout_s: float = RECV_TIMEOUT_S, busy_wait_s: float = 0.0
+    ) -> None:
         self.robot_ip = resolve_ip(robot_ip)
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:

@@ -35,7 +35,9 @@ class LabOptions:
         if self.baud <= 0:
             raise SettingError(LabOptions, "baud", f"must be positive, got {self.baud}")
         if not 0 <= self.pendulum_zero < 4096:
-            raise SettingError(LabOptions, "pendulum_zero", f"must be an encoder count 0..4095, got {self.pendulum_zero}")
+            raise SettingError(
+                LabOptions, "pendulum_zero", f"must be an encoder count 0..4095, got {self.pendulum_zero}"
+            )
         if not (math.isfinite(self.mqtt_rate_hz) and 0 < self.mqtt_rate_hz <= 1000):
             raise SettingError(LabOptions, "mqtt_rate_hz", f"must be in (0, 1000] Hz, got {self.mqtt_rate_hz:g}")
         if self.mqtt is not None:
@@ -49,7 +51,9 @@ class LabOptions:
         from trajectories.errors import SettingError
 
         if self.pendulum == "sim" and not embedded:
-            raise SettingError(LabOptions, "pendulum", "'sim' emulates the module in the built-in simulator; not with a robot")
+            raise SettingError(
+                LabOptions, "pendulum", "'sim' emulates the module in the built-in simulator; not with a robot"
+            )
 
 
 def snapshot(mon: Any, pendulum: PendulumReader | None) -> dict[str, Any]:
@@ -124,8 +128,11 @@ class LabAttachments:
     def summary(self) -> dict[str, Any]:
         d: dict[str, Any] = {}
         if self.pendulum is not None:
-            d.update(pendulum_lines=self.pendulum.lines, pendulum_malformed=self.pendulum.malformed,
-                     pendulum_error=self.pendulum.error)
+            d.update(
+                pendulum_lines=self.pendulum.lines,
+                pendulum_malformed=self.pendulum.malformed,
+                pendulum_error=self.pendulum.error,
+            )
         if self.publisher is not None:
             d.update(mqtt_published=self.publisher.published, mqtt_dropped=self.publisher.dropped)
         return d

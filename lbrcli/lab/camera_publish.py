@@ -48,9 +48,19 @@ def result_dict(r: LiveResult) -> dict[str, Any]:
         return float(x) if math.isfinite(x) else None
 
     return {
-        "seq": r.seq, "t_capture": r.t_capture, "t_source": f(r.t_source), "latency_s": f(r.latency_s),
-        "found": r.found, "confidence": r.confidence, "u": f(r.u), "v": f(r.v), "radius_px": f(r.radius_px),
-        "theta": f(r.theta), "theta_x": f(r.theta_x), "theta_y": f(r.theta_y), "tilt_ambiguous": r.tilt_ambiguous,
+        "seq": r.seq,
+        "t_capture": r.t_capture,
+        "t_source": f(r.t_source),
+        "latency_s": f(r.latency_s),
+        "found": r.found,
+        "confidence": r.confidence,
+        "u": f(r.u),
+        "v": f(r.v),
+        "radius_px": f(r.radius_px),
+        "theta": f(r.theta),
+        "theta_x": f(r.theta_x),
+        "theta_y": f(r.theta_y),
+        "tilt_ambiguous": r.tilt_ambiguous,
         "dropped": r.dropped,
     }
 
@@ -61,19 +71,49 @@ def encode(r: LiveResult, fmt: str = "binary") -> bytes:
         return json.dumps(result_dict(r), separators=(",", ":")).encode()
     flags = (FOUND if r.found else 0) | (THETA_VALID if math.isfinite(r.theta) else 0)
     flags |= (TILT_VALID if math.isfinite(r.theta_x) else 0) | (TILT_AMBIGUOUS if r.tilt_ambiguous else 0)
-    return struct.pack(FORMAT, MAGIC, VERSION, flags, r.seq & 0xFFFFFFFF, r.t_capture, r.t_source, r.latency_s, r.u,
-                       r.v, r.radius_px, r.confidence, r.theta, r.theta_x, r.theta_y, r.dropped & 0xFFFFFFFF)
+    return struct.pack(
+        FORMAT,
+        MAGIC,
+        VERSION,
+        flags,
+        r.seq & 0xFFFFFFFF,
+        r.t_capture,
+        r.t_source,
+        r.latency_s,
+        r.u,
+        r.v,
+        r.radius_px,
+        r.confidence,
+        r.theta,
+        r.theta_x,
+        r.theta_y,
+        r.dropped & 0xFFFFFFFF,
+    )
 
 
 def decode(data: bytes) -> dict[str, Any]:
     """A binary datagram back to a dict (ValueError if it is not one)."""
     if len(data) != SIZE or data[:4] != MAGIC:
         raise ValueError(f"not an LBRC datagram ({len(data)} bytes)")
-    (_, version, flags, seq, t_cap, t_src, lat, u, v, radius, conf, theta, tx, ty, dropped) = struct.unpack(FORMAT, data)
+    (_, version, flags, seq, t_cap, t_src, lat, u, v, radius, conf, theta, tx, ty, dropped) = struct.unpack(
+        FORMAT, data
+    )
     return {
-        "version": version, "seq": seq, "t_capture": t_cap, "t_source": t_src, "latency_s": lat, "found": bool(flags & FOUND),
-        "confidence": conf, "u": u, "v": v, "radius_px": radius, "theta": theta, "theta_x": tx, "theta_y": ty,
-        "tilt_ambiguous": bool(flags & TILT_AMBIGUOUS), "dropped": dropped,
+        "version": version,
+        "seq": seq,
+        "t_capture": t_cap,
+        "t_source": t_src,
+        "latency_s": lat,
+        "found": bool(flags & FOUND),
+        "confidence": conf,
+        "u": u,
+        "v": v,
+        "radius_px": radius,
+        "theta": theta,
+        "theta_x": tx,
+        "theta_y": ty,
+        "tilt_ambiguous": bool(flags & TILT_AMBIGUOUS),
+        "dropped": dropped,
     }
 
 

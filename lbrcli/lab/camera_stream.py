@@ -70,8 +70,14 @@ class CameraServer:
     t_k of every frame served, so a test can pair the tracker's results with the truth.
     """
 
-    def __init__(self, scene: Scene, config: CameraConfig | None = None, host: str = "127.0.0.1", port: int = 0,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(
+        self,
+        scene: Scene,
+        config: CameraConfig | None = None,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
         if host not in ("127.0.0.1", "localhost", "::1"):
             raise ValueError("the simulated camera serves on loopback only")
         self.scene = scene
@@ -152,7 +158,9 @@ class CameraServer:
 
     # ------------------------------------------------------------------ rendering
 
-    def render(self, t: float, rng: np.random.Generator | None = None, background: np.ndarray | None = None) -> np.ndarray:
+    def render(
+        self, t: float, rng: np.random.Generator | None = None, background: np.ndarray | None = None
+    ) -> np.ndarray:
         """The BGR frame showing the scene at time t [s] (the exposure centred on t): the backdrop, the flange, string
         and ball drawn on it, sensor noise (a bank of 8 fields drawn once: drawing a field costs ≈ 9 ms at VGA) and a
         slight blur. The backdrop with each noise field is blurred once; per frame only the region of the drawing is
@@ -251,14 +259,17 @@ class CameraServer:
         sent = -1
         while not self._stop.is_set():
             with self._cond:
-                self._cond.wait_for(lambda: self._stop.is_set() or (self._latest is not None and self._latest[0] != sent),
-                                    timeout=1.0)
+                self._cond.wait_for(
+                    lambda: self._stop.is_set() or (self._latest is not None and self._latest[0] != sent), timeout=1.0
+                )
                 if self._stop.is_set() or self._latest is None or self._latest[0] == sent:
                     continue
                 sent, jpg = self._latest
             try:
                 wfile.write(
-                    f"--{BOUNDARY}\r\nContent-Type: image/jpeg\r\nContent-Length: {len(jpg)}\r\n\r\n".encode() + jpg + b"\r\n"
+                    f"--{BOUNDARY}\r\nContent-Type: image/jpeg\r\nContent-Length: {len(jpg)}\r\n\r\n".encode()
+                    + jpg
+                    + b"\r\n"
                 )
                 wfile.flush()
             except (BrokenPipeError, ConnectionResetError, socket.error):

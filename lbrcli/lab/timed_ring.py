@@ -19,7 +19,9 @@ class TimedRing:
         self.rows, self.width = rows, width
         self.buffer = bytearray(self.nbytes(rows, width)) if buffer is None else buffer
         self._count = np.frombuffer(self.buffer, dtype=np.int64, count=1)
-        self._data = np.frombuffer(self.buffer, dtype=np.float64, offset=8, count=rows * (1 + width)).reshape(rows, 1 + width)
+        self._data = np.frombuffer(self.buffer, dtype=np.float64, offset=8, count=rows * (1 + width)).reshape(
+            rows, 1 + width
+        )
 
     @staticmethod
     def nbytes(rows: int, width: int) -> int:

@@ -93,7 +93,9 @@ class Ball:
         self._axis_f = self.model.axis_flange
         p0 = tuple(float(x) for x in tcp0)
         self.stepper = StringStepper(self.model, p0, self._axis(rotation0))
-        self.stepper.t = -2.0 * period_s  # the first cycle advances the ball over [−2h, −h]: event times on the TCP's clock
+        self.stepper.t = (
+            -2.0 * period_s
+        )  # the first cycle advances the ball over [−2h, −h]: event times on the TCP's clock
         self._tcp_acc = TcpAcceleration(period_s, tcp0)
         self._acc_prev = (0.0, 0.0, 0.0)  # TCP acceleration at the sample before [m/s²]
         self._p_prev = p0  # TCP position at the sample before [m]
@@ -109,8 +111,11 @@ class Ball:
     def _axis(self, rotation) -> tuple[float, float, float]:
         a = self._axis_f
         r = rotation
-        return (r[0][0] * a[0] + r[0][1] * a[1] + r[0][2] * a[2], r[1][0] * a[0] + r[1][1] * a[1] + r[1][2] * a[2],
-                r[2][0] * a[0] + r[2][1] * a[1] + r[2][2] * a[2])
+        return (
+            r[0][0] * a[0] + r[0][1] * a[1] + r[0][2] * a[2],
+            r[1][0] * a[0] + r[1][1] * a[1] + r[1][2] * a[2],
+            r[2][0] * a[0] + r[2][1] * a[1] + r[2][2] * a[2],
+        )
 
     def step(self, t: float, tcp: Sequence[float], rotation=None) -> list[float]:
         acc = self._tcp_acc.push(tcp)  # at the previous sample [m/s²]
@@ -163,9 +168,16 @@ class Ball:
             from planners.catch_outcome import outcome
 
             o = outcome(self.stepper.events, self.stepper.resting, self.stepper.inside)
-            out["cup"] = {"caught": o.caught, "entered_s": o.t_entry, "rest_s": o.t_rest, "released_s": o.t_release,
-                          "entry_margin_m": o.margin, "relative_entry_speed_m_s": o.relative_speed,
-                          "failure": o.failure, "in_cup_at_end": self.stepper.inside}
+            out["cup"] = {
+                "caught": o.caught,
+                "entered_s": o.t_entry,
+                "rest_s": o.t_rest,
+                "released_s": o.t_release,
+                "entry_margin_m": o.margin,
+                "relative_entry_speed_m_s": o.relative_speed,
+                "failure": o.failure,
+                "in_cup_at_end": self.stepper.inside,
+            }
         return out
 
     def close(self) -> None:

@@ -34,7 +34,9 @@ class PendulumModuleSpec:
         self.validate()
         ball = next((p for p in context.plants if isinstance(p, Ball)), None)
         if ball is None:
-            raise SettingError(PendulumModuleSpec, "ball", "the pendulum module emulation needs a simulated ball before it")
+            raise SettingError(
+                PendulumModuleSpec, "ball", "the pendulum module emulation needs a simulated ball before it"
+            )
         module = PendulumModule(self, ball, context.period_s)
         module._emu.settle_s = LOCKSTEP_SETTLE_S if context.lockstep else 0.0
         return module

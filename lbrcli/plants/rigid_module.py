@@ -66,13 +66,17 @@ class RigidModuleSpec:
             raise SettingError(RigidModuleSpec, "phi0", "the pendulum's start angle and rate must be finite")
         for t, d in self.pushes:
             if not (math.isfinite(t) and t >= 0 and math.isfinite(d)):
-                raise SettingError(RigidModuleSpec, "pushes", f"need a time >= 0 s and a finite angle, got {t:g} s, {d:g} rad")
+                raise SettingError(
+                    RigidModuleSpec, "pushes", f"need a time >= 0 s and a finite angle, got {t:g} s, {d:g} rad"
+                )
         if not 0 <= self.noise_counts <= 100:
             raise SettingError(RigidModuleSpec, "noise_counts", f"must be 0..100 counts, got {self.noise_counts}")
         if self.sign not in (1, -1):
             raise SettingError(RigidModuleSpec, "sign", f"must be 1 or -1, got {self.sign}")
         if not 0 <= self.zero_count < COUNTS:
-            raise SettingError(RigidModuleSpec, "zero_count", f"must be an encoder count 0..4095, got {self.zero_count}")
+            raise SettingError(
+                RigidModuleSpec, "zero_count", f"must be an encoder count 0..4095, got {self.zero_count}"
+            )
 
     def build(self, context) -> "RigidModule":
         self.validate()
@@ -99,8 +103,10 @@ class RigidModule:
         down = np.array([0.0, 0.0, -1.0])
         u = down - n_world * float(n_world @ down)
         if np.linalg.norm(u) < 0.2:  # the axis is within ≈ 11° of vertical: the rod would not hang
-            raise OptionError("the pendulum module's axis is (nearly) vertical at the start pose: the rod cannot swing; "
-                              "start with the flange horizontal (e.g. the thesis start pose)")
+            raise OptionError(
+                "the pendulum module's axis is (nearly) vertical at the start pose: the rod cannot swing; "
+                "start with the flange horizontal (e.g. the thesis start pose)"
+            )
         u /= np.linalg.norm(u)
         self._n = n.tolist()  # axis, TCP frame
         self._u = (rotation0.T @ u).tolist()  # encoder zero, TCP frame
@@ -171,8 +177,12 @@ class RigidModule:
         return {"pendulum_path": self._emu.path}
 
     def figures(self) -> dict:
-        return {"lines_sent": self._emu.sent, "lines_dropped": self._emu.dropped,
-                "max_abs_phi_deg": math.degrees(self.max_abs_phi), "final_phi_deg": math.degrees(self.phi)}
+        return {
+            "lines_sent": self._emu.sent,
+            "lines_dropped": self._emu.dropped,
+            "max_abs_phi_deg": math.degrees(self.max_abs_phi),
+            "final_phi_deg": math.degrees(self.phi),
+        }
 
     def close(self) -> None:
         self._emu.close()

@@ -19,8 +19,11 @@ class TcpAcceleration:
     def push(self, tcp: Sequence[float]) -> tuple[float, float, float]:
         """The TCP at this cycle [m] → its acceleration at the previous sample [m/s²]."""
         p0, p1, p2, ih2 = tcp, self._p0, self._p1, self._ih2
-        acc = ((p0[0] - 2.0 * p1[0] + p2[0]) * ih2, (p0[1] - 2.0 * p1[1] + p2[1]) * ih2,
-               (p0[2] - 2.0 * p1[2] + p2[2]) * ih2)
+        acc = (
+            (p0[0] - 2.0 * p1[0] + p2[0]) * ih2,
+            (p0[1] - 2.0 * p1[1] + p2[1]) * ih2,
+            (p0[2] - 2.0 * p1[2] + p2[2]) * ih2,
+        )
         self._p0, self._p1 = list(p0), p1
         return acc
 

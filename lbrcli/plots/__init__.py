@@ -54,5 +54,7 @@ def limits_phrase(report) -> str:
     text = f"{checked}{scaled}: {status} (peaks {peaks} %"
     text += f", jerk {peak['jerk']:.0f} %)" if report.jerk_enforced else ")"
     if not report.jerk_enforced:
-        text += f"; jerk {peak['jerk']:.0f} % of its limit" + (" — NOT checked" if peak["jerk"] > 100 else ", not checked")
+        text += f"; jerk {peak['jerk']:.0f} % of its limit" + (
+            " — NOT checked" if peak["jerk"] > 100 else ", not checked"
+        )
     return text

@@ -32,12 +32,22 @@ def plot_antisway(result, path: str | Path) -> None:
     for ob in result.obstacles:
         w, h = ob.upper[0] - ob.lower[0], ob.upper[1] - ob.lower[1]
         top.add_patch(Rectangle(ob.lower[:2], w, h, color="tab:red", alpha=0.35))
-        top.annotate(f"{ob.name} (z {ob.lower[2]:.2f}–{ob.upper[2]:.2f} m)", (ob.lower[0], ob.upper[1]),
-                     fontsize=8, color="tab:red")
+        top.annotate(
+            f"{ob.name} (z {ob.lower[2]:.2f}–{ob.upper[2]:.2f} m)",
+            (ob.lower[0], ob.upper[1]),
+            fontsize=8,
+            color="tab:red",
+        )
     if result.obstacles:
         c = band.clearance
-        top.plot([c.position[0]], [c.position[1]], "x", color="tab:red", ms=8,
-                 label=f"least clearance {c.clearance * 1000:.0f} mm ({c.obstacle})")
+        top.plot(
+            [c.position[0]],
+            [c.position[1]],
+            "x",
+            color="tab:red",
+            ms=8,
+            label=f"least clearance {c.clearance * 1000:.0f} mm ({c.obstacle})",
+        )
     top.legend(fontsize=7, loc="best")
     ends = np.array([plan.segments[0].start] + [s.end for s in plan.segments])
     top.plot(ends[:, 0], ends[:, 1], "o", color="k", ms=5)
@@ -70,8 +80,14 @@ def plot_antisway(result, path: str | Path) -> None:
     sway.plot(run.t, unwrap_deg(run.theta_y), lw=1.0, ls="--", color="tab:orange", label="θy (toward +y)", zorder=3)
     if band is not None and len(band.lengths) > 1:
         env = np.max([np.degrees(r.theta) for r in band.runs], axis=0)
-        sway.plot(band.runs[0].t, env, lw=0.8, ls="--", color="tab:purple",
-                  label=f"worst tilt, string ±{plan.options.length_tolerance * 100:g} %")
+        sway.plot(
+            band.runs[0].t,
+            env,
+            lw=0.8,
+            ls="--",
+            color="tab:purple",
+            label=f"worst tilt, string ±{plan.options.length_tolerance * 100:g} %",
+        )
     if result.max_sway is not None:
         sway.axhline(np.degrees(result.max_sway), ls="-.", lw=0.8, color="tab:red", label="--max-sway")
     sway.axvline(result.stop_time, ls=":", color="tab:red", lw=1.0, label="last stop")
@@ -91,4 +107,3 @@ def plot_antisway(result, path: str | Path) -> None:
     )
     fig.tight_layout()
     save_figure(fig, path, dpi=110)
-

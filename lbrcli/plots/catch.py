@@ -15,7 +15,9 @@ PHASE_STYLE = {0: ("taut", "tab:blue"), 1: ("slack (free flight)", "tab:orange")
 def cup_outline(anchor: np.ndarray, cup) -> np.ndarray:
     """(m, 2) y–z outline [m] of the cup's cross-section (in its plane through the axis) for an upright cup."""
     ri, ro, rim, zb = cup.inner_radius, cup.outer_radius, cup.rim_height, cup.bottom_height
-    pts = np.array([(-ri, rim), (-ri, zb), (ri, zb), (ri, rim), (ro, rim), (ro, 0.0), (-ro, 0.0), (-ro, rim), (-ri, rim)])
+    pts = np.array(
+        [(-ri, rim), (-ri, zb), (ri, zb), (ri, rim), (ro, rim), (ro, 0.0), (-ro, 0.0), (-ro, rim), (-ri, rim)]
+    )
     return pts + anchor[None, :]
 
 
@@ -42,8 +44,11 @@ def plot_catch(result, path: str | Path) -> None:
     ax.plot(anchor[:, 0], anchor[:, 1], color="k", lw=1.0, label="string anchor (cup bottom)")
     ax.plot(anchor[:, 0], anchor[:, 1] + m.cup.rim_height, color="0.5", lw=0.8, ls="--", label="rim centre")
     n = result.nominal
-    marks = [(n.t_release, "release"), (n.t_entry or n.t_crossing, "entry" if n.t_entry else "at the rim height"),
-             (float(run.t[-1]), "end")]
+    marks = [
+        (n.t_release, "release"),
+        (n.t_entry or n.t_crossing, "entry" if n.t_entry else "at the rim height"),
+        (float(run.t[-1]), "end"),
+    ]
     for t_mark, label in marks:
         if t_mark is None:
             continue
@@ -62,7 +67,9 @@ def plot_catch(result, path: str | Path) -> None:
         ax.plot(run.t, ball[:, k], color="tab:red", ls=ls, lw=1.0, label=f"ball {name}")
         ax.plot(run.t, anchor[:, k], color="k", ls=ls, lw=1.0, label=f"anchor {name}")
     for code, (label, color) in PHASE_STYLE.items():
-        ax.fill_between(run.t, -1, 1, where=run.phase == code, color=color, alpha=0.12, transform=ax.get_xaxis_transform())
+        ax.fill_between(
+            run.t, -1, 1, where=run.phase == code, color=color, alpha=0.12, transform=ax.get_xaxis_transform()
+        )
     ax.set_ylabel("position [m]")
     ax.legend(fontsize=8, ncol=4, loc="upper left")
 
@@ -77,8 +84,11 @@ def plot_catch(result, path: str | Path) -> None:
     ax.legend(fontsize=8, loc="upper left")
 
     rb = result.band
-    state = (f"caught: enters {n.t_entry:.2f} s, margin {1e3 * n.margin:.0f} mm, {n.relative_speed:.2f} m/s"
-             if n.caught else f"NOT caught: {n.failure}")
+    state = (
+        f"caught: enters {n.t_entry:.2f} s, margin {1e3 * n.margin:.0f} mm, {n.relative_speed:.2f} m/s"
+        if n.caught
+        else f"NOT caught: {n.failure}"
+    )
     fig.suptitle(
         f"cup-and-ball: l = {m.length:g} m, cup r = {1e3 * m.cup.inner_radius:.0f} mm, ball r = "
         f"{1e3 * m.ball.radius:.0f} mm — {state}\nband (l ±{100 * r.length_tol:g} %, m ±{100 * r.mass_tol:g} %"

@@ -34,14 +34,24 @@ def plot_check(report, path: str | Path, title: str = "") -> None:
                 ax.plot(t, data[:, j], lw=1.0, color="tab:blue", zorder=2)
                 over = np.abs(data[:, j]) > lim
                 if over.any():
-                    ax.plot(t[over], data[over, j], ".", ms=2.5, color="tab:red" if enforced else "tab:orange", zorder=3)
+                    ax.plot(
+                        t[over], data[over, j], ".", ms=2.5, color="tab:red" if enforced else "tab:orange", zorder=3
+                    )
             ax.axhline(lim, ls="--", lw=0.8, color="k", zorder=1)
             ax.axhline(-lim, ls="--", lw=0.8, color="k", zorder=1)
             ax.set_ylabel(f"A{j + 1} [{unit}]", fontsize=8)
             ax.tick_params(labelsize=7)
             ax.grid(alpha=0.3)
-            ax.text(0.99, 0.95, f"{100 * peaks[qname][j]:.0f} %", transform=ax.transAxes, ha="right", va="top",
-                    fontsize=7, color="tab:red" if peaks[qname][j] > 1 and enforced else "0.3")
+            ax.text(
+                0.99,
+                0.95,
+                f"{100 * peaks[qname][j]:.0f} %",
+                transform=ax.transAxes,
+                ha="right",
+                va="top",
+                fontsize=7,
+                color="tab:red" if peaks[qname][j] > 1 and enforced else "0.3",
+            )
             if j == 0:
                 note = "" if enforced else " — reported, not checked (--jerk)"
                 ax.set_title(f"joint {qname}{note}", fontsize=9)

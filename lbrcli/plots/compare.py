@@ -31,10 +31,24 @@ def plot_compare(
     fig, (ax, ax_err) = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
     # the experiment wide and light underneath, the model thin and dashed on top: both stay visible where they agree
     if t_meas is not None and theta_meas is not None:
-        ax.plot(np.asarray(t_meas) - cmp.lag_s, unwrap_deg(theta_meas), color="tab:orange", lw=1.0, alpha=0.35,
-                zorder=1, label="experiment outside the overlap")
-    ax.plot(cmp.t - cmp.lag_s, unwrap_deg(cmp.measured), color="tab:orange", lw=3.0, alpha=0.75, zorder=2,
-            label="experiment (track)")
+        ax.plot(
+            np.asarray(t_meas) - cmp.lag_s,
+            unwrap_deg(theta_meas),
+            color="tab:orange",
+            lw=1.0,
+            alpha=0.35,
+            zorder=1,
+            label="experiment outside the overlap",
+        )
+    ax.plot(
+        cmp.t - cmp.lag_s,
+        unwrap_deg(cmp.measured),
+        color="tab:orange",
+        lw=3.0,
+        alpha=0.75,
+        zorder=2,
+        label="experiment (track)",
+    )
     ax.plot(t_model, unwrap_deg(theta_model), color="tab:blue", lw=1.3, ls="--", zorder=3, label="model (prediction)")
     ax.set_ylabel("θ [deg]")
     ax.grid(alpha=0.3)

@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 
 
-def mask_degenerate(planar: np.ndarray, theta: np.ndarray, phi: np.ndarray, axis: str,
-                    min_projection: float = 0.2) -> np.ndarray:
+def mask_degenerate(
+    planar: np.ndarray, theta: np.ndarray, phi: np.ndarray, axis: str, min_projection: float = 0.2
+) -> np.ndarray:
     """NaN where the planar swing angle θx (axis 'x') or θy ('y') is undefined: the string's projection onto that
     vertical plane is shorter than ``min_projection`` of its length (the string nearly perpendicular to the
     plane, e.g. θx while the ball swings over the top in the y–z plane). θ tilt, φ azimuth [rad]."""
@@ -68,8 +69,15 @@ def plot_execution(log_path: str | Path, path: str | Path, title: str = "") -> N
                 planar = tab.column(name)
                 if tab.has("ball_phi"):
                     planar = mask_degenerate(planar, theta, tab.column("ball_phi"), axis=name[-1])
-                ax.plot(t, unwrap_deg(planar), lw=1.0, ls=style, color=color, zorder=2,
-                        label=name.replace("ball_", "") + " (unwrapped)")
+                ax.plot(
+                    t,
+                    unwrap_deg(planar),
+                    lw=1.0,
+                    ls=style,
+                    color=color,
+                    zorder=2,
+                    label=name.replace("ball_", "") + " (unwrapped)",
+                )
         ax.set_ylabel("ball sway [deg]")
         ax.legend(fontsize=7, title="θx, θy blank where the string is perpendicular to their plane", title_fontsize=7)
         ax.grid(alpha=0.3)

@@ -22,8 +22,15 @@ def plot_swingup(result, path: str | Path) -> None:
     fig, axes = plt.subplots(5, 1, figsize=(10, 13), sharex=True)
 
     ax = axes[0]
-    ax.plot(ver.t, unwrap_deg(ver.theta), lw=2.2, color="tab:blue", alpha=0.6, zorder=2,
-            label="verified (ball simulated under the joint path)")
+    ax.plot(
+        ver.t,
+        unwrap_deg(ver.theta),
+        lw=2.2,
+        color="tab:blue",
+        alpha=0.6,
+        zorder=2,
+        label="verified (ball simulated under the joint path)",
+    )
     ax.plot(plan.t, unwrap_deg(plan.theta), lw=1.0, ls="--", color="k", zorder=3, label="planned (planar model)")
     for sign in (1, -1):
         ax.axhline(sign * math.degrees(r.theta_d), color="k", ls=":", lw=0.8)
@@ -57,8 +64,14 @@ def plot_swingup(result, path: str | Path) -> None:
             ax.plot(t, ratio[:, j], lw=0.8, label=f"A{j + 1}")
         if qname == "acceleration":
             jr = (np.abs(rep.series["jerk"]) / rep.limits["jerk"][None, :]).max(axis=1) * 100
-            ax.plot(t, jr, color="k", lw=0.6, ls="--",
-                    label="jerk (max joint)" + ("" if rep.jerk_enforced else ", not checked"))
+            ax.plot(
+                t,
+                jr,
+                color="k",
+                lw=0.6,
+                ls="--",
+                label="jerk (max joint)" + ("" if rep.jerk_enforced else ", not checked"),
+            )
         ax.axhline(100, color="tab:red", lw=1.0)
         ax.set_ylabel(f"|joint {qname}| / limit [%]")
         ax.legend(fontsize=7, ncol=8, loc="upper left")

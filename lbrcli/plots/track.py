@@ -40,6 +40,8 @@ def plot_track(track, path: str | Path, title: str = "") -> None:
         axes[0].vlines(t[lost], ymin, ymax, colors="tab:red", lw=0.5, alpha=0.4)
     axes[-1].set_xlabel("t [s]")
     found_pct = 100.0 * (1.0 - lost.mean()) if len(lost) else 0.0
-    fig.suptitle(f"{title} — ball found in {found_pct:.1f} % of {len(t)} frames" if title else f"found {found_pct:.1f} %")
+    fig.suptitle(
+        f"{title} — ball found in {found_pct:.1f} % of {len(t)} frames" if title else f"found {found_pct:.1f} %"
+    )
     fig.tight_layout()
     save_figure(fig, path, dpi=110)

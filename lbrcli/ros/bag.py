@@ -31,10 +31,12 @@ from trajectories.trajectory import N_JOINTS
 from . import msgs
 from .cdr import Layout, stamps
 
-LATCHED_QOS = ("- history: keep_last\n  depth: 1\n  reliability: reliable\n  durability: transient_local\n"
-               "  deadline:\n    sec: 0\n    nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n"
-               "  liveliness: automatic\n  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n"
-               "  avoid_ros_namespace_conventions: false\n")
+LATCHED_QOS = (
+    "- history: keep_last\n  depth: 1\n  reliability: reliable\n  durability: transient_local\n"
+    "  deadline:\n    sec: 0\n    nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n"
+    "  liveliness: automatic\n  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n"
+    "  avoid_ros_namespace_conventions: false\n"
+)
 
 
 @dataclass(frozen=True)
@@ -70,8 +72,8 @@ def read_log_series(table) -> LogSeries:
     def joints(prefix: str) -> np.ndarray:  # (n, 7): a view of the table when the columns are in order
         names = tuple(f"{prefix}{i}" for i in range(1, N_JOINTS + 1))
         first = table.names.index(names[0])
-        if table.names[first:first + N_JOINTS] == names:
-            return table.data[:, first:first + N_JOINTS]
+        if table.names[first : first + N_JOINTS] == names:
+            return table.data[:, first : first + N_JOINTS]
         return np.column_stack([table.column(name) for name in names])
 
     direction = None
@@ -83,8 +85,18 @@ def read_log_series(table) -> LogSeries:
     if table.has("phase") and table.has("row"):
         rows = np.flatnonzero((table.column("phase") == 2) & (table.column("row") == 0))
         start = int(ns[rows[0]]) if rows.size else None
-    return LogSeries(ns, clock, joints("cmd_q"), joints("msr_q"), joints("ipo_q"), joints("msr_tau"),
-                     joints("cmd_tau") if table.has("cmd_tau1") else None, joints("ext_tau"), direction, start)
+    return LogSeries(
+        ns,
+        clock,
+        joints("cmd_q"),
+        joints("msr_q"),
+        joints("ipo_q"),
+        joints("msr_tau"),
+        joints("cmd_tau") if table.has("cmd_tau1") else None,
+        joints("ext_tau"),
+        direction,
+        start,
+    )
 
 
 def joint_transforms(robot, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -117,8 +129,12 @@ def chain_positions(trans: np.ndarray, quat: np.ndarray, tip: np.ndarray) -> np.
     for i in range(1, len(trans)):
         p = tuple(a + b for a, b in zip(p, _rotate(x, y, z, w, trans[i])))
         bx, by, bz, bw = quat[:, i].T
-        x, y, z, w = (w * bx + x * bw + y * bz - z * by, w * by - x * bz + y * bw + z * bx,
-                      w * bz + x * by - y * bx + z * bw, w * bw - x * bx - y * by - z * bz)
+        x, y, z, w = (
+            w * bx + x * bw + y * bz - z * by,
+            w * by - x * bz + y * bw + z * bx,
+            w * bz + x * by - y * bx + z * bw,
+            w * bw - x * bx - y * by - z * bz,
+        )
     return np.column_stack([a + b for a, b in zip(p, _rotate(x, y, z, w, tip))])
 
 
@@ -142,8 +158,15 @@ class Bag:
             self.counts[topic] = 0
         return self.channels[topic]
 
-    def write(self, topic: str, short_type: str, times_ns: np.ndarray, message: Layout | bytes,
-              values: dict[str, np.ndarray] | None = None, latched: bool = False) -> None:
+    def write(
+        self,
+        topic: str,
+        short_type: str,
+        times_ns: np.ndarray,
+        message: Layout | bytes,
+        values: dict[str, np.ndarray] | None = None,
+        latched: bool = False,
+    ) -> None:
         """Messages at ``times_ns``: a layout with its slots' ``values`` (arrays over the messages or constants), or
         one message's bytes."""
         layout = message if isinstance(message, Layout) else Layout(bytearray(message))
@@ -159,8 +182,9 @@ class Bag:
 
 
 def _joint_state_topic(bag: Bag, topic: str, names, ns, stamp, position=None, velocity=None, effort=None):
-    layout = msgs.joint_state(names, position=position is not None, velocity=velocity is not None,
-                              effort=effort is not None)
+    layout = msgs.joint_state(
+        names, position=position is not None, velocity=velocity is not None, effort=effort is not None
+    )
     values = {"stamp": stamp}
     for key, arr in (("position", position), ("velocity", velocity), ("effort", effort)):
         if arr is not None:
@@ -168,8 +192,9 @@ def _joint_state_topic(bag: Bag, topic: str, names, ns, stamp, position=None, ve
     bag.write(topic, "sensor_msgs/JointState", ns, layout, values)
 
 
-def write_tf(bag: Bag, robot, prefix: str, ns: np.ndarray, trans: np.ndarray, quat: np.ndarray,
-             ball: np.ndarray | None = None) -> None:
+def write_tf(
+    bag: Bag, robot, prefix: str, ns: np.ndarray, trans: np.ndarray, quat: np.ndarray, ball: np.ndarray | None = None
+) -> None:
     """/tf of the arm (the joint transforms of :func:`joint_transforms`) and the ball's frame, /tf_static of the
     flange and TCP (at the first time)."""
     from scipy.spatial.transform import Rotation
@@ -201,10 +226,10 @@ def write_log(bag: Bag, series: LogSeries, robot, prefix: str, length: float) ->
     names = joint_names(prefix)
     ns = series.time_ns
     stamp = stamps(ns)
-    _joint_state_topic(bag, f"/{prefix}/joint_states", names, ns, stamp, position=series.msr_q,
-                       effort=series.msr_tau)
-    _joint_state_topic(bag, f"/{prefix}/command/joint_states", names, ns, stamp, position=series.cmd_q,
-                       effort=series.cmd_tau)
+    _joint_state_topic(bag, f"/{prefix}/joint_states", names, ns, stamp, position=series.msr_q, effort=series.msr_tau)
+    _joint_state_topic(
+        bag, f"/{prefix}/command/joint_states", names, ns, stamp, position=series.cmd_q, effort=series.cmd_tau
+    )
     _joint_state_topic(bag, f"/{prefix}/ipo/joint_states", names, ns, stamp, position=series.ipo_q)
     _joint_state_topic(bag, f"/{prefix}/external_torque", names, ns, stamp, effort=series.ext_tau)
     trans, quat = joint_transforms(robot, series.msr_q)
@@ -212,8 +237,13 @@ def write_log(bag: Bag, series: LogSeries, robot, prefix: str, length: float) ->
     if series.ball_direction is not None:
         tcp = chain_positions(trans, quat, robot.model.frames[robot.tcp_id].placement.translation)
         ball = tcp + length * series.ball_direction
-        bag.write(f"/{prefix}/ball", "geometry_msgs/PointStamped", ns, msgs.point_stamped(link_names(prefix)[0]),
-                  {"stamp": stamp, "point": ball})
+        bag.write(
+            f"/{prefix}/ball",
+            "geometry_msgs/PointStamped",
+            ns,
+            msgs.point_stamped(link_names(prefix)[0]),
+            {"stamp": stamp, "point": ball},
+        )
     write_tf(bag, robot, prefix, ns, trans, quat, ball)
 
 
@@ -228,14 +258,16 @@ def write_plan(bag: Bag, t: np.ndarray, q: np.ndarray, robot, prefix: str, start
     ns = start_ns + np.round(t * 1e9).astype(np.int64)
     _joint_state_topic(bag, f"/{prefix}/plan/joint_states", names, ns, stamps(ns), position=q, velocity=qd)
     message = msgs.joint_trajectory(names, t, q, qd, qdd)
-    bag.write(f"/{prefix}/joint_trajectory_controller/joint_trajectory", "trajectory_msgs/JointTrajectory",
-              ns[:1], message)
+    bag.write(
+        f"/{prefix}/joint_trajectory_controller/joint_trajectory", "trajectory_msgs/JointTrajectory", ns[:1], message
+    )
     if with_tf:
         write_tf(bag, robot, prefix, ns, *joint_transforms(robot, q))
 
 
 def write_description(bag: Bag, urdf: str, prefix: str, time_ns: int) -> None:
     """The URDF as a latched std_msgs/String and as the attachment robot_description.urdf."""
-    bag.write(f"/{prefix}/robot_description", "std_msgs/String", np.array([time_ns]), msgs.string_message(urdf),
-              latched=True)
+    bag.write(
+        f"/{prefix}/robot_description", "std_msgs/String", np.array([time_ns]), msgs.string_message(urdf), latched=True
+    )
     bag.attach("robot_description.urdf", "application/xml", urdf.encode(), time_ns)

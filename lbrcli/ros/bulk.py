@@ -25,8 +25,18 @@ from typing import BinaryIO
 import numpy as np
 from mcap.data_stream import RecordBuilder
 from mcap.opcode import Opcode
-from mcap.records import (Attachment, AttachmentIndex, Channel, ChunkIndex, DataEnd, Footer, Header, Schema,
-                          Statistics, SummaryOffset)
+from mcap.records import (
+    Attachment,
+    AttachmentIndex,
+    Channel,
+    ChunkIndex,
+    DataEnd,
+    Footer,
+    Header,
+    Schema,
+    Statistics,
+    SummaryOffset,
+)
 from mcap.writer import LIBRARY_IDENTIFIER, MCAP0_MAGIC
 
 CHUNK_BYTES = 1 << 20  # [bytes] uncompressed chunk size aimed at: the default of the mcap libraries (C++, Rust, Python)
@@ -121,8 +131,16 @@ class _Chunks:
         chunk = np.concatenate([[0], np.cumsum(np.diff(chunk) > 0)])  # renumbered 0.. (a big row spans several)
         firsts = np.flatnonzero(np.r_[True, np.diff(chunk) > 0])
         lasts = np.r_[firsts[1:], len(chunk)] - 1
-        return cls(times, gid, row, chunk, start - start[firsts][chunk], firsts, lasts,
-                   (start[lasts] + size[lasts] - start[firsts]).tolist())
+        return cls(
+            times,
+            gid,
+            row,
+            chunk,
+            start - start[firsts][chunk],
+            firsts,
+            lasts,
+            (start[lasts] + size[lasts] - start[firsts]).tolist(),
+        )
 
     def runs(self):
         """(chunk, group, first row, end row, whether the chunk ends with it) of the runs of consecutive rows of one
@@ -142,9 +160,10 @@ class _Chunks:
             bounds = np.searchsorted(self.chunk[mine], np.arange(len(self.firsts) + 1))
             for s, at in zip(series, g.record_offsets.tolist()):
                 for c in np.flatnonzero(np.diff(bounds)).tolist():
-                    sel = mine[bounds[c]:bounds[c + 1]]
-                    indexes[c].append((s.channel_id, _message_index(s.channel_id, self.times[sel],
-                                                                    self.offset[sel] + at)))
+                    sel = mine[bounds[c] : bounds[c + 1]]
+                    indexes[c].append(
+                        (s.channel_id, _message_index(s.channel_id, self.times[sel], self.offset[sel] + at))
+                    )
         return indexes
 
 
@@ -195,8 +214,15 @@ class BulkWriter:
         return self.schemas[-1].id
 
     def channel(self, topic: str, message_encoding: str, schema_id: int, metadata: dict[str, str] | None = None) -> int:
-        self.channels.append(Channel(id=len(self.channels) + 1, topic=topic, message_encoding=message_encoding,
-                                     schema_id=schema_id, metadata=dict(metadata or {})))
+        self.channels.append(
+            Channel(
+                id=len(self.channels) + 1,
+                topic=topic,
+                message_encoding=message_encoding,
+                schema_id=schema_id,
+                metadata=dict(metadata or {}),
+            )
+        )
         return self.channels[-1].id
 
     def add(self, channel_id: int, times: np.ndarray, template: bytes, slots=None, values=None) -> None:
@@ -209,15 +235,17 @@ class BulkWriter:
         self.series.append(Series(channel_id, times, bytes(template), dict(slots or {}), dict(values or {})))
 
     def attach(self, name: str, media_type: str, data: bytes, log_time: int, create_time: int) -> None:
-        self.attachments.append(Attachment(create_time=create_time, log_time=log_time, name=name,
-                                           media_type=media_type, data=data))
+        self.attachments.append(
+            Attachment(create_time=create_time, log_time=log_time, name=name, media_type=media_type, data=data)
+        )
 
     def write(self, out: BinaryIO) -> dict[int, int]:
         """Write the file to ``out`` (a binary file); returns the messages per channel id."""
         grouped: list[list[Series]] = []
         for s in self.series:
-            same = next((g for g in grouped if len(g[0].times) == len(s.times) and np.array_equal(g[0].times, s.times)),
-                        None)
+            same = next(
+                (g for g in grouped if len(g[0].times) == len(s.times) and np.array_equal(g[0].times, s.times)), None
+            )
             (same.append(s) if same is not None else grouped.append([s]))
         groups = [_Rows(g) for g in grouped]
         chunks = _Chunks.of(groups)
@@ -230,12 +258,30 @@ class BulkWriter:
         def written(c: int, job) -> int:  # chunk c and its message indexes, once compressed: bytes written
             crc, body = job.result()
             lo, hi = int(chunks.times[chunks.firsts[c]]), int(chunks.times[chunks.lasts[c]])
-            head = _CHUNK_HEAD.pack(Opcode.CHUNK, _CHUNK_HEAD.size - 9 + len(compression) + 8 + len(body), lo, hi,
-                                    chunks.sizes[c], crc, len(compression)) + compression.encode()
+            head = (
+                _CHUNK_HEAD.pack(
+                    Opcode.CHUNK,
+                    _CHUNK_HEAD.size - 9 + len(compression) + 8 + len(body),
+                    lo,
+                    hi,
+                    chunks.sizes[c],
+                    crc,
+                    len(compression),
+                )
+                + compression.encode()
+            )
             head += struct.pack("<Q", len(body))
-            index = ChunkIndex(message_start_time=lo, message_end_time=hi, chunk_start_offset=pos,
-                               chunk_length=len(head) + len(body), message_index_offsets={}, message_index_length=0,
-                               compression=compression, compressed_size=len(body), uncompressed_size=chunks.sizes[c])
+            index = ChunkIndex(
+                message_start_time=lo,
+                message_end_time=hi,
+                chunk_start_offset=pos,
+                chunk_length=len(head) + len(body),
+                message_index_offsets={},
+                message_index_length=0,
+                compression=compression,
+                compressed_size=len(body),
+                uncompressed_size=chunks.sizes[c],
+            )
             at = pos + _write(out, [head, body])
             for channel_id, message_index in sorted(indexes[c]):
                 index.message_index_offsets[channel_id] = at
@@ -263,31 +309,59 @@ class BulkWriter:
         attachment_indexes = []
         for a in self.attachments:
             record = _record(a)
-            attachment_indexes.append(AttachmentIndex(offset=pos, length=len(record), log_time=a.log_time,
-                                                      create_time=a.create_time, data_size=len(a.data), name=a.name,
-                                                      media_type=a.media_type))
+            attachment_indexes.append(
+                AttachmentIndex(
+                    offset=pos,
+                    length=len(record),
+                    log_time=a.log_time,
+                    create_time=a.create_time,
+                    data_size=len(a.data),
+                    name=a.name,
+                    media_type=a.media_type,
+                )
+            )
             pos += _write(out, [record])
         pos += _write(out, [_record(DataEnd(data_section_crc=0))])
-        statistics = Statistics(message_count=int(sum(counts.values())), schema_count=len(self.schemas),
-                                channel_count=len(self.channels), attachment_count=len(self.attachments),
-                                metadata_count=0, chunk_count=len(chunk_indexes),
-                                message_start_time=int(chunks.times[0]), message_end_time=int(chunks.times[-1]),
-                                channel_message_counts=dict(sorted(counts.items())))
+        statistics = Statistics(
+            message_count=int(sum(counts.values())),
+            schema_count=len(self.schemas),
+            channel_count=len(self.channels),
+            attachment_count=len(self.attachments),
+            metadata_count=0,
+            chunk_count=len(chunk_indexes),
+            message_start_time=int(chunks.times[0]),
+            message_end_time=int(chunks.times[-1]),
+            channel_message_counts=dict(sorted(counts.items())),
+        )
         summary_start, summary, offsets = pos, bytearray(), []
-        for opcode, records in ((Opcode.SCHEMA, self.schemas), (Opcode.CHANNEL, self.channels),
-                                (Opcode.STATISTICS, [statistics]), (Opcode.CHUNK_INDEX, chunk_indexes),
-                                (Opcode.ATTACHMENT_INDEX, attachment_indexes)):
+        for opcode, records in (
+            (Opcode.SCHEMA, self.schemas),
+            (Opcode.CHANNEL, self.channels),
+            (Opcode.STATISTICS, [statistics]),
+            (Opcode.CHUNK_INDEX, chunk_indexes),
+            (Opcode.ATTACHMENT_INDEX, attachment_indexes),
+        ):
             if records:
                 body = b"".join(_record(r) for r in records)
-                offsets.append(SummaryOffset(group_opcode=opcode, group_start=summary_start + len(summary),
-                                             group_length=len(body)))
+                offsets.append(
+                    SummaryOffset(group_opcode=opcode, group_start=summary_start + len(summary), group_length=len(body))
+                )
                 summary += body
         summary_offset_start = summary_start + len(summary)
         summary += b"".join(_record(o) for o in offsets)
-        crc = zlib.crc32(_FOOTER_FIELDS.pack(Opcode.FOOTER, 20, summary_start, summary_offset_start),
-                         zlib.crc32(summary))
-        _write(out, [summary, _record(Footer(summary_start=summary_start, summary_offset_start=summary_offset_start,
-                                             summary_crc=crc)), MCAP0_MAGIC])
+        crc = zlib.crc32(
+            _FOOTER_FIELDS.pack(Opcode.FOOTER, 20, summary_start, summary_offset_start), zlib.crc32(summary)
+        )
+        _write(
+            out,
+            [
+                summary,
+                _record(
+                    Footer(summary_start=summary_start, summary_offset_start=summary_offset_start, summary_crc=crc)
+                ),
+                MCAP0_MAGIC,
+            ],
+        )
         return counts
 
 

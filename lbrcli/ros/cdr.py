@@ -76,8 +76,9 @@ class Layout:
         for name, (offset, dtype, count) in self.slots.items():
             if name not in values:
                 continue
-            data = np.ascontiguousarray(np.broadcast_to(np.asarray(values[name]).reshape(n, -1), (n, count)),
-                                       dtype=dtype)
+            data = np.ascontiguousarray(
+                np.broadcast_to(np.asarray(values[name]).reshape(n, -1), (n, count)), dtype=dtype
+            )
             out[:, offset : offset + data.itemsize * count] = data.view(np.uint8).reshape(n, -1)
         return out
 

@@ -14,32 +14,47 @@ _DEFS = {
     "std_msgs/Header": "builtin_interfaces/Time stamp\nstring frame_id\n",
     "std_msgs/String": "string data\n",
     "sensor_msgs/JointState": "std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\n"
-                              "float64[] effort\n",
+    "float64[] effort\n",
     "geometry_msgs/Vector3": "float64 x\nfloat64 y\nfloat64 z\n",
     "geometry_msgs/Point": "float64 x\nfloat64 y\nfloat64 z\n",
     "geometry_msgs/Quaternion": "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n",
     "geometry_msgs/Transform": "geometry_msgs/Vector3 translation\ngeometry_msgs/Quaternion rotation\n",
     "geometry_msgs/TransformStamped": "std_msgs/Header header\nstring child_frame_id\n"
-                                      "geometry_msgs/Transform transform\n",
+    "geometry_msgs/Transform transform\n",
     "geometry_msgs/PointStamped": "std_msgs/Header header\ngeometry_msgs/Point point\n",
     "tf2_msgs/TFMessage": "geometry_msgs/TransformStamped[] transforms\n",
     "trajectory_msgs/JointTrajectoryPoint": "float64[] positions\nfloat64[] velocities\nfloat64[] accelerations\n"
-                                            "float64[] effort\nbuiltin_interfaces/Duration time_from_start\n",
+    "float64[] effort\nbuiltin_interfaces/Duration time_from_start\n",
     "trajectory_msgs/JointTrajectory": "std_msgs/Header header\nstring[] joint_names\n"
-                                       "trajectory_msgs/JointTrajectoryPoint[] points\n",
+    "trajectory_msgs/JointTrajectoryPoint[] points\n",
 }
 _DEPS = {
     "std_msgs/Header": ("builtin_interfaces/Time",),
     "sensor_msgs/JointState": ("std_msgs/Header", "builtin_interfaces/Time"),
     "geometry_msgs/Transform": ("geometry_msgs/Vector3", "geometry_msgs/Quaternion"),
-    "geometry_msgs/TransformStamped": ("std_msgs/Header", "builtin_interfaces/Time", "geometry_msgs/Transform",
-                                       "geometry_msgs/Vector3", "geometry_msgs/Quaternion"),
+    "geometry_msgs/TransformStamped": (
+        "std_msgs/Header",
+        "builtin_interfaces/Time",
+        "geometry_msgs/Transform",
+        "geometry_msgs/Vector3",
+        "geometry_msgs/Quaternion",
+    ),
     "geometry_msgs/PointStamped": ("std_msgs/Header", "builtin_interfaces/Time", "geometry_msgs/Point"),
-    "tf2_msgs/TFMessage": ("geometry_msgs/TransformStamped", "std_msgs/Header", "builtin_interfaces/Time",
-                           "geometry_msgs/Transform", "geometry_msgs/Vector3", "geometry_msgs/Quaternion"),
+    "tf2_msgs/TFMessage": (
+        "geometry_msgs/TransformStamped",
+        "std_msgs/Header",
+        "builtin_interfaces/Time",
+        "geometry_msgs/Transform",
+        "geometry_msgs/Vector3",
+        "geometry_msgs/Quaternion",
+    ),
     "trajectory_msgs/JointTrajectoryPoint": ("builtin_interfaces/Duration",),
-    "trajectory_msgs/JointTrajectory": ("std_msgs/Header", "builtin_interfaces/Time",
-                                        "trajectory_msgs/JointTrajectoryPoint", "builtin_interfaces/Duration"),
+    "trajectory_msgs/JointTrajectory": (
+        "std_msgs/Header",
+        "builtin_interfaces/Time",
+        "trajectory_msgs/JointTrajectoryPoint",
+        "builtin_interfaces/Duration",
+    ),
 }
 _SEPARATOR = "=" * 80
 
@@ -63,8 +78,9 @@ def header(layout: Layout, stamp: str, frame_id: str) -> None:
     layout.string(frame_id)
 
 
-def joint_state(names: tuple[str, ...], frame_id: str = "", position: bool = True, velocity: bool = False,
-                effort: bool = False) -> Layout:
+def joint_state(
+    names: tuple[str, ...], frame_id: str = "", position: bool = True, velocity: bool = False, effort: bool = False
+) -> Layout:
     """sensor_msgs/JointState with slots ``stamp``, ``position``, ``velocity``, ``effort`` (those asked for)."""
     n = len(names)
     layout = Layout()
@@ -107,8 +123,15 @@ def string_message(text: str) -> bytes:
     return bytes(layout.buf)
 
 
-def joint_trajectory(names: tuple[str, ...], t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
-                     stamp_ns: int = 0, frame_id: str = "") -> bytes:
+def joint_trajectory(
+    names: tuple[str, ...],
+    t: np.ndarray,
+    q: np.ndarray,
+    qd: np.ndarray,
+    qdd: np.ndarray,
+    stamp_ns: int = 0,
+    frame_id: str = "",
+) -> bytes:
     """trajectory_msgs/JointTrajectory: one point per row (positions, velocities, accelerations; time from start
     = t [s])."""
     layout = Layout()

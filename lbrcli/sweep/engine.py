@@ -77,8 +77,13 @@ def run_inline(runs: Sequence[Run], joints: frozenset[str], on_result: Callable[
     return Execution("this process (inline)", 1, time.perf_counter() - t0, 0.0)
 
 
-def run_dask(runs: Sequence[Run], cluster: ClusterSpec, joints: frozenset[str],
-             on_result: Callable[[RunResult], None], on_ready: Callable[[str, int], None] | None = None) -> Execution:
+def run_dask(
+    runs: Sequence[Run],
+    cluster: ClusterSpec,
+    joints: frozenset[str],
+    on_result: Callable[[RunResult], None],
+    on_ready: Callable[[str, int], None] | None = None,
+) -> Execution:
     """Submit ``runs`` (``cluster.batch`` per task) and call ``on_result`` once per run as results arrive."""
     from distributed import Client, LocalCluster, as_completed
 
@@ -108,8 +113,9 @@ def run_dask(runs: Sequence[Run], cluster: ClusterSpec, joints: frozenset[str],
         try:
             versions = client.run(_lbr_version)
         except Exception as exc:  # noqa: BLE001
-            raise CheckFailed(f"the Dask workers cannot run lbr ({type(exc).__name__}: {exc}): install lbr on every "
-                              "worker") from None
+            raise CheckFailed(
+                f"the Dask workers cannot run lbr ({type(exc).__name__}: {exc}): install lbr on every worker"
+            ) from None
         mine = _lbr_version()
         stale = sorted(addr for addr, v in versions.items() if v != mine)
         if stale:
@@ -123,7 +129,7 @@ def run_dask(runs: Sequence[Run], cluster: ClusterSpec, joints: frozenset[str],
             on_ready(where, n_workers)
         startup = time.perf_counter() - t_start
         t0 = time.perf_counter()
-        batches = [tuple(runs[i:i + cluster.batch]) for i in range(0, len(runs), cluster.batch)]
+        batches = [tuple(runs[i : i + cluster.batch]) for i in range(0, len(runs), cluster.batch)]
         keys = [f"lbr-run-{b[0].key}-{len(b)}" for b in batches]
         by_key = dict(zip(keys, batches))
         futures = client.map(execute_batch, batches, joints=joints, key=keys, pure=False)
@@ -148,8 +154,13 @@ def run_dask(runs: Sequence[Run], cluster: ClusterSpec, joints: frozenset[str],
                     local.close(timeout=5)
 
 
-def run_runs(runs: Sequence[Run], cluster: ClusterSpec, joints: frozenset[str],
-             on_result: Callable[[RunResult], None], on_ready: Callable[[str, int], None] | None = None) -> Execution:
+def run_runs(
+    runs: Sequence[Run],
+    cluster: ClusterSpec,
+    joints: frozenset[str],
+    on_result: Callable[[RunResult], None],
+    on_ready: Callable[[str, int], None] | None = None,
+) -> Execution:
     """Execute ``runs`` where ``cluster`` says."""
     if cluster.scheduler == INLINE:
         if on_ready is not None:

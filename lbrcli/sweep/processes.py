@@ -36,9 +36,23 @@ class LocalDaskCluster:
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
         _wait_for(self.file.exists, 60, "the dask scheduler did not write its file")
         self.workers = [
-            subprocess.Popen(WORKER + ["--scheduler-file", str(self.file), "--nthreads", "1", "--no-nanny",
-                                       "--no-dashboard", "--host", "127.0.0.1", "--name", f"w{k}"],
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+            subprocess.Popen(
+                WORKER
+                + [
+                    "--scheduler-file",
+                    str(self.file),
+                    "--nthreads",
+                    "1",
+                    "--no-nanny",
+                    "--no-dashboard",
+                    "--host",
+                    "127.0.0.1",
+                    "--name",
+                    f"w{k}",
+                ],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )  # fmt: skip
             for k in range(workers)
         ]
         _wait_for(lambda: self.n_workers() == workers, 60, "the dask workers did not register")

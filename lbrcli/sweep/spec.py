@@ -132,8 +132,9 @@ def read_study(path: str | Path) -> Study:
     except tomllib.TOMLDecodeError as exc:
         m = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
         msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
-        raise InputError(f"not valid TOML: {msg}", file=spath, row=int(m[1]) if m else None,
-                         column=int(m[2]) if m else None) from None
+        raise InputError(
+            f"not valid TOML: {msg}", file=spath, row=int(m[1]) if m else None, column=int(m[2]) if m else None
+        ) from None
     return parse_study(doc, spath)
 
 
@@ -161,26 +162,37 @@ def parse_study(doc: dict, path: str) -> Study:
         fixed.pop(a.name, None)  # a varied option replaces the kind's default
     for name in list(fixed) + [a.name for a in axes]:
         if kind.options is not None and name not in kind.options and name not in kind.defaults:
-            raise _fail(path, f"{name!r} is not an option of {kind.name} ({' '.join(kind.command)}); options: "
-                              f"{', '.join(kind.options)}")
+            raise _fail(
+                path,
+                f"{name!r} is not an option of {kind.name} ({' '.join(kind.command)}); options: "
+                f"{', '.join(kind.options)}",
+            )
     for name in kind.required:
         if name not in fixed and name not in [a.name for a in axes]:
             raise _fail(path, f"{kind.name} needs {name!r} in [fixed] or [vary]")
     random_axes = [a for a in axes if a.sampler is not None]
     samples = _int(st.get("samples", 1), "[study] samples", path, 1)
     if random_axes and "samples" not in st:
-        raise _fail(path, f"[study] samples is needed with random parameters ({', '.join(a.name for a in random_axes)})")
+        raise _fail(
+            path, f"[study] samples is needed with random parameters ({', '.join(a.name for a in random_axes)})"
+        )
     figures = st.get("figures")
     if figures is not None and not (isinstance(figures, list) and all(isinstance(f, str) for f in figures)):
-        raise _fail(path, "[study] figures must be a list of JSON keys, e.g. [\"motion_s\", \"max_ratio.jerk\"]")
+        raise _fail(path, '[study] figures must be a list of JSON keys, e.g. ["motion_s", "max_ratio.jerk"]')
     timeout = st.get("timeout")
     if timeout is not None and not (isinstance(timeout, (int, float)) and 0 < timeout <= 86400):
         raise _fail(path, f"[study] timeout must be in (0, 86400] s, got {timeout!r}")
     study = Study(
-        path=path, name=str(st.get("name", Path(path).stem)), kind=kind.name,
-        fixed=tuple((k, canonical(v)) for k, v in fixed.items()), axes=axes, samples=samples,
-        seed=_int(st.get("seed", 0), "[study] seed", path, 0), figures=tuple(figures) if figures else None,
-        judge=_judge(doc, kind, path), plots=_plots(doc, axes, path),
+        path=path,
+        name=str(st.get("name", Path(path).stem)),
+        kind=kind.name,
+        fixed=tuple((k, canonical(v)) for k, v in fixed.items()),
+        axes=axes,
+        samples=samples,
+        seed=_int(st.get("seed", 0), "[study] seed", path, 0),
+        figures=tuple(figures) if figures else None,
+        judge=_judge(doc, kind, path),
+        plots=_plots(doc, axes, path),
         timeout=float(timeout) if timeout is not None else None,
     )
     if study.size > MAX_RUNS:
@@ -215,11 +227,14 @@ def _axis(name: str, spec: Any, kind: RunKind, base: Path, path: str) -> Axis:
     if isinstance(spec, list):
         return Axis(name, tuple(canonical(_path_value(kind, name, v, base)) for v in spec))
     if not isinstance(spec, dict) or len(spec) != 1 and not {"from", "to", "steps"} <= set(spec):
-        raise _fail(path, f"{where}: expected a list, {{ values = [...] }}, {{ from, to, steps }}, {{ glob = ... }} "
-                          f"or one of {', '.join(f'{{ {r} = ... }}' for r in RANDOM)}")
+        raise _fail(
+            path,
+            f"{where}: expected a list, {{ values = [...] }}, {{ from, to, steps }}, {{ glob = ... }} "
+            f"or one of {', '.join(f'{{ {r} = ... }}' for r in RANDOM)}",
+        )
     if {"from", "to", "steps"} <= set(spec):
         return Axis(name, _grid(spec, where, path))
-    (how, arg), = spec.items()
+    ((how, arg),) = spec.items()
     if how == "values":
         if not isinstance(arg, list):
             raise _fail(path, f"{where}: values must be a list")
@@ -253,8 +268,11 @@ def _grid(spec: dict, where: str, path: str) -> tuple:
 
 def _check_sampler(how: str, arg: Any, where: str, path: str) -> None:
     def pair(a) -> bool:
-        return isinstance(a, list) and len(a) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                                           for v in a)
+        return (
+            isinstance(a, list)
+            and len(a) == 2
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in a)
+        )
 
     ok = {
         "uniform": pair(arg) and arg[0] <= arg[1],
@@ -262,8 +280,7 @@ def _check_sampler(how: str, arg: Any, where: str, path: str) -> None:
         "normal": pair(arg) and arg[1] >= 0,
         "integers": pair(arg) and all(isinstance(v, int) for v in arg) and arg[0] <= arg[1],
         "choice": isinstance(arg, list) and len(arg) > 0,
-        "layout": isinstance(arg, dict) and set(arg) <= set(LAYOUT_DEFAULTS)
-        and all(pair(v) for v in arg.values()),
+        "layout": isinstance(arg, dict) and set(arg) <= set(LAYOUT_DEFAULTS) and all(pair(v) for v in arg.values()),
     }[how]
     if not ok:
         expect = {"uniform": "[low, high]", "loguniform": "[low, high] with low > 0", "normal": "[mean, std]",
@@ -308,8 +325,12 @@ def _plots(doc: dict, axes: tuple[Axis, ...], path: str) -> tuple[PlotSpec, ...]
 
 def run_key(kind: RunKind, options: dict, judge: Judge | None) -> str:
     """The cache key of a run: a hash of what determines its result (kind, its version, options, judge)."""
-    doc = {"kind": kind.name, "version": kind.version, "options": {k: plain(v) for k, v in options.items()},
-           "judge": None if judge is None else {"errors": list(judge.errors), "model": judge.model}}
+    doc = {
+        "kind": kind.name,
+        "version": kind.version,
+        "options": {k: plain(v) for k, v in options.items()},
+        "judge": None if judge is None else {"errors": list(judge.errors), "model": judge.model},
+    }
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:24]
 
 
@@ -365,6 +386,16 @@ def expand(study: Study) -> list[Run]:
                     params[a.name] = draw(a, study.seed, sample)
             params = {a.name: params[a.name] for a in study.axes}  # file order
             options = {**fixed, **params}
-            runs.append(Run(len(runs), run_key(kind, options, study.judge), kind.name, tuple(options.items()),
-                            tuple(params.items()), sample, study.judge, study.timeout))
+            runs.append(
+                Run(
+                    len(runs),
+                    run_key(kind, options, study.judge),
+                    kind.name,
+                    tuple(options.items()),
+                    tuple(params.items()),
+                    sample,
+                    study.judge,
+                    study.timeout,
+                )
+            )
     return runs

@@ -34,7 +34,6 @@ def read_records(path: Path) -> Iterator[dict]:
                 yield rec
 
 
-
 @contextlib.contextmanager
 def _interrupts_deferred():
     """SIGINT held back while the block runs (delivered right after it), where the platform allows it."""
@@ -46,6 +45,7 @@ def _interrupts_deferred():
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
 
 class RunStore:
     """The completed runs of a results folder, by key; :meth:`add` appends one."""

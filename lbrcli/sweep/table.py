@@ -55,9 +55,17 @@ def rows(study: Study, runs: Sequence[Run], records: dict[str, dict]) -> tuple[l
     out = []
     for run, rec in done:
         values = dict(run.params)
-        row = {"run": run.index, "sample": run.sample, **{c: table_cell(values[p]) for p, c in params},
-               "status": rec["status"], "exit_code": rec["exit_code"], "error": rec["error"],
-               "run_s": rec["seconds"], "worker": rec["worker"], "key": run.key}
+        row = {
+            "run": run.index,
+            "sample": run.sample,
+            **{c: table_cell(values[p]) for p, c in params},
+            "status": rec["status"],
+            "exit_code": rec["exit_code"],
+            "error": rec["error"],
+            "run_s": rec["seconds"],
+            "worker": rec["worker"],
+            "key": run.key,
+        }
         for f, col in fig_cols:
             row[col] = table_cell(figure_value(rec["figures"], f))
         for k in judged:

@@ -29,15 +29,30 @@ def status_of(exit_code: int, crashed: bool = False) -> str:
     return {0: "ok", 1: "failed", 2: "bad-input"}.get(exit_code, "crashed")
 
 
-def record(run: Run, exit_code: int, error: str | None, figures: dict, judged: dict, seconds: float,
-           crashed: bool = False, worker: str | None = None) -> dict:
+def record(
+    run: Run,
+    exit_code: int,
+    error: str | None,
+    figures: dict,
+    judged: dict,
+    seconds: float,
+    crashed: bool = False,
+    worker: str | None = None,
+) -> dict:
     """The JSON record of a completed run (NaN and ±inf become null, as in the commands' --json)."""
     from lbrcli.console import _jsonable
 
     return {
-        "key": run.key, "kind": run.kind, "exit_code": int(exit_code), "status": status_of(exit_code, crashed),
-        "error": error, "figures": _jsonable(figures), "judged": _jsonable(judged), "seconds": seconds,
-        "worker": worker or f"{socket.gethostname()}:{os.getpid()}", "finished": time.time(),
+        "key": run.key,
+        "kind": run.kind,
+        "exit_code": int(exit_code),
+        "status": status_of(exit_code, crashed),
+        "error": error,
+        "figures": _jsonable(figures),
+        "judged": _jsonable(judged),
+        "seconds": seconds,
+        "worker": worker or f"{socket.gethostname()}:{os.getpid()}",
+        "finished": time.time(),
     }
 
 

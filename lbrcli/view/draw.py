@@ -17,8 +17,12 @@ from .scene import Scene
 ARM_COLOURS = {"planned": (70, 170, 90), "commanded": (50, 120, 235), "measured": (255, 120, 20)}  # RGB
 ARM_OPACITY = {"planned": 0.5, "commanded": 0.35, "measured": 0.85}  # ghosts; an arm drawn alone is opaque
 BALL_COLOURS = {"predicted": (40, 170, 60), "simulated": (225, 45, 45), "tracked": (40, 90, 235)}
-PATH_COLOURS = {"planned": (70, 170, 90), "commanded": (50, 120, 235), "measured": (255, 120, 20),
-                "task": (120, 120, 120)}
+PATH_COLOURS = {
+    "planned": (70, 170, 90),
+    "commanded": (50, 120, 235),
+    "measured": (255, 120, 20),
+    "task": (120, 120, 120),
+}
 _UNCHANGED = 1e-7  # [m] and quaternion units: a node that moved less is not sent again
 
 
@@ -29,8 +33,9 @@ def _add_shape(api, name: str, shape: Shape, colour, opacity) -> None:
     m = shape.matrix
     wxyz = Rotation.from_matrix(m[:3, :3]).as_quat(scalar_first=True)
     if shape.kind == "cylinder":
-        api.add_cylinder(name, radius=shape.radius, height=shape.length, color=colour, opacity=opacity,
-                         wxyz=wxyz, position=m[:3, 3])
+        api.add_cylinder(
+            name, radius=shape.radius, height=shape.length, color=colour, opacity=opacity, wxyz=wxyz, position=m[:3, 3]
+        )
     else:
         api.add_icosphere(name, radius=shape.radius, color=colour, opacity=opacity, wxyz=wxyz, position=m[:3, 3])
 
@@ -61,28 +66,45 @@ class Drawing:
         if scene.cup_arm is not None and scene.settings.cup is not None:
             radius, depth = scene.settings.cup  # a translucent cylinder on the TCP along the flange's z axis
             tool = np.asarray(robot.config.tool, dtype=float)
-            api.add_cylinder(f"/arms/{scene.cup_arm}/body{FLANGE_BODY}/cup", radius=radius, height=depth,
-                             color=(90, 90, 200), opacity=0.45, position=tool + (0.0, 0.0, depth / 2))
+            api.add_cylinder(
+                f"/arms/{scene.cup_arm}/body{FLANGE_BODY}/cup",
+                radius=radius,
+                height=depth,
+                color=(90, 90, 200),
+                opacity=0.45,
+                position=tool + (0.0, 0.0, depth / 2),
+            )
         self.balls: dict[str, tuple] = {}
         for ball in scene.balls:
             colour = BALL_COLOURS.get(ball.kind, (200, 0, 200))
             handle = api.add_icosphere(f"/balls/{ball.key}", radius=scene.settings.ball_radius, color=colour)
-            string = api.add_line_segments(f"/balls/{ball.key}_string", np.zeros((1, 2, 3), np.float32), colour,
-                                           thickness=0.003)
+            string = api.add_line_segments(
+                f"/balls/{ball.key}_string", np.zeros((1, 2, 3), np.float32), colour, thickness=0.003
+            )
             self.balls[ball.key] = (handle, string)
         for path in scene.paths:
             pts = path.points.astype(np.float32)
             if len(pts) > 1:
-                api.add_line_segments(f"/paths/{path.key}", np.stack([pts[:-1], pts[1:]], axis=1),
-                                      PATH_COLOURS.get(path.role, (120, 120, 120)), thickness=0.004)
+                api.add_line_segments(
+                    f"/paths/{path.key}",
+                    np.stack([pts[:-1], pts[1:]], axis=1),
+                    PATH_COLOURS.get(path.role, (120, 120, 120)),
+                    thickness=0.004,
+                )
         for k, p in enumerate(scene.turning_points[:200]):
             api.add_icosphere(f"/turning_points/{k}", radius=0.012, color=(230, 30, 160), position=tuple(p))
         for obstacle in scene.obstacles:
             lo, hi = np.asarray(obstacle.lower, float), np.asarray(obstacle.upper, float)
-            api.add_box(f"/obstacles/{obstacle.name}", dimensions=tuple(hi - lo), position=tuple((lo + hi) / 2),
-                        color=(150, 150, 150), opacity=0.6)
-        self.status = api.add_label("/status", scene.status[0] if scene.status else "", position=(0.0, 0.0, 1.55),
-                                    anchor="bottom-center")
+            api.add_box(
+                f"/obstacles/{obstacle.name}",
+                dimensions=tuple(hi - lo),
+                position=tuple((lo + hi) / 2),
+                color=(150, 150, 150),
+                opacity=0.6,
+            )
+        self.status = api.add_label(
+            "/status", scene.status[0] if scene.status else "", position=(0.0, 0.0, 1.55), anchor="bottom-center"
+        )
 
     def _set(self, name: str, handle, position: np.ndarray, wxyz: np.ndarray | None = None) -> None:
         """Move a node unless it stands where it was last sent (keeps the message stream small)."""

@@ -119,13 +119,21 @@ def file_kind(path: str | Path) -> str:
     if head[:1] != ["t"] or len(head) < 2:
         raise CsvFormatError(
             f"not a file lbr writes (header starts {','.join(head[:3])!r}): expected a joint or task trajectory, "
-            "an execution log, a prediction, a track or an obstacle file", file=spath, row=1, column=1)
+            "an execution log, a prediction, a track or an obstacle file",
+            file=spath,
+            row=1,
+            column=1,
+        )
     second = head[1]
     kinds = {"q1": JOINT, "x": TASK, "state": LOG, "theta": PREDICTION, "frame": TRACK}
     if second not in kinds:
         raise CsvFormatError(
             f"not a file lbr writes (second column {second!r}): expected q1 (joint trajectory), x (task), "
-            "state (execution log), theta (prediction) or frame (track)", file=spath, row=1, column=2)
+            "state (execution log), theta (prediction) or frame (track)",
+            file=spath,
+            row=1,
+            column=2,
+        )
     return kinds[second]
 
 
@@ -164,31 +172,49 @@ def read_input(path: str | Path) -> InputFile:
         if table.has("ball_theta") and table.has("ball_phi"):
             theta, phi = table.column("ball_theta"), table.column("ball_phi")
             planar = table.column("ball_theta_y") if table.has("ball_theta_y") else theta
-            balls = (BallSeries(spath, "simulated", t, spherical_direction(theta, phi), planar,
-                                _ball_position(table)),)
+            balls = (BallSeries(spath, "simulated", t, spherical_direction(theta, phi), planar, _ball_position(table)),)
         cols = [table.column(c) if table.has(c) else np.full(len(t), -1.0) for c in ("state", "phase", "row")]
         state = StateSeries(t, *(c.astype(int) for c in cols))
         return InputFile(spath, kind, arms=arms, balls=balls, state=state)
     if kind == PREDICTION:
-        table = read_table(spath, PREDICTION_COLUMNS, time="increasing",
-                           nan_columns=("theta", "phi", "theta_x", "theta_y") + BALL_POSITION_COLUMNS)
+        table = read_table(
+            spath,
+            PREDICTION_COLUMNS,
+            time="increasing",
+            nan_columns=("theta", "phi", "theta_x", "theta_y") + BALL_POSITION_COLUMNS,
+        )
         t, theta = table.column("t"), table.column("theta")
         if table.has("phi"):
             direction = spherical_direction(theta, table.column("phi"))
             planar = table.column("theta_y") if table.has("theta_y") else np.arctan2(direction[:, 1], -direction[:, 2])
         else:
             direction, planar = planar_direction(theta), theta
-        return InputFile(spath, kind, balls=(BallSeries(spath, "predicted", t, direction, planar,
-                                                         _ball_position(table)),))
+        return InputFile(
+            spath, kind, balls=(BallSeries(spath, "predicted", t, direction, planar, _ball_position(table)),)
+        )
     from tracking.trackfile import read_track_csv
 
     track = read_track_csv(spath)
     if track.theta is None:
-        raise CsvFormatError("no 'theta' column: track the video with --pivot or --pivot-color to draw its ball",
-                             file=spath, row=1)
-    return InputFile(spath, kind, balls=(BallSeries(spath, "tracked", track.t, planar_direction(track.theta),
-                                                     track.theta),))
+        raise CsvFormatError(
+            "no 'theta' column: track the video with --pivot or --pivot-color to draw its ball", file=spath, row=1
+        )
+    return InputFile(
+        spath, kind, balls=(BallSeries(spath, "tracked", track.t, planar_direction(track.theta), track.theta),)
+    )
 
 
-__all__ = ["InputFile", "ArmSeries", "BallSeries", "StateSeries", "read_input", "file_kind", "JOINT", "TASK", "LOG",
-           "PREDICTION", "TRACK", "OBSTACLES"]
+__all__ = [
+    "InputFile",
+    "ArmSeries",
+    "BallSeries",
+    "StateSeries",
+    "read_input",
+    "file_kind",
+    "JOINT",
+    "TASK",
+    "LOG",
+    "PREDICTION",
+    "TRACK",
+    "OBSTACLES",
+]

@@ -134,8 +134,9 @@ def _decimate(n: int, limit: int) -> slice:
     return slice(None, None, max(1, math.ceil(n / limit)))
 
 
-def _status(state_file: InputFile | None, offset: float, plan: ArmSeries | None, plan_offset: float,
-            times: np.ndarray) -> tuple[str, ...]:
+def _status(
+    state_file: InputFile | None, offset: float, plan: ArmSeries | None, plan_offset: float, times: np.ndarray
+) -> tuple[str, ...]:
     """'t = 1.23 s · COMMANDING_ACTIVE · trajectory row 45' per frame."""
     out = []
     if state_file is not None:
@@ -177,8 +178,14 @@ def build_scene(files: list[InputFile], alignment: Alignment, robot, settings: V
             tcp_at_frames[(f.path, series.role)] = frames[:, TCP, :3, 3]
             if series.role in ("planned", "measured"):
                 dec = _decimate(len(series.q), PATH_POINTS)
-                paths.append(PathTrack(f"{node_key(f.path)}/{series.role}_path", f"{f.name} pivot path",
-                                       robot.link_frames(series.q[dec])[:, TCP, :3, 3], series.role))
+                paths.append(
+                    PathTrack(
+                        f"{node_key(f.path)}/{series.role}_path",
+                        f"{f.name} pivot path",
+                        robot.link_frames(series.q[dec])[:, TCP, :3, 3],
+                        series.role,
+                    )
+                )
         if f.pivot_path is not None:
             dec = _decimate(len(f.pivot_path), PATH_POINTS)
             paths.append(PathTrack(f"{node_key(f.path)}/path", f"{f.name} pivot path", f.pivot_path[dec], "task"))
@@ -191,20 +198,43 @@ def build_scene(files: list[InputFile], alignment: Alignment, robot, settings: V
         dec = _decimate(len(source.q), 20000)
         p = robot.link_frames(source.q[dec])[:, TCP, :3, 3]
         turning = turning_points(p, float(np.median(np.diff(source.t[dec]))))
-    status = _status(logs[0] if logs else None, off[logs[0].path] if logs else 0.0,
-                     plan_file.arms[0] if plan_file else None, off[plan_file.path] if plan_file else 0.0, times)
+    status = _status(
+        logs[0] if logs else None,
+        off[logs[0].path] if logs else 0.0,
+        plan_file.arms[0] if plan_file else None,
+        off[plan_file.path] if plan_file else 0.0,
+        times,
+    )
     obstacles = tuple(o for f in files for o in f.obstacles)
     carrier = next((a.key for a in arms if a.role == "measured"), arms[0].key if arms else None)
-    return Scene(times, tuple(arms), tuple(b for b in balls if b is not None), status, tuple(paths), turning,
-                 obstacles, carrier if settings.cup else None, settings)
+    return Scene(
+        times,
+        tuple(arms),
+        tuple(b for b in balls if b is not None),
+        status,
+        tuple(paths),
+        turning,
+        obstacles,
+        carrier if settings.cup else None,
+        settings,
+    )
 
 
-def _ball_track(f: InputFile, ball: BallSeries, offset: float, times: np.ndarray, settings: ViewSettings,
-                tcp_at_frames: dict[tuple[str, str], np.ndarray]) -> BallTrack | None:
+def _ball_track(
+    f: InputFile,
+    ball: BallSeries,
+    offset: float,
+    times: np.ndarray,
+    settings: ViewSettings,
+    tcp_at_frames: dict[tuple[str, str], np.ndarray],
+) -> BallTrack | None:
     """A ball at the frames: its own file's measured arm as pivot (simulated), else the plan's (predicted), else any
     measured arm (tracked); a ball with no arm at all hangs from the origin."""
-    prefer = {"simulated": ("measured", "planned"), "predicted": ("planned", "commanded", "measured"),
-              "tracked": ("measured", "planned", "commanded")}[ball.kind]
+    prefer = {
+        "simulated": ("measured", "planned"),
+        "predicted": ("planned", "commanded", "measured"),
+        "tracked": ("measured", "planned", "commanded"),
+    }[ball.kind]
     pivot = tcp_at_frames.get((f.path, prefer[0]))
     for role in prefer:
         if pivot is not None:
@@ -219,5 +249,4 @@ def _ball_track(f: InputFile, ball: BallSeries, offset: float, times: np.ndarray
         s = sample(tv, ball.direction, times, clamp=False)
         s /= np.linalg.norm(s, axis=1, keepdims=True)
         position = pivot + settings.length * s
-    return BallTrack(f"{node_key(f.path)}/ball_{ball.kind}", f"{f.name} ({ball.kind} ball)", ball.kind, position,
-                     pivot)
+    return BallTrack(f"{node_key(f.path)}/ball_{ball.kind}", f"{f.name} ({ball.kind} ball)", ball.kind, position, pivot)

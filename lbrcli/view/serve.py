@@ -87,8 +87,9 @@ class Player:
         gui = server.gui
         with gui.add_folder("Replay"):
             self.button = gui.add_button("Pause")
-            self.slider = gui.add_slider("time [s]", min=0.0, max=max(scene.duration, 1e-3),
-                                         step=1.0 / scene.settings.fps, initial_value=0.0)
+            self.slider = gui.add_slider(
+                "time [s]", min=0.0, max=max(scene.duration, 1e-3), step=1.0 / scene.settings.fps, initial_value=0.0
+            )
             self.speed_menu = gui.add_dropdown("speed", SPEEDS, initial_value="1x")
             self.loop = gui.add_checkbox("loop", initial_value=True)
             self.state = gui.add_markdown(scene.status[0] if scene.status else "")

@@ -102,14 +102,18 @@ def align(files: list[InputFile], given: dict[str, float] | None = None) -> Alig
             continue
         if math.isfinite(est.lag_s):
             offsets[f.path] = ref_offset - est.lag_s
-            how[f.path] = (f"θ matched to {Path(ref_ball.source).name} (lag {est.lag_s:+.3f} s, "
-                           f"score {est.correlation:.3f})")
+            how[f.path] = (
+                f"θ matched to {Path(ref_ball.source).name} (lag {est.lag_s:+.3f} s, score {est.correlation:.3f})"
+            )
     for f in files:
         value = _given(f.path, given)
         if value is not None and f.kind != OBSTACLES:
             offsets[f.path], how[f.path] = float(value), "given (--offset)"
-    spans = [(offsets[f.path] + t[0], offsets[f.path] + t[-1]) for f in files
-             if f.kind != OBSTACLES and (t := _times(f)) is not None and len(t)]
+    spans = [
+        (offsets[f.path] + t[0], offsets[f.path] + t[-1])
+        for f in files
+        if f.kind != OBSTACLES and (t := _times(f)) is not None and len(t)
+    ]
     if not spans:
         return Alignment({}, {}, 0.0)
     first = min(s[0] for s in spans)

@@ -8,5 +8,16 @@ from .damping import DampingOptions, SwayDamper, simulate_damping, sway_referenc
 from .observer import DelayedObserver
 from .upright import Mode, UprightController, UprightOptions
 
-__all__ = ["Cart", "CorrectionPlan", "DampingOptions", "DelayedObserver", "Mode", "SwayDamper", "UprightController",
-           "UprightOptions", "correction_plan", "simulate_damping", "sway_reference"]
+__all__ = [
+    "Cart",
+    "CorrectionPlan",
+    "DampingOptions",
+    "DelayedObserver",
+    "Mode",
+    "SwayDamper",
+    "UprightController",
+    "UprightOptions",
+    "correction_plan",
+    "simulate_damping",
+    "sway_reference",
+]

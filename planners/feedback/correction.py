@@ -86,7 +86,9 @@ def correction_plan(robot, q: np.ndarray, limits, dt: float, options: DampingOpt
     return CorrectionPlan(dt, maps, bounds, pivot_acceleration(pos[:, :2], dt), travel, rejoin_bounds, rejoin_share)
 
 
-def _bounds(v_room: np.ndarray, a_room: np.ndarray, j_room: np.ndarray, half: int, options: DampingOptions) -> np.ndarray:
+def _bounds(
+    v_room: np.ndarray, a_room: np.ndarray, j_room: np.ndarray, half: int, options: DampingOptions
+) -> np.ndarray:
     """(n, 5) offset bounds from per-joint room (n, 7) in offset units, the smallest over a window of ±half rows."""
     speed = np.minimum(_window_min(v_room.min(axis=1), half), options.velocity)
     a = np.minimum(_window_min(a_room.min(axis=1), half), options.acceleration)

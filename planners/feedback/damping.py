@@ -47,7 +47,15 @@ class DampingOptions:
         return CartLimits(self.travel, self.velocity, self.acceleration, self.jerk)
 
     def validate(self) -> None:
-        vals = (*self.weights, self.jerk_weight, self.bandwidth, self.travel, self.velocity, self.acceleration, self.jerk)
+        vals = (
+            *self.weights,
+            self.jerk_weight,
+            self.bandwidth,
+            self.travel,
+            self.velocity,
+            self.acceleration,
+            self.jerk,
+        )
         if not all(math.isfinite(v) for v in vals) or min(self.weights) < 0 or min(vals[5:]) <= 0:
             raise ValueError("damping options: weights >= 0, the jerk weight, bandwidth and bounds > 0")
 
@@ -183,8 +191,15 @@ def simulate_damping(path: np.ndarray, dt: float, true_length: float, model_leng
     ref, ref_rate = sway_reference(acc_plan[:, :2], model_length, dt, actuation_delay)
     rows = [tuple(float(v) for v in b) for b in bounds] if bounds is not None else None
     at = [0]
-    damper = SwayDamper(model_length, dt, sensor_delay, dt, options, actuation_delay=actuation_delay,
-                        bounds=(lambda x, v, a: rows[min(at[0], len(rows) - 1)]) if rows else None)
+    damper = SwayDamper(
+        model_length,
+        dt,
+        sensor_delay,
+        dt,
+        options,
+        actuation_delay=actuation_delay,
+        bounds=(lambda x, v, a: rows[min(at[0], len(rows) - 1)]) if rows else None,
+    )
     lag = max(0, int(round(sensor_delay / dt)))
     s, sdot = (0.0, 0.0, -1.0), (0.0, 0.0, 0.0)
     offsets = np.zeros((n, 2))

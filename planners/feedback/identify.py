@@ -209,7 +209,9 @@ def identify(t_readings: np.ndarray, readings: np.ndarray, accel: np.ndarray, dt
     from scipy.optimize import minimize
 
     p0 = np.array([w0, c0, mu0])
-    simplex = p0 + np.array([[0, 0, 0], [0.004 * w0, 0, 0], [0, 0.05 + 0.2 * c0, 0], [0, 0, 0.005 * w0 * w0 + 0.2 * mu0]])
+    simplex = p0 + np.array(
+        [[0, 0, 0], [0.004 * w0, 0, 0], [0, 0.05 + 0.2 * c0, 0], [0, 0, 0.005 * w0 * w0 + 0.2 * mu0]]
+    )
     res = minimize(cost, p0, method="Nelder-Mead", options={"xatol": 1e-5, "fatol": 1e-9, "maxiter": 60,
                                                             "initial_simplex": simplex})  # fmt: skip
     w0, c, mu = (float(v) for v in res.x)

@@ -184,8 +184,9 @@ class UprightSession:
                 if self.o.identify:
                     self._enter(IDENTIFY)
                 else:
-                    self._start_control(self.length, self._nominal_gain, self.o.sensor_delay_s, 0.0, 0.0,
-                                        self._nominal_reach)
+                    self._start_control(
+                        self.length, self._nominal_gain, self.o.sensor_delay_s, 0.0, 0.0, self._nominal_reach
+                    )
                 return
         if self._phase_t > self.o.wait_s:
             rec = self._recent
@@ -238,8 +239,9 @@ class UprightSession:
         sensor_delay = max(0.0, rod.delay - self.o.actuation_cycles * self.dt)
         self._start_control(rod.equivalent_length, res.gain, sensor_delay, rod.damping, rod.coulomb, res.reach)
 
-    def _start_control(self, length: float, gain, sensor_delay: float, damping: float, coulomb: float,
-                       reach: np.ndarray | None = None) -> None:
+    def _start_control(
+        self, length: float, gain, sensor_delay: float, damping: float, coulomb: float, reach: np.ndarray | None = None
+    ) -> None:
         phi0 = 0.0
         if self._rec_y:
             phi0 = self.sign * (self._rec_y[-1] - self.offset)
@@ -277,7 +279,8 @@ class UprightSession:
             if self._run >= o.hold_s:
                 self.succeeded = True
                 self.verdict = f"balanced upright for {o.hold_s:g} s" + (
-                    f" (after {ctl.falls} fall{'s' if ctl.falls != 1 else ''} and re-catches)" if ctl.falls else "")  # type: ignore[union-attr]
+                    f" (after {ctl.falls} fall{'s' if ctl.falls != 1 else ''} and re-catches)" if ctl.falls else ""
+                )  # type: ignore[union-attr]
                 ctl.lower(o.lower_ramp_s)  # type: ignore[union-attr]
                 self._enter(LOWER)
             return
@@ -329,5 +332,3 @@ class _Done:
         if self._error is not None:
             raise self._error
         return self._value
-
-

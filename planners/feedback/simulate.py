@@ -53,8 +53,9 @@ def simulate_upright(pendulum: RigidPendulum, limits: CartLimits, duration: floa
     cart = Cart(limits, dt, bounds=bounds)
     l_model = model_length or pendulum.equivalent_length
     ctl = UprightController(l_model, cart, options)
-    obs = DelayedObserver(l_model, dt, sensor.delay + 0.5 * sensor.jitter, 1.0 / sensor.rate_hz,
-                          actuation_delay=actuation_delay)
+    obs = DelayedObserver(
+        l_model, dt, sensor.delay + 0.5 * sensor.jitter, 1.0 / sensor.rate_hz, actuation_delay=actuation_delay
+    )
     applied = [0.0] * (actuation_delay + 1)
     phi = omega = 0.0
     a_prev = 0.0
@@ -86,8 +87,9 @@ def simulate_upright(pendulum: RigidPendulum, limits: CartLimits, duration: floa
         applied[k % len(applied)] = cart.a
         obs.predict(cart.a)
         out[k] = (t, phi, obs.phi, cart.x, cart.v, cart.a, int(ctl.mode))
-    return UprightRun(out[:, 0], out[:, 1], out[:, 2], out[:, 3], out[:, 4], out[:, 5], out[:, 6].astype(int),
-                      ctl.catches, ctl.falls)
+    return UprightRun(
+        out[:, 0], out[:, 1], out[:, 2], out[:, 3], out[:, 4], out[:, 5], out[:, 6].astype(int), ctl.catches, ctl.falls
+    )
 
 
 @dataclass(frozen=True)

@@ -81,16 +81,24 @@ def catch_reach(length: float, gain: tuple[float, ...], horizon: float = 3.0, st
 class UprightController:
     """Drives ``cart`` from the estimate (φ, φ̇) of a pendulum of equivalent length ``length`` [m]."""
 
-    def __init__(self, length: float, cart: Cart, options: UprightOptions = UprightOptions(),
-                 gain: tuple[float, ...] | None = None, friction: float = 0.0, reach: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        length: float,
+        cart: Cart,
+        options: UprightOptions = UprightOptions(),
+        gain: tuple[float, ...] | None = None,
+        friction: float = 0.0,
+        reach: np.ndarray | None = None,
+    ) -> None:
         self.length = length
         self.friction = friction  # μ [rad/s²] the bearing's dry friction per inertia (identified): pumped for
         self.cart = cart
         self.o = options
         self.gain = gain if gain is not None else balance_gain(length, options)
         # the catch's prediction (pass it in to keep the matrix exponential out of a real-time cycle)
-        self._reach = reach if reach is not None or not any(self.gain) else catch_reach(length, self.gain,
-                                                                                         options.catch_horizon)
+        self._reach = (
+            reach if reach is not None or not any(self.gain) else catch_reach(length, self.gain, options.catch_horizon)
+        )
         self._z = np.zeros(5)
         self.mode = Mode.SWING_UP
         self.catches = 0
@@ -110,8 +118,12 @@ class UprightController:
         """One cycle with the estimate φ [rad] (0 hanging, π upright), φ̇ [rad/s]: step the cart."""
         o, cart = self.o, self.cart
         theta = wrap_angle(phi - math.pi)
-        if (self.mode is Mode.SWING_UP and abs(theta) < o.catch_angle and abs(omega) < o.catch_rate
-                and self._catchable(theta, omega)):
+        if (
+            self.mode is Mode.SWING_UP
+            and abs(theta) < o.catch_angle
+            and abs(omega) < o.catch_rate
+            and self._catchable(theta, omega)
+        ):
             self.mode = Mode.BALANCE
             self.catches += 1
         elif self.mode is Mode.BALANCE and abs(theta) > o.drop_angle:

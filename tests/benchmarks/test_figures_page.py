@@ -27,11 +27,23 @@ def test_the_page_is_generated_from_the_results():
 
 def test_every_result_is_on_the_page_with_its_values(tmp_path):
     page = _figures_page()
-    (tmp_path / "demo.json").write_text(json.dumps({
-        "benchmark": "demo", "command": "python benchmarks/run_all.py demo", "measured": "2026-01-02T03:04:05",
-        "seconds": 1.5, "cpus": 2, "load_1min_before": 0.5,
-        "figures": [{"name": "a | b", "value": 0.1234567, "unit": "s"}, {"name": "n", "value": 12345, "unit": ""},
-                    {"name": "x", "value": float("nan"), "unit": "deg"}]}))
+    (tmp_path / "demo.json").write_text(
+        json.dumps(
+            {
+                "benchmark": "demo",
+                "command": "python benchmarks/run_all.py demo",
+                "measured": "2026-01-02T03:04:05",
+                "seconds": 1.5,
+                "cpus": 2,
+                "load_1min_before": 0.5,
+                "figures": [
+                    {"name": "a | b", "value": 0.1234567, "unit": "s"},
+                    {"name": "n", "value": 12345, "unit": ""},
+                    {"name": "x", "value": float("nan"), "unit": "deg"},
+                ],
+            }
+        )
+    )
     text = page.render(tmp_path)
     assert "## demo" in text and "| a \\| b | 0.1235 | s |" in text and "| n | 12,345 |  |" in text
     assert "| x | — | deg |" in text and "2026-01-02 03:04:05" in text

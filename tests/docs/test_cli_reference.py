@@ -12,7 +12,9 @@ ROOT = Path(__file__).resolve().parents[2]
 @pytest.fixture(scope="module")
 def gen() -> SimpleNamespace:
     """The generator, and the page it renders now (rendered once for both tests)."""
-    module = SimpleNamespace(**runpy.run_path(str(ROOT / "docs" / "gen_cli_reference.py"), run_name="gen_cli_reference"))
+    module = SimpleNamespace(
+        **runpy.run_path(str(ROOT / "docs" / "gen_cli_reference.py"), run_name="gen_cli_reference")
+    )
     module.text = module.render()
     return module
 

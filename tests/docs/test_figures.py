@@ -44,23 +44,28 @@ NUMBER = r"[−\-+]?\d[\d,]*(?:\.\d+)?(?:e[−\-]?\d+)?"
 # a number or a range / list of them (0.2–0.5, 0.2 / 0.3, 0.2/0.3/0.5), then its unit; not part of a word or path
 FIGURE = re.compile(rf"(?<![\w.\-/^]){NUMBER}(?:\s?(?:–|-|/|…|\.\.\.)\s?{NUMBER})*\s?{UNIT}(?![\w/²³])")
 FIG = rf"(?P<fig>{FIGURE.pattern})"
-INPUT_WORDS = (r"hold|push|pushes|paths?|logs?|runs?|sessions?|videos?|clips?|moves?|windows?|timeouts?|delays?|"
-               r"late|early|jitter|tilts?|yaw|turns?|swings?|pumping|settle|waits?|of streaming|of motion|of swing|"
-               r"streams?|recording|budget|studies|sleeps?|sleeping|apart|slices?|steps?|grid|"
-               r"exposure|shutter|per command|segments?|above|below|around|down|wide|margin|stages?|"
-               r"plans?|later|earlier|tail|lost|malformed|amplitudes?")
-ALLOWED = [re.compile(p) for p in (
-    rf"(?:≤|≥|<|>|up to|at least|at most)\s*{FIG}",  # a bound: goal, limit, threshold
-    rf"{FIG}\s+(?:send\s+|command\s+|FRI\s+|control\s+)?(?:periods?|cycles?)\b",  # the FRI period
-    r"\b(?:at|every)\s+(?P<fig>(?:1|2|4|5|10)(?:\s?(?:–|,|/|and|or)\s?(?:1|2|4|5|10))*\s?ms)\b",
-    rf"±\s*{FIG}",  # a band
-    rf"{FIG}\s+(?:shorter|longer|short|long|off|wider|narrower|larger|smaller|heavier|lighter|too long|too short)\b",
-    rf"\b(?:at|to|within|of)\s+{FIG}\s+of\s+(?:the|its|their|every|each)\b",  # a share of the limits
-    rf"{FIG}\s+(?:{INPUT_WORDS})\b",  # what a run is given
-    rf"{FIG},?\s+(?:\w+\s+)?(?:ball|string|circle|disc|marker|radius|square|board|rod|cup|frame)\b",
-    rf"\bdefault:?\s+{FIG}",
-    rf"\b(?:a|an|with)\s+{FIG}\s+(?:camera\s+)?latency\b",  # a camera's latency, as a run is given it
-)]
+INPUT_WORDS = (
+    r"hold|push|pushes|paths?|logs?|runs?|sessions?|videos?|clips?|moves?|windows?|timeouts?|delays?|"
+    r"late|early|jitter|tilts?|yaw|turns?|swings?|pumping|settle|waits?|of streaming|of motion|of swing|"
+    r"streams?|recording|budget|studies|sleeps?|sleeping|apart|slices?|steps?|grid|"
+    r"exposure|shutter|per command|segments?|above|below|around|down|wide|margin|stages?|"
+    r"plans?|later|earlier|tail|lost|malformed|amplitudes?"
+)
+ALLOWED = [
+    re.compile(p)
+    for p in (
+        rf"(?:≤|≥|<|>|up to|at least|at most)\s*{FIG}",  # a bound: goal, limit, threshold
+        rf"{FIG}\s+(?:send\s+|command\s+|FRI\s+|control\s+)?(?:periods?|cycles?)\b",  # the FRI period
+        r"\b(?:at|every)\s+(?P<fig>(?:1|2|4|5|10)(?:\s?(?:–|,|/|and|or)\s?(?:1|2|4|5|10))*\s?ms)\b",
+        rf"±\s*{FIG}",  # a band
+        rf"{FIG}\s+(?:shorter|longer|short|long|off|wider|narrower|larger|smaller|heavier|lighter|too long|too short)\b",
+        rf"\b(?:at|to|within|of)\s+{FIG}\s+of\s+(?:the|its|their|every|each)\b",  # a share of the limits
+        rf"{FIG}\s+(?:{INPUT_WORDS})\b",  # what a run is given
+        rf"{FIG},?\s+(?:\w+\s+)?(?:ball|string|circle|disc|marker|radius|square|board|rod|cup|frame)\b",
+        rf"\bdefault:?\s+{FIG}",
+        rf"\b(?:a|an|with)\s+{FIG}\s+(?:camera\s+)?latency\b",  # a camera's latency, as a run is given it
+    )
+]
 
 
 def pages() -> list[Path]:
@@ -102,8 +107,11 @@ def hand_typed(text: str, before: str = "", after: str = "") -> list[str]:
     for a phrase broken over lines)."""
     whole, start = f"{before}\n{text}\n{after}", len(before) + 1
     allowed = [m.span("fig") for pattern in ALLOWED for m in pattern.finditer(whole)]
-    return [m.group(0) for m in FIGURE.finditer(whole, start, start + len(text))
-            if not any(a <= m.start() and m.end() <= b for a, b in allowed)]
+    return [
+        m.group(0)
+        for m in FIGURE.finditer(whole, start, start + len(text))
+        if not any(a <= m.start() and m.end() <= b for a, b in allowed)
+    ]
 
 
 def page_figures(path: Path) -> list[str]:
@@ -118,23 +126,48 @@ def page_figures(path: Path) -> list[str]:
 
 def test_no_measured_figure_is_typed_by_hand():
     found = [line for path in pages() for line in page_figures(path)]
-    assert not found, (f"{len(found)} figures typed by hand (quote them with <!-- lbr:bench FILE.KEY -->; see this "
-                       "test's docstring for the parameter phrases allowed):\n" + "\n".join(found))
+    assert not found, (
+        f"{len(found)} figures typed by hand (quote them with <!-- lbr:bench FILE.KEY -->; see this "
+        "test's docstring for the parameter phrases allowed):\n" + "\n".join(found)
+    )
 
 
-@pytest.mark.parametrize("text", [
-    "p99 0.058 ms, 1.08× KUKA's", "28,300 poses/s best of 3", "100 % found, centre RMS 0.20 px", "in 1,231 s end",
-    "planning 4.0 s", "viser's client is 0.8 MB", "θ RMS 0.020°", "median 0.75 (0.2–0.5°)", "8.42 runs/s",
-    "a largest offset of 17.6 mm", "decode 1,659 frames/s", "it took 2 min",
-])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "p99 0.058 ms, 1.08× KUKA's",
+        "28,300 poses/s best of 3",
+        "100 % found, centre RMS 0.20 px",
+        "in 1,231 s end",
+        "planning 4.0 s",
+        "viser's client is 0.8 MB",
+        "θ RMS 0.020°",
+        "median 0.75 (0.2–0.5°)",
+        "8.42 runs/s",
+        "a largest offset of 17.6 mm",
+        "decode 1,659 frames/s",
+        "it took 2 min",
+    ],
+)
 def test_a_measured_figure_is_found(text):
     assert hand_typed(text), text
 
 
-@pytest.mark.parametrize("text", [
-    "at a 1 ms send period", "every 5 ms", "strings ±10 % off", "the string 20 % short", "a 60 s hold and a 10° push",
-    "(goal ≤ 5 s)", "at 20 % of the limits", "a 13 px ball", "(default 0.2°)", "5 and 15 ms delay",
-])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "at a 1 ms send period",
+        "every 5 ms",
+        "strings ±10 % off",
+        "the string 20 % short",
+        "a 60 s hold and a 10° push",
+        "(goal ≤ 5 s)",
+        "at 20 % of the limits",
+        "a 13 px ball",
+        "(default 0.2°)",
+        "5 and 15 ms delay",
+    ],
+)
 def test_a_parameter_phrase_is_allowed(text):
     assert not hand_typed(text), text
 
@@ -159,22 +192,39 @@ def test_a_marker_quotes_the_results_file_with_its_unit_and_rounding(tmp_path, m
 
     hooks = _hooks()
     monkeypatch.setattr(hooks, "RESULT_FOLDERS", (tmp_path,))
-    (tmp_path / "demo.json").write_text(json.dumps({
-        "benchmark": "demo", "load_1min_before": 2.5,
-        "figures": [{"name": "plan: time (4 segments)", "value": 1.23456, "unit": "s"},
+    (tmp_path / "demo.json").write_text(
+        json.dumps(
+            {
+                "benchmark": "demo",
+                "load_1min_before": 2.5,
+                "figures": [
+                    {"name": "plan: time (4 segments)", "value": 1.23456, "unit": "s"},
                     {"name": "plan: residual", "value": 0.0012345, "unit": "deg"},
-                    {"name": "run: residual", "value": 0.5, "unit": "deg"}]}))
-    (tmp_path / "own.json").write_text(json.dumps({"cases": [{"key": "a", "p99_ms": 1.0, "share": 0.25},
-                                                              {"key": "b", "p99_ms": 2.5, "share": 0.5}]}))
+                    {"name": "run: residual", "value": 0.5, "unit": "deg"},
+                ],
+            }
+        )
+    )
+    (tmp_path / "own.json").write_text(
+        json.dumps({"cases": [{"key": "a", "p99_ms": 1.0, "share": 0.25}, {"key": "b", "p99_ms": 2.5, "share": 0.5}]})
+    )
     assert hooks.figure('demo."plan: time (4 segments)"') == "1.23 s"
     assert hooks.figure('demo."plan: time (4 segments)"', "unit=ms") == "1,230 ms"
     assert hooks.figure('demo."plan: residual"') == "0.00123°"
     assert hooks.figure('demo."*: residual"', "max") == "0.500°" and hooks.figure("demo.load_1min_before") == "2.50"
-    assert hooks.figure("own.cases.b.p99_ms") == "2.50 ms" and hooks.figure("own.cases.*.p99_ms", "range") == "1.00–2.50 ms"
+    assert (
+        hooks.figure("own.cases.b.p99_ms") == "2.50 ms"
+        and hooks.figure("own.cases.*.p99_ms", "range") == "1.00–2.50 ms"
+    )
     assert hooks.figure("own.cases.0.share", "unit=%") == "25 %" and hooks.figure("own.cases.*", "count") == "2"
     assert hooks.expand("x <!-- lbr:bench own.cases.b.p99_ms digits=2 --> y") == "x 2.5 ms y"
-    for spec, options in (("nothing.x", ""), ("own.cases.c.p99_ms", ""), ("own.cases.a.p50_ms", ""),
-                          ("own.cases.*.p99_ms", ""), ("own.cases.a.p99_ms", "sideways")):
+    for spec, options in (
+        ("nothing.x", ""),
+        ("own.cases.c.p99_ms", ""),
+        ("own.cases.a.p50_ms", ""),
+        ("own.cases.*.p99_ms", ""),
+        ("own.cases.a.p99_ms", "sideways"),
+    ):
         with pytest.raises(hooks.FigureError):
             hooks.figure(spec, options)
     with pytest.raises(ValueError, match="not understood"):

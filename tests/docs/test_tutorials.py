@@ -61,7 +61,9 @@ def blocks(path: Path) -> list[Block]:
             body.append(lines[i])
             i += 1
         text = "\n".join(line[2:] if line.startswith("$ ") else line for line in body).replace("\\\n", " ")
-        commands = tuple(tuple(argv) for argv in (shlex.split(line, comments=True) for line in text.splitlines()) if argv)
+        commands = tuple(
+            tuple(argv) for argv in (shlex.split(line, comments=True) for line in text.splitlines()) if argv
+        )
         expect = int(mark.split()[1]) if mark.startswith("expect-exit") else 0
         kind = mark.split(":")[0].split()[0] if mark else ""
         after = mark.split(": ", 1)[1] if kind == "same-as" else ""
@@ -159,7 +161,8 @@ def run_page(path: Path, tmp: Path, with_slow: bool, ran_before: list[tuple[str,
             check_syntax(argv, where)
             code, stderr = (run_lbr if argv[0] == "lbr" else run_python)(argv, tmp)
             assert code == block.expect, (
-                f"{where}: `{' '.join(argv)}` exited {code}, the page expects {block.expect}\n{stderr[-3000:]}")
+                f"{where}: `{' '.join(argv)}` exited {code}, the page expects {block.expect}\n{stderr[-3000:]}"
+            )
             ran.append(argv)
     assert not [p.name for p in tmp.iterdir() if ".part" in p.name], "a temporary output was left behind"
     return ran
@@ -173,8 +176,11 @@ def test_pages_run_as_written(chain, tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("chain", [c for c in chains() if any(b.mark == "slow" for p in c for b in blocks(p))],
-                         ids=lambda c: "+".join(p.name for p in c))
+@pytest.mark.parametrize(
+    "chain",
+    [c for c in chains() if any(b.mark == "slow" for p in c for b in blocks(p))],
+    ids=lambda c: "+".join(p.name for p in c),
+)
 def test_pages_run_as_written_with_their_slow_blocks(chain, tmp_path):
     ran: list[tuple[str, ...]] = []
     for page in chain:

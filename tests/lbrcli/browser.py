@@ -11,8 +11,16 @@ import time
 import numpy as np
 import pytest
 
-CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                  "--disable-background-networking", "--disable-component-update", "--disable-sync")
+CHROMIUM_FLAGS = (
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+)
 
 # The position of a scene node in the scene's own frame (the robot's base frame), whatever viser's root does.
 NODE_POSITION_JS = """name => {
@@ -24,8 +32,10 @@ NODE_POSITION_JS = """name => {
   root.worldToLocal(v);
   return [v.x, v.y, v.z, o.visible];
 }"""
-STATUS_JS = "() => { const s = window.__viserSceneTree && window.__viserSceneTree.getState()['/status']; " \
-            "return s ? s.message.props.text : null; }"
+STATUS_JS = (
+    "() => { const s = window.__viserSceneTree && window.__viserSceneTree.getState()['/status']; "
+    "return s ? s.message.props.text : null; }"
+)
 
 
 def chromium_path() -> str | None:
@@ -51,8 +61,12 @@ def page(viewport=(480, 320)):
     console: list[tuple[str, str]] = []
     with tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
         context = pw.chromium.launch_persistent_context(
-            profile, executable_path=executable, headless=True, args=list(CHROMIUM_FLAGS),
-            viewport={"width": viewport[0], "height": viewport[1]})
+            profile,
+            executable_path=executable,
+            headless=True,
+            args=list(CHROMIUM_FLAGS),
+            viewport={"width": viewport[0], "height": viewport[1]},
+        )
         try:
             pg = context.pages[0] if context.pages else context.new_page()
             pg.set_default_timeout(120_000)  # [ms]: a software-rendered page on a loaded machine answers late

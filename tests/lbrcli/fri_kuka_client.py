@@ -85,8 +85,14 @@ class KukaLikeClient:
     def close(self) -> None:
         self.sock.close()
 
-    def run(self, overlay: Callable | None = None, mode: str = "position", io: Callable | None = None,
-            timeout: float = 10.0, record: bool = True) -> Run:
+    def run(
+        self,
+        overlay: Callable | None = None,
+        mode: str = "position",
+        io: Callable | None = None,
+        timeout: float = 10.0,
+        record: bool = True,
+    ) -> Run:
         """Answer until IDLE, ``timeout`` [s], or 1 s without a message; ``record=False`` keeps nothing (an echo
         client for timing measurements)."""
         codec, sock = self.codec, self.sock
@@ -146,7 +152,15 @@ class KukaLikeClient:
             cmd.header.reflectedSequenceCounter = mon.header.sequenceCounter
             sock.sendto(codec.encode(cmd), addr)
             if record:
-                out.sent.append(Sent(seq, mon.header.sequenceCounter, q, tau if mode == "torque" else None,
-                                     wrench if mode == "wrench" else None, writes))
+                out.sent.append(
+                    Sent(
+                        seq,
+                        mon.header.sequenceCounter,
+                        q,
+                        tau if mode == "torque" else None,
+                        wrench if mode == "wrench" else None,
+                        writes,
+                    )
+                )
             seq += 1
         return out

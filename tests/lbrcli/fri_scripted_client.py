@@ -106,15 +106,23 @@ class ScriptedClient:
                 continue
             md = mon.monitorData
             rec = Received(
-                t=now, seq=mon.header.sequenceCounter, reflected=mon.header.reflectedSequenceCounter,
-                state=mon.connectionInfo.sessionState, quality=mon.connectionInfo.quality,
-                send_period=mon.connectionInfo.sendPeriod, multiplier=mon.connectionInfo.receiveMultiplier,
-                safety=mon.robotInfo.safetyState, drives=tuple(mon.robotInfo.driveState),
-                msr_q=np.array(md.measuredJointPosition.value), ipo_q=np.array(mon.ipoData.jointPosition.value),
-                msr_tau=np.array(md.measuredTorque.value), tracking=mon.ipoData.trackingPerformance,
+                t=now,
+                seq=mon.header.sequenceCounter,
+                reflected=mon.header.reflectedSequenceCounter,
+                state=mon.connectionInfo.sessionState,
+                quality=mon.connectionInfo.quality,
+                send_period=mon.connectionInfo.sendPeriod,
+                multiplier=mon.connectionInfo.receiveMultiplier,
+                safety=mon.robotInfo.safetyState,
+                drives=tuple(mon.robotInfo.driveState),
+                msr_q=np.array(md.measuredJointPosition.value),
+                ipo_q=np.array(mon.ipoData.jointPosition.value),
+                msr_tau=np.array(md.measuredTorque.value),
+                tracking=mon.ipoData.trackingPerformance,
                 stamp=(md.timestamp.sec, md.timestamp.nanosec),
                 io={io.name: io.analogValue for io in md.readIORequest},
-                mode=mon.ipoData.clientCommandMode, overlay=mon.ipoData.overlayType,
+                mode=mon.ipoData.clientCommandMode,
+                overlay=mon.ipoData.overlayType,
             )
             out.received.append(rec)
             if rec.state == SessionState.IDLE:

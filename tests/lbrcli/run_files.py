@@ -37,9 +37,28 @@ def _make(folder: Path) -> None:
     t = np.arange(0.0, 1.6 + 1e-12, 0.01)
     s = (1 - np.cos(2 * np.pi * t / 1.6)) / 2
     write_joint_csv(folder / "plan.csv", JointTrajectory(t=t, q=Q0 + s[:, None] * AXES))
-    proc = subprocess.run([sys.executable, "-m", "lbrcli", "execute", str(folder / "plan.csv"), "--port", "0",
-                           "--log", str(folder / "log.csv"), "--length", str(LENGTH), "--settle", "0.6",
-                           "--sim-lenient", "--json"], capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "lbrcli",
+            "execute",
+            str(folder / "plan.csv"),
+            "--port",
+            "0",
+            "--log",
+            str(folder / "log.csv"),
+            "--length",
+            str(LENGTH),
+            "--settle",
+            "0.6",
+            "--sim-lenient",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 0, proc.stderr
     log = read_table(folder / "log.csv", LOG_COLUMNS, time="increasing")
     rng = np.random.default_rng(7)
@@ -49,9 +68,12 @@ def _make(folder: Path) -> None:
     found = rng.random(len(theta)) > 0.05
     theta[~found] = np.nan
     uv = np.where(found[:, None], np.column_stack([640 + 300 * np.sin(theta), 260 + 300 * np.cos(theta)]), np.nan)
-    write_table(folder / "track.csv", ("t", "frame", "u", "v", "found", "theta"),
-                np.column_stack([t_track, np.arange(len(t_track)), uv, found.astype(float), theta]),
-                fmt=["%.6f", "%d", "%.3f", "%.3f", "%d", "%.6f"])
+    write_table(
+        folder / "track.csv",
+        ("t", "frame", "u", "v", "found", "theta"),
+        np.column_stack([t_track, np.arange(len(t_track)), uv, found.astype(float), theta]),
+        fmt=["%.6f", "%d", "%.3f", "%.3f", "%d", "%.6f"],
+    )
     (folder / "boxes.csv").write_text("name,x_min,y_min,z_min,x_max,y_max,z_max\npost,0.5,-0.4,0.0,0.56,-0.34,0.3\n")
     (folder / "done.json").write_text(json.dumps({"ok": True}))
 

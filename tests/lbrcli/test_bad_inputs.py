@@ -107,8 +107,11 @@ def ws(tmp_path_factory):
     write_table(d / "pred.csv", ("t", "theta"), np.column_stack([t, 0.2 * np.sin(2 * np.pi * t)]))
     tt = np.arange(0, 4.0, 1 / 60)
     th = 0.2 * np.sin(2 * np.pi * tt)
-    write_table(d / "track.csv", ("t", "frame", "u", "v", "found", "theta"),
-                np.column_stack([tt, np.arange(len(tt)), 100 + 50 * th, 200 + 0 * tt, 1 + 0 * tt, th]))
+    write_table(
+        d / "track.csv",
+        ("t", "frame", "u", "v", "found", "theta"),
+        np.column_stack([tt, np.arange(len(tt)), 100 + 50 * th, 200 + 0 * tt, 1 + 0 * tt, th]),
+    )
     _log(d / "log.csv")
     _log(d / "stopped.csv", complete=False)
     _log(d / "noball.csv", ball=False)
@@ -142,8 +145,18 @@ BASE = {
     "retime": ["retime", "{ws}/joint.csv", "-o", "{out}/r.csv"],
     "compare": ["compare", "{ws}/pred.csv", "{ws}/track.csv"],
     "plan anti-sway": ["plan", "anti-sway", "-o", "{out}/a.csv", "--length", "0.25", "--a-max", "2"],
-    "plan swing-up": ["plan", "swing-up", "-o", "{out}/s.csv", "--length", "0.25", "--mass", "0.0139", "--theta-d",
-                      "115deg"],
+    "plan swing-up": [
+        "plan",
+        "swing-up",
+        "-o",
+        "{out}/s.csv",
+        "--length",
+        "0.25",
+        "--mass",
+        "0.0139",
+        "--theta-d",
+        "115deg",
+    ],
     "plan cup-and-ball": ["plan", "cup-and-ball", "-o", "{out}/c.csv", "--length", "0.25"],
     "execute": ["execute", "{ws}/joint.csv"],
     "monitor": ["monitor", "--duration", "1"],
@@ -230,10 +243,14 @@ def _bad_values(parser) -> list[str]:
         if parser.integer:
             vals += ["1.5", "1e3"]
         if parser.low is not None:
-            below = parser.low / 2 if getattr(parser, "zero_is_none", False) else parser.low - max(1e-6, abs(parser.low))
+            below = (
+                parser.low / 2 if getattr(parser, "zero_is_none", False) else parser.low - max(1e-6, abs(parser.low))
+            )
             vals.append(f"{parser.low:.17g}" if parser.low_open else f"{below:.17g}")  # (0: "no ball" where it is)
         if parser.high is not None:
-            vals.append(f"{parser.high:.17g}" if parser.high_open else f"{parser.high + max(1e-6, abs(parser.high)):.17g}")
+            vals.append(
+                f"{parser.high:.17g}" if parser.high_open else f"{parser.high + max(1e-6, abs(parser.high)):.17g}"
+            )
         return vals
     if isinstance(parser, Angle):
         lo, hi = parser.range.low, parser.range.high
@@ -515,13 +532,23 @@ BAD_CALIBRATIONS = [
     ("not_json", "{", "not JSON"),
     ("list", "[1, 2]", "not a calibration object"),
     ("missing", '{"dist_coeffs": [0,0,0,0,0], "image_size": [320, 240]}', "missing field 'camera_matrix'"),
-    ("nan", '{"camera_matrix": [[NaN,0,0],[0,1,0],[0,0,1]], "dist_coeffs": [0,0,0,0,0], "image_size": [320, 240]}',
-     "non-finite"),
+    (
+        "nan",
+        '{"camera_matrix": [[NaN,0,0],[0,1,0],[0,0,1]], "dist_coeffs": [0,0,0,0,0], "image_size": [320, 240]}',
+        "non-finite",
+    ),
     ("shape", '{"camera_matrix": [1,2,3], "dist_coeffs": [0,0,0,0,0], "image_size": [320, 240]}', "shape"),
-    ("size", '{"camera_matrix": [[1,0,0],[0,1,0],[0,0,1]], "dist_coeffs": [0,0,0,0,0], "image_size": [-1, 1e30]}',
-     "image_size"),
-    ("rms", '{"camera_matrix": [[1,0,0],[0,1,0],[0,0,1]], "dist_coeffs": [0,0,0,0,0], "image_size": [320, 240], '
-            '"rms_px": "low"}', "rms_px"),
+    (
+        "size",
+        '{"camera_matrix": [[1,0,0],[0,1,0],[0,0,1]], "dist_coeffs": [0,0,0,0,0], "image_size": [-1, 1e30]}',
+        "image_size",
+    ),
+    (
+        "rms",
+        '{"camera_matrix": [[1,0,0],[0,1,0],[0,0,1]], "dist_coeffs": [0,0,0,0,0], "image_size": [320, 240], '
+        '"rms_px": "low"}',
+        "rms_px",
+    ),
     ("deep", "[" * 100000 + "]" * 100000, "nested too deeply"),
 ]
 
@@ -554,7 +581,9 @@ def test_bad_videos(guarded_ws, tmp_path, name, content, words):
     assert not any(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize("name, content, words", BAD_MEDIA[:3] + BAD_MEDIA[5:], ids=[c[0] for c in BAD_MEDIA[:3] + BAD_MEDIA[5:]])
+@pytest.mark.parametrize(
+    "name, content, words", BAD_MEDIA[:3] + BAD_MEDIA[5:], ids=[c[0] for c in BAD_MEDIA[:3] + BAD_MEDIA[5:]]
+)
 def test_bad_calibration_images(guarded_ws, tmp_path, name, content, words):
     path = _materialise(tmp_path, name, content)
     code, out, err = run(["track", "calibrate", path, "-o", tmp_path / "cal.json"])
@@ -566,7 +595,10 @@ def test_bad_calibration_images(guarded_ws, tmp_path, name, content, words):
 @pytest.mark.parametrize(
     "argv, words",
     [
-        (["track", "film", "{ws}/stopped.csv", "-o", "{out}/f.mp4"], "did not complete (it stopped at row 40 of the 100"),
+        (
+            ["track", "film", "{ws}/stopped.csv", "-o", "{out}/f.mp4"],
+            "did not complete (it stopped at row 40 of the 100",
+        ),
         (["track", "film", "{ws}/noball.csv", "-o", "{out}/f.mp4"], "no column 'ball_theta_y'"),
         (["track", "film", "{ws}/joint.csv", "-o", "{out}/f.mp4"], "wrong header"),
         (["compare", "{ws}/stopped.csv", "{ws}/track.csv", "--column", "ball_theta_y"], "did not complete"),
@@ -596,8 +628,11 @@ def test_a_track_covering_a_small_part_of_the_prediction_is_refused(guarded_ws, 
 
     t = np.arange(0, 0.4, 1 / 60)
     short = tmp_path.parent / f"short-{tmp_path.name}.csv"
-    write_table(short, ("t", "frame", "u", "v", "found", "theta"),
-                np.column_stack([t, np.arange(len(t)), 0 * t, 0 * t, 1 + 0 * t, 0.2 * np.sin(2 * np.pi * t)]))
+    write_table(
+        short,
+        ("t", "frame", "u", "v", "found", "theta"),
+        np.column_stack([t, np.arange(len(t)), 0 * t, 0 * t, 1 + 0 * t, 0.2 * np.sin(2 * np.pi * t)]),
+    )
     code, out, err = run(["compare", guarded_ws / "pred.csv", short, "--lag", "0"])
     assert "covers only 10 % of the prediction" in error_line(code, err, 1)
     code, out, err = run(["compare", guarded_ws / "pred.csv", short, "--lag", "0", "--partial"])
@@ -668,7 +703,10 @@ def tiny_disk(tmp_path_factory):
     if os.geteuid() != 0:
         yield None
         return
-    ok = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(d)], capture_output=True).returncode == 0
+    ok = (
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(d)], capture_output=True).returncode
+        == 0
+    )
     yield d if ok else None
     if ok:
         subprocess.run(["umount", "-l", str(d)], capture_output=True)

@@ -75,19 +75,24 @@ def test_state_round_trip_binary_and_json():
     assert len(data) == STATE_SIZE == 256 and data[:4] == b"LBRS"
     assert decode_state(data) == state == decode_state(encode_state_json(state))
     # the documented offsets: commanded q at 88, the TCP pose at 200
-    assert struct.unpack_from("<7d", data, 88) == (0.2,) * 7 and struct.unpack_from("<7d", data, 200)[:3] == (0.4, 0, 0.5)
+    assert struct.unpack_from("<7d", data, 88) == (0.2,) * 7 and struct.unpack_from("<7d", data, 200)[:3] == (
+        0.4,
+        0,
+        0.5,
+    )
 
 
 # -- the bridge on the simulator ----------------------------------------------------------------------------------
-PERIOD_S = 0.004  # [s] the embedded simulator's send period in these real-time tests: on a machine busy with other
-# work a 1 ms session is lost to the controller's connection-quality rule (a timing question: benchmarks); the
-# bridge's 1 ms behaviour is tested in lock step (test_bridge_timeline.py)
+PERIOD_S = 0.004  # [s] the embedded simulator's send period in these real-time tests; the bridge's 1 ms behaviour is
+# tested in lock step (test_bridge_timeline.py). The simulator keeps its period's grid but waits for each reply
+# (--sim-lockstep): on a machine busy with other work its connection-quality rule would otherwise drop the session
+# for late replies — a timing question, which the benchmarks answer
 
 
 def _serve(tmp_path, listen_port: int, *extra: str) -> subprocess.Popen:
     return subprocess.Popen(
         [sys.executable, "-m", "lbrcli", "serve", "--listen", f"127.0.0.1:{listen_port}", "--port", "0",
-         "--period", str(round(PERIOD_S * 1e3)), "--sim-lenient", "--log", str(tmp_path / "serve.csv"), "--json",
+         "--period", str(round(PERIOD_S * 1e3)), "--sim-lockstep", "--log", str(tmp_path / "serve.csv"), "--json",
          *extra],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
@@ -120,23 +125,29 @@ def _ready(client: BridgeClient, timeout_s: float = 60.0) -> None:
 
 
 def _stream(client: BridgeClient, rate_hz: float, seconds: float, states: list | None = None) -> list[np.ndarray]:
-    """Send the wave at ``rate_hz`` for ``seconds`` (after the bridge answered); the targets sent."""
-    sent = []
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < seconds:
-        t = time.monotonic() - t0
+    """Send the wave at ``rate_hz`` (wall clock) for ``seconds`` of the robot's time; the targets sent. The wave's time
+    is the controller time the bridge's states echo (a source synchronised to the robot's clock): in lock-step a
+    loaded machine runs the simulator slower than real time, and the robot still sees the wave it would see on an
+    idle one."""
+    sent: list[np.ndarray] = []
+    seen = states if states is not None else []
+    t, t0 = 0.0, None  # [s] the wave's time; the controller time it started at
+    wall0 = time.monotonic()
+    while t < seconds and time.monotonic() < wall0 + 60.0 + 20.0 * seconds:
+        client.sock.setblocking(False)
+        try:
+            while True:
+                seen.append(decode_state(client.sock.recv(4096)))
+        except (BlockingIOError, OSError):
+            pass
+        client.sock.setblocking(True)
+        if seen:
+            t0 = seen[-1].t if t0 is None else t0
+            t = seen[-1].t - t0
         q = _wave(t)
         client.send_joint(q, t=t)
         sent.append(q)
-        if states is not None:
-            client.sock.setblocking(False)
-            try:
-                while True:
-                    states.append(decode_state(client.sock.recv(4096)))
-            except (BlockingIOError, OSError):
-                pass
-            client.sock.setblocking(True)
-        time.sleep(max(0.0, t0 + len(sent) / rate_hz - time.monotonic()))
+        time.sleep(max(0.0, wall0 + len(sent) / rate_hz - time.monotonic()))
     return sent
 
 
@@ -275,20 +286,30 @@ def test_a_json_target_outside_the_limits_is_refused(tmp_path):
 
 def test_no_target_within_first_target_of_commanding_ends_the_session(tmp_path):
     proc = _serve(tmp_path, free_port(), "--first-target", "0.5")
-    out, err = proc.communicate(timeout=60)
+    out, err = proc.communicate(timeout=180)
     assert proc.returncode == 1 and "no target arrived within 0.5 s of commanding" in err
     f = json.loads(out)
-    assert f["active_cycles"] >= 0.4 / PERIOD_S  # the clock ran from activation (0.5 s; less on a loaded machine)
+    # the clock ran from activation, not from the start: cycles in commanding, never more than 0.5 s of them (a loaded
+    # machine runs fewer: the simulator waits for late replies)
+    assert 0.1 / PERIOD_S <= f["active_cycles"] <= 0.55 / PERIOD_S
     cmd = np.column_stack([_log(tmp_path).column(f"cmd_q{k}") for k in range(1, 8)])
     assert np.abs(cmd - Q0).max() < 1e-9  # held where it stood
 
 
 @pytest.mark.parametrize(
     "argv, option",
-    [(("--listen", "nowhere"), "--listen"), (("--timeout", "0"), "--timeout"), (("--speed-scale", "2"), "--speed-scale"),
-     (("--state-every", "-1"), "--state-every"), (("--length", "0.3", "--robot", "127.0.0.1"), "--length"),
-     (("--listen", "off"), "--mqtt"), (("--mqtt", "http://host/topic"), "--mqtt"), (("--secret", "/nonexistent"), "--secret"),
-     (("--mqtt-state-hz", "-1"), "--mqtt-state-hz"), (("--mqtt", "mqtt://127.0.0.1:1/lbr/cmd"), "--mqtt")],
+    [
+        (("--listen", "nowhere"), "--listen"),
+        (("--timeout", "0"), "--timeout"),
+        (("--speed-scale", "2"), "--speed-scale"),
+        (("--state-every", "-1"), "--state-every"),
+        (("--length", "0.3", "--robot", "127.0.0.1"), "--length"),
+        (("--listen", "off"), "--mqtt"),
+        (("--mqtt", "http://host/topic"), "--mqtt"),
+        (("--secret", "/nonexistent"), "--secret"),
+        (("--mqtt-state-hz", "-1"), "--mqtt-state-hz"),
+        (("--mqtt", "mqtt://127.0.0.1:1/lbr/cmd"), "--mqtt"),
+    ],
 )
 def test_serve_options_are_validated(argv, option):
     proc = run_lbr("serve", "--port", "0", *argv)

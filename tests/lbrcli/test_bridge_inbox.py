@@ -58,7 +58,12 @@ def test_bad_pose_targets_are_refused_with_a_reason(data, words):
 def test_signed_messages_verify_only_with_the_secret():
     msg = encode_target([0.1] * 7)
     assert verify(sign(msg, KEY), KEY) == msg
-    for bad in (sign(msg, b"another-secret-of-16"), msg, sign(msg, KEY)[:-1] + bytes([sign(msg, KEY)[-1] ^ 1]), b"short"):
+    for bad in (
+        sign(msg, b"another-secret-of-16"),
+        msg,
+        sign(msg, KEY)[:-1] + bytes([sign(msg, KEY)[-1] ^ 1]),
+        b"short",
+    ):
         with pytest.raises(BadTarget):
             verify(bad, KEY)
 

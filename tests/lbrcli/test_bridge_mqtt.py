@@ -101,13 +101,17 @@ def test_a_30hz_teleoperation_source_over_mosquitto_is_followed_smoothly_and_its
     # the TCP followed the circle (behind by the 30 Hz steps and ruckig's lag), and never went toward the stranger
     following = (tab.column("state") == 4) & (np.cumsum(tab.column("phase") == PHASE_BRAKE) == 0)
     cmd = np.column_stack([tab.column(f"cmd_q{k}") for k in range(1, 8)])[following]
-    tcp, _ = robot.fk_path(cmd[:: 20])
+    tcp, _ = robot.fk_path(cmd[::20])
     circle = np.array([p for _, p in sent])
     dist = np.linalg.norm(tcp[:, None, :] - circle[None, :, :], axis=2).min(axis=1)
     # within 5 cm of the drawn path (median 6 mm) (≈ 2 mm on a quiet machine; a loaded one delivers the targets in bursts; the
     # accuracy is judged in lock step, test_bridge_timeline.py), round (the circle spans 0.12 m in y; ruckig's lag at
     # --speed-scale 0.5 and late bursts cut its extremes by up to 2 cm under load)
-    assert dist.max() < 0.05 and np.median(dist) < 0.006 and np.ptp(tcp[:, 1]) > 0.08, (dist.max(), np.median(dist), np.ptp(tcp[:, 1]))
+    assert dist.max() < 0.05 and np.median(dist) < 0.006 and np.ptp(tcp[:, 1]) > 0.08, (
+        dist.max(),
+        np.median(dist),
+        np.ptp(tcp[:, 1]),
+    )
     assert np.abs(cmd - (Q0 + 0.4)).max(axis=1).min() > 0.2  # never near the stranger's configuration
     # the state came back on lab/iiwa/cmd/state at ≈ 50 Hz with the commanded TCP
     states = list(op.states)
@@ -132,6 +136,8 @@ def test_the_end_message_over_mqtt_ends_the_session_and_a_refused_log_in_is_an_o
         op.close()
     assert proc.returncode == 0, err
     assert json.loads(out)["reason"] == "finished"
-    bad = run_lbr("serve", "--listen", "off", "--port", "0", "--mqtt", f"mqtt://lbr:wrong@127.0.0.1:{broker.port}/lbr/cmd")
+    bad = run_lbr(
+        "serve", "--listen", "off", "--port", "0", "--mqtt", f"mqtt://lbr:wrong@127.0.0.1:{broker.port}/lbr/cmd"
+    )
     assert bad.returncode == 2 and "--mqtt" in bad.stderr and "refused" in bad.stderr
     assert len(bad.stderr.strip().splitlines()) == 1

@@ -24,8 +24,13 @@ T_GRID = np.arange(0.0, 8.0, 0.001)
 @pytest.fixture(scope="module")
 def pendulum():
     """A free spherical pendulum (elliptical orbit: both tilt components move) from planners.pendulum.simulate."""
-    run = simulate(T_GRID, lambda t: np.zeros(3), STRING_M, s0=direction_from_angles(math.radians(14), math.radians(-6)),
-                   sdot0=np.array([0.0, 0.7, 0.0]))
+    run = simulate(
+        T_GRID,
+        lambda t: np.zeros(3),
+        STRING_M,
+        s0=direction_from_angles(math.radians(14), math.radians(-6)),
+        sdot0=np.array([0.0, 0.7, 0.0]),
+    )
 
     def scene(t):
         k = min(max(t, 0.0), T_GRID[-1] - 2e-3) / 1e-3
@@ -56,8 +61,13 @@ def run_live(scene, config, seconds=2.2):
     results, stamps = [], {}
     with CameraProcess(scene, config) as server:
         tilt = TiltSetup(server.geometry, tuple(PIVOT_M), STRING_M)
-        with LiveTracker(server.url, color_spec("red"), tilt=tilt, on_result=results.append,
-                         on_frame=lambda seq, frame: stamps.__setitem__(seq, read_stamp(frame))) as live:
+        with LiveTracker(
+            server.url,
+            color_spec("red"),
+            tilt=tilt,
+            on_result=results.append,
+            on_frame=lambda seq, frame: stamps.__setitem__(seq, read_stamp(frame)),
+        ) as live:
             time.sleep(seconds)
             latest = live.latest()
         return results, stamps, live.stats, server, latest
@@ -65,8 +75,16 @@ def run_live(scene, config, seconds=2.2):
 
 def test_pendulum_through_the_simulated_camera(pendulum):
     run, scene = pendulum
-    cfg = CameraConfig(position_m=(1.3, -0.6, 1.0), look_at_m=(0.5, 0.0, 0.35), fov_deg=45.0, size=(320, 240), fps=60.0,
-                       exposure_s=0.004, latency_s=0.02, stamp=True)
+    cfg = CameraConfig(
+        position_m=(1.3, -0.6, 1.0),
+        look_at_m=(0.5, 0.0, 0.35),
+        fov_deg=45.0,
+        size=(320, 240),
+        fps=60.0,
+        exposure_s=0.004,
+        latency_s=0.02,
+        stamp=True,
+    )
     results, stamps, stats, server, latest = run_live(scene, cfg)
     assert stats.errors == [] and stats.read >= 60
     assert latest is not None and latest in results  # latest() is one of the results handed out
@@ -83,8 +101,18 @@ def test_pendulum_through_the_simulated_camera(pendulum):
 def test_second_judge_other_pose_rate_blur_latency_bigger_ball(pendulum):
     """From the other side and lower, 120 fps, the shutter open 8 ms, 45 ms late, a ball 20 % larger."""
     run, scene = pendulum
-    cfg = CameraConfig(position_m=(-0.3, 0.9, 0.9), look_at_m=(0.5, 0.0, 0.3), fov_deg=55.0, size=(320, 240),
-                       fps=120.0, exposure_s=0.008, latency_s=0.045, ball_radius_m=0.024, seed=3, stamp=True)
+    cfg = CameraConfig(
+        position_m=(-0.3, 0.9, 0.9),
+        look_at_m=(0.5, 0.0, 0.3),
+        fov_deg=55.0,
+        size=(320, 240),
+        fps=120.0,
+        exposure_s=0.008,
+        latency_s=0.045,
+        ball_radius_m=0.024,
+        seed=3,
+        stamp=True,
+    )
     results, stamps, stats, server, _ = run_live(scene, cfg)
     assert stats.errors == []
     ex, ey, delay, n = judge(results, stamps, cfg.fps, server.t_start, run)
@@ -103,8 +131,12 @@ def test_a_slow_consumer_drops_frames_and_never_queues(pendulum):
         time.sleep(0.05)
 
     with CameraServer(scene, cfg) as server:
-        live = LiveTracker(server.url, color_spec("red"), on_result=slow,
-                           on_frame=lambda seq, frame: taken.append((seq, live.stats.read)))
+        live = LiveTracker(
+            server.url,
+            color_spec("red"),
+            on_result=slow,
+            on_frame=lambda seq, frame: taken.append((seq, live.stats.read)),
+        )
         with live:
             time.sleep(1.5)
     assert live.stats.dropped > 0 and len(results) < live.stats.read
@@ -150,9 +182,26 @@ def test_cli_live_udp_json_and_track_file(lbr, pendulum, tmp_path):
         import sys
 
         proc = subprocess.Popen(
-            [sys.executable, "-m", "lbrcli", "track", "live", server.url, "--duration", "1.5", "--geometry", str(geometry),
-             "--udp", f"127.0.0.1:{sock.getsockname()[1]}", "--json", "-o", str(out)],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            [
+                sys.executable,
+                "-m",
+                "lbrcli",
+                "track",
+                "live",
+                server.url,
+                "--duration",
+                "1.5",
+                "--geometry",
+                str(geometry),
+                "--udp",
+                f"127.0.0.1:{sock.getsockname()[1]}",
+                "--json",
+                "-o",
+                str(out),
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
         )
         datagrams = []
         deadline = time.monotonic() + 60

@@ -25,8 +25,12 @@ def _files(tmp_path, model_fn, start_s, duration_s, drop=(), missing=()):
     found = np.isfinite(theta).astype(float)
     uv = np.where(found[:, None] > 0, 100.0, np.nan) * np.ones((len(t), 2))
     track = tmp_path / "track.csv"
-    write_table(track, ("t", "frame", "u", "v", "found", "theta"),
-                np.column_stack([t, np.arange(len(t)), uv, found, theta]), ["%.6f", "%d", "%.3f", "%.3f", "%d", "%.6f"])
+    write_table(
+        track,
+        ("t", "frame", "u", "v", "found", "theta"),
+        np.column_stack([t, np.arange(len(t)), uv, found, theta]),
+        ["%.6f", "%d", "%.3f", "%.3f", "%d", "%.6f"],
+    )
     return pred, track
 
 

@@ -158,7 +158,9 @@ def test_damping_rides_through_lost_and_malformed_messages(tmp_path):
     from trajectories.robot import Flange, Robot, RobotConfig
 
     path = tmp_path / "moves.csv"  # moves that leave ≈ 5° of sway (the damper's bounds are not saturated)
-    move_end = _write_moves(path, ((np.array([0.12, 0, 0, 0, 0, 0, 0]), 1.2), (np.array([0, 0.05, 0, 0.06, 0, 0, 0]), 1.0)))
+    move_end = _write_moves(
+        path, ((np.array([0.12, 0, 0, 0, 0, 0, 0]), 1.2), (np.array([0, 0.05, 0, 0.06, 0, 0, 0]), 1.0))
+    )
     lim, traj = default_limits(), read_joint_csv(path, None)
     plan = correction_plan(Robot(RobotConfig(flange=Flange("touch-electric"))), traj.q, lim, DT)  # the simulator's
     client = DampingClient(traj.q, lim, DT, 0.25, plan, damp_s=3 * natural_period(0.25), sensor_delay_s=0.015)

@@ -49,9 +49,24 @@ JUDGES = (
     (0.30, (), 0.3),
     # a second judge: from the other side of the move and higher (a 1° tilt moves the ball only 0.5–0.8 px), 90 fps,
     # 6 ms exposure, 30 ms latency, the string 20 % short: measured 0.15–0.17° (open loop 0.67°)
-    (0.20, ("--sim-camera-position", "0.9,-0.9,1.0", "--sim-camera-look-at",
-            "0.5,0,0.2", "--sim-camera-fov", "60", "--sim-camera-fps", "90", "--sim-camera-exposure", "6",
-            "--sim-camera-latency", "30"), 0.45),
+    (
+        0.20,
+        (
+            "--sim-camera-position",
+            "0.9,-0.9,1.0",
+            "--sim-camera-look-at",
+            "0.5,0,0.2",
+            "--sim-camera-fov",
+            "60",
+            "--sim-camera-fps",
+            "90",
+            "--sim-camera-exposure",
+            "6",
+            "--sim-camera-latency",
+            "30",
+        ),
+        0.45,
+    ),
 )
 
 

@@ -9,8 +9,12 @@ import subprocess
 @pytest.mark.slow
 def test_demo_runs_the_whole_loop(tmp_path):
     out = tmp_path / "demo"
-    res = subprocess.run([sys.executable, "-m", "lbrcli", "demo", "--out", str(out), "--json"],
-                         capture_output=True, text=True, timeout=1200)
+    res = subprocess.run(
+        [sys.executable, "-m", "lbrcli", "demo", "--out", str(out), "--json"],
+        capture_output=True,
+        text=True,
+        timeout=1200,
+    )
     assert res.returncode == 0, res.stderr[-3000:]
     f = json.loads(res.stdout)
     assert f["ok"] and not f["steps_failed"]
@@ -37,8 +41,15 @@ def test_demo_runs_the_whole_loop(tmp_path):
     assert catch["flight_position_rms_m"] < 0.005
     summary = (out / "summary.md").read_text()
     assert "lbr execute crane_shaped.csv" in summary and "FAILED" not in summary
-    for name in ("crane_baseline_log.csv", "crane_shaped_execution.png", "swingup.mp4", "swingup_compare.png",
-                 "catch.mp4", "catch_plan.png", "catch_compare.png"):
+    for name in (
+        "crane_baseline_log.csv",
+        "crane_shaped_execution.png",
+        "swingup.mp4",
+        "swingup_compare.png",
+        "catch.mp4",
+        "catch_plan.png",
+        "catch_compare.png",
+    ):
         assert (out / name).stat().st_size > 1000
 
 

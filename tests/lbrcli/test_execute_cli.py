@@ -64,7 +64,19 @@ def free_port() -> int:
 def test_execute_on_the_simulator_streams_every_row_and_logs(tmp_path, version):
     traj = write_traj(tmp_path / "j.csv", 0.01, 1.2)
     log, png = tmp_path / "log.csv", tmp_path / "run.png"
-    args = ["execute", tmp_path / "j.csv", "--port", "0", "--log", log, "--settle", "0.3", "--json", "--fri-version", version]
+    args = [
+        "execute",
+        tmp_path / "j.csv",
+        "--port",
+        "0",
+        "--log",
+        log,
+        "--settle",
+        "0.3",
+        "--json",
+        "--fri-version",
+        version,
+    ]
     if version == "2.7":
         args += ["--plot", png]
     proc = run_lbr(*args)
@@ -131,7 +143,7 @@ def test_monitor_logs_flange_position_and_never_commands_motion(tmp_path, robot)
     assert f["outcome"] == "completed" and f["reason"] == "duration"
     tab = read_log(log)
     i = tab.names.index("flange_x")
-    assert tab.names[i:i + 3] == ("flange_x", "flange_y", "flange_z")
+    assert tab.names[i : i + 3] == ("flange_x", "flange_y", "flange_z")
     k = len(tab.data) // 2
     q = np.array([tab.column(f"msr_q{j}")[k] for j in range(1, 8)])
     pin.framesForwardKinematics(robot.model, robot.data, q)
@@ -186,7 +198,9 @@ def test_unsafe_file_is_refused_before_any_socket_opens(tmp_path):
     th = threading.Thread(target=controller, daemon=True)
     th.start()
     try:
-        proc = run_lbr("execute", tmp_path / "bad.csv", "--robot", "127.0.0.1", "--port", port, "--log", tmp_path / "l.csv")
+        proc = run_lbr(
+            "execute", tmp_path / "bad.csv", "--robot", "127.0.0.1", "--port", port, "--log", tmp_path / "l.csv"
+        )
     finally:
         stop.set()
         th.join(5)
@@ -227,7 +241,9 @@ def test_step_must_equal_the_controller_period_unless_resampled(tmp_path):
     active = np.array([r.position for r in ctl.replies if r.state == CA])
     f = figures(proc)
     assert f["trajectory_rows"] == 401 and len(active) == 401 + f["braking_cycles"]
-    np.testing.assert_allclose(active[:401:5], traj.q, atol=1e-12)  # the file's samples, 1 ms in between  # the file's samples, 1 ms in between
+    np.testing.assert_allclose(
+        active[:401:5], traj.q, atol=1e-12
+    )  # the file's samples, 1 ms in between  # the file's samples, 1 ms in between
 
 
 @pytest.mark.parametrize("to", ["process", "group"])  # group: Ctrl-C in a terminal, which reaches the log writer too
@@ -299,7 +315,9 @@ def test_move_to_start_leaves_the_ball_at_rest_and_the_rows_wait_until_it_is_cal
     assert len(waited) >= window - 1 and waited[-1] == first - 1
     np.testing.assert_array_equal(cmd(tab)[waited], np.repeat(traj.q[:1], len(waited), axis=0))  # held at row 0
     # the shaped move left little swing (an unshaped one leaves degrees), then the rows waited for a calm window
-    assert theta[waited[0]] < 0.5 and theta[first - window + 1 : first + 1].max() < 0.05  # the message of the first row included
+    assert (
+        theta[waited[0]] < 0.5 and theta[first - window + 1 : first + 1].max() < 0.05
+    )  # the message of the first row included
     assert f["start_sway_deg"] < 0.05 and f["start_sway_above_threshold"] is False
     assert f["sway_wait_s"] == pytest.approx(len(waited) * 0.005)
     assert "start sway" in proc.stderr

@@ -59,17 +59,20 @@ def test_every_message_read_back_equals_the_log(exported, reader):
     stamps = log.column("stamp_sec").astype(np.int64) * 1_000_000_000 + log.column("stamp_nsec").astype(np.int64)
     got = reader(out)
     assert fig["clock"] == "controller"
-    expect = {"/lbr/joint_states": (_joints(log, "msr_q"), _joints(log, "msr_tau")),
-              "/lbr/command/joint_states": (_joints(log, "cmd_q"), _joints(log, "cmd_tau")),
-              "/lbr/ipo/joint_states": (_joints(log, "ipo_q"), None),
-              "/lbr/external_torque": (None, _joints(log, "ext_tau"))}
+    expect = {
+        "/lbr/joint_states": (_joints(log, "msr_q"), _joints(log, "msr_tau")),
+        "/lbr/command/joint_states": (_joints(log, "cmd_q"), _joints(log, "cmd_tau")),
+        "/lbr/ipo/joint_states": (_joints(log, "ipo_q"), None),
+        "/lbr/external_torque": (None, _joints(log, "ext_tau")),
+    }
     for topic, (position, effort) in expect.items():
         msgs = got[topic]
         assert len(msgs) == n, topic
         times = np.array([t for t, _ in msgs])
         np.testing.assert_array_equal(times, stamps)
-        np.testing.assert_array_equal([m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for _, m in msgs],
-                                      stamps)
+        np.testing.assert_array_equal(
+            [m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for _, m in msgs], stamps
+        )
         assert all(list(m.name) == [f"lbr_A{i}" for i in range(1, 8)] for _, m in msgs)
         for field, want in (("position", position), ("effort", effort)):
             values = np.array([list(getattr(m, field)) for _, m in msgs])
@@ -91,8 +94,19 @@ def test_every_message_read_back_equals_the_log(exported, reader):
             tr = chain[f"lbr_link_{i}"]
             assert tr.header.frame_id == f"lbr_link_{i - 1}"
             r = tr.transform.rotation
-            pose = pose * pin.XYZQUATToSE3(np.array([tr.transform.translation.x, tr.transform.translation.y,
-                                                      tr.transform.translation.z, r.x, r.y, r.z, r.w]))
+            pose = pose * pin.XYZQUATToSE3(
+                np.array(
+                    [
+                        tr.transform.translation.x,
+                        tr.transform.translation.y,
+                        tr.transform.translation.z,
+                        r.x,
+                        r.y,
+                        r.z,
+                        r.w,
+                    ]
+                )
+            )
         f = static["lbr_flange"]
         pose = pose * pin.SE3(np.eye(3), np.array([f.translation.x, f.translation.y, f.translation.z]))
         pin.framesForwardKinematics(robot.model, robot.data, msr[k])
@@ -100,8 +114,9 @@ def test_every_message_read_back_equals_the_log(exported, reader):
         np.testing.assert_allclose(pose.translation, want.translation, atol=1e-12)
         np.testing.assert_allclose(pose.rotation, want.rotation, atol=1e-12)
         tcp = robot.data.oMf[robot.tcp_id].translation
-        ball = tcp + LENGTH * np.array([np.sin(theta[k]) * np.cos(phi[k]), np.sin(theta[k]) * np.sin(phi[k]),
-                                        -np.cos(theta[k])])
+        ball = tcp + LENGTH * np.array(
+            [np.sin(theta[k]) * np.cos(phi[k]), np.sin(theta[k]) * np.sin(phi[k]), -np.cos(theta[k])]
+        )
         point = got["/lbr/ball"][k][1].point
         np.testing.assert_allclose([point.x, point.y, point.z], ball, atol=1e-12)
         b = chain["lbr_ball"].transform.translation
@@ -113,8 +128,10 @@ def test_every_message_read_back_equals_the_log(exported, reader):
     assert when == stamps[first]
     assert list(traj.joint_names) == [f"lbr_A{i}" for i in range(1, 8)]
     np.testing.assert_array_equal([list(p.positions) for p in traj.points], plan.q)
-    np.testing.assert_array_equal([p.time_from_start.sec * 1_000_000_000 + p.time_from_start.nanosec
-                                   for p in traj.points], np.round(plan.t * 1e9).astype(np.int64))
+    np.testing.assert_array_equal(
+        [p.time_from_start.sec * 1_000_000_000 + p.time_from_start.nanosec for p in traj.points],
+        np.round(plan.t * 1e9).astype(np.int64),
+    )
     assert list(traj.points[0].velocities) == [0.0] * 7 and list(traj.points[-1].velocities) == [0.0] * 7
     [(_, description)] = got["/lbr/robot_description"]
     assert pin.buildModelFromXML(description.data).nq == 7
@@ -133,7 +150,9 @@ def test_robot_description_is_attached_and_the_file_is_a_ros2_bag(exported):
     encodings = {(s.name, s.encoding) for s in summary.schemas.values()}
     assert ("sensor_msgs/msg/JointState", "ros2msg") in encodings
     assert {c.message_encoding for c in summary.channels.values()} == {"cdr"}
-    latched = {c.topic for c in summary.channels.values() if "transient_local" in c.metadata.get("offered_qos_profiles", "")}
+    latched = {
+        c.topic for c in summary.channels.values() if "transient_local" in c.metadata.get("offered_qos_profiles", "")
+    }
     assert latched == {"/tf_static", "/lbr/robot_description"}
     assert sum(fig["topics"].values()) == fig["messages"] == summary.statistics.message_count
 
@@ -153,15 +172,19 @@ def test_a_plan_alone_is_exported_from_zero_with_its_tf(tmp_path_factory, tmp_pa
     assert tcp.transform.translation.z == pytest.approx(0.05)
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["LOG", "-o", "x.txt"], "MCAP file"),
-    (["LOG", "-o", "x.mcap", "--prefix", "1bad"], "--prefix"),
-    (["LOG", "-o", "x.mcap", "--compression", "gzip"], "--compression"),
-    (["TRACK", "-o", "x.mcap"], "execution logs and plans"),
-    (["LOG", "LOG", "-o", "x.mcap"], "given twice"),
-])
-def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path_factory, tmp_path, monkeypatch, capsys, argv,
-                                                            message):
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["LOG", "-o", "x.txt"], "MCAP file"),
+        (["LOG", "-o", "x.mcap", "--prefix", "1bad"], "--prefix"),
+        (["LOG", "-o", "x.mcap", "--compression", "gzip"], "--compression"),
+        (["TRACK", "-o", "x.mcap"], "execution logs and plans"),
+        (["LOG", "LOG", "-o", "x.mcap"], "given twice"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line_and_writes_nothing(
+    tmp_path_factory, tmp_path, monkeypatch, capsys, argv, message
+):
     from lbrcli.app import main
 
     run = run_files(tmp_path_factory)

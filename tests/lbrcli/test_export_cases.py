@@ -48,8 +48,9 @@ def _log(path: Path, rng: np.random.Generator, n: int, stamps: bool, cmd_tau: bo
             cols[f"cmd_tau{i}"] = rng.normal(0, 20.0, n)
     if ball:
         cols["ball_theta"], cols["ball_phi"] = rng.uniform(-1.2, 1.2, n), rng.uniform(-np.pi, np.pi, n)
-    fmt = ["%.17g" if not k.startswith(("stamp", "state", "quality", "phase", "row", "tracking")) else "%d"
-           for k in cols]
+    fmt = [
+        "%.17g" if not k.startswith(("stamp", "state", "quality", "phase", "row", "tracking")) else "%d" for k in cols
+    ]
     write_table(path, tuple(cols), np.column_stack(list(cols.values())), fmt=fmt)
 
 
@@ -60,9 +61,12 @@ def _time(ns: int):
 def _joint_state(ns: int, position=(), velocity=(), effort=()) -> bytes:
     types = TYPES.types
     msg = types["sensor_msgs/msg/JointState"](
-        header=types["std_msgs/msg/Header"](stamp=_time(ns), frame_id=""), name=NAMES,
-        position=np.asarray(position, dtype=float), velocity=np.asarray(velocity, dtype=float),
-        effort=np.asarray(effort, dtype=float))
+        header=types["std_msgs/msg/Header"](stamp=_time(ns), frame_id=""),
+        name=NAMES,
+        position=np.asarray(position, dtype=float),
+        velocity=np.asarray(velocity, dtype=float),
+        effort=np.asarray(effort, dtype=float),
+    )
     return bytes(TYPES.serialize_cdr(msg, "sensor_msgs/msg/JointState"))
 
 
@@ -94,14 +98,17 @@ def _check_tf(decoded: dict, times: np.ndarray, q: np.ndarray, ball: np.ndarray 
         assert [(tr.header.frame_id, tr.child_frame_id) for tr in tf.transforms[:7]] == list(zip(frames, frames[1:]))
         for i, tr in enumerate(tf.transforms[:7]):
             assert tr.header.stamp.sec * 1_000_000_000 + tr.header.stamp.nanosec == times[k]
-            np.testing.assert_allclose(_pose(tr.transform).homogeneous, data.liMi[i + 1].homogeneous, atol=1e-12, rtol=0)
+            np.testing.assert_allclose(
+                _pose(tr.transform).homogeneous, data.liMi[i + 1].homogeneous, atol=1e-12, rtol=0
+            )
         if ball is None:
             assert len(tf.transforms) == 7
         else:
             (tr,) = tf.transforms[7:]
             assert (tr.header.frame_id, tr.child_frame_id) == ("lbr_link_0", "lbr_ball")
-            np.testing.assert_allclose(_pose(tr.transform).homogeneous[:3], np.column_stack([np.eye(3), ball[k]]),
-                                       atol=1e-12, rtol=0)  # the ball's frame: at the ball, axes of lbr_link_0
+            np.testing.assert_allclose(
+                _pose(tr.transform).homogeneous[:3], np.column_stack([np.eye(3), ball[k]]), atol=1e-12, rtol=0
+            )  # the ball's frame: at the ball, axes of lbr_link_0
     [(when, static)] = decoded["/tf_static"]
     assert when == times[0]
     pin.framesForwardKinematics(model, data, q[0])
@@ -136,8 +143,19 @@ def test_every_message_equals_a_reference_built_message_by_message(case, tmp_pat
         write_joint_csv(tmp_path / "plan.csv", JointTrajectory(t=t, q=Q0 + np.sin(t)[:, None] * rng.normal(0, 0.3, 7)))
         files.append(tmp_path / "plan.csv")
     out = tmp_path / "run.mcap"
-    code, _, err = run_in_process(["export", *files, "-o", out, "--length", str(LENGTH), "--compression", compression,
-                                   *(["--tool", tool] if tool else [])])
+    code, _, err = run_in_process(
+        [
+            "export",
+            *files,
+            "-o",
+            out,
+            "--length",
+            str(LENGTH),
+            "--compression",
+            compression,
+            *(["--tool", tool] if tool else []),
+        ]
+    )
     assert code == 0, err
     log = read_table(tmp_path / "log.csv", LOG_COLUMNS, time="increasing")
 
@@ -148,13 +166,17 @@ def test_every_message_equals_a_reference_built_message_by_message(case, tmp_pat
         times = log.column("stamp_sec").astype(np.int64) * 1_000_000_000 + log.column("stamp_nsec").astype(np.int64)
     else:
         times = np.round(log.column("t") * 1e9).astype(np.int64)
-    want = {"/lbr/joint_states": [_joint_state(t, position=p, effort=e)
-                                  for t, p, e in zip(times, joints("msr_q"), joints("msr_tau"))],
-            "/lbr/command/joint_states": [_joint_state(t, position=p, effort=e if cmd_tau else ())
-                                          for t, p, e in zip(times, joints("cmd_q"),
-                                                             joints("cmd_tau") if cmd_tau else times)],
-            "/lbr/ipo/joint_states": [_joint_state(t, position=p) for t, p in zip(times, joints("ipo_q"))],
-            "/lbr/external_torque": [_joint_state(t, effort=e) for t, e in zip(times, joints("ext_tau"))]}
+    want = {
+        "/lbr/joint_states": [
+            _joint_state(t, position=p, effort=e) for t, p, e in zip(times, joints("msr_q"), joints("msr_tau"))
+        ],
+        "/lbr/command/joint_states": [
+            _joint_state(t, position=p, effort=e if cmd_tau else ())
+            for t, p, e in zip(times, joints("cmd_q"), joints("cmd_tau") if cmd_tau else times)
+        ],
+        "/lbr/ipo/joint_states": [_joint_state(t, position=p) for t, p in zip(times, joints("ipo_q"))],
+        "/lbr/external_torque": [_joint_state(t, effort=e) for t, e in zip(times, joints("ext_tau"))],
+    }
     raw = _raw(out)
     for topic, messages in want.items():
         assert [t for t, _ in raw[topic]] == times.tolist(), topic
@@ -188,8 +210,9 @@ def test_every_message_equals_a_reference_built_message_by_message(case, tmp_pat
         [(when, trajectory)] = decoded["/lbr/joint_trajectory_controller/joint_trajectory"]
         assert when == start and list(trajectory.joint_names) == NAMES
         np.testing.assert_array_equal([p.positions for p in trajectory.points], plan.q)
-        assert [p.time_from_start.sec * 1_000_000_000 + p.time_from_start.nanosec for p in trajectory.points] == \
-            np.round(plan.t * 1e9).astype(np.int64).tolist()
+        assert [
+            p.time_from_start.sec * 1_000_000_000 + p.time_from_start.nanosec for p in trajectory.points
+        ] == np.round(plan.t * 1e9).astype(np.int64).tolist()
         expected_topics |= {"/lbr/plan/joint_states", "/lbr/joint_trajectory_controller/joint_trajectory"}
     assert set(decoded) == expected_topics
 
@@ -205,8 +228,9 @@ def test_a_plan_alone_gets_its_tf_from_zero(tmp_path, monkeypatch):
     plan = read_joint_csv(tmp_path / "plan.csv")
     times = np.round(plan.t * 1e9).astype(np.int64)
     _check_tf(decoded, times, plan.q, None, None)
-    assert [bytes(m) for _, m in _raw(tmp_path / "plan.mcap")["/lbr/plan/joint_states"]][0] == \
-        _joint_state(0, position=plan.q[0], velocity=np.zeros(7))
+    assert [bytes(m) for _, m in _raw(tmp_path / "plan.mcap")["/lbr/plan/joint_states"]][0] == _joint_state(
+        0, position=plan.q[0], velocity=np.zeros(7)
+    )
 
 
 def test_a_nan_torque_is_refused_naming_file_row_and_column(tmp_path):
@@ -220,4 +244,3 @@ def test_a_nan_torque_is_refused_naming_file_row_and_column(tmp_path):
     code, out, err = run_in_process(["export", tmp_path / "log.csv", "-o", tmp_path / "x.mcap"])
     assert code == 2 and len(err.strip().splitlines()) == 1 and "log.csv" in err and "4" in err and "msr_tau4" in err
     assert not (tmp_path / "x.mcap").exists() and out == ""
-

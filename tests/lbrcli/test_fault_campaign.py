@@ -13,10 +13,22 @@ from lbrcli.fri.testing.campaign import run_case
 
 EXECUTE = execute_cases()
 # a sample of the other surfaces (the benchmark runs them all)
-PICK = {"ptp: 5 % of messages lost", "ptp: SIGTERM", "serve: NaN target", "serve: the source dies mid-motion",
-        "serve: replayed old targets", "serve: 2 replies lost", "damp: sensor reads 0 (the ball hangs still for it)",
-        "upright: encoder reversed sign", "torque: SIGTERM", "torque: torque beyond its bound", "wrench: loss 5",
-        "user: returns NaN", "user: sine 0.5 rad at 3 Hz (5× the velocity limit)", "user: timestamps frozen"}
+PICK = {
+    "ptp: 5 % of messages lost",
+    "ptp: SIGTERM",
+    "serve: NaN target",
+    "serve: the source dies mid-motion",
+    "serve: replayed old targets",
+    "serve: 2 replies lost",
+    "damp: sensor reads 0 (the ball hangs still for it)",
+    "upright: encoder reversed sign",
+    "torque: SIGTERM",
+    "torque: torque beyond its bound",
+    "wrench: loss 5",
+    "user: returns NaN",
+    "user: sine 0.5 rad at 3 Hz (5× the velocity limit)",
+    "user: timestamps frozen",
+}
 OTHERS = [c for s in all_surfaces() for c in surface_cases(s) if c.name in PICK]
 
 

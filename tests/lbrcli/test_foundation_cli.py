@@ -113,7 +113,10 @@ def test_retime_cli(lbr, tmp_path):
         (["check", "{bad}"], "row 3, column 4 (q3): not a number"),
         (["check", "{slow}", "--margin", "1.5"], "--margin must be in [0, 1)"),
         (["ik", "{slow}", "-o", "{out}"], "expected 'x'"),
-        (["fk", "{slow}", "-o", "{out}", "--flange", "huge"], "--flange must be one of touch-electric, standard, touch-pneumatic, got 'huge'"),
+        (
+            ["fk", "{slow}", "-o", "{out}", "--flange", "huge"],
+            "--flange must be one of touch-electric, standard, touch-pneumatic, got 'huge'",
+        ),
         (["fk", "{slow}", "-o", "{out}", "--tool", "0,0"], "--tool"),
         (["ik", "{task}", "-o", "{out}", "--q0", "0,0,0,0,0,0,abc"], "--q0: not an angle"),
         (["check", "{slow}", "--limits", "{missing}"], "limits file not found"),
@@ -127,7 +130,9 @@ def test_bad_input_is_one_line_exit_2(lbr, tmp_path, slow_csv, args, words):
     headerless.write_text("0,0,0,0,0,0,0\n" * 3)
     task = tmp_path / "task.csv"
     task.write_text("t,x,y,z,qw,qx,qy,qz\n0,0.5,0,0.8,1,0,0,0\n")
-    names = dict(missing=tmp_path / "nope.csv", bad=bad, slow=slow_csv, out=tmp_path / "o.csv", task=task, headerless=headerless)
+    names = dict(
+        missing=tmp_path / "nope.csv", bad=bad, slow=slow_csv, out=tmp_path / "o.csv", task=task, headerless=headerless
+    )
     line = one_line_error(lbr(*[a.format(**names) for a in args]))
     assert words in line
 
@@ -147,13 +152,31 @@ def test_headerless_with_dt(lbr, tmp_path):
         ["check", "{slow}", "--plot", "{csvplot}"],
         ["retime", "{slow}", "-o", "{bad}"],
         ["plan", "anti-sway", "--length", "0.25", "--a-max", "1", "-o", "{bad}"],
-        ["plan", "swing-up", "--length", "0.25", "--mass", "0.01", "--theta-d", "60deg", "--theta0", "0.1", "-o", "{bad}"],
+        [
+            "plan",
+            "swing-up",
+            "--length",
+            "0.25",
+            "--mass",
+            "0.01",
+            "--theta-d",
+            "60deg",
+            "--theta0",
+            "0.1",
+            "-o",
+            "{bad}",
+        ],
         ["plan", "anti-sway", "--length", "0.25", "--a-max", "1", "-o", "{folder}"],
     ],
 )
 def test_unwritable_output_is_one_line_exit_2(lbr, tmp_path, slow_csv, args):
-    names = dict(slow=slow_csv, bad=tmp_path / "missing" / "out.csv", folder=tmp_path, csvplot=tmp_path / "plot.csv",
-                 badpng=tmp_path / "missing" / "plot.png")
+    names = dict(
+        slow=slow_csv,
+        bad=tmp_path / "missing" / "out.csv",
+        folder=tmp_path,
+        csvplot=tmp_path / "plot.csv",
+        badpng=tmp_path / "missing" / "plot.png",
+    )
     line = one_line_error(lbr(*[a.format(**names) for a in args]))
     assert line.startswith("lbr: error: ") and str(tmp_path) in line
     assert any(w in line for w in ("No such file or directory", "Is a directory", "not an image format"))

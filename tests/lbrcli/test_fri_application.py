@@ -257,7 +257,7 @@ def test_interrupt_mid_motion_is_a_jerk_limited_braking_stop(tmp_path):
     v_end = np.abs(q[-1] - q[-2]) / 1e-3
     assert np.all(v_end < 1e-9)  # at rest when the session ends
     jerk = np.abs(np.diff(q, 3, axis=0)) / 1e-9
-    assert np.all(jerk[-res.braking_cycles:] <= LIM.jerk * 1.01)
+    assert np.all(jerk[-res.braking_cycles :] <= LIM.jerk * 1.01)
     tab = read_log(log_path)
     assert (tab.column("phase") == Phase.BRAKE).sum() == res.braking_cycles
 
@@ -400,7 +400,15 @@ class _Memory:
     as a controller that received it); the replies are kept."""
 
     def __init__(self, ctl: ScriptedController) -> None:
-        self.ctl, self.i, self.sent, self.port, self.robot_ip, self.foreign, self.warm = ctl, 0, [], 0, "127.0.0.1", 0, None
+        self.ctl, self.i, self.sent, self.port, self.robot_ip, self.foreign, self.warm = (
+            ctl,
+            0,
+            [],
+            0,
+            "127.0.0.1",
+            0,
+            None,
+        )
 
     def receive(self) -> bytes | None:
         if self.i >= len(self.ctl.script):
@@ -446,7 +454,11 @@ def test_warming_between_messages_changes_nothing(version):
                 if mon.IsInitialized():  # a message as decoded: warming keeps it as it is
                     before = (mon.SerializeToString(), app.state.measured_joint_position, app.state.session_state)
                     app.transport.warm()
-                    assert (mon.SerializeToString(), app.state.measured_joint_position, app.state.session_state) == before
+                    assert (
+                        mon.SerializeToString(),
+                        app.state.measured_joint_position,
+                        app.state.session_state,
+                    ) == before
                     last_good = before[0]
                 else:  # what the garbage left: warming restores the last good message
                     app.transport.warm()

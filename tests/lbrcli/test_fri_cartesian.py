@@ -112,12 +112,24 @@ def cartesian_answer(offset_at):
     return answer
 
 
-CFG = dict(version="2.7", command_mode="cartesian", period_ms=2, commanding_after_s=0.0, quality_window=5,
-           end_delay_s=0.02, session_duration_s=2.0)
+CFG = dict(
+    version="2.7",
+    command_mode="cartesian",
+    period_ms=2,
+    commanding_after_s=0.0,
+    quality_window=5,
+    end_delay_s=0.02,
+    session_duration_s=2.0,
+)
 
 
-@pytest.mark.parametrize("offset, reason", [(lambda n: (0.0, 0.0, 1500.0 if n > 50 else 0.0), "cartesian_refused"),
-                                            (lambda n: None if n > 50 else (0, 0, 0), "command_missing")])
+@pytest.mark.parametrize(
+    "offset, reason",
+    [
+        (lambda n: (0.0, 0.0, 1500.0 if n > 50 else 0.0), "cartesian_refused"),
+        (lambda n: None if n > 50 else (0, 0, 0), "command_missing"),
+    ],
+)
 def test_controller_ends_the_overlay_on_a_pose_it_cannot_execute(offset, reason):
     ctl = Controller(SimConfig(**CFG))
     msgs = drive(ctl, cartesian_answer(offset), 600)
@@ -222,7 +234,12 @@ def lockstep_session(client, duration=1.2, frames=None):
             result = app.run()
             stats = sim.wait(20.0) or sim.stop()
     app.close()
-    return result, stats, [CODEC.decode_monitoring(d) for d in relay.to_client], [CODEC.decode_command(d) for d in relay.to_sim]
+    return (
+        result,
+        stats,
+        [CODEC.decode_monitoring(d) for d in relay.to_client],
+        [CODEC.decode_command(d) for d in relay.to_sim],
+    )
 
 
 def test_client_cartesian_line_is_executed_and_frames_arrive():

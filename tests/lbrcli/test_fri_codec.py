@@ -163,7 +163,11 @@ def test_decode_into_reused_message_clears_old_fields(version):
     codec = FriCodec(version)
     into = codec.decode_command(codec.encode(_command(codec)))
     bare = codec.new_command()
-    bare.header.messageIdentifier, bare.header.sequenceCounter, bare.header.reflectedSequenceCounter = COMMAND_MESSAGE_ID, 6, 42
+    bare.header.messageIdentifier, bare.header.sequenceCounter, bare.header.reflectedSequenceCounter = (
+        COMMAND_MESSAGE_ID,
+        6,
+        42,
+    )
     out = codec.decode_command(codec.encode(bare), into=into)
     assert out is into
     assert not out.HasField("commandData")
@@ -185,7 +189,9 @@ def test_repeated_doubles_are_written_unpacked_like_kuka(version):
 @pytest.mark.parametrize("version", VERSIONS)
 def test_packed_and_unpacked_encodings_decode_to_the_same_values(version):
     codec = FriCodec(version)
-    header = _len_field(1, _tag(1, 0) + _varint(COMMAND_MESSAGE_ID) + _tag(2, 0) + _varint(9) + _tag(3, 0) + _varint(300))
+    header = _len_field(
+        1, _tag(1, 0) + _varint(COMMAND_MESSAGE_ID) + _tag(2, 0) + _varint(9) + _tag(3, 0) + _varint(300)
+    )
     unpacked = b"".join(b"\x09" + struct.pack("<d", v) for v in Q)
     packed = _len_field(1, struct.pack("<7d", *Q))  # field 1, wire type 2, 56 bytes of doubles
     datagrams = [codec.frame(header + _len_field(2, _len_field(1, body))) for body in (unpacked, packed)]
@@ -203,7 +209,9 @@ def test_packed_and_unpacked_encodings_decode_to_the_same_values(version):
 
 def _packed_monitoring_payload() -> bytes:
     """A monitoring payload written by hand with packed repeated doubles and packed drive states."""
-    header = _len_field(1, _tag(1, 0) + _varint(MONITORING_MESSAGE_ID) + _tag(2, 0) + _varint(41) + _tag(3, 0) + _varint(17))
+    header = _len_field(
+        1, _tag(1, 0) + _varint(MONITORING_MESSAGE_ID) + _tag(2, 0) + _varint(41) + _tag(3, 0) + _varint(17)
+    )
     robot = _len_field(2, _tag(1, 0) + _varint(7) + _len_field(5, b"\x02" * 7))
     joints = _len_field(1, struct.pack("<7d", *Q))  # JointValues{value packed}
     monitor = _len_field(3, _len_field(1, joints) + _len_field(5, joints))

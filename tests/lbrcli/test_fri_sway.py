@@ -16,7 +16,11 @@ from lbrcli.fri.sway import IoSway, SwayWatch, window_for_length
 
 
 def _state(theta=None, name="ball_theta", sample_time=1e-3):
-    ios = [] if theta is None else [SimpleNamespace(name="other", analogValue=9.0), SimpleNamespace(name=name, analogValue=theta)]
+    ios = (
+        []
+        if theta is None
+        else [SimpleNamespace(name="other", analogValue=9.0), SimpleNamespace(name=name, analogValue=theta)]
+    )
     msg = SimpleNamespace(monitorData=SimpleNamespace(readIORequest=ios))
     return SimpleNamespace(message=msg, sample_time=sample_time)
 

@@ -37,5 +37,10 @@ def test_an_fri_command_body_is_at_most_40_lines(path, name):
 
 
 def test_the_session_code_has_no_function_over_80_lines():
-    long = [f"{p}:{f.lineno} {f.name} {_body_lines(f)}" for p in SESSION_MODULES for f in _functions(p) if _body_lines(f) > 80]
+    long = [
+        f"{p}:{f.lineno} {f.name} {_body_lines(f)}"
+        for p in SESSION_MODULES
+        for f in _functions(p)
+        if _body_lines(f) > 80
+    ]
     assert not long, long

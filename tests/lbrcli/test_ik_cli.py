@@ -13,8 +13,9 @@ from conftest import Q_START
 
 
 def _write(path, file):
-    write_task_csv(file, TaskTrajectory(t=path.t, position=path.position,
-                                        quaternion=quaternions_from_matrices(path.rotation)))
+    write_task_csv(
+        file, TaskTrajectory(t=path.t, position=path.position, quaternion=quaternions_from_matrices(path.rotation))
+    )
     return file
 
 

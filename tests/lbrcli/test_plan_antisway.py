@@ -32,8 +32,21 @@ def default_plan(tmp_path_factory):
 
     files = {k: d / f"{k}" for k in ("joint.csv", "task.csv", "pred.csv", "plot.png")}
     proc = run_lbr(
-        "plan", "anti-sway", "--length", L, "--a-max", 2.0, "-o", files["joint.csv"], "--task-out", files["task.csv"],
-        "--prediction", files["pred.csv"], "--plot", files["plot.png"], "--json",
+        "plan",
+        "anti-sway",
+        "--length",
+        L,
+        "--a-max",
+        2.0,
+        "-o",
+        files["joint.csv"],
+        "--task-out",
+        files["task.csv"],
+        "--prediction",
+        files["pred.csv"],
+        "--plot",
+        files["plot.png"],
+        "--json",
     )
     return proc, files
 
@@ -119,8 +132,9 @@ def test_length_tolerance_on_the_real_joint_path(tmp_path):
 
 def test_infeasible_acceleration_names_the_segment_and_a_verified_fit(tmp_path, lbr):
     pts = "0.40,-0.30;0.62,-0.30"
-    proc = lbr("plan", "anti-sway", "--length", L, "--a-max", 6, "--points", pts, "--no-fallback", "-o",
-               tmp_path / "x.csv")
+    proc = lbr(
+        "plan", "anti-sway", "--length", L, "--a-max", 6, "--points", pts, "--no-fallback", "-o", tmp_path / "x.csv"
+    )
     assert proc.returncode == 1
     line = proc.stderr.strip().splitlines()[-1]
     assert line.startswith("lbr: error:") and "segment 1" in line and "largest a_max that plans is" in line
@@ -128,8 +142,20 @@ def test_infeasible_acceleration_names_the_segment_and_a_verified_fit(tmp_path, 
     assert 0.5 < best < 6
     assert not (tmp_path / "x.csv").exists()
     # the reported value plans with the very same command
-    ok = lbr("plan", "anti-sway", "--length", L, "--a-max", best, "--points", pts, "--no-fallback", "-o",
-             tmp_path / "ok.csv", "--json")
+    ok = lbr(
+        "plan",
+        "anti-sway",
+        "--length",
+        L,
+        "--a-max",
+        best,
+        "--points",
+        pts,
+        "--no-fallback",
+        "-o",
+        tmp_path / "ok.csv",
+        "--json",
+    )
     assert ok.returncode == 0, ok.stderr
     assert json.loads(ok.stdout)["limits_ok"]
 
@@ -159,8 +185,21 @@ def test_a_layout_whose_middle_segments_break_a_joint_limit_lowers_a_max_there_o
 
 
 def test_max_sway_bounds_the_swing_for_every_length_in_the_band(tmp_path, lbr):
-    proc = lbr("plan", "anti-sway", "--length", L, "--a-max", 2, "--max-sway", 3, "-o", tmp_path / "m.csv",
-               "--points", "0.40,-0.30;0.62,-0.30;0.62,0.05", "--json")
+    proc = lbr(
+        "plan",
+        "anti-sway",
+        "--length",
+        L,
+        "--a-max",
+        2,
+        "--max-sway",
+        3,
+        "-o",
+        tmp_path / "m.csv",
+        "--points",
+        "0.40,-0.30;0.62,-0.30;0.62,0.05",
+        "--json",
+    )
     assert proc.returncode == 0, proc.stderr
     figs = json.loads(proc.stdout)
     assert figs["max_sway_deg"] == pytest.approx(3.0)
@@ -178,18 +217,52 @@ def _write(path, text):
 
 def test_obstacle_on_the_ball_path_is_refused_with_its_name_and_time(tmp_path, lbr):
     pts = "0.40,-0.30;0.62,-0.30"
-    obs = _write(tmp_path / "obs.csv", "name,x_min,y_min,z_min,x_max,y_max,z_max\n"
-                 "# a post the ball must pass beside\npost,0.50,-0.24,0.00,0.56,-0.20,0.25\n")
-    ok = lbr("plan", "anti-sway", "--length", L, "--a-max", 2, "--points", pts, "--obstacles", obs,
-             "--ball-radius", 0.02, "-o", tmp_path / "ok.csv", "--plot", tmp_path / "ok.png", "--json")
+    obs = _write(
+        tmp_path / "obs.csv",
+        "name,x_min,y_min,z_min,x_max,y_max,z_max\n"
+        "# a post the ball must pass beside\npost,0.50,-0.24,0.00,0.56,-0.20,0.25\n",
+    )
+    ok = lbr(
+        "plan",
+        "anti-sway",
+        "--length",
+        L,
+        "--a-max",
+        2,
+        "--points",
+        pts,
+        "--obstacles",
+        obs,
+        "--ball-radius",
+        0.02,
+        "-o",
+        tmp_path / "ok.csv",
+        "--plot",
+        tmp_path / "ok.png",
+        "--json",
+    )
     assert ok.returncode == 0, ok.stderr
     figs = json.loads(ok.stdout)
     assert figs["nearest_obstacle"]["name"] == "post"
     assert 0 < figs["min_clearance_m"] < 0.06 - 0.02 + 1e-3  # 60 mm from the path, minus the ball's radius
     assert (tmp_path / "ok.png").read_bytes()[:4] == b"\x89PNG"
     # a wider ball no longer passes
-    bad = lbr("plan", "anti-sway", "--length", L, "--a-max", 2, "--points", pts, "--obstacles", obs,
-              "--ball-radius", 0.07, "-o", tmp_path / "bad.csv")
+    bad = lbr(
+        "plan",
+        "anti-sway",
+        "--length",
+        L,
+        "--a-max",
+        2,
+        "--points",
+        pts,
+        "--obstacles",
+        obs,
+        "--ball-radius",
+        0.07,
+        "-o",
+        tmp_path / "bad.csv",
+    )
     assert bad.returncode == 1
     line = bad.stderr.strip().splitlines()[-1]
     assert "obstacle 'post'" in line and "t = " in line

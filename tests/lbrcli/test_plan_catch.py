@@ -21,8 +21,25 @@ LENGTH = 0.2
 def planned(tmp_path_factory):
     d = tmp_path_factory.mktemp("catch")
     out, pred, plot = d / "catch.csv", d / "pred.csv", d / "catch.png"
-    res = run_lbr("plan", "cup-and-ball", "--length", LENGTH, "--length-tol", "0.01", "--mass-tol", "0", "--no-timing",
-                  "-o", out, "--prediction", pred, "--plot", plot, "--json", timeout=600)
+    res = run_lbr(
+        "plan",
+        "cup-and-ball",
+        "--length",
+        LENGTH,
+        "--length-tol",
+        "0.01",
+        "--mass-tol",
+        "0",
+        "--no-timing",
+        "-o",
+        out,
+        "--prediction",
+        pred,
+        "--plot",
+        plot,
+        "--json",
+        timeout=600,
+    )
     return res, out, pred, plot
 
 
@@ -108,8 +125,22 @@ def test_the_rehearsal_on_the_simulator_catches_it_and_the_log_says_when(planned
     res, out, _, _ = planned
     f = json.loads(res.stdout)
     log = tmp_path / "log.csv"
-    ex = run_lbr("execute", out, "--port", "0", "--length", LENGTH, "--cup", f["cup_spec"], "--settle", "0.5", "--log",
-                 log, "--json", timeout=300)
+    ex = run_lbr(
+        "execute",
+        out,
+        "--port",
+        "0",
+        "--length",
+        LENGTH,
+        "--cup",
+        f["cup_spec"],
+        "--settle",
+        "0.5",
+        "--log",
+        log,
+        "--json",
+        timeout=300,
+    )
     assert ex.returncode == 0, ex.stderr
     g = json.loads(ex.stdout)
     cup = g["cup"]
@@ -129,6 +160,10 @@ def test_cup_spec_round_trips_and_bad_specs_are_named():
     assert model.cup.inner_radius == 0.04 and model.cup.axis == (0.0, 0.0, 1.0) and model.ball.radius == 0.012
     assert parse_cup_spec(cup_spec(model), 0.3) == model
     assert parse_cup_spec("default", 0.3) == StringModel(0.3)
-    for spec, fragment in (("radius=x", "radius must be a number"), ("size=3", "keys"), ("radius=0.005", "inner radius")):
+    for spec, fragment in (
+        ("radius=x", "radius must be a number"),
+        ("size=3", "keys"),
+        ("radius=0.005", "inner radius"),
+    ):
         with pytest.raises(OptionError, match=fragment):
             parse_cup_spec(spec, 0.3)

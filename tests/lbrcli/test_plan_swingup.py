@@ -54,8 +54,26 @@ def test_thesis_example_fails_near_90_deg_on_a_real_string_as_the_thesis_experim
     with goes slack past 90° and the open-loop energy law no longer adds up — the thesis's own experiments peaked at
     1.73 rad (§5.4). The command says so and exits 1, after writing every file."""
     out, pred, plot = tmp_path / "j.csv", tmp_path / "p.csv", tmp_path / "s.png"
-    res = lbr(*BASE, "--theta-d", "115deg", "--ke", "1.7", "--kp", "0.05", "--kd", "0.05", "--theta0", "0.1",
-              "-o", out, "--prediction", pred, "--plot", plot, "--json")
+    res = lbr(
+        *BASE,
+        "--theta-d",
+        "115deg",
+        "--ke",
+        "1.7",
+        "--kp",
+        "0.05",
+        "--kd",
+        "0.05",
+        "--theta0",
+        "0.1",
+        "-o",
+        out,
+        "--prediction",
+        pred,
+        "--plot",
+        plot,
+        "--json",
+    )
     assert res.returncode == 1 and "not reached" in res.stderr
     f = json.loads(res.stdout.strip().splitlines()[0])
     assert f["limits_ok"] and f["method"] == "energy" and f["orientation"] == "fixed"
@@ -66,8 +84,13 @@ def test_thesis_example_fails_near_90_deg_on_a_real_string_as_the_thesis_experim
     traj = read_joint_csv(out)
     assert traj.dt == pytest.approx(0.005) and np.allclose(traj.q[0], Q_START, atol=1e-6)
     pos, _ = Robot().fk_path(traj.q)
-    run = simulate_string(StringModel(0.25, cup=None), PivotMotion(traj.t, pos), float(traj.t[-1]), traj.t,
-                          direction_from_angles(0.0, 0.1))
+    run = simulate_string(
+        StringModel(0.25, cup=None),
+        PivotMotion(traj.t, pos),
+        float(traj.t[-1]),
+        traj.t,
+        direction_from_angles(0.0, 0.1),
+    )
     assert abs(math.degrees(np.abs(run.theta_y).max()) - f["max_theta_deg"]) < 0.5
     table = read_table(pred, ("t", "theta"))
     np.testing.assert_allclose(table.data[:, 1], run.theta_y, atol=math.radians(0.5))
@@ -77,8 +100,22 @@ def test_thesis_example_fails_near_90_deg_on_a_real_string_as_the_thesis_experim
 
 def test_fast_at_1_ms_reaches_115_deg_within_3_s_inside_the_limits(lbr, tmp_path):
     out, pred = tmp_path / "fast.csv", tmp_path / "fast_pred.csv"
-    res = lbr(*BASE, "--theta-d", "115deg", "--method", "fast", "--dt", "0.001", "--side", "+y", "-o", out,
-              "--prediction", pred, "--json")
+    res = lbr(
+        *BASE,
+        "--theta-d",
+        "115deg",
+        "--method",
+        "fast",
+        "--dt",
+        "0.001",
+        "--side",
+        "+y",
+        "-o",
+        out,
+        "--prediction",
+        pred,
+        "--json",
+    )
     assert res.returncode == 0, res.stderr
     f = json.loads(res.stdout)
     assert f["reached"] and f["limits_ok"] and f["t_theta_d_s"] < 3.0 and f["dt_s"] == pytest.approx(0.001)

@@ -39,8 +39,9 @@ def _run_chain(chain: list[list[str]], cwd: Path) -> dict:
             args += ["--port", "0", *REALTIME, "--sim-lenient"]
         if args[:2] == ["track", "film"]:
             args += ["--size", "640x360"]
-        res = subprocess.run([sys.executable, "-m", "lbrcli", *args, "--json"], cwd=cwd, capture_output=True,
-                             text=True, timeout=300)
+        res = subprocess.run(
+            [sys.executable, "-m", "lbrcli", *args, "--json"], cwd=cwd, capture_output=True, text=True, timeout=300
+        )
         assert res.returncode == 0, f"{' '.join(argv)}\n{res.stderr[-2000:]}"
         figures[" ".join(args[:2])] = json.loads(res.stdout)
     return figures

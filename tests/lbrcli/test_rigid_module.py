@@ -65,8 +65,12 @@ def test_a_vertical_axis_and_bad_options_are_refused(robot):
     down = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # the flange points up: its axis is vertical
     with pytest.raises(OptionError, match="vertical"):
         RigidModuleSpec().build(PlantContext(1e-3, robot, down))
-    for bad in (RigidModuleSpec(rate_hz=0.0), RigidModuleSpec(delay_ms=-1.0), RigidModuleSpec(pushes=((-1.0, 0.1),)),
-                RigidModuleSpec(pendulum=RigidPendulum(rod_length=0.0))):
+    for bad in (
+        RigidModuleSpec(rate_hz=0.0),
+        RigidModuleSpec(delay_ms=-1.0),
+        RigidModuleSpec(pushes=((-1.0, 0.1),)),
+        RigidModuleSpec(pendulum=RigidPendulum(rod_length=0.0)),
+    ):
         with pytest.raises(OptionError):
             bad.validate()
 
@@ -115,9 +119,13 @@ def test_lbr_control_upright_swings_up_balances_and_survives_a_push(tmp_path):
 
 
 def test_lbr_control_upright_fails_when_it_cannot_catch_and_refuses_bad_input(tmp_path):
-    p = run_lbr("control", "upright", "--sim-lockstep", "--port", "0", "--swing-timeout", "1", "--hold", "5", timeout=120)
+    p = run_lbr(
+        "control", "upright", "--sim-lockstep", "--port", "0", "--swing-timeout", "1", "--hold", "5", timeout=120
+    )
     assert p.returncode == 1 and "no catch upright within 1 s" in p.stderr
-    p = run_lbr("control", "upright", "--sim-lockstep", "--port", "0", "--sim-encoder-sign", "-1", "--hold", "5", timeout=120)
+    p = run_lbr(
+        "control", "upright", "--sim-lockstep", "--port", "0", "--sim-encoder-sign", "-1", "--hold", "5", timeout=120
+    )
     assert p.returncode == 1 and "--encoder-sign -1" in p.stderr  # detected from the push, not guessed
     for args, text in ((("--rod-length", "0"), "--rod-length"), (("--push", "10deg"), "--push"),
                        (("--robot", "192.0.2.1"), "--pendulum PORT"), (("--push", "10deg@3", "--robot", "192.0.2.1",
@@ -151,8 +159,15 @@ def test_upright_rides_through_lost_and_malformed_messages(robot):
 
     fitter = ProcessFitter()  # the fit outside the cycle, as the CLI does
     client = UprightClient(rail, model.equivalent_length, lim, session=SessionOptions(hold_s=3.0), fitter=fitter)
-    sim = SimulatorSettings(start=tuple(Q_START), plants=(RigidModuleSpec(model),), max_runtime_s=90, lockstep=True,
-                            loss=0.02, malformed=0.01, seed=3)  # fmt: skip (the same loop on a busy machine)
+    sim = SimulatorSettings(
+        start=tuple(Q_START),
+        plants=(RigidModuleSpec(model),),
+        max_runtime_s=90,
+        lockstep=True,
+        loss=0.02,
+        malformed=0.01,
+        seed=3,
+    )  # fmt: skip (the same loop on a busy machine)
     result, _, lab = run_client(Reporter(True), client, SessionSettings(port=0, limits=lim), sim, lab=LabOptions("sim"),
                                 extra=LogColumns(LOG_COLUMNS, client.log_values))  # fmt: skip
     fitter.close()

@@ -44,14 +44,22 @@ def _random_series(rng: np.random.Generator) -> list[dict]:
                 slots[name] = (at, dtype, count)
                 info = np.iinfo(dtype) if dtype[1] in "iu" else None
                 shape = ((n,) if count == 1 else (n, count)) if rng.random() < 0.8 else ((count,) if count > 1 else ())
-                values[name] = (rng.normal(0, 1e3, shape) if info is None
-                                else rng.integers(info.min, info.max, shape, dtype=dtype, endpoint=True))
+                values[name] = (
+                    rng.normal(0, 1e3, shape)
+                    if info is None
+                    else rng.integers(info.min, info.max, shape, dtype=dtype, endpoint=True)
+                )
                 at += width
             channels.append({"times": times, "template": template, "slots": slots, "values": values})
     for _ in range(rng.integers(0, 3)):  # single messages (a URDF, a whole trajectory), some larger than a chunk
-        channels.append({"times": np.array([int(rng.integers(0, 10_000))]), "template":
-                         rng.integers(0, 256, int(rng.integers(1, 30_000)), dtype=np.uint8).tobytes(), "slots": {},
-                         "values": {}})
+        channels.append(
+            {
+                "times": np.array([int(rng.integers(0, 10_000))]),
+                "template": rng.integers(0, 256, int(rng.integers(1, 30_000)), dtype=np.uint8).tobytes(),
+                "slots": {},
+                "values": {},
+            }
+        )
     return channels
 
 
@@ -69,8 +77,13 @@ def _message(channel: dict, k: int) -> bytes:
 def _write_both(channels: list[dict], compression: str) -> tuple[bytes, bytes]:
     out = bulk.BulkWriter(compression, profile="test", library="lbr-test")
     ref = io.BytesIO()
-    writer = Writer(ref, chunk_size=bulk.CHUNK_BYTES, compression={"zstd": CompressionType.ZSTD, "lz4":
-                    CompressionType.LZ4, "none": CompressionType.NONE}[compression])
+    writer = Writer(
+        ref,
+        chunk_size=bulk.CHUNK_BYTES,
+        compression={"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}[
+            compression
+        ],
+    )
     writer.start(profile="test", library="reference")
     schema = out.schema("test/msg/Blob", "ros2msg", b"uint8[] data\n")
     writer.register_schema("test/msg/Blob", "ros2msg", b"uint8[] data\n")
@@ -83,8 +96,9 @@ def _write_both(channels: list[dict], compression: str) -> tuple[bytes, bytes]:
         writer.add_message(k + 1, t, _message(channels[k], j), t, sequence=j + 1)
     attachment = (b"<robot/>", 123, 456)
     out.attach("a.urdf", "application/xml", *attachment)
-    writer.add_attachment(create_time=456, log_time=123, name="a.urdf", media_type="application/xml",
-                          data=attachment[0])
+    writer.add_attachment(
+        create_time=456, log_time=123, name="a.urdf", media_type="application/xml", data=attachment[0]
+    )
     writer.finish()
     fh = io.BytesIO()
     out.write(fh)
@@ -96,8 +110,9 @@ def _messages(data: bytes) -> tuple[dict, object, list]:
     per_topic: dict[str, list] = {}
     in_time_order = []
     for _, channel, message in reader.iter_messages(log_time_order=True):
-        per_topic.setdefault(channel.topic, []).append((message.log_time, message.publish_time, message.sequence,
-                                                        message.data))
+        per_topic.setdefault(channel.topic, []).append(
+            (message.log_time, message.publish_time, message.sequence, message.data)
+        )
         in_time_order.append(message.log_time)
     return per_topic, reader.get_summary(), in_time_order
 
@@ -117,7 +132,10 @@ def _check_records(data: bytes) -> None:
         if isinstance(record, Chunk):
             index: ChunkIndex = chunk_at.pop(pos)
             assert index.chunk_length == 9 + length and index.compressed_size == len(record.data)
-            chunk, chunk_data = index, get_chunk_data_stream(record, validate_crc=True)[0].read(record.uncompressed_size)
+            chunk, chunk_data = (
+                index,
+                get_chunk_data_stream(record, validate_crc=True)[0].read(record.uncompressed_size),
+            )
             assert zlib.crc32(chunk_data) == record.uncompressed_crc != 0
             seen_in_chunk = {}
             o = 0
@@ -135,11 +153,13 @@ def _check_records(data: bytes) -> None:
             assert chunk.message_index_offsets[record.channel_id] == pos
             assert sorted(record.records) == sorted(seen_in_chunk.pop(record.channel_id))
             if not seen_in_chunk:  # every channel of the chunk has its index
-                assert pos + 9 + length - chunk.message_index_offsets[min(chunk.message_index_offsets)] == \
-                    chunk.message_index_length
+                assert (
+                    pos + 9 + length - chunk.message_index_offsets[min(chunk.message_index_offsets)]
+                    == chunk.message_index_length
+                )
         elif isinstance(record, Footer):
             assert pos == len(data) - 8 - 29  # the footer: opcode, length, two offsets, CRC; then the magic
-            assert zlib.crc32(data[record.summary_start:pos + 25]) == record.summary_crc != 0
+            assert zlib.crc32(data[record.summary_start : pos + 25]) == record.summary_crc != 0
         pos += 9 + length
     assert not chunk_at  # every chunk index points at a chunk
 
@@ -158,15 +178,28 @@ def test_the_bulk_file_reads_back_like_the_mcap_writers_file(seed, monkeypatch):
         assert got[topic] == want[topic], topic
     assert order == sorted(order)
     s, r = summary.statistics, ref_summary.statistics
-    assert (s.message_count, s.channel_message_counts, s.message_start_time, s.message_end_time) == \
-        (r.message_count, r.channel_message_counts, r.message_start_time, r.message_end_time)
-    assert (s.schema_count, s.channel_count, s.attachment_count, s.chunk_count) == \
-        (1, len(channels), 1, len(summary.chunk_indexes))
-    assert [(c.topic, c.metadata) for c in summary.channels.values()] == \
-        [(c.topic, c.metadata) for c in ref_summary.channels.values()]
+    assert (s.message_count, s.channel_message_counts, s.message_start_time, s.message_end_time) == (
+        r.message_count,
+        r.channel_message_counts,
+        r.message_start_time,
+        r.message_end_time,
+    )
+    assert (s.schema_count, s.channel_count, s.attachment_count, s.chunk_count) == (
+        1,
+        len(channels),
+        1,
+        len(summary.chunk_indexes),
+    )
+    assert [(c.topic, c.metadata) for c in summary.channels.values()] == [
+        (c.topic, c.metadata) for c in ref_summary.channels.values()
+    ]
     [attachment] = mcap_reader.make_reader(io.BytesIO(data)).iter_attachments()
-    assert (attachment.name, attachment.data, attachment.log_time, attachment.create_time) == \
-        ("a.urdf", b"<robot/>", 123, 456)
+    assert (attachment.name, attachment.data, attachment.log_time, attachment.create_time) == (
+        "a.urdf",
+        b"<robot/>",
+        123,
+        456,
+    )
     _check_records(data)
     assert {ci.compression for ci in summary.chunk_indexes} == {"" if compression == "none" else compression}
 

@@ -70,7 +70,12 @@ def test_settings_are_frozen_and_picklable():
     import pickle
 
     sim = SimulatorSettings(ball=BallSpec(0.3), start=Q_START)
-    for obj, field in ((SessionSettings(), "port"), (sim, "period_ms"), (LabOptions(), "baud"), (BallSpec(0.3), "length")):
+    for obj, field in (
+        (SessionSettings(), "port"),
+        (sim, "period_ms"),
+        (LabOptions(), "baud"),
+        (BallSpec(0.3), "length"),
+    ):
         with pytest.raises(dataclasses.FrozenInstanceError):
             setattr(obj, field, 1)
     assert pickle.loads(pickle.dumps(sim)) == sim and isinstance(sim.start, tuple)
@@ -89,9 +94,17 @@ def test_the_session_defaults_follow_the_target():
 
 def test_the_simulator_config_carries_the_settings():
     ball = BallSpec(0.4, 0.1)
-    plain = SimulatorSettings(period_ms=2, receive_multiplier=2, ball=ball, plants=(PendulumModuleSpec(),), lenient=False)
+    plain = SimulatorSettings(
+        period_ms=2, receive_multiplier=2, ball=ball, plants=(PendulumModuleSpec(),), lenient=False
+    )
     cfg = plain.config(client_port=40000, version="2.7", realtime=True)
-    assert (cfg.client_port, cfg.version, cfg.period_ms, cfg.receive_multiplier, cfg.realtime) == (40000, "2.7", 2, 2, True)
+    assert (cfg.client_port, cfg.version, cfg.period_ms, cfg.receive_multiplier, cfg.realtime) == (
+        40000,
+        "2.7",
+        2,
+        2,
+        True,
+    )
     assert cfg.plants == (ball, PendulumModuleSpec()) and cfg.quality_window == 50 and cfg.lockstep_timeout_s is None
     lenient = dataclasses.replace(plain, lenient=True, fast=True).config(client_port=40000)
     assert lenient.quality_good == 0.5 and lenient.quality_window == 250  # a 1 s window at 4 ms
@@ -161,12 +174,18 @@ def test_a_setting_refused_by_a_library_is_reported_with_its_option():
 @pytest.mark.parametrize(
     "argv, words",
     [
-        (["monitor", "--duration", "1", "--port", "0", "--length", "0", "--pendulum", "sim"],
-         ["lbr: error: --length: the pendulum module emulation needs a simulated ball"]),
-        (["monitor", "--duration", "1", "--robot", "192.0.2.1", "--pendulum", "sim"],
-         ["lbr: error: --pendulum: 'sim' emulates the module in the built-in simulator; not with a robot"]),
-        (["execute", "x.csv", "--robot", "192.0.2.1", "--sim-lockstep", "--damping", "1"],
-         ["--sim-lockstep", "--damping", "apply to the simulator only, not with --robot"]),
+        (
+            ["monitor", "--duration", "1", "--port", "0", "--length", "0", "--pendulum", "sim"],
+            ["lbr: error: --length: the pendulum module emulation needs a simulated ball"],
+        ),
+        (
+            ["monitor", "--duration", "1", "--robot", "192.0.2.1", "--pendulum", "sim"],
+            ["lbr: error: --pendulum: 'sim' emulates the module in the built-in simulator; not with a robot"],
+        ),
+        (
+            ["execute", "x.csv", "--robot", "192.0.2.1", "--sim-lockstep", "--damping", "1"],
+            ["--sim-lockstep", "--damping", "apply to the simulator only, not with --robot"],
+        ),
         (["execute", "x.csv", "--robot", "192.0.2.1", "--length", "0.3"], ["x.csv"]),  # a length shapes the move there
     ],
 )

@@ -50,8 +50,9 @@ def _closed_with_idle(states: list[int], n: int = 3) -> None:
 def test_timeout_closes_the_session_with_idle(version):
     sock = _silent()
     try:
-        with SimulatorProcess(SimConfig(client_port=sock.getsockname()[1], version=version, period_ms=4,
-                                        max_runtime_s=0.3)) as sim:
+        with SimulatorProcess(
+            SimConfig(client_port=sock.getsockname()[1], version=version, period_ms=4, max_runtime_s=0.3)
+        ) as sim:
             stats = sim.wait(20.0)
         states = _states(sock, version)
     finally:
@@ -111,9 +112,12 @@ def test_lbr_sim_sigterm_closes_the_session_and_reports():
     sock = _silent()
     try:
         client = f"127.0.0.1:{sock.getsockname()[1]}"
-        proc = subprocess.Popen([sys.executable, "-m", "lbrcli", "sim", "--client", client, "--period", "5", "--json",
-                                 "--timeout", "60"],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "lbrcli", "sim", "--client", client, "--period", "5", "--json", "--timeout", "60"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         sock.settimeout(60.0)
         sock.recvfrom(2048)  # it runs
         proc.send_signal(signal.SIGTERM)
@@ -129,11 +133,18 @@ def test_lbr_sim_sigterm_closes_the_session_and_reports():
 def test_parent_exit_closes_the_session_with_idle():
     """The simulator process notices its parent is gone (checked every 512 cycles) and closes the session."""
     sock = _silent()
-    code = ("import os, sys; from lbrcli.fri.sim import SimConfig, SimulatorProcess; "
-            f"SimulatorProcess(SimConfig(client_port={sock.getsockname()[1]}, period_ms=1)).start(); os._exit(0)")
+    code = (
+        "import os, sys; from lbrcli.fri.sim import SimConfig, SimulatorProcess; "
+        f"SimulatorProcess(SimConfig(client_port={sock.getsockname()[1]}, period_ms=1)).start(); os._exit(0)"
+    )
     try:
-        parent = subprocess.run([sys.executable, "-c", code], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                timeout=60, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+        parent = subprocess.run(
+            [sys.executable, "-c", code],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            timeout=60,
+            env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)},
+        )
         assert parent.returncode == 0  # (no pipes: the simulator process would hold them open)
         states = _states(sock, quiet_s=2.0, first_s=10.0)
     finally:

@@ -13,13 +13,23 @@ from lbrcli.fri.sim import IO_PRESETS, IoChannel, SimConfig, SimulatorProcess
 
 from fri_kuka_client import CA, KukaLikeClient, joint_sine
 
-FAST = dict(commanding_after_s=0.05, quality_window=25, quality_good=0.5, quality_fair=0.3, quality_excellent=0.9,
-            end_delay_s=0.05, max_runtime_s=15.0)
+FAST = dict(
+    commanding_after_s=0.05,
+    quality_window=25,
+    quality_good=0.5,
+    quality_fair=0.3,
+    quality_excellent=0.9,
+    end_delay_s=0.05,
+    max_runtime_s=15.0,
+)
+# these tests are about the protocol's semantics and the plant's response, not about timing (tests/lbrcli/test_sim_spacing.py
+# is): the simulator waits for every reply (simulated time advances one period per cycle), so load changes nothing
+LOCKSTEP = dict(lockstep_timeout_s=2.0, lockstep_free=True)
 
 
 def session(version="1.15", client_overlay=None, mode="position", io_writer=None, **cfg):
     client = KukaLikeClient(version)
-    config = SimConfig(client_port=client.port, version=version, command_mode=mode, **{**FAST, **cfg})
+    config = SimConfig(client_port=client.port, version=version, command_mode=mode, **{**FAST, **LOCKSTEP, **cfg})
     try:
         with SimulatorProcess(config) as sim:
             run = client.run(client_overlay, mode=mode, io=io_writer, timeout=20.0)
@@ -37,17 +47,26 @@ def q_of(field) -> np.ndarray:
 @pytest.mark.parametrize("period_ms", [1, 2, 5])
 def test_joint_sine_overlay_moves_measured_not_ipo(version, period_ms):
     """KUKA's LBRJointSineOverlay: command = ipo + 0.04·sin on A4 → measured = ipo + sine one cycle later."""
-    run, stats, cfg = session(version, joint_sine(3, 0.04, 1.0), period_ms=period_ms,
-                              session_duration_s=max(0.6, 150 * period_ms * 1e-3),
-                              quality_window=max(50, 500 // period_ms), quality_good=0.2, quality_fair=0.1)  # loaded machine
+    run, stats, cfg = session(
+        version,
+        joint_sine(3, 0.04, 1.0),
+        period_ms=period_ms,
+        session_duration_s=max(0.6, 150 * period_ms * 1e-3),
+        quality_window=max(50, 500 // period_ms),
+        quality_good=0.2,
+        quality_fair=0.1,
+    )  # loaded machine
     assert not stats.safety_stop and stats.end_reason == "duration"
     active = run.active()
     ipo = np.array([q_of(m.ipoData.jointPosition) for m in active])
     assert np.ptp(ipo, axis=0).max() == 0.0 and np.allclose(ipo[0], cfg.q0)  # PositionHold: ipo constant
     # timely commands, and not while the interpolator still catches up after a long gap of late replies (a loaded
     # machine; it reports that as tracking performance < 1)
-    pairs = [(s, m) for s, m in run.executed_pairs(steady=3)
-             if m.connectionInfo.sessionState == CA and s.q is not None and m.ipoData.trackingPerformance == 1.0]
+    pairs = [
+        (s, m)
+        for s, m in run.executed_pairs(steady=3)
+        if m.connectionInfo.sessionState == CA and s.q is not None and m.ipoData.trackingPerformance == 1.0
+    ]
     assert len(pairs) > 0.3 * len(active)
     err = [np.abs(q_of(m.monitorData.measuredJointPosition) - s.q).max() for s, m in pairs]
     assert max(err) < 1e-6
@@ -70,8 +89,15 @@ def test_torque_mode_response_is_the_joint_impedance_dynamics(robot):
         tau[3] = bias + amp * math.sin(2 * math.pi * f * h * n)
         return np.zeros(7), tau, None
 
-    run, stats, cfg = session("1.15", overlay, mode="torque", period_ms=2, session_duration_s=1.6,
-                              joint_stiffness=K, damping_ratio=zeta)
+    run, stats, cfg = session(
+        "1.15",
+        overlay,
+        mode="torque",
+        period_ms=2,
+        session_duration_s=1.6,
+        joint_stiffness=K,
+        damping_ratio=zeta,
+    )
     assert not stats.safety_stop and stats.incomplete_commands == 0
     active = run.active()
     assert all(m.ipoData.clientCommandMode == 3 and m.robotInfo.controlMode == 2 for m in active)
@@ -111,9 +137,14 @@ def test_wrench_mode_constant_force_deflects_by_force_over_stiffness(robot):
     def overlay(n, h):
         return np.zeros(7), None, np.array([F, 0, 0, 0, 0, 0])
 
-    run, stats, cfg = session("2.7", overlay, mode="wrench", period_ms=2, session_duration_s=2.0,
-                              cartesian_stiffness=(k, 150.0),
-                              quality_window=500, quality_good=0.2, quality_fair=0.1)  # a loaded machine answers late
+    run, stats, cfg = session(
+        "2.7",
+        overlay,
+        mode="wrench",
+        period_ms=2,
+        session_duration_s=2.0,
+        cartesian_stiffness=(k, 150.0),
+    )
     assert not stats.safety_stop and stats.incomplete_commands == 0
     active = run.active()
     assert all(m.ipoData.overlayType == 2 and m.robotInfo.controlMode == 1 for m in active)
@@ -138,8 +169,12 @@ def test_io_outputs_are_written_inputs_reported_wrong_writes_refused():
 
     def io(mon):
         n = mon.header.sequenceCounter
-        return [("FRI.Out_Analog_Deci_Seconds", 2, 0.01 * n), ("FRI.Out_Integer_Seconds", 1, n),
-                ("FRI.In_Bool_Clock_Enabled", 0, 0), ("No.Such.Channel", 2, 1.0)]
+        return [
+            ("FRI.Out_Analog_Deci_Seconds", 2, 0.01 * n),
+            ("FRI.Out_Integer_Seconds", 1, n),
+            ("FRI.In_Bool_Clock_Enabled", 0, 0),
+            ("No.Such.Channel", 2, 1.0),
+        ]
 
     # like KUKA's IOAccess: a monitoring-only application (it mirrors no positions), IO read and written throughout
     run, stats, _ = session("2.7", None, io_writer=io, period_ms=4, session_duration_s=0.2, io=channels, overlay=False)
@@ -161,8 +196,9 @@ def test_io_outputs_are_written_inputs_reported_wrong_writes_refused():
 
 def test_fri_2_7_fields_are_the_kinematics_of_the_measured_pose(robot):
     force = np.array([0.0, 0.0, -15.0, 0.0, 0.0, 0.0])  # a 15 N downward pull on the TCP (base axes)
-    run, stats, _ = session("2.7", joint_sine(1, 0.05, 2.0, 0.9), period_ms=4, session_duration_s=0.4,
-                            external_force=tuple(force))
+    run, stats, _ = session(
+        "2.7", joint_sine(1, 0.05, 2.0, 0.9), period_ms=4, session_duration_s=0.4, external_force=tuple(force)
+    )
     assert not stats.safety_stop
     for m in run.messages[:-1]:
         md, ipo = m.monitorData, m.ipoData
@@ -193,8 +229,17 @@ def test_safety_stop_brakes_inside_the_position_limits(limits, mode):
         off[3] = -2.0 * (n * h) ** 2
         return off, None, None
 
-    run, stats, cfg = session("1.15", overlay, mode=mode, period_ms=2, session_duration_s=3.0, end_delay_s=0.5,
-                              quality_window=250, quality_good=0.2, quality_fair=0.1)  # a loaded machine answers late
+    run, stats, cfg = session(
+        "1.15",
+        overlay,
+        mode=mode,
+        period_ms=2,
+        session_duration_s=3.0,
+        end_delay_s=0.5,
+        quality_window=250,
+        quality_good=0.2,
+        quality_fair=0.1,
+    )  # a loaded machine answers late
     assert stats.safety_stop and stats.end_reason == "safety_stop"
     q4 = np.array([q_of(m.monitorData.measuredJointPosition)[3] for m in run.messages])
     assert np.abs(q4).max() <= lim + 1e-12 and abs(stats.final_q[3]) <= math.radians(120) + 1e-12

@@ -80,8 +80,12 @@ def test_kuka_cartesian_overlay_moves_the_flange_by_its_amplitude():
     assert stats.end_reason == "duration" and stats.states_seen[-1] == 0 and not stats.safety_stop
     assert stats.command_problem == "" and stats.cartesian_poses > 1000
     by_seq = {m.header.sequenceCounter: m for m in mons}
-    active = [x for x in cmds if by_seq.get(x.header.reflectedSequenceCounter) is not None
-              and by_seq[x.header.reflectedSequenceCounter].connectionInfo.sessionState == CA]
+    active = [
+        x
+        for x in cmds
+        if by_seq.get(x.header.reflectedSequenceCounter) is not None
+        and by_seq[x.header.reflectedSequenceCounter].connectionInfo.sessionState == CA
+    ]
     assert all(len(x.commandData.cartesianPose.element) == 7 and not x.commandData.jointPosition.value for x in active)
     ipos = np.array([m.ipoData.cartesianPose.element[:3] for m in mons if m.connectionInfo.sessionState == CA])
     assert np.ptp(ipos, axis=0).max() == 0.0  # PositionHold: the ipo pose stays while commanding
@@ -102,7 +106,9 @@ def test_kuka_cartesian_overlay_moves_the_flange_by_its_amplitude():
     cmd = np.array([x.commandData.cartesianPose.element[:3] for x, _ in pairs]) - ipo
     assert np.abs(msr - cmd).max() < 0.01  # [mm] executed exactly where the interpolator keeps up
     assert 0.97 * amp < np.abs(msr[:, 0]).max() <= amp  # the flange swings ±30 mm in x
-    e1 = [(x.commandData.redundancyInformation.value, m.monitorData.measuredRedundancyInformation.value) for x, m in pairs]
+    e1 = [
+        (x.commandData.redundancyInformation.value, m.monitorData.measuredRedundancyInformation.value) for x, m in pairs
+    ]
     assert max(abs(a - b) for a, b in e1) < 1e-9 and max(abs(a) for a, _ in e1) > math.radians(5)
     dh = np.array([pose_error(m.monitorData.measuredJointPosition.value, x.commandData.cartesianPose.element)
                    for x, m in pairs])  # fmt: skip
@@ -126,7 +132,9 @@ def test_kuka_transformation_provider_values_arrive():
     assert set(np.round(step[:, 2], 9)) <= {10.0, -300.0}
     assert np.allclose(np.array(fig["last"][:3]), xyz[-1] * 1e-3)  # reported in metres
     stamps = {m.header.sequenceCounter: (m.monitorData.timestamp.sec, m.monitorData.timestamp.nanosec) for m in mons}
-    assert all((t[0].timestamp.sec, t[0].timestamp.nanosec) == stamps[x.header.reflectedSequenceCounter] for x, t in trs)
+    assert all(
+        (t[0].timestamp.sec, t[0].timestamp.nanosec) == stamps[x.header.reflectedSequenceCounter] for x, t in trs
+    )
 
 
 def test_kuka_simulated_transformation_provider_runs_and_its_data_arrive():

@@ -75,7 +75,6 @@ def test_tracking_performance_is_the_achieved_fraction_of_the_step(limits):
     assert ip.q[3] == pytest.approx(limits.acceleration[3] * DT * DT)
 
 
-
 def test_a_joint_that_overshoots_a_sudden_stop_does_not_report_perfect_tracking(limits):
     ip = _interp(limits)
     v = 0.5 * limits.velocity[3]  # [rad/s] moving; then the target stops dead half a step ahead
@@ -92,6 +91,7 @@ def test_a_joint_that_overshoots_a_sudden_stop_does_not_report_perfect_tracking(
     assert overshoot > 0.0
     assert tp < 1.0 and tp == pytest.approx(1.0 - overshoot / asked)
 
+
 def test_quality_from_the_share_of_timely_cycles():
     qm = QualityMonitor(QualityThresholds(window=10, fair=0.5, good=0.8, excellent=1.0))
     assert qm.quality is Q.POOR
@@ -104,8 +104,9 @@ def test_quality_from_the_share_of_timely_cycles():
 
 
 def _machine(**kw):
-    return SessionMachine(SessionTiming(**{"commanding_after_s": 0.1, "wait_cycles": 3, "end_delay_s": 0.05,
-                                           "idle_messages": 2, **kw}))
+    return SessionMachine(
+        SessionTiming(**{"commanding_after_s": 0.1, "wait_cycles": 3, "end_delay_s": 0.05, "idle_messages": 2, **kw})
+    )
 
 
 def test_session_machine_full_sequence_and_normal_end():
@@ -137,18 +138,27 @@ def test_session_machine_full_sequence_and_normal_end():
     assert t - t_active == pytest.approx(0.2, abs=0.011) and m.end_reason == "duration"
     while step() is not S.IDLE:
         pass
-    assert states == [S.MONITORING_WAIT, S.MONITORING_READY, S.COMMANDING_WAIT, S.COMMANDING_ACTIVE,
-                      S.MONITORING_READY, S.IDLE]
+    assert states == [
+        S.MONITORING_WAIT,
+        S.MONITORING_READY,
+        S.COMMANDING_WAIT,
+        S.COMMANDING_ACTIVE,
+        S.MONITORING_READY,
+        S.IDLE,
+    ]
     assert not m.finished
     m.note_idle_sent()
     m.note_idle_sent()
     assert m.finished
 
 
-@pytest.mark.parametrize("quality, safety, state, reason", [
-    (Q.FAIR, False, S.MONITORING_WAIT, "quality"),
-    (Q.EXCELLENT, True, S.MONITORING_READY, "safety_stop"),
-])
+@pytest.mark.parametrize(
+    "quality, safety, state, reason",
+    [
+        (Q.FAIR, False, S.MONITORING_WAIT, "quality"),
+        (Q.EXCELLENT, True, S.MONITORING_READY, "safety_stop"),
+    ],
+)
 def test_session_machine_leaves_commanding(quality, safety, state, reason):
     m = _machine()
     m.state = S.COMMANDING_ACTIVE
@@ -244,9 +254,11 @@ def test_the_sim_package_imports_no_cli_planners_or_lab():
     import subprocess
     import sys
 
-    code = ("import sys; from lbrcli.fri.sim import SimConfig; from lbrcli.fri.sim.controller import Controller; "
-            "c = Controller(SimConfig(version='2.7')); c.cycle(0.0); "
-            "bad = [m for m in sys.modules if m.split('.')[0] == 'planners' or m.startswith(('lbrcli.lab', "
-            "'lbrcli.commands', 'lbrcli.app', 'typer'))]; print(bad); sys.exit(1 if bad else 0)")
+    code = (
+        "import sys; from lbrcli.fri.sim import SimConfig; from lbrcli.fri.sim.controller import Controller; "
+        "c = Controller(SimConfig(version='2.7')); c.cycle(0.0); "
+        "bad = [m for m in sys.modules if m.split('.')[0] == 'planners' or m.startswith(('lbrcli.lab', "
+        "'lbrcli.commands', 'lbrcli.app', 'typer'))]; print(bad); sys.exit(1 if bad else 0)"
+    )
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stdout + res.stderr

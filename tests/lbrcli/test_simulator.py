@@ -19,20 +19,38 @@ from trajectories.errors import FriError, OptionError
 
 from fri_scripted_client import ScriptedClient  # tests/lbrcli is on sys.path (rootdir-less test dirs)
 
-MW, MR, CW, CA, IDLE = (int(s) for s in (SessionState.MONITORING_WAIT, SessionState.MONITORING_READY,
-                                         SessionState.COMMANDING_WAIT, SessionState.COMMANDING_ACTIVE,
-                                         SessionState.IDLE))
-TEST_DEFAULTS = dict(
-    period_ms=4, commanding_after_s=0.05, quality_window=25, quality_good=0.5, quality_fair=0.3,
-    quality_excellent=0.9, max_runtime_s=8.0, end_delay_s=0.05,  # lenient: the test machine may be loaded
+MW, MR, CW, CA, IDLE = (
+    int(s)
+    for s in (
+        SessionState.MONITORING_WAIT,
+        SessionState.MONITORING_READY,
+        SessionState.COMMANDING_WAIT,
+        SessionState.COMMANDING_ACTIVE,
+        SessionState.IDLE,
+    )
 )
+TEST_DEFAULTS = dict(
+    period_ms=4,
+    commanding_after_s=0.05,
+    quality_window=25,
+    quality_good=0.5,
+    quality_fair=0.3,
+    quality_excellent=0.9,
+    max_runtime_s=8.0,
+    end_delay_s=0.05,  # lenient: the test machine may be loaded
+)
+# the simulator waits for each reply the client owes (on the period's grid): what these tests judge does not change
+# with this machine's load; the tests of the timing rules themselves run in real time (REAL_TIME)
+LOCKSTEP = dict(lockstep_timeout_s=2.0)
+REAL_TIME = dict(lockstep_timeout_s=None)
 
 
 def run_session(version="1.15", policy=None, multiplier=1, before=None, answer=None, client_timeout=8.0, **cfg):
     """Start the simulator for a scripted client, run the session, return (client run, sim stats, config)."""
     client = ScriptedClient(version)
-    config = SimConfig(client_port=client.port, version=version, receive_multiplier=multiplier,
-                       **{**TEST_DEFAULTS, **cfg})
+    config = SimConfig(
+        client_port=client.port, version=version, receive_multiplier=multiplier, **{**TEST_DEFAULTS, **LOCKSTEP, **cfg}
+    )
     try:
         with SimulatorProcess(config) as sim:
             if before is not None:
@@ -50,7 +68,7 @@ def assert_sequence(states: list[int]) -> None:
     i = states.index(CA)
     assert states[i - 1] == CW and states[i - 2] == MR
     assert states.count(CA) == 1 and states.count(CW) == 1
-    assert set(states[:i - 1]) <= {MW, MR}
+    assert set(states[: i - 1]) <= {MW, MR}
 
 
 @pytest.mark.parametrize("version", ["1.15", "2.7"])
@@ -108,7 +126,7 @@ def test_receive_multiplier_is_honoured_and_commands_are_fine_interpolated():
     active = run.where(CA)
     assert 0.2 * len(active) <= stats.commanded_rows <= 0.5 * len(active)
     # between commands the controller interpolates: A7 moves every cycle, not in steps of three
-    dq = np.diff([r.msr_q[6] for r in active[len(active) // 2:]])
+    dq = np.diff([r.msr_q[6] for r in active[len(active) // 2 :]])
     assert np.all(dq > 0.2 * ramp)
     assert np.median(dq) == pytest.approx(ramp, rel=0.2)
 
@@ -122,15 +140,38 @@ def test_falls_back_to_monitoring_when_replies_stop():
             return None
         return q0
 
-    run, stats, _ = run_session(policy=policy, answer=lambda r: not silent)
+    run, stats, _ = run_session(policy=policy, answer=lambda r: not silent, **REAL_TIME)
     states = run.states
     i = states.index(CA)
-    assert states[i + 1:] == [MW, IDLE]
+    assert states[i + 1 :] == [MW, IDLE]
     assert stats.end_reason == "quality"
     assert stats.missed_replies >= 3 and stats.untimely_active_cycles >= 3  # the quality rule saw them in commanding
     after = [r for r in run.received if r.state == MW and r.seq > run.where(CA)[-1].seq]
     assert after and after[-1].quality <= 1  # POOR or FAIR
     assert all(r.tracking == 0.0 for r in after)
+
+
+def test_a_session_dropped_for_quality_says_so_when_the_simulator_is_stopped_afterwards():
+    """The client gives up after the drop and stops the simulator before its IDLE: the statistics keep the session's
+    own end ("quality", what a user's error message explains), not only "stopped"."""
+    silent = []
+
+    def policy(k, q0):
+        if k >= 40:
+            silent.append(k)
+            return None
+        return q0
+
+    client = ScriptedClient("1.15")
+    config = SimConfig(client_port=client.port, **{**TEST_DEFAULTS, "end_delay_s": 30.0})  # no IDLE on its own
+    try:
+        with SimulatorProcess(config) as sim:
+            run = client.run(policy, timeout=1.5, answer_monitoring=lambda r: not silent)
+            stats = sim.stop()
+    finally:
+        client.close()
+    assert CA in run.states and run.states[-1] == MW  # dropped, then stopped before the simulator's IDLE
+    assert stats.end_reason == "quality"
 
 
 def test_safety_stop_on_a_command_outside_the_position_limits(limits):
@@ -230,18 +271,20 @@ def test_ball_swings_after_a_jerk_of_the_flange_as_the_pendulum_model_predicts(r
     q = np.array([r.msr_q for r in rec])
     t = np.arange(len(q)) * h
     pos, _ = robot.fk_path(q)
-    ref = simulate_string(StringModel(length, cup=None), PivotMotion(t, pos), float(t[-1]))  # the same model, event-driven
+    ref = simulate_string(
+        StringModel(length, cup=None), PivotMotion(t, pos), float(t[-1])
+    )  # the same model, event-driven
     d = ref.string_direction
     m = len(q) - 3
-    sim_tx = np.array([r.io["ball_theta_x"] for r in rec[1:m + 1]])  # message k carries the ball at t[k−1]
-    sim_ty = np.array([r.io["ball_theta_y"] for r in rec[1:m + 1]])
+    sim_tx = np.array([r.io["ball_theta_x"] for r in rec[1 : m + 1]])  # message k carries the ball at t[k−1]
+    sim_ty = np.array([r.io["ball_theta_y"] for r in rec[1 : m + 1]])
     assert np.abs(sim_tx - np.arctan2(d[:m, 0], -d[:m, 2])).max() < 1e-4
     assert np.abs(sim_ty - ref.theta_y[:m]).max() < 1e-4
-    sim_theta = np.array([r.io["ball_theta"] for r in rec[1:m + 1]])
+    sim_theta = np.array([r.io["ball_theta"] for r in rec[1 : m + 1]])
     assert np.abs(sim_theta - ref.theta[:m]).max() < 1e-4
-    sim_ball = np.array([[r.io[f"ball_{c}"] for c in "xyz"] for r in rec[1:m + 1]])
+    sim_ball = np.array([[r.io[f"ball_{c}"] for c in "xyz"] for r in rec[1 : m + 1]])
     assert np.abs(sim_ball - ref.position[:m]).max() < 1e-4  # [m]
-    assert {r.io["ball_phase"] for r in rec[1:m + 1]} == {0.0}  # taut throughout
+    assert {r.io["ball_phase"] for r in rec[1 : m + 1]} == {0.0}  # taut throughout
 
 
 def test_loss_injection_is_counted_and_bridged():
@@ -264,6 +307,8 @@ def test_malformed_injection_is_counted():
 
 
 def test_delays_within_the_period_are_tolerated():
+    # in lock-step: the delay line delivers every message and the session runs its course; whether a loaded machine
+    # still answers in time is a question for the benchmarks
     run, stats, _ = run_session(period_ms=4, delay_ms=0.5, jitter_ms=1.0, session_duration_s=0.3)
     assert_sequence(run.states)
     assert stats.end_reason == "duration"
@@ -271,7 +316,7 @@ def test_delays_within_the_period_are_tolerated():
 
 
 def test_replies_later_than_the_next_send_keep_the_session_in_monitoring_wait():
-    run, stats, _ = run_session(delay_ms=6.0, max_runtime_s=0.6, client_timeout=0.8)
+    run, stats, _ = run_session(delay_ms=6.0, max_runtime_s=0.6, client_timeout=0.8, **REAL_TIME)
     assert stats.states_seen == (MW, IDLE)  # the timeout closes the session
     assert stats.end_reason == "max_runtime"
     # most are late (a loaded machine may stretch a simulator cycle beyond the delay now and then)
@@ -285,16 +330,31 @@ def test_foreign_and_malformed_datagrams_are_counted_and_ignored():
     def send_foreign(address):
         c115, c27 = FriCodec("1.15"), FriCodec("2.7")
         cmd = c115.new_command()
-        cmd.header.messageIdentifier, cmd.header.sequenceCounter, cmd.header.reflectedSequenceCounter = COMMAND_MESSAGE_ID, 99, 0
+        cmd.header.messageIdentifier, cmd.header.sequenceCounter, cmd.header.reflectedSequenceCounter = (
+            COMMAND_MESSAGE_ID,
+            99,
+            0,
+        )
         cmd.commandData.jointPosition.value.extend([3.0] * 7)  # would be a safety stop if it were accepted
         mon = c115.new_monitoring()
-        mon.header.messageIdentifier, mon.header.sequenceCounter, mon.header.reflectedSequenceCounter = MONITORING_MESSAGE_ID, 1, 2
+        mon.header.messageIdentifier, mon.header.sequenceCounter, mon.header.reflectedSequenceCounter = (
+            MONITORING_MESSAGE_ID,
+            1,
+            2,
+        )
         cmd27 = c27.new_command()
-        cmd27.header.messageIdentifier, cmd27.header.sequenceCounter, cmd27.header.reflectedSequenceCounter = COMMAND_MESSAGE_ID, 1, 2
+        cmd27.header.messageIdentifier, cmd27.header.sequenceCounter, cmd27.header.reflectedSequenceCounter = (
+            COMMAND_MESSAGE_ID,
+            1,
+            2,
+        )
         local = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         local.bind(("127.0.0.1", 0))
-        sends = [(local, c115.encode(mon))] * 2 + [(local, b"\xff" * n) for n in (1, 10, 100)] + [
-            (local, c27.encode(cmd27)), (local, b"")]
+        sends = (
+            [(local, c115.encode(mon))] * 2
+            + [(local, b"\xff" * n) for n in (1, 10, 100)]
+            + [(local, c27.encode(cmd27)), (local, b"")]
+        )
         foreign_host = 0
         other = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
@@ -311,7 +371,7 @@ def test_foreign_and_malformed_datagrams_are_counted_and_ignored():
 
     # in lock-step: the quality rule is not what is tested here, and a loaded machine dropped the session to
     # MONITORING_WAIT once (the counts held)
-    run, stats, _ = run_session(before=send_foreign, session_duration_s=0.2, lockstep_timeout_s=0.5)
+    run, stats, _ = run_session(before=send_foreign, session_duration_s=0.2)
     assert stats.foreign_received == counts["foreign"]
     assert stats.malformed_received == counts["malformed"]
     assert_sequence(run.states)
@@ -322,17 +382,18 @@ def test_stop_without_a_client():
     silent = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     silent.bind(("127.0.0.1", 0))
     cfg = SimConfig(client_port=silent.getsockname()[1], period_ms=2)
+    silent.settimeout(30.0)
     try:
         with SimulatorProcess(cfg) as sim:
-            assert sim.wait(0.3) is None  # nobody answers: the session does not end by itself
+            first = [silent.recvfrom(2048)[0] for _ in range(25)]  # 25 cycles sent (however slowly a loaded PC runs)
+            assert sim.wait(0.1) is None  # nobody answers: the session does not end by itself
             stats = sim.stop()
-        data, _ = silent.recvfrom(2048)
     finally:
         silent.close()
-    m = FriCodec("1.15").decode_monitoring(data)
+    m = FriCodec("1.15").decode_monitoring(first[0])
     assert m.header.sequenceCounter == 0 and m.connectionInfo.sessionState == MW
     assert stats.end_reason == "stopped" and stats.states_seen == (MW, IDLE)  # stop() closes the session
-    assert stats.cycles > 20 and stats.replies == 0 and stats.missed_replies == 0
+    assert stats.cycles >= 25 and stats.replies == 0 and stats.missed_replies == 0
 
 
 def test_bad_configuration_is_refused():
@@ -361,11 +422,36 @@ def test_lbr_sim_command_runs_a_session_and_reports_json():
     client = ScriptedClient("2.7")
     try:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "lbrcli", "sim", "--client", f"127.0.0.1:{client.port}", "--period", "5",
-             "--quality-window", "25", "--quality-good", "0.75",
-             "--duration", "0.2", "--commanding-after", "0.05", "--fri-version", "2.7", "--length", "0.4",
-             "--q0", "0,10deg,0,-80deg,0,30deg,0", "--timeout", "20", "--json"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            [
+                sys.executable,
+                "-m",
+                "lbrcli",
+                "sim",
+                "--client",
+                f"127.0.0.1:{client.port}",
+                "--period",
+                "5",
+                "--quality-window",
+                "25",
+                "--quality-good",
+                "0.75",
+                "--duration",
+                "0.2",
+                "--commanding-after",
+                "0.05",
+                "--fri-version",
+                "2.7",
+                "--length",
+                "0.4",
+                "--q0",
+                "0,10deg,0,-80deg,0,30deg,0",
+                "--timeout",
+                "20",
+                "--json",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
         )
         run = client.run(timeout=30.0)
         out, err = proc.communicate(timeout=30)

@@ -97,7 +97,6 @@ def test_interrupted_study_resumes_and_an_extended_grid_computes_only_the_new_ru
     assert sorted(r["value"] for r in pq.read_table(out / "results.parquet").to_pylist()) == list(range(1, 47))
 
 
-
 def test_a_run_that_kills_its_workers_is_a_crashed_row(tmp_path):
     """Dask gives a run lost with its worker to another; one that takes the workers down (here the first: allowed
     failures 0) ends as a row naming KilledWorker, the study goes on, and the sweep exits 1."""

@@ -65,7 +65,10 @@ def board_images(tmp_path_factory):
     D = np.array([-0.2, 0.05, 0.0, 0.0, 0.0])
     rng = np.random.default_rng(2)
     poses = [
-        (np.radians(rng.uniform(-30, 30, 3)) * [1, 1, 0.3], np.array([-0.1 + rng.uniform(-0.04, 0.04), -0.06, rng.uniform(0.45, 0.6)]))
+        (
+            np.radians(rng.uniform(-30, 30, 3)) * [1, 1, 0.3],
+            np.array([-0.1 + rng.uniform(-0.04, 0.04), -0.06, rng.uniform(0.45, 0.6)]),
+        )
         for _ in range(8)
     ]
     views = d / "views"
@@ -80,7 +83,20 @@ def board_images(tmp_path_factory):
 def test_calibrate_then_track_in_metres(lbr, board_images, clip, tmp_path):
     d, K = board_images
     cam = tmp_path / "cam.json"
-    res = lbr("track", "calibrate", d / "views", "--board", "9x6", "--square", "0.025", "--plane", d / "plane.png", "-o", cam, "--json")
+    res = lbr(
+        "track",
+        "calibrate",
+        d / "views",
+        "--board",
+        "9x6",
+        "--square",
+        "0.025",
+        "--plane",
+        d / "plane.png",
+        "-o",
+        cam,
+        "--json",
+    )
     assert res.returncode == 0, res.stderr
     fig = json.loads(res.stdout)
     assert fig["views_used"] == 8 and fig["rms_px"] < 0.2
@@ -115,12 +131,22 @@ def test_bad_inputs_exit_2(lbr, clip, board_images, tmp_path):
     junk.write_text("not a video\n")
     assert "not a readable video" in one_line_error(lbr("track", "video", junk, "-o", out))
     assert "--pivot" in one_line_error(lbr("track", "video", video, "-o", out, "--pivot", "1,2,3"))
-    assert "not both" in one_line_error(lbr("track", "video", video, "-o", out, "--pivot", "1,2", "--pivot-color", "green"))
+    assert "not both" in one_line_error(
+        lbr("track", "video", video, "-o", out, "--pivot", "1,2", "--pivot-color", "green")
+    )
     assert "unknown colour" in one_line_error(lbr("track", "video", video, "-o", out, "--color", "purple"))
     assert "must differ" in one_line_error(lbr("track", "video", video, "-o", out, "--pivot-color", "red"))
     assert "folder does not exist" in one_line_error(lbr("track", "video", video, "-o", tmp_path / "no" / "t.csv"))
     cam = tmp_path / "cam.json"
-    cam.write_text(json.dumps({"camera_matrix": [[500, 0, 320], [0, 500, 240], [0, 0, 1]], "dist_coeffs": [0, 0, 0, 0, 0], "image_size": [640, 480]}))
+    cam.write_text(
+        json.dumps(
+            {
+                "camera_matrix": [[500, 0, 320], [0, 500, 240], [0, 0, 1]],
+                "dist_coeffs": [0, 0, 0, 0, 0],
+                "image_size": [640, 480],
+            }
+        )
+    )
     assert "640x480" in one_line_error(lbr("track", "video", video, "-o", out, "--pivot", "1,2", "--calibration", cam))
     d, _ = board_images
     assert "--board" in one_line_error(lbr("track", "calibrate", d / "views", "--board", "9by6", "-o", cam))
@@ -218,7 +244,9 @@ def test_tilted_camera_theta_in_plane_with_calibration(lbr, hard, tmp_path):
 def test_slow_motion_fps_option(lbr, hard, tmp_path):
     sc = hard("slow_motion")
     out = tmp_path / "t.csv"
-    res = lbr("track", "video", sc.path, "-o", out, "--pivot", _uv(sc.track_kwargs["pivot_uv"]), "--fps", "240", "--json")
+    res = lbr(
+        "track", "video", sc.path, "-o", out, "--pivot", _uv(sc.track_kwargs["pivot_uv"]), "--fps", "240", "--json"
+    )
     assert res.returncode == 0, res.stderr
     assert json.loads(res.stdout)["fps_given"] == 240.0
     tr = read_track_csv(out)
@@ -250,9 +278,21 @@ def test_candidates_png_lists_ball_like_blobs(lbr, hard, tmp_path):
 
     sc = hard("red_disc")
     png = tmp_path / "cands.png"
-    res = lbr("track", "video", sc.path, "-o", tmp_path / "t.csv", "--candidates", png, "--pivot", _uv(sc.track_kwargs["pivot_uv"]))
+    res = lbr(
+        "track",
+        "video",
+        sc.path,
+        "-o",
+        tmp_path / "t.csv",
+        "--candidates",
+        png,
+        "--pivot",
+        _uv(sc.track_kwargs["pivot_uv"]),
+    )
     assert res.returncode == 0, res.stderr
     assert "candidates: 2 ball-like blobs" in res.stdout
     img = cv2.imread(str(png))
     assert img is not None and img.shape[1::-1] == HARD_SIZE
-    assert "--candidates" in one_line_error(lbr("track", "video", sc.path, "-o", tmp_path / "t.csv", "--candidates", tmp_path / "c.xyz"))
+    assert "--candidates" in one_line_error(
+        lbr("track", "video", sc.path, "-o", tmp_path / "t.csv", "--candidates", tmp_path / "c.xyz")
+    )

@@ -46,9 +46,12 @@ def test_the_track_is_placed_by_its_ball_and_the_plan_at_its_first_commanded_row
     assert given.offsets[str(run.track)] - given.offsets[str(run.log)] == pytest.approx(1.5)
 
 
-@pytest.mark.parametrize("lag, noise_deg, lost, fps", [(-0.8, 0.05, 0.05, 60), (0.15, 0.5, 0.2, 30), (1.3, 0.2, 0.1, 120)])
-def test_tracks_are_placed_within_a_frame_across_lags_noise_and_lost_frames(tmp_path_factory, tmp_path, lag,
-                                                                             noise_deg, lost, fps):
+@pytest.mark.parametrize(
+    "lag, noise_deg, lost, fps", [(-0.8, 0.05, 0.05, 60), (0.15, 0.5, 0.2, 30), (1.3, 0.2, 0.1, 120)]
+)
+def test_tracks_are_placed_within_a_frame_across_lags_noise_and_lost_frames(
+    tmp_path_factory, tmp_path, lag, noise_deg, lost, fps
+):
     """Another camera each time: its own delay (before or after the log), noise, lost frames and frame rate; placed
     within one video frame or one log period, whichever is longer."""
     from trajectories.csvio import write_table
@@ -61,9 +64,20 @@ def test_tracks_are_placed_within_a_frame_across_lags_noise_and_lost_frames(tmp_
     theta = np.interp(t - lag, ball.t, ball.planar) + rng.normal(0.0, np.radians(noise_deg), len(t))
     found = rng.random(len(t)) > lost
     theta[~found] = np.nan
-    write_table(tmp_path / "cam.csv", ("t", "frame", "u", "v", "found", "theta"),
-                np.column_stack([t, np.arange(len(t)), np.where(found, 1.0, np.nan), np.where(found, 1.0, np.nan),
-                                 found.astype(float), theta]))
+    write_table(
+        tmp_path / "cam.csv",
+        ("t", "frame", "u", "v", "found", "theta"),
+        np.column_stack(
+            [
+                t,
+                np.arange(len(t)),
+                np.where(found, 1.0, np.nan),
+                np.where(found, 1.0, np.nan),
+                found.astype(float),
+                theta,
+            ]
+        ),
+    )
     al = align([log, read_input(tmp_path / "cam.csv")])
     placed = al.offsets[str(tmp_path / "cam.csv")] - al.offsets[log.path]
     period = float(np.median(np.diff(ball.t)))  # the log's 10 ms: the reference is sampled no finer
@@ -112,9 +126,28 @@ def test_drawn_bodies_and_balls_are_where_pinocchio_puts_the_logged_arm(tmp_path
 def test_turning_points_are_the_points_the_crane_move_was_planned_through(tmp_path):
     points = [(0.45, -0.15), (0.6, -0.15), (0.6, 0.1), (0.5, 0.1)]
     text = ";".join(f"{x},{y}" for x, y in points)
-    proc = run_lbr("plan", "anti-sway", "--points", text, "--length", LENGTH, "--a-max", "2", "--dt", "0.01",
-                   "--length-tolerance", "0", "--z", "0.4", "-o", tmp_path / "crane.csv", "--prediction",
-                   tmp_path / "pred.csv", "--json", cwd=tmp_path)
+    proc = run_lbr(
+        "plan",
+        "anti-sway",
+        "--points",
+        text,
+        "--length",
+        LENGTH,
+        "--a-max",
+        "2",
+        "--dt",
+        "0.01",
+        "--length-tolerance",
+        "0",
+        "--z",
+        "0.4",
+        "-o",
+        tmp_path / "crane.csv",
+        "--prediction",
+        tmp_path / "pred.csv",
+        "--json",
+        cwd=tmp_path,
+    )
     assert proc.returncode == 0, proc.stderr
     files = [read_input(tmp_path / "crane.csv"), read_input(tmp_path / "pred.csv")]
     scene = build_scene(files, align(files), Robot(), ViewSettings(length=LENGTH))
@@ -135,10 +168,16 @@ def test_turning_points_of_a_reversing_and_a_resting_pivot():
     assert turning_points(np.tile([0.5, 0.0, 0.4], (50, 1)), 0.01).shape == (1, 3)
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--fps", "0"], "--fps"), (["--cup", "0.04"], "--cup"), (["--offset", "nofile=1"], "--offset"),
-    (["-o", "view.txt"], "HTML"), (["--port", "70000"], "--port"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--fps", "0"], "--fps"),
+        (["--cup", "0.04"], "--cup"),
+        (["--offset", "nofile=1"], "--offset"),
+        (["-o", "view.txt"], "HTML"),
+        (["--port", "70000"], "--port"),
+    ],
+)
 def test_bad_options_exit_2_with_one_line(tmp_path_factory, tmp_path, monkeypatch, capsys, argv, message):
     from lbrcli.app import main
 

@@ -87,8 +87,17 @@ def test_offline_file_draws_the_run_where_the_files_say_and_the_slider_moves_it(
     from lbrcli.app import main
 
     try:  # in this process: the command as a user runs it, without another interpreter's start-up
-        main(["view", *map(str, (run.plan, run.log, run.track, run.obstacles)), "-o", str(out), "--fps", str(FPS),
-              "--json"])
+        main(
+            [
+                "view",
+                *map(str, (run.plan, run.log, run.track, run.obstacles)),
+                "-o",
+                str(out),
+                "--fps",
+                str(FPS),
+                "--json",
+            ]
+        )
     except SystemExit as ended:
         assert not ended.code, capsys.readouterr().err
     fig = json.loads(capsys.readouterr().out)
@@ -120,9 +129,27 @@ def test_offline_file_draws_the_run_where_the_files_say_and_the_slider_moves_it(
 def test_live_view_serves_on_loopback_and_follows_its_slider(tmp_path_factory):
     require_browser()
     run = run_files(tmp_path_factory)
-    proc = subprocess.Popen([sys.executable, "-m", "lbrcli", "view", str(run.plan), str(run.log), str(run.track),
-                             "--port", "0", "--fps", str(FPS), "--duration", "60", "--json"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "lbrcli",
+            "view",
+            str(run.plan),
+            str(run.log),
+            str(run.track),
+            "--port",
+            "0",
+            "--fps",
+            str(FPS),
+            "--duration",
+            "60",
+            "--json",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         url, offset = None, None
         for line in proc.stderr:  # "…/log.csv: execution log, at +0.370 s: reference clock", then "view: URL"

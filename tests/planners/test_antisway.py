@@ -170,8 +170,9 @@ def test_planar_tuning_model_agrees_with_the_spherical_pendulum():
     h = 0.001
     t = np.arange(0.0, prof.duration / 2 + h / 2, h)
     # the spherical model driven along x stays in the x–z plane; compare the mid-move angle
-    run = simulate(t, lambda tt: np.array([prof.acceleration(tt)[()], 0.0, 0.0]), L, rtol=1e-10, atol=1e-12,
-                   max_step=0.01)
+    run = simulate(
+        t, lambda tt: np.array([prof.acceleration(tt)[()], 0.0, 0.0]), L, rtol=1e-10, atol=1e-12, max_step=0.01
+    )
     theta_mid = planar_midpoint_angle(prof, L, step=0.0005)
     mid = np.interp(prof.duration / 2, run.t, run.theta_x)
     assert theta_mid == pytest.approx(mid, abs=2e-5)

@@ -55,7 +55,9 @@ def test_robust_profile_meets_its_bound_over_the_band_and_the_limits(length, a_m
     assert a <= a_max * (1 + 1e-6) and jj <= j * (1 + 1e-6)
     assert prof.position(prof.duration) == pytest.approx(s, abs=1e-12)
     assert abs(prof.velocity(np.array([prof.duration - 1e-9]))[0]) < 1e-6
-    assert np.all(np.diff(prof.position(np.linspace(0, prof.duration, 500))) >= -1e-4)  # backs up < 0.1 mm (speed ≥ 0 at the nodes only)
+    assert np.all(
+        np.diff(prof.position(np.linspace(0, prof.duration, 500))) >= -1e-4
+    )  # backs up < 0.1 mm (speed ≥ 0 at the nodes only)
     # quicker is not possible at this bound (bisection tolerance 1 %)
     from planners.robust_shaping import solve_at_duration
 
@@ -70,8 +72,14 @@ def test_linear_phasor_matches_the_simulated_linear_pendulum():
     spec = RobustSpec(5.0, 7.0, math.radians(0.5))
     prof, _ = robust_profile(0.3, spec, 1.5, 30.0, math.inf)
     w = 6.1
-    sol = solve_ivp(lambda t, y: [y[1], -w * w * y[0] - w * w / G * prof.acceleration(np.array(t))[()]],
-                    (0, prof.duration), [0.0, 0.0], rtol=1e-11, atol=1e-13, max_step=prof.step / 4)
+    sol = solve_ivp(
+        lambda t, y: [y[1], -w * w * y[0] - w * w / G * prof.acceleration(np.array(t))[()]],
+        (0, prof.duration),
+        [0.0, 0.0],
+        rtol=1e-11,
+        atol=1e-13,
+        max_step=prof.step / 4,
+    )
     th, thd = sol.y[:, -1]
     z = linear_residual_phasor(prof, np.array([w]))[0]
     assert z == pytest.approx(-np.exp(-1j * w * prof.duration) * (thd / w + 1j * th), abs=1e-7)
@@ -85,8 +93,9 @@ def test_nonlinear_correction_reaches_the_budget_where_the_linear_design_does_no
     lin_only, _ = robust_profile(s, spec, a_max, a_max / (0.04 * natural_period(length)), math.inf)
     z_lin, _ = nonlinear_phasor(lin_only, spec.omegas)
     assert np.abs(z_lin).max() > budget
-    plan = plan_layout(np.array([[0.0, 0.0], [s, 0.0]]), length, a_max, 0.45, 0.005,
-                       AntiSwayOptions(robust_budget=budget))
+    plan = plan_layout(
+        np.array([[0.0, 0.0], [s, 0.0]]), length, a_max, 0.45, 0.005, AntiSwayOptions(robust_budget=budget)
+    )
     seg = plan.segments[0]
     assert seg.design == "robust" and seg.band_residual <= 1.1 * budget < 0.5 * np.abs(z_lin).max()
     amp, _ = planar_band(seg.profile, length * np.array([0.9, 0.95, 1.0, 1.05, 1.1]), step=0.001)

@@ -13,8 +13,16 @@ L, M = 0.25, 0.0139
 
 
 def _run(u_of_t, theta0=0.3, duration=6.0):
-    sol = solve_ivp(lambda t, y: rhs(y, u_of_t(t), L), (0, duration), [0, 0, theta0, 0.0], method="DOP853",
-                    dense_output=True, rtol=1e-11, atol=1e-12, max_step=0.01)
+    sol = solve_ivp(
+        lambda t, y: rhs(y, u_of_t(t), L),
+        (0, duration),
+        [0, 0, theta0, 0.0],
+        method="DOP853",
+        dense_output=True,
+        rtol=1e-11,
+        atol=1e-12,
+        max_step=0.01,
+    )
     t = np.linspace(0, duration, 6001)
     return t, sol.sol(t)
 

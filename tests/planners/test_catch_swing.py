@@ -21,8 +21,16 @@ PARAMS = FastParams(speed=0.9, first_speed=0.8, centring=0.68, apex_offset=-0.29
 
 @pytest.fixture(scope="module")
 def cruising():
-    problem = FastProblem(length=LENGTH, theta_d=math.radians(150), bounds=TaskBounds(1.0, 5.0, 79.0), release=True,
-                          band=(0.97, 1.03), horizon=4.0, scorer=release_score, goal=ReleaseGoal(height=HEIGHT))
+    problem = FastProblem(
+        length=LENGTH,
+        theta_d=math.radians(150),
+        bounds=TaskBounds(1.0, 5.0, 79.0),
+        release=True,
+        band=(0.97, 1.03),
+        horizon=4.0,
+        scorer=release_score,
+        goal=ReleaseGoal(height=HEIGHT),
+    )
     plan = simulate_fast(problem, PARAMS)
     x = np.concatenate([plan.x, plan.x[-1] + plan.v[-1] * problem.dt * np.arange(1, 201)])  # cruise on, 1 s
     t = np.arange(len(x)) * problem.dt

@@ -48,7 +48,11 @@ def test_local_bounds_keep_every_joint_inside_its_limits(rail, limits):
     for _ in range(300):
         x = rng.uniform(-0.29, 0.29)
         speed, lo, hi, jlo, jhi = rail.local_bounds(x, 0.0, 0.0)
-        assert speed >= rail.limits.velocity - 1e-9 and hi >= rail.limits.acceleration - 1e-9 and -lo >= rail.limits.acceleration - 1e-9
+        assert (
+            speed >= rail.limits.velocity - 1e-9
+            and hi >= rail.limits.acceleration - 1e-9
+            and -lo >= rail.limits.acceleration - 1e-9
+        )
         v = rng.uniform(-0.95, 0.95) * speed
         _, lo, hi, jlo, jhi = rail.local_bounds(x, v, 0.0)
         a = rng.choice([lo, hi]) * 0.999

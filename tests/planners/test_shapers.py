@@ -20,8 +20,8 @@ def test_shaper_impulses_are_positive_and_sum_to_one(name):
 
 
 @pytest.mark.parametrize(
-    "name, duration, v_at_design", [("zv", 0.5, 0.0), ("zvd", 1.0, 0.0), ("zvdd", 1.5, 0.0), ("mzv", 0.75, 0.0),
-                                     ("ei", 1.0, 0.05)]
+    "name, duration, v_at_design",
+    [("zv", 0.5, 0.0), ("zvd", 1.0, 0.0), ("zvdd", 1.5, 0.0), ("mzv", 0.75, 0.0), ("ei", 1.0, 0.05)],
 )
 def test_residual_at_the_design_frequency(name, duration, v_at_design):
     T = 0.9
@@ -58,7 +58,9 @@ def test_length_band_and_box_zero():
     assert lo == pytest.approx(1 / math.sqrt(1.2)) and hi == pytest.approx(1 / math.sqrt(0.8))
     T = 1.0
     assert float(box_residual(2 * math.pi / T, T)) == pytest.approx(0.0, abs=1e-15)
-    assert float(box_residual(2 * math.pi / T * 1.118, T)) == pytest.approx(abs(math.sin(math.pi * 1.118) / (math.pi * 1.118)))
+    assert float(box_residual(2 * math.pi / T * 1.118, T)) == pytest.approx(
+        abs(math.sin(math.pi * 1.118) / (math.pi * 1.118))
+    )
 
 
 def _ruckig_duration(s, v, a, j):

@@ -10,7 +10,16 @@ import pytest
 from planners.catch_outcome import outcome
 from planners.pendulum import G, SampledAcceleration, simulate
 from planners.string_model import (
-    RESTING, SLACK, TAUT, Ball, Cup, StringModel, contact_velocity, cup_gap, in_cup, retension_velocity,
+    RESTING,
+    SLACK,
+    TAUT,
+    Ball,
+    Cup,
+    StringModel,
+    contact_velocity,
+    cup_gap,
+    in_cup,
+    retension_velocity,
 )
 from planners.string_penalty import judge
 from planners.string_sim import PivotMotion, simulate_string
@@ -47,8 +56,13 @@ def test_taut_motion_is_the_spherical_pendulum():
 def test_free_swing_goes_slack_where_the_tension_vanishes_and_flies_a_parabola(length, apex_deg):
     t, pos = fixed_pivot(1.2)
     model = StringModel(length, ball=NO_DRAG, cup=None)
-    run = simulate_string(model, PivotMotion(t, pos), 1.2, np.arange(0, 1.2, 0.001),
-                          sdot0=np.array([0.0, apex_rate(math.radians(apex_deg), length), 0.0]))
+    run = simulate_string(
+        model,
+        PivotMotion(t, pos),
+        1.2,
+        np.arange(0, 1.2, 0.001),
+        sdot0=np.array([0.0, apex_rate(math.radians(apex_deg), length), 0.0]),
+    )
     release = run.of_kind("slack")[0]
     cos_s = 2.0 / 3.0 * math.cos(math.radians(apex_deg))
     assert release.info["theta_deg"] == pytest.approx(math.degrees(math.acos(cos_s)), abs=1e-5)
@@ -141,10 +155,16 @@ def test_a_ball_beside_the_rim_is_not_caught_and_says_how_far_out():
 
 def _swing_cases():
     """Free swings released by the string into a resting cup: (model, apex [deg]) of several lengths and cups."""
-    cups = [Cup(), Cup(inner_radius=0.04, depth=0.06, rim_height=0.065, wall=0.004),
-            Cup(inner_radius=0.025, depth=0.035, rim_height=0.04, wall=0.002)]
-    return [(StringModel(0.25, cup=cups[0]), 157.0), (StringModel(0.3, cup=cups[1], restitution=0.7), 162.0),
-            (StringModel(0.18, cup=cups[2], ball=Ball(radius=0.008)), 157.0)]
+    cups = [
+        Cup(),
+        Cup(inner_radius=0.04, depth=0.06, rim_height=0.065, wall=0.004),
+        Cup(inner_radius=0.025, depth=0.035, rim_height=0.04, wall=0.002),
+    ]
+    return [
+        (StringModel(0.25, cup=cups[0]), 157.0),
+        (StringModel(0.3, cup=cups[1], restitution=0.7), 162.0),
+        (StringModel(0.18, cup=cups[2], ball=Ball(radius=0.008)), 157.0),
+    ]
 
 
 def test_the_stepper_and_the_event_driven_integrator_agree_event_by_event():

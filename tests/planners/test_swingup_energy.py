@@ -62,8 +62,16 @@ def test_planned_angle_matches_an_independent_integration_of_the_sampled_path(th
     plan = thesis_plan
     pos = np.column_stack([np.zeros_like(plan.x), plan.x, np.zeros_like(plan.x)])
     acc = SampledAcceleration(plan.t, pos)  # what position commands every 5 ms realise
-    sol = solve_ivp(lambda t, y: rhs(y, acc(t)[1], THESIS.length), (0, plan.t[-1]), [0, 0, THESIS.theta0, 0],
-                    method="LSODA", t_eval=plan.t, rtol=1e-10, atol=1e-12, max_step=plan.dt)
+    sol = solve_ivp(
+        lambda t, y: rhs(y, acc(t)[1], THESIS.length),
+        (0, plan.t[-1]),
+        [0, 0, THESIS.theta0, 0],
+        method="LSODA",
+        t_eval=plan.t,
+        rtol=1e-10,
+        atol=1e-12,
+        max_step=plan.dt,
+    )
     theta = sol.y[2]
     assert abs(np.abs(theta).max() - plan.max_theta) < math.radians(0.5)
     assert np.abs(theta - plan.theta).max() < math.radians(3)

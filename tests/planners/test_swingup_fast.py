@@ -60,8 +60,16 @@ def test_claim_agrees_with_the_ball_simulated_under_the_joint_path(fast):
     assert fast.figures()["claimed"]["max_theta_difference_deg"] < 3
     # and with an independent planar integration of the written pivot samples
     acc = SampledAcceleration(plan.t, np.column_stack([0 * plan.x, plan.x, 0 * plan.x]))
-    sol = solve_ivp(lambda t, y: rhs(y, acc(t)[1], 0.25), (0, plan.t[-1]), [0, 0, 0, 0], method="LSODA",
-                    t_eval=plan.t, rtol=1e-10, atol=1e-12, max_step=plan.dt)
+    sol = solve_ivp(
+        lambda t, y: rhs(y, acc(t)[1], 0.25),
+        (0, plan.t[-1]),
+        [0, 0, 0, 0],
+        method="LSODA",
+        t_eval=plan.t,
+        rtol=1e-10,
+        atol=1e-12,
+        max_step=plan.dt,
+    )
     assert np.abs(sol.y[2] - plan.theta).max() < math.radians(1)
 
 

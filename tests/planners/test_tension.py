@@ -36,8 +36,9 @@ def test_sign_conventions_match_the_spherical_model():
     s = np.column_stack([np.zeros_like(th), np.sin(th), -np.cos(th)])
     sdot = np.column_stack([np.zeros_like(th), np.cos(th), np.sin(th)]) * om[:, None]
     acc = np.column_stack([np.zeros_like(th), ax, az])  # pivot along +y (toward +θ) and up
-    np.testing.assert_allclose(tension_margin(th, om, ax, az, 0.3), pendulum.tension_per_mass(s, sdot, acc, 0.3),
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        tension_margin(th, om, ax, az, 0.3), pendulum.tension_per_mass(s, sdot, acc, 0.3), atol=1e-12
+    )
 
 
 def test_apex_acceleration_keeps_the_string_just_taut():
@@ -51,8 +52,9 @@ def test_apex_acceleration_keeps_the_string_just_taut():
 
 def test_free_swing_goes_slack_where_predicted():
     apex = math.radians(115)
-    sol = solve_ivp(lambda t, y: rhs(y, 0.0, 0.25), (0, 0.4), [0, 0, apex, 0.0], rtol=1e-11, atol=1e-12,
-                    dense_output=True)
+    sol = solve_ivp(
+        lambda t, y: rhs(y, 0.0, 0.25), (0, 0.4), [0, 0, apex, 0.0], rtol=1e-11, atol=1e-12, dense_output=True
+    )
     t = np.linspace(0, 0.4, 40001)
     _, _, th, om = sol.sol(t)
     margin = tension_margin(th, om, 0.0, 0.0, 0.25)

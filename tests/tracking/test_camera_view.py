@@ -6,8 +6,14 @@ import math
 import numpy as np
 import pytest
 
-from tracking.camera_geometry import (CameraGeometry, camera_pose_for, hanging_length, string_direction, sway_view,
-                                      tilt_from_pixel)
+from tracking.camera_geometry import (
+    CameraGeometry,
+    camera_pose_for,
+    hanging_length,
+    string_direction,
+    sway_view,
+    tilt_from_pixel,
+)
 
 PIVOT = np.array([0.5, 0.1, 0.45])
 

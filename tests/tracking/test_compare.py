@@ -43,6 +43,7 @@ def test_known_lag_recovered_within_one_frame(lag):
 
 def test_free_swing_released_after_video_start():
     """A pure damped swing (periodic: shifts by one period also match well) held at θ0 before release."""
+
     def swing(t):
         return np.where(t < 0, 0.4, 0.4 * np.exp(-0.05 * OMEGA * np.clip(t, 0, None)) * np.cos(OMEGA * t))
 

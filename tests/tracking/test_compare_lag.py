@@ -25,8 +25,10 @@ def clip(model_fn, start_s, duration_s, fps=60.0, noise_deg=0.05, seed=0):
     return t, model_fn(t + start_s) + np.radians(noise_deg) * rng.standard_normal(len(t))
 
 
-@pytest.mark.parametrize("start_s,duration_s,fps,seed", [(0.9, 2.0, 60.0, 0), (1.7, 2.2, 30.0, 1), (2.4, 3.0, 120.0, 2),
-                                                        (0.3, 2.0, 60.0, 3), (3.1, 2.5, 60.0, 4)])
+@pytest.mark.parametrize(
+    "start_s,duration_s,fps,seed",
+    [(0.9, 2.0, 60.0, 0), (1.7, 2.2, 30.0, 1), (2.4, 3.0, 120.0, 2), (0.3, 2.0, 60.0, 3), (3.1, 2.5, 60.0, 4)],
+)
 def test_short_clips_recover_the_lag_within_1_ms(start_s, duration_s, fps, seed):
     """Clips of 2–3 s cut out of a 6 s crane move: the lag (−start) to ≤ 1 ms, not one period off."""
     t, y = clip(crane, start_s, duration_s, fps, seed=seed)

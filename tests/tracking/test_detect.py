@@ -88,7 +88,13 @@ def test_window_origin_and_clipped_flag():
     inside = find_blobs(img[60:140, 110:190], RED, BlobGates(), origin=(110, 60), frame_size=(300, 200))
     assert len(inside) == 1 and not inside[0].clipped
     assert abs(inside[0].u - 150.25) < 0.1 and abs(inside[0].v - 100.5) < 0.1
-    cut = find_blobs(img[60:140, 148:228], RED, BlobGates(min_circularity=0.3, min_ellipse_fit=0.0), origin=(148, 60), frame_size=(300, 200))
+    cut = find_blobs(
+        img[60:140, 148:228],
+        RED,
+        BlobGates(min_circularity=0.3, min_ellipse_fit=0.0),
+        origin=(148, 60),
+        frame_size=(300, 200),
+    )
     assert len(cut) == 1 and cut[0].clipped
 
 

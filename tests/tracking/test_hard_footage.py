@@ -32,8 +32,10 @@ def run(tmp_path_factory):
     return get
 
 
-@pytest.mark.parametrize("name,min_found", [("clutter", 99.0), ("h264_clutter", 90.0), ("tiny_ball", 97.0),
-                                            ("big_ball", 99.0), ("h264_100k", 90.0)])
+@pytest.mark.parametrize(
+    "name,min_found",
+    [("clutter", 99.0), ("h264_clutter", 90.0), ("tiny_ball", 97.0), ("big_ball", 99.0), ("h264_100k", 90.0)],
+)
 def test_no_false_fix_and_found(name, min_found, run):
     sc, track, out = run(name)
     assert out.false_fixes == 0, out
@@ -62,8 +64,9 @@ def test_lock_on_a_static_object_is_dropped_and_its_frames_withdrawn(tmp_path):
         if tk < 0.6:
             cv2.rectangle(frame, (130, 120), (350, 240), (150, 152, 155), -1)
 
-    gt = render_pendulum_video(tmp_path / "v.mp4", t, th, piv, L, r, SIZE, 60.0, distractors=[disc], foreground=[cover],
-                               seed=4)
+    gt = render_pendulum_video(
+        tmp_path / "v.mp4", t, th, piv, L, r, SIZE, 60.0, distractors=[disc], foreground=[cover], seed=4
+    )
     track = track_video(tmp_path / "v.mp4", color_spec("red"), pivot_uv=piv)
     err = np.linalg.norm(track.uv - gt.ball_uv, axis=1)
     assert not np.any(track.found & (err > 5.0))  # the disc is never reported as the ball
@@ -91,8 +94,9 @@ def test_beyond_the_string_is_not_the_ball(tmp_path):
         if tk >= 1.0:
             cv2.circle(frame, (440, 240), int(r), (35, 30, 205), -1, cv2.LINE_AA)
 
-    gt = render_pendulum_video(tmp_path / "s.mp4", t, th, piv, L, r, SIZE, 60.0, distractors=None, foreground=[flash],
-                               seed=6)
+    gt = render_pendulum_video(
+        tmp_path / "s.mp4", t, th, piv, L, r, SIZE, 60.0, distractors=None, foreground=[flash], seed=6
+    )
     track = track_video(tmp_path / "s.mp4", color_spec("red"), pivot_uv=piv)
     err = np.linalg.norm(track.uv - gt.ball_uv, axis=1)
     assert not np.any(track.found & (err > 5.0))

@@ -2,7 +2,6 @@
 capture by a round red object, θ in the plane of a tilted camera, fast blurred swing-ups, a skin-coloured
 hand beside an orange ball, an occluding rod, slow-motion timing."""
 
-
 import numpy as np
 import pytest
 
@@ -34,7 +33,16 @@ def run(tmp_path_factory):
 
 @pytest.mark.parametrize(
     "name",
-    ["dark_start", "red_disc", "red_disc_start", "orange_hand", "occluding_rod", "swing_up_60", "swing_up_30_short", "compressed"],
+    [
+        "dark_start",
+        "red_disc",
+        "red_disc_start",
+        "orange_hand",
+        "occluding_rod",
+        "swing_up_60",
+        "swing_up_30_short",
+        "compressed",
+    ],
 )
 def test_found_without_false_fixes(name, run):
     sc, track, out = run(name)

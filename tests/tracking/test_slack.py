@@ -54,8 +54,20 @@ def test_a_rendered_flight_on_a_slack_string_is_tracked_by_position(tmp_path):
     r = np.where(t < 0.4, 150.0, 150.0 - 300 * (t - 0.4))  # taut, then flying inward
     ball = pivot + r[:, None] * np.column_stack([np.sin(ang), np.cos(ang)])
     video = tmp_path / "flight.mp4"
-    truth = render_pendulum_video(video, t, np.zeros(n), pivot, string_px=150.0, ball_radius_px=8.0, size=(480, 360),
-                                  fps=fps, ball_path=ball, pivot_marker="green", distractors=None, seed=2)
+    truth = render_pendulum_video(
+        video,
+        t,
+        np.zeros(n),
+        pivot,
+        string_px=150.0,
+        ball_radius_px=8.0,
+        size=(480, 360),
+        fps=fps,
+        ball_path=ball,
+        pivot_marker="green",
+        distractors=None,
+        seed=2,
+    )
     track = track_video(video, color_spec("red", "--color"), pivot_color=color_spec("green", "--pivot-color"))
     assert track.found.all()
     assert np.abs(track.uv - truth.ball_uv).max() < 1.0

@@ -128,8 +128,15 @@ def test_ball_crossing_a_red_cable_next_to_a_red_box(tmp_path):
     t = np.linspace(0.0, 2.0, 2001)
     theta = np.radians(40) * np.cos(2 * np.pi * t / 0.9)
     gt = render_pendulum_video(
-        tmp_path / "cable.mp4", t, theta, (320, 30), 200.0, 6.0, (640, 360),
-        distractors=[Distractor("cable", cable), Distractor("box", box)], seed=9,
+        tmp_path / "cable.mp4",
+        t,
+        theta,
+        (320, 30),
+        200.0,
+        6.0,
+        (640, 360),
+        distractors=[Distractor("cable", cable), Distractor("box", box)],
+        seed=9,
     )
     track = track_video(tmp_path / "cable.mp4", color_spec("red"), pivot_uv=(320, 30))
     err = centre_errors(track, gt)

@@ -59,7 +59,9 @@ def test_a_link_fifo_or_device_is_never_replaced(tmp_path, kind):
     after = os.lstat(target)
     assert (after.st_mode, after.st_ino, after.st_rdev) == (before.st_mode, before.st_ino, before.st_rdev)
     assert kept.read_text() == "precious\n"
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["kept.csv"] + (["out.csv"] if kind != "device" else []))
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["kept.csv"] + (["out.csv"] if kind != "device" else [])
+    )
 
 
 def test_a_full_disk_is_an_output_error_and_leaves_nothing(tmp_path):

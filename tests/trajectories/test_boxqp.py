@@ -12,8 +12,9 @@ def test_matches_scipy_bounded_least_squares():
         lo, hi = -rng.uniform(0, 1, 7), rng.uniform(0, 1, 7)
         lam = 1e-3
         sol = solve_box_qp(A.T @ A + lam**2 * np.eye(7), A.T @ b, lo, hi)
-        ref = lsq_linear(np.vstack([A, lam * np.eye(7)]), np.r_[b, np.zeros(7)], bounds=(lo, hi), method="bvls",
-                         tol=1e-14)
+        ref = lsq_linear(
+            np.vstack([A, lam * np.eye(7)]), np.r_[b, np.zeros(7)], bounds=(lo, hi), method="bvls", tol=1e-14
+        )
         assert np.abs(sol.x - ref.x).max() < 1e-9
         assert np.all(sol.x >= lo - 1e-15) and np.all(sol.x <= hi + 1e-15)
         assert np.array_equal(sol.active == -1, np.isclose(sol.x, lo, atol=0, rtol=0) & (sol.active != 0))

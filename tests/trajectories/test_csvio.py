@@ -50,7 +50,12 @@ def test_extra_named_columns_after_the_fixed_ones_are_allowed(tmp_path):
         (HEADER + "0,1,2,,4,5,6,7\n", 2, 4, "empty cell"),
         (HEADER + "0.1,1,2,3,4,5,6,7\n", 2, 1, "time must start at 0"),
         (HEADER + "0,1,2,3,4,5,6,7\n0.005,1,2,3,4,5,6,7\n0.005,1,2,3,4,5,6,7\n", 4, 1, "time not increasing"),
-        (HEADER + "0,1,2,3,4,5,6,7\n0.005,1,2,3,4,5,6,7\n0.011,1,2,3,4,5,6,7\n0.015,1,2,3,4,5,6,7\n", 4, 1, "not uniform"),
+        (
+            HEADER + "0,1,2,3,4,5,6,7\n0.005,1,2,3,4,5,6,7\n0.011,1,2,3,4,5,6,7\n0.015,1,2,3,4,5,6,7\n",
+            4,
+            1,
+            "not uniform",
+        ),
     ],
 )
 def test_bad_joint_files_name_row_and_column(tmp_path, text, row, column, words):
@@ -133,9 +138,17 @@ def test_quoted_cells_read_like_csv(tmp_path):
     assert read_joint_csv(write(tmp_path, text)).q[1, 0] == 1.0
 
 
-@pytest.mark.parametrize("cell, words", [("1_0", "not a number: '1_0'"), ("١", "not a number"), ("0x1", "not a number"),
-                                         ("1e400", "not a finite number"), ("inf", "not a finite number"),
-                                         ("1e300", "joint angle [rad] 1e+300 is beyond")])
+@pytest.mark.parametrize(
+    "cell, words",
+    [
+        ("1_0", "not a number: '1_0'"),
+        ("١", "not a number"),
+        ("0x1", "not a number"),
+        ("1e400", "not a finite number"),
+        ("inf", "not a finite number"),
+        ("1e300", "joint angle [rad] 1e+300 is beyond"),
+    ],
+)
 def test_cells_must_be_plain_finite_plausible_numbers(tmp_path, cell, words):
     text = HEADER + "0,0,0,0,0,0,0,0\n0.005,0,0,%s,0,0,0,0\n" % cell
     with pytest.raises(CsvFormatError) as exc:
@@ -193,9 +206,46 @@ def test_nan_columns_allow_nan_text_but_not_inf(tmp_path):
     assert (exc.value.row, exc.value.column) == (3, 3)
 
 
-ODD_CELLS = ["1_0", "١", "0x1", "1e400", "-1e400", "inf", "-inf", "Infinity", "nan", "NaN", "-nan", "", " ", " 0.5",
-             "0.5 ", "+0.5", ".5", "5.", "1e-5", "1E+2", "0.5e", "e5", "--1", "1.2.3", "0.5\r", "1,5", "true", "null",
-             "N/A", "#N/A", "1e-400", "0.1f", "٣.٥", "０.５", "1 000", "\t0.5", "0,", "'0.5'"]
+ODD_CELLS = [
+    "1_0",
+    "١",
+    "0x1",
+    "1e400",
+    "-1e400",
+    "inf",
+    "-inf",
+    "Infinity",
+    "nan",
+    "NaN",
+    "-nan",
+    "",
+    " ",
+    " 0.5",
+    "0.5 ",
+    "+0.5",
+    ".5",
+    "5.",
+    "1e-5",
+    "1E+2",
+    "0.5e",
+    "e5",
+    "--1",
+    "1.2.3",
+    "0.5\r",
+    "1,5",
+    "true",
+    "null",
+    "N/A",
+    "#N/A",
+    "1e-400",
+    "0.1f",
+    "٣.٥",
+    "０.５",
+    "1 000",
+    "\t0.5",
+    "0,",
+    "'0.5'",
+]
 
 
 @pytest.mark.parametrize("cell", ODD_CELLS)
@@ -211,10 +261,12 @@ def test_the_large_file_reader_reads_exactly_what_the_small_file_reader_reads(tm
     monkeypatch.setattr(csvio, "_arrow_body", lambda *a: arrow_calls.append(a[1:3]) or arrow(*a))
     names = ["t", "a", "b", "extra"]
     n_small, n_big = 20, 1 + csvio.ARROW_MIN_BYTES // len("0.123,0.25,-1.5,0.75\n")
+
     def body(n):
         rows = [f"{0.001 * k:.3f},0.25,-1.5,0.75" for k in range(n)]
         rows[n // 2] = rows[n // 2].replace("0.25", cell, 1)
         return "t,a,b,extra\n" + "\n".join(rows) + "\n"
+
     outcomes = []
     for n in (n_small, n_big):
         p = tmp_path / f"{n}.csv"
@@ -223,8 +275,9 @@ def test_the_large_file_reader_reads_exactly_what_the_small_file_reader_reads(tm
             table = read_table(p, names[:3], time="increasing", nan_columns=["a"] if nan_column else ())
             outcomes.append(("ok", table.data[n // 2, 1], table.data.shape[0] - n))
         except CsvFormatError as exc:
-            outcomes.append(("error", re.sub(r"row \d+", "row", str(exc).replace(str(p), "F")), exc.row - n // 2,
-                             exc.column))
+            outcomes.append(
+                ("error", re.sub(r"row \d+", "row", str(exc).replace(str(p), "F")), exc.row - n // 2, exc.column)
+            )
     small, big = outcomes
     assert len(arrow_calls) == 1  # the big file went to Arrow
     assert (small[0], small[2:]) == (big[0], big[2:])
@@ -238,7 +291,9 @@ def test_the_large_file_reader_is_used_and_equals_numpys(tmp_path):
     from trajectories import csvio
 
     rng = np.random.default_rng(3)
-    data = np.column_stack([np.arange(60000) * 1e-3, rng.normal(size=(60000, 5)) * 10.0 ** rng.integers(-8, 8, (60000, 5))])
+    data = np.column_stack(
+        [np.arange(60000) * 1e-3, rng.normal(size=(60000, 5)) * 10.0 ** rng.integers(-8, 8, (60000, 5))]
+    )
     p = tmp_path / "big.csv"
     np.savetxt(p, data, delimiter=",", fmt="%.17g", header="t,a,b,c,d,e", comments="")
     assert p.stat().st_size - len("t,a,b,c,d,e\n") >= csvio.ARROW_MIN_BYTES

@@ -13,7 +13,11 @@ from trajectories.description import joint_names, link_names, link_shapes, urdf
 from trajectories.limits import default_limits
 from trajectories.robot import Flange, Robot, RobotConfig
 
-CONFIGS = [RobotConfig(), RobotConfig(Flange.STANDARD, (0.0, 0.0, 0.1)), RobotConfig(Flange.TOUCH_PNEUMATIC, (0.03, -0.02, 0.07))]
+CONFIGS = [
+    RobotConfig(),
+    RobotConfig(Flange.STANDARD, (0.0, 0.0, 0.1)),
+    RobotConfig(Flange.TOUCH_PNEUMATIC, (0.03, -0.02, 0.07)),
+]
 
 
 @pytest.mark.parametrize("config", CONFIGS, ids=["touch-electric", "standard+tool", "pneumatic+offset-tool"])
@@ -32,8 +36,9 @@ def test_urdf_read_by_pinocchio_has_the_models_kinematics_dynamics_and_limits(co
         pin.framesForwardKinematics(model, data, q)
         pin.framesForwardKinematics(robot.model, robot.data, q)
         np.testing.assert_allclose(data.oMf[tcp].homogeneous, robot.data.oMf[robot.tcp_id].homogeneous, atol=1e-10)
-        np.testing.assert_allclose(data.oMf[flange].homogeneous, robot.data.oMf[robot.flange_id].homogeneous,
-                                   atol=1e-10)
+        np.testing.assert_allclose(
+            data.oMf[flange].homogeneous, robot.data.oMf[robot.flange_id].homogeneous, atol=1e-10
+        )
         np.testing.assert_allclose(pin.crba(model, data, q), pin.crba(robot.model, robot.data, q), atol=1e-8)
 
 

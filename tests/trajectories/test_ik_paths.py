@@ -60,8 +60,15 @@ def test_interpolated_path_keeps_the_acceleration_the_samples_need(robot, limits
     from trajectories.ik import IkOptions, solve_ik_path
 
     path = next(p for p in build_suite(robot, limits) if p.name == "joint-c4-v0.9-1ms")
-    res = solve_ik_path(robot, path.position, path.rotation, None, limits,
-                        IkOptions(nullspace_gain=None, speed_limits=True), times=path.t)
+    res = solve_ik_path(
+        robot,
+        path.position,
+        path.rotation,
+        None,
+        limits,
+        IkOptions(nullspace_gain=None, speed_limits=True),
+        times=path.t,
+    )
     check = verify_joint_path(robot, path, res.q, limits)
     assert check.ok(1e-6, 1e-5, acceleration=True)
     assert res.acceleration_ratio <= 1.0 + 1e-6

@@ -25,7 +25,9 @@ def test_all_is_what_the_type_checking_imports_name_and_each_resolves(name):
 
 
 def test_importing_a_package_loads_none_of_its_modules():
-    code = ("import sys, planners, trajectories, tracking; "
-            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('planners', 'trajectories', 'tracking')))")
+    code = (
+        "import sys, planners, trajectories, tracking; "
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('planners', 'trajectories', 'tracking')))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert eval(out) == ["planners", "tracking", "trajectories", "trajectories.lazy"]

@@ -69,6 +69,7 @@ def test_link_inertias_land_where_the_urdf_puts_them(robot):
 
 def test_gravity_torque_matches_potential_energy_gradient(robot, q_start):
     """τ_g = ∂V/∂q with V = g·Σ m_i z_com,i (finite differences on the COM heights)."""
+
     def potential(q):
         data = robot.model.createData()
         pin.forwardKinematics(robot.model, data, q)
@@ -78,9 +79,7 @@ def test_gravity_torque_matches_potential_energy_gradient(robot, q_start):
 
     tau = robot.inverse_dynamics(q_start, np.zeros(7), np.zeros(7))
     eps = 1e-6
-    grad = np.array(
-        [(potential(q_start + eps * e) - potential(q_start - eps * e)) / (2 * eps) for e in np.eye(7)]
-    )
+    grad = np.array([(potential(q_start + eps * e) - potential(q_start - eps * e)) / (2 * eps) for e in np.eye(7)])
     # pinocchio's default gravity is 9.81 m/s^2
     assert np.allclose(tau, grad, atol=1e-5)
     assert abs(tau[1]) > 5.0  # A2 carries the stretched-out arm

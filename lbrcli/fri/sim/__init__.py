@@ -9,5 +9,17 @@ from .process import SimulatorProcess
 from .simulator import Simulator
 from .stats import SimStats
 
-__all__ = ["IO_PRESETS", "THESIS_Q0", "IoChannel", "Plant", "PlantContext", "PlantSpec", "SimConfig", "SimStats", "lenient_quality",
-           "Simulator", "SimulatorProcess", "parse_io"]
+__all__ = [
+    "IO_PRESETS",
+    "THESIS_Q0",
+    "IoChannel",
+    "Plant",
+    "PlantContext",
+    "PlantSpec",
+    "SimConfig",
+    "SimStats",
+    "lenient_quality",
+    "Simulator",
+    "SimulatorProcess",
+    "parse_io",
+]

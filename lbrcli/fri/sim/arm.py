@@ -31,8 +31,9 @@ _MAX_SUBSTEP = 1e-3  # [s]
 class Arm:
     """State q [rad], v [rad/s], a [rad/s²] and motor torque tau [Nm] of the simulated LBR."""
 
-    def __init__(self, robot, position_limit: np.ndarray, q0: np.ndarray, external_torque: np.ndarray,
-                 external_force: np.ndarray) -> None:
+    def __init__(
+        self, robot, position_limit: np.ndarray, q0: np.ndarray, external_torque: np.ndarray, external_force: np.ndarray
+    ) -> None:
         self.model, self.data, self.tcp_id = robot.model, robot.data, robot.tcp_id
         self.qmax = np.asarray(position_limit, dtype=float)  # [rad]
         self.q = np.array(q0, dtype=float)
@@ -89,8 +90,15 @@ class Arm:
             self._integrate(M, tau, np.diag(h * D + (h * h) * K), h, K * self.v)
         self.a[:] = (self.v - v0) / dt
 
-    def cartesian_impedance(self, q_set: np.ndarray, wrench_tcp: np.ndarray, stiffness: tuple[float, float],
-                            nullspace_stiffness: float, zeta: float, dt: float) -> None:
+    def cartesian_impedance(
+        self,
+        q_set: np.ndarray,
+        wrench_tcp: np.ndarray,
+        stiffness: tuple[float, float],
+        nullspace_stiffness: float,
+        zeta: float,
+        dt: float,
+    ) -> None:
         """Advance dt [s] under Cartesian impedance around the TCP pose of q_set plus the commanded wrench
         (force [N] along the TCP's x, y, z; moments [Nm] about its x, y, z). The stiffness is isotropic
         (translation, rotation), so the same along the TCP's axes as along the base's."""

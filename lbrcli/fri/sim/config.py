@@ -18,7 +18,11 @@ from ..messages import FriVersion
 
 THESIS_Q0 = THESIS_START  # [rad], thesis §5.3.2 start pose
 """The thesis start pose (§5.3.2) [rad]: where the simulated robot stands unless told otherwise."""
-OPERATION_MODES = {"T1": OperationMode.TEST_MODE_1, "T2": OperationMode.TEST_MODE_2, "AUT": OperationMode.AUTOMATIC_MODE}
+OPERATION_MODES = {
+    "T1": OperationMode.TEST_MODE_1,
+    "T2": OperationMode.TEST_MODE_2,
+    "AUT": OperationMode.AUTOMATIC_MODE,
+}
 COMMAND_MODES = ("position", "torque", "wrench", "cartesian")  # the overlay's client command mode (cartesian: 2.7)
 MAX_TRANSFORMATIONS = 5  # requested transformations a 2.7 message carries at most (KUKA's SDK: 5, names < 64 bytes)
 IO_TYPES = ("boolean", "digital", "analog")  # FriIOType 0, 1, 2
@@ -46,9 +50,13 @@ class IoChannel:
         if not self.name or len(self.name) > 60:
             raise SettingError(IoChannel, "name", f"channel name must be 1..60 characters, got {self.name!r}")
         if self.type not in IO_TYPES:
-            raise SettingError(IoChannel, "type", f"{self.name}: type must be one of {', '.join(IO_TYPES)}, got {self.type!r}")
+            raise SettingError(
+                IoChannel, "type", f"{self.name}: type must be one of {', '.join(IO_TYPES)}, got {self.type!r}"
+            )
         if self.direction not in IO_DIRECTIONS:
-            raise SettingError(IoChannel, "direction", f"{self.name}: direction must be in or out, got {self.direction!r}")
+            raise SettingError(
+                IoChannel, "direction", f"{self.name}: direction must be in or out, got {self.direction!r}"
+            )
         if not math.isfinite(self.value) or (not self.is_analog and (self.value < 0 or self.value != int(self.value))):
             raise SettingError(IoChannel, "value", f"{self.name}: bad initial value {self.value!r}")
 
@@ -85,8 +93,12 @@ channel is missing."""
 def lenient_quality(period_ms: int, receive_multiplier: int = 1) -> dict[str, float | int]:
     """SimConfig quality thresholds that tolerate a loaded PC: a 1 s window, GOOD at 50 % timely replies (default:
     50 cycles, 90 %, as strict as the real controller)."""
-    return dict(quality_window=max(50, round(1000 / (period_ms * receive_multiplier))), quality_good=0.5,
-                quality_fair=0.3, quality_excellent=0.9)
+    return dict(
+        quality_window=max(50, round(1000 / (period_ms * receive_multiplier))),
+        quality_good=0.5,
+        quality_fair=0.3,
+        quality_excellent=0.9,
+    )
 
 
 @dataclass(frozen=True)
@@ -233,8 +245,9 @@ class SimConfig:
             bad("quality_window", f"must be 1..100000 cycles, got {self.quality_window}")
         if self.wait_cycles < 1:
             bad("wait_cycles", f"must be >= 1, got {self.wait_cycles}")
-        if self.lockstep_timeout_s is not None and not (math.isfinite(self.lockstep_timeout_s)
-                                                        and 0.0 < self.lockstep_timeout_s <= 60.0):
+        if self.lockstep_timeout_s is not None and not (
+            math.isfinite(self.lockstep_timeout_s) and 0.0 < self.lockstep_timeout_s <= 60.0
+        ):
             bad("lockstep_timeout_s", f"the reply wait must be in (0, 60] s, got {self.lockstep_timeout_s:g}")
         if self.lockstep_free and self.lockstep_timeout_s is None:
             bad("lockstep_free", "runs the simulator in lock-step: it needs the reply wait of lock-step")

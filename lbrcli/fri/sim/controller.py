@@ -88,13 +88,14 @@ class Controller:
             raise SettingError("SimConfig", "q0", f"q{j + 1} = {q0[j]:.4f} rad is outside the position limit "
                                f"±{self.limits.position[j]:.4f} rad")  # fmt: skip
         self.robot = Robot(RobotConfig(flange=Flange(cfg.flange), tool=tuple(cfg.tool)))
-        self.arm = Arm(self.robot, self.limits.position, q0, np.array(cfg.external_torque),
-                       np.array(cfg.external_force))
+        self.arm = Arm(
+            self.robot, self.limits.position, q0, np.array(cfg.external_torque), np.array(cfg.external_force)
+        )
         self.interp = Interpolator(q0, self.limits.velocity, self.limits.acceleration, self.period)
         self.quality_monitor = QualityMonitor(
-            QualityThresholds(cfg.quality_window, cfg.quality_fair, cfg.quality_good, cfg.quality_excellent))
-        self.machine = SessionMachine(SessionTiming(cfg.commanding_after_s, cfg.wait_cycles, cfg.session_duration_s,
-                                                    cfg.end_delay_s, cfg.idle_messages, cfg.overlay))
+            QualityThresholds(cfg.quality_window, cfg.quality_fair, cfg.quality_good, cfg.quality_excellent)
+        )
+        self.machine = SessionMachine(SessionTiming.of(cfg))
         self._mode = cfg.command_mode
         self.writer = MonitoringWriter(self.codec, cfg, *MODES[self._mode])
         self.io = self.writer.io
@@ -117,7 +118,9 @@ class Controller:
                 if ch is None:
                     entries.append(self.io.add(IoChannel(name, "analog", "in")))
                 elif ch.is_output or not ch.is_analog:
-                    raise SettingError("SimConfig", "io", f"{name}: the plant {plant.name} drives it, it must be an analog input")
+                    raise SettingError(
+                        "SimConfig", "io", f"{name}: the plant {plant.name} drives it, it must be an analog input"
+                    )
                 else:
                     entries.append(self.io.entry(name))
             self._plant_io.append(entries)
@@ -165,8 +168,8 @@ class Controller:
         self.states_seen: list[int] = []
         self._tracking = 0.0
         self.min_tracking = 1.0
-        self.counts = dict(replies=0, late=0, missed=0, malformed_rx=0, foreign_rx=0, commanded=0, gaps=0,
-                           active=0, incomplete=0, no_position=0, untimely_active=0, poses=0)
+        self.counts = dict.fromkeys(("replies", "late", "missed", "malformed_rx", "foreign_rx", "commanded", "gaps",
+                                     "active", "incomplete", "no_position", "untimely_active", "poses"), 0)  # fmt: skip
 
     # -- receiving -------------------------------------------------------------------------------------------
     def on_datagram(self, data: bytes, arrival: float) -> None:
@@ -295,7 +298,7 @@ class Controller:
         self.seq += 1
         target = self._target if state is CA else self.interp.q
         return self.writer.fill(self.seq, self._reflect, state, self.quality, self.arm, self.ipo, target,
-                                self._tracking, pose)
+                                self._tracking, pose)  # fmt: skip
 
     def _evaluate_interval(self) -> None:
         """Timeliness of the interval that just ended → quality."""
@@ -395,11 +398,11 @@ class Controller:
                 ip.a[over] = 0.0
             arm.follow(ip.q, ip.v, ip.a)
         elif self._mode == "torque":
-            arm.joint_impedance(ip.q, self._tau_in_force, self.cfg.joint_stiffness, self.cfg.damping_ratio,
-                                self.period)
+            arm.joint_impedance(ip.q, self._tau_in_force, self.cfg.joint_stiffness, self.cfg.damping_ratio, self.period)
         else:
-            arm.cartesian_impedance(ip.q, self._wrench_in_force, self.cfg.cartesian_stiffness,
-                                    self.cfg.nullspace_stiffness, self.cfg.damping_ratio, self.period)
+            c = self.cfg
+            arm.cartesian_impedance(ip.q, self._wrench_in_force, c.cartesian_stiffness, c.nullspace_stiffness,
+                                    c.damping_ratio, self.period)  # fmt: skip
         if state is not CA and state is not CW and self._stiff:
             self.ipo[:] = arm.q  # PositionHold starts (again) where the robot stands
         self._cmd_fresh = False

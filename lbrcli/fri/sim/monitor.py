@@ -87,8 +87,18 @@ class MonitoringWriter:
         self.io = IoBank(md, self.codec.msgs.enums, cfg.io)
         self.mon = m
 
-    def fill(self, seq: int, reflect: int, state: SessionState, quality: ConnectionQuality, arm, ipo_q: np.ndarray,
-             command: np.ndarray, tracking: float, pose) -> bytes:
+    def fill(
+        self,
+        seq: int,
+        reflect: int,
+        state: SessionState,
+        quality: ConnectionQuality,
+        arm,
+        ipo_q: np.ndarray,
+        command: np.ndarray,
+        tracking: float,
+        pose,
+    ) -> bytes:
         """The encoded message of cycle ``seq``: the arm's measured state and torques, the ipo position, the
         command in force [rad], the tracking performance, the measured TCP ``pose`` (pinocchio SE3)."""
         m = self.mon
@@ -125,4 +135,3 @@ class MonitoringWriter:
         self._ts.sec = (ns // 1_000_000_000) & _U32
         self._ts.nanosec = ns % 1_000_000_000
         return self.codec.encode(m)
-

@@ -77,8 +77,9 @@ class SimulatorProcess:
         ctx = child_context()
         parent, child = ctx.Pipe(duplex=False)
         self._stop = ctx.Event()
-        self._proc = ctx.Process(target=_child_main, args=(self.config, child, self._stop), daemon=True,
-                                 name="lbr-fri-sim")
+        self._proc = ctx.Process(
+            target=_child_main, args=(self.config, child, self._stop), daemon=True, name="lbr-fri-sim"
+        )
         self._proc.start()
         child.close()
         self._conn = parent

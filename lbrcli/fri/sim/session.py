@@ -77,6 +77,11 @@ class SessionTiming:
     idle_messages: int = 3  # IDLE messages sent before the simulator stops (also when it is stopped: ``close``)
     overlay: bool = True  # False: the application only monitors (no COMMANDING states)
 
+    @classmethod
+    def of(cls, cfg) -> "SessionTiming":
+        """The timing fields of a :class:`~lbrcli.fri.sim.SimConfig` (same names)."""
+        return cls(**{f: getattr(cfg, f) for f in cls.__dataclass_fields__})
+
 
 class SessionMachine:
     """The controller's FRI session state, advanced once per cycle at time ``now`` [s].
@@ -149,10 +154,15 @@ class SessionMachine:
                     self.state, self._since = SessionState.COMMANDING_ACTIVE, now
         elif s is SessionState.COMMANDING_ACTIVE:
             if safety_stop:
-                self._end(now, EndReason.SAFETY, SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT)
+                self._end(
+                    now, EndReason.SAFETY, SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT
+                )
             elif command_missing or command_refused:
-                self._end(now, EndReason.COMMAND_MISSING if command_missing else EndReason.CARTESIAN_REFUSED,
-                          SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT)
+                self._end(
+                    now,
+                    EndReason.COMMAND_MISSING if command_missing else EndReason.CARTESIAN_REFUSED,
+                    SessionState.MONITORING_READY if good else SessionState.MONITORING_WAIT,
+                )
             elif not good:
                 self._end(now, EndReason.QUALITY, SessionState.MONITORING_WAIT)
             elif self.timing.session_duration_s is not None and now - self._since >= self.timing.session_duration_s:

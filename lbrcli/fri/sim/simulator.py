@@ -36,7 +36,6 @@ MIN_SEND_SPACING = 0.5  # [periods] least time from a send to the next cycle's s
 CLOSE_BUDGET_S = 0.5  # [s] at most this long sending the closing IDLE messages after a stop or timeout
 
 
-
 def _parent_watch() -> Callable[[], bool]:
     """A test that is true once the process that started this simulator has ended: the sentinel multiprocessing
     gives its children (closed when the starter ends, also from a fork server, which outlives the starter and is the
@@ -48,6 +47,7 @@ def _parent_watch() -> Callable[[], bool]:
         return lambda: not parent.is_alive()
     ppid = os.getppid()
     return lambda: os.getppid() != ppid
+
 
 class Simulator:
     """One simulated controller bound to a UDP socket; ``run()`` drives the session until it ends."""
@@ -64,8 +64,14 @@ class Simulator:
         self._on_state = on_state
         self.period = config.period_ms * 1e-3  # [s]
         framed = config.version == "2.7"
-        self.link = Link(config.host, config.port, config.client_host, config.client_port,
-                         Faults(config.loss, config.delay_ms, config.jitter_ms, config.malformed, config.seed), framed)
+        self.link = Link(
+            config.host,
+            config.port,
+            config.client_host,
+            config.client_port,
+            Faults(config.loss, config.delay_ms, config.jitter_ms, config.malformed, config.seed),
+            framed,
+        )
         try:
             self.controller = Controller(config, sent_at=self.link.sent_at)
         except BaseException:
@@ -145,8 +151,8 @@ class Simulator:
                         if ctl.machine.finished:
                             end_reason = ctl.machine.end_reason or "idle"
                             break
-                    if self._stop():
-                        end_reason = "stopped"
+                    if self._stop():  # the session's own end (quality, safety stop, …) if it had one first
+                        end_reason = ctl.machine.end_reason or "stopped"
                     elif cfg.max_runtime_s is not None and rel >= cfg.max_runtime_s:
                         end_reason = "max_runtime"
                     elif k % 512 == 0 and self._parent_gone():
@@ -231,22 +237,44 @@ class Simulator:
         plants = {p.name: p.figures() for p in ctl.plants}
         ball = next((f["max_ball_theta"] for f in plants.values() if "max_ball_theta" in f), None)
         return SimStats(
-            cycles=ncycles, replies=c["replies"], late_replies=c["late"], missed_replies=c["missed"],
-            malformed_received=c["malformed_rx"], foreign_received=c["foreign_rx"] + link.foreign,
-            states_seen=tuple(ctl.states_seen), safety_stop=ctl.safety,
-            min_tracking_performance=ctl.min_tracking, commanded_rows=c["commanded"],
-            max_ball_theta=ball, end_reason=end_reason,
-            lost_sent=link.lost, malformed_sent=link.malformed_sent, client_sequence_gaps=c["gaps"],
-            overruns=self.overruns, active_cycles=c["active"],
-            period_ms_p50=pp[0], period_ms_p99=pp[1], period_ms_max=pp[2],
-            reply_latency_ms_p50=lp[0], reply_latency_ms_p99=lp[1], reply_latency_ms_max=lp[2],
+            cycles=ncycles,
+            replies=c["replies"],
+            late_replies=c["late"],
+            missed_replies=c["missed"],
+            malformed_received=c["malformed_rx"],
+            foreign_received=c["foreign_rx"] + link.foreign,
+            states_seen=tuple(ctl.states_seen),
+            safety_stop=ctl.safety,
+            min_tracking_performance=ctl.min_tracking,
+            commanded_rows=c["commanded"],
+            max_ball_theta=ball,
+            end_reason=end_reason,
+            lost_sent=link.lost,
+            malformed_sent=link.malformed_sent,
+            client_sequence_gaps=c["gaps"],
+            overruns=self.overruns,
+            active_cycles=c["active"],
+            period_ms_p50=pp[0],
+            period_ms_p99=pp[1],
+            period_ms_max=pp[2],
+            reply_latency_ms_p50=lp[0],
+            reply_latency_ms_p99=lp[1],
+            reply_latency_ms_max=lp[2],
             reply_latency_ms_p999=float(np.percentile(lat, 99.9)) if len(lat) else None,
             final_q=tuple(float(x) for x in ctl.arm.q),
-            work_us_p50=wp[0], work_us_p99=wp[1], cpu_fraction=cpu_fraction, realtime=realtime,
-            command_mode=self.cfg.command_mode, io_writes=ctl.io.writes, io_refused=ctl.io.refused,
-            incomplete_commands=c["incomplete"], commands_without_position=c["no_position"],
-            untimely_active_cycles=c["untimely_active"], plants=plants,
-            cartesian_poses=c["poses"], command_problem=ctl.command_problem,
+            work_us_p50=wp[0],
+            work_us_p99=wp[1],
+            cpu_fraction=cpu_fraction,
+            realtime=realtime,
+            command_mode=self.cfg.command_mode,
+            io_writes=ctl.io.writes,
+            io_refused=ctl.io.refused,
+            incomplete_commands=c["incomplete"],
+            commands_without_position=c["no_position"],
+            untimely_active_cycles=c["untimely_active"],
+            plants=plants,
+            cartesian_poses=c["poses"],
+            command_problem=ctl.command_problem,
             transformations=ctl.transforms.figures() if ctl.transforms is not None else {},
             transformations_refused=ctl.transforms.refused if ctl.transforms is not None else 0,
         )

@@ -16,4 +16,16 @@ Run your own :class:`~lbrcli.fri.LBRClient` against it::
 
 from .scripted import CA, CW, IDLE, MR, MW, Cycle, Reply, ScriptedController, active, preamble, session_script
 
-__all__ = ["CA", "CW", "Cycle", "IDLE", "MR", "MW", "Reply", "ScriptedController", "active", "preamble", "session_script"]
+__all__ = [
+    "CA",
+    "CW",
+    "Cycle",
+    "IDLE",
+    "MR",
+    "MW",
+    "Reply",
+    "ScriptedController",
+    "active",
+    "preamble",
+    "session_script",
+]

@@ -23,8 +23,13 @@ from ..codec import FriCodec
 from ..constants import MONITORING_MESSAGE_ID
 from ..errors import FriDecodeError
 
-from ..constants import (STATE_COMMANDING_ACTIVE, STATE_COMMANDING_WAIT, STATE_IDLE, STATE_MONITORING_READY,
-                         STATE_MONITORING_WAIT)
+from ..constants import (
+    STATE_COMMANDING_ACTIVE,
+    STATE_COMMANDING_WAIT,
+    STATE_IDLE,
+    STATE_MONITORING_READY,
+    STATE_MONITORING_WAIT,
+)
 
 MW = STATE_MONITORING_WAIT
 """Session state MONITORING_WAIT in a script."""
@@ -267,7 +272,10 @@ class ScriptedController:
                 got = self.codec.decode_command(data, cmd)
             except FriDecodeError:
                 continue
-            if expected is not None and 0 < ((expected - got.header.reflectedSequenceCounter) & 0xFFFFFFFF) < 0x80000000:
+            if (
+                expected is not None
+                and 0 < ((expected - got.header.reflectedSequenceCounter) & 0xFFFFFFFF) < 0x80000000
+            ):
                 self.late_replies += 1
                 continue
             return got
@@ -357,8 +365,9 @@ class ScriptedController:
             for name, v in io:
                 self.io_values[name] = v
             self.replies.append(
-                Reply(i, c.state, seq, (cmd.header.sequenceCounter, cmd.header.reflectedSequenceCounter), pos,
-                      tau, wr, io)
+                Reply(
+                    i, c.state, seq, (cmd.header.sequenceCounter, cmd.header.reflectedSequenceCounter), pos, tau, wr, io
+                )
             )
             self._robot_step(c, pos)
             time.sleep(self.pace_s)

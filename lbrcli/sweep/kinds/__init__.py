@@ -36,7 +36,9 @@ class RunKind:
     """One kind of run: ``lbr <command…>`` with the options of a study."""
 
     name: str  # as written in a study's `kind`
-    command: tuple[str, ...] | None  # the lbr command words, e.g. ("plan", "anti-sway"); () from the options, None: none
+    command: (
+        tuple[str, ...] | None
+    )  # the lbr command words, e.g. ("plan", "anti-sway"); () from the options, None: none
     run: Callable[[Mapping[str, Any], float | None], Outcome]  # in a worker; options by command-line names
     options: tuple[str, ...] | None  # option names a study may set (None: any, the command checks them)
     summary: str = ""  # one line for `lbr sweep --kinds`
@@ -61,8 +63,9 @@ class RunKind:
         else:  # the `command` kind: the words are an option
             rest = {k: v for k, v in options.items() if k not in ("command", "out", "args")}
             args = options.get("args", ())
-            words = shlex.split(str(options["command"])) + [cli_text(a) for a in (
-                args if isinstance(args, (list, tuple)) else [args])]
+            words = shlex.split(str(options["command"])) + [
+                cli_text(a) for a in (args if isinstance(args, (list, tuple)) else [args])
+            ]
         words += [cli_text(rest.pop(a)) for a in self.arguments if a in rest]
         return ["lbr", *words, *option_words(rest, self.repeatable)]
 

@@ -34,7 +34,7 @@ def error_line(stderr: str) -> str | None:
     """The last ``lbr: error: ...`` (or ``lbr: interrupted``) line of a command's stderr, without the prefix."""
     for line in reversed(stderr.splitlines()):
         if line.startswith("lbr: error: "):
-            return line[len("lbr: error: "):]
+            return line[len("lbr: error: ") :]
         if line.startswith("lbr: interrupted"):
             return "interrupted"
     return None
@@ -66,4 +66,3 @@ def run_lbr(words: Sequence[str], timeout: float | None, joints: Path | None = N
 
         traj = read_joint_csv(joints)
     return Outcome(figures, p.returncode, error, traj)
-

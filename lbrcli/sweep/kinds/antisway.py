@@ -18,9 +18,16 @@ def run(options: Mapping[str, Any], timeout: float | None = None) -> Outcome:
 
     kw = anti_sway_inputs(**python_args(options))
     result = plan_anti_sway(**kw)
-    return Outcome(_jsonable(result.figures()), joints=result.joints,
-                   context={"stop_time": result.stop_time, "length": float(options["length"]),
-                            "flange": kw["flange"], "tool": kw["tool"]})
+    return Outcome(
+        _jsonable(result.figures()),
+        joints=result.joints,
+        context={
+            "stop_time": result.stop_time,
+            "length": float(options["length"]),
+            "flange": kw["flange"],
+            "tool": kw["tool"],
+        },
+    )
 
 
 def judge(outcome: Outcome, spec: Judge) -> dict:

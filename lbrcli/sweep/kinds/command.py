@@ -28,6 +28,6 @@ KIND = RunKind(
     command=(),
     run=run,
     options=None,  # any: the command checks its own options
-    summary="any lbr command with --json as a process: command = \"plan cup-and-ball\", its options beside it",
+    summary='any lbr command with --json as a process: command = "plan cup-and-ball", its options beside it',
     required=("command",),
 )

@@ -62,10 +62,25 @@ def run_upright(options: Mapping[str, Any], timeout: float | None = None) -> Out
 
 
 KINDS = (
-    RunKind(name="control-damp", command=("control", "damp"), run=run_damp, options=("joint-csv", "plan") + DAMP_OPTIONS,
-            summary="lbr control damp on the simulator: a joint CSV (or an anti-sway plan) streamed with sway damping",
-            paths=("joint-csv", "limits"), arguments=("joint-csv",), kind_only=("plan",), defaults=SESSION),
-    RunKind(name="control-upright", command=("control", "upright"), run=run_upright, options=UPRIGHT_OPTIONS,
-            summary="lbr control upright on the simulator: swing the pendulum module up and balance it",
-            paths=("limits",), repeatable=("push",), defaults=SESSION),
+    RunKind(
+        name="control-damp",
+        command=("control", "damp"),
+        run=run_damp,
+        options=("joint-csv", "plan") + DAMP_OPTIONS,
+        summary="lbr control damp on the simulator: a joint CSV (or an anti-sway plan) streamed with sway damping",
+        paths=("joint-csv", "limits"),
+        arguments=("joint-csv",),
+        kind_only=("plan",),
+        defaults=SESSION,
+    ),
+    RunKind(
+        name="control-upright",
+        command=("control", "upright"),
+        run=run_upright,
+        options=UPRIGHT_OPTIONS,
+        summary="lbr control upright on the simulator: swing the pendulum module up and balance it",
+        paths=("limits",),
+        repeatable=("push",),
+        defaults=SESSION,
+    ),
 )

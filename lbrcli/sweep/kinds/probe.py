@@ -37,8 +37,12 @@ def run(options: Mapping[str, Any], timeout: float | None = None) -> Outcome:
             pass
     else:
         time.sleep(seconds)
-    figures = {"elapsed_s": time.perf_counter() - t0, "pid": os.getpid(), "host": socket.gethostname(),
-               "value": options.get("value")}
+    figures = {
+        "elapsed_s": time.perf_counter() - t0,
+        "pid": os.getpid(),
+        "host": socket.gethostname(),
+        "value": options.get("value"),
+    }
     return Outcome(figures, code, f"probe asked to exit {code}" if code else None)
 
 

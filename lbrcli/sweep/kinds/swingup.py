@@ -13,8 +13,30 @@ from . import Judge, Outcome, RunKind, warm_robot
 # command-line name → keyword of plan_swing_up_files, where they differ; angles are parsed as the command does
 RENAMED = {"ke": "k_e", "kp": "k_p", "kd": "k_d", "max-travel": "travel"}
 ANGLES = {"theta-d": None, "theta0": "0", "tolerance": "2deg"}  # option → the command's default text
-OPTIONS = ("length", "mass", "theta-d", "method", "theta0", "push", "ke", "kp", "kd", "duration", "dt", "q-start",
-           "max-travel", "taut", "tolerance", "margin", "orientation", "workers", "side", "flange", "tool", "limits")
+OPTIONS = (
+    "length",
+    "mass",
+    "theta-d",
+    "method",
+    "theta0",
+    "push",
+    "ke",
+    "kp",
+    "kd",
+    "duration",
+    "dt",
+    "q-start",
+    "max-travel",
+    "taut",
+    "tolerance",
+    "margin",
+    "orientation",
+    "workers",
+    "side",
+    "flange",
+    "tool",
+    "limits",
+)
 
 
 def run(options: Mapping[str, Any], timeout: float | None = None) -> Outcome:
@@ -48,8 +70,10 @@ def judge(outcome: Outcome, spec: Judge) -> dict:
     ctx = outcome.context
     robot = make_robot(ctx["flange"] or DEFAULT_FLANGE, ctx["tool"])
     reached = math.degrees(ctx["theta_d"] - ctx["tolerance"])
-    peaks = [math.degrees(verify(robot, outcome.joints, ctx["length"] * (1 + e), ctx["theta0"]).max_theta)
-             for e in spec.errors]
+    peaks = [
+        math.degrees(verify(robot, outcome.joints, ctx["length"] * (1 + e), ctx["theta0"]).max_theta)
+        for e in spec.errors
+    ]
     return {
         "judged_max_theta_deg": min(peaks),
         "judged_reached_share": sum(p >= reached for p in peaks) / len(peaks),

@@ -32,7 +32,9 @@ def _feed(h: SensorHealth, t, readings, ref, drive, predicted=None) -> str | Non
     return h.fault
 
 
-@pytest.mark.parametrize("length, noise, late", [(0.25, 0.0, 0), (0.30, math.radians(0.3), 30), (0.20, math.radians(0.6), 10)])
+@pytest.mark.parametrize(
+    "length, noise, late", [(0.25, 0.0, 0), (0.30, math.radians(0.3), 30), (0.20, math.radians(0.6), 10)]
+)
 def test_a_healthy_sensor_never_trips(length, noise, late):
     t, ref, true, drive = _swing(length)
     rng = np.random.default_rng(1)

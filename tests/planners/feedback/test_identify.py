@@ -34,7 +34,9 @@ def _record(length: float, friction: float = 0.0, delay: float = 0.006, noise: i
         phi, om = z
         return [om, -(G * math.sin(phi) + pivot[k] * math.cos(phi)) / length - mu * math.tanh(om / 0.02)]
 
-    sol = solve_ivp(rhs, (0, n * dt), [0.0, 0.0], max_step=dt, t_eval=np.arange(0, n * dt, 0.005), rtol=1e-8, atol=1e-10)
+    sol = solve_ivp(
+        rhs, (0, n * dt), [0.0, 0.0], max_step=dt, t_eval=np.arange(0, n * dt, 0.005), rtol=1e-8, atol=1e-10
+    )
     counts = sign * np.round(sol.y[0] / (2 * math.pi) * 4096) + offset + rng.integers(-noise, noise + 1, sol.t.size)
     arrive = sol.t + delay + rng.uniform(0, 0.001, sol.t.size)
     return arrive, counts * 2 * math.pi / 4096, a, dt

@@ -53,7 +53,12 @@ def test_a_reversed_encoder_is_refused_not_guessed():
 def test_it_always_ends_and_says_why_it_failed():
     # no reading ever: the wait runs out
     run = simulate_session(_rod(), LIM, NOMINAL.equivalent_length, SessionOptions(wait_s=1.0), Sensor(rate_hz=0.001))
-    assert run.session.done and not run.session.succeeded and "hang still" in run.session.verdict or "no reading" in run.session.verdict
+    assert (
+        run.session.done
+        and not run.session.succeeded
+        and "hang still" in run.session.verdict
+        or "no reading" in run.session.verdict
+    )
     # a cart too weak to swing it up: the swing-up's time runs out, the rod is lowered, the arm parks
     weak = CartLimits(0.3, 0.8, 0.3, 60.0)
     run = simulate_session(_rod(), weak, NOMINAL.equivalent_length, SessionOptions(swing_timeout_s=5.0), Sensor())

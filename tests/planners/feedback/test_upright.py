@@ -27,8 +27,14 @@ def _from_upright_deg(phi):
 @pytest.mark.parametrize("rod, delay", [(0.3, 0.010), (0.45, 0.005), (0.75, 0.010)])
 def test_swings_up_balances_and_survives_a_ten_degree_push(rail, rod, delay):
     push = 9.0
-    run = simulate_upright(RigidPendulum(rod_length=rod), rail.limits, 14.0, bounds=rail.local_bounds,
-                           sensor=Sensor(delay=delay), pushes=((push, math.radians(-10)),))
+    run = simulate_upright(
+        RigidPendulum(rod_length=rod),
+        rail.limits,
+        14.0,
+        bounds=rail.local_bounds,
+        sensor=Sensor(delay=delay),
+        pushes=((push, math.radians(-10)),),
+    )
     up = _from_upright_deg(run.phi)
     first = int(np.argmax(run.mode == Mode.BALANCE))
     assert 0 < run.t[first] < 6.0

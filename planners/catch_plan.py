@@ -61,7 +61,7 @@ SEARCH_LENGTHS = 5  # string lengths across the band the catch-move search judge
 BAND_LENGTHS = 9  # string lengths across the band of the verdict (× 3 masses × 3 timings)
 SPREAD_SHARE = 0.85  # the swing-up aims at landings of the band spread over at most this share of the opening
 LATERAL_SHARE = 0.5  # the band lands flying over the ground at most this share of the catch move's speed bound
-SWING_HORIZON = 6.0  # [s] longest pumping without --max-time
+SWING_HORIZON = 4.0  # [s] longest pumping without --max-time (as --max-time 3 searches: longer found worse plans)
 
 
 @dataclass(frozen=True)

@@ -36,8 +36,9 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
+from trajectories.start_poses import THESIS_START
 
-Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # [rad]
+Q0 = np.array(THESIS_START)  # [rad]
 SETTLE_S = 0.05
 _SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)  # Linux; the kernel's receive time of each datagram
 

@@ -1,7 +1,7 @@
 """FRI 2.7 CARTESIAN_POSE on `lbr sim`, judged by an independent forward kinematics (issue #40).
 
 Every commanded pose is compared with the flange of the joints the simulator executed for it (the next monitoring
-message's measured joints), through the thesis's DH table in plain numpy (tests/lbrcli/dh_fk.py) — not the
+message's measured joints), through the thesis's DH table in plain numpy (lbrcli/fri/testing/dh.py) — not the
 pinocchio model the simulator's IK and our client use. A deliberately wrong DH (d3 and d5 10 % long) judges the same
 runs, to show the judge is sensitive (its error must be large).
 
@@ -9,7 +9,7 @@ runs, to show the judge is sensitive (its error must be large).
   circle of radius R in the base xy plane at 0.25 Hz, E1 swept ±0.3 rad at 0.2 Hz, over send periods, radii and two
   start poses (the thesis's and a bent one). Per run: ended by the application's duration, min tracking performance,
   the largest DH position / rotation error.
-- KUKA's LBRCartesianOverlay (C++, SDK 2.7; skipped without a build, tests/lbrcli/kuka_sdk.py) in real time at
+- KUKA's LBRCartesianOverlay (C++, SDK 2.7; skipped without a build, lbrcli/fri/testing/kuka_sdk.py) in real time at
   several periods and amplitudes: the measured flange's peak x offset against the amplitude and against the peak of
   its source's filtered sine (the filter coefficient 0.99 is per command, so it damps more at longer periods); the
   DH error over the commands executed on time (tracking performance 1). Its E1 sweep is 0.1° per command: 100°/s at
@@ -27,18 +27,16 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from trajectories.start_poses import THESIS_START
 
 HERE = Path(__file__).resolve().parent
-TESTS = HERE.parent / "tests" / "lbrcli"
 BENT_Q0 = (0.4, 0.6, -0.3, -1.4, 0.3, 0.9, 0.2)  # [rad] a second start pose
-THESIS_Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)
+THESIS_Q0 = THESIS_START  # [rad]
 
 
 def _helpers():
-    if str(TESTS) not in sys.path:
-        sys.path.append(str(TESTS))
-    import dh_fk
-    import fri_relay
+    from lbrcli.fri.testing import dh as dh_fk
+    from lbrcli.fri.testing import relay as fri_relay
 
     return dh_fk, fri_relay
 
@@ -178,7 +176,7 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         ("ours: wrong DH (d3, d5 +10 %) position error, least over all poses", worst["wrong"] * 1e3, "mm"),
         ("ours: min tracking performance, worst run", worst["track"], "-"),
     ]
-    from kuka_sdk import kuka_app  # (tests/lbrcli is on the path: _helpers)
+    from lbrcli.fri.testing.kuka_sdk import kuka_app
 
     exe, why = kuka_app("LBRCartesianOverlay")
     if exe is None:

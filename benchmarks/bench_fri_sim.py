@@ -7,7 +7,7 @@ reported.
 
 Issue #12's done criterion: KUKA's LBRJointSineOverlay semantics (command = ipo + 0.04·sin(2π·0.25 Hz·t) on A4
 with its 0.99 filter, mirror in COMMANDING_WAIT) for 20 s at 1, 2 and 5 ms in both FRI versions, answered by the
-KUKA-like raw client of tests/lbrcli/fri_kuka_client.py: max |measured − (ipo + sine)| over the commands the
+KUKA-like raw client of lbrcli/fri/testing/kuka_client.py: max |measured − (ipo + sine)| over the commands the
 controller demonstrably had in time, and whether a safety stop happened."""
 
 from __future__ import annotations
@@ -31,8 +31,7 @@ def _mirror(mon, cmd, mode: str, seq: int) -> None:
 
 
 def _echo_client(port_queue, version: str, stop_after: float, mode: str = "position") -> None:
-    _kuka_client_module()
-    from fri_kuka_client import KukaLikeClient
+    from lbrcli.fri.testing.kuka_client import KukaLikeClient
 
     client = KukaLikeClient(version)
     port_queue.put(client.port)
@@ -40,16 +39,6 @@ def _echo_client(port_queue, version: str, stop_after: float, mode: str = "posit
         client.run(None, mode=mode, timeout=stop_after, record=False)  # mirrors ipo (+ zero torque/wrench)
     finally:
         client.close()
-
-
-def _kuka_client_module() -> None:
-    """Make tests/lbrcli/fri_kuka_client.py importable (the KUKA-like raw client shared with the tests)."""
-    import sys
-    from pathlib import Path
-
-    path = str(Path(__file__).resolve().parents[1] / "tests" / "lbrcli")
-    if path not in sys.path:
-        sys.path.insert(0, path)
 
 
 def measure(
@@ -146,8 +135,7 @@ def kuka_sine(duration_s: float, period_ms: int, version: str) -> tuple[float, f
     on A4 [rad] (the sine's reach), time in COMMANDING_ACTIVE [s])."""
     import numpy as np
 
-    _kuka_client_module()
-    from fri_kuka_client import CA, KukaLikeClient, joint_sine
+    from lbrcli.fri.testing.kuka_client import CA, KukaLikeClient, joint_sine
 
     from lbrcli.fri.sim import SimConfig, SimulatorProcess
 

@@ -48,13 +48,14 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+from trajectories.start_poses import THESIS_START
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = Path(__file__).resolve().parent / "results" / "fri_timing.json"
 KUKA_PORT = 30200  # KUKA's example clients bind it (no option)
 KUKA_NAME = "KUKA LBRJointSineOverlayApp (C++)"
 BUILD_DIR = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "lbr-bench" / "kuka-fri-1.15"
-Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # [rad] the simulator's default start
+Q0 = np.array(THESIS_START)  # [rad] the simulator's default start
 PY = [sys.executable]
 LBR = [sys.executable, "-m", "lbrcli"]
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from trajectories.start_poses import THESIS_START
 
 
 def run(quick: bool = False) -> list[tuple[str, float, str]]:
@@ -16,7 +17,7 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
 
     robot = Robot()
     limits = default_limits()
-    q_start = np.array([0, 0.071, 0, -1.3523, 0, 0.1301, 0])
+    q_start = np.array(THESIS_START)
     n = 2001 if quick else 10001
     t = np.linspace(0.0, (n - 1) * 1e-3, n)
     wave = np.sin(2 * np.pi * 0.2 * t)[:, None] * np.array([0.3, 0.15, 0.1, 0.12, 0.2, 0.15, 0.3])

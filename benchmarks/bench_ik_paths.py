@@ -13,6 +13,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from trajectories.start_poses import THESIS_START
 
 PINK_ITERATIONS = 10  # QP steps per pose at most
 TIMING_REPEATS = 3  # lbr's timing over the suite: best and median of this many runs
@@ -133,7 +134,7 @@ def _run(quick: bool) -> list[tuple[str, float, str]]:
             elif q_lbr is not None:
                 start = q_lbr[0]
             else:
-                start = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])
+                start = np.array(THESIS_START)
             t0 = time.perf_counter()
             q_pink = pink_solve(path, start)
             pink_time += time.perf_counter() - t0

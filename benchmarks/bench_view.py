@@ -22,10 +22,11 @@ from contextlib import redirect_stdout
 from pathlib import Path
 
 import numpy as np
+from trajectories.start_poses import THESIS_START
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results" / "view_export.json"
-Q0 = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])  # [rad]
+Q0 = np.array(THESIS_START)  # [rad]
 AXES = np.array([0.35, 0.2, -0.15, 0.3, 0.1, -0.25, 0.4])  # [rad]
 
 
@@ -75,8 +76,7 @@ def measure_view(log: Path, folder: Path) -> dict[str, float]:
     """Seconds from `lbr view LOG` to the arm drawn in headless Chromium; scene time per wall time while playing
     (steady: over ``PLAY_WINDOW_S`` from ``WARM_UP_S`` after the arm appeared — the first 5 s measured 0.67× at load 9,
     the page still loading)."""
-    sys.path.insert(0, str(HERE.parent / "tests" / "lbrcli"))
-    from browser import chromium_path, page, status, status_time, wait_for_scene
+    from lbrcli.view.testing import chromium_path, page, status, status_time, wait_for_scene
 
     if chromium_path() is None:
         return {}

@@ -21,6 +21,11 @@ def arguments(description: str, duration_s: float = 5.0) -> argparse.ArgumentPar
         help="simulator tolerant of a loaded PC (1 s quality window; --no-sim-lenient: as strict as a robot)",
     )
     p.add_argument(
+        "--sim-lockstep",
+        action="store_true",
+        help="simulator that waits for each reply on its period's grid: a loaded PC does not drop the session",
+    )
+    p.add_argument(
         "--sim-fast",
         action="store_true",
         help="simulator in lock-step as fast as the client answers: it waits for each reply, so a loaded PC behaves as "
@@ -38,8 +43,8 @@ def run(client, args, observers=(), **sim_options) -> SessionResult:
 
     if args.sim_lenient:
         sim_options = {**lenient_quality(args.period), **sim_options}
-    if args.sim_fast:
-        sim_options = {"lockstep_timeout_s": 0.5, "lockstep_free": True, **sim_options}
+    if args.sim_fast or args.sim_lockstep:
+        sim_options = {"lockstep_timeout_s": 0.5, "lockstep_free": args.sim_fast, **sim_options}
 
     with ClientApplication(client, "127.0.0.1", 0, bind_host="127.0.0.1", version=args.fri_version, observers=observers,
                            first_message_timeout_s=20, reply_gap_s=0.5 if args.sim_lenient else None) as app:  # fmt: skip

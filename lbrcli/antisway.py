@@ -36,6 +36,7 @@ GENTLE_STEP, GENTLE_TRIES = 0.85, 6  # robust-gentle: a_max × 0.85 on the faili
 FALLBACK_RESIDUAL = math.radians(0.5)  # a fallback must leave at most this swing across the length band [rad]
 DEFAULT_BALL_RADIUS = 0.02  # [m]
 Z_RANGE = (-0.5, 1.5)  # [m] flange heights worth planning at (the arm reaches about −0.4..1.3 m)
+SETTINGS = "plan_anti_sway"  # the owner of its SettingErrors: ``plan_anti_sway.FIELD`` (a parameter of it)
 
 
 @dataclass(frozen=True)
@@ -206,7 +207,7 @@ def check_reach(points, z: float, robot, limits) -> None:
         )
     raise PlanningError(
         f"the layout is out of reach at z = {z:g} m with the flange pointing down: {place}: {fact.describe()}; "
-        f"move the points or change --z"
+        f"move the points or change the flange height z"
     )
 
 
@@ -356,13 +357,13 @@ def _attempt(setup: _Setup, a_max, options, progress=None) -> AntiSwayResult:
     elif setup.max_sway is not None and band.worst_peak > setup.max_sway and max(band.peak) <= setup.max_sway:
         failure = (
             f"predicted sway {math.degrees(band.worst_peak):.2f}° for a string length between the simulated ones "
-            f"exceeds --max-sway {math.degrees(setup.max_sway):.2f}°"
+            f"exceeds the sway limit (max sway) {math.degrees(setup.max_sway):.2f}°"
         )
     elif setup.max_sway is not None and max(band.peak) > setup.max_sway:
         k = max(range(len(band.peak)), key=lambda i: band.peak[i])
         failure = (
             f"predicted sway {math.degrees(band.peak[k]):.2f}° at t = {band.peak_time[k]:.3f} s (string "
-            f"{band.lengths[k]:.3f} m, segment {plan.segment_of(band.peak_time[k])}) exceeds --max-sway "
+            f"{band.lengths[k]:.3f} m, segment {plan.segment_of(band.peak_time[k])}) exceeds the sway limit (max sway) "
             f"{math.degrees(setup.max_sway):.2f}°"
         )
     elif band.clearance is not None and band.clearance.touches:
@@ -454,22 +455,15 @@ def plan_anti_sway(
     import numpy as np
 
     from planners.antisway import DEFAULT_LENGTH_TOLERANCE, DEFAULT_Z, AntiSwayOptions
-    from trajectories.errors import OptionError, PlanningError
+    from trajectories.errors import PlanningError
     from trajectories.limits import load_limits
 
     from .options import make_robot
-    from .parsing import parse_joint_vector
 
     pts = np.asarray(points, dtype=float)
     z = DEFAULT_Z if z is None else float(z)
-    if not (math.isfinite(z) and Z_RANGE[0] <= z <= Z_RANGE[1]):
-        raise OptionError(f"--z must be a flange height in [{Z_RANGE[0]:g}, {Z_RANGE[1]:g}] m, got {z:g}")
     tol = DEFAULT_LENGTH_TOLERANCE if length_tolerance is None else float(length_tolerance)
-    _validate(pts, length, a_max, dt, shaper, tol, margin)
-    if max_sway is not None and not (0 < max_sway < math.pi / 2):
-        raise OptionError(f"--max-sway must be in (0, 90) deg, got {math.degrees(max_sway):g} deg")
-    if not (math.isfinite(ball_radius) and 0 <= ball_radius < 1):
-        raise OptionError(f"--ball-radius must be in [0, 1) m, got {ball_radius:g}")
+    _validate(pts, length, a_max, dt, shaper, tol, margin, z, max_sway, ball_radius)
     options = AntiSwayOptions(
         shaper=shaper,
         j_max=None if j_max is None else float(j_max),
@@ -480,9 +474,7 @@ def plan_anti_sway(
     )
     lim = limits if limits is not None else load_limits(None)
     robot = make_robot(flange, tool)
-    q_ref = parse_joint_vector(ANTISWAY_Q0, "--q0") if q0 is None else np.asarray(q0, dtype=float)
-    if q_ref.shape != (7,):
-        raise OptionError("--q0: expected 7 joint angles")
+    q_ref = _start_pose(q0)
     check_reach(pts, z, robot, lim)
     setup = _Setup(
         pts,
@@ -502,39 +494,56 @@ def plan_anti_sway(
     if result.failure is None:
         return result
     if fallback and shaper == "auto":
-        from dataclasses import replace
+        alt = _fallback(setup, a_max, options, result)
+        if alt is not None:
+            return alt
+    raise PlanningError(_failure_text(setup, a_max, options, result, fallback and shaper == "auto", suggest))
 
-        tried = []
-        peak_speed = float(np.abs(np.diff(result.plan.position, axis=0)).max() / dt) * math.sqrt(2)
-        for design in FALLBACK_DESIGNS:
-            # robust-slow: the robust design with the pivot speed capped at 3/4 of the failed plan's peak;
-            # robust-gentle: the robust design at a lower a_max (a joint's acceleration limit is often what fails,
-            # and the robust design stays quicker than the baseline at a little less acceleration)
-            if design == "robust-gentle":
-                found = _gentle(setup, a_max, options, result)
-                if found is not None and (tol == 0 or found[0].band.worst_residual[0] <= FALLBACK_RESIDUAL):
-                    alt = replace(found[0], baseline_duration=result.baseline_duration)  # at the user's a_max
-                    tried.append((alt, f" (a_max {_accel_text(found[1])} m/s² per segment)"))
-                continue
-            alt_opts = (
-                replace(options, shaper="robust", v_max=min(options.v_max, 0.75 * peak_speed))
-                if design == "robust-slow"
-                else replace(options, shaper=design)
-            )
-            alt = _attempt(setup, a_max, alt_opts)
-            if alt.failure is None and (tol == 0 or alt.band.worst_residual[0] <= FALLBACK_RESIDUAL):
-                tried.append((alt, ""))
-        if tried:
-            alt, note = min(tried, key=lambda r: r[0].stop_time)
-            to = (
-                alt.plan.shaper
-                if math.isinf(alt.plan.options.v_max)
-                else (f"{alt.plan.shaper} (pivot speed ≤ {alt.plan.options.v_max:.2f} m/s)")
-            )
-            to += note
-            return replace(alt, fallback={"from": shaper, "to": to, "reason": result.failure})
+
+def _fallback(setup: _Setup, a_max: float, options, result: AntiSwayResult) -> AntiSwayResult | None:
+    """The quickest of the other designs (``FALLBACK_DESIGNS``) that plans at ``a_max`` [m/s²] where the shaper
+    ``auto`` failed (``result``), with at most ``FALLBACK_RESIDUAL`` residual across the length band; None if none."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    tol = options.length_tolerance
+    tried = []
+    peak_speed = float(np.abs(np.diff(result.plan.position, axis=0)).max() / setup.dt) * math.sqrt(2)
+    for design in FALLBACK_DESIGNS:
+        # robust-slow: the robust design with the pivot speed capped at 3/4 of the failed plan's peak;
+        # robust-gentle: the robust design at a lower a_max (a joint's acceleration limit is often what fails,
+        # and the robust design stays quicker than the baseline at a little less acceleration)
+        if design == "robust-gentle":
+            found = _gentle(setup, a_max, options, result)
+            if found is not None and (tol == 0 or found[0].band.worst_residual[0] <= FALLBACK_RESIDUAL):
+                alt = replace(found[0], baseline_duration=result.baseline_duration)  # at the user's a_max
+                tried.append((alt, f" (a_max {_accel_text(found[1])} m/s² per segment)"))
+            continue
+        alt_opts = (
+            replace(options, shaper="robust", v_max=min(options.v_max, 0.75 * peak_speed))
+            if design == "robust-slow"
+            else replace(options, shaper=design)
+        )
+        alt = _attempt(setup, a_max, alt_opts)
+        if alt.failure is None and (tol == 0 or alt.band.worst_residual[0] <= FALLBACK_RESIDUAL):
+            tried.append((alt, ""))
+    if not tried:
+        return None
+    alt, note = min(tried, key=lambda r: r[0].stop_time)
+    to = (
+        alt.plan.shaper
+        if math.isinf(alt.plan.options.v_max)
+        else (f"{alt.plan.shaper} (pivot speed ≤ {alt.plan.options.v_max:.2f} m/s)")
+    )
+    return replace(alt, fallback={"from": options.shaper, "to": to + note, "reason": result.failure})
+
+
+def _failure_text(setup: _Setup, a_max: float, options, result: AntiSwayResult, fell_back: bool, suggest: bool) -> str:
+    """Why no plan: the failure, that no fallback design planned either, and (``suggest``) the largest a_max
+    [m/s²] that plans."""
     msg = result.failure
-    if fallback and shaper == "auto":
+    if fell_back:
         msg += (
             f"; no fallback design ({', '.join(FALLBACK_DESIGNS)}) plans either with ≤ "
             f"{math.degrees(FALLBACK_RESIDUAL):g}° residual across the length band"
@@ -546,34 +555,58 @@ def plan_anti_sway(
             if best > 0
             else "; no a_max plans (the layout is outside the joint limits at any acceleration)"
         )
-    raise PlanningError(msg + " (an anti-sway plan is never re-timed)")
+    return msg + " (an anti-sway plan is never re-timed)"
 
 
-def _validate(pts, length, a_max, dt, shaper, tol, margin) -> None:
+def _start_pose(q0: Sequence[float] | None):
+    """The IK's reference pose (7,) [rad]: ``q0``, else the anti-sway start pose."""
+    import numpy as np
+
+    from trajectories.errors import SettingError
+
+    from .parsing import parse_joint_vector
+
+    q_ref = parse_joint_vector(ANTISWAY_Q0, "ANTISWAY_Q0") if q0 is None else np.asarray(q0, dtype=float)
+    if q_ref.shape != (7,):
+        raise SettingError(SETTINGS, "q0", "expected 7 joint angles")
+    return q_ref
+
+
+def _validate(pts, length, a_max, dt, shaper, tol, margin, z, max_sway, ball_radius) -> None:
+    """Every setting of :func:`plan_anti_sway` in its range (SettingError ``plan_anti_sway.FIELD`` naming the first
+    one that is not; the command maps it to its option)."""
     import numpy as np
 
     from planners.antisway import SHAPERS
-    from trajectories.errors import OptionError
+    from trajectories.errors import SettingError
 
-    from .options import check_number
+    def bad(field: str, message: str) -> SettingError:
+        return SettingError(SETTINGS, field, message)
 
+    if not (math.isfinite(z) and Z_RANGE[0] <= z <= Z_RANGE[1]):
+        raise bad("z", f"must be a flange height in [{Z_RANGE[0]:g}, {Z_RANGE[1]:g}] m, got {z:g}")
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2:
-        raise OptionError("--points: need a start and at least one turning point 'x0,y0;x1,y1;...'")
+        raise bad("points", "need a start and at least one turning point 'x0,y0;x1,y1;...'")
     seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
     if np.any(seg < 1e-6):
         k = int(np.argmin(seg)) + 1
-        raise OptionError(f"--points: segment {k} has zero length (points {k - 1} and {k} coincide)")
+        raise bad("points", f"segment {k} has zero length (points {k - 1} and {k} coincide)")
     if not (math.isfinite(length) and 0.01 <= length <= 3.0):
-        raise OptionError(f"--length must be a string length in [0.01, 3] m, got {length:g}")
+        raise bad("length", f"must be a string length in [0.01, 3] m, got {length:g}")
     if not (math.isfinite(a_max) and 0 < a_max <= 20.0):
-        raise OptionError(f"--a-max must be in (0, 20] m/s², got {a_max:g}")
+        raise bad("a_max", f"must be in (0, 20] m/s², got {a_max:g}")
     if not (math.isfinite(dt) and 1e-4 <= dt <= 0.05):
-        raise OptionError(f"--dt must be in [0.0001, 0.05] s, got {dt:g}")
+        raise bad("dt", f"must be in [0.0001, 0.05] s, got {dt:g}")
     if shaper not in SHAPERS:
-        raise OptionError(f"--shaper: unknown {shaper!r}; choose one of {', '.join(SHAPERS)}")
+        raise bad("shaper", f"unknown {shaper!r}; choose one of {', '.join(SHAPERS)}")
     if not (0.0 <= tol < 0.9):
-        raise OptionError(f"--length-tolerance must be in [0, 0.9), got {tol:g}")
-    check_number("--margin", margin, 0, 1, high_open=True)
+        raise bad("length_tolerance", f"must be in [0, 0.9), got {tol:g}")
+    if not (math.isfinite(margin) and 0 <= margin < 1):
+        raise bad("margin", f"must be in [0, 1), got {margin:g}")
+    if max_sway is not None and not (0 < max_sway < math.pi / 2):
+        raise bad("max_sway", f"must be in (0, 90) deg, got {math.degrees(max_sway):g} deg")
+    if not (math.isfinite(ball_radius) and 0 <= ball_radius < 1):
+        raise bad("ball_radius", f"must be in [0, 1) m, got {ball_radius:g}")
 
 
 def write_outputs(

@@ -98,6 +98,16 @@ def _usage_message(exc) -> str:
     return message
 
 
+def _error_message(exc) -> str:
+    """An lbr error's line: a setting's error names the option it comes from where every command names it alike."""
+    from trajectories.errors import SettingError
+
+    from .option_groups import SHARED_FLAGS, flag_message, name_flags
+
+    name_flags(exc, SHARED_FLAGS)
+    return (flag_message(exc) if isinstance(exc, SettingError) else None) or str(exc)
+
+
 def _fail(message: str, code: int, argv: list[str], extra: dict | None = None) -> NoReturn:
     """One line on stderr; with --json also one JSON object on stdout (unless the command already printed its
     figures); then exit with ``code``."""
@@ -174,7 +184,7 @@ def main(argv: list[str] | None = None) -> None:
     except LbrError as exc:
         where = (("file", getattr(exc, "file", None)), ("row", getattr(exc, "row", None)),
                  ("column", getattr(exc, "column", None)))  # fmt: skip
-        _fail(str(exc), exc.exit_code, argv, {k: v for k, v in where if v is not None})
+        _fail(_error_message(exc), exc.exit_code, argv, {k: v for k, v in where if v is not None})
     except BrokenPipeError:  # `lbr ... | head`: the reader left; say nothing more
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         sys.exit(1)

@@ -112,6 +112,16 @@ PeriodOpt = Annotated[
         "controller must have.",
     ),
 ]
+StartToleranceOpt = Annotated[  # commands that play rows from a first one (execute, control damp)
+    float,
+    number(
+        "--start-tolerance",
+        low=0,
+        high=0.1,
+        unit="rad",
+        help="Largest |first row − measured position| accepted \\[rad].",
+    ),
+]
 SessionPeriodOpt = Annotated[  # commands that play no file
     Optional[int],
     number(
@@ -259,13 +269,17 @@ def check_simulator_only(robot: str | None, options: dict[str, bool]) -> None:
 
 SESSION_FLAGS = {
     "SessionSettings.port": "--port", "SessionSettings.version": "--fri-version", "SessionSettings.wait_s": "--wait",
-    "SessionSettings.busy_wait_s": "--busy-wait", "SessionSettings.max_tracking_error": "--max-tracking-error",
+    "SessionSettings.busy_wait_s": "--busy-wait", "SessionSettings.send_period_ms": "--period", "SessionSettings.max_tracking_error": "--max-tracking-error",
     "SimulatorSettings.period_ms": "--period", "SimulatorSettings.start": "--sim-start",
     "SimulatorSettings.ball": "--length", "BallSpec.length": "--length", "BallSpec.damping": "--damping",
     "BallSpec.model": "--cup", "BallSpec.io_delay_ms": "--sim-delay", "SimConfig.period_ms": "--period",
     "SimConfig.receive_multiplier": "--receive-multiplier", "SimConfig.q0": "--sim-start", "SimConfig.version": "--fri-version",
     "SimConfig.lockstep_timeout_s": "--sim-lockstep", "SimConfig.lockstep_free": "--sim-fast",
     "SessionSettings.realtime": "--realtime", "UdpTransport.robot": "--robot",
+    "ClientApplication.robot": "--robot", "ClientApplication.version": "--fri-version",
+    "TrajectoryPlayer.resample": "--resample", "TrajectoryPlayer.start_tolerance": "--start-tolerance",
+    "TrajectoryPlayer.move_to_start": "--move-to-start", "SwayWatch.threshold": "--start-sway",
+    "SwayWatch.max_wait_s": "--sway-wait", "ExecutionLog.path": "--log", "SimulatorSettings.lockstep": "--sim-lockstep",
 }  # fmt: skip
 """The flag each setting of the session and the simulator comes from (``Class.field`` → option)."""
 
@@ -315,12 +329,14 @@ class FriOptions:
             raise OptionError(f"--log {self.log} is the trajectory file itself; choose another name")
 
     def session(self, limits: Any = None, *, duration_s: float | None = None,
-                max_tracking_error: float | None = None) -> SessionSettings:  # fmt: skip
-        """The session's settings (``limits``: the JointLimits the commands are guarded with)."""
+                max_tracking_error: float | None = None, check_period: bool = True) -> SessionSettings:  # fmt: skip
+        """The session's settings (``limits``: the JointLimits the commands are guarded with); with a robot, the send
+        period given is the one it must have (``check_period`` False: the command checks the period itself)."""
         return SessionSettings(robot=self.robot, port=self.port, bind=self.bind, version=self.fri_version, limits=limits,
                                log=self.log, wait_s=self.wait, duration_s=duration_s, realtime=self.realtime,
                                busy_wait_s=busy_wait_seconds(self.busy_wait) or 0.0,
-                               max_tracking_error=max_tracking_error)  # fmt: skip
+                               max_tracking_error=max_tracking_error,
+                               send_period_ms=self.period if check_period else None)  # fmt: skip
 
     def ball_length(self) -> float:
         """[m] the simulated ball's string: --length, its default where not given (0: no ball)."""

@@ -5,11 +5,13 @@ hand them to :func:`run_client`."""
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 from pathlib import Path
 from typing import Any, Callable
 
 import typer
 
+from .option_groups import name_text
 from .session_settings import LogColumns, SessionSettings, SimulatorSettings
 
 
@@ -44,7 +46,8 @@ def realtime_context(realtime: bool):
 
 LATE_REPLIES_HINT = (
     ": the simulator's connection-quality rule dropped it for late replies, as a controller does (this computer was "
-    "too busy to answer every period in time; --sim-lockstep waits for each reply, see docs/explanations/fri-timing.md)"
+    "too busy to answer every period in time; lock-step (SimulatorSettings.lockstep) waits for each reply, see "
+    "docs/explanations/fri-timing.md)"
 )
 
 
@@ -174,7 +177,10 @@ def run_client(rep, client, session: SessionSettings, simulator: SimulatorSettin
     finally:
         app.disconnect()
         parts.stop()
-    return parts.judged(result), parts.sim_stats, parts.lab_figures
+    result = parts.judged(result)
+    if name_text(result.detail) != result.detail:  # a hint naming settings: the command's flags
+        result = dataclasses.replace(result, detail=name_text(result.detail))
+    return result, parts.sim_stats, parts.lab_figures
 
 
 def print_summary(rep, result, sim_stats, log_path: Path | None) -> dict[str, Any]:
@@ -200,9 +206,11 @@ def print_summary(rep, result, sim_stats, log_path: Path | None) -> dict[str, An
         waited = f.get("sway_wait_s") or 0.0
         if f.get("start_sway_above_threshold"):
             rep.warn(
-                f"the rows started with {f['start_sway_deg']:.3f}° of sway, above --start-sway "
-                f"{f['sway_threshold_deg']:g}° after waiting {waited:.2f} s (--sway-wait; a damped ball decays, "
-                "an undamped simulated one does not)"
+                name_text(
+                    f"the rows started with {f['start_sway_deg']:.3f}° of sway, above SwayWatch.threshold "
+                    f"{f['sway_threshold_deg']:g}° after waiting {waited:.2f} s (SwayWatch.max_wait_s; a damped ball decays, "
+                    "an undamped simulated one does not)"
+                )
             )
         else:
             rep.print(
@@ -274,7 +282,11 @@ def plot_log(
     if path is None:
         return None
     if log_path is None:
-        rep.warn("--plot needs --log (the plot is drawn from the log); no plot written")
+        rep.warn(
+            name_text(
+                "Plot.path needs the session's log (ExecutionLog.path): the plot is drawn from the log; no plot written"
+            )
+        )
         return None
     if draw is None:
         from .plots.execute import plot_execution

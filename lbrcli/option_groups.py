@@ -16,7 +16,7 @@ import inspect
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Mapping
 
-from trajectories.errors import OptionError, SettingError
+from trajectories.errors import InputError, LbrError, OptionError, SettingError
 
 
 def _parameters(fn: Callable, skip: frozenset[str] | set[str] = frozenset()) -> dict[str, inspect.Parameter]:
@@ -115,17 +115,67 @@ def with_options(*, flags: Mapping[str, str] | None = None, **groups: OptionGrou
     return decorate
 
 
+SHARED_FLAGS = {
+    "RobotConfig.tool": "--tool",
+    "RobotConfig.flange": "--flange",
+    "Plot.path": "--plot",
+    "read_table.headerless_dt": "--dt",
+    "solve_ik_path.q0": "--q0",
+}
+"""Settings every command that takes them takes by the same option: the app maps a SettingError of these that no
+command mapped (:func:`flag_message`)."""
+
+
+def flag_message(exc: SettingError, names: Mapping[str, str] = SHARED_FLAGS) -> str | None:
+    """The message of ``exc`` naming the option its setting comes from (``names``), or None if it has none."""
+    flag = names.get(exc.setting)
+    return f"{flag}: {exc.message}" if flag is not None else None
+
+
+def name_text(text: str, names: Mapping[str, str] | None = None) -> str:
+    """``text`` with the flags for the settings it names (``Class.field``, e.g. a hint "lower SwingUpRequest.theta_d"
+    → "lower --theta-d"); ``names`` default: those of the commands running (:class:`settings_named`) and the shared
+    ones."""
+    import re
+
+    if names is None:
+        names = {k: v for n in (SHARED_FLAGS, *_active) for k, v in n.items()}
+    found = [s for s in names if s in text]
+    if not found:
+        return text
+    pattern = re.compile("|".join(rf"\b{re.escape(s)}\b" for s in sorted(found, key=len, reverse=True)))
+    return pattern.sub(lambda m: names[m.group(0)], text)
+
+
+def name_flags(exc: LbrError, names: Mapping[str, str]) -> None:
+    """Write the flags for the settings an error's text names (:func:`name_text`), in place: the error keeps its
+    type, exit code and place."""
+    if isinstance(exc, InputError):
+        exc.message = name_text(exc.message, names)
+        exc.args = (str(exc),)
+    elif exc.args:
+        exc.args = (name_text(str(exc.args[0]), names), *exc.args[1:])
+
+
+_active: list[Mapping[str, str]] = []  # the flag names of the settings_named contexts entered (innermost last)
+
+
 class settings_named:
     """Context: a SettingError raised inside becomes an OptionError naming the flag of its setting
-    (``names``: "Class.field" → "--flag"); a setting without a flag keeps its own name."""
+    (``names``: "Class.field" → "--flag"); a setting without a flag keeps its own name. Another lbr error that names
+    settings in its text (a hint) names their flags instead (:func:`name_flags`)."""
 
     def __init__(self, names: Mapping[str, str]) -> None:
         self.names = names
 
     def __enter__(self) -> "settings_named":
+        _active.append(self.names)
         return self
 
     def __exit__(self, kind, exc, tb) -> bool:
+        _active.pop()
         if isinstance(exc, SettingError) and exc.setting in self.names:
-            raise OptionError(f"{self.names[exc.setting]}: {exc.message}") from None
+            raise OptionError(flag_message(exc, self.names)) from None
+        if isinstance(exc, LbrError):
+            name_flags(exc, self.names)
         return False

@@ -5,7 +5,7 @@ Every numeric option of every command is declared with :func:`number` (or, for v
 :func:`angle`, :func:`floats`, :func:`joints`, :func:`grid`, :func:`choice`): a typer ``parser`` checks the syntax
 (plain decimals, :mod:`trajectories.numbers`), finiteness and the range while click parses the command line, so a
 bad value is a one-line usage error (exit 2) naming the option before any work starts, and the range appears in
-the option's help. ``tests/lbrcli/test_options.py`` checks that no numeric option escapes it.
+the option's help. ``tests/lbrcli/test_app_bad_inputs.py`` checks that no numeric option escapes it.
 """
 
 from __future__ import annotations

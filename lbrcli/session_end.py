@@ -59,17 +59,18 @@ def session_end(table) -> SessionEnd:
     return end
 
 
-def require_complete(table, partial: bool, rep=None) -> SessionEnd:
+def require_complete(table, partial: bool, rep=None, *, option: str = "partial") -> SessionEnd:
     """:func:`session_end`, raising InputError (exit 2, naming the log) for an incomplete session unless
-    ``partial``; with ``partial`` a warning on ``rep`` says what is used."""
+    ``partial``; with ``partial`` a warning on ``rep`` says what is used. ``option``: how the caller's user asks for
+    a partial log (the command's flag)."""
     from trajectories.errors import InputError
 
     end = session_end(table)
     if not end.complete:
         if not partial:
             raise InputError(f"the session of this log did not complete ({end.reason}, log ends at {end.t_end:.3f} "
-                             "s); give --partial to use it anyway", file=table.path)  # fmt: skip
+                             f"s); give {option} to use it anyway", file=table.path)  # fmt: skip
         if rep is not None:
             rep.warn(f"{table.path}: the session did not complete ({end.reason}); using the {end.t_end:.3f} s logged "
-                     "(--partial)")  # fmt: skip
+                     f"({option})")  # fmt: skip
     return end

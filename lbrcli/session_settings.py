@@ -57,6 +57,8 @@ class SessionSettings:
     realtime: bool = False  # the FRI loop as a real-time task (SCHED_FIFO, pinned to a CPU, memory locked)
     busy_wait_s: float = 0.0  # [s] poll the socket this long before each message is due (0: block in the kernel)
     max_tracking_error: float | None = None  # [rad] (None: velocity limit × max(20 ms, 8 command periods))
+    send_period_ms: int | None = None  # [ms] the send period a robot must have (None: whatever it sends; simulated:
+    # the simulator's, SimulatorSettings.period_ms)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.port, int) and 0 <= self.port <= 65535):
@@ -68,6 +70,7 @@ class SessionSettings:
         _check_positive(SessionSettings, {"wait_s": self.wait_s, "duration_s": self.duration_s,
                                           "commanding_timeout_s": self.commanding_timeout_s}, "s")  # fmt: skip
         _check_positive(SessionSettings, {"max_tracking_error": self.max_tracking_error}, "rad")
+        _check_positive(SessionSettings, {"send_period_ms": self.send_period_ms}, "ms")
         if not (math.isfinite(self.busy_wait_s) and self.busy_wait_s >= 0):
             raise SettingError(SessionSettings, "busy_wait_s", f"must be >= 0 s, got {self.busy_wait_s!r}")
 
@@ -90,6 +93,7 @@ class SessionSettings:
             first_message_timeout_s=self.wait_s if self.wait_s is not None else (SIMULATED_WAIT_S if sim else ROBOT_FIRST_MESSAGE_S),
             commanding_timeout_s=self.commanding_timeout_s if self.commanding_timeout_s is not None else (SIMULATED_WAIT_S if sim else None),
             max_tracking_error=self.max_tracking_error, busy_wait_s=self.busy_wait_s,
+            send_period_s=None if sim or self.send_period_ms is None else self.send_period_ms * 1e-3,
             reply_gap_s=LENIENT_REPLY_GAP_S if lenient else None, tracking_lag_s=LENIENT_TRACKING_LAG_S if lenient else None,
         )  # fmt: skip
 

@@ -222,7 +222,7 @@ def _highest_taut_energy(r: SwingUpRequest, bounds: TaskBounds) -> tuple[PivotPl
         else:
             hi = mid
     if best is None:
-        raise PlanningError("no energy-shaping plan keeps the string taut; lower --theta-d")
+        raise PlanningError("no energy-shaping plan keeps the string taut; lower SwingUpRequest.theta_d")
     return best, best.max_theta
 
 
@@ -279,7 +279,7 @@ def _on_side(r: SwingUpRequest, plan: PivotPlan, notes: list[str]) -> PivotPlan:
     if r.side == 0 or side in (0, r.side):
         return plan
     if r.theta0 != 0.0:
-        notes.append("θ_d is reached on the other side; a plan from --theta0 ≠ 0 cannot be mirrored (flip its sign)")
+        notes.append("θ_d is reached on the other side; a plan from θ0 ≠ 0 cannot be mirrored (flip its sign)")
         return plan
     return mirrored(plan)
 
@@ -317,7 +317,8 @@ def plan_swing_up(r: SwingUpRequest, robot: Robot, limits: JointLimits, progress
         if travel > r.travel:
             raise PlanningError(
                 f"the energy law moves the pivot {travel:.2f} m from its start, beyond the "
-                f"±{r.travel:g} m band (--max-travel); raise --kp/--kd or lower --push"
+                f"±{r.travel:g} m band (SwingUpRequest.travel); raise SwingUpRequest.k_p/SwingUpRequest.k_d or lower "
+                "SwingUpRequest.push"
             )
         traj, ik_err = joint_path(robot, setup, plan.t, plan.x, limits, progress)
         report = check_trajectory(traj, limits)

@@ -65,61 +65,21 @@ def plan_energy(p: EnergyParams, bounds: TaskBounds) -> PivotPlan:
 
     Raises PlanningError when the ball starts at exact rest without a push (the law gives u ≡ 0).
     """
-    from scipy.integrate import solve_ivp
-
     if p.theta0 == 0.0 and p.theta_dot0 == 0.0 and p.push == 0.0:
         raise PlanningError(
             "from exact rest the energy law produces no motion (θ = θ̇ = 0 gives u = 0); "
-            "start from a small angle (--theta0 0.1) or give a start push (--push 0.5)"
+            "start from a small angle (EnergyParams.theta0, e.g. 0.1 rad) or give a start push (EnergyParams.push, "
+            "e.g. 0.5 m/s²)"
         )
     e_d = desired_energy(p.theta_d, p.length, p.mass)
     reach_angle = p.theta_d - p.tolerance
-    aim = p.theta_d - 0.5 * p.tolerance
     l = p.length
-
-    def f(t, y):
-        return rhs(y, control(p, t, y, e_d), l)
-
-    def reach(t, y):
-        return abs(y[2]) - aim
-
-    reach.terminal, reach.direction = True, 1.0
-
-    def slack(t, y):
-        return tension_margin(y[2], y[3], control(p, t, y, e_d), 0.0, l)
-
-    slack.terminal, slack.direction = False, -1.0
-
-    y0 = np.array([0.0, 0.0, p.theta0, p.theta_dot0])
-    max_step = min(0.02, p.dt)
-    pump = solve_ivp(
-        f,
-        (0.0, p.duration),
-        y0,
-        method="DOP853",
-        events=(reach, slack),
-        dense_output=True,
-        rtol=p.rtol,
-        atol=p.atol,
-        max_step=max_step,
-    )
-    if pump.status < 0:
-        raise PlanningError(f"energy-shaping integration failed: {pump.message}")
+    pump = _pump(p, e_d)
     t_sw = float(pump.t[-1])
     y_sw = pump.y[:, -1]
-    u_sw = control(p, t_sw, y_sw, e_d)
-    stop = StopProfile(y_sw[1], u_sw, bounds)
-    t0 = natural_period(l)
-
-    def g(t, y):
-        return rhs(y, float(stop.at(t - t_sw)[2][0]), l)
-
-    t_end = t_sw + stop.duration + 0.5 * t0
-    coast = solve_ivp(
-        g, (t_sw, t_end), y_sw, method="DOP853", dense_output=True, rtol=p.rtol, atol=p.atol, max_step=max_step
-    )
-    if coast.status < 0:
-        raise PlanningError(f"energy-shaping integration failed while stopping: {coast.message}")
+    stop = StopProfile(y_sw[1], control(p, t_sw, y_sw, e_d), bounds)
+    t_end = t_sw + stop.duration + 0.5 * natural_period(l)
+    coast = _coast(p, stop, t_sw, y_sw, t_end)
 
     t = time_grid(t_end, p.dt)
     before = t <= t_sw
@@ -154,3 +114,59 @@ def plan_energy(p: EnergyParams, bounds: TaskBounds) -> PivotPlan:
             "g": G,
         },
     )
+
+
+def _pump(p: EnergyParams, e_d: float):
+    """The energy law integrated from the start state until |θ| reaches the aim (θ_d − tolerance / 2) or
+    ``duration``: the solve_ivp solution (dense), with the slack events (tension ≤ 0) as its second event."""
+    from scipy.integrate import solve_ivp
+
+    aim = p.theta_d - 0.5 * p.tolerance
+    l = p.length
+
+    def f(t, y):
+        return rhs(y, control(p, t, y, e_d), l)
+
+    def reach(t, y):
+        return abs(y[2]) - aim
+
+    reach.terminal, reach.direction = True, 1.0
+
+    def slack(t, y):
+        return tension_margin(y[2], y[3], control(p, t, y, e_d), 0.0, l)
+
+    slack.terminal, slack.direction = False, -1.0
+
+    y0 = np.array([0.0, 0.0, p.theta0, p.theta_dot0])
+    pump = solve_ivp(
+        f,
+        (0.0, p.duration),
+        y0,
+        method="DOP853",
+        events=(reach, slack),
+        dense_output=True,
+        rtol=p.rtol,
+        atol=p.atol,
+        max_step=min(0.02, p.dt),
+    )
+    if pump.status < 0:
+        raise PlanningError(f"energy-shaping integration failed: {pump.message}")
+    return pump
+
+
+def _coast(p: EnergyParams, stop: StopProfile, t_sw: float, y_sw: np.ndarray, t_end: float):
+    """The pendulum while the pivot follows ``stop`` from ``t_sw`` [s] (state ``y_sw``) until ``t_end`` [s]: the
+    solve_ivp solution (dense)."""
+    from scipy.integrate import solve_ivp
+
+    l = p.length
+
+    def g(t, y):
+        return rhs(y, float(stop.at(t - t_sw)[2][0]), l)
+
+    coast = solve_ivp(
+        g, (t_sw, t_end), y_sw, method="DOP853", dense_output=True, rtol=p.rtol, atol=p.atol, max_step=min(0.02, p.dt)
+    )
+    if coast.status < 0:
+        raise PlanningError(f"energy-shaping integration failed while stopping: {coast.message}")
+    return coast

@@ -189,17 +189,28 @@ def find_blobs(
 _COARSE_MAX_REGIONS = 24  # more candidate regions than this: search the full-resolution frame instead
 
 
-def coarse_factor(width_px: int) -> int:
-    """Downscaling factor of the first pass of a whole-frame search: 2 from 960 px wide, else 1 (none)."""
-    return 2 if width_px >= 960 else 1
+_COARSE_MIN_RADIUS_PX = 6.0  # [px] the smallest ball sought keeps at least this radius in the shrunk image
+_COARSE_MAX_FACTOR = 4
+
+
+def coarse_factor(width_px: int, min_radius_px: float | None = None) -> int:
+    """Downscaling factor of the first pass of a whole-frame search: 2 from 960 px wide, else 1 (none); when the
+    smallest ball sought is known to be large (min_radius_px [px]), up to 4 as long as it keeps 6 px of radius."""
+    base = 2 if width_px >= 960 else 1
+    if min_radius_px is None or min_radius_px < 2.0 * _COARSE_MIN_RADIUS_PX:
+        return base
+    by_size = 1 << int(math.log2(min_radius_px / _COARSE_MIN_RADIUS_PX))
+    return max(base, min(_COARSE_MAX_FACTOR, by_size))
 
 
 def coarse_hsv(bgr: np.ndarray, factor: int) -> np.ndarray:
-    """The image shrunk by ``factor`` (area averaging) in HSV: the first pass of :func:`find_blobs_coarse`."""
+    """The image shrunk by ``factor`` in HSV: the first pass of :func:`find_blobs_coarse`. Area averaging by 2;
+    by 4, the mean of the 2×2 central pixels of each 4×4 block (bilinear, 3× cheaper than area averaging there)."""
     import cv2
 
     h, w = bgr.shape[:2]
-    return cv2.cvtColor(cv2.resize(bgr, (w // factor, h // factor), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2HSV)
+    how = cv2.INTER_AREA if factor <= 2 else cv2.INTER_LINEAR
+    return cv2.cvtColor(cv2.resize(bgr, (w // factor, h // factor), interpolation=how), cv2.COLOR_BGR2HSV)
 
 
 def find_blobs_coarse(
@@ -239,7 +250,7 @@ def find_blobs_coarse(
         return find_blobs(bgr, spec, gates, origin, size)
     out: list[Blob] = []
     for x, y, bw, bh in boxes:
-        pad = 4 + max(bw, bh) // 2
+        pad = 4 + min(max(bw, bh) // 2, 6)  # [coarse px] a blob cut by its window falls back to the full frame
         x0, y0 = max((x - pad) * factor, 0), max((y - pad) * factor, 0)
         x1, y1 = min((x + bw + pad) * factor, w), min((y + bh + pad) * factor, h)
         for b in find_blobs(bgr[y0:y1, x0:x1], spec, gates, (x0 + ox, y0 + oy), size):
@@ -274,16 +285,20 @@ def find_tiny(
     hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
     loose = with_min_saturation(spec, min(min_saturation, min(b.lower[1] for b in spec.bands)))
     mask = color_mask(hsv, loose)
-    n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    # the 8-connected regions by their outer contours: ≈ 50× cheaper than labelling a whole frame's components
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     h, w = mask.shape
     x0, y0 = origin
     fw, fh = frame_size if frame_size is not None else (w + x0, h + y0)
     sat_all = hsv[:, :, 1]
     sat = sat_all.astype(np.float32) * (mask > 0)
     out: list[Blob] = []
-    for i in range(1, n):
-        bx, by, bw, bh, area = (int(x) for x in stats[i])
-        if area > max_area_px or max(bw, bh) > 2.5 * math.sqrt(max_area_px):
+    for c in contours:
+        bx, by, bw, bh = cv2.boundingRect(c)
+        if max(bw, bh) > 2.5 * math.sqrt(max_area_px):
+            continue
+        area = cv2.countNonZero(mask[by : by + bh, bx : bx + bw])
+        if area > max_area_px:
             continue
         cx0, cy0 = max(bx - 2, 0), max(by - 2, 0)
         cx1, cy1 = min(bx + bw + 2, w), min(by + bh + 2, h)

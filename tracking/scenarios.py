@@ -114,6 +114,22 @@ def red_disc_start(path: Path, size, duration_s: float, seed: int = 3) -> Scenar
     return Scenario("static red disc, --start", path, gt, {"options": TrackerOptions(start_uv=start)}, _visible(gt))
 
 
+def _exact_calibration(K: np.ndarray, H: np.ndarray, image_size, m_per_plane_px: float) -> CameraCalibration:
+    """The calibration of an exact pinhole camera ``K`` seeing the plane of motion through ``H`` (plane px → image):
+    metres in the plane at ``m_per_plane_px`` [m/px], y down."""
+    to_m = np.diag([m_per_plane_px, m_per_plane_px, 1.0]) @ np.linalg.inv(H)
+    return CameraCalibration(
+        camera_matrix=K,
+        dist_coeffs=np.zeros(5),
+        image_size=tuple(image_size),
+        rms_px=0.0,
+        board=(9, 6),
+        square_m=0.025,
+        views=0,
+        plane=PlaneCalibration(to_m / to_m[2, 2], m_per_plane_px, np.zeros(3), np.zeros(3)),
+    )
+
+
 def tilted(path: Path, size, duration_s: float, seed: int = 4) -> Scenario:
     """A camera looking at the plane of motion obliquely (25° and 30° off, rolled 4°), with a plane calibration
     (an exact pinhole camera; metres in the plane, y down)."""
@@ -124,18 +140,7 @@ def tilted(path: Path, size, duration_s: float, seed: int = 4) -> Scenario:
     K = np.array([[focal, 0.0, w / 2.0], [0.0, focal, h / 2.0], [0.0, 0.0, 1.0]])
     t, th = _swing(duration_s, amplitude_deg=35.0)
     gt = render_pendulum_video(path, t, th, piv, L, r, size, 60.0, plane_to_image=H, distractors=None, seed=seed)
-    m_per_plane_px = 0.25 / L  # a 25 cm string
-    to_m = np.diag([m_per_plane_px, m_per_plane_px, 1.0]) @ np.linalg.inv(H)
-    cal = CameraCalibration(
-        camera_matrix=K,
-        dist_coeffs=np.zeros(5),
-        image_size=(w, h),
-        rms_px=0.0,
-        board=(9, 6),
-        square_m=0.025,
-        views=0,
-        plane=PlaneCalibration(to_m / to_m[2, 2], m_per_plane_px, np.zeros(3), np.zeros(3)),
-    )
+    cal = _exact_calibration(K, H, (w, h), 0.25 / L)  # a 25 cm string
     pivot_image = tuple(float(c) for c in gt.pivot_uv[0])
     return Scenario(
         "tilted camera + calibration",
@@ -143,7 +148,7 @@ def tilted(path: Path, size, duration_s: float, seed: int = 4) -> Scenario:
         gt,
         {"pivot_uv": pivot_image, "calibration": cal},
         _visible(gt),
-        extra={"metres_per_plane_px": m_per_plane_px},
+        extra={"metres_per_plane_px": cal.plane.metres_per_px},
     )
 
 
@@ -305,18 +310,7 @@ def oblique(
     K = np.array([[focal, 0.0, w / 2.0], [0.0, focal, h / 2.0], [0.0, 0.0, 1.0]])
     t, th = _swing(duration_s, amplitude_deg=40.0, period_s=1.1)
     gt = render_pendulum_video(path, t, th, piv, L, r, size, fps, plane_to_image=H, exposure=0.15, seed=seed)
-    m_per_plane_px = 0.3 / L
-    to_m = np.diag([m_per_plane_px, m_per_plane_px, 1.0]) @ np.linalg.inv(H)
-    cal = CameraCalibration(
-        camera_matrix=K,
-        dist_coeffs=np.zeros(5),
-        image_size=(w, h),
-        rms_px=0.0,
-        board=(9, 6),
-        square_m=0.025,
-        views=0,
-        plane=PlaneCalibration(to_m / to_m[2, 2], m_per_plane_px, np.zeros(3), np.zeros(3)),
-    )
+    cal = _exact_calibration(K, H, (w, h), 0.3 / L)
     pivot_image = tuple(float(c) for c in gt.pivot_uv[0])
     return Scenario(name, path, gt, {"pivot_uv": pivot_image, "calibration": cal}, _visible(gt))
 
@@ -420,6 +414,12 @@ HELD_OUT: dict[str, Callable[..., Scenario]] = {
     "oblique_other_side": lambda p, s, d: oblique(
         p, s, d, seed=26, tilt=(20.0, -42.0, 8.0), fps=30.0, name="held-out: oblique from the other side, 30 fps"
     ),
+    "h264_80k_clutter": lambda p, s, d: clutter(
+        p, s, d, seed=27, codec="h264", bitrate_kbps=80.0, name="held-out: clutter + H.264 80 kbit/s"
+    ),
+    "h264_200k": lambda p, s, d: h264(p, s, d, seed=28, bitrate_kbps=200.0),
+    "ball_5px": lambda p, s, d: tiny_ball(p, s, d, seed=29, radius_px=2.5),
+    "big_ball_fifth": lambda p, s, d: big_ball(p, s, d, seed=30, share=0.2),
 }
 
 

@@ -1,7 +1,7 @@
 """Where the ball's colour stays put: a coarse running average of the colour mask, so that static objects of
 the ball's colour (labels, cables, a tool on the table) are learned and not taken for the ball.
 
-At most ≈ 30 times a second, the colour mask of a subsampled frame (about 320 px wide) is blended into the map
+At most ≈ 10 times a second, the colour mask of a subsampled frame (about 320 px wide) is blended into the map
 with weight Δt/τ, except inside circles the caller names (the ball it is sure of: a ball hanging still must not become
 "static"). A pixel that was of the colour for most of the last ~2τ reads close to 1; a ball swinging past
 leaves a few per cent. Costs ≈ 0.1 ms per learned 720p frame.
@@ -17,7 +17,7 @@ from .color import ColorSpec, color_mask
 
 _TARGET_WIDTH_PX = 320  # the map's width [cells]
 STATIC_LEVEL = 0.8  # a cell at or above this share of recent time in the colour is static
-_MIN_STEP_S = 0.03  # [s] frames closer than this to the last one learned are skipped
+_MIN_STEP_S = 0.1  # [s] frames closer than this to the last one learned are skipped
 
 
 class StaticMap:
@@ -38,7 +38,7 @@ class StaticMap:
         h, w = frame.shape[:2]
         if self._map is None:
             self.factor = max(1, w // _TARGET_WIDTH_PX)
-        elif self.frames and t - self._t < _MIN_STEP_S:  # learning at ≈ 30 Hz is plenty for a ≈ 1 s average
+        elif self.frames and t - self._t < _MIN_STEP_S:  # learning at ≈ 10 Hz is plenty for a ≈ 1 s average
             return
         f = self.factor
         small = cv2.resize(frame, (w // f, h // f), interpolation=cv2.INTER_NEAREST)

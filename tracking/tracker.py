@@ -56,7 +56,8 @@ class TrackerOptions:
 
     gates: BlobGates = field(default_factory=BlobGates)
     window_min_half_px: int = 32  # smallest half-size of the search window [px]
-    window_radius_factor: float = 4.0  # window half-size ≥ this × the ball radius + the gate
+    window_radius_factor: float = 2.5  # window half-size ≥ this × the ball radius + the gate ...
+    window_streak_radii: float = 1.5  # ... + the last frame step (a motion-blurred streak), at most this × the radius
     area_ratio_max: float = 2.5  # once locked, a blob whose area differs by more than this factor is not the ball
     area_history: int = 15  # the learned area is the median of this many last fixes
     area_reset_misses: int = 3  # frames in a row with a blob rejected for its area alone → forget the area
@@ -99,6 +100,7 @@ class TrackerOptions:
     static_lock_s: float = 0.6  # [s] a lock that has not moved for this long may be an object, not the ball:
     recheck_s: float = 0.5  # [s] ... look this often for other candidates and keep the one moving like a pendulum
     plumb_deg: float = 15.0  # a new lock at rest is confirmed only within this of the pivot's vertical (a hanging ball)
+    rest_confirm_s: float = 0.25  # [s] ... once followed this long (a codec's ghost of the ball stays a few frames)
     static_time_constant_s: float = 1.0  # [s] of the map of static objects in the ball's colour (tracking.static_map)
 
 
@@ -141,6 +143,7 @@ class _Follower:
         self.confirmed = False
         self.pending: list[tuple[int, Blob]] = []  # tentative frames (update index, blob) until confirmed
         self.origin = (blob.u, blob.v)
+        self.origin_t = t  # [s] when the lock began
         self.round = True  # acquired by the strict shape gates
         self.recent: deque[tuple[float, float, float, int]] = deque()  # (t, u, v, update index) of the last fixes
         self.string_misses = 0
@@ -184,6 +187,10 @@ class _Follower:
     def radius(self) -> float:
         return math.sqrt(self.area / math.pi)
 
+    def min_radius(self) -> float:
+        """Radius [px] of the smallest blob that can still be the ball (area_ratio_max below the learned area)."""
+        return self.radius() / math.sqrt(self.options.area_ratio_max)
+
     def predict(self, t: float) -> Prediction:
         o = self.options
         last = self.fixes[-1]
@@ -206,9 +213,12 @@ class _Follower:
         return 1.0 + pred.frame_step_px / max(2.0 * self.radius(), 1.0)
 
     def _area_ok(self, b: Blob, pred: Prediction) -> bool:
-        r = b.area_px / self.area
-        smear = self._smear(pred)
-        return 1.0 / self.options.area_ratio_max <= r <= self.options.area_ratio_max * smear
+        """Within area_ratio_max of the learned area (× the smear of a streak), the learned disc's radius taken
+        ± half a pixel first: a ball a few pixels across changes its area by pixelation alone by more than that."""
+        r = self.radius()
+        ratio = self.options.area_ratio_max
+        low, high = math.pi * max(r - 0.5, 0.0) ** 2 / ratio, math.pi * (r + 0.5) ** 2 * ratio * self._smear(pred)
+        return low <= b.area_px <= high
 
     def _saturation_ok(self, b: Blob, pred: Prediction) -> bool:
         """The blob's peak saturation is the ball's, allowing for motion blur (the colour mixed with the
@@ -255,9 +265,12 @@ class _Follower:
         """The fixes of the last span_s seconds (covering most of it) stay within a radius' share of their median."""
         if len(self.recent) < 3 or self.recent[-1][0] - self.recent[0][0] < 0.8 * span_s:
             return False
+        limit = max(1.5, 0.3 * self.radius())
+        (_, u0, v0, _), (_, u1, v1, _) = self.recent[0], self.recent[-1]
+        if math.hypot(u1 - u0, v1 - v0) > 2.0 * limit:  # both within the limit of the median: not at rest (cheap)
+            return False
         p = np.array([(u, v) for _, u, v, _ in self.recent])
-        spread = float(np.max(np.linalg.norm(p - np.median(p, axis=0), axis=1)))
-        return spread <= max(1.5, 0.3 * self.radius())
+        return float(np.max(np.linalg.norm(p - np.median(p, axis=0), axis=1))) <= limit
 
     def moving(self, min_px: float) -> bool:
         """Moved at least min_px [px] from where the lock began, steadily: each of the last 3 frame steps longer
@@ -272,7 +285,9 @@ class _Follower:
 
     def window(self, pred: Prediction, w: int, h: int) -> tuple[int, int, int, int] | None:
         o = self.options
-        half = int(max(o.window_min_half_px, o.window_radius_factor * self.radius() + pred.gate_px))
+        r = self.radius()
+        reach = o.window_radius_factor * r + min(o.window_streak_radii * r, pred.frame_step_px)
+        half = int(max(o.window_min_half_px, reach + pred.gate_px))
         x0, y0 = max(int(pred.u) - half, 0), max(int(pred.v) - half, 0)
         x1, y1 = min(int(pred.u) + half + 1, w), min(int(pred.v) + half + 1, h)
         if x1 - x0 > 4 and y1 - y0 > 4 and (x1 - x0) * (y1 - y0) < w * h // 2:
@@ -299,6 +314,8 @@ class _Follower:
                 o.gates.min_ellipse_fit, o.streak_min_ellipse_fit if streak else o.locked_min_ellipse_fit
             ),
             max_area_px=o.gates.max_area_px * self._smear(pred),
+            # a ball of a few pixels, sharp for a moment (a turning point), may outline less than the general floor
+            min_area_px=min(o.gates.min_area_px, max(4.0, self.area / o.area_ratio_max)),
         )
         sub = frame[y0:y1, x0:x1]
         if self.tiny:  # a few pixels across: no blur, no morphology, no shape
@@ -307,7 +324,7 @@ class _Follower:
             if blob is not None and blob.clipped:
                 return None, False
             return blob, True
-        factor = coarse_factor(w) if (x1 - x0) * (y1 - y0) > COARSE_WINDOW_PX else 1  # the frame sets the ball size
+        factor = coarse_factor(w, self.min_radius()) if (x1 - x0) * (y1 - y0) > COARSE_WINDOW_PX else 1
         hsv = to_hsv(sub) if factor == 1 else coarse_hsv(sub, factor)
         for spec in self._specs(pred):
             if factor > 1:  # a large window (a fast ball, or the first frames after a fix): coarse pass first
@@ -330,6 +347,26 @@ class _Follower:
         self.areas.append(blob.area_px)
         self._area = None
         self.sats.append(blob.saturation)
+
+
+def _last_jump(centres: list[tuple[float, float]], radius_px: float) -> int:
+    """Index where the last continuous stretch of a followed candidate's centres (NaN where not seen) begins: a fix
+    farther than 4 radii + 3 px + the distance covered at the last velocity from where that velocity would have taken
+    it (after a gap) starts a new stretch; judged once a velocity is known (0 when there is no such jump)."""
+    start, prev, step = 0, None, None  # prev: (frame, u, v); step: last velocity [px/frame]
+    for j, (u, v) in enumerate(centres):
+        if not math.isfinite(u):
+            continue
+        if prev is not None:
+            g = j - prev[0]
+            if step is not None:
+                miss = math.hypot(u - prev[1] - step[0] * g, v - prev[2] - step[1] * g)
+                if miss > 4.0 * radius_px + 3.0 + math.hypot(*step) * g:
+                    start, prev, step = j, (j, u, v), None
+                    continue
+            step = ((u - prev[1]) / g, (v - prev[2]) / g)
+        prev = (j, u, v)
+    return start
 
 
 @dataclass
@@ -369,7 +406,7 @@ class BallTracker:
         self._n = 0  # updates so far
         self._revision: list[tuple[int, Blob | None, float]] = []
         self.full_frame_searches = 0  # how often the window failed and the whole frame was searched
-        self._coarse: tuple[np.ndarray, np.ndarray] | None = None  # (frame, its coarse HSV) of the last search
+        self._coarse: tuple[np.ndarray, int, np.ndarray] | None = None  # (frame, factor, coarse HSV) last searched
         self.notes: list[str] = []  # ambiguities met and how they were resolved (for the user)
         self._started = False  # a first fix was made (start_uv only applies before it)
         self._acquire_spec = with_min_saturation(spec, self.options.acquire_min_saturation)
@@ -449,7 +486,7 @@ class BallTracker:
                 blob, settled = f.search_window(frame, pred)
                 if not settled:
                     self.full_frame_searches += 1
-                    blob = f.choose(self._whole(frame, self.spec), pred)
+                    blob = f.choose(self._whole(frame, self.spec, min_radius_px=f.min_radius()), pred)
                 if blob is not None and not self._within_string(f, blob, pivot_uv):
                     blob = None
                 if blob is not None:
@@ -510,11 +547,13 @@ class BallTracker:
             p = [(u, v) for _, u, v, _ in list(f.recent)[-3:]]
             step = math.hypot(p[-2][0] - p[-3][0], p[-2][1] - p[-3][1]) if len(p) == 3 else 0.0
             if math.hypot(p[-1][0] - p[-2][0], p[-1][1] - p[-2][1]) > 4.0 * f.radius() + 2.0 * step:
-                f.pending, f.hits, f.origin = [], 1, (blob.u, blob.v)
+                f.pending, f.hits, f.origin, f.origin_t = [], 1, (blob.u, blob.v), t
                 f.recent = deque([f.recent[-1]])
         if not f.confirmed:
             moved = f.moving(max(3.0, o.confirm_move_radii * f.radius()))
-            at_rest_ok = f.round and (pivot_uv is None or self._plumb(blob, pivot_uv))
+            at_rest_ok = (
+                f.round and (pivot_uv is None or self._plumb(blob, pivot_uv)) and t - f.origin_t >= o.rest_confirm_s
+            )
             if f.hits >= o.confirm_frames and (moved or at_rest_ok):
                 f.confirmed = True
                 self._revision.extend((k, b, CONFIRMED) for k, b in f.pending)
@@ -545,7 +584,7 @@ class BallTracker:
         object excluded."""
         o = self.options
         every = o.recheck_s if f.confirmed else min(o.recheck_s, 0.1)  # a tentative lock at rest is doubted more often
-        if f.named or not f.at_rest(o.static_lock_s) or t - f.last_recheck < every:
+        if f.named or t - f.last_recheck < every or not f.at_rest(o.static_lock_s):
             return blob
         f.last_recheck = t
         r = f.radius()
@@ -570,13 +609,16 @@ class BallTracker:
             self.confidence = TENTATIVE
         return blob
 
-    def _whole(self, frame: np.ndarray, spec: ColorSpec, gates: BlobGates | None = None) -> list[Blob]:
-        """Blobs passing the strict gates on the whole frame (a coarse pass first on large frames, its shrunk
-        image kept for further colour thresholds on the same frame)."""
-        factor = coarse_factor(frame.shape[1])
-        if factor > 1 and (self._coarse is None or self._coarse[0] is not frame):
-            self._coarse = (frame, coarse_hsv(frame, factor))
-        small = self._coarse[1] if factor > 1 else None
+    def _whole(
+        self, frame: np.ndarray, spec: ColorSpec, gates: BlobGates | None = None, min_radius_px: float | None = None
+    ) -> list[Blob]:
+        """Blobs passing the strict gates on the whole frame (a coarse pass first on large frames — shrunk more when
+        the ball sought is known to be large, min_radius_px [px] — its shrunk image kept for further colour
+        thresholds on the same frame)."""
+        factor = coarse_factor(frame.shape[1], min_radius_px)
+        if factor > 1 and (self._coarse is None or self._coarse[0] is not frame or self._coarse[1] != factor):
+            self._coarse = (frame, factor, coarse_hsv(frame, factor))
+        small = self._coarse[2] if factor > 1 else None
         return find_blobs_coarse(frame, spec, gates or self.options.gates, factor, small_hsv=small)
 
     def _current(self) -> _Follower | None:
@@ -797,20 +839,29 @@ class BallTracker:
         hangs = last is not None and len(piv) > 0 and self._plumb(last, tuple(piv[-1]))
         # confirmed when it moved like a pendulum, or hangs still below the pivot; else (a held ball, an object) it
         # stays tentative until it moves
-        doubtful = not choice.moving and not (still and hangs) and not (still and len(piv) == 0 and final)
+        # hanging still counts once followed for rest_confirm_s (an encoder's ghost of a ball that left stays a few frames)
+        young = still and hangs and hyp.times[-1] - hyp.t0 < self.options.rest_confirm_s
+        doubtful = not choice.moving and not (still and hangs and not young) and not (still and len(piv) == 0 and final)
         if (
-            doubtful and final and len(piv) > 0
+            doubtful and final and len(piv) > 0 and not young
         ):  # nothing moved and nothing hangs below the pivot: none of them is the ball
             self._abandon()
             return None
         f.confirmed = not doubtful
         if not doubtful and f.pending:  # the incumbent lock's tentative frames from before are settled too
             self._revision.extend((j, b, CONFIRMED) for j, b in f.pending)
+        # what it followed before its last jump (an encoder's ghost left where the ball was) is not settled with it
+        s = _last_jump(hyp.centres[k], f.radius())
         f.pending = (
-            (f.pending + [(hyp.first + j, b) for j, b in enumerate(blobs[:-1]) if b is not None]) if doubtful else []
+            f.pending + [(hyp.first + j, b) for j, b in enumerate(blobs[:-1]) if b is not None and j >= s]
+            if doubtful
+            else []
         )
         level = TENTATIVE if doubtful else CONFIRMED
-        self._revision.extend((hyp.first + j, b, level if b is not None else 0.0) for j, b in enumerate(blobs[:-1]))
+        self._revision.extend(
+            (hyp.first + j, b, (level if j >= s else TENTATIVE) if b is not None else 0.0)
+            for j, b in enumerate(blobs[:-1])
+        )
         self._follower = f
         self._hyp = None
         return blobs

@@ -245,6 +245,9 @@ def _csv_rows(text: str, spath: str, first_line: int = 1) -> list[tuple[int, lis
     return [(first_line + i, r) for i, r in enumerate(rows) if any(c.strip() for c in r)]
 
 
+_DT = "read_table.headerless_dt"  # the setting a headerless file's step comes from (the commands' --dt)
+
+
 def read_table(
     path: str | Path,
     columns: Sequence[str],
@@ -276,11 +279,10 @@ def read_table(
             expected = ",".join(columns)
             raise CsvFormatError(f"missing header; expected '{expected}'", file=spath, row=first_line)
         if headerless_dt is None:
-            raise CsvFormatError(
-                f"headerless {headerless_width}-column file: give the sample step with --dt", file=spath, row=first_line
-            )
+            raise CsvFormatError(f"headerless {headerless_width}-column file: give the sample step with {_DT}",
+                                 file=spath, row=first_line)  # fmt: skip
         if not (headerless_dt > 0 and math.isfinite(headerless_dt)):
-            raise CsvFormatError(f"--dt must be a positive number of seconds, got {headerless_dt:g}", file=spath)
+            raise CsvFormatError(f"{_DT} must be a positive number of seconds, got {headerless_dt:g}", file=spath)
         names = tuple(columns[1:])
         headerless = True
         body_start, body_line = first_start, first_line

@@ -54,6 +54,9 @@ STAGNATION = 0.9  # a box-bound Newton step that keeps this share of the error c
 STALL_STEPS, STALL_STEPS_FIRST = 3, 12  # such steps in a row that end a Newton loop (the first pose: a far start)
 
 
+GIVEN_START = "from the start given (solve_ik_path.q0)"  # where a path from the caller's start began
+
+
 @dataclass(frozen=True)
 class IkOptions:
     """Tolerances, gains and limits handling of the path IK."""
@@ -394,7 +397,7 @@ class PathSolver:
         dM = target.actInv(data.oMf[fid])
         return q, float(np.linalg.norm(dM.translation)), float(np.linalg.norm(pin.log3(dM.rotation)))
 
-    def diagnose(self, stall: _Stall, origin: str = "from the start given (--q0)") -> IkError:
+    def diagnose(self, stall: _Stall, origin: str = GIVEN_START) -> IkError:
         """Why the path followed ``origin`` stalled at sample ``stall.k`` whose pose is reachable inside the limits
         (:meth:`fact` found nothing there): a joint's position limit or speed limit on the way lbr's redundancy
         went — a fact of that path, not of the pose."""
@@ -412,7 +415,7 @@ class PathSolver:
             f"the pose itself is reachable inside the limits (e.g. at arm angle {math.degrees(psi):.1f}° in branch "
             f"{signs} of A2/A4/A6)"
         )
-        hint = "; without --q0 lbr chooses the start for the whole path" if "--q0" in origin else ""
+        hint = "; without solve_ik_path.q0 lbr chooses the start for the whole path" if origin == GIVEN_START else ""
 
         def held(text: str, reason: str, j: int, needed: float) -> IkError:
             return IkError(f"{where}: {text}; {reachable}; {remaining}{hint}", reason=reason, joint=j, needed=needed,

@@ -401,93 +401,113 @@ def rest_joint_path(
     return _fk_path(robot, name, kind, dt, qw)
 
 
+def _drawing_paths(dt: float, ms: str) -> list[TaskPath]:
+    """Handwriting and drawings at step ``dt`` [s]: pens of several lengths, the table and the board."""
+    paths: list[TaskPath] = []
+    # handwriting and drawings, pens of several lengths, the table and the board
+    paths += [
+        drawing_path(f"write-table-pen-{ms}", "loops", dt, 6.0, (0.5, 0.0, 0.15), "table", 0.36),
+        drawing_path(f"write-board-{ms}", "loops", dt, 6.0, (0.62, 0.0, 0.55), "board", 0.4, RobotConfig()),
+        drawing_path(
+            f"write-board-longpen-tilt20-{ms}",
+            "loops",
+            dt,
+            5.0,
+            (0.7, 0.05, 0.45),
+            "board",
+            0.32,
+            LONG_PEN,
+            pen_tilt_deg=20.0,
+        ),
+        drawing_path(
+            f"rose-table-offsetpen-{ms}", "rose", dt, 5.0, (0.62, 0.1, 0.12), "table", 0.3, OFFSET_PEN, yaw_deg=40.0
+        ),
+        drawing_path(f"spiral-table-{ms}", "spiral", dt, 4.0, (0.6, -0.15, 0.2), "table", 0.3),
+        drawing_path(
+            f"heart-board-pen-tilt30-{ms}", "heart", dt, 4.0, (0.6, -0.1, 0.5), "board", 0.3, pen_tilt_deg=30.0
+        ),
+        drawing_path(f"spiral-board-fast-{ms}", "spiral", dt, 1.5, (0.78, 0.1, 0.55), "board", 0.3, LONG_PEN),
+        drawing_path(f"write-table-moving-ends-{ms}", "loops", dt, 5.0, (0.5, 0.0, 0.15), "table", 0.36, rest=False),
+        drawing_path(
+            f"rose-board-moving-ends-{ms}",
+            "rose",
+            dt,
+            4.0,
+            (0.6, 0.0, 0.5),
+            "board",
+            0.3,
+            RobotConfig(),
+            rest=False,
+        ),
+    ]
+    return paths
+
+
+def _move_paths(dt: float, ms: str) -> list[TaskPath]:
+    """Moves at rest at both ends: near-singular passes and orientation-heavy moves."""
+    paths: list[TaskPath] = []
+    # near-singular passes: over the base axis (shoulder), at full stretch (elbow), forearm along the flange
+    paths += [
+        move_path(f"near-full-stretch-{ms}", dt, 3.0, (0.65, 0.0, 0.4), (0.9, 0.0, 0.4), _frame([1.0, 0.0, 0.0])),
+        move_path(f"near-wrist-singular-{ms}", dt, 3.0, (0.4, -0.2, 0.6), (0.4, 0.2, 0.6)),
+        move_path(f"pen-near-wrist-singular-{ms}", dt, 3.0, (0.5, -0.3, 0.3), (0.5, 0.3, 0.3), DOWN, PEN),
+    ]
+    # orientation-heavy moves at rest at both ends
+    paths += [
+        move_path(f"spin-flange-170-{ms}", dt, 3.0, (0.55, 0.0, 0.4), kind="orientation", angle_deg=170.0),
+        move_path(
+            f"tumble-to-horizontal-{ms}",
+            dt,
+            3.0,
+            (0.5, 0.1, 0.45),
+            kind="orientation",
+            axis=(0, 1, 0),
+            angle_deg=-90.0,
+        ),
+        move_path(f"tilt-pen-50-{ms}", dt, 2.0, (0.5, -0.2, 0.25), None, DOWN, PEN, "orientation", (1, -1, 0), 50.0),
+        move_path(f"spin-pen-300-{ms}", dt, 4.0, (0.5, 0.0, 0.3), None, DOWN, PEN, "orientation", angle_deg=300.0),
+    ]
+    return paths
+
+
+def _rest_joint_paths(robot: Robot, limits: JointLimits, dt: float, ms: str) -> list[TaskPath]:
+    """FK-built joint paths time-warped to rest: random, through singularities, brushing a limit."""
+    paths: list[TaskPath] = []
+    # FK-built joint paths time-warped to rest: random, through singularities, brushing a limit
+    rng = np.random.default_rng(17 if dt < 2e-3 else 18)
+    for c, centre in enumerate(CENTRES[:4]):
+        q = random_joint_path(rng, limits, dt, 3.0, np.array(centre), np.full(7, 0.8) * rng.uniform(0.5, 1, 7), 0.5)
+        paths.append(rest_joint_path(robot, f"rest-joint-c{c}-{ms}", "joint", q, dt, limits))
+    for joint in (5, 3, 1):
+        q = random_joint_path(rng, limits, dt, 3.0, np.array(CENTRES[1]), rng.uniform(0.2, 0.6, 7), 0.5)
+        q[:, joint] = 0.5 * np.cos(np.pi * np.arange(len(q)) * dt / 3.0) + (0.03 if joint == 3 else 0.0)
+        paths.append(rest_joint_path(robot, f"rest-singular-A{joint + 1}-{ms}", "singular", q, dt, limits))
+    return paths
+
+
+def _leaving_paths(dt: float, ms: str) -> list[TaskPath]:
+    """Paths that leave the workspace (refused: the first pose no joint path reaches inside the limits)."""
+    paths: list[TaskPath] = []
+    # leaving the workspace (refused: the first pose that no joint path reaches inside the limits)
+    paths += [
+        move_path(f"leave-over-the-base-{ms}", dt, 3.0, (0.05, -0.25, 0.75), (0.05, 0.25, 0.75), kind="leave"),
+        move_path(f"leave-reach-outward-{ms}", dt, 3.0, (0.5, 0.0, 0.3), (1.0, 0.0, 0.3), kind="leave"),
+        move_path(f"leave-reach-upward-pen-{ms}", dt, 3.0, (0.3, 0.2, 0.6), (0.3, 0.2, 1.2), DOWN, PEN, "leave"),
+        move_path(f"leave-to-shoulder-{ms}", dt, 3.0, (0.5, 0.0, 0.3), (0.12, 0.0, 0.3), kind="leave"),
+        move_path(f"leave-tumble-up-{ms}", dt, 3.0, (0.45, 0.0, 0.15), kind="leave", axis=(0, 1, 0), angle_deg=150.0),
+        move_path(f"leave-a4-too-fast-{ms}", dt, 0.25, (0.45, 0.0, 0.45), (0.75, 0.0, 0.45), kind="leave"),
+    ]
+    return paths
+
+
 def build_rest_suite(limits: JointLimits, quick: bool = False) -> list[TaskPath]:
     """The paths of the module docstring's second part (``quick``: a third of them, and no 60 s path)."""
     robot = Robot()
     paths: list[TaskPath] = []
     for dt in (1e-3, 5e-3):
         ms = f"{dt * 1e3:g}ms"
-        # handwriting and drawings, pens of several lengths, the table and the board
-        paths += [
-            drawing_path(f"write-table-pen-{ms}", "loops", dt, 6.0, (0.5, 0.0, 0.15), "table", 0.36),
-            drawing_path(f"write-board-{ms}", "loops", dt, 6.0, (0.62, 0.0, 0.55), "board", 0.4, RobotConfig()),
-            drawing_path(
-                f"write-board-longpen-tilt20-{ms}",
-                "loops",
-                dt,
-                5.0,
-                (0.7, 0.05, 0.45),
-                "board",
-                0.32,
-                LONG_PEN,
-                pen_tilt_deg=20.0,
-            ),
-            drawing_path(
-                f"rose-table-offsetpen-{ms}", "rose", dt, 5.0, (0.62, 0.1, 0.12), "table", 0.3, OFFSET_PEN, yaw_deg=40.0
-            ),
-            drawing_path(f"spiral-table-{ms}", "spiral", dt, 4.0, (0.6, -0.15, 0.2), "table", 0.3),
-            drawing_path(
-                f"heart-board-pen-tilt30-{ms}", "heart", dt, 4.0, (0.6, -0.1, 0.5), "board", 0.3, pen_tilt_deg=30.0
-            ),
-            drawing_path(f"spiral-board-fast-{ms}", "spiral", dt, 1.5, (0.78, 0.1, 0.55), "board", 0.3, LONG_PEN),
-            drawing_path(
-                f"write-table-moving-ends-{ms}", "loops", dt, 5.0, (0.5, 0.0, 0.15), "table", 0.36, rest=False
-            ),
-            drawing_path(
-                f"rose-board-moving-ends-{ms}",
-                "rose",
-                dt,
-                4.0,
-                (0.6, 0.0, 0.5),
-                "board",
-                0.3,
-                RobotConfig(),
-                rest=False,
-            ),
-        ]
-        # near-singular passes: over the base axis (shoulder), at full stretch (elbow), forearm along the flange
-        paths += [
-            move_path(f"near-full-stretch-{ms}", dt, 3.0, (0.65, 0.0, 0.4), (0.9, 0.0, 0.4), _frame([1.0, 0.0, 0.0])),
-            move_path(f"near-wrist-singular-{ms}", dt, 3.0, (0.4, -0.2, 0.6), (0.4, 0.2, 0.6)),
-            move_path(f"pen-near-wrist-singular-{ms}", dt, 3.0, (0.5, -0.3, 0.3), (0.5, 0.3, 0.3), DOWN, PEN),
-        ]
-        # orientation-heavy moves at rest at both ends
-        paths += [
-            move_path(f"spin-flange-170-{ms}", dt, 3.0, (0.55, 0.0, 0.4), kind="orientation", angle_deg=170.0),
-            move_path(
-                f"tumble-to-horizontal-{ms}",
-                dt,
-                3.0,
-                (0.5, 0.1, 0.45),
-                kind="orientation",
-                axis=(0, 1, 0),
-                angle_deg=-90.0,
-            ),
-            move_path(
-                f"tilt-pen-50-{ms}", dt, 2.0, (0.5, -0.2, 0.25), None, DOWN, PEN, "orientation", (1, -1, 0), 50.0
-            ),
-            move_path(f"spin-pen-300-{ms}", dt, 4.0, (0.5, 0.0, 0.3), None, DOWN, PEN, "orientation", angle_deg=300.0),
-        ]
-        # FK-built joint paths time-warped to rest: random, through singularities, brushing a limit
-        rng = np.random.default_rng(17 if dt < 2e-3 else 18)
-        for c, centre in enumerate(CENTRES[:4]):
-            q = random_joint_path(rng, limits, dt, 3.0, np.array(centre), np.full(7, 0.8) * rng.uniform(0.5, 1, 7), 0.5)
-            paths.append(rest_joint_path(robot, f"rest-joint-c{c}-{ms}", "joint", q, dt, limits))
-        for joint in (5, 3, 1):
-            q = random_joint_path(rng, limits, dt, 3.0, np.array(CENTRES[1]), rng.uniform(0.2, 0.6, 7), 0.5)
-            q[:, joint] = 0.5 * np.cos(np.pi * np.arange(len(q)) * dt / 3.0) + (0.03 if joint == 3 else 0.0)
-            paths.append(rest_joint_path(robot, f"rest-singular-A{joint + 1}-{ms}", "singular", q, dt, limits))
-        # leaving the workspace (refused: the first pose that no joint path reaches inside the limits)
-        paths += [
-            move_path(f"leave-over-the-base-{ms}", dt, 3.0, (0.05, -0.25, 0.75), (0.05, 0.25, 0.75), kind="leave"),
-            move_path(f"leave-reach-outward-{ms}", dt, 3.0, (0.5, 0.0, 0.3), (1.0, 0.0, 0.3), kind="leave"),
-            move_path(f"leave-reach-upward-pen-{ms}", dt, 3.0, (0.3, 0.2, 0.6), (0.3, 0.2, 1.2), DOWN, PEN, "leave"),
-            move_path(f"leave-to-shoulder-{ms}", dt, 3.0, (0.5, 0.0, 0.3), (0.12, 0.0, 0.3), kind="leave"),
-            move_path(
-                f"leave-tumble-up-{ms}", dt, 3.0, (0.45, 0.0, 0.15), kind="leave", axis=(0, 1, 0), angle_deg=150.0
-            ),
-            move_path(f"leave-a4-too-fast-{ms}", dt, 0.25, (0.45, 0.0, 0.45), (0.75, 0.0, 0.45), kind="leave"),
-        ]
+        paths += _drawing_paths(dt, ms) + _move_paths(dt, ms) + _rest_joint_paths(robot, limits, dt, ms)
+        paths += _leaving_paths(dt, ms)
     if quick:
         paths = paths[::3]
     else:

@@ -17,6 +17,8 @@ no sample is above the limit or a round does not lower the peak.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linprog
@@ -63,18 +65,31 @@ def _context(q: np.ndarray, end: int, rest: bool) -> np.ndarray:
     return q[end] if rest else 2.0 * q[end] - q[inner]
 
 
-def _round(solver, q: np.ndarray, lo: int, hi: int, rest: tuple[bool, bool]) -> np.ndarray | None:
-    """One LP round on the samples lo..hi → the moved and re-projected path, or None when the LP fails. ``rest``:
-    whether the robot is at rest before the first / after the last sample."""
+@dataclass(frozen=True)
+class _Window:
+    """Samples ``idx`` of a path with one row of context each side (``ext``, (m + 2, 7) [rad]), their null-space
+    directions ``n`` (m, 7) (``ext_n`` with the context rows), which samples move (``free``) and the LP column of
+    each row's α (``col``, −1: fixed)."""
+
+    idx: np.ndarray
+    n: np.ndarray
+    ext: np.ndarray
+    ext_n: np.ndarray
+    free: np.ndarray
+    col: np.ndarray
+
+    @property
+    def nf(self) -> int:
+        return int(self.free.sum())
+
+
+def _window(solver, q: np.ndarray, lo: int, hi: int, rest: tuple[bool, bool]) -> _Window:
+    """The samples lo..hi of ``q`` and their context: the neighbour outside the window (fixed), or beyond a path end
+    the robot at rest (a copy of the end sample, moving with it) or moving on (a fixed extrapolation)."""
     n_all = len(q)
-    t = solver.times
-    h = float(np.median(np.diff(t)))
-    vmax, amax = solver.limits.velocity * h, solver.limits.acceleration * h * h  # per step [rad]
     idx = np.arange(lo, hi + 1)
     m = len(idx)
     n = _null_directions(solver, q[idx])
-    # the window with one row of context each side: the neighbour outside it (fixed), or beyond a path end the
-    # robot at rest (a copy of the end sample, moving with it) or moving on (a fixed extrapolation)
     before = q[lo - 1] if lo > 0 else _context(q, 0, rest[0])
     after = q[hi + 1] if hi < n_all - 1 else _context(q, -1, rest[1])
     ext = np.vstack([before, q[idx], after])
@@ -92,18 +107,28 @@ def _round(solver, q: np.ndarray, lo: int, hi: int, rest: tuple[bool, bool]) -> 
         ext_n[0], col[0] = n[0], col[1]
     if hi == n_all - 1 and rest[1]:
         ext_n[-1], col[-1] = n[-1], col[-2]
+    return _Window(idx, n, ext, ext_n, free, col)
+
+
+def _round_lp(solver, q: np.ndarray, w: _Window):
+    """The LP of one round over the window: minimise the peak second difference as a share ``s`` of the
+    acceleration limit (plus a small cost on the curvature of α), speeds and position limits bounded, every |α| ≤
+    TRUST. (cost, A_ub, b_ub, bounds) for ``linprog``."""
+    h = float(np.median(np.diff(solver.times)))
+    vmax, amax = solver.limits.velocity * h, solver.limits.acceleration * h * h  # per step [rad]
+    m, nf, ext, n, free = len(w.idx), w.nf, w.ext, w.n, w.free
     nvar = nf + 1 + max(nf - 2, 0)  # the α of the free samples, s, then u ≥ |Δ²α| (kept smooth: small cost)
-    d2 = _difference_rows(ext_n, col, (1.0, -2.0, 1.0), nvar)
+    d2 = _difference_rows(w.ext_n, w.col, (1.0, -2.0, 1.0), nvar)
     base2 = np.diff(ext, 2, axis=0).T.ravel()  # joint-major, as the rows
     a_rows = np.repeat(amax, m)
     s_col = sp.csr_matrix((-a_rows, (np.arange(7 * m), np.full(7 * m, nf))), shape=(7 * m, nvar))
-    d1 = _difference_rows(ext_n, col, (-1.0, 1.0), nvar)
+    d1 = _difference_rows(w.ext_n, w.col, (-1.0, 1.0), nvar)
     base1 = np.diff(ext, axis=0).T.ravel()
     # speeds kept SPEED_SHARE inside the limit (the projection back onto the poses moves them a little), or where a
     # step is already faster, not faster than it is
     v_rows = np.maximum(np.repeat(vmax * SPEED_SHARE, m + 1), np.abs(base1))
     # position limits, where a move within the trust region could reach them
-    qf, nfree = q[idx[free]].T.ravel(), n[free].T.ravel()  # joint-major
+    qf, nfree = q[w.idx[free]].T.ravel(), n[free].T.ravel()  # joint-major
     bound = np.repeat(solver.upper, nf)
     near = np.flatnonzero(np.abs(qf) + TRUST * np.abs(nfree) > bound)
     pos = sp.csr_matrix((nfree[near], (np.arange(len(near)), np.tile(np.arange(nf), 7)[near])), shape=(len(near), nvar))
@@ -134,14 +159,22 @@ def _round(solver, q: np.ndarray, lo: int, hi: int, rest: tuple[bool, bool]) -> 
     cost[nf] = 1.0
     cost[nf + 1 :] = SMOOTHING / float(amax.min())
     bounds = [(-TRUST, TRUST)] * nf + [(0.0, None)] * (1 + nu)
+    return cost, a_ub, b_ub, bounds
+
+
+def _round(solver, q: np.ndarray, lo: int, hi: int, rest: tuple[bool, bool]) -> np.ndarray | None:
+    """One LP round on the samples lo..hi → the moved and re-projected path, or None when the LP fails. ``rest``:
+    whether the robot is at rest before the first / after the last sample."""
+    w = _window(solver, q, lo, hi, rest)
+    cost, a_ub, b_ub, bounds = _round_lp(solver, q, w)
     res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs-ipm")
     if res.x is None:
         return None
-    alpha = np.zeros(m)
-    alpha[free] = res.x[:nf]
+    alpha = np.zeros(len(w.idx))
+    alpha[w.free] = res.x[: w.nf]
     moved = q.copy()
-    moved[idx] = q[idx] + alpha[:, None] * n
-    out, ep, er = solver.refine(moved, solver.options.refine_iterations + 5, idx)
+    moved[w.idx] = q[w.idx] + alpha[:, None] * w.n
+    out, ep, er = solver.refine(moved, solver.options.refine_iterations + 5, w.idx)
     if ep.max() > max(solver.options.position_tolerance, 1e-7) or er.max() > max(
         solver.options.rotation_tolerance, 1e-6
     ):

@@ -14,7 +14,7 @@ from enum import Enum
 import numpy as np
 import pinocchio as pin
 
-from .errors import OptionError
+from .errors import SettingError
 from .trajectory import N_JOINTS
 
 # (d [m], a [m], alpha [rad]) for links 1..6; d7 comes from the flange.
@@ -189,16 +189,19 @@ MAX_TOOL_OFFSET = 2.0  # [m] a tool (string attachment) this far from the flange
 
 
 def parse_tool(text: str | tuple | None) -> tuple[float, float, float]:
-    """Parse ``--tool x,y,z`` [m] (a tuple of three numbers is taken as it is); each within ±2 m."""
+    """Parse a tool offset ``x,y,z`` [m] (a tuple of three numbers is taken as it is); each within ±2 m
+    (SettingError ``RobotConfig.tool``)."""
     if text is None or (isinstance(text, str) and text.strip() == ""):
         return (0.0, 0.0, 0.0)
     parts = text.split(",") if isinstance(text, str) else list(text)
     try:
         vals = tuple(float(p) for p in parts)
     except (TypeError, ValueError):
-        raise OptionError(f"--tool: expected x,y,z in metres, got {text!r}") from None
+        raise SettingError("RobotConfig", "tool", f"expected x,y,z in metres, got {text!r}") from None
     if len(vals) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_TOOL_OFFSET for v in vals):
-        raise OptionError(f"--tool: expected three numbers x,y,z within ±{MAX_TOOL_OFFSET:g} m, got {text!r}")
+        raise SettingError(
+            "RobotConfig", "tool", f"expected three numbers x,y,z within ±{MAX_TOOL_OFFSET:g} m, got {text!r}"
+        )
     return vals  # type: ignore[return-value]
 
 
@@ -207,4 +210,4 @@ def parse_flange(text: str | Flange) -> Flange:
         return Flange(text)
     except ValueError:
         names = ", ".join(f.value for f in Flange)
-        raise OptionError(f"--flange: unknown flange {text!r} (one of {names})") from None
+        raise SettingError("RobotConfig", "flange", f"unknown flange {text!r} (one of {names})") from None

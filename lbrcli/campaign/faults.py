@@ -73,10 +73,10 @@ def _frozen_from(n: int, at: int) -> list[Cycle]:
     return preamble() + active(n, {k: _mutate(freeze) for k in range(at, n)})
 
 
-def controller_faults() -> list[Fault]:
-    """The faults of a controller, a network and a lab (≈ 30)."""
+def _network_faults() -> list[Fault]:
+    """Messages lost (single, in bursts), duplicated, reordered or late; replies lost on the way back."""
     N = (NORMAL,)
-    out = [
+    return [
         Fault("loss 1", "loss", _at(Cycle(state=CA, seq_jump=1)), N + STOP),
         Fault("loss 5", "loss", _at(Cycle(state=CA, seq_jump=5)), N + STOP),
         Fault("loss 30", "loss", _at(Cycle(state=CA, seq_jump=30)), N + STOP),
@@ -107,6 +107,13 @@ def controller_faults() -> list[Fault]:
         Fault("reordered by 3", "reordering", _at([Cycle(state=CA), Cycle(state=CA, stale_by=3)]), N + STOP),
         Fault("controller pauses 50 ms", "delay", _at(Cycle(state=CA, pause_s=0.05)), N + STOP),
         Fault("2 replies lost", "replies lost", _at([Cycle(state=CA, drop_reply=True)] * 2), N + STOP),
+    ]
+
+
+def _message_faults() -> list[Fault]:
+    """Datagrams that must never be answered: malformed, lying (wrong but decodable), from a foreign sender."""
+    N = (NORMAL,)
+    return [
         Fault("garbage datagram", "malformed", _at([Cycle(raw=b"\x00\x01garbage"), Cycle(state=CA)]), N + STOP),
         Fault(
             "measured NaN",
@@ -127,6 +134,12 @@ def controller_faults() -> list[Fault]:
             _at([Cycle(state=CA, foreign=True)] * 10 + [Cycle(state=CA)]),
             N + STOP,
         ),
+    ]
+
+
+def _session_faults() -> list[Fault]:
+    """The robot side ending the session, period and clock faults, a pushed robot, signals and a full disk."""
+    return [
         Fault("safety stop", "robot side", _at(Cycle(state=CA, safety=2)), (EndReason.SAFETY_STOP,)),
         Fault("drives off", "robot side", _at(Cycle(state=CA, drive=1)), (EndReason.DRIVES_OFF,)),
         Fault("quality POOR", "robot side", _at(Cycle(state=CA, quality=0)), (EndReason.QUALITY_POOR,)),
@@ -155,4 +168,8 @@ def controller_faults() -> list[Fault]:
             "disk full", "full disk", lambda n, at: preamble() + active(n), (EndReason.OBSERVER_FAILED,), full_disk=True
         ),
     ]
-    return out
+
+
+def controller_faults() -> list[Fault]:
+    """The faults of a controller, a network and a lab (≈ 30)."""
+    return _network_faults() + _message_faults() + _session_faults()

@@ -142,78 +142,93 @@ class Source:
     end_at: int = 1500  # the end message
 
 
-def serve_surface() -> Surface:
-    """The bridge's follower (speed scale 0.5, dead-man 0.5 s) fed by a UDP source in lock-step with the controller."""
-    from lbrcli.bridge.client import BridgeClient
+def _serve_client() -> LBRClient:
+    """The bridge's follower (speed scale 0.5, dead-man 0.5 s) reading targets from a UDP port of its own."""
     from lbrcli.bridge.follower import TargetFollower
     from lbrcli.bridge.udp import UdpTargets
 
-    def make() -> LBRClient:
-        # the dead-man at 0.5 s: in lock-step a loaded machine runs the controller's cycles slower than real time
-        return TargetFollower(UdpTargets(0, "127.0.0.1", limits=LIM), LIM, timeout_s=0.5, first_target_s=5.0,
-                              speed_scale=0.5)  # fmt: skip
+    # the dead-man at 0.5 s: in lock-step a loaded machine runs the controller's cycles slower than real time
+    return TargetFollower(UdpTargets(0, "127.0.0.1", limits=LIM), LIM, timeout_s=0.5, first_target_s=5.0,
+                          speed_scale=0.5)  # fmt: skip
 
-    def around_for(src: Source):
-        @contextlib.contextmanager
-        def around(run: Run):
-            client: Any = run.client
-            port = client.source.port
-            run.state["src"] = BridgeClient("127.0.0.1", port)
-            run.state["other"] = BridgeClient("127.0.0.1", port)
-            run.state["cfg"] = src
-            try:
-                yield
-            finally:
-                run.state["closed"] = True  # the controller's thread may run a few cycles more
-                run.state["src"].close()
-                run.state["other"].close()
-                client.source.close()
 
-        return around
+def _serve_around(src: Source) -> Callable[[Run], Any]:
+    """The session's world: the source (and another sender) on the follower's port, behaving as ``src`` says."""
+    from lbrcli.bridge.client import BridgeClient
 
-    def on_cycle(i: int, run: Run) -> None:
-        if run.state.get("closed"):
-            return
-        cfg: Source = run.state["cfg"]
-        k = i - PREAMBLE + 5  # the source starts a little before commanding
-        if k < 0:
-            return
-        src, other = run.state["src"], run.state["other"]
-        t = k * 1e-3
-        if k == cfg.end_at:
-            src.sock.sendto(b'{"end": true}', src.address)
-            return
-        if k > cfg.end_at or k % cfg.every:
-            return
-        f = cfg.fault if k >= cfg.at else None
-        if f == "dead":
-            return
-        q = _wave(t)
-        if f == "nan":
-            q[2] = math.nan
-        elif f == "beyond":
-            q[3] = -LIM.position[3] - 0.05
-        elif f == "near-limit":
-            q[3] = -LIM.position[3] + 1e-6
-        if f == "stale":  # a replay of old targets (their counters are behind)
-            seq = src.seq
-            src.seq = max(0, seq - 50)
-            src.send_joint(q, t=t)
-            src.seq = seq
-        if f == "garbage":
-            src.sock.sendto(b"hello", src.address)
-            return
-        if f == "foreign-garbage":
-            other.sock.sendto(b"hello", other.address)
-        if f == "spoof":
-            other.send_joint(_wave(t + 0.5), t=t)
+    @contextlib.contextmanager
+    def around(run: Run):
+        client: Any = run.client
+        port = client.source.port
+        run.state["src"] = BridgeClient("127.0.0.1", port)
+        run.state["other"] = BridgeClient("127.0.0.1", port)
+        run.state["cfg"] = src
+        try:
+            yield
+        finally:
+            run.state["closed"] = True  # the controller's thread may run a few cycles more
+            run.state["src"].close()
+            run.state["other"].close()
+            client.source.close()
+
+    return around
+
+
+def _serve_source_cycle(i: int, run: Run) -> None:
+    """Before script cycle ``i``: what the source (and the other sender) sends, its fault included."""
+    if run.state.get("closed"):
+        return
+    cfg: Source = run.state["cfg"]
+    k = i - PREAMBLE + 5  # the source starts a little before commanding
+    if k < 0:
+        return
+    src, other = run.state["src"], run.state["other"]
+    t = k * 1e-3
+    if k == cfg.end_at:
+        src.sock.sendto(b'{"end": true}', src.address)
+        return
+    if k > cfg.end_at or k % cfg.every:
+        return
+    f = cfg.fault if k >= cfg.at else None
+    if f == "dead":
+        return
+    q = _wave(t)
+    if f == "nan":
+        q[2] = math.nan
+    elif f == "beyond":
+        q[3] = -LIM.position[3] - 0.05
+    elif f == "near-limit":
+        q[3] = -LIM.position[3] + 1e-6
+    if f == "stale":  # a replay of old targets (their counters are behind)
+        seq = src.seq
+        src.seq = max(0, seq - 50)
         src.send_joint(q, t=t)
-        if f == "flood":
-            for _ in range(50):
-                src.send_joint(q, t=t)
+        src.seq = seq
+    if f == "garbage":
+        src.sock.sendto(b"hello", src.address)
+        return
+    if f == "foreign-garbage":
+        other.sock.sendto(b"hello", other.address)
+    if f == "spoof":
+        other.send_joint(_wave(t + 0.5), t=t)
+    src.send_joint(q, t=t)
+    if f == "flood":
+        for _ in range(50):
+            src.send_joint(q, t=t)
 
+
+def serve_surface() -> Surface:
+    """The bridge's follower (speed scale 0.5, dead-man 0.5 s) fed by a UDP source in lock-step with the controller."""
     base = Source()
-    s = Surface("serve", make, 2000, 600, (EndReason.FINISHED,), on_cycle=on_cycle, around=around_for(base))
+    s = Surface(
+        "serve",
+        _serve_client,
+        2000,
+        600,
+        (EndReason.FINISHED,),
+        on_cycle=_serve_source_cycle,
+        around=_serve_around(base),
+    )
     s.own = []
     for name, cfg, ends in [
         ("1 kHz source", Source(), (EndReason.FINISHED,)),
@@ -229,7 +244,7 @@ def serve_surface() -> Surface:
         ("the source floods 50 per cycle", Source(fault="flood"), (EndReason.FINISHED,)),
         ("dead source at 30 Hz", Source(every=33, fault="dead"), (EndReason.CLIENT_REFUSED,)),
     ]:  # fmt: skip
-        s.own.append(_case(s, name, "sources", preamble() + active(2000), ends, around=around_for(cfg)))
+        s.own.append(_case(s, name, "sources", preamble() + active(2000), ends, around=_serve_around(cfg)))
     bursts = {k: Cycle(state=CA, seq_jump=5 + k % 5) for k in range(700, 760, 6)}
     s.own.append(_case(s, "bursts of 5–9 lost while following", "bursts", preamble() + active(2000, bursts),
                        (EndReason.FINISHED, EndReason.SUPERVISION)))  # fmt: skip

@@ -108,7 +108,7 @@ def compare(
         pred = read_table(prediction, ("t",), time="increasing", nan_columns=NAN_COLUMNS)
         if not pred.has(column):
             raise CsvFormatError(f"no column '{column}' (columns: {', '.join(pred.names)})", file=pred.path, row=1)
-        require_complete(pred, partial, rep)
+        require_complete(pred, partial, rep, option="--partial")
     t_model, theta_model = pred.column("t"), pred.column(column)
     known = np.isfinite(theta_model)  # an execution log's pendulum columns are nan before the first reading
     t_model, theta_model = t_model[known], theta_model[known]

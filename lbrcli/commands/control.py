@@ -23,7 +23,7 @@ import typer
 from trajectories.errors import CheckFailed, InputError, OptionError
 
 from ..console import Reporter
-from ..fri_options import DEFAULT_BALL_LENGTH, FRI_OPTIONS, LAB_OPTIONS, FriOptions, PlotOpt
+from ..fri_options import DEFAULT_BALL_LENGTH, FRI_OPTIONS, LAB_OPTIONS, FriOptions, PlotOpt, StartToleranceOpt
 from ..fri_runner import exit_for, plot_log, print_summary, run_client
 from ..lab.attach import LabOptions
 from ..option_groups import OptionGroup, with_options
@@ -358,153 +358,171 @@ def _print_upright(rep, f: dict, model, sim_stats) -> None:
         )
 
 
+CameraOpt = Annotated[
+    Optional[str],
+    typer.Option(
+        "--camera",
+        metavar="SOURCE",
+        help="With --sensor camera: a V4L2 device index (0) or path (/dev/video0), a stream URL (http://…/stream.mjpg, rtsp://…) or a video file played at its frame rate; default with the simulator: its own camera (--sim-camera-*).",
+    ),
+]
+GeometryOpt = Annotated[
+    Optional[Path],
+    typer.Option(
+        "--geometry",
+        help="The camera's pose JSON, as `lbr track live --geometry` reads (camera_matrix, dist_coeffs, rotation, centre_m, image_size — or position_m, look_at_m, fov_deg, image_size); its pivot_m and string_m are not used: the pivot is the robot's TCP, the string is measured.",
+    ),
+]
+CameraPositionOpt = Annotated[
+    Optional[tuple],
+    floats(
+        "--camera-position",
+        count=3,
+        low=-20,
+        high=20,
+        unit="m",
+        metavar="X,Y,Z",
+        help="Instead of --geometry: the camera's centre in the base frame \\[m] (with --camera-look-at, --camera-fov; image size from the source).",
+    ),
+]
+CameraLookAtOpt = Annotated[
+    Optional[tuple],
+    floats(
+        "--camera-look-at",
+        count=3,
+        low=-20,
+        high=20,
+        unit="m",
+        metavar="X,Y,Z",
+        help="The point at the image centre \\[m], base frame.",
+    ),
+]
+CameraFovOpt = Annotated[
+    Optional[float],
+    number("--camera-fov", low=1, high=170, unit="deg", help="Horizontal field of view \\[deg] (default 50)."),
+]
+CameraDelayOpt = Annotated[
+    Optional[float],
+    number(
+        "--camera-delay",
+        low=0,
+        high=1000,
+        unit="ms",
+        help="The camera's own delay from the middle of a frame's exposure to its arrival here \\[ms], which the tracker cannot see (default: the simulated camera's exposure/2 + latency + 1 ms; 20 with --camera — measure yours).",
+    ),
+]
+SimCameraPositionOpt = Annotated[
+    Optional[tuple],
+    floats(
+        "--sim-camera-position",
+        count=3,
+        low=-20,
+        high=20,
+        unit="m",
+        metavar="X,Y,Z",
+        help="Simulator: its camera's centre \\[m], base frame (default: 30° above the ball's path, 45° around from the base's line to it, as close as sees it whole).",
+    ),
+]
+SimCameraLookAtOpt = Annotated[
+    Optional[tuple],
+    floats(
+        "--sim-camera-look-at",
+        count=3,
+        low=-20,
+        high=20,
+        unit="m",
+        metavar="X,Y,Z",
+        help="Simulator: the point at its camera's image centre \\[m] (default: the middle of the ball's path).",
+    ),
+]
+SimCameraFovOpt = Annotated[
+    Optional[float],
+    number(
+        "--sim-camera-fov",
+        low=5,
+        high=120,
+        unit="deg",
+        help="Simulator: its camera's horizontal field of view \\[deg] (default 50).",
+    ),
+]
+SimCameraSizeOpt = Annotated[
+    Optional[tuple],
+    grid(
+        "--sim-camera-size",
+        low=64,
+        high=4096,
+        metavar="WxH",
+        help="Simulator: its camera's image size \\[px] (default 320x240).",
+    ),
+]
+SimCameraFpsOpt = Annotated[
+    Optional[float],
+    number(
+        "--sim-camera-fps",
+        low=10,
+        high=500,
+        unit="1/s",
+        help="Simulator: its camera's frame rate \\[1/s] (default 120; 30–240 tested).",
+    ),
+]
+SimCameraExposureOpt = Annotated[
+    Optional[float],
+    number(
+        "--sim-camera-exposure",
+        low=0,
+        high=100,
+        unit="ms",
+        help="Simulator: its camera's exposure \\[ms] (motion blur; default 4, at most one frame).",
+    ),
+]
+SimCameraLatencyOpt = Annotated[
+    Optional[float],
+    number(
+        "--sim-camera-latency",
+        low=0,
+        high=500,
+        unit="ms",
+        help="Simulator: from the end of an exposure to the frame leaving its camera \\[ms] (default 15).",
+    ),
+]
+SimCameraStampOpt = Annotated[
+    Optional[bool],
+    typer.Option(
+        "--sim-camera-stamp/--no-sim-camera-stamp",
+        help="Simulator: its camera writes each frame's index into the frame's corner (a camera's embedded frame counter), so a frame's moment is known exactly (default); without it, as with --camera, a frame shows its arrival − --camera-delay.",
+    ),
+]
+SimCameraStopOpt = Annotated[
+    Optional[float],
+    number(
+        "--sim-camera-stop",
+        low=0,
+        high=3600,
+        low_open=True,
+        unit="s",
+        help="Simulator: its camera stops streaming this long after the simulator started \\[s] (a failure drill).",
+    ),
+]
+
+
 def _camera_options(
-    camera: Annotated[
-        Optional[str],
-        typer.Option(
-            "--camera",
-            metavar="SOURCE",
-            help="With --sensor camera: a V4L2 device index (0) or path (/dev/video0), a stream URL (http://…/stream.mjpg, rtsp://…) or a video file played at its frame rate; default with the simulator: its own camera (--sim-camera-*).",
-        ),
-    ] = None,
-    geometry: Annotated[
-        Optional[Path],
-        typer.Option(
-            "--geometry",
-            help="The camera's pose JSON, as `lbr track live --geometry` reads (camera_matrix, dist_coeffs, rotation, centre_m, image_size — or position_m, look_at_m, fov_deg, image_size); its pivot_m and string_m are not used: the pivot is the robot's TCP, the string is measured.",
-        ),
-    ] = None,
-    camera_position: Annotated[
-        Optional[tuple],
-        floats(
-            "--camera-position",
-            count=3,
-            low=-20,
-            high=20,
-            unit="m",
-            metavar="X,Y,Z",
-            help="Instead of --geometry: the camera's centre in the base frame \\[m] (with --camera-look-at, --camera-fov; image size from the source).",
-        ),
-    ] = None,
-    camera_look_at: Annotated[
-        Optional[tuple],
-        floats(
-            "--camera-look-at",
-            count=3,
-            low=-20,
-            high=20,
-            unit="m",
-            metavar="X,Y,Z",
-            help="The point at the image centre \\[m], base frame.",
-        ),
-    ] = None,
-    camera_fov: Annotated[
-        Optional[float],
-        number("--camera-fov", low=1, high=170, unit="deg", help="Horizontal field of view \\[deg] (default 50)."),
-    ] = None,
-    camera_delay: Annotated[
-        Optional[float],
-        number(
-            "--camera-delay",
-            low=0,
-            high=1000,
-            unit="ms",
-            help="The camera's own delay from the middle of a frame's exposure to its arrival here \\[ms], which the tracker cannot see (default: the simulated camera's exposure/2 + latency + 1 ms; 20 with --camera — measure yours).",
-        ),
-    ] = None,
-    sim_camera_position: Annotated[
-        Optional[tuple],
-        floats(
-            "--sim-camera-position",
-            count=3,
-            low=-20,
-            high=20,
-            unit="m",
-            metavar="X,Y,Z",
-            help="Simulator: its camera's centre \\[m], base frame (default: 30° above the ball's path, 45° around from the base's line to it, as close as sees it whole).",
-        ),
-    ] = None,
-    sim_camera_look_at: Annotated[
-        Optional[tuple],
-        floats(
-            "--sim-camera-look-at",
-            count=3,
-            low=-20,
-            high=20,
-            unit="m",
-            metavar="X,Y,Z",
-            help="Simulator: the point at its camera's image centre \\[m] (default: the middle of the ball's path).",
-        ),
-    ] = None,
-    sim_camera_fov: Annotated[
-        Optional[float],
-        number(
-            "--sim-camera-fov",
-            low=5,
-            high=120,
-            unit="deg",
-            help="Simulator: its camera's horizontal field of view \\[deg] (default 50).",
-        ),
-    ] = None,
-    sim_camera_size: Annotated[
-        Optional[tuple],
-        grid(
-            "--sim-camera-size",
-            low=64,
-            high=4096,
-            metavar="WxH",
-            help="Simulator: its camera's image size \\[px] (default 320x240).",
-        ),
-    ] = None,
-    sim_camera_fps: Annotated[
-        Optional[float],
-        number(
-            "--sim-camera-fps",
-            low=10,
-            high=500,
-            unit="1/s",
-            help="Simulator: its camera's frame rate \\[1/s] (default 120; 30–240 tested).",
-        ),
-    ] = None,
-    sim_camera_exposure: Annotated[
-        Optional[float],
-        number(
-            "--sim-camera-exposure",
-            low=0,
-            high=100,
-            unit="ms",
-            help="Simulator: its camera's exposure \\[ms] (motion blur; default 4, at most one frame).",
-        ),
-    ] = None,
-    sim_camera_latency: Annotated[
-        Optional[float],
-        number(
-            "--sim-camera-latency",
-            low=0,
-            high=500,
-            unit="ms",
-            help="Simulator: from the end of an exposure to the frame leaving its camera \\[ms] (default 15).",
-        ),
-    ] = None,
-    sim_camera_stamp: Annotated[
-        Optional[bool],
-        typer.Option(
-            "--sim-camera-stamp/--no-sim-camera-stamp",
-            help="Simulator: its camera writes each frame's index into the frame's corner (a camera's embedded frame counter), so a frame's moment is known exactly (default); without it, as with --camera, a frame shows its arrival − --camera-delay.",
-        ),
-    ] = None,
-    sim_camera_stop: Annotated[
-        Optional[float],
-        number(
-            "--sim-camera-stop",
-            low=0,
-            high=3600,
-            low_open=True,
-            unit="s",
-            help="Simulator: its camera stops streaming this long after the simulator started \\[s] (a failure drill).",
-        ),
-    ] = None,
+    camera: CameraOpt = None,
+    geometry: GeometryOpt = None,
+    camera_position: CameraPositionOpt = None,
+    camera_look_at: CameraLookAtOpt = None,
+    camera_fov: CameraFovOpt = None,
+    camera_delay: CameraDelayOpt = None,
+    sim_camera_position: SimCameraPositionOpt = None,
+    sim_camera_look_at: SimCameraLookAtOpt = None,
+    sim_camera_fov: SimCameraFovOpt = None,
+    sim_camera_size: SimCameraSizeOpt = None,
+    sim_camera_fps: SimCameraFpsOpt = None,
+    sim_camera_exposure: SimCameraExposureOpt = None,
+    sim_camera_latency: SimCameraLatencyOpt = None,
+    sim_camera_stamp: SimCameraStampOpt = None,
+    sim_camera_stop: SimCameraStopOpt = None,
 ) -> CameraOptions:
+    """The camera options of `lbr control damp --sensor camera` (the simulator's camera too), as one value."""
     from ..control.camera_setup import CameraOptions
 
     return CameraOptions(camera, geometry, camera_position, camera_look_at, camera_fov, camera_delay, sim_camera_position,
@@ -512,7 +530,9 @@ def _camera_options(
                          sim_camera_latency, sim_camera_stop, sim_camera_stamp)  # fmt: skip
 
 
-CAMERA_OPTIONS = OptionGroup(_camera_options)
+CAMERA_OPTIONS = OptionGroup(_camera_options, flags={
+    "CameraOptions.geometry": "--geometry", "CameraOptions.position": "--camera-position",
+    "CameraOptions.sim_position": "--sim-camera-position", "CameraSensor.color": "--color"})  # fmt: skip
 """`lbr control damp --sensor camera`: the camera (or the simulator's) and its geometry (:class:`CameraOptions`)."""
 
 
@@ -615,16 +635,7 @@ def damp(
             help="If the robot stands elsewhere, first move there (jerk-limited, input-shaped for the swing).",
         ),
     ] = False,
-    start_tolerance: Annotated[
-        float,
-        number(
-            "--start-tolerance",
-            low=0,
-            high=0.1,
-            unit="rad",
-            help="Largest |first row − measured position| accepted \\[rad].",
-        ),
-    ] = 1e-3,
+    start_tolerance: StartToleranceOpt = 1e-3,
     start_sway: Annotated[
         float,
         number(

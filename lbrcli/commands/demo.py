@@ -30,11 +30,13 @@ def demo(
     from rich.table import Table
 
     from ..console import Reporter
+    from ..option_groups import settings_named
     from ..demo.folder import discard, prepare_out, publish, staging_folder
     from ..demo.pipeline import demo_steps, run_demo, summary_figures, summary_rows, write_summary
 
     rep = Reporter(json_out)
-    replaces = prepare_out(out)
+    with settings_named({"demo.out": "--out"}):
+        replaces = prepare_out(out)
     if replaces:
         rep.print(f"{out}/ holds a previous demo ({replaces}): it is replaced when this run completes")
     staging = staging_folder(out)

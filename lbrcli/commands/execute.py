@@ -18,7 +18,7 @@ from trajectories.errors import InputError
 from ..console import Reporter
 from ..cup_options import CupSpecOpt, cup_model
 from ..fri_options import (DEFAULT_BALL_LENGTH, FRI_OPTIONS, LAB_OPTIONS, FriOptions, MultiplierOpt, PeriodOpt, PlotOpt,
-                           TrackingErrorOpt)  # fmt: skip
+                           StartToleranceOpt, TrackingErrorOpt)  # fmt: skip
 from ..fri_runner import exit_for, plot_log, print_summary, run_client
 from ..lab.attach import LabOptions
 from ..option_groups import with_options
@@ -63,16 +63,7 @@ def execute(
         bool,
         typer.Option("--resample", help="Resample the file (cubic spline) to the controller's period if it differs."),
     ] = False,
-    start_tolerance: Annotated[
-        float,
-        number(
-            "--start-tolerance",
-            low=0,
-            high=0.1,
-            unit="rad",
-            help="Largest |first row − measured position| accepted \\[rad].",
-        ),
-    ] = 1e-3,
+    start_tolerance: StartToleranceOpt = 1e-3,
     move_to_start: Annotated[
         bool,
         typer.Option(
@@ -164,7 +155,7 @@ def execute(
                               ball=fri.ball(damping, cup_model(cup, ball_length)) if fri.embedded else None,
                               period_ms=period_ms, receive_multiplier=receive_multiplier, flange=flange, tool=tool,
                               limits=limits)  # fmt: skip
-    session = fri.session(lim, max_tracking_error=max_tracking_error)
+    session = fri.session(lim, max_tracking_error=max_tracking_error, check_period=False)  # the player checks it
     result, sim_stats, lab_figures = run_client(rep, player, session, simulator, lab=lab, extra=LogColumns(
         (FILE_ROWS_COLUMN,), lambda state: (len(player.rows),)))  # the log tells when it completed  # fmt: skip
     figures = print_summary(rep, result, sim_stats, fri.log)

@@ -94,7 +94,7 @@ def film(
     k = w / 1280.0
     camera = Camera(px_per_m=1300.0 * k, pivot0_uv=(w / 2.0, 260.0 * h / 720.0), size=(w, h), fps=fps)
     table = read_film_log(log)
-    require_complete(table, partial, rep)
+    require_complete(table, partial, rep, option="--partial")
     with atomic_path(out) as tmp, rep.progress("film", None) as update:
         footage = film_execution_log(
             table, tmp, length, camera, flange=flange, tool=parse_tool(tool), progress=update, cup=model, target=out

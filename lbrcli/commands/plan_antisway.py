@@ -13,9 +13,17 @@ import typer
 
 import numpy as np
 
+from ..option_groups import settings_named
 from ..antisway import ANTISWAY_Q0, DEFAULT_BALL_RADIUS, DEFAULT_DT, DEFAULT_POINTS_TEXT, Z_RANGE, plan_anti_sway_files
 from ..options import (DEFAULT_FLANGE, FlangeOpt, JointVector, JsonOpt, LimitsOpt, MarginOpt, Points, ToolOpt, angle, joints,
                        number)  # fmt: skip
+
+
+FLAGS = {f"plan_anti_sway.{field}": flag for field, flag in (
+    ("z", "--z"), ("points", "--points"), ("length", "--length"), ("a_max", "--a-max"), ("dt", "--dt"),
+    ("shaper", "--shaper"), ("length_tolerance", "--length-tolerance"), ("margin", "--margin"),
+    ("max_sway", "--max-sway"), ("ball_radius", "--ball-radius"), ("q0", "--q0"))}  # fmt: skip
+"""The settings of :func:`lbrcli.antisway.plan_anti_sway` → the options they come from (its SettingErrors)."""
 
 
 def plan_anti_sway_command(
@@ -173,7 +181,7 @@ def plan_anti_sway_command(
         tool=tool,
         limits=limits,
     )
-    with rep.progress("IK", None) as update:
+    with rep.progress("IK", None) as update, settings_named(FLAGS):
         figs = plan_anti_sway_files(
             **inputs, out=out, task_out=task_out, prediction=prediction, plot=plot, progress=update
         )

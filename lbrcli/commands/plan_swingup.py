@@ -19,6 +19,10 @@ from ..options import (DEFAULT_FLANGE, THESIS_Q_START, FlangeOpt, JointVector, J
                        joints, number)  # fmt: skip
 
 PREDICTION_COLUMNS = ("t", "theta", "theta_planned")
+FLAGS = {"SwingUpRequest.theta_d": "--theta-d", "SwingUpRequest.travel": "--max-travel", "SwingUpRequest.k_p": "--kp",
+         "SwingUpRequest.k_d": "--kd", "SwingUpRequest.push": "--push", "EnergyParams.push": "--push",
+         "EnergyParams.theta0": "--theta0"}  # fmt: skip
+"""The settings the planners name in their messages → this command's options."""
 SIDES = {"any": 0, "+y": 1, "-y": -1}
 
 
@@ -118,37 +122,17 @@ def plan_swing_up_files(
     """
     from planners.swingup import SwingUpRequest, plan_swing_up
     from planners.swingup_fast import SearchSettings
-    from trajectories.csvio import write_joint_csv, write_table, write_task_csv
     from trajectories.errors import PlanningError
-    from trajectories.poses import quaternions_from_matrices
-    from trajectories.trajectory import TaskTrajectory
 
+    from ..option_groups import settings_named
     from ..options import limits_from, make_robot, within_limits
     from ..outputs import guard_outputs
     from ..parsing import parse_joint_vector
 
-    _validate(
-        length,
-        mass,
-        theta_d,
-        method,
-        theta0,
-        dt,
-        duration,
-        travel,
-        k_e,
-        k_p,
-        k_d,
-        tolerance,
-        margin,
-        orientation,
-        push,
-        side,
-        workers,
-    )
+    _validate(length, mass, theta_d, method, theta0, dt, duration, travel, k_e, k_p, k_d, tolerance, margin,
+              orientation, push, side, workers)  # fmt: skip
     guard_outputs({"--limits": limits}, {"-o": out, "--prediction": prediction, "--plot": plot, "--task-out": task_out})
-    robot = make_robot(flange, tool)
-    lim = limits_from(limits)
+    robot, lim = make_robot(flange, tool), limits_from(limits)
     q0 = within_limits(parse_joint_vector(q_start, "--q-start"), lim, "--q-start")
     request = SwingUpRequest(
         length=length,
@@ -171,7 +155,23 @@ def plan_swing_up_files(
         search=SearchSettings(workers=int(workers)),
         side=SIDES[side],
     )
-    result = plan_swing_up(request, robot, lim, progress=progress)
+    with settings_named(FLAGS):  # the planners' hints name the options
+        result = plan_swing_up(request, robot, lim, progress=progress)
+    figures = _write_outputs(result, robot, out, prediction, task_out, plot)
+    failure = result.failure()
+    figures["ok"], figures["failure"] = failure is None, failure
+    if strict and failure:
+        raise PlanningError(failure)
+    return figures
+
+
+def _write_outputs(result, robot, out: Path, prediction: Path | None, task_out: Path | None, plot: Path | None) -> dict:
+    """Write the joint CSV and the outputs asked for (the predicted swing, the flange's task path, the plot); the
+    figures with their paths."""
+    from trajectories.csvio import write_joint_csv, write_table, write_task_csv
+    from trajectories.poses import quaternions_from_matrices
+    from trajectories.trajectory import TaskTrajectory
+
     write_joint_csv(out, result.trajectory)
     figures = {"out": str(out), **result.figures()}
     if prediction is not None:
@@ -192,11 +192,6 @@ def plan_swing_up_files(
 
         plot_swingup(result, plot)
         figures["plot"] = str(plot)
-    failure = result.failure()
-    figures["ok"] = failure is None
-    figures["failure"] = failure
-    if strict and failure:
-        raise PlanningError(failure)
     return figures
 
 

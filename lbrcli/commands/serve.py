@@ -214,7 +214,7 @@ def _open_targets(rep, endpoint: tuple[str, int] | None, mqtt: str | None, state
     from lbrcli.bridge import MqttTransport, MqttUnavailable, TargetInbox, UdpTransport
     from lbrcli.lab.telemetry import parse_mqtt_url
 
-    mqtt_target = parse_mqtt_url(mqtt) if mqtt is not None else None
+    mqtt_target = parse_mqtt_url(mqtt, "--mqtt") if mqtt is not None else None
     transports: list = []
     try:
         if endpoint is not None:

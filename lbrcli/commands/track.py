@@ -675,7 +675,7 @@ def live(
     if mqtt is not None:
         from ..lab.telemetry import TelemetryPublisher, parse_mqtt_url
 
-        mqtt_pub = TelemetryPublisher(parse_mqtt_url(mqtt), mqtt_rate)
+        mqtt_pub = TelemetryPublisher(parse_mqtt_url(mqtt, "--mqtt"), mqtt_rate)
     results = []
 
     def on_result(r) -> None:  # noqa: ANN001

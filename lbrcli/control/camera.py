@@ -208,7 +208,7 @@ class CameraTilt:
             seen = self.results
             self.stop()
             why = ("delivered no frame" if seen == 0 else
-                   f"delivered {seen} frames but the ball was found in {self.found} (is it in view, is --color right?)")  # fmt: skip
+                   f"delivered {seen} frames but the ball was found in {self.found} (is it in view, is its colour (CameraSensor.color) right?)")  # fmt: skip
             raise CheckFailed(f"camera {source}: {why} within {self.start_timeout_s:g} s")
         return self
 

@@ -87,17 +87,18 @@ def camera_delay_ms(opts: CameraOptions, sim_config) -> float:
 
 
 def assumed_geometry(opts: CameraOptions, size: tuple[int, int] | None, sim_config):
-    """(the geometry the tracker assumes, the option it comes from): --geometry, --camera-position/…, or the simulated
-    camera's own (a perfect calibration). ``size``: the source's image size [px] (for --camera-position)."""
+    """(the geometry the tracker assumes, the setting it comes from): the geometry file, the camera's pose, or the
+    simulated camera's own (a perfect calibration). ``size``: the source's image size [px] (for a pose)."""
     from tracking.camera_geometry import CameraGeometry, load_geometry
 
     if opts.geometry is not None:
         geometry, _ = load_geometry(opts.geometry)
-        return geometry, "--geometry"
+        return geometry, "CameraOptions.geometry"
     if opts.position is not None:
         look = opts.look_at if opts.look_at is not None else sim_config.look_at_m
-        return CameraGeometry.from_pose(opts.position, look, opts.fov or FOV_DEG, size), "--camera-position"
-    return sim_config.geometry(), ("--sim-camera-position" if opts.sim_position is not None else "the simulated camera")
+        return CameraGeometry.from_pose(opts.position, look, opts.fov or FOV_DEG, size), "CameraOptions.position"
+    where = "CameraOptions.sim_position" if opts.sim_position is not None else "the simulated camera"
+    return sim_config.geometry(), where
 
 
 def check_view(geometry, where: str, pivots_m: np.ndarray, t_s: np.ndarray, string_m: float, sway_rad: np.ndarray,
@@ -143,7 +144,7 @@ def camera_sensor_for(opts: CameraOptions, rep, stack, *, robot_factory, rows: n
     from .camera import CAMERA_NICENESS, CameraTilt
     from .sensors import CameraSensor
 
-    ball = color_spec(color, "--color")
+    ball = color_spec(color, "CameraSensor.color")
     robot = robot_factory()
     idx = np.unique(np.append(np.arange(0, len(rows), 10), len(rows) - 1))
     pivots, _ = robot.fk_path(np.asarray(rows)[idx])

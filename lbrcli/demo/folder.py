@@ -12,17 +12,18 @@ SUMMARY_TITLE = "# lbr demo"
 def prepare_out(out: Path) -> str | None:
     """Check that ``out`` may receive the demo; return a description of the previous demo it replaces (or None).
 
-    Raises OptionError (exit 2) when ``out`` is a file, or a non-empty folder that is not a previous demo.
+    Raises SettingError ``demo.out`` (exit 2) when ``out`` is a file, or a non-empty folder that is not a previous
+    demo.
     """
-    from trajectories.errors import OptionError
+    from trajectories.errors import SettingError
 
     if out.exists() and not out.is_dir():
-        raise OptionError(f"--out: {out} exists and is not a folder")
+        raise SettingError("demo", "out", f"{out} exists and is not a folder")
     if not out.exists() or not any(out.iterdir()):
         try:
             out.parent.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise OptionError(f"--out: cannot create the folder {out.parent} ({exc.strerror})") from None
+            raise SettingError("demo", "out", f"cannot create the folder {out.parent} ({exc.strerror})") from None
         return None
     summary = out / "summary.md"
     try:
@@ -30,7 +31,9 @@ def prepare_out(out: Path) -> str | None:
     except OSError:
         previous = False
     if not previous:
-        raise OptionError(f"--out: {out} is not empty and holds no previous demo (no summary.md): choose a new folder")
+        raise SettingError(
+            "demo", "out", f"{out} is not empty and holds no previous demo (no summary.md): choose a new folder"
+        )
     n = sum(1 for p in out.iterdir() if p.is_file())
     return f"{n} files"
 

@@ -92,244 +92,156 @@ def _tracking_error(out: Path, results: dict[str, StepResult]) -> dict[str, Any]
     }
 
 
-def demo_steps() -> list[Step]:
-    from lbrcli.fri.realtime import permitted
+def lbr_argv(*words: str, **options: str | bool) -> tuple[str, ...]:
+    """An `lbr` command line: ``words``, then each option in order (``a_max="2"`` → ``--a-max 2``, one letter → ``-o``;
+    True: the bare flag, False: left out)."""
+    argv = list(words)
+    for key, value in options.items():
+        flag = ("-" if len(key) == 1 else "--") + key.replace("_", "-")
+        if value is True:
+            argv.append(flag)
+        elif value is not False:
+            argv += [flag, value]
+    return tuple(argv)
 
-    L = str(BALL_LENGTH)
-    rt = ("--realtime",) if permitted() else ()  # steadier where the system grants it; refused (exit 2) elsewhere
-    crane = []
+
+def _execute_on_sim(csv: str, realtime: bool, settle: str, log: str, plot: str, **extra: str) -> tuple[str, ...]:
+    """`lbr execute` of a demo file on the built-in simulator (port 0, lenient quality, the demo ball)."""
+    return lbr_argv(
+        "execute",
+        csv,
+        port="0",
+        realtime=realtime,
+        sim_lenient=True,
+        length=str(BALL_LENGTH),
+        **extra,
+        settle=settle,
+        log=log,
+        plot=plot,
+    )
+
+
+def _crane_steps(realtime: bool) -> list[Step]:
+    """Plan, check and execute the crane move twice: plain acceleration profile, then input-shaped."""
+    steps = []
     for name, shaper in (("baseline", "accel"), ("shaped", "auto")):
-        crane += [
+        plan = lbr_argv(
+            "plan",
+            "anti-sway",
+            length=str(BALL_LENGTH),
+            a_max=str(CRANE_A_MAX),
+            shaper=shaper,
+            o=f"crane_{name}.csv",
+            prediction=f"crane_{name}_prediction.csv",
+            task_out=f"crane_{name}_pivot.csv",
+            plot=f"crane_{name}_plan.png",
+        )
+        check = lbr_argv("check", f"crane_{name}.csv", plot=f"crane_{name}_check.png")
+        execute = _execute_on_sim(
+            f"crane_{name}.csv", realtime, "3", f"crane_{name}_log.csv", f"crane_{name}_execution.png"
+        )
+        steps += [
+            Step(f"plan_{name}", f"plan crane move ({shaper})", plan),
+            Step(f"check_{name}", f"check crane move ({shaper})", check, needs=(f"plan_{name}",)),
             Step(
-                f"plan_{name}",
-                f"plan crane move ({shaper})",
-                (
-                    "plan",
-                    "anti-sway",
-                    "--length",
-                    L,
-                    "--a-max",
-                    str(CRANE_A_MAX),
-                    "--shaper",
-                    shaper,
-                    "-o",
-                    f"crane_{name}.csv",
-                    "--prediction",
-                    f"crane_{name}_prediction.csv",
-                    "--task-out",
-                    f"crane_{name}_pivot.csv",
-                    "--plot",
-                    f"crane_{name}_plan.png",
-                ),
-            ),
-            Step(
-                f"check_{name}",
-                f"check crane move ({shaper})",
-                ("check", f"crane_{name}.csv", "--plot", f"crane_{name}_check.png"),
-                needs=(f"plan_{name}",),
-            ),
-            Step(
-                f"execute_{name}",
-                f"execute crane move ({shaper}) on the simulator",
-                (
-                    "execute",
-                    f"crane_{name}.csv",
-                    "--port",
-                    "0",
-                    *rt,
-                    "--sim-lenient",
-                    "--length",
-                    L,
-                    "--settle",
-                    "3",
-                    "--log",
-                    f"crane_{name}_log.csv",
-                    "--plot",
-                    f"crane_{name}_execution.png",
-                ),
-                needs=(f"check_{name}",),
+                f"execute_{name}", f"execute crane move ({shaper}) on the simulator", execute, needs=(f"check_{name}",)
             ),
         ]
-    swing = [
-        Step(
-            "plan_swingup",
-            "plan swing-up (fast)",
-            (
-                "plan",
-                "swing-up",
-                "--method",
-                "fast",
-                "--length",
-                L,
-                "--mass",
-                str(BALL_MASS),
-                "--theta-d",
-                SWING_THETA_D,
-                "--side",
-                "+y",
-                "-o",
-                "swingup.csv",
-                "--prediction",
-                "swingup_prediction.csv",
-                "--plot",
-                "swingup_plan.png",
-            ),
-        ),
-        Step(
-            "execute_swingup",
-            "execute swing-up on the simulator",
-            (
-                "execute",
-                "swingup.csv",
-                "--port",
-                "0",
-                *rt,
-                "--sim-lenient",
-                "--length",
-                L,
-                "--settle",
-                "1.5",
-                "--log",
-                "swingup_log.csv",
-                "--plot",
-                "swingup_execution.png",
-            ),
-            needs=("plan_swingup",),
-        ),
-        Step(
-            "film",
-            "film the simulated ball (render swingup.mp4)",
-            (
-                "track",
-                "film",
-                "swingup_log.csv",
-                "-o",
-                "swingup.mp4",
-                "--length",
-                L,
-                "--truth",
-                "swingup_video_truth.csv",
-            ),
-            needs=("execute_swingup",),
-        ),
-        Step(
-            "track",
-            "track the ball in the video",
-            (
-                "track",
-                "video",
-                "swingup.mp4",
-                "-o",
-                "swingup_track.csv",
-                "--pivot-color",
-                "green",
-                "--plot",
-                "swingup_track.png",
-                "--preview",
-                "swingup_preview.mp4",
-            ),
-            needs=("film",),
-        ),
+    return steps
+
+
+def _swing_up_steps(realtime: bool) -> list[Step]:
+    """Plan and execute the swing-up, film the simulated ball, track it and compare with the model."""
+    L = str(BALL_LENGTH)
+    plan = lbr_argv(
+        "plan",
+        "swing-up",
+        method="fast",
+        length=L,
+        mass=str(BALL_MASS),
+        theta_d=SWING_THETA_D,
+        side="+y",
+        o="swingup.csv",
+        prediction="swingup_prediction.csv",
+        plot="swingup_plan.png",
+    )
+    execute = _execute_on_sim("swingup.csv", realtime, "1.5", "swingup_log.csv", "swingup_execution.png")
+    film = lbr_argv("track", "film", "swingup_log.csv", o="swingup.mp4", length=L, truth="swingup_video_truth.csv")
+    track = lbr_argv(
+        "track",
+        "video",
+        "swingup.mp4",
+        o="swingup_track.csv",
+        pivot_color="green",
+        plot="swingup_track.png",
+        preview="swingup_preview.mp4",
+    )
+    compare = lbr_argv("compare", "swingup_prediction.csv", "swingup_track.csv", plot="swingup_compare.png")
+    view = lbr_argv(
+        "view",
+        "swingup.csv",
+        "swingup_log.csv",
+        "swingup_prediction.csv",
+        "swingup_track.csv",
+        length=L,
+        o="swingup_view.html",
+    )
+    return [
+        Step("plan_swingup", "plan swing-up (fast)", plan),
+        Step("execute_swingup", "execute swing-up on the simulator", execute, needs=("plan_swingup",)),
+        Step("film", "film the simulated ball (render swingup.mp4)", film, needs=("execute_swingup",)),
+        Step("track", "track the ball in the video", track, needs=("film",)),
         Step("tracking_error", "tracked ball vs what was drawn", action=_tracking_error, needs=("track",)),
-        Step(
-            "compare",
-            "compare model and experiment",
-            ("compare", "swingup_prediction.csv", "swingup_track.csv", "--plot", "swingup_compare.png"),
-            needs=("track",),
-        ),
-        Step(
-            "view",
-            "3D replay of the swing-up (one offline HTML file)",
-            (
-                "view",
-                "swingup.csv",
-                "swingup_log.csv",
-                "swingup_prediction.csv",
-                "swingup_track.csv",
-                "--length",
-                L,
-                "-o",
-                "swingup_view.html",
-            ),
-            needs=("track",),
-        ),
+        Step("compare", "compare model and experiment", compare, needs=("track",)),
+        Step("view", "3D replay of the swing-up (one offline HTML file)", view, needs=("track",)),
     ]
-    catch = [
-        Step(
-            "plan_catch",
-            "plan the cup-and-ball catch",
-            (
-                "plan",
-                "cup-and-ball",
-                "--length",
-                L,
-                "--min-success",
-                "0",
-                "-o",
-                "catch.csv",
-                "--prediction",
-                "catch_prediction.csv",
-                "--plot",
-                "catch_plan.png",
-            ),
-        ),
+
+
+def _catch_steps(realtime: bool) -> list[Step]:
+    """Plan and execute the cup-and-ball catch, film it with the cup, track the flight and compare."""
+    L = str(BALL_LENGTH)
+    plan = lbr_argv(
+        "plan",
+        "cup-and-ball",
+        length=L,
+        min_success="0",
+        o="catch.csv",
+        prediction="catch_prediction.csv",
+        plot="catch_plan.png",
+    )
+    execute = _execute_on_sim("catch.csv", realtime, "1", "catch_log.csv", "catch_execution.png", cup=CUP)
+    film = lbr_argv(
+        "track",
+        "film",
+        "catch_log.csv",
+        o="catch.mp4",
+        length=L,
+        cup=CUP,
+        size="960x540",
+        truth="catch_video_truth.csv",
+    )
+    track = lbr_argv("track", "video", "catch.mp4", o="catch_track.csv", pivot_color="green")
+    compare = lbr_argv("compare", "catch_prediction.csv", "catch_track.csv", plot="catch_compare.png")
+    return [
+        Step("plan_catch", "plan the cup-and-ball catch", plan),
         Step(
             "execute_catch",
             "execute the catch on the simulator (ball and cup simulated)",
-            (
-                "execute",
-                "catch.csv",
-                "--port",
-                "0",
-                *rt,
-                "--sim-lenient",
-                "--length",
-                L,
-                "--cup",
-                CUP,
-                "--settle",
-                "1",
-                "--log",
-                "catch_log.csv",
-                "--plot",
-                "catch_execution.png",
-            ),
+            execute,
             needs=("plan_catch",),
         ),
-        Step(
-            "film_catch",
-            "film the catch (render catch.mp4 with the cup)",
-            (
-                "track",
-                "film",
-                "catch_log.csv",
-                "-o",
-                "catch.mp4",
-                "--length",
-                L,
-                "--cup",
-                CUP,
-                "--size",
-                "960x540",
-                "--truth",
-                "catch_video_truth.csv",
-            ),
-            needs=("execute_catch",),
-        ),
-        Step(
-            "track_catch",
-            "track the ball through the flight",
-            ("track", "video", "catch.mp4", "-o", "catch_track.csv", "--pivot-color", "green"),
-            needs=("film_catch",),
-        ),
-        Step(
-            "compare_catch",
-            "compare model and experiment, positions in the flight",
-            ("compare", "catch_prediction.csv", "catch_track.csv", "--plot", "catch_compare.png"),
-            needs=("track_catch",),
-        ),
+        Step("film_catch", "film the catch (render catch.mp4 with the cup)", film, needs=("execute_catch",)),
+        Step("track_catch", "track the ball through the flight", track, needs=("film_catch",)),
+        Step("compare_catch", "compare model and experiment, positions in the flight", compare, needs=("track_catch",)),
     ]
-    return crane + swing + catch
+
+
+def demo_steps() -> list[Step]:
+    """Every step of the demo in order: the crane move, the swing-up with its video, the catch."""
+    from lbrcli.fri.realtime import permitted
+
+    realtime = permitted()  # steadier where the system grants it; refused (exit 2) elsewhere
+    return _crane_steps(realtime) + _swing_up_steps(realtime) + _catch_steps(realtime)
 
 
 def run_demo(

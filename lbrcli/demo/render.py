@@ -46,7 +46,7 @@ def read_film_log(log_csv: str | Path):
     missing = [c for c in FILM_COLUMNS if not table.has(c)]
     if missing:
         raise CsvFormatError(f"no column '{missing[0]}': not a log of the simulator with its ball (`lbr execute` "
-                             "without --robot, --length > 0)", file=table.path, row=1)  # fmt: skip
+                             "on the built-in simulator with a string length > 0)", file=table.path, row=1)  # fmt: skip
     if len(table.column("t")) < 2:
         raise CsvFormatError("need at least 2 rows to film", file=table.path)
     return table

@@ -9,10 +9,14 @@ from typing import Any
 
 from .clock import SessionClock
 from .cycle import Observer
-from .errors import FriTimeout, StopSession
+from .constants import SessionState
+from .errors import FriError, FriTimeout, StopSession
 from .motion import ExecutedMotion
 from .outcome import EndReason, Outcome, SessionResult, session_result
+from .supervision import robot_side_end
 from .transport import no_message_text
+
+from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE, STATE_COMMANDING_WAIT as CMD_WAIT, STATE_IDLE as IDLE
 
 
 class SessionEnding:
@@ -34,9 +38,16 @@ class SessionEnding:
     _cycles0: int
     _answered_any: bool
     _unanswered_at_start: int
+    send_period_s: float | None
+    _last_state: int
+    _interrupt: EndReason | None
+    watchdog: Any
+    states_seen: list[int]
+    cycle: Any
 
     def _moving(self) -> bool:
-        raise NotImplementedError
+        """Commands were sent in COMMANDING_ACTIVE and the robot was last seen there: a stop must brake."""
+        return self._last_state == CMD_ACTIVE and self._motion is not None and self._motion.moving
 
     # -- stops -----------------------------------------------------------------------------------------------
     def _stop_braking(self, outcome: Outcome, reason: EndReason, text: str) -> None:
@@ -46,6 +57,13 @@ class SessionEnding:
         self._stop = (outcome, reason, text)
         if self._moving():
             self._motion.begin_braking()  # type: ignore[union-attr]
+
+    def _check_send_period(self, send_period_ms: int) -> None:
+        """A controller at another send period than ``send_period_s`` ends the session before it commands (BAD_INPUT)."""
+        if self.send_period_s is not None and abs(send_period_ms * 1e-3 - self.send_period_s) > 1e-9:
+            self._stop_braking(Outcome.REFUSED, EndReason.BAD_INPUT,
+                               f"the controller's send period is {send_period_ms} ms, not the {self.send_period_s * 1e3:g} ms "
+                               "asked; set it in the robot's FRI configuration or ask for that period")  # fmt: skip
 
     def _request_stop(self, outcome: Outcome, reason: EndReason, text: str) -> bool:
         """Remember a client-side stop; brake when commanding. True if the session ended at once."""
@@ -145,3 +163,48 @@ class SessionEnding:
         )  # fmt: skip
         for o in list(self.observers):
             self._call_observer(o, "on_end", self, self.result)
+
+    def _stop_on_interrupt(self) -> bool:
+        """Turn a pending interrupt (Ctrl-C, SIGTERM) into a stop; True if that ended the session at once."""
+        text = "interrupted (Ctrl-C)" if self._interrupt is EndReason.SIGINT else "terminated (SIGTERM)"
+        return self._request_stop(Outcome.INTERRUPTED, self._interrupt, text)  # type: ignore[arg-type]
+
+    def _on_silence(self, t_wait: float, now: float) -> bool:
+        """A receive timeout: the controller is quiet since ``t_wait`` [s]; the watchdog may end the session."""
+        if self._clock.quiet_from is None:
+            self._clock.quiet_from = t_wait
+        self._prepared = None
+        if self.watchdog is not None:
+            problem = self.watchdog()
+            if problem:
+                self._ended = True
+                raise FriError(problem)
+        return self._check_clocks(now)
+
+    def _robot_side(self, mon: Any, state: int, now: float) -> bool | None:
+        """The session state as the robot reports it: state changes (told to the client), the robot side's ends,
+        IDLE (observed, not answered). The step's result when the cycle ends here, else None."""
+        if not self.states_seen or state != self.states_seen[-1]:
+            self.states_seen.append(state)
+        if state != self._last_state:
+            old, self._last_state = self._last_state, state
+            self._call_client("on_state_change", SessionState(old), SessionState(state))
+        clock = self._clock
+        end = robot_side_end(mon, state, seen_session=self._seen_session, commanding=self._commanding,
+                             was_active=self._was_active, period_key=clock.period_key, waited_s=now - clock.t_first,  # type: ignore[operator]
+                             commanding_timeout_s=self.commanding_timeout_s)  # fmt: skip
+        if end is not None:
+            self._finish(*end, observe=True)
+            return False
+        if state == IDLE:
+            if not self._seen_session:
+                self.cycle.command = tuple(mon.monitorData.measuredJointPosition.value)
+            self._observe()
+            return self._check_clocks(now)
+        self._seen_session = True
+        if state >= CMD_WAIT:
+            self._commanding = True
+        if state == CMD_ACTIVE:
+            self._was_active = True
+            self.active_cycles += 1
+        return None

@@ -46,7 +46,44 @@ def _plan_to_rest(
     return traj
 
 
-class OnlineMove:
+class _SteppedMove:
+    """A move followed one command period at a time: ``_k`` commands taken, ``done`` once it has arrived at
+    ``target``; a subclass plans it (``start``) and says where it is at ``t`` [s] (``_at``) and when it arrives."""
+
+    period_s: float
+    target: tuple[float, ...]
+    done: bool
+    _k: int
+
+    def skip(self, n: int) -> None:
+        """``n`` command periods went by without our commands (the controller bridged them)."""
+        if not self.done:
+            self._k += n
+
+    def unstep(self) -> None:
+        """Take back the last :meth:`next` (computed a cycle ahead, never sent)."""
+        if self._k > 0:
+            self._k -= 1
+            self.done = False
+
+    def next(self) -> tuple[float, ...]:
+        if self.done:
+            return self.target
+        self._k += 1
+        t = self._k * self.period_s
+        if t >= self._arrival_s():
+            self.done = True
+            return self.target
+        return self._at(t)
+
+    def _arrival_s(self) -> float:
+        raise NotImplementedError
+
+    def _at(self, t: float) -> tuple[float, ...]:
+        raise NotImplementedError
+
+
+class OnlineMove(_SteppedMove):
     """A rest-to-rest ruckig move (position interface), planned once and followed in time one cycle at a time. After
     lost messages (the controller extrapolated our commands meanwhile) it goes on in step with its plan
     (:meth:`skip`): it arrives when it was planned to, whatever is lost; the motion-safety core absorbs the difference
@@ -75,29 +112,14 @@ class OnlineMove:
         self.done = self.duration_s <= 0.0
         return self.duration_s
 
-    def skip(self, n: int) -> None:
-        """``n`` command periods went by without our commands (the controller bridged them)."""
-        if not self.done:
-            self._k += n
+    def _arrival_s(self) -> float:
+        return self.duration_s - 1e-12
 
-    def unstep(self) -> None:
-        """Take back the last :meth:`next` (computed a cycle ahead, never sent)."""
-        if self._k > 0:
-            self._k -= 1
-            self.done = False
-
-    def next(self) -> tuple[float, ...]:
-        if self.done:
-            return self.target
-        self._k += 1
-        t = self._k * self.period_s
-        if t >= self.duration_s - 1e-12:
-            self.done = True
-            return self.target
+    def _at(self, t: float) -> tuple[float, ...]:
         return tuple(self._traj.at_time(t)[0])
 
 
-class ShapedMove:
+class ShapedMove(_SteppedMove):
     """A rest-to-rest ruckig move, input-shaped so that a ball on a string hanging from the TCP is left (nearly) at
     rest: with a ``robot`` model the TCP follows the unshaped move's TCP path convolved with the shaper (impulses
     ``amplitudes`` ≥ 0 summing to 1 at ``times`` [s]) — the joints are the convolved joint positions corrected by two
@@ -148,25 +170,10 @@ class ShapedMove:
         self.done = False
         return self._end
 
-    def skip(self, n: int) -> None:
-        """``n`` command periods went by without our commands (the controller bridged them)."""
-        if not self.done:
-            self._k += n
+    def _arrival_s(self) -> float:
+        return self._end
 
-    def unstep(self) -> None:
-        """Take back the last :meth:`next` (computed a cycle ahead, never sent)."""
-        if self._k > 0:
-            self._k -= 1
-            self.done = False
-
-    def next(self) -> tuple[float, ...]:
-        if self.done:
-            return self.target
-        self._k += 1
-        t = self._k * self.period_s
-        if t >= self._end:
-            self.done = True
-            return self.target
+    def _at(self, t: float) -> tuple[float, ...]:
         traj, dur = self._traj, self._traj.duration
         if self._robot is not None and len(self._terms) > 1:
             return self._corrected(t)

@@ -127,7 +127,7 @@ class TrajectoryPlayer(LBRClient):
             raise StopSession(
                 f"the controller's command period is {got * 1e3:g} ms (send period {state.sample_time * 1e3:g} ms × "
                 f"receive multiplier {state.receive_multiplier}), the rows' step is {self.period_s * 1e3:g} ms; "
-                "re-plan at that step or use --resample",
+                "re-plan at that step or resample the rows (TrajectoryPlayer.resample)",
                 completed=False,
                 bad_input=True,
             )
@@ -143,8 +143,9 @@ class TrajectoryPlayer(LBRClient):
         if dist > self.start_tolerance and not self.move_to_start:
             raise StopSession(
                 f"the first row is {dist:.6f} rad from the measured position on A{j + 1} {where} "
-                f"(measured {q[j]:.6f}, file {self.rows[0][j]:.6f}), more than --start-tolerance "
-                f"{self.start_tolerance:g} rad; move the robot there first or use --move-to-start",
+                f"(measured {q[j]:.6f}, file {self.rows[0][j]:.6f}), more than the start tolerance "
+                f"(TrajectoryPlayer.start_tolerance) {self.start_tolerance:g} rad; move the robot there first or "
+                "move to the start (TrajectoryPlayer.move_to_start)",
                 completed=False,
             )
 

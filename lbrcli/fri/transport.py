@@ -189,9 +189,9 @@ def no_message_text(transport: UdpTransport, waited: float, undecodable: int, ve
     text = f"no FRI monitoring message from {transport.robot_ip} on UDP port {transport.port} within {waited:.1f} s"
     hints = []
     if undecodable:
-        hints.append(f"{undecodable} datagrams from it did not decode as {version} (--fri-version?)")
+        hints.append(f"{undecodable} datagrams from it did not decode as {version} (ClientApplication.version?)")
     if transport.foreign:
-        hints.append(f"{transport.foreign} datagrams came from other addresses (--robot?)")
+        hints.append(f"{transport.foreign} datagrams came from other addresses (ClientApplication.robot?)")
     if not hints:
         hints.append("is the robot application running with this PC's address and port, and the firewall open?")
     return text + "; " + "; ".join(hints)

@@ -29,9 +29,9 @@ class MqttTarget:
     tls: bool = False
 
 
-def parse_mqtt_url(url: str, option: str = "--mqtt") -> MqttTarget:
+def parse_mqtt_url(url: str, option: str = "LabOptions.mqtt") -> MqttTarget:
     """'mqtt://[USER:PASSWORD@]HOST:PORT/TOPIC' (port 1883 by default; 'mqtts://' for TLS, port 8883 by default;
-    the topic may contain '/')."""
+    the topic may contain '/'); OptionError naming ``option`` (the setting, or the caller's flag)."""
     parts = urlsplit(url)
     if parts.scheme not in ("mqtt", "mqtts") or not parts.hostname:
         raise OptionError(f"{option}: expected mqtt://[USER:PASSWORD@]HOST:PORT/TOPIC, got {url!r}")

@@ -14,7 +14,7 @@ def save_figure(fig, path: str | Path, dpi: int = 110) -> None:
     close it; an unsupported format is bad input."""
     import matplotlib.pyplot as plt
 
-    from trajectories.errors import OptionError
+    from trajectories.errors import SettingError
 
     from trajectories.atomic import atomic_path
 
@@ -24,7 +24,9 @@ def save_figure(fig, path: str | Path, dpi: int = 110) -> None:
     except ValueError as exc:
         if "is not supported" not in str(exc):
             raise
-        raise OptionError(f"--plot {path}: not an image format matplotlib writes (use .png, .pdf or .svg)") from None
+        raise SettingError(
+            "Plot", "path", f"{path}: not an image format matplotlib writes (use .png, .pdf or .svg)"
+        ) from None
     finally:
         plt.close(fig)
 

@@ -53,7 +53,7 @@ def plot_check(report, path: str | Path, title: str = "") -> None:
                 color="tab:red" if peaks[qname][j] > 1 and enforced else "0.3",
             )
             if j == 0:
-                note = "" if enforced else " — reported, not checked (--jerk)"
+                note = "" if enforced else " — reported, not checked (jerk not enforced)"
                 ax.set_title(f"joint {qname}{note}", fontsize=9)
         axes[-1, col].set_xlabel("t [s]")
     status = limits_phrase(report)

@@ -241,47 +241,47 @@ class BulkWriter:
 
     def write(self, out: BinaryIO) -> dict[int, int]:
         """Write the file to ``out`` (a binary file); returns the messages per channel id."""
+        grouped = self._by_times()
+        groups = [_Rows(g) for g in grouped]
+        chunks = _Chunks.of(groups)
+        counts = {s.channel_id: len(s.times) for s in self.series}
+        pos = _write(out, [MCAP0_MAGIC, _record(self.header)] + [_record(r) for r in (*self.schemas, *self.channels)])
+        pos, chunk_indexes = self._write_chunks(out, pos, groups, chunks, chunks.message_indexes(groups, grouped))
+        pos, attachment_indexes = self._write_attachments(out, pos)
+        pos += _write(out, [_record(DataEnd(data_section_crc=0))])
+        statistics = Statistics(
+            message_count=int(sum(counts.values())),
+            schema_count=len(self.schemas),
+            channel_count=len(self.channels),
+            attachment_count=len(self.attachments),
+            metadata_count=0,
+            chunk_count=len(chunk_indexes),
+            message_start_time=int(chunks.times[0]),
+            message_end_time=int(chunks.times[-1]),
+            channel_message_counts=dict(sorted(counts.items())),
+        )
+        self._write_summary(out, pos, statistics, chunk_indexes, attachment_indexes)
+        return counts
+
+    def _by_times(self) -> list[list[Series]]:
+        """The series grouped by their times (the topics of one log share them: one kind of row)."""
         grouped: list[list[Series]] = []
         for s in self.series:
             same = next(
                 (g for g in grouped if len(g[0].times) == len(s.times) and np.array_equal(g[0].times, s.times)), None
             )
             (same.append(s) if same is not None else grouped.append([s]))
-        groups = [_Rows(g) for g in grouped]
-        chunks = _Chunks.of(groups)
-        indexes = chunks.message_indexes(groups, grouped)
-        counts = {s.channel_id: len(s.times) for s in self.series}
+        return grouped
+
+    def _write_chunks(self, out: BinaryIO, pos: int, groups, chunks, indexes) -> tuple[int, list[ChunkIndex]]:
+        """The data section's chunks from offset ``pos`` [bytes], each followed by its message indexes: the offset
+        after them and the chunk indexes."""
         compression = "" if self.compression == "none" else self.compression
-        pos = _write(out, [MCAP0_MAGIC, _record(self.header)] + [_record(r) for r in (*self.schemas, *self.channels)])
         chunk_indexes: list[ChunkIndex] = []
 
         def written(c: int, job) -> int:  # chunk c and its message indexes, once compressed: bytes written
             crc, body = job.result()
-            lo, hi = int(chunks.times[chunks.firsts[c]]), int(chunks.times[chunks.lasts[c]])
-            head = (
-                _CHUNK_HEAD.pack(
-                    Opcode.CHUNK,
-                    _CHUNK_HEAD.size - 9 + len(compression) + 8 + len(body),
-                    lo,
-                    hi,
-                    chunks.sizes[c],
-                    crc,
-                    len(compression),
-                )
-                + compression.encode()
-            )
-            head += struct.pack("<Q", len(body))
-            index = ChunkIndex(
-                message_start_time=lo,
-                message_end_time=hi,
-                chunk_start_offset=pos,
-                chunk_length=len(head) + len(body),
-                message_index_offsets={},
-                message_index_length=0,
-                compression=compression,
-                compressed_size=len(body),
-                uncompressed_size=chunks.sizes[c],
-            )
+            head, index = _chunk_head(chunks, c, crc, body, compression, pos)
             at = pos + _write(out, [head, body])
             for channel_id, message_index in sorted(indexes[c]):
                 index.message_index_offsets[channel_id] = at
@@ -306,6 +306,10 @@ class BulkWriter:
                     pos += written(*pending.popleft())
             while pending:
                 pos += written(*pending.popleft())
+        return pos, chunk_indexes
+
+    def _write_attachments(self, out: BinaryIO, pos: int) -> tuple[int, list[AttachmentIndex]]:
+        """The attachments from offset ``pos`` [bytes]: the offset after them and their indexes."""
         attachment_indexes = []
         for a in self.attachments:
             record = _record(a)
@@ -321,19 +325,14 @@ class BulkWriter:
                 )
             )
             pos += _write(out, [record])
-        pos += _write(out, [_record(DataEnd(data_section_crc=0))])
-        statistics = Statistics(
-            message_count=int(sum(counts.values())),
-            schema_count=len(self.schemas),
-            channel_count=len(self.channels),
-            attachment_count=len(self.attachments),
-            metadata_count=0,
-            chunk_count=len(chunk_indexes),
-            message_start_time=int(chunks.times[0]),
-            message_end_time=int(chunks.times[-1]),
-            channel_message_counts=dict(sorted(counts.items())),
-        )
-        summary_start, summary, offsets = pos, bytearray(), []
+        return pos, attachment_indexes
+
+    def _write_summary(
+        self, out: BinaryIO, summary_start: int, statistics: Statistics, chunk_indexes: list, attachment_indexes: list
+    ) -> None:
+        """The summary section at ``summary_start`` [bytes] (schemas, channels, statistics, chunk and attachment
+        indexes, summary offsets), the footer with its CRC and the closing magic."""
+        summary, offsets = bytearray(), []
         for opcode, records in (
             (Opcode.SCHEMA, self.schemas),
             (Opcode.CHANNEL, self.channels),
@@ -352,17 +351,29 @@ class BulkWriter:
         crc = zlib.crc32(
             _FOOTER_FIELDS.pack(Opcode.FOOTER, 20, summary_start, summary_offset_start), zlib.crc32(summary)
         )
-        _write(
-            out,
-            [
-                summary,
-                _record(
-                    Footer(summary_start=summary_start, summary_offset_start=summary_offset_start, summary_crc=crc)
-                ),
-                MCAP0_MAGIC,
-            ],
-        )
-        return counts
+        footer = Footer(summary_start=summary_start, summary_offset_start=summary_offset_start, summary_crc=crc)
+        _write(out, [summary, _record(footer), MCAP0_MAGIC])
+
+
+def _chunk_head(chunks, c: int, crc: int, body: bytes, compression: str, pos: int) -> tuple[bytes, ChunkIndex]:
+    """The Chunk record of chunk ``c`` up to its compressed ``body`` (with its CRC), written at ``pos`` [bytes], and
+    its index (the message index offsets filled in as they are written)."""
+    lo, hi = int(chunks.times[chunks.firsts[c]]), int(chunks.times[chunks.lasts[c]])
+    length = _CHUNK_HEAD.size - 9 + len(compression) + 8 + len(body)
+    head = _CHUNK_HEAD.pack(Opcode.CHUNK, length, lo, hi, chunks.sizes[c], crc, len(compression))
+    head += compression.encode() + struct.pack("<Q", len(body))
+    index = ChunkIndex(
+        message_start_time=lo,
+        message_end_time=hi,
+        chunk_start_offset=pos,
+        chunk_length=len(head) + len(body),
+        message_index_offsets={},
+        message_index_length=0,
+        compression=compression,
+        compressed_size=len(body),
+        uncompressed_size=chunks.sizes[c],
+    )
+    return head, index
 
 
 def _write(out: BinaryIO, parts: list) -> int:

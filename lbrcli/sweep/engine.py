@@ -106,7 +106,7 @@ def run_dask(
             else:
                 client = Client(cluster.scheduler, timeout=CONNECT_TIMEOUT_S)
         except (OSError, TimeoutError) as exc:
-            raise CheckFailed(f"--scheduler {cluster.scheduler}: no Dask scheduler answered ({exc})") from None
+            raise CheckFailed(f"no Dask scheduler answered at {cluster.scheduler} ({exc})") from None
         where = f"Dask scheduler {cluster.scheduler}"
     futures = []
     try:

@@ -197,7 +197,9 @@ def read_input(path: str | Path) -> InputFile:
     track = read_track_csv(spath)
     if track.theta is None:
         raise CsvFormatError(
-            "no 'theta' column: track the video with --pivot or --pivot-color to draw its ball", file=spath, row=1
+            "no 'theta' column: track the video giving the pivot (its position or colour) to draw its ball",
+            file=spath,
+            row=1,
         )
     return InputFile(
         spath, kind, balls=(BallSeries(spath, "tracked", track.t, planar_direction(track.theta), track.theta),)

@@ -108,7 +108,7 @@ def align(files: list[InputFile], given: dict[str, float] | None = None) -> Alig
     for f in files:
         value = _given(f.path, given)
         if value is not None and f.kind != OBSTACLES:
-            offsets[f.path], how[f.path] = float(value), "given (--offset)"
+            offsets[f.path], how[f.path] = float(value), "given by hand (offset)"
     spans = [
         (offsets[f.path] + t[0], offsets[f.path] + t[-1])
         for f in files

@@ -19,6 +19,7 @@ def gen() -> SimpleNamespace:
     return module
 
 
+@pytest.mark.heavy
 def test_committed_reference_is_what_the_app_gives(gen):
     assert gen.PAGE.read_text() == gen.text, f"docs/reference/cli.md is stale: run {gen.REGENERATE}"
 

@@ -124,6 +124,7 @@ def page_figures(path: Path) -> list[str]:
     return found
 
 
+@pytest.mark.heavy
 def test_no_measured_figure_is_typed_by_hand():
     found = [line for path in pages() for line in page_figures(path)]
     assert not found, (

@@ -58,6 +58,7 @@ def _exports() -> dict[str, list[str]]:
     return found, loader
 
 
+@pytest.mark.heavy
 def test_site_builds_strictly_and_covers_the_api(site):
     """One build (it takes most of this test's time), four checks: it built, every public name is in the API
     reference with a docstring, and the pages quote the code and the benchmarks' files rather than copies of them."""

@@ -168,6 +168,7 @@ def run_page(path: Path, tmp: Path, with_slow: bool, ran_before: list[tuple[str,
     return ran
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("chain", chains(), ids=lambda c: "+".join(p.name for p in c))
 def test_pages_run_as_written(chain, tmp_path):
     ran: list[tuple[str, ...]] = []
@@ -194,6 +195,7 @@ def test_tutorials_run_commands():
         assert runnable, page.name
 
 
+@pytest.mark.heavy
 def test_the_syntax_check_catches_a_renamed_option():
     check_syntax(("lbr", "plan", "anti-sway", "--length", "0.25", "-o", "x.csv"), "here")
     with pytest.raises(AssertionError, match="--lenght is not an option"):

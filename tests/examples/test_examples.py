@@ -1,5 +1,6 @@
-"""Every example in examples/ runs against the simulator and does what it says (with --sim-lenient: the suite runs
-on a loaded 2-core machine; quality handling has its own tests)."""
+"""Every example in examples/ runs against the simulator and does what it says — in lock-step (--sim-fast, or
+--sim-lockstep where a source runs in real time beside it), so that what they judge does not depend on this machine's
+load; the timing rules have their own tests and benchmarks."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from tests.helpers.cli import Q_START
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 sys.path.insert(0, str(EXAMPLES))
@@ -19,11 +21,12 @@ def test_every_example_is_short():
         assert len(path.read_text().splitlines()) <= 60, path.name
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("version", ["1.15", "2.7"])
 def test_joint_sine_overlay_moves_the_measured_position_by_the_sine(version):
     import joint_sine_overlay
 
-    result, client = joint_sine_overlay.main(["--duration", "2", "--fri-version", version, "--sim-lenient"])
+    result, client = joint_sine_overlay.main(["--duration", "2", "--fri-version", version, "--sim-fast"])
     assert result.ok, result.detail
     measured = np.array([m for m, _ in client.history])
     commanded = np.array([c for _, c in client.history])
@@ -33,23 +36,25 @@ def test_joint_sine_overlay_moves_the_measured_position_by_the_sine(version):
     step = np.abs(np.diff(commanded, axis=0)).max()
     assert np.mean(prev < 1e-6) > 0.9 and prev.max() < 2 * step
     assert np.abs(measured - measured[0]).max() < 0.04 + 1e-9  # bounded by the amplitude: nothing accumulates
-    assert 1e-4 < np.ptp(commanded[:, 3]) < 0.04  # the filtered sine on A4 only
+    assert 1e-4 < np.ptp(commanded[:, 3]) <= 2 * 0.04 + 1e-9  # the filtered sine on A4 only, within ± its amplitude
     assert np.ptp(commanded[:, 0]) == 0.0
 
 
+@pytest.mark.heavy
 def test_torque_sine_moves_the_joint_and_wrench_sine_moves_the_flange():
     import torque_sine_overlay
     import wrench_sine_overlay
 
-    result, client = torque_sine_overlay.main(["--duration", "2", "--sim-lenient"])
+    result, client = torque_sine_overlay.main(["--duration", "2", "--sim-fast"])
     assert result.ok, result.detail
     q = np.array(client.measured)
     assert np.ptp(q[:, 3]) > 1e-4 and np.ptp(q[:, 0]) < np.ptp(q[:, 3]) / 10  # 5 Nm on A4 against 1000 Nm/rad
-    result, client = wrench_sine_overlay.main(["--duration", "2", "--sim-lenient"])
+    result, client = wrench_sine_overlay.main(["--duration", "2", "--sim-fast"])
     assert result.ok, result.detail
     assert np.ptp(np.array(client.measured), axis=0).max() > 1e-5
 
 
+@pytest.mark.heavy
 def test_stream_csv_and_monitor_write_logs_the_project_reads(tmp_path):
     import monitor_to_file
     import stream_csv
@@ -59,18 +64,19 @@ def test_stream_csv_and_monitor_write_logs_the_project_reads(tmp_path):
 
     t = np.arange(0, 1.0 + 1e-9, 0.005)
     s = 10 * (t / t[-1]) ** 3 - 15 * (t / t[-1]) ** 4 + 6 * (t / t[-1]) ** 5
-    q = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0]) + 0.1 * s[:, None]
+    q = Q_START + 0.1 * s[:, None]
     csv = tmp_path / "move.csv"
     np.savetxt(csv, np.column_stack([t, q]), delimiter=",", header="t,q1,q2,q3,q4,q5,q6,q7", comments="", fmt="%.12g")
-    result, player = stream_csv.main([str(csv), "--log", str(tmp_path / "run.csv"), "--sim-lenient"])
+    result, player = stream_csv.main([str(csv), "--log", str(tmp_path / "run.csv"), "--sim-fast"])
     assert result.ok, result.detail
     assert player.trajectory_rows == len(t)
     assert result.prepared_replies > 0.5 * len(t)  # over UDP with the simulator: the rows go out prepared
     assert len(read_table(tmp_path / "run.csv", LOG_COLUMNS, time="increasing").data) == result.cycles
-    result, rows = monitor_to_file.main(["--log", str(tmp_path / "mon.csv"), "--duration", "0.5", "--sim-lenient"])
+    result, rows = monitor_to_file.main(["--log", str(tmp_path / "mon.csv"), "--duration", "0.5", "--sim-fast"])
     assert result.ok and rows == len(read_table(tmp_path / "mon.csv", LOG_COLUMNS, time="increasing").data) > 50
 
 
+@pytest.mark.heavy
 def test_damp_ball_feedback_removes_the_sway_open_loop_keeps():
     import damp_ball
 
@@ -85,10 +91,11 @@ def test_damp_ball_feedback_removes_the_sway_open_loop_keeps():
     assert late[0.9] < late[0.0] / 4
 
 
+@pytest.mark.heavy
 def test_io_access_writes_the_clock_and_reads_it_back():
     import io_access
 
-    result, client = io_access.main(["--duration", "1", "--sim-lenient"])
+    result, client = io_access.main(["--duration", "1", "--sim-fast"])
     assert result.ok, result.detail
     assert len(client.written) > 50
     # what the controller reports in the next message is what was written in the cycle before
@@ -100,12 +107,13 @@ def test_io_access_writes_the_clock_and_reads_it_back():
     assert set(later) <= set(client.written) | {(0, 0.0)}  # never anything that was not written
 
 
+@pytest.mark.heavy
 def test_bridge_pose_source_draws_the_circle_and_ends_the_session():
     import bridge_pose_source
 
     from trajectories.robot import Robot
 
-    result, follower, sent = bridge_pose_source.main(["--sim-lenient"])
+    result, follower, sent = bridge_pose_source.main(["--sim-lockstep"])
     assert result.ok, result.detail
     assert "ended" in result.detail and follower.pose_targets > 300 and follower.poses_unreached == 0
     circle, tcp_back = np.array(sent[:-1]), sent[-1]

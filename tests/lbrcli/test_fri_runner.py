@@ -9,6 +9,8 @@ import pytest
 
 from lbrcli.fri import EndReason, Outcome
 from lbrcli.fri_runner import LATE_REPLIES_HINT, _SessionParts
+from lbrcli.fri_options import SESSION_FLAGS
+from lbrcli.option_groups import name_text
 from lbrcli.session_settings import SimulatorSettings
 
 
@@ -46,7 +48,8 @@ def test_a_drop_for_late_replies_is_explained_with_what_helps(sim, end_reason, h
     assert judged.detail.endswith(LATE_REPLIES_HINT) is hinted
     assert judged.detail.startswith("the session left COMMANDING_ACTIVE")
     if hinted:
-        assert "--sim-lockstep" in judged.detail and "late replies" in judged.detail
+        assert "SimulatorSettings.lockstep" in judged.detail and "late replies" in judged.detail
+        assert "lock-step (--sim-lockstep) waits" in name_text(judged.detail, SESSION_FLAGS)  # as the commands say it
 
 
 def test_a_completed_session_is_not_touched():

@@ -12,7 +12,7 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
-from conftest import Q_START, run_in_process
+from tests.helpers.cli import Q_START, run_in_process
 from lbrcli.fri import LBRClient
 from lbrcli.lab.attach import LabOptions
 from lbrcli.option_groups import OptionGroup, with_options

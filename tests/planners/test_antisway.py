@@ -58,6 +58,7 @@ def test_plan_layout_accel_is_the_thesis_baseline_bit_for_bit():
     assert np.all(plan.position[:, 2] == Z)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("shaper", ["fast", "box", "zv", "mzv", "zvd", "box-zvd"])
 @pytest.mark.parametrize("a", [1.0, 2.0])
 def test_zero_vibration_designs_leave_no_sway_at_the_nominal_length(table, shaper, a):
@@ -101,6 +102,7 @@ def test_robustness_ordering_off_nominal(table):
         assert worst["box-zvd"] <= 0.5
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("length, a", [(0.15, 2.0), (0.25, 1.0), (0.30, 2.0)])
 def test_length_tolerance_goal(length, a):
     plan = plan_of("auto", a, length, length_tolerance=0.2)
@@ -119,6 +121,7 @@ def test_long_move_nonlinear_effect():
     assert auto.stop_time <= 1.05 * base.stop_time
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("length", [0.15, 0.30])
 @pytest.mark.parametrize("a", [1.0, 2.0])
 def test_default_duration_and_residual_over_segment_lengths(length, a):
@@ -139,6 +142,7 @@ def test_default_duration_and_residual_over_segment_lengths(length, a):
                 assert residual_deg(robust, length * (1 + err)) <= 0.3, (s, err)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("shaper", ["auto", "robust", "box", "zv", "zvd", "ei", "box-zvd", "accel"])
 def test_pivot_limits_hold_by_construction(shaper):
     a, j = 2.0, 20.0
@@ -186,6 +190,7 @@ def test_linear_residual_of_a_box_design_vanishes_at_its_period():
     assert float(linear_residual(prof, 1.1 * w0)) > 1e-3
 
 
+@pytest.mark.heavy
 def test_prediction_integrates_the_sampled_acceleration_exactly():
     """The fixed-step piecewise prediction equals a tight adaptive integration of the same sampled input."""
     from planners.sway_prediction import hat_acceleration

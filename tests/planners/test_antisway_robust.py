@@ -42,6 +42,7 @@ def test_ramp_profile_closed_forms_agree_with_numerical_integration():
     assert v == pytest.approx(np.abs(vel).max(), rel=1e-4)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("length, a_max, s", [(0.25, 2.0, 0.35), (0.12, 3.0, 0.6), (0.5, 1.0, 0.1)])
 def test_robust_profile_meets_its_bound_over_the_band_and_the_limits(length, a_max, s):
     spec = robust_spec(length, a_max, 0.1, math.radians(0.2), None)
@@ -65,6 +66,7 @@ def test_robust_profile_meets_its_bound_over_the_band_and_the_limits(length, a_m
     assert sol is None or sol[0] > spec.residual
 
 
+@pytest.mark.heavy
 def test_linear_phasor_matches_the_simulated_linear_pendulum():
     """|Z| is the residual amplitude of θ̈ + ω²θ = −(ω²/g)·ẍ; its phase gives the final state."""
     from scipy.integrate import solve_ivp
@@ -85,6 +87,7 @@ def test_linear_phasor_matches_the_simulated_linear_pendulum():
     assert z == pytest.approx(-np.exp(-1j * w * prof.duration) * (thd / w + 1j * th), abs=1e-7)
 
 
+@pytest.mark.heavy
 def test_nonlinear_correction_reaches_the_budget_where_the_linear_design_does_not():
     """At 3 m/s² on a short string the linear design misses on the nonlinear pendulum; the planner corrects it."""
     length, a_max, s = 0.1, 3.0, 0.45
@@ -102,6 +105,7 @@ def test_nonlinear_correction_reaches_the_budget_where_the_linear_design_does_no
     assert amp.max() <= 1.15 * budget
 
 
+@pytest.mark.heavy
 def test_max_sway_is_a_constraint_of_the_default_design():
     pts = np.array([[0.4, -0.3], [0.62, -0.3], [0.62, 0.05]])
     free = plan_layout(pts, L, 2.0, 0.45, 0.005, AntiSwayOptions())
@@ -116,6 +120,7 @@ def test_max_sway_is_a_constraint_of_the_default_design():
     assert bounded.stop_time > free.stop_time  # bounded sway costs time
 
 
+@pytest.mark.heavy
 def test_hat_model_of_the_sampled_path_ends_at_rest():
     """The realised pivot acceleration integrates to zero net velocity (no spurious swing after the move)."""
     from planners.sway_prediction import hat_acceleration

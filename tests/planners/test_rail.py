@@ -15,7 +15,7 @@ def rail(robot, limits, q_start):
 
 @pytest.fixture(scope="module")
 def q_start():
-    from conftest import Q_START
+    from tests.helpers.cli import Q_START
 
     return Q_START.copy()
 

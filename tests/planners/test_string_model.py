@@ -39,6 +39,7 @@ def apex_rate(theta_apex, length):
     return math.sqrt(2 * G * (1 - math.cos(theta_apex)) / length)
 
 
+@pytest.mark.heavy
 def test_taut_motion_is_the_spherical_pendulum():
     """A driven swing that stays taut: identical to planners.pendulum (the same equations), drag off."""
     t = np.arange(0.0, 2.0, 0.005)
@@ -52,6 +53,7 @@ def test_taut_motion_is_the_spherical_pendulum():
     assert np.nanmax(np.abs(run.tension - ref.tension)) < 1e-5
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("length,apex_deg", [(0.2, 140.0), (0.33, 165.0)])
 def test_free_swing_goes_slack_where_the_tension_vanishes_and_flies_a_parabola(length, apex_deg):
     t, pos = fixed_pivot(1.2)
@@ -167,6 +169,7 @@ def _swing_cases():
     ]
 
 
+@pytest.mark.heavy
 def test_the_stepper_and_the_event_driven_integrator_agree_event_by_event():
     t, pos = fixed_pivot(1.6)
     for model, apex in _swing_cases():

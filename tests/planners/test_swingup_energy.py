@@ -22,10 +22,11 @@ def thesis_plan():
 
 
 def test_from_exact_rest_the_law_does_nothing_and_says_so():
-    with pytest.raises(PlanningError, match="--theta0"):
+    with pytest.raises(PlanningError, match="EnergyParams.theta0"):
         plan_energy(EnergyParams(length=0.25, mass=0.0139, theta_d=2.0), BOUNDS)
 
 
+@pytest.mark.heavy
 def test_a_start_push_gets_it_going():
     p = EnergyParams(length=0.25, mass=0.0139, theta_d=math.radians(115), push=1.0)
     plan = plan_energy(p, BOUNDS)
@@ -33,6 +34,7 @@ def test_a_start_push_gets_it_going():
     assert plan.reached and plan.max_theta > math.radians(113)
 
 
+@pytest.mark.heavy
 def test_thesis_example_reaches_theta_d_and_stops(thesis_plan):
     plan = thesis_plan
     assert plan.reached
@@ -58,6 +60,7 @@ def test_energy_law_drives_the_energy_towards_e_d_as_the_thesis_bookkeeping_says
     np.testing.assert_allclose(e - e[0], integral, atol=2e-3 * abs(e[0] - e_d))
 
 
+@pytest.mark.heavy
 def test_planned_angle_matches_an_independent_integration_of_the_sampled_path(thesis_plan):
     plan = thesis_plan
     pos = np.column_stack([np.zeros_like(plan.x), plan.x, np.zeros_like(plan.x)])

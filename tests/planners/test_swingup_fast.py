@@ -22,6 +22,7 @@ def fast(robot, limits):
     return plan_swing_up(SwingUpRequest(length=0.25, mass=0.0139, theta_d=THETA_D, method="fast"), robot, limits)
 
 
+@pytest.mark.heavy
 def test_reaches_115_deg_from_rest_within_3_s(fast):
     ver = fast.verification
     k = int(np.flatnonzero(np.abs(ver.theta) >= THETA_D)[0])
@@ -83,6 +84,7 @@ def test_reports_slack_honestly(fast):
     assert np.isnan(fast.verification.tension[k + 1])  # no tension in a slack string
 
 
+@pytest.mark.heavy
 def test_taut_constraint_gives_the_highest_taut_angle():
     bounds = TaskBounds(v_max=0.8, a_max=3.9, j_max=25.0)
     problem = FastProblem(length=0.25, theta_d=THETA_D, bounds=bounds, taut=True)

@@ -42,6 +42,7 @@ def calibration():
     return calibrate_camera(views, (640, 480), BOARD, SQUARE)
 
 
+@pytest.mark.heavy
 def test_intrinsics_recovered(calibration):
     cal = calibration
     assert cal.rms_px < 0.15

@@ -128,6 +128,7 @@ def _same(a, b):
         assert abs(p.u - q.u) < 1e-9 and abs(p.v - q.v) < 1e-9 and p.area_px == q.area_px and p.clipped == q.clipped
 
 
+@pytest.mark.heavy
 def test_coarse_whole_frame_search_finds_what_the_full_resolution_pass_finds():
     from tracking.detect import coarse_factor, find_blobs_coarse
 

@@ -41,6 +41,7 @@ def test_positions_are_compared_on_the_models_clock_and_scale():
     assert mirrored.rms_m < 1e-4
 
 
+@pytest.mark.heavy
 def test_a_rendered_flight_on_a_slack_string_is_tracked_by_position(tmp_path):
     """The renderer's slack string (a ball path instead of an angle) seen by the tracker: the ball is followed where
     the string sags, within a pixel, and those frames are slack."""

@@ -1,9 +1,11 @@
+import pytest
 import numpy as np
 from scipy.optimize import lsq_linear
 
 from trajectories.boxqp import solve_box_qp
 
 
+@pytest.mark.heavy
 def test_matches_scipy_bounded_least_squares():
     rng = np.random.default_rng(3)
     for _ in range(200):

@@ -82,7 +82,7 @@ def test_missing_file(tmp_path):
 
 def test_headerless_needs_dt(tmp_path):
     p = write(tmp_path, "0.1,0.2,0.3,-1.0,0.5,0.6,0.7\n" * 4)
-    with pytest.raises(CsvFormatError, match="--dt"):
+    with pytest.raises(CsvFormatError, match="read_table.headerless_dt"):
         read_joint_csv(p)
     traj = read_joint_csv(p, dt=0.005)
     assert len(traj) == 4 and traj.t[-1] == pytest.approx(0.015)
@@ -173,6 +173,7 @@ def test_not_utf8_names_the_row(tmp_path):
     assert exc.value.row == 5 and "not UTF-8" in str(exc.value)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("rows", [10, 3000, 5001])
 def test_large_files_read_exactly_and_name_the_first_fault(tmp_path, rows):
     rng = np.random.default_rng(rows)
@@ -287,6 +288,7 @@ def test_the_large_file_reader_reads_exactly_what_the_small_file_reader_reads(tm
         assert small[1] == big[1]
 
 
+@pytest.mark.heavy
 def test_the_large_file_reader_is_used_and_equals_numpys(tmp_path):
     from trajectories import csvio
 

@@ -38,6 +38,7 @@ def _integrate_stop(v: float, a: float, a_max: float, j_max: float, h: float = 2
     return s * x, max(s * hi, s * lo), min(s * hi, s * lo)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("seed", range(4))
 def test_stop_distance_matches_a_fine_step_integration(seed: int) -> None:
     rng = np.random.default_rng(seed)
@@ -54,6 +55,7 @@ def test_stop_distance_matches_a_fine_step_integration(seed: int) -> None:
         assert stop_distance(-v, -a, a_max, j_max) == pytest.approx(-d)
 
 
+@pytest.mark.heavy
 def test_over_braking_stays_within_its_forward_and_reverse_bounds() -> None:
     a_max, j_max = float(LIM.acceleration[1]), float(LIM.jerk[1])
     for v, a in [(0.01, -8.0), (0.05, -8.5), (0.2, -8.57)]:
@@ -90,6 +92,7 @@ def _walk(env: BrakingEnvelope, rng: np.random.Generator, n: int, jerk: bool, pu
     return h
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("jerk", [False, True])
 @pytest.mark.parametrize("push", ["limit", "random"])
 def test_every_admitted_state_is_brakeable_and_inside_the_limits(jerk: bool, push: str) -> None:

@@ -12,6 +12,7 @@ def _path(robot, q_start, n=2001, dt=1e-3, amplitude=0.3):
     return t, q, *robot.fk_path(q)
 
 
+@pytest.mark.heavy
 def test_ik_round_trip_with_changing_orientation(robot, limits, q_start):
     t, q_true, pos, rot = _path(robot, q_start)
     # the orientation really changes along this path

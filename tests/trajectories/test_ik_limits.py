@@ -8,15 +8,17 @@ import pytest
 from trajectories.errors import IkError
 from trajectories.ik import IkOptions, solve_ik_path
 from trajectories.ik_paths import build_suite, issue_circle, random_joint_path, verify_joint_path
+from tests.helpers.cli import Q_START
 
 BOUNDED = IkOptions(nullspace_gain=None, speed_limits=True)
-THESIS = np.array([0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0])
+THESIS = Q_START
 
 
 def _solve(robot, limits, path, q0=None, options=BOUNDED):
     return solve_ik_path(robot, path.position, path.rotation, q0, limits, options, times=path.t)
 
 
+@pytest.mark.heavy
 def test_joint_held_at_its_limit_is_named_as_a_fact_of_the_path_from_q0(robot, limits):
     # the flange turns 170° about its own axis (A7 alone), but this robot's A7 stops at ±120°: the path from q0
     # runs into A7's limit, although other arm angles reach the pose inside the limits (not a fact of the pose)
@@ -33,7 +35,7 @@ def test_joint_held_at_its_limit_is_named_as_a_fact_of_the_path_from_q0(robot, l
     err = exc.value
     assert err.reason == "position limit" and err.joint == 6 and abs(err.needed) > np.radians(120)
     assert err.kind == "start" and "ran into A7's position limit" in str(err) and t[err.index] > 1.0
-    assert "the pose itself is reachable" in str(err) and "without --q0" in str(err)
+    assert "the pose itself is reachable" in str(err) and "without solve_ik_path.q0" in str(err)
     # a judge of its own: the closed form on a 0.05° grid of arm angles × 8 branches finds the pose inside the limits
     psi = np.radians(np.arange(-180.0, 180.0, 0.05))
     k = err.index
@@ -45,7 +47,7 @@ def test_joint_held_at_its_limit_is_named_as_a_fact_of_the_path_from_q0(robot, l
 
 
 def test_issue_circle_solved_from_a_start_chosen_for_the_whole_path(robot, limits):
-    path = issue_circle(0.001)  # at 5 ms: tests/lbrcli/test_ik_cli.py
+    path = issue_circle(0.001)  # at 5 ms: tests/lbrcli/commands/test_kinematics_ik.py
     res = _solve(robot, limits, path)
     check = verify_joint_path(robot, path, res.q, limits)
     assert check.position_error <= 1e-6 and check.rotation_error <= 1e-5
@@ -54,6 +56,7 @@ def test_issue_circle_solved_from_a_start_chosen_for_the_whole_path(robot, limit
     assert abs(res.velocity_ratio - check.velocity_ratio) < 1e-6
 
 
+@pytest.mark.heavy
 def test_suite_subset_solved_inside_the_speed_limits(robot, limits):
     # FK-built paths at 5 ms: random, through the wrist singularity, brushing A2/A7 limits; the solver picks the start
     suite = {p.name: p for p in build_suite(robot, limits) if p.dt == 0.005}
@@ -92,6 +95,7 @@ def test_out_of_reach_says_by_how_much(robot, limits):
     assert "out of reach by" in str(exc.value) and " mm" in str(exc.value)
 
 
+@pytest.mark.heavy
 def test_null_space_pull_is_per_second_not_per_sample(robot, limits):
     # The same continuous path sampled at 1 and 5 ms, solved from a start whose elbow differs from the path's:
     # the redundancy relaxes toward q0 at the same pace, so both joint paths agree at common times.

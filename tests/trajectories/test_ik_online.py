@@ -39,6 +39,7 @@ def test_poses_near_the_seed_are_solved_to_the_tolerance(ik, robot, limits, q_st
         assert res.iterations <= 4
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("posture, drift", [(True, 0.01), (False, 0.5)])
 def test_a_streamed_tcp_circle_gives_continuous_joints(ik, robot, posture, drift):
     """A 10 cm circle at 1 kHz, each pose seeded with the previous solution: joints change smoothly (no flips of

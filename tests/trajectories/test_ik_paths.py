@@ -1,8 +1,10 @@
+import pytest
 import numpy as np
 
 from trajectories.ik_paths import build_suite, cartesian_path, issue_circle, verify_joint_path
 
 
+@pytest.mark.heavy
 def test_suite_is_wide_and_fk_built_paths_are_feasible(robot, limits):
     suite = build_suite(robot, limits)
     assert len(suite) >= 60
@@ -36,6 +38,7 @@ def test_cartesian_shapes_are_what_they_say(robot):
     assert np.allclose(tilt, 45.0)
 
 
+@pytest.mark.heavy
 def test_a_start_on_the_right_part_of_the_self_motion_is_found_when_the_best_scored_ones_stall(robot, limits):
     """Two FK-built paths (so reachable within the speed limits) whose best-scored start candidates all stall on a
     joint's speed limit: the solver goes on to the other candidates and solves them."""
@@ -53,6 +56,7 @@ def test_a_start_on_the_right_part_of_the_self_motion_is_found_when_the_best_sco
         assert rank > options.start_attempts  # found beyond the best-scored ones
 
 
+@pytest.mark.heavy
 def test_interpolated_path_keeps_the_acceleration_the_samples_need(robot, limits):
     """An FK-built fast path whose coarse samples needed one acceleration bound dropped: accepting any spline
     after a dropped bound let one through at 28× the acceleration limit; only what the samples themselves need

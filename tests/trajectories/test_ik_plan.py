@@ -12,6 +12,7 @@ from trajectories.ik_plan import PlanTargets, best_plan
 BOUNDED = IkOptions(nullspace_gain=None, speed_limits=True)
 
 
+@pytest.mark.heavy
 def test_plan_along_a_fast_joint_path_is_exact_and_inside_the_limits(robot, limits):
     path = next(p for p in build_suite(robot, limits, seed=2) if p.name == "joint-c0-v0.9-1ms")
     plan = best_plan(PlanTargets(ArmGeometry.of(robot), path.position, path.rotation, path.t, limits))

@@ -26,6 +26,7 @@ def _grid_feasible(geometry, pos, rot, bound, step_deg=0.05):
     return (reach & (np.abs(q) <= bound).all(axis=-1)).any(axis=(1, 2))
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("config", [RobotConfig(), RobotConfig(flange=Flange.STANDARD, tool=(0.02, -0.01, 0.12))])
 def test_feasibility_of_random_poses_agrees_with_a_dense_grid(config, limits):
     """Poses of configurations up to 1.25× the limits (about a third beyond them at every arm angle)."""
@@ -41,6 +42,7 @@ def test_feasibility_of_random_poses_agrees_with_a_dense_grid(config, limits):
     assert (ok == judge).all()
 
 
+@pytest.mark.heavy
 def test_the_first_pose_beyond_a_limit_is_exact(robot, limits):
     """A suite circle whose tilted poses leave the reach of A6: the first sample that fits no arm angle is found
     at every sample (the judge agrees on it and on the one before), refused by the IK at that index."""
@@ -75,6 +77,7 @@ def test_a4_speed_is_a_fact_of_the_path(robot, limits, q_start):
         assert err.needed == pytest.approx(speed[first - 1], rel=1e-6)
 
 
+@pytest.mark.heavy
 def test_a_short_excursion_missed_by_the_coarse_check_is_found_when_the_solver_stalls(robot, limits):
     """Three samples (3 ms) of a pose beyond A6's limit at every arm angle inside a path that is otherwise easy: the
     check before solving looks at the arm angles every 20 ms and misses them; the solver stalls there and the

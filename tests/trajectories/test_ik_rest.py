@@ -20,6 +20,7 @@ def _solve(path, limits, options=BOUNDED):
     return robot, solve_ik_path(robot, path.position, path.rotation, None, limits, options, times=path.t)
 
 
+@pytest.mark.heavy
 def test_a_yawing_line_ends_at_rest_and_passes_the_check(limits):
     """A suite line at 1 ms (flange turning 90° about the vertical, rest to rest) on which the null-space pull
     toward the start still moved the elbow at the last sample (refused by the check): now the file passes the
@@ -45,6 +46,7 @@ def test_a_path_moving_at_its_ends_is_reported_not_at_rest(limits):
             if v.quantity == "rest"} == {"start", "end"}  # fmt: skip
 
 
+@pytest.mark.heavy
 def test_accelerations_above_the_limit_are_lowered_along_the_self_motion(limits):
     """An FK-built path near the shoulder and wrist singularities (its witness within 0.8 of every limit) on which
     the local solution reached 2.3× the acceleration limit: moved along the self-motion it passes the check."""
@@ -62,6 +64,7 @@ def test_accelerations_above_the_limit_are_lowered_along_the_self_motion(limits)
     assert check_trajectory(JointTrajectory(t=path.t, q=lowered), limits).ok
 
 
+@pytest.mark.heavy
 def test_a4_acceleration_set_by_the_poses_refuses_a_rest_to_rest_path(limits):
     """A rose drawn with an offset pen whose wrist distance changes faster than A4 may accelerate: A4 is set by
     the pose, so no arm angle helps; the refusal names the first sample, judged by the closed form's A4."""

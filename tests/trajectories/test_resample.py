@@ -7,8 +7,9 @@ import pytest
 
 from trajectories.resample import resample
 from trajectories.trajectory import JointTrajectory
+from tests.helpers.cli import Q_START
 
-Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)
+Q0 = tuple(Q_START.tolist())  # [rad]
 
 
 def test_resample_keeps_the_samples_and_interpolates_smoothly():

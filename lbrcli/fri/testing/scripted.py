@@ -281,6 +281,39 @@ class ScriptedController:
             return got
         return None
 
+    def _await_client(self, c: Cycle, seq: int, reflected: int, dest: tuple[str, int]) -> tuple[Any, int]:
+        """A client still starting up: send cycle ``c`` again (new counters) until the client answers the latest
+        message or ``wait_for_client`` [s] passes; the reply (None: none) and the sequence counter reached."""
+        give_up = time.monotonic() + self.wait_for_client
+        cmd = self._await_reply(time.monotonic() + 0.02)
+        while (cmd is None or cmd.header.reflectedSequenceCounter != seq) and time.monotonic() < give_up:
+            if self.client_done.is_set():
+                break
+            if cmd is None:
+                seq += 1
+                self.clock_ns += int(round((c.clock_ms or c.send_period) * 1e6))  # its clock runs on
+                self.sock.sendto(self._message(c, seq, reflected), dest)
+                self.sent_seqs.append(seq)
+            cmd = self._await_reply(time.monotonic() + 0.02)
+        self.wait_for_client = 0.0
+        return cmd, seq
+
+    def _record(self, i: int, c: Cycle, seq: int, cmd: Any) -> tuple[float, ...] | None:
+        """Record the client's reply ``cmd`` to script cycle ``i`` (``replies``, its IO writes); the joint position it
+        commands [rad] (None: none)."""
+        pos = tuple(cmd.commandData.jointPosition.value) if cmd.HasField("commandData") else None
+        if pos is not None and len(pos) == 0:
+            pos = None
+        cd = cmd.commandData
+        tau = tuple(cd.jointTorque.value) or None
+        wr = tuple(cd.cartesianWrenchFeedForward.element) or None
+        io = tuple((w.name, w.analogValue if w.type == 2 else w.digitalValue) for w in cd.writeIORequest)
+        for name, v in io:
+            self.io_values[name] = v
+        header = (cmd.header.sequenceCounter, cmd.header.reflectedSequenceCounter)
+        self.replies.append(Reply(i, c.state, seq, header, pos, tau, wr, io))
+        return pos
+
     def _run(self) -> None:
         seq = -1
         reflected = 0
@@ -328,18 +361,7 @@ class ScriptedController:
                 time.sleep(self.pace_s)
                 continue
             if self.wait_for_client > 0:  # a client still starting up: keep sending until it answers the latest
-                give_up = time.monotonic() + self.wait_for_client
-                cmd = self._await_reply(time.monotonic() + 0.02)
-                while (cmd is None or cmd.header.reflectedSequenceCounter != seq) and time.monotonic() < give_up:
-                    if self.client_done.is_set():
-                        break
-                    if cmd is None:
-                        seq += 1
-                        self.clock_ns += int(round((c.clock_ms or c.send_period) * 1e6))  # its clock runs on
-                        self.sock.sendto(self._message(c, seq, reflected), dest)
-                        self.sent_seqs.append(seq)
-                    cmd = self._await_reply(time.monotonic() + 0.02)
-                self.wait_for_client = 0.0
+                cmd, seq = self._await_client(c, seq, reflected, dest)
             else:
                 cmd = self._await_reply(time.monotonic() + self.reply_timeout, seq)
             if cmd is None:
@@ -355,21 +377,7 @@ class ScriptedController:
             if cmd.header.reflectedSequenceCounter != seq:
                 self.unexpected.append(i)
             reflected = cmd.header.sequenceCounter
-            pos = tuple(cmd.commandData.jointPosition.value) if cmd.HasField("commandData") else None
-            if pos is not None and len(pos) == 0:
-                pos = None
-            cd = cmd.commandData
-            tau = tuple(cd.jointTorque.value) or None
-            wr = tuple(cd.cartesianWrenchFeedForward.element) or None
-            io = tuple((w.name, w.analogValue if w.type == 2 else w.digitalValue) for w in cd.writeIORequest)
-            for name, v in io:
-                self.io_values[name] = v
-            self.replies.append(
-                Reply(
-                    i, c.state, seq, (cmd.header.sequenceCounter, cmd.header.reflectedSequenceCounter), pos, tau, wr, io
-                )
-            )
-            self._robot_step(c, pos)
+            self._robot_step(c, self._record(i, c, seq, cmd))
             time.sleep(self.pace_s)
 
 

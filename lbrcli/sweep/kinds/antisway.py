@@ -13,11 +13,13 @@ from . import Judge, Outcome, RunKind, python_args, warm_robot
 def run(options: Mapping[str, Any], timeout: float | None = None) -> Outcome:
     """Plan as the command does; a plan that cannot be used is exit 1 with the command's message."""
     from lbrcli.antisway import plan_anti_sway
-    from lbrcli.commands.plan_antisway import anti_sway_inputs
+    from lbrcli.commands.plan_antisway import FLAGS, anti_sway_inputs
     from lbrcli.console import _jsonable
+    from lbrcli.option_groups import settings_named
 
     kw = anti_sway_inputs(**python_args(options))
-    result = plan_anti_sway(**kw)
+    with settings_named(FLAGS):  # the error names the option, as the command's does
+        result = plan_anti_sway(**kw)
     return Outcome(
         _jsonable(result.figures()),
         joints=result.joints,

@@ -24,7 +24,7 @@ def run(options: Mapping[str, Any], timeout: float | None = None) -> Outcome:
     from lbrcli.commands.kinematics import ik_path
     from lbrcli.console import _jsonable
     from trajectories.csvio import read_task_csv
-    from trajectories.errors import OptionError
+    from trajectories.errors import OptionError, SettingError
 
     kw = python_args(options)
     index, seed = kw.pop("suite_path", None), int(kw.pop("suite_seed", 0))
@@ -40,7 +40,7 @@ def run(options: Mapping[str, Any], timeout: float | None = None) -> Outcome:
 
         suite = _suite(seed)
         if not (isinstance(index, int) and 0 <= index < len(suite)):
-            raise OptionError(f"--suite-path must be 0..{len(suite) - 1}, got {index!r}")
+            raise SettingError("ik", "suite-path", f"must be 0..{len(suite) - 1}, got {index!r}")
         path = suite[index]
         task = TaskTrajectory(t=path.t, position=path.position, quaternion=quaternions_from_matrices(path.rotation))
         traj, figures = ik_path(task, **kw)

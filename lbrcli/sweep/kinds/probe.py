@@ -15,15 +15,15 @@ from . import Outcome, RunKind
 def run(options: Mapping[str, Any], timeout: float | None = None) -> Outcome:
     """Busy-loop for ``seconds`` of CPU time (``busy = true``, default) or sleep ``seconds`` [s]; figures: the wall
     time taken and where."""
-    from trajectories.errors import OptionError
+    from trajectories.errors import SettingError
 
     seconds = float(options.get("seconds", 0.0))
     code = int(options.get("exit-code", 0))
     if not (0.0 <= seconds <= 3600.0):
-        raise OptionError(f"--seconds must be in [0, 3600] s, got {seconds:g}")
+        raise SettingError("probe", "seconds", f"must be in [0, 3600] s, got {seconds:g}")
     crash = options.get("crash", "none")
     if crash not in ("none", "exception", "worker"):
-        raise OptionError(f"--crash must be none, exception or worker, got {crash!r}")
+        raise SettingError("probe", "crash", f"must be none, exception or worker, got {crash!r}")
     if crash == "exception":
         raise RuntimeError("probe asked to crash")
     if crash == "worker":
@@ -51,5 +51,5 @@ KIND = RunKind(
     command=None,
     run=run,
     options=("seconds", "busy", "exit-code", "value", "crash"),
-    summary="a synthetic run (busy or sleeping for --seconds): what the cluster costs per run; no lbr command",
+    summary="a synthetic run (busy or sleeping for its seconds): what the cluster costs per run; no lbr command",
 )

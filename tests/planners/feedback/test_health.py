@@ -32,6 +32,7 @@ def _feed(h: SensorHealth, t, readings, ref, drive, predicted=None) -> str | Non
     return h.fault
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize(
     "length, noise, late", [(0.25, 0.0, 0), (0.30, math.radians(0.3), 30), (0.20, math.radians(0.6), 10)]
 )
@@ -42,6 +43,7 @@ def test_a_healthy_sensor_never_trips(length, noise, late):
     assert _feed(SensorHealth("θ"), t, readings, ref, drive, predicted=true) is None
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("fault, words", [("stuck", "stood still"), ("frozen", "stood still"), ("reversed", "reversed"),
                                           ("jump", "jumped"), ("nan", "not a number")])  # fmt: skip
 def test_a_lying_sensor_is_found(fault, words):

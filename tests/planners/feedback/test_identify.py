@@ -42,6 +42,7 @@ def _record(length: float, friction: float = 0.0, delay: float = 0.006, noise: i
     return arrive, counts * 2 * math.pi / 4096, a, dt
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("length, friction, delay, noise, offset", [
     (NOMINAL, 0.0, 0.006, 0, 0), (0.8 * NOMINAL, 0.0, 0.006, 0, 0), (1.2 * NOMINAL, 0.0, 0.006, 0, 0),
     (NOMINAL, 0.05, 0.006, 0, 0), (NOMINAL, 0.0, 0.015, 2, 0), (0.8 * NOMINAL, 0.05, 0.015, 2, -30),
@@ -56,12 +57,14 @@ def test_the_rod_its_friction_the_offset_and_the_delay_are_found(length, frictio
     assert rod.gain == pytest.approx(1.0, abs=0.1)
 
 
+@pytest.mark.heavy
 def test_a_reversed_encoder_is_told_by_the_sign_of_its_response():
     t, y, a, dt = _record(NOMINAL, sign=-1, noise=2)
     rod = identify(t, y, a, dt, NOMINAL)
     assert rod.sign == -1 and rod.equivalent_length == pytest.approx(NOMINAL, rel=0.01)
 
 
+@pytest.mark.heavy
 def test_no_rod_or_one_outside_the_band_is_refused_with_a_reason():
     t, y, a, dt = _record(NOMINAL, amplitude=0.0005)  # the arm barely pushes: no swing to speak of
     with pytest.raises(IdentificationError, match="barely moved"):

@@ -24,6 +24,7 @@ def _rod(scale: float = 1.0, friction: float = 0.0) -> RigidPendulum:
     return RigidPendulum(rod_length=0.4 * scale, coulomb=friction * r.mass * r.com * 9.81)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("scale, friction, sensor", [
     (0.8, 0.05, Sensor(noise=2, delay=0.015, offset=-30)), (1.2, 0.05, Sensor(noise=2, delay=0.015, offset=30)),
     (1.0, 0.0, Sensor())])  # fmt: skip
@@ -38,18 +39,21 @@ def test_it_balances_for_the_hold_without_a_fall_and_lowers_the_rod(scale, frict
     assert abs(math.degrees(run.phi[-1])) < 15.0 and np.all(np.abs(run.x) <= LIM.travel + 1e-9)  # lowered, on the rail
 
 
+@pytest.mark.heavy
 def test_a_push_of_10_degrees_is_recovered():
     run = simulate_session(_rod(), LIM, NOMINAL.equivalent_length, SessionOptions(hold_s=6.0), Sensor(noise=2),
                            pushes=((3.0, math.radians(10)),))  # fmt: skip
     assert run.session.succeeded and run.session.falls == 0
 
 
+@pytest.mark.heavy
 def test_a_reversed_encoder_is_refused_not_guessed():
     run = simulate_session(_rod(), LIM, NOMINAL.equivalent_length, SessionOptions(hold_s=5.0), Sensor(sign=-1))
     s = run.session
     assert not s.succeeded and s.done and "--encoder-sign -1" in s.verdict and s.swing_up_s is None
 
 
+@pytest.mark.heavy
 def test_it_always_ends_and_says_why_it_failed():
     # no reading ever: the wait runs out
     run = simulate_session(_rod(), LIM, NOMINAL.equivalent_length, SessionOptions(wait_s=1.0), Sensor(rate_hz=0.001))

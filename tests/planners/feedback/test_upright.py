@@ -15,7 +15,7 @@ from planners.rigid_pendulum import RigidPendulum
 
 @pytest.fixture(scope="module")
 def rail(robot, limits):
-    from conftest import Q_START
+    from tests.helpers.cli import Q_START
 
     return build_rail(robot, Q_START, limits, 0.3)
 
@@ -24,6 +24,7 @@ def _from_upright_deg(phi):
     return np.degrees(np.abs(np.angle(np.exp(1j * (phi - np.pi)))))
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("rod, delay", [(0.3, 0.010), (0.45, 0.005), (0.75, 0.010)])
 def test_swings_up_balances_and_survives_a_ten_degree_push(rail, rod, delay):
     push = 9.0

@@ -1,0 +1,148 @@
+"""CPU per cycle of ``ClientApplication.step`` alone, in lock-step and without the network or the machine's timing.
+
+A session of ``lbr execute``'s client (a trajectory player with the figures and the execution log as observers) is
+recorded against the scripted controller (``lbrcli.fri.testing``) over loopback; the monitoring datagrams it
+received are then replayed to a new application whose transport hands them over from memory and swallows the
+replies. Figures: the best of ``REPEATS`` timed replays [µs per step] (the best, as timeit: other work on a shared
+machine only ever slows a run) and their median, with the reply prepared a cycle ahead and built in step; with
+``--profile`` the cProfile of one replay (top functions by own time). It measures the code of a cycle (decode,
+checks, client callback, guard, encode, observers), not the system calls.
+
+Run: `python benchmarks/run_all.py fri_step` or `python benchmarks/bench_fri_step.py [--quick] [--profile]`.
+"""
+
+from __future__ import annotations
+
+import cProfile
+import pstats
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from lbrcli.fri import ClientApplication, ExecutionLog, LogObserver, SessionFigures, TrajectoryPlayer
+from lbrcli.fri.testing import CA, CW, IDLE, MR, MW, Cycle, ScriptedController
+from trajectories.limits import default_limits
+
+Q0 = (0.0, 0.071, 0.0, -1.3523, 0.0, 0.1301, 0.0)  # [rad]
+ROWS = 3000  # 3 s at 1 ms
+REPEATS = 7
+LIM = default_limits()
+
+
+def trajectory(n: int) -> np.ndarray:
+    """(n, 7) rest-to-rest minimum-jerk move from Q0 [rad] at 1 ms rows."""
+    s = np.linspace(0.0, 1.0, n)
+    p = 10 * s**3 - 15 * s**4 + 6 * s**5
+    return np.array(Q0) + 0.3 * p[:, None] * np.array([1, 0.5, -0.5, 1, 0.3, -1, 1])
+
+
+def _app(folder: Path, tag: str, prepare: bool = True) -> ClientApplication:
+    log = ExecutionLog(folder / f"{tag}.csv")
+    player = TrajectoryPlayer(trajectory(ROWS), LIM, period_s=1e-3, settle_cycles=4)
+    return ClientApplication(player, "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=LIM,
+                             observers=[LogObserver(log), SessionFigures()], prepare=prepare)  # fmt: skip
+
+
+def record(folder: Path) -> list[bytes]:
+    """The monitoring datagrams of one scripted session, as the client received them."""
+    script = ([Cycle(state=IDLE)] + [Cycle(state=MW, quality=1)] * 3 + [Cycle(state=MR)] * 3 + [Cycle(state=CW)] * 4
+              + [Cycle(state=CA)] * (ROWS + 20) + [Cycle(state=IDLE)])  # fmt: skip
+    app = _app(folder, "record").connect()
+    got: list[bytes] = []
+    receive = app.transport.receive  # type: ignore[union-attr]
+
+    def recording() -> bytes | None:
+        data = receive()
+        if data is not None:
+            got.append(data)
+        return data
+
+    app.transport.receive = recording  # type: ignore[union-attr]
+    ctl = ScriptedController(app.port, script, Q0, pace_s=0.0).start()
+    try:
+        app.run()
+    finally:
+        ctl.client_done.set()
+        ctl.join()
+        app.close()
+    return got
+
+
+class ReplayTransport:
+    """Hands the recorded datagrams over in order (then None: a silent controller); replies are dropped."""
+
+    def __init__(self, datagrams: list[bytes]) -> None:
+        self._it = iter(datagrams)
+        self.sent = self.foreign = self.polled = 0
+        self.port, self.robot_ip, self.warm = 0, "127.0.0.1", None
+
+    def expect_period(self, period_s: float | None) -> None:
+        pass
+
+    def receive(self) -> bytes | None:
+        return next(self._it, None)
+
+    def send(self, data: bytes) -> None:
+        self.sent += 1
+
+    def close(self) -> None:
+        pass
+
+
+def replay(
+    folder: Path, datagrams: list[bytes], prepare: bool, profile: cProfile.Profile | None = None
+) -> tuple[float, int, str]:
+    """[µs] per step over one replay, the steps, and how the session ended."""
+    app = _app(folder, "replay", prepare)
+    app.transport = ReplayTransport(datagrams)  # type: ignore[assignment]
+    app.start()
+    step, n = app.step, 0
+    if profile is not None:
+        profile.enable()
+    t0 = time.thread_time_ns()
+    while n < len(datagrams) and step():
+        n += 1
+    t1 = time.thread_time_ns()
+    if profile is not None:
+        profile.disable()
+    reason = app.result.reason.value if app.result is not None else "running"
+    return (t1 - t0) * 1e-3 / max(n, 1), n, reason
+
+
+def run(quick: bool = False, profile: bool = False) -> list[tuple[str, float, str]]:
+    """The figures (name, value, unit): µs per step, best and median of the replays, prepared and built in step."""
+    repeats = 3 if quick else REPEATS
+    rows: list[tuple[str, float, str]] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        datagrams = record(folder)
+        for prepare in (True, False):  # the reply prepared a cycle ahead (lbr execute's default), or built in step
+            tag = "prepared a cycle ahead" if prepare else "built in step"
+            runs = [replay(folder, datagrams, prepare) for _ in range(repeats)]
+            us = [r[0] for r in runs]
+            rows += [(f"step, reply {tag}: CPU per cycle, best of {repeats}", round(min(us), 2), "µs"),
+                     (f"step, reply {tag}: CPU per cycle, median", round(float(np.median(us)), 2), "µs")]  # fmt: skip
+            if profile:
+                prof = cProfile.Profile()
+                replay(folder, datagrams, prepare, prof)
+                pstats.Stats(prof).sort_stats("tottime").print_stats(12)
+    return rows
+
+
+def main(argv: list[str]) -> int:
+    from run_all import save_results
+
+    t0 = time.perf_counter()
+    rows = run(quick="--quick" in argv, profile="--profile" in argv)
+    for name, value, unit in rows:
+        print(f"  {name:<55} {value:>8.1f} {unit}")
+    if "--quick" not in argv:
+        save_results("fri_step", rows, time.perf_counter() - t0)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,69 @@
+"""The execution log written by a child process (``lbrcli.fri.logwriter.LogProcess``): the same rows as the
+in-process log, every row handed over is written, and a writer that cannot write stops the session."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from lbrcli.fri import EndReason, ExecutionLog, LogObserver, Outcome, TrajectoryPlayer
+from lbrcli.fri.logwriter import LogProcess
+from lbrcli.fri.log import LOG_COLUMNS
+from trajectories.csvio import read_table
+
+from lbrcli.fri.testing import CA, Cycle
+
+from tests.helpers.fri_session import LIM, min_jerk, preamble, run
+
+
+@pytest.mark.heavy
+@pytest.mark.parametrize("version", ["1.15", "2.7"])
+def test_the_writer_process_writes_the_rows_the_in_process_log_writes(tmp_path, version):
+    n = 300
+    traj = min_jerk(n)
+    inproc = ExecutionLog(tmp_path / "in.csv")
+    child = LogProcess(tmp_path / "child.csv", extra_names=("row_x2",), extra=lambda s: (2.0 * s.timestamp_sec,))
+    try:
+        res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * (n + 50), TrajectoryPlayer(traj, LIM, period_s=1e-3),
+                               version=version,
+                               observers=[LogObserver(inproc, ("row_x2",), lambda s: (2.0 * s.timestamp_sec,)), child])  # fmt: skip
+    finally:
+        inproc.close()
+        child.close()
+    assert err is None and res.ok, res.detail if res else err
+    assert child.error is None and child.written == child.rows == inproc.rows > n
+    # byte for byte the same file: decoded again from the datagram in the writer, formatted by the same layout
+    assert (tmp_path / "child.csv").read_bytes() == (tmp_path / "in.csv").read_bytes()
+    table = read_table(tmp_path / "child.csv", LOG_COLUMNS, time="increasing")
+    assert len(table.data) == inproc.rows
+
+
+@pytest.mark.heavy
+def test_a_writer_that_cannot_write_brakes_and_ends_the_session():
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full on this system")
+    # a 6 s move at ≈ 0.47 rad/s (within every limit, so only the log can end it). The writer runs at nice 19: on
+    # an idle machine it finds the disk full within milliseconds and the session brakes mid-move; on a machine whose
+    # cores are taken by other work it can be starved for the whole move — then the close says so (lbr exits 1)
+    n = 6000
+    player = TrajectoryPlayer(min_jerk(n, amp=1.5), LIM, period_s=1e-3)
+    log = LogProcess("/dev/full")
+    try:
+        res, ctl, _, err = run(preamble() + [Cycle(state=CA)] * (n + 300), player, observers=[log])
+    finally:
+        log.close()
+    assert err is None, err
+    if res.outcome is Outcome.FAILED:
+        assert res.reason is EndReason.OBSERVER_FAILED, res.detail
+        assert "cannot write the log" in res.detail and "No space left" in res.detail
+        assert res.braking_cycles > 0  # it was moving: a braking stop, not a cut
+    else:  # starved until the end: never a silent success
+        assert res.ok and log.error is not None and "cannot write the log" in log.error, (res.detail, log.error)
+
+
+def test_a_log_that_cannot_be_created_is_refused_at_once(tmp_path):
+    from trajectories.errors import InputError
+
+    with pytest.raises(InputError, match="cannot write the log"):
+        LogProcess(tmp_path / "no" / "such" / "dir.csv")

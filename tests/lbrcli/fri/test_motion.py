@@ -1,0 +1,138 @@
+"""ExecutedMotion: the history the guard judges against, continued over lost messages as the controller does."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lbrcli.fri.motion import EFFORT_RANGE_S, ExecutedMotion
+from trajectories.limits import default_limits
+
+ACTIVE, POSITION = 4, 1
+
+
+@pytest.mark.parametrize("lost_after, lost", [(1, 1), (3, 2), (10, 1), (25, 4)])
+def test_a_braking_stop_interrupted_by_lost_messages_goes_on_within_the_limits(lost_after, lost):
+    lim, dt = default_limits(), 0.001
+    m = ExecutedMotion(lim, dt, 1e9, 1e9, hold_cycles=2, q=(0.0,) * 7)
+    v = 0.8 * lim.velocity  # [rad/s] cruising at 80 % of every joint's limit
+    sent = [np.zeros(7)]
+    for k in range(1, 400):  # accelerate within the limits, then cruise
+        speed = np.minimum(v, 0.5 * lim.acceleration * k * dt)
+        q = tuple(sent[-1] + speed * dt)
+        cmd, *_, why = m.next_command(q, ACTIVE, POSITION, q, None, None)
+        assert why is None
+        m.sent(cmd, ACTIVE)
+        sent.append(np.array(cmd))
+    m.begin_braking()
+    for k in range(400):
+        if k == lost_after:  # the controller's messages were lost: it extrapolated our last commands
+            m.extrapolate(lost)
+            for _ in range(lost):  # at the last commands' velocity
+                sent.append(2 * sent[-1] - sent[-2])
+            assert np.allclose(m.prev, sent[-1])
+        cmd, *_, why = m.next_command(sent[-1], ACTIVE, POSITION, sent[-1], None, None)  # the brake replaces it
+        assert why is None
+        m.sent(cmd, ACTIVE)
+        sent.append(np.array(cmd))
+        if m.brake.done:
+            break
+    assert m.brake.done
+    q = np.array(sent)
+    assert np.all(np.abs(np.diff(q, axis=0)) / dt <= lim.velocity * (1 + 1e-9))
+    assert np.all(np.abs(np.diff(q, 2, axis=0)) / dt**2 <= lim.acceleration * (1 + 1e-6))
+    assert np.allclose(q[-1], q[-2], atol=1e-12)  # at rest
+
+
+def _drive(m: ExecutedMotion, wants, n: int, mode: int = POSITION, tau=None, wrench=None, exact=False, jerk=False):
+    """Feed ``n`` commands ``wants(k, prev)`` through the core; the positions sent and the reasons given."""
+    sent, reasons = [np.array(m.prev)], []
+    for k in range(n):
+        want = wants(k, m.prev)
+        cmd, t, w, why = m.next_command(want, ACTIVE, mode, want, tau, wrench, exact, jerk)
+        m.sent(tuple(cmd), ACTIVE)
+        sent.append(np.array(cmd))
+        reasons.append(why)
+    return np.array(sent), reasons
+
+
+def _ratios(q: np.ndarray, dt: float, lim) -> tuple[float, float, float]:
+    v = np.diff(q, axis=0) / dt
+    a = np.diff(v, axis=0) / dt
+    j = np.diff(a, axis=0) / dt
+    return (float((np.abs(v) / lim.velocity).max()), float((np.abs(a) / lim.acceleration).max()),
+            float((np.abs(j) / lim.jerk).max()))  # fmt: skip
+
+
+@pytest.mark.heavy
+def test_a_feedback_client_that_asks_too_much_is_clamped_and_can_always_brake():
+    """A client that wants 3× the velocity limit toward A1's and A4's position limits and then stops asking: every
+    command it gets is inside the limits, none is refused, and the brake from wherever it is stays inside too."""
+    lim, dt = default_limits(), 1e-3
+    q0 = (1.5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+    m = ExecutedMotion(lim, dt, 1e9, 1e9, hold_cycles=1, q=q0)
+    push = np.array([3.0, 0, 0, 3.0, 0, 0, 0]) * lim.velocity * dt
+    q, reasons = _drive(m, lambda k, prev: tuple(np.array(prev) + push), 1500)
+    assert all(r is None for r in reasons) and m.clamped_cycles > 1000
+    assert np.all(np.abs(q) <= lim.position * (1 + 1e-9))
+    v, a, _ = _ratios(q, dt, lim)
+    assert v <= 1 + 1e-9 and a <= 1 + 1e-9
+    # pressed against the limits: the robot stands just inside them
+    assert lim.position[0] - q[-1, 0] < 1e-3 and lim.position[3] - q[-1, 3] < 1e-3
+    # mid-approach at full speed: a stop from any admitted state stays inside the limits
+    m2 = ExecutedMotion(lim, dt, 1e9, 1e9, hold_cycles=1, q=q0)
+    head, _ = _drive(m2, lambda k, prev: tuple(np.array(prev) + push), 300)
+    m2.begin_braking()
+    tail, _ = _drive(m2, lambda k, prev: prev, 800)
+    v, a, j = _ratios(np.vstack([head, tail[1:]])[-810:], dt, lim)  # the last approach and the whole stop
+    assert m2.brake.done and v <= 1 + 1e-9 and a <= 1 + 1e-6 and j <= 1 + 1e-6
+    assert np.all(np.abs(tail) <= lim.position * (1 + 1e-9))
+
+
+def test_exact_commands_are_not_clamped_but_refused_with_a_braking_stop():
+    lim, dt = default_limits(), 1e-3
+    m = ExecutedMotion(lim, dt, 1e9, 1e9, hold_cycles=1, q=(0.0,) * 7)
+    step = np.zeros(7)
+    step[2] = 1.5 * lim.velocity[2] * dt  # a jump A3 cannot follow
+    q, reasons = _drive(m, lambda k, prev: tuple(np.array(prev) + (step if k == 20 else 0.0)), 40, exact=True)
+    assert reasons[20] is not None and "A3" in reasons[20] and m.braking and m.clamped_cycles == 0
+    v, a, _ = _ratios(q, dt, lim)
+    assert v <= 1 + 1e-9 and a <= 1 + 1e-9
+
+
+def test_jerk_limited_clients_are_clamped_in_jerk_too():
+    lim, dt = default_limits(), 1e-3
+    m = ExecutedMotion(lim, dt, 1e9, 1e9, hold_cycles=1, q=(0.0,) * 7)
+    rng = np.random.default_rng(5)
+    q, _ = _drive(m, lambda k, prev: tuple(np.array(prev) + rng.normal(0, 1, 7) * lim.velocity * dt), 600, jerk=True)
+    v, a, j = _ratios(q, dt, lim)
+    assert v <= 1 + 1e-9 and a <= 1 + 1e-9 and j <= 1 + 1e-6
+
+
+@pytest.mark.parametrize("mode", [3, 2])  # TORQUE, WRENCH
+def test_a_stop_in_torque_or_wrench_mode_ramps_the_effort_down_within_its_rate(mode):
+    lim, dt = default_limits(), 1e-3
+    m = ExecutedMotion(lim, dt, 20.0, 2.0, hold_cycles=2, q=(0.0,) * 7)
+    tau = (39.6,) * 7 if mode == 3 else None
+    wrench = (20.0, -20.0, 10.0, 2.0, -2.0, 1.0) if mode == 2 else None
+    efforts = []
+    for k in range(50):
+        if k == 10:
+            m.begin_braking()
+        cmd, t, w, why = m.next_command(m.prev, ACTIVE, mode, m.prev, tau, wrench)
+        assert why is None
+        m.sent(tuple(cmd), ACTIVE)
+        efforts.append(t if mode == 3 else w)
+    k = 50
+    while not m.held_long_enough():
+        cmd, t, w, _ = m.next_command(m.prev, ACTIVE, mode, m.prev, tau, wrench)
+        m.sent(tuple(cmd), ACTIVE)
+        efforts.append(t if mode == 3 else w)
+        k += 1
+        assert k < 5000
+    e = np.array(efforts)
+    assert np.allclose(e[:10], e[0]) and np.allclose(e[-1], 0.0)  # the client's effort, then down to zero …
+    rate = np.abs(np.diff(e, axis=0)).max(axis=0) / dt
+    bound = (lim.torque if mode == 3 else np.array([20.0] * 3 + [2.0] * 3)) / EFFORT_RANGE_S
+    assert np.all(rate <= bound * (1 + 1e-6))  # … no faster than the whole range per EFFORT_RANGE_S
+    assert np.all(np.abs(np.diff(e, axis=0)).max(axis=0) < np.abs(e[0]) / 10)  # never in one cycle

@@ -3,13 +3,15 @@
 ``plan_catch`` is what `lbr plan cup-and-ball` calls:
 
 1. Swing-up (``catch_swing``): fast energy pumping along base y with the tension governor (taut while the pivot
-   moves), chosen by differential evolution for an early release and a small spread of the landing points over the
-   string-length band, within ``max_time``.
-2. Release: the pivot brakes to rest and the ball's free swing goes slack by itself; every length of the band is
-   stepped to the moment all have been released (``catch_move.prepare_band``).
+   accelerates), chosen by differential evolution for an early release and a small spread of the landing points
+   over the string-length band, within ``max_time``.
+2. Release: the pivot ends at a constant velocity (cruising toward where the ball will come down, or at rest) and the
+   ball's free swing goes slack by itself; every length of the band is stepped to the moment all have been released
+   (``catch_move.prepare_band``).
 3. Catch move (``catch_move``): a jerk-limited move in the base y–z plane to a position and velocity at a chosen
    time, then a brake to rest; a grid and a Nelder–Mead search maximise the share of the band caught (entry margin
-   and relative entry speed as tie-breakers), the band stepped with ``string_stepper``.
+   and relative entry speed as tie-breakers), the band (5 lengths × the cup one period early, on time, late)
+   stepped with ``string_stepper``.
 4. The joint path (IK per sample, ``swingup_robot``), the limit check (jerk included), and the verdict from the
    nonlinear model driven by the TCP path the joints realise: the event-driven ``string_sim`` for the prediction,
    the stepper for every member of the robustness band (length × mass × timing of the cup after the release).
@@ -55,10 +57,11 @@ SETTLE = 0.6  # [s] the pivot rests this long at the end (the ball settles in th
 MAX_AXIS_TILT = math.radians(25.0)  # the cup must open upward within this angle of base +z at the start pose
 MOVE_SHARE = 0.75  # the catch move's y and z each get this share of their own bounds (they add up on the joints)
 SWING_JERK_SHARE = 0.8  # the swing-up's jerk bound: this share of the first-order one
-SEARCH_LENGTHS = 7  # string lengths across the band the catch-move search judges each candidate on
+SEARCH_LENGTHS = 5  # string lengths across the band the catch-move search judges each candidate on (× 3 timings)
 BAND_LENGTHS = 9  # string lengths across the band of the verdict (× 3 masses × 3 timings)
 SPREAD_SHARE = 0.85  # the swing-up aims at landings of the band spread over at most this share of the opening
-SWING_HORIZON = 6.0  # [s] longest pumping without --max-time
+LATERAL_SHARE = 0.5  # the band lands flying over the ground at most this share of the catch move's speed bound
+SWING_HORIZON = 4.0  # [s] longest pumping without --max-time (as --max-time 3 searches: longer found worse plans)
 
 
 @dataclass(frozen=True)
@@ -220,11 +223,17 @@ def cup_axis_at_start(robot: Robot, model: StringModel, q_start) -> np.ndarray:
     return rot @ np.asarray(model.axis_flange)
 
 
-def _swing_up(r: CatchRequest, bounds: TaskBounds) -> PivotPlan:
+def _swing_up(r: CatchRequest, bounds: TaskBounds, move: TaskBounds) -> PivotPlan:
     m = r.model
     window = 2.0 * (m.cup.inner_radius - m.ball.radius)  # lateral width of the opening the ball centre fits through
     deadline = math.inf if r.max_time is None else r.max_time - FLIGHT_ALLOWANCE
-    goal = ReleaseGoal(height=m.cup.rim_height, reach=0.06, spread_target=SPREAD_SHARE * window, deadline=deadline)
+    goal = ReleaseGoal(
+        height=m.cup.rim_height,
+        reach=0.06,
+        spread_target=SPREAD_SHARE * window,
+        deadline=deadline,
+        lateral_speed=LATERAL_SHARE * move.v_max,
+    )
     problem = FastProblem(
         length=m.length,
         theta_d=r.release_apex,
@@ -241,10 +250,26 @@ def _swing_up(r: CatchRequest, bounds: TaskBounds) -> PivotPlan:
     return simulate_fast(problem, params)
 
 
-def _releases(r: CatchRequest, swing: PivotPlan, p0: np.ndarray, axis: np.ndarray) -> tuple[PivotMotion, float]:
-    """The swing-up path held at rest afterwards, and the time all lengths of the band have been released [s]."""
+@dataclass(frozen=True)
+class Release:
+    """The swing-up continued at the pivot's final constant velocity (at rest or cruising), sampled every dt [s]
+    along base y: displacement x [m], velocity v [m/s], acceleration u [m/s²]; its anchor motion, and the time [s]
+    every length of the band has been released (the catch move starts then)."""
+
+    x: np.ndarray
+    v: np.ndarray
+    u: np.ndarray
+    pivot: PivotMotion
+    t_start: float
+
+
+def _releases(r: CatchRequest, swing: PivotPlan, p0: np.ndarray, axis: np.ndarray) -> Release:
+    """The swing-up path continued at its final velocity, and the time all lengths of the band have been released."""
     hold = int(round(natural_period(r.model.length * (1 + r.length_tol)) / r.dt))
-    x = np.concatenate([swing.x, np.full(hold, swing.x[-1])])
+    v_end = float(swing.v[-1])
+    x = np.concatenate([swing.x, swing.x[-1] + v_end * r.dt * np.arange(1, hold + 1)])
+    v = np.concatenate([swing.v, np.full(hold, v_end)])
+    u = np.concatenate([swing.u, np.zeros(hold)])
     t = np.arange(len(x)) * r.dt
     pivot = pivot_motion(t, p0, np.column_stack([x, np.zeros_like(x)]), axis)
     last = swing.t_rest
@@ -254,12 +279,12 @@ def _releases(r: CatchRequest, swing: PivotPlan, p0: np.ndarray, axis: np.ndarra
         if not slack:
             raise PlanningError(f"the swing-up does not release the ball on a {r.model.length * f:.4f} m string")
         last = max(last, slack[0])
-    return pivot, r.dt * math.ceil(last / r.dt + 1e-9) + r.dt
+    return Release(x, v, u, pivot, r.dt * math.ceil(last / r.dt + 1e-9) + r.dt)
 
 
-def _landings(model: StringModel, pivot: PivotMotion, lengths, rest_y: float) -> list[tuple[float, float, float]]:
+def _landings(model: StringModel, pivot: PivotMotion, lengths) -> list[tuple[float, float, float]]:
     """(time [s], y [m] from the start pose, vy [m/s]) where each length's ball comes down through the rim height
-    above the resting anchor (no cup in the way)."""
+    above the anchor's height at the end (no cup in the way)."""
     out = []
     for ln in lengths:
         st, rec = step_path(replace(model, length=ln, cup=None), pivot, pivot.t_end, record=True)
@@ -278,14 +303,7 @@ def _landings(model: StringModel, pivot: PivotMotion, lengths, rest_y: float) ->
 
 
 def _search_catch(
-    r: CatchRequest,
-    swing: PivotPlan,
-    release_pivot: PivotMotion,
-    t_start: float,
-    p0: np.ndarray,
-    axis: np.ndarray,
-    by: TaskBounds,
-    bz: TaskBounds,
+    r: CatchRequest, rel: Release, p0: np.ndarray, axis: np.ndarray, by: TaskBounds, bz: TaskBounds
 ) -> CatchMove:
     """Grid, then Nelder–Mead, over the catch move's time, position and velocity; judged on the length band."""
     from scipy.optimize import minimize
@@ -294,9 +312,11 @@ def _search_catch(
     lengths = (
         tuple(m.length * (1 + r.length_tol * np.linspace(-1.0, 1.0, SEARCH_LENGTHS))) if r.length_tol else (m.length,)
     )
-    members = tuple(BandMember(float(ln), m.ball.mass) for ln in lengths)
-    band = prepare_band(m, members, release_pivot, t_start)
-    lands = _landings(m, release_pivot, lengths, float(swing.x[-1]))
+    shifts = (-r.dt, 0.0, r.dt) if r.timing else (0.0,)
+    members = tuple(BandMember(float(ln), m.ball.mass, s) for ln in lengths for s in shifts)
+    t_start = rel.t_start
+    band = prepare_band(m, members, rel.pivot, t_start)
+    lands = _landings(m, rel.pivot, lengths)
     if not lands:
         raise PlanningError("the released ball never comes down through the height of the rim")
     t_land = float(np.mean([x[0] for x in lands]))
@@ -320,7 +340,7 @@ def _search_catch(
         if key not in cache:
             mv = move_of(x)
             try:
-                path, _ = cup_path(swing.x, swing.v, swing.u, r.dt, mv, by, bz, settle=0.3)
+                path, _ = cup_path(rel.x, rel.v, rel.u, r.dt, mv, by, bz, settle=0.3)
             except PlanningError:
                 cache[key] = -10.0
                 return cache[key]
@@ -333,7 +353,7 @@ def _search_catch(
     for dtc in (-0.05, -0.025, 0.0):
         for kappa in (0.0, 0.5, 1.0):
             for z, vz in ((0.0, 0.0), (-0.02, -0.5 * bz.v_max)):
-                vy = kappa * vy_ball
+                vy = kappa * vy_ball + (1.0 - kappa) * float(rel.v[-1])
                 x = np.array([t_land + dtc, y_land + vy * dtc, z, vy, vz])
                 s = score(x)
                 if best is None or s > best[0]:
@@ -421,24 +441,24 @@ def plan_catch(r: CatchRequest, robot: Robot, limits: JointLimits, progress=None
     for attempt in range(1, 4):
         try:
             if swing is None:
-                swing = _swing_up(r, by)
-            release_pivot, t_start = _releases(r, swing, p0, axis)
-            move = _search_catch(r, swing, release_pivot, t_start, p0, axis, my, bz)
+                swing = _swing_up(r, by, my)
+            rel = _releases(r, swing, p0, axis)
+            move = _search_catch(r, rel, p0, axis, my, bz)
         except PlanningError as exc:
             if last is None:
                 raise
             notes.append(f"attempt {attempt} with bounds scaled down: {exc}; the previous attempt is kept")
             break
-        path, _ = cup_path(swing.x, swing.v, swing.u, r.dt, move, my, bz, settle=SETTLE)
+        path, _ = cup_path(rel.x, rel.v, rel.u, r.dt, move, my, bz, settle=SETTLE)
         t = np.arange(len(path)) * r.dt
         traj, ik_err = joint_path(robot, setup, t, path, limits, progress)
         report = check_trajectory(traj, limits, jerk=True)
-        last = (swing, move, path, traj, ik_err, report, t_start, (by, my, bz))
+        last = (swing, move, path, traj, ik_err, report, rel.t_start, (by, my, bz))
         ratios = {q: report.ratios()[q] for q in ("velocity", "acceleration", "jerk")}
         notes.append(f"attempt {attempt}: peak ratios " + ", ".join(f"{q} {v.max():.2f}" for q, v in ratios.items()))
         if report.ok:
             break
-        swing_peak, move_peak = _split_ratios(traj, limits, int(round(t_start / r.dt)))
+        swing_peak, move_peak = _split_ratios(traj, limits, int(round(rel.t_start / r.dt)))
         if max(swing_peak.values()) > target:  # the swing-up breaks a limit: pump with tighter bounds, search again
             by, swing = _rescaled(by, swing_peak, target), None
         else:  # only the catch move does: move within tighter bounds

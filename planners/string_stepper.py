@@ -361,7 +361,8 @@ def step_path(
     """Step the ball along a ``string_sim.PivotMotion`` to ``t_end`` [s], ``substeps`` intervals per sample step:
     from the pivot's first sample (hanging, or s0, ṡ0), or on from ``state`` (a stepper at its time ``t``, which is
     advanced in place). ``shift`` [s]: once the ball is slack the anchor is read at t − shift — the cup's motion
-    after the release that much late (negative: early). Returns the stepper and, with ``record``, the (times,
+    after the release that much late (negative: early), continuing from where the anchor is then (a pivot that is
+    moving then does not jump). Returns the stepper and, with ``record``, the (times,
     ball positions, phase codes) at the interval ends."""
     h = pivot.h / substeps
     if state is None:
@@ -374,12 +375,17 @@ def step_path(
     t0 = st.t
     rec = ([], [], []) if record else None
     lag = 0.0
+    offset: Vec3 = (0.0, 0.0, 0.0)
     n = int(math.floor((t_end - t0) / h + 1e-9))
     for i in range(n):
         t = t0 + i * h
         if shift and not lag and st.phase != TAUT:
             lag = shift
+            # the cup goes on from where it is: a pivot moving when the shift begins does not jump (at rest: 0)
+            offset = sub(pivot.state(t)[0], pivot.state(t - lag)[0])
         p, v, a = pivot.state(t - lag)
+        if lag:
+            p = axpy(1.0, offset, p)
         a1 = pivot.state(t + h - lag)[2]
         st.advance(h, p, v, a, a1, pivot.axis(t - lag))
         if rec is not None:

@@ -57,12 +57,14 @@ class FastProblem:
 @dataclass(frozen=True)
 class FastParams:
     """Tuning of the pumping: pumping speed V and first-swing speed V₁ as fractions of v_max, centring gain
-    k [1/s], and the energy at which pumping stops, as its free-swing apex offset δ from θ_d [rad]."""
+    k [1/s], the energy at which pumping stops, as its free-swing apex offset δ from θ_d [rad], and (``release``
+    only) the constant velocity the pivot ends at, as a signed fraction of v_max (0: at rest)."""
 
     speed: float = 0.8
     first_speed: float = 0.5
     centring: float = 1.0
     apex_offset: float = 0.0
+    cruise: float = 0.0
 
     @classmethod
     def from_vector(cls, v) -> "FastParams":
@@ -72,9 +74,11 @@ class FastParams:
 def param_ranges(problem: "FastProblem") -> tuple[tuple[float, float], ...]:
     """Search box of (speed, first_speed, centring, apex_offset). The apex offset may aim well below θ_d (a pump
     stopped early can still carry the ball to θ_d; with ``taut`` the highest taut swing aims near 90° whatever θ_d),
-    ``release`` aims within ±0.3 rad of θ_d (the apex energy is what it asks for)."""
+    ``release`` aims within ±0.3 rad of θ_d (the apex energy is what it asks for) and ends at a cruise speed of up
+    to 0.8 v_max either way (a pivot at constant velocity leaves the free swing as it is at rest: the cup is
+    already on its way to where the ball will land)."""
     if problem.release:
-        return ((0.3, 1.0), (0.1, 1.0), (0.0, 6.0), (-0.3, 0.3))
+        return ((0.3, 1.0), (0.1, 1.0), (0.0, 6.0), (-0.3, 0.3), (-0.8, 0.8))
     low = -max(0.4, min(problem.theta_d - 0.2, problem.theta_d - math.pi / 2 + 0.3))
     return ((0.3, 1.0), (0.1, 1.0), (0.0, 6.0), (low, 0.4))
 
@@ -151,6 +155,7 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
     e_stop = -G * l * math.cos(min(apex_stop, math.pi))  # per unit mass [J/kg]
     v_pump = params.speed * pb.v_max
     v_first = params.first_speed * pb.v_max
+    v_end = params.cruise * pb.v_max if problem.release else 0.0  # [m/s] the pivot's final constant velocity
     otg = Ruckig(1, h)
     inp, out = InputParameter(1), OutputParameter(1)
     inp.control_interface = ControlInterface.Velocity
@@ -193,7 +198,7 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
                 ):
                     target = 0.0
         if phase in ("stop", "rest"):
-            target = 0.0
+            target = v_end
         forced = None
         if problem.governed and phase != "rest":
             lo, hi = tension_window(
@@ -222,7 +227,7 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
         x, v, a = x1, v1, a1
         t += h
         ts.append(t), xs.append(x), vs.append(v), us.append(a), ths.append(th), oms.append(om)
-        if phase == "stop" and res == Result.Finished and abs(v) < 1e-12 and abs(a) < 1e-12:
+        if phase == "stop" and res == Result.Finished and abs(v - v_end) < 1e-12 and abs(a) < 1e-12:
             phase, t_rest = "rest", t
         if phase == "rest" and t >= t_rest + 0.5 * t0:
             break
@@ -340,11 +345,8 @@ def optimise(
         updating="deferred",
     )
     if start is not None:
-        kwargs["x0"] = np.clip(
-            [start.speed, start.first_speed, start.centring, start.apex_offset],
-            [r[0] for r in ranges],
-            [r[1] for r in ranges],
-        )
+        x0 = [start.speed, start.first_speed, start.centring, start.apex_offset, start.cruise][: len(ranges)]
+        kwargs["x0"] = np.clip(x0, [r[0] for r in ranges], [r[1] for r in ranges])
     if settings.workers > 1:
         pool = worker_pool(settings.workers)
         try:

@@ -45,8 +45,11 @@ def test_a_client_three_periods_late_keeps_an_exact_session():
 
     run, stats = _session(answer=_late, policy=policy, session_duration_s=0.3)
     assert_sequence(run.states)
-    # late only before its first reply: the messages sent while the simulator did not know yet that it answers
-    assert stats.end_reason == "duration" and stats.late_replies <= 4 and stats.missed_replies <= 1, stats
+    # late only before its first reply (the messages sent while the simulator did not know yet that it answers: how many
+    # depends on how soon this machine runs the client), never once commanding
+    assert stats.end_reason == "duration" and stats.late_replies < 0.1 * stats.replies and stats.missed_replies <= 1, (
+        stats
+    )
     assert stats.untimely_active_cycles == 0
     # the controller's clock: exactly one period per message, however long the client took
     ns = np.array([s * 1_000_000_000 + n for s, n in (r.stamp for r in run.received)], dtype=np.int64)

@@ -107,3 +107,47 @@ def test_a_log_that_cannot_be_created_is_refused_at_once(tmp_path):
 
     with pytest.raises(InputError, match="cannot write the log"):
         LogProcess(tmp_path / "no" / "such" / "dir.csv")
+
+
+def _fake_app(codec, k):
+    """What LogProcess.on_cycle reads of an application, for monitoring message ``k`` (a valid datagram)."""
+    from types import SimpleNamespace
+
+    m = codec.new_monitoring()
+    m.header.messageIdentifier, m.header.sequenceCounter, m.header.reflectedSequenceCounter = 0x245142, k, 0
+    m.connectionInfo.sessionState, m.connectionInfo.quality, m.connectionInfo.sendPeriod = 3, 3, 1
+    m.monitorData.measuredJointPosition.value.extend([0.1 * k + j for j in range(7)])
+    cycle = SimpleNamespace(braking=False, answered=True, t=k * 1e-3, sent_position=True, phase=2, row=k, state=3,
+                            command=tuple(0.1 * k + j for j in range(7)))  # fmt: skip
+    return SimpleNamespace(cycle=cycle, state=None, _last_data=codec.encode(m), client_sequence=k,
+                           version=codec.version)  # fmt: skip
+
+
+@pytest.mark.heavy
+@pytest.mark.parametrize("version", ["1.15", "2.7"])
+def test_a_loop_that_dies_loses_at_most_the_rows_not_yet_handed_over_and_signals_do_not_stop_the_writer(
+    tmp_path, version
+):
+    import signal
+
+    from lbrcli.fri.codec import FriCodec
+    from lbrcli.fri.logwriter import FLUSH_ROWS
+
+    codec = FriCodec(version)
+    log = LogProcess(tmp_path / "log.csv")
+    n = 5 * FLUSH_ROWS + 7
+    for k in range(n):
+        log.on_cycle(_fake_app(codec, k))
+        if k == FLUSH_ROWS:  # Ctrl-C and SIGTERM reach the writer too (the process group): it writes on
+            log._proc.send_signal(signal.SIGINT)
+            log._proc.send_signal(signal.SIGTERM)
+    # the loop dies (kill -9): the pipe closes without the last hand-over; the writer writes what it was handed
+    log._proc.stdin.close()
+    assert log._proc.wait(30) == 0
+    assert log._proc.stdout.read().strip() == f"rows {n - n % FLUSH_ROWS}".encode()
+    log._proc.stdout.close()
+    rows = read_table(tmp_path / "log.csv", LOG_COLUMNS, time="increasing")
+    handed = n - n % FLUSH_ROWS
+    assert len(rows.data) == handed
+    np.testing.assert_allclose(rows.column("row"), np.arange(handed))
+    np.testing.assert_allclose(rows.column("msr_q3"), 0.1 * np.arange(handed) + 2)

@@ -282,7 +282,7 @@ class ClientApplication:
         command periods the client missed, or −1 if too many messages were lost (the session ended)."""
         link, end = self._link, self._end
         first = link.clock.t_first is None
-        skipped = link.received(mon, d, lost_reply, end.moving(), now)
+        skipped = link.received(mon, d, lost_reply, (d > 1 or lost_reply) and end.moving(), now)
         if skipped < 0:  # longer than any controller bridges: where the robot is, is unknown — it stopped it itself
             end.finish(self, Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {d - 1} messages of the "
                        "controller were lost in a row: no command is safe from here")  # fmt: skip
@@ -346,7 +346,7 @@ class ClientApplication:
         else:
             out.message.header_only()  # type: ignore[union-attr]  # plus IO writes, in the monitoring states
         out.set_extras(cmd)  # type: ignore[arg-type]  # IO writes, transformations
-        problem = out.send_reply(self.transport, seq, t_rx)
+        problem = out.send(self.transport, out.message.datagram(out.client_seq, seq), t_rx)  # type: ignore[union-attr]
         if problem is not None:
             self._end.finish(self, Outcome.STOPPED, EndReason.SILENT, problem, observe=True)
             return False
@@ -374,7 +374,7 @@ class ClientApplication:
         end.observe(self)
         if cyc.state == CMD_ACTIVE and self.prepares and end.stop is None and not end.ended and motion is not None:
             out.prepare(seq, mon, motion, self.client)  # type: ignore[arg-type]
-        return self._check_clocks(now)
+        return end.check_clocks(self, link.clock, now)
 
     def _send_prepared(self, prepared: Prepared, mon: Any, seq: int, now: float, t_rx: int) -> bool:
         """Send the reply prepared for this message, then what the full cycle records, the client's confirming

@@ -77,7 +77,7 @@ class Link:
         """The first message outside IDLE tells the command period: the executed motion and its supervision are
         built (True, once)."""
         ci = mon.connectionInfo
-        if ci.sessionState == IDLE or not self.clock.learn_period(ci):
+        if self.clock.period_key is not None or ci.sessionState == IDLE or not self.clock.learn_period(ci):
             return False
         clock = self.clock
         self.motion = ExecutedMotion(self.limits, clock.period_s, *self._wrench, self.hold_cycles,  # type: ignore[arg-type]

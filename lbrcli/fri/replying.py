@@ -51,6 +51,7 @@ class Replier:
         self.prepared: Prepared | None = None  # the reply to the next message, if the client prepared it
         self.poses: Any = None  # the PoseSolver, built at the first Cartesian command
         self.client_seq = 0  # the sequence counter of the next reply
+        self.client_sequence = -1  # ... of the last reply sent (−1 before the first)
         self.answered = self.position_commands = 0
         self.prepared_replies = 0  # cycles answered with the reply prepared after the previous one
         self.unanswered_at_start = 0  # messages that went by before the first reply
@@ -59,11 +60,6 @@ class Replier:
     def open(self, codec: Any) -> None:
         """The session's codec is known: its command message."""
         self.message = ReplyMessage(codec)
-
-    @property
-    def client_sequence(self) -> int:
-        """Sequence counter of the last command message sent (−1 before the first)."""
-        return (self.client_seq - 1) & 0xFFFFFFFF if self.answered else -1
 
     # -- sending ---------------------------------------------------------------------------------------------
     def send(self, transport: Any, datagram: bytes, t_rx: int) -> str | None:
@@ -75,14 +71,11 @@ class Replier:
         self.latencies.append(time.perf_counter_ns() - t_rx)
         return None
 
-    def send_reply(self, transport: Any, seq: int, t_rx: int) -> str | None:
-        """Send the reply written this cycle to the message ``seq``; why it could not be, or None."""
-        return self.send(transport, self.message.datagram(self.client_seq, seq), t_rx)  # type: ignore[union-attr]
-
     def sent(self, cycle: Any, missed: int) -> None:
         """The reply of ``cycle`` went out (``missed``: the controller's messages lost so far)."""
         if not self.answered:
             self.unanswered_at_start = missed
+        self.client_sequence = self.client_seq
         self.client_seq = (self.client_seq + 1) & 0xFFFFFFFF
         self.answered += 1
         cycle.answered = True

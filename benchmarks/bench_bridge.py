@@ -117,8 +117,8 @@ class _Latency:
         now = time.monotonic()
         if app.cycle.state == 4 and not app.cycle.braking:
             self.latency.extend(now - t for t in self.stamps)
-            if self.stamps and app._latencies:  # a cycle that took a target: FRI message in → reply out [ns]
-                self.work.append(app._latencies[-1] * 1e-9)
+            if self.stamps and app.latencies:  # a cycle that took a target: FRI message in → reply out [ns]
+                self.work.append(app.latencies[-1] * 1e-9)
         self.stamps.clear()
 
 

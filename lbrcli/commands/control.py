@@ -84,10 +84,16 @@ def _pushes(texts: list[str] | None) -> tuple[tuple[float, float], ...]:
     return tuple(out)
 
 
-@with_options(fri=FRI_OPTIONS.without("sim_start", "length"), lab=UPRIGHT_LAB, flags={
+UPRIGHT_FLAGS = {
     "RigidModuleSpec.rate_hz": "--sensor-rate", "RigidModuleSpec.delay_ms": "--sim-delay", "RigidModuleSpec.jitter_ms":
     "--sim-jitter", "RigidModuleSpec.pushes": "--push", "RigidModuleSpec.noise_counts": "--sim-noise",
-    "RigidModuleSpec.sign": "--sim-encoder-sign", "RigidModuleSpec.zero_count": "--pendulum-zero"})  # fmt: skip
+    "RigidModuleSpec.sign": "--sim-encoder-sign", "RigidModuleSpec.zero_count": "--pendulum-zero",
+    "UprightClient.move_to_start": "--move-to-start",
+}  # fmt: skip
+"""`lbr control upright`'s own flags of the settings its libraries name (``Class.field`` → option)."""
+
+
+@with_options(fri=FRI_OPTIONS.without("sim_start", "length"), lab=UPRIGHT_LAB, flags=UPRIGHT_FLAGS)
 def upright(
     fri: FriOptions,
     lab: LabOptions,

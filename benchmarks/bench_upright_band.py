@@ -429,7 +429,7 @@ def _fast_section(result: dict, head: list[str]) -> list[str]:
 def _off_section(result: dict, head: list[str]) -> list[str]:
     lines = ["## Off the band's grid (fast simulation: rods 0.75 and 1.25 ×, 8 ms jitter, other knocks)", "", *head,
              f"{result['off_succeeded_without_fall']} of {result['off_cases']} cases without a fall, "
-             f"{result['off_falls_total']} falls.", "",
+             f"{result['off_falls_total']} fall{'' if result['off_falls_total'] == 1 else 's'}.", "",
              "| rod × | tip [kg] | friction | delay + jitter [ms] | actuation [cycles] | push | excursion after it [m] | "
              "falls | verdict |", "|---:|---:|---:|---|---:|---|---:|---:|---|"]  # fmt: skip
     for r in result["off"]:

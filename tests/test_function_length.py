@@ -57,7 +57,6 @@ LONG_ALLOWED = {
     ("tracking/pipeline.py", "track_video"),
     ("tracking/compare.py", "estimate_lag"),
     ("planners/swingup_fast.py", "simulate_fast"),
-    ("planners/feedback/identify.py", "identify"),
     ("planners/string_penalty.py", "judge"),
     ("lbrcli/commands/plan_catch.py", "plan_catch_files"),
 }

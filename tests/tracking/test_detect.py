@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from trajectories.errors import OptionError
+from trajectories.errors import OptionError, SettingError
 from tracking.color import COLORS, color_spec
 from tracking.detect import BlobGates, find_blobs
 
@@ -106,6 +106,9 @@ def test_colour_names_and_hue_ranges():
     for bad in ("purple-ish", "10-200", "x-y", ""):
         with pytest.raises(OptionError):
             color_spec(bad)
+    with pytest.raises(SettingError, match="unknown colour 'mauve'") as err:  # the setting named, never a flag
+        color_spec("mauve", "CameraSensor.color")
+    assert err.value.setting == "CameraSensor.color" and "--" not in str(err.value)
 
 
 def _wide_scene(rng):

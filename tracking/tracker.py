@@ -66,8 +66,7 @@ class TrackerOptions:
     area_ratio_max: float = 2.5  # once locked, a blob whose area differs by more than this factor is not the ball
     area_history: int = 15  # the learned area is the median of this many last fixes
     area_reset_misses: int = 3  # frames in a row with a blob rejected for its area alone → forget the area
-    gate_radius_factor: float = 3.0  # gate ≥ this × the ball radius [px] ...
-    gate_radius_cap_px: float = 16.0  # ... the radius counted up to this [px] (a big ball moves no farther per frame)
+    gate_radius_factor: float = 3.0  # gate ≥ this × the ball radius [px]
     gate_step_factor: float = 0.6  # gate ≥ this × the predicted displacement since the last fix
     max_acceleration_px_s2: float = 4e4  # the gate grows by ½·a·Δt² with the time Δt since the last fix
     max_speed_px_s: float = 4000.0  # with a single recent fix (velocity unknown) the gate is speed × Δt
@@ -216,7 +215,7 @@ class _Follower:
         age = t - last.t
         if age > o.max_coast_s:
             return Prediction(last.u, last.v, 0.0, math.inf)
-        base = o.gate_radius_factor * min(self.radius(), o.gate_radius_cap_px)
+        base = o.gate_radius_factor * self.radius()
         if len(self.fixes) == 2 and 0 < last.t - self.fixes[0].t <= o.velocity_max_gap_s:
             prev = self.fixes[0]
             dt = last.t - prev.t
@@ -320,9 +319,6 @@ class _Follower:
         h, w = frame.shape[:2]
         o = self.options
         box = self.window(pred, w, h)
-        if box is None:
-            return None, False
-        x0, y0, x1, y1 = box
         streak = pred.frame_step_px > 2.0 * self.radius()  # blurred over more than its own size: ragged
         gates = replace(
             o.gates,
@@ -336,6 +332,15 @@ class _Follower:
             # a ball of a few pixels, sharp for a moment (a turning point), may outline less than the general floor
             min_area_px=min(o.gates.min_area_px, max(4.0, self.area / o.area_ratio_max)),
         )
+        scale = detail_scale(self.min_radius())  # a large ball is measured on a shrunk image
+        large = box is None or (box[2] - box[0]) * (box[3] - box[1]) > COARSE_WINDOW_PX
+        if not self.tiny and (scale > 1 or not large):  # (a fast small ball's large window: the coarse pass is cheaper)
+            blob = self._search_near(frame, pred, gates, scale)
+            if blob is not None:
+                return blob, True
+        if box is None:
+            return None, False
+        x0, y0, x1, y1 = box
         sub = frame[y0:y1, x0:x1]
         if self.tiny:  # a few pixels across: no blur, no morphology, no shape
             found = find_tiny(sub, self.spec, (x0, y0), (w, h), max_area_px=max(TINY_MAX_AREA_PX, 4.0 * self.area))
@@ -343,12 +348,7 @@ class _Follower:
             if blob is not None and blob.clipped:
                 return None, False
             return blob, True
-        factor = coarse_factor(w, self.min_radius()) if (x1 - x0) * (y1 - y0) > COARSE_WINDOW_PX else 1
-        scale = detail_scale(self.min_radius())  # a large ball is measured on a shrunk image
-        if not (factor > 1 and scale == 1):  # (a fast small ball's window: the coarse pass finds it cheaper)
-            blob = self._search_near(frame, pred, gates, scale)
-            if blob is not None:
-                return blob, True
+        factor = coarse_factor(w, self.min_radius()) if large else 1
         hsv = (to_hsv(sub) if scale == 1 else None) if factor == 1 else coarse_hsv(sub, factor)
         for spec in self._specs(pred):
             if factor > 1:  # a large window (a fast ball, or the first frames after a fix): coarse pass first

@@ -187,7 +187,9 @@ def find_blobs(
     return out
 
 
-_DETAIL_RADIUS_PX = 12.0  # [px] a ball keeping this radius in a shrunk image is measured there (centre to ≈ 0.1 px)
+_DETAIL_RADIUS_PX = (
+    12.0  # [px] a ball keeping this radius in a shrunk image is measured there (centre to ≈ 0.1 px of it)
+)
 
 
 def detail_scale(min_radius_px: float | None) -> int:

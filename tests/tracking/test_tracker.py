@@ -117,6 +117,29 @@ def test_tracker_ignores_jumps_then_reacquires():
     assert tr.full_frame_searches == searches + 1
 
 
+def test_ball_sized_candidates_are_followed_before_fragments():
+    """Eight round specks (a codec's fragments of clutter, too small for their shape to tell) and a still ball: the
+    ball is among the candidates followed although the specks look rounder, and it is the one taken once it moves."""
+    import cv2
+
+    blank = np.full((360, 640, 3), 160, np.uint8)
+    for k in range(8):  # perfect discs of 56 px² (ellipse fit 1.0)
+        cv2.circle(blank, ((40 + 70 * k) * 16, 40 * 16), 4 * 16, (35, 30, 205), -1, cv2.LINE_AA, 4)
+
+    def frame(cx):  # a ball with a bite out of it (fit ≈ 0.92): the rounder specks came first, and only 6 are followed
+        img = blank.copy()
+        cv2.circle(img, (int(cx * 16), 250 * 16), 10 * 16, (35, 30, 205), -1, cv2.LINE_AA, 4)
+        cv2.rectangle(img, (int(cx) + 6, 240), (int(cx) + 13, 246), (160, 160, 160), -1)
+        return img
+
+    tr = BallTracker(color_spec("red"))
+    xs = [320.0] * 6 + [320.0 + 4.0 * k for k in range(1, 40)]
+    for k, x in enumerate(xs):
+        b = tr.update(frame(x), k / 60)
+    assert b is not None and abs(b.u - xs[-1]) < 1.0 and abs(b.v - 250) < 1.0 and tr.confidence >= 0.5  # (the bite)
+    assert any("took the one at (320, 250)" in n for n in tr.notes), tr.notes
+
+
 def _distance_to_polyline(p, line):
     a, b = line[:-1], line[1:]
     ab = b - a

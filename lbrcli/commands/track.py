@@ -12,6 +12,50 @@ from ..fri_options import parse_host_port
 from ..options import JsonOpt, choice, floats, grid, number
 
 
+PivotOpt = Annotated[
+    Optional[tuple],
+    floats(
+        "--pivot",
+        count=2,
+        low=0,
+        high=100_000,
+        unit="px",
+        metavar="U,V",
+        help="Fixed pivot (string attachment) U,V \\[px] in the image.",
+    ),
+]
+PivotColorOpt = Annotated[
+    Optional[str],
+    typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame (e.g. green)."),
+]
+ColorOpt = Annotated[
+    str,
+    typer.Option(
+        "--color",
+        help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or an OpenCV hue range H1-H2 (0–179).",
+    ),
+]
+RadiusOpt = Annotated[
+    Optional[float],
+    number(
+        "--radius",
+        low=0,
+        high=10_000,
+        low_open=True,
+        unit="px",
+        help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: learned, from a 3 px ball to a radius of 1/6 of the frame height).",
+    ),
+]
+CalibrationOpt = Annotated[
+    Optional[Path],
+    typer.Option(
+        "--calibration",
+        help="Camera JSON from `lbr track calibrate`: undistort points; with a plane, θ in the plane of motion and x_m,y_m \\[m].",
+    ),
+]
+"""The ball and pivot options `lbr track video` and `lbr track live` share (one definition each)."""
+
+
 def _check_out(path: Path | None, option: str) -> None:
     from trajectories.errors import OptionError
 
@@ -43,40 +87,10 @@ def video(
             "-o", "--out", help="Track CSV to write: t,frame,u,v,found\\[,theta,...] \\[s, -, px, px, 0/1, rad]."
         ),
     ],
-    pivot: Annotated[
-        Optional[tuple],
-        floats(
-            "--pivot",
-            count=2,
-            low=0,
-            high=100_000,
-            unit="px",
-            metavar="U,V",
-            help="Fixed pivot (string attachment) U,V \\[px] in the video image.",
-        ),
-    ] = None,
-    pivot_color: Annotated[
-        Optional[str],
-        typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame (e.g. green)."),
-    ] = None,
-    color: Annotated[
-        str,
-        typer.Option(
-            "--color",
-            help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or an OpenCV hue range H1-H2 (0–179).",
-        ),
-    ] = "red",
-    radius: Annotated[
-        Optional[float],
-        number(
-            "--radius",
-            low=0,
-            high=10_000,
-            low_open=True,
-            unit="px",
-            help="Approximate ball radius \\[px]: accept blobs of 0.3–3× its area (default: learned, from a 3 px ball to a radius of 1/6 of the frame height).",
-        ),
-    ] = None,
+    pivot: PivotOpt = None,
+    pivot_color: PivotColorOpt = None,
+    color: ColorOpt = "red",
+    radius: RadiusOpt = None,
     min_circularity: Annotated[
         float,
         number(
@@ -95,13 +109,7 @@ def video(
             help="Minimum overlap (IoU) of the blob with its moment ellipse (disc ≥ 0.9, any box ≈ 0.83).",
         ),
     ] = 0.88,
-    calibration: Annotated[
-        Optional[Path],
-        typer.Option(
-            "--calibration",
-            help="Camera JSON from `lbr track calibrate`: undistort points; with a plane, θ in the plane of motion and x_m,y_m \\[m].",
-        ),
-    ] = None,
+    calibration: CalibrationOpt = None,
     start: Annotated[
         Optional[tuple],
         floats(
@@ -540,45 +548,11 @@ def live(
             help="Stop after this long \\[s] (default: when the source ends, or Ctrl-C).",
         ),
     ] = None,
-    pivot: Annotated[
-        Optional[tuple],
-        floats(
-            "--pivot",
-            count=2,
-            low=0,
-            high=100_000,
-            unit="px",
-            metavar="U,V",
-            help="Fixed pivot U,V \\[px] in the image.",
-        ),
-    ] = None,
-    pivot_color: Annotated[
-        Optional[str], typer.Option("--pivot-color", help="Colour of a marker on the pivot, tracked in every frame.")
-    ] = None,
-    color: Annotated[
-        str,
-        typer.Option(
-            "--color",
-            help="Ball colour: red, orange, yellow, green, cyan, blue, magenta, or a hue range H1-H2 (0–179).",
-        ),
-    ] = "red",
-    radius: Annotated[
-        Optional[float],
-        number(
-            "--radius",
-            low=0,
-            high=10_000,
-            low_open=True,
-            unit="px",
-            help="Approximate ball radius \\[px] (default: learned, 1.5 px to 1/6 of the frame height).",
-        ),
-    ] = None,
-    calibration: Annotated[
-        Optional[Path],
-        typer.Option(
-            "--calibration", help="Camera JSON from `lbr track calibrate` (undistortion; θ in the plane of motion)."
-        ),
-    ] = None,
+    pivot: PivotOpt = None,
+    pivot_color: PivotColorOpt = None,
+    color: ColorOpt = "red",
+    radius: RadiusOpt = None,
+    calibration: CalibrationOpt = None,
     geometry: Annotated[
         Optional[Path],
         typer.Option(

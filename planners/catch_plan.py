@@ -4,17 +4,19 @@
 
 1. Swing-up (``catch_swing``): fast energy pumping along base y with the tension governor (taut while the pivot
    accelerates), chosen by differential evolution for an early release and a small spread of the landing points
-   over the string-length band, within ``max_time``.
+   over the string-length band, within ``max_time``. Each variant (``swing_variants``: the pivot ending cruising or
+   at rest, pumping over one or two horizons) is searched on its own.
 2. Release: the pivot ends at a constant velocity (cruising toward where the ball will come down, or at rest) and the
    ball's free swing goes slack by itself; every length of the band is stepped to the moment all have been released
    (``catch_move.prepare_band``).
 3. Catch move (``catch_move``): a jerk-limited move in the base y–z plane to a position and velocity at a chosen
-   time, then a brake to rest; a grid and a Nelder–Mead search maximise the share of the band caught (entry margin
-   and relative entry speed as tie-breakers), the band (5 lengths × the cup one period early, on time, late)
-   stepped with ``string_stepper``.
+   time, then a brake to rest; a grid (every variant) and a Nelder–Mead search (the REFINED variants the grid puts
+   first) maximise the share of the band caught (entry margin and relative entry speed as tie-breakers), the band
+   (5 lengths × the cup one period early, on time, late) stepped with ``string_stepper``.
 4. The joint path (IK per sample, ``swingup_robot``), the limit check (jerk included), and the verdict from the
    nonlinear model driven by the TCP path the joints realise: the event-driven ``string_sim`` for the prediction,
-   the stepper for every member of the robustness band (length × mass × timing of the cup after the release).
+   the stepper for every member of the robustness band (length × mass × timing of the cup after the release). The
+   variant whose verdict ranks first (``_rank``: valid, then the share of the band caught) is the plan.
 """
 
 from __future__ import annotations

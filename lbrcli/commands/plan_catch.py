@@ -302,9 +302,9 @@ def cup_and_ball(
 ) -> None:
     """Plan the cup-and-ball game from the ball hanging at rest to the ball resting in the cup (thesis ch. 5).
 
-    The swing-up pumps along base y with the string taut, the pivot then rests and the free swing releases the ball;
-    the catch move brings the cup (an open cylinder on the flange, the string tied at its bottom) under the falling
-    ball and stops. Chosen to catch across the band of string length, ball mass and timing, judged on the nonlinear
+    The swing-up pumps along base y with the string taut, the pivot then cruises at a constant velocity or rests (both
+    are planned, the one catching more of the band is kept) and the free swing releases the ball; the catch move
+    brings the cup (an open cylinder on the flange, the string tied at its bottom) under the falling ball and stops. Chosen to catch across the band of string length, ball mass and timing, judged on the nonlinear
     string-and-cup model (one-sided string, impacts with the rim, walls and bottom) driven by the TCP path the written
     joints produce. JSON: caught, catch time, entry margin to the rim, relative entry speed, the band's success
     fraction and worst case. Exit 1 when no catch is found (saying where the ball went), a joint limit is violated

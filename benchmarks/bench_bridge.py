@@ -9,6 +9,12 @@
    the 1 kHz stream, the TCP's distance from the drawn path, the state rate back at the source, latency.
 3. Source loss mid-motion: from the last target to the braking stop (dead-man 0.1 s), how long the stop takes and
    its peak ratios.
+
+The real-time sessions' ratios to the limits are of the commands the controller received in time. A late reply
+(the PC busy: the simulator's message said our previous reply had not arrived) makes the controller bridge the
+period by extrapolation, as KUKA's does; the motion it then executes is not the one we sent, and its acceleration
+changes within one period (the "late replies included" rows). The share of late replies is reported beside them. The
+lock-step bands report the same for the motion the scripted controller executed with replies lost.
 """
 
 from __future__ import annotations
@@ -111,8 +117,8 @@ class _Latency:
         now = time.monotonic()
         if app.cycle.state == 4 and not app.cycle.braking:
             self.latency.extend(now - t for t in self.stamps)
-            if self.stamps and app._latencies:  # a cycle that took a target: FRI message in → reply out [ns]
-                self.work.append(app._latencies[-1] * 1e-9)
+            if self.stamps and app.latencies:  # a cycle that took a target: FRI message in → reply out [ns]
+                self.work.append(app.latencies[-1] * 1e-9)
         self.stamps.clear()
 
 
@@ -143,25 +149,46 @@ def _session(transport, source_proc, duration_s: float, tmp: Path, timeout_s: fl
     return result, lat, read_table(log_path, LOG_COLUMNS, time="increasing"), lim
 
 
-def _step_ratios(tab, lim, keep) -> list[np.ndarray]:
+def _on_time(tab) -> np.ndarray:
+    """Rows whose message says our previous reply reached the controller in time (its reflected counter is the one
+    before its own): the controller executed that command, not its extrapolation of the two before it."""
+    return tab.column("seq") - tab.column("reflected_seq") == 1
+
+
+def _step_ratios(tab, lim, keep, in_time: bool = False) -> list[np.ndarray]:
     """|first, second, third differences| of the commands kept, per cycle and joint, over the velocity,
-    acceleration and jerk limits."""
+    acceleration and jerk limits. ``in_time``: NaN where a command of the difference did not reach the controller in
+    time (a late reply makes it extrapolate: the motion it executes is then not the one we sent)."""
     q = np.column_stack([tab.column(f"cmd_q{j}") for j in range(1, 8)])[keep]
-    return [np.abs(np.diff(q, k, axis=0)) / 1e-3**k / lim_k
-            for k, lim_k in ((1, lim.velocity), (2, lim.acceleration), (3, lim.jerk))]  # fmt: skip
+    late = (~_on_time(tab)[keep]).astype(float)
+    out = []
+    for k, lim_k in ((1, lim.velocity), (2, lim.acceleration), (3, lim.jerk)):
+        r = np.abs(np.diff(q, k, axis=0)) / 1e-3**k / lim_k
+        if in_time and len(r):  # the commands i..i+k, each confirmed by the next row's counter (rows i..i+k+1)
+            confirmed = np.append(np.convolve(late, np.ones(k + 2), "valid") == 0, False)[: len(r)]
+            r[~confirmed] = np.nan
+        out.append(r)
+    return out
 
 
-def _ratios(tab, lim, keep) -> tuple[float, float, float]:
-    return tuple(float(r.max()) if r.size else float("nan") for r in _step_ratios(tab, lim, keep))  # type: ignore[return-value]
+def _ratios(tab, lim, keep, in_time: bool = False) -> tuple[float, float, float]:
+    return tuple(float(np.nanmax(r)) if np.isfinite(r).any() else float("nan")
+                 for r in _step_ratios(tab, lim, keep, in_time))  # type: ignore[return-value]  # fmt: skip
 
 
-def _over(tab, lim, keep) -> int:
+def _over(tab, lim, keep, in_time: bool = False) -> int:
     """Commands whose step, second or third difference exceeds its limit."""
-    ratios = _step_ratios(tab, lim, keep)
+    ratios = _step_ratios(tab, lim, keep, in_time)
     over = np.zeros(len(ratios[0]) + 1, dtype=bool)
     for k, r in enumerate(ratios, start=1):
         over[k:] |= (r > 1 + 1e-6).any(axis=1)
     return int(over.sum())
+
+
+def _late_share(tab, keep) -> float:
+    """[%] of the rows kept whose previous reply was late (the controller extrapolated instead)."""
+    ok = _on_time(tab)[keep]
+    return float(100.0 * np.mean(~ok)) if ok.size else float("nan")
 
 
 def _online_ik(n: int) -> list[tuple[str, float, str]]:
@@ -202,7 +229,7 @@ def _bands(quick: bool) -> list[tuple[str, float, str]]:
     for rate, ff in cases[:2] if quick else cases:
         for drop in (0.0, 0.05) if quick else (0.0, 0.05, 0.2):
             for late_ms in (2.0,) if quick else (1.0, 5.0):
-                worst, delays, vs, accs = 0.0, [], [], []
+                worst, delays, vs, accs, jerks = 0.0, [], [], [], []
                 for seed in (0,) if quick else (0, 1):
                     r = follow_in_lock_step(LockStepSource(rate, ff, seed=seed, lateness_s=late_ms * 1e-3), lim,
                                             drop=drop, seed=seed)  # fmt: skip
@@ -210,17 +237,19 @@ def _bands(quick: bool) -> list[tuple[str, float, str]]:
                     keep = r.t > 1.5
                     ref = np.array([wave(x - d)[0] for x in r.t[keep]])
                     worst = max(worst, float(np.degrees(np.abs(r.q[keep, 0] - r.q0[0] - ref).max())))
-                    v, a, _ = r.controller.motion_ratios(lim.velocity, lim.acceleration)
+                    v, a, jk = r.controller.motion_ratios(lim.velocity, lim.acceleration, lim.jerk)
                     delays.append(d * 1e3)
                     vs.append(v)
                     accs.append(a)
+                    jerks.append(jk)
                 name = (
                     f"lock step {rate:g} Hz {'ff' if ff else 'positions'}, {drop:.0%} replies lost, {late_ms:g} ms late"
                 )
                 rows += [(f"{name}: max error behind the delay", worst, "deg"),
                          (f"{name}: delay", max(delays), "ms"),
                          (f"{name}: peak velocity / limit", max(vs), ""),
-                         (f"{name}: peak acceleration / limit", max(accs), "")]  # fmt: skip
+                         (f"{name}: peak acceleration / limit", max(accs), ""),
+                         (f"{name}: peak jerk / limit (executed: lost replies extrapolated)", max(jerks), "")]  # fmt: skip
     return rows
 
 
@@ -248,7 +277,8 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         result, lat, tab, lim = _session(udp, src, seconds + 30, tmp)
         ms = np.array(lat.latency) * 1e3
         active = (tab.column("state") == 4) & (np.cumsum(tab.column("phase") == PHASE_BRAKE) == 0)
-        v, a, j = _ratios(tab, lim, tab.column("state") == 4)
+        act = tab.column("state") == 4
+        v, a, j = _ratios(tab, lim, act, in_time=True)
         rows += [
             ("udp 1 kHz: targets measured", len(ms), ""),
             ("udp 1 kHz: send -> FRI command p50", _pct(ms, 50), "ms"),
@@ -257,10 +287,12 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
             ("udp 1 kHz: share under 1 ms", float(np.mean(ms < 1.0) * 100) if len(ms) else float("nan"), "%"),
             ("udp 1 kHz: bridge work (FRI message -> reply) p50", _pct(np.array(lat.work) * 1e3, 50), "ms"),
             ("udp 1 kHz: bridge work (FRI message -> reply) p99", _pct(np.array(lat.work) * 1e3, 99), "ms"),
-            ("udp 1 kHz: commands over the limits", float(_over(tab, lim, tab.column("state") == 4)), ""),
-            ("udp 1 kHz: peak velocity / limit", v, ""),
-            ("udp 1 kHz: peak acceleration / limit", a, ""),
-            ("udp 1 kHz: peak jerk / limit", j, ""),
+            ("udp 1 kHz: replies late (the controller extrapolated)", _late_share(tab, act), "%"),
+            ("udp 1 kHz: commands over the limits (replies in time)", float(_over(tab, lim, act, in_time=True)), ""),
+            ("udp 1 kHz: peak velocity / limit (replies in time)", v, ""),
+            ("udp 1 kHz: peak acceleration / limit (replies in time)", a, ""),
+            ("udp 1 kHz: peak jerk / limit (replies in time)", j, ""),
+            ("udp 1 kHz: peak jerk / limit (late replies included)", _ratios(tab, lim, act)[2], ""),
             ("udp 1 kHz: following cycles", float(active.sum()), ""),
             ("udp 1 kHz: session ended", 1.0 if result.ok else 0.0, "(1 = by the source's end message)"),
         ]
@@ -277,15 +309,17 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
                 result, lat, tab, lim = _session(mq, src, seconds + 30, tmp)
                 path, n_states, dur = out.get(timeout=30)
                 keep = (tab.column("state") == 4) & (np.cumsum(tab.column("phase") == PHASE_BRAKE) == 0)
-                v, a, j = _ratios(tab, lim, keep)
+                v, a, j = _ratios(tab, lim, keep, in_time=True)
                 q = np.column_stack([tab.column(f"cmd_q{k}") for k in range(1, 8)])[keep]
                 tcp, _ = Robot().fk_path(q[::10])
                 dist = np.linalg.norm(tcp[:, None, :] - path[None, :, :], axis=2).min(axis=1) * 1e3
                 ms = np.array(lat.latency) * 1e3
                 rows += [
                     ("mqtt 30 Hz poses: targets", float(len(path)), ""),
-                    ("mqtt 30 Hz poses: peak jerk / limit (following)", j, ""),
-                    ("mqtt 30 Hz poses: peak acceleration / limit (following)", a, ""),
+                    ("mqtt 30 Hz poses: replies late (the controller extrapolated)", _late_share(tab, keep), "%"),
+                    ("mqtt 30 Hz poses: peak jerk / limit (following, replies in time)", j, ""),
+                    ("mqtt 30 Hz poses: peak acceleration / limit (following, replies in time)", a, ""),
+                    ("mqtt 30 Hz poses: peak jerk / limit (late replies included)", _ratios(tab, lim, keep)[2], ""),
                     ("mqtt 30 Hz poses: TCP distance from the drawn path max", float(dist.max()), "mm"),
                     ("mqtt 30 Hz poses: TCP distance from the drawn path p50", float(np.median(dist)), "mm"),
                     ("mqtt 30 Hz poses: send -> FRI command p50 (via broker)", _pct(ms, 50), "ms"),
@@ -300,7 +334,8 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         src = ctx.Process(target=_udp_source, args=(udp.port, 2.0, 1.6, 1000.0, False), daemon=True)
         result, lat, tab, lim = _session(udp, src, 30.0, tmp)
         brake = tab.column("phase") == PHASE_BRAKE
-        v, a, j = _ratios(tab, lim, tab.column("state") == 4)
+        act = tab.column("state") == 4
+        v, a, j = _ratios(tab, lim, act, in_time=True)
         q = np.column_stack([tab.column(f"cmd_q{k}") for k in range(1, 8)])
         b0, b1 = np.flatnonzero(brake)[[0, -1]] if brake.any() else (0, -1)  # no stop: a zero-length one, reported
         speed0 = np.abs(q[b0] - q[b0 - 1]).max() / 1e-3 if b0 > 0 else 0.0
@@ -308,8 +343,11 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
             ("source loss: ended by the dead-man", 1.0 if "dead-man" in result.detail else 0.0, ""),
             ("source loss: braking stop", (b1 - b0 + 1) * 1.0, "ms"),
             ("source loss: joint speed at the loss (fastest joint)", speed0, "rad/s"),
-            ("source loss: peak velocity / limit", v, ""),
-            ("source loss: peak acceleration / limit", a, ""),
-            ("source loss: peak jerk / limit", j, ""),
+            ("source loss: replies late (the controller extrapolated)", _late_share(tab, act), "%"),
+            ("source loss: peak velocity / limit (replies in time)", v, ""),
+            ("source loss: peak acceleration / limit (replies in time)", a, ""),
+            ("source loss: peak jerk / limit (replies in time)", j, ""),
+            ("source loss: braking stop's peak jerk / limit (replies in time)", _ratios(tab, lim, brake, True)[2], ""),
+            ("source loss: peak jerk / limit (late replies included)", _ratios(tab, lim, act)[2], ""),
         ]
     return rows

@@ -317,14 +317,14 @@ def _processing_cost(n: int = 20000) -> list[tuple[str, float, str]]:
             app.start()
             for _ in range(len(preamble) + 50):  # past the start checks and the plan at activation
                 app.step()
-            k0, j0 = app.transport.i, len(app._latencies)
+            k0, j0 = app.transport.i, len(app.latencies)
             t0 = time.perf_counter()
             while app.transport.i < len(app.transport.datagrams) - 10 and app.step():
                 pass
             k = app.transport.i - k0
             best = min(best, (time.perf_counter() - t0) / max(k, 1) * 1e6)
             # receive → reply handed to the (memory) socket: the Python work that delays each reply [ns]
-            best_before = min(best_before, float(np.median(app._latencies[j0:])) * 1e-3)
+            best_before = min(best_before, float(np.median(app.latencies[j0:])) * 1e-3)
             if log is not None:
                 log.close()
         out[with_log, prepare] = best

@@ -46,10 +46,22 @@ def _app(folder: Path, tag: str, prepare: bool = True) -> ClientApplication:
                              observers=[LogObserver(log), SessionFigures()], prepare=prepare)  # fmt: skip
 
 
-def record(folder: Path) -> list[bytes]:
-    """The monitoring datagrams of one scripted session, as the client received them."""
+def scripted_session(app: ClientApplication, version: str = "1.15") -> None:
+    """Run ``app`` (connected) against the scripted controller: the states to COMMANDING_ACTIVE, ROWS + 20 cycles of
+    it, IDLE; unpaced (each message as soon as the last reply arrived)."""
     script = ([Cycle(state=IDLE)] + [Cycle(state=MW, quality=1)] * 3 + [Cycle(state=MR)] * 3 + [Cycle(state=CW)] * 4
               + [Cycle(state=CA)] * (ROWS + 20) + [Cycle(state=IDLE)])  # fmt: skip
+    ctl = ScriptedController(app.port, script, Q0, pace_s=0.0, version=version).start()
+    try:
+        app.run()
+    finally:
+        ctl.client_done.set()
+        ctl.join()
+        app.close()
+
+
+def record(folder: Path) -> list[bytes]:
+    """The monitoring datagrams of one scripted session, as the client received them."""
     app = _app(folder, "record").connect()
     got: list[bytes] = []
     receive = app.transport.receive  # type: ignore[union-attr]
@@ -61,13 +73,7 @@ def record(folder: Path) -> list[bytes]:
         return data
 
     app.transport.receive = recording  # type: ignore[union-attr]
-    ctl = ScriptedController(app.port, script, Q0, pace_s=0.0).start()
-    try:
-        app.run()
-    finally:
-        ctl.client_done.set()
-        ctl.join()
-        app.close()
+    scripted_session(app)
     return got
 
 
@@ -132,15 +138,16 @@ def run(quick: bool = False, profile: bool = False) -> list[tuple[str, float, st
     return rows
 
 
-def main(argv: list[str]) -> int:
+def main(argv: list[str], name: str = "fri_step", run_fn=None) -> int:
+    """Print the figures of ``run_fn`` (``run``) and, unless ``--quick``, save them as benchmark ``name``."""
     from run_all import save_results
 
     t0 = time.perf_counter()
-    rows = run(quick="--quick" in argv, profile="--profile" in argv)
-    for name, value, unit in rows:
-        print(f"  {name:<55} {value:>8.1f} {unit}")
+    rows = (run_fn or run)(quick="--quick" in argv, profile="--profile" in argv)
+    for label, value, unit in rows:
+        print(f"  {label:<80} {value:>8.2f} {unit}")
     if "--quick" not in argv:
-        save_results("fri_step", rows, time.perf_counter() - t0)
+        save_results(name, rows, time.perf_counter() - t0)
     return 0
 
 

@@ -9,6 +9,9 @@ delay, 2 or 6 cycles of actuation delay; 60 s hold with a 10° push 20 s after t
 succeeded, falls, swing-up time, the largest angle from upright 2 s after the catch (before the push), after the
 push, and whether the cart stayed on the rail.
 
+Off the band's grid (``--parts off``, :func:`off_band_cases`): rods 0.75 and 1.25 × with and without the tip mass,
+5 % friction, 8 ms of jitter on 5 or 15 ms of delay, 3 or 5 cycles of actuation delay, knocks of ±10° at other times.
+
 A second judge, built to differ (:class:`StribeckRod`, not ``planners.rigid_pendulum``): the rod's bearing has
 Stribeck friction — kinetic 3, 5 or 7 % of the peak gravity torque, static 1.3 × that below 0.05 rad/s, plus viscous —
 integrated by scipy's adaptive ``solve_ivp`` (RK45) over every cycle instead of one RK4 step; rods 0.85 / 1.15 × the
@@ -19,7 +22,7 @@ seconds after the catch (so that they meet the balance's 3 Hz dither at other ph
 FRI simulator (``lbr control upright --sim-lockstep``, the real arm model, the module's serial lines on a pty): the
 nominal rod and the rod 20 % short and long with friction and noise, 60 s hold and the push.
 
-``python benchmarks/bench_upright_band.py [--quick] [--parts fast,fri,judge]`` writes
+``python benchmarks/bench_upright_band.py [--quick] [--parts fast,off,fri,judge] [--processes N]`` writes
 benchmarks/results/upright_band.json and benchmarks/results/upright_band.md (the docs' page) after each part it runs
 (the parts not run keep what the file had; each part is stamped with its date and commit; ``--quick`` writes
 nothing: a smoke run). The judge is the slowest part (scipy's RK45 over every 1 ms cycle, ≈ 2 min of CPU a case).
@@ -62,19 +65,22 @@ def _rail():
 
 
 def fast_case(args: tuple) -> dict:
+    """One case of the band: (rod ×, tip [kg], dry friction share, delay [s], actuation [cycles], seed), and for the
+    off-band cases also the jitter [s], the push's time after the catch [s] and its angle [deg]."""
     from planners.feedback.session import SessionOptions
     from planners.feedback.simulate import Sensor, simulate_session
     from planners.rigid_pendulum import RigidPendulum
 
-    scale, tip, friction, delay, actuation, seed = args
+    scale, tip, friction, delay, actuation, seed, *more = args
+    jitter, push_s, push_deg = more or (0.001, PUSH_AFTER_S, PUSH_DEG)
     rail = _rail()
     shape = RigidPendulum(rod_length=NOMINAL_ROD * scale, tip_mass=tip)
     rod = RigidPendulum(rod_length=NOMINAL_ROD * scale, tip_mass=tip,
                         coulomb=friction * shape.mass * shape.com * 9.81)  # fmt: skip
     model = RigidPendulum(rod_length=NOMINAL_ROD)
     run = simulate_session(rod, rail.limits, model.equivalent_length, SessionOptions(hold_s=HOLD_S),
-                           Sensor(noise=2, delay=delay, offset=17 * (seed + 1)), actuation_delay=actuation, seed=seed,
-                           pushes=((PUSH_AFTER_S, math.radians(PUSH_DEG)),), bounds=rail.local_bounds)  # fmt: skip
+                           Sensor(noise=2, delay=delay, jitter=jitter, offset=17 * (seed + 1)), actuation_delay=actuation,
+                           seed=seed, pushes=((push_s, math.radians(push_deg)),), bounds=rail.local_bounds)  # fmt: skip
     s = run.session
     t = np.asarray(run.t)
     up = np.degrees(np.abs(np.angle(np.exp(1j * (np.asarray(run.phi) - np.pi)))))
@@ -82,14 +88,26 @@ def fast_case(args: tuple) -> dict:
     out = dict(scale=scale, tip_kg=tip, friction=friction, delay_ms=delay * 1e3, actuation_cycles=actuation, seed=seed,
                succeeded=bool(s.succeeded), falls=int(s.falls), swing_up_s=s.swing_up_s,
                on_rail=bool(np.all(np.abs(np.asarray(run.x)) <= rail.limits.travel + 1e-9)), verdict=s.verdict)  # fmt: skip
+    if more:
+        out.update(jitter_ms=jitter * 1e3, push_s=push_s, push_deg=push_deg)
     if bal.any():
         t_catch = t[np.flatnonzero(bal)[0]]
-        before = bal & (t > t_catch + 2.0) & (t < t_catch + PUSH_AFTER_S)
-        after = bal & (t > t_catch + PUSH_AFTER_S + 3.0)
+        before = bal & (t > t_catch + 2.0) & (t < t_catch + push_s)
+        after = bal & (t > t_catch + push_s + 3.0)
         out["max_up_deg_settled"] = float(up[before].max()) if before.any() else None
         out["max_up_deg_after_push"] = float(up[after].max()) if after.any() else None
-        pushed = (t > t_catch + PUSH_AFTER_S) & (t < t_catch + PUSH_AFTER_S + 4.0)
+        pushed = (t > t_catch + push_s) & (t < t_catch + push_s + 4.0)
         out["max_cart_m_after_push"] = float(np.abs(np.asarray(run.x))[pushed].max()) if pushed.any() else None
+    return out
+
+
+def off_band_cases() -> list[tuple]:
+    """Cases off the band's grid: rods 0.75 and 1.25 × (with and without the tip mass), 5 % friction, 8 ms of
+    jitter on 5 or 15 ms of delay, 3 or 5 cycles of actuation delay, other seeds, knocks of ±10° at other times."""
+    out = []
+    for i, (scale, tip, delay) in enumerate(itertools.product((0.75, 1.25), (0.0, 0.02), (0.005, 0.015))):
+        out.append((scale, tip, 0.05, delay, 3 + 2 * (i % 2), 50 + i, 0.008, round(14.7 + 1.3 * i, 2),
+                    PUSH_DEG if i % 3 else -PUSH_DEG))  # fmt: skip
     return out
 
 
@@ -251,6 +269,74 @@ def push_travel_floor(length: float, share: float, accel: float, jerk: float, pu
     return max(best[-2:])
 
 
+def knock_excursion(length: float, weights: tuple, friction: float, delay: float, limits, dt: float = 1e-3,
+                    push: float = math.radians(PUSH_DEG), horizon: float = 3.0) -> float:  # fmt: skip
+    """The cart's largest excursion [m] when a rod of equivalent ``length`` [m] with dry friction of ``friction`` of
+    its gravity torque, balanced with the cart at rest at the rail's centre, is knocked by ``push`` [rad] — predicted
+    by the balance's own closed loop (``planners.feedback``'s controller with LQR ``weights``, no dither; its observer
+    fed a reading every 5 ms that arrives ``delay`` [s] late; commands acting 2 cycles late; the cart's governor on
+    the constant ``limits``), not its linearisation; inf when the rod falls."""
+    from dataclasses import replace
+
+    from planners.feedback.cart import Cart
+    from planners.feedback.observer import DelayedObserver
+    from planners.feedback.upright import Mode, UprightController, UprightOptions, balance_gain
+
+    options = replace(UprightOptions(), weights=tuple(weights))
+    cart = Cart(limits, dt)
+    ctl = UprightController(length, cart, options, balance_gain(length, options), reach=np.zeros((3, 1, 5)),
+                            limit=math.inf)  # fmt: skip
+    ctl.mode = Mode.BALANCE
+    mu = friction * 9.81 / length
+    obs = DelayedObserver(length, dt, delay, 0.005, actuation_delay=2, phi0=math.pi, coulomb=mu)
+    lag, every = int(round(delay / dt)), int(round(0.005 / dt))
+    seen, applied = [math.pi] * (lag + 1), [0.0] * 3  # rings: the true angle over the delay, the commands
+    phi, omega, far = math.pi + push, 0.0, 0.0
+    for k in range(int(round(horizon / dt))):
+        a = applied[k % 3]
+        omega += (-(9.81 * math.sin(phi) + a * math.cos(phi)) / length - mu * math.tanh(omega / 0.05)) * dt
+        phi += omega * dt
+        seen[k % len(seen)] = phi
+        if k % every == 0:
+            obs.correct(seen[(k + 1) % len(seen)])  # the angle ``lag`` cycles ago
+        ctl.update(obs.phi, obs.omega)
+        applied[k % 3] = cart.a
+        obs.predict(cart.a)
+        far = max(far, abs(cart.x))
+        if ctl.mode is not Mode.BALANCE:
+            return math.inf
+    return far
+
+
+def weight_scan(fast: list[dict]) -> list[dict]:
+    """For the band's longer rods with 5 % friction: the knock's predicted excursion (:func:`knock_excursion`, the rail's
+    bounds at its centre) with the fixed LQR weights against the measured one, and the least over a grid of 81 other
+    weights (x, v, θ, θ̇ each over 3 values, 16 × apart): can any weights fit the knock's recovery into the rail?"""
+    from planners.feedback.upright import UprightOptions
+    from planners.rail import CartLimits
+    from planners.rigid_pendulum import RigidPendulum
+
+    rail = _rail()
+    speed, _, a_hi, _, j_hi = rail.local_bounds(0.0, 0.0, 0.0)
+    centre = CartLimits(rail.limits.travel, speed, a_hi, j_hi)
+    fixed = UprightOptions().weights
+    grid = [(x, v, fixed[2], t, w) for x, v, t, w in itertools.product((30, 120, 480), (10, 40, 160), (50, 200, 800),
+                                                                        (1, 5, 20))]  # fmt: skip
+    out = []
+    for scale, tip, delay in ((1.0, 0.02, 0.015), (1.2, 0.0, 0.015), (1.2, 0.02, 0.005), (1.2, 0.02, 0.015)):
+        length = RigidPendulum(rod_length=NOMINAL_ROD * scale, tip_mass=tip).equivalent_length
+        sensor = delay + 0.0005  # the link's delay and half its jitter, as identified
+        scanned = sorted((knock_excursion(length, w, 0.05, sensor, centre), w) for w in grid)
+        measured = [r["max_cart_m_after_push"] for r in fast if (r["scale"], r["tip_kg"], r["friction"], r["delay_ms"])
+                    == (scale, tip, 0.05, delay * 1e3) and r.get("max_cart_m_after_push") is not None]  # fmt: skip
+        out.append(dict(scale=scale, tip_kg=tip, delay_ms=delay * 1e3,
+                        fixed_m=knock_excursion(length, fixed, 0.05, sensor, centre),
+                        fixed_no_friction_m=knock_excursion(length, fixed, 0.0, sensor, centre),
+                        measured_m=[min(measured), max(measured)] if measured else None,
+                        best_m=scanned[0][0], best_weights=list(scanned[0][1])))  # fmt: skip
+    return out
+
+
 def _summary(rows: list[dict], key: str) -> dict:
     """Cases, those balanced for the hold without a fall (on the rail), falls, per value of ``key``."""
     out = {}
@@ -283,6 +369,8 @@ def write_page(result: dict, path: Path) -> None:
 
     if "fast_by_friction" in result:
         lines += _fast_section(result, measured("fast"))
+    if "off" in result:
+        lines += _off_section(result, measured("off"))
     if "judge" in result:
         lines += _judge_section(result, measured("judge"))
     else:
@@ -322,6 +410,33 @@ def _fast_section(result: dict, head: list[str]) -> list[str]:
         cell = ["—" if fl[k] is None else f"{fl[k]:.3f}" for k in ("0.0", "0.05")]
         lines.append(f"| {r['scale']:g} | {r['tip_kg']:g} | x = {r['bounds_at_m']:g} m, at rest | {r['accel']:.1f} | "
                      f"{r['jerk']:.0f} | {cell[0]} | {cell[1]} |")  # fmt: skip
+    if "weight_scan" in result:
+        lines += ["", "Can other LQR weights fit the knock's recovery into the rail? The excursion [m] of a 10° knock "
+                  "predicted by the balance's own closed loop (observer, delays, the governor on the rail's bounds at its "
+                  "centre; `knock_excursion`) with 5 % friction, for the fixed weights (against the band's measured "
+                  "range), without friction, and the least over 81 other weights (x, v, θ, θ̇ each over three values "
+                  "16 × apart):", "",
+                  "| rod × | tip [kg] | delay [ms] | fixed weights | measured | no friction | least of the grid | its "
+                  "weights (x, v, a, θ, θ̇) |", "|---:|---:|---:|---:|---|---:|---:|---|"]  # fmt: skip
+        for r in result["weight_scan"]:
+            m = r["measured_m"]
+            lines.append(f"| {r['scale']:g} | {r['tip_kg']:g} | {r['delay_ms']:g} | {r['fixed_m']:.3f} | "
+                         f"{'—' if m is None else f'{m[0]:.3f}–{m[1]:.3f}'} | {r['fixed_no_friction_m']:.3f} | "
+                         f"{r['best_m']:.3f} | {tuple(r['best_weights'])} |")  # fmt: skip
+    return lines + [""]
+
+
+def _off_section(result: dict, head: list[str]) -> list[str]:
+    lines = ["## Off the band's grid (fast simulation: rods 0.75 and 1.25 ×, 8 ms jitter, other knocks)", "", *head,
+             f"{result['off_succeeded_without_fall']} of {result['off_cases']} cases without a fall, "
+             f"{result['off_falls_total']} fall{'' if result['off_falls_total'] == 1 else 's'}.", "",
+             "| rod × | tip [kg] | friction | delay + jitter [ms] | actuation [cycles] | push | excursion after it [m] | "
+             "falls | verdict |", "|---:|---:|---:|---|---:|---|---:|---:|---|"]  # fmt: skip
+    for r in result["off"]:
+        run = r.get("max_cart_m_after_push")
+        lines.append(f"| {r['scale']:g} | {r['tip_kg']:g} | {r['friction']:.0%} | {r['delay_ms']:g} + {r['jitter_ms']:g} | "
+                     f"{r['actuation_cycles']} | {r['push_deg']:+g}° at {r['push_s']:g} s | "
+                     f"{'—' if run is None else f'{run:.3f}'} | {r['falls']} | {r['verdict']} |")  # fmt: skip
     return lines + [""]
 
 
@@ -356,7 +471,7 @@ def _fri_section(result: dict, head: list[str]) -> list[str]:
     return lines
 
 
-PARTS = ("fast", "fri", "judge")  # the order they run in (the slowest, the judge's RK45 per cycle, last)
+PARTS = ("fast", "off", "fri", "judge")  # the order they run in (the slowest, the judge's RK45 per cycle, last)
 
 
 def _stamp() -> dict:
@@ -418,9 +533,23 @@ def fast_part(pool, quick: bool) -> dict:
         "fast_max_cart_m_after_push": max(travel) if travel else None,
         "fast_wall_s": round(fast_s, 1),
         "push_travel_floor": floors,
+        "weight_scan": weight_scan(fast),
         "fast_failures": [r for r in fast if r not in ok],
         "fast": fast,
     }  # fmt: skip
+
+
+def off_part(pool) -> dict:
+    """The cases off the band's grid (:func:`off_band_cases`)."""
+    t0 = time.perf_counter()
+    off = pool.map(fast_case, off_band_cases())
+    return {
+        "off_cases": len(off),
+        "off_succeeded_without_fall": sum(r["succeeded"] and r["falls"] == 0 and r["on_rail"] for r in off),
+        "off_falls_total": sum(r["falls"] for r in off),
+        "off_wall_s": round(time.perf_counter() - t0, 1),
+        "off": off,
+    }
 
 
 def judge_part(pool) -> dict:
@@ -445,16 +574,21 @@ def _write(result: dict) -> None:
     write_page(result, out.with_suffix(".md"))
 
 
-def main(quick: bool = False, parts: tuple[str, ...] = PARTS) -> dict:
-    """Run ``parts`` (of :data:`PARTS`) and write the results file after each: the parts not run keep what the file
-    had, each part stamped with when and on which commit it was measured (``measured``)."""
+def main(quick: bool = False, parts: tuple[str, ...] = PARTS, processes: int = 2) -> dict:
+    """Run ``parts`` (of :data:`PARTS`) on ``processes`` worker processes and write the results file after each: the
+    parts not run keep what the file had, each part stamped with when and on which commit it was measured
+    (``measured``)."""
     out = ROOT / "benchmarks" / "results" / "upright_band.json"
     result = {} if quick or not out.exists() else json.loads(out.read_text())
     result.setdefault("measured", {})
-    with Pool(2) as pool:
+    with Pool(processes) as pool:
         for part in (p for p in PARTS if p in parts):
             if part == "fast":
                 result.update(fast_part(pool, quick))
+            elif part == "off":
+                if quick:
+                    continue
+                result.update(off_part(pool))
             elif part == "judge":
                 if quick:
                     continue
@@ -467,10 +601,12 @@ def main(quick: bool = False, parts: tuple[str, ...] = PARTS) -> dict:
             result["date"] = time.strftime("%Y-%m-%d")
             if not quick:
                 _write(result)
-    print(json.dumps({k: v for k, v in result.items() if k not in ("fast", "fast_failures", "judge", "push_travel_floor")},
-                     indent=1))  # fmt: skip
+    print(json.dumps({k: v for k, v in result.items()
+                      if k not in ("fast", "fast_failures", "judge", "off", "push_travel_floor")}, indent=1))  # fmt: skip
     for r in result.get("fast_failures", []):
         print("failed:", r)
+    for r in result.get("off", []):
+        print("off the grid:", r)
     for r in result.get("judge", []):
         print("judge:", r)
     return result
@@ -486,8 +622,11 @@ if __name__ == "__main__":
         default=",".join(PARTS),
         help=f"comma-separated parts to run (of {', '.join(PARTS)}); the others keep what the file has",
     )
+    ap.add_argument("--processes", type=int, default=2, help="worker processes (default 2)")
     args = ap.parse_args()
     chosen = tuple(p.strip() for p in args.parts.split(",") if p.strip())
     if not chosen or set(chosen) - set(PARTS):
         ap.error(f"--parts: expected some of {', '.join(PARTS)}, got {args.parts!r}")
-    main(args.quick, chosen)
+    if args.processes < 1:
+        ap.error(f"--processes: expected 1 or more, got {args.processes}")
+    main(args.quick, chosen, args.processes)

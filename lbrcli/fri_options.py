@@ -142,6 +142,15 @@ LengthOpt = Annotated[
         help=f"Simulated ball string length \\[m] (default {DEFAULT_BALL_LENGTH}; 0: no ball).",
     ),
 ]
+DrawnLengthOpt = Annotated[
+    float,
+    string_length(
+        "--length",
+        help="String length \\[m] from the TCP to the ball's centre, for balls a file gives by their angles (the "
+        "execution log's simulated ball).",
+    ),
+]
+"""``lbr view`` and ``lbr export``: the string of the ball they draw from angles (default :data:`DEFAULT_BALL_LENGTH`)."""
 SimStartOpt = Annotated[
     Optional[JointVector],
     joints("--sim-start", help="Simulator only: where the simulated robot stands at start (7 angles, deg/rad)."),

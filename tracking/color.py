@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trajectories.errors import OptionError
+from trajectories.errors import SettingError
 
 _MIN_S = 100  # minimum saturation of a coloured marker (grey, white, skin and wood stay below)
 _MIN_V = 50  # minimum value (brightness) — darker pixels have unreliable hue
@@ -49,8 +49,10 @@ COLORS: dict[str, ColorSpec] = {
 }
 
 
-def color_spec(text: str, option: str = "--color") -> ColorSpec:
-    """A colour by name (see COLORS) or as an OpenCV hue range 'H1-H2' (0–179; H1 > H2 wraps through 0)."""
+def color_spec(text: str, setting: str = "ColorSpec.name") -> ColorSpec:
+    """A colour by name (see COLORS) or as an OpenCV hue range 'H1-H2' (0–179; H1 > H2 wraps through 0). An unknown
+    one is a SettingError naming ``setting`` ("Class.field" of what the text was given for; the CLI names its option).
+    """
     key = str(text).strip().lower()
     if key in COLORS:
         return COLORS[key]
@@ -63,7 +65,8 @@ def color_spec(text: str, option: str = "--color") -> ColorSpec:
         if 0 <= h1 <= 179 and 0 <= h2 <= 179:
             return ColorSpec(key, _hue_bands(h1, h2))
     names = ", ".join(COLORS)
-    raise OptionError(f"{option}: unknown colour {text!r} (one of {names}, or a hue range H1-H2 in 0–179)")
+    owner, _, name = setting.rpartition(".")
+    raise SettingError(owner, name, f"unknown colour {text!r} (one of {names}, or a hue range H1-H2 in 0–179)")
 
 
 def color_mask(hsv: np.ndarray, spec: ColorSpec) -> np.ndarray:

@@ -21,6 +21,7 @@ _REFINED_MINIMA = 4  # the best local minima of the misfit on the grid refined t
 AMBIGUOUS_RMS_RATIO = (
     1.5  # a rival lag whose RMS misfit is within this factor of the best one's makes the lag ambiguous
 )
+LAG_SETTING = "compare_angles.lag_s"  # the setting that gives the lag instead (the CLI names its option)
 
 
 @dataclass(frozen=True)
@@ -127,6 +128,68 @@ def _local_minima(e: np.ndarray) -> np.ndarray:
     return np.union1d(inner, np.array(ends, int))
 
 
+@dataclass(frozen=True)
+class _ShiftMisfits:
+    """The misfit of the measurement against the model at every whole-sample shift on a common grid."""
+
+    step: float  # grid step [s]
+    lags: np.ndarray  # (s,) lag of each shift [s]
+    error: np.ndarray  # (s,) Σ over the overlap of (y − model)² + UNCOVERED_WEIGHT × the measured energy outside it
+    inside: np.ndarray  # (s,) its part inside the overlap
+    syy: np.ndarray  # (s,) measured energy inside the overlap
+    overlapping: np.ndarray  # (s,) bool: at least two samples overlap
+
+
+def _shift_misfits(t_model, theta_model, t_meas, theta_meas, step: float) -> _ShiftMisfits:
+    """:class:`_ShiftMisfits` by FFT cross-correlations of both series resampled on a grid of step [s] (gaps in the
+    measurement masked). CheckFailed when a series is constant."""
+    from scipy.signal import correlate
+
+    tm0, xm, mm = _series(np.asarray(t_model, float), np.asarray(theta_model, float), step, math.inf)
+    ty0, ym, my = _series(np.asarray(t_meas, float), np.asarray(theta_meas, float), step, _GAP_FACTOR * step)
+
+    def xc(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # Σ_n a[n + s] b[n] for every shift s
+        return correlate(a, b, mode="full", method="fft")
+
+    sxy = xc(ym, xm)
+    sxx = xc(my, xm * xm)  # model energy where it is compared with a measured sample
+    count = xc(my, mm)
+    shifts = np.arange(-(len(xm) - 1), len(ym))
+    lags = ty0 - tm0 + shifts * step
+    ey = float(np.dot(ym, ym))
+    if float(np.ptp(xm[mm > 0])) == 0.0 or float(np.ptp(ym[my > 0])) == 0.0:
+        raise CheckFailed(f"cannot estimate the lag: a θ series is constant (give {LAG_SETTING})")
+    syy = xc(ym * ym, mm)  # measured energy inside the overlap
+    inside = np.clip(syy - 2.0 * sxy + sxx, 0.0, None)  # Σ over the overlap of (y − model)²
+    error = inside + UNCOVERED_WEIGHT * np.clip(ey - syy, 0.0, None)
+    return _ShiftMisfits(step, lags, error, inside, syy, count >= 2.0 - 0.5)
+
+
+def _refine_minima(shifts: _ShiftMisfits, minima: np.ndarray, t_model, theta_model, t_meas, theta_meas) -> list:
+    """The best few minima of the grid's misfit, each refined to sub-sample by a bounded search within ± a step (the
+    grid misaligns the series by up to half a step): [(misfit, its part inside the overlap, lag [s], grid index)],
+    the best first."""
+    from scipy.optimize import minimize_scalar
+
+    step, lags = shifts.step, shifts.lags
+    order = minima[np.argsort(shifts.error[minima])][:_REFINED_MINIMA]
+    refined = []
+    for j in order:
+        lo, hi = float(lags[j] - step), float(lags[j] + step)
+        res = minimize_scalar(
+            lambda lag: _misfit(t_model, theta_model, t_meas, theta_meas, lag, (lo, hi))[0],
+            bounds=(lo, hi),
+            method="bounded",
+            options={"xatol": step * 1e-3},
+        )
+        lag = float(res.x)
+        if _misfit(t_model, theta_model, t_meas, theta_meas, float(lags[j]), (lo, hi))[0] < res.fun:
+            lag = float(lags[j])
+        refined.append((*_misfit(t_model, theta_model, t_meas, theta_meas, lag), lag, int(j)))
+    refined.sort()
+    return refined
+
+
 def estimate_lag(
     t_model: np.ndarray,
     theta_model: np.ndarray,
@@ -148,55 +211,22 @@ def estimate_lag(
     sub-sample by least squares of the residual; the best other local minimum at least 0.15 s away is the
     rival (a steady swing scores nearly alike one period off: then the lag is ambiguous).
     """
-    from scipy.optimize import minimize_scalar
-    from scipy.signal import correlate
-
     step = step_s or median_step(t_meas[np.isfinite(theta_meas)])
-    tm0, xm, mm = _series(np.asarray(t_model, float), np.asarray(theta_model, float), step, math.inf)
-    ty0, ym, my = _series(np.asarray(t_meas, float), np.asarray(theta_meas, float), step, _GAP_FACTOR * step)
-
-    def xc(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # Σ_n a[n + s] b[n] for every shift s
-        return correlate(a, b, mode="full", method="fft")
-
-    sxy = xc(ym, xm)
-    sxx = xc(my, xm * xm)  # model energy where it is compared with a measured sample
-    count = xc(my, mm)
-    shifts = np.arange(-(len(xm) - 1), len(ym))
-    lags = ty0 - tm0 + shifts * step
-    ey = float(np.dot(ym, ym))
-    if float(np.ptp(xm[mm > 0])) == 0.0 or float(np.ptp(ym[my > 0])) == 0.0:
-        raise CheckFailed("cannot estimate the lag: a θ series is constant (give --lag)")
+    shifts = _shift_misfits(t_model, theta_model, t_meas, theta_meas, step)
     default_window = max_lag_s is None
     if max_lag_s is None:
         max_lag_s = default_lag_window(t_model, t_meas)
-    overlapping = count >= 2.0 - 0.5
-    valid = (np.abs(lags) <= max_lag_s) & overlapping
+    valid = (np.abs(shifts.lags) <= max_lag_s) & shifts.overlapping
     if not valid.any():
         raise CheckFailed("no lag with enough overlap between prediction and track")
-    syy = xc(ym * ym, mm)  # measured energy inside the overlap
-    inside = np.clip(syy - 2.0 * sxy + sxx, 0.0, None)  # Σ over the overlap of (y − model)²
-    error = inside + UNCOVERED_WEIGHT * np.clip(ey - syy, 0.0, None)
-    err = np.where(valid, error, np.inf)
-    minima = _local_minima(err)
-    if default_window and not valid[overlapping].all():  # the default window is a guess: a better lag beyond it rivals
-        minima = np.append(minima, int(np.argmin(np.where(overlapping & ~valid, error, np.inf))))
-    # the grid's step misaligns the series by up to half a step: refine the best few minima before ranking them
-    order = minima[np.argsort(error[minima])][:_REFINED_MINIMA]
+    minima = _local_minima(np.where(valid, shifts.error, np.inf))
+    if (
+        default_window and not valid[shifts.overlapping].all()
+    ):  # the default window is a guess: a better lag beyond it rivals
+        beyond = np.where(shifts.overlapping & ~valid, shifts.error, np.inf)
+        minima = np.append(minima, int(np.argmin(beyond)))
     t_meas, theta_meas = np.asarray(t_meas, float), np.asarray(theta_meas, float)
-    refined = []
-    for j in order:
-        lo, hi = float(lags[j] - step), float(lags[j] + step)
-        res = minimize_scalar(
-            lambda lag: _misfit(t_model, theta_model, t_meas, theta_meas, lag, (lo, hi))[0],
-            bounds=(lo, hi),
-            method="bounded",
-            options={"xatol": step * 1e-3},
-        )
-        lag = float(res.x)
-        if _misfit(t_model, theta_model, t_meas, theta_meas, float(lags[j]), (lo, hi))[0] < res.fun:
-            lag = float(lags[j])
-        refined.append((*_misfit(t_model, theta_model, t_meas, theta_meas, lag), lag, int(j)))
-    refined.sort()
+    refined = _refine_minima(shifts, minima, t_model, theta_model, t_meas, theta_meas)
     best_ms, best_inside, lag, k = refined[0]
     if abs(lag) > max_lag_s + step:  # only a rival may lie beyond the window: keep the best inside as the lag
         best_ms, best_inside, lag, k = next((r for r in refined if abs(r[2]) <= max_lag_s + step), refined[0])
@@ -212,7 +242,7 @@ def estimate_lag(
         rms_rad=math.sqrt(best_ms),
         rival_rms_rad=math.sqrt(rival[0]) if rival else math.nan,
         at_window_edge=abs(lag) >= float(max_lag_s) - 1.5 * step,
-        overlap_misfit=float(inside[k] / max(syy[k], 1e-300)),
+        overlap_misfit=float(shifts.inside[k] / max(shifts.syy[k], 1e-300)),
         overlap_rms_rad=math.sqrt(best_inside),
     )
 

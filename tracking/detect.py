@@ -15,7 +15,7 @@ there (a blob that small cannot be told from a tiny box anyway).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -24,6 +24,7 @@ from .color import ColorSpec, color_mask
 _KERNEL_SIZE = 3  # [px] morphology structuring element (removes single-pixel noise, fills pinholes)
 # Below this area [px²] the shape gates are relaxed by _SMALL_RELAX (pixelation, see the module docstring).
 _SMALL_AREA_PX = 64.0
+SHAPE_MIN_AREA_PX = _SMALL_AREA_PX  # [px²] a blob this large has a shape that tells a ball from a box
 _SMALL_RELAX = 0.15
 
 
@@ -98,7 +99,7 @@ def ellipse_fit(contour: np.ndarray) -> float:
 
     x, y, w, h = cv2.boundingRect(contour)
     fill = np.zeros((h, w), np.uint8)
-    cv2.drawContours(fill, [contour - (x, y)], -1, 1, -1)
+    cv2.drawContours(fill, (contour,), -1, 1, -1, offset=(-x, -y))
     m = cv2.moments(fill, True)
     if m["m00"] <= 0:
         return 0.0
@@ -186,6 +187,53 @@ def find_blobs(
     return out
 
 
+_DETAIL_RADIUS_PX = (
+    12.0  # [px] a ball keeping this radius in a shrunk image is measured there (centre to ≈ 0.1 px of it)
+)
+
+
+def detail_scale(min_radius_px: float | None) -> int:
+    """Shrink factor (1, 2 or 4) at which a ball of at least min_radius_px [px] still keeps 12 px of radius: a ball a
+    quarter of the frame is measured on a quarter or a sixteenth of the pixels."""
+    if min_radius_px is None or min_radius_px < 2.0 * _DETAIL_RADIUS_PX:
+        return 1
+    return 4 if min_radius_px >= 4.0 * _DETAIL_RADIUS_PX else 2
+
+
+def find_blobs_scaled(
+    bgr: np.ndarray,
+    spec: ColorSpec,
+    gates: BlobGates,
+    scale: int,
+    origin: tuple[int, int] = (0, 0),
+    frame_size: tuple[int, int] | None = None,
+) -> list[Blob]:
+    """:func:`find_blobs` on the image shrunk by ``scale`` (area averaging; arguments as there): for a ball large enough
+    to keep its shape there (:func:`detail_scale`), at a fraction of the cost. Centres, areas and the ``clipped`` flag
+    are in full-resolution terms (a shrunk pixel j covers the pixels j·scale … j·scale + scale − 1)."""
+    import cv2
+
+    if scale <= 1:
+        return find_blobs(bgr, spec, gates, origin, frame_size)
+    h, w = bgr.shape[:2]
+    ox, oy = origin
+    fw, fh = frame_size if frame_size is not None else (w + ox, h + oy)
+    ws, hs = w // scale, h // scale
+    if ws < 5 or hs < 5:
+        return find_blobs(bgr, spec, gates, origin, frame_size)
+    small = bgr[: hs * scale, : ws * scale]
+    for _ in range(scale.bit_length() - 1):  # halvings: OpenCV's fast path of area averaging (scale a power of 2)
+        small = cv2.resize(small, (small.shape[1] // 2, small.shape[0] // 2), interpolation=cv2.INTER_AREA)
+    s2 = float(scale * scale)
+    shrunk = replace(gates, min_area_px=gates.min_area_px / s2, max_area_px=gates.max_area_px / s2)
+    x0, y0 = int(ox > 0), int(oy > 0)  # which edges of the window are inner ones (not the frame's)
+    size = (x0 + ws + int(ox + w < fw), y0 + hs + int(oy + h < fh))
+    return [
+        replace(b, u=(b.u - x0 + 0.5) * scale - 0.5 + ox, v=(b.v - y0 + 0.5) * scale - 0.5 + oy, area_px=b.area_px * s2)
+        for b in find_blobs(small, spec, shrunk, (x0, y0), size)
+    ]
+
+
 _COARSE_MAX_REGIONS = 24  # more candidate regions than this: search the full-resolution frame instead
 
 
@@ -221,13 +269,15 @@ def find_blobs_coarse(
     origin: tuple[int, int] = (0, 0),
     frame_size: tuple[int, int] | None = None,
     small_hsv: np.ndarray | None = None,
+    refine: int = 1,
 ) -> list[Blob]:
     """:func:`find_blobs` on a whole frame (or a large window of one: ``origin``, ``frame_size`` as there) in two
     passes: the colour's pixels on the image shrunk by factor (area averaging, no morphology, so a ball of 2 px
     radius still shows), then the exact detection at full resolution in a window around each region found,
     skipping regions longer than the largest ball. Same result as one full-resolution pass at a fraction of the
     cost; falls back to it when the coarse pass finds very many regions or a blob is cut by a window.
-    ``small_hsv``: :func:`coarse_hsv` of the image already (several colour thresholds on one image).
+    ``small_hsv``: :func:`coarse_hsv` of the image already (several colour thresholds on one image); ``refine``: the
+    regions are measured on the image shrunk by this (:func:`find_blobs_scaled`; a ball known to be large).
     """
     import cv2
 
@@ -235,7 +285,7 @@ def find_blobs_coarse(
     ox, oy = origin
     size = frame_size or (w, h)
     if factor <= 1:
-        return find_blobs(bgr, spec, gates, origin, size)
+        return find_blobs_scaled(bgr, spec, gates, refine, origin, size)
     mask = color_mask(coarse_hsv(bgr, factor) if small_hsv is None else small_hsv, spec)
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     # regions longer than the largest ball (a cable, a big box) cannot hold one apart from them; tiny ones are noise
@@ -247,15 +297,15 @@ def find_blobs_coarse(
         if max(r[2], r[3]) <= longest and max(cv2.contourArea(c), 1.0) >= least
     ]
     if len(boxes) > _COARSE_MAX_REGIONS:
-        return find_blobs(bgr, spec, gates, origin, size)
+        return find_blobs_scaled(bgr, spec, gates, refine, origin, size)
     out: list[Blob] = []
     for x, y, bw, bh in boxes:
         pad = 4 + min(max(bw, bh) // 2, 6)  # [coarse px] a blob cut by its window falls back to the full frame
         x0, y0 = max((x - pad) * factor, 0), max((y - pad) * factor, 0)
         x1, y1 = min((x + bw + pad) * factor, w), min((y + bh + pad) * factor, h)
-        for b in find_blobs(bgr[y0:y1, x0:x1], spec, gates, (x0 + ox, y0 + oy), size):
+        for b in find_blobs_scaled(bgr[y0:y1, x0:x1], spec, gates, refine, (x0 + ox, y0 + oy), size):
             if b.clipped:  # cut by a coarse window (or by the outer window, which the caller handles)
-                return find_blobs(bgr, spec, gates, origin, size)
+                return find_blobs_scaled(bgr, spec, gates, refine, origin, size)
             if all(abs(b.u - o.u) > 0.5 or abs(b.v - o.v) > 0.5 for o in out):
                 out.append(b)
     return out

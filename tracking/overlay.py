@@ -48,7 +48,8 @@ def draw_overlay(
 
 
 def draw_candidates(frame: np.ndarray, blobs: list) -> np.ndarray:  # list[tracking.detect.Blob]
-    """Draw in place every ball-like blob of a frame with its centre 'U,V' [px] (to pick one for --start)."""
+    """Draw in place every ball-like blob of a frame with its centre 'U,V' [px] (to pick one as the ball's start point,
+    TrackerOptions.start_uv)."""
     import cv2
 
     for b in blobs:

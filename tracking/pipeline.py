@@ -85,6 +85,144 @@ class ImageAngles:
         return string_angle(undistort_points(self.cal, b), undistort_points(self.cal, p))
 
 
+def _check_inputs(
+    path: str | Path,
+    pivot_uv: tuple[float, float] | None,
+    pivot_color: ColorSpec | None,
+    calibration: CameraCalibration | None,
+) -> VideoInfo:
+    """The video's info; ValueError for both a fixed pivot and a pivot colour, InputError for an unreadable video or a
+    calibration made for another image size."""
+    if pivot_uv is not None and pivot_color is not None:
+        raise ValueError("give a fixed pivot or a pivot colour, not both")
+    info = probe_video(path)
+    if calibration is not None and tuple(calibration.image_size) != info.size:
+        raise InputError(
+            f"calibration is for {calibration.image_size[0]}x{calibration.image_size[1]} images, "
+            f"the video is {info.width}x{info.height}",
+            file=str(path),
+        )
+    return info
+
+
+_NAN2 = (math.nan, math.nan)
+
+
+class _Columns:
+    """The per-frame results gathered while tracking — time, ball centre, radius and confidence, pivot — with the
+    frames the trackers revise rewritten in place (the on_frame preview shows what was known at the time)."""
+
+    def __init__(self) -> None:
+        self.t: list[float] = []
+        self.uv: list[tuple[float, float]] = []
+        self.radius: list[float] = []
+        self.conf: list[float] = []
+        self.piv: list[tuple[float, float]] = []
+
+    def add(self, t: float, ball: Blob | None, confidence: float) -> None:
+        self.t.append(t)
+        self.uv.append((ball.u, ball.v) if ball is not None else _NAN2)
+        self.radius.append(ball.radius_px if ball is not None else math.nan)
+        self.conf.append(confidence if ball is not None else 0.0)
+
+    def revise_ball(self, tracker: BallTracker) -> None:
+        for k, blob, c in tracker.pop_revision():
+            self.uv[k] = (blob.u, blob.v) if blob is not None else _NAN2
+            self.radius[k] = blob.radius_px if blob is not None else math.nan
+            self.conf[k] = c if blob is not None else 0.0
+
+    def revise_pivot(self, tracker: BallTracker) -> None:
+        for k, blob, _ in tracker.pop_revision():
+            self.piv[k] = (blob.u, blob.v) if blob is not None else _NAN2
+
+
+class _Trackers:
+    """The ball's tracker and the pivot's (a tracked marker, or a fixed pixel, or none), run frame by frame."""
+
+    def __init__(
+        self,
+        ball: ColorSpec,
+        options: TrackerOptions | None,
+        pivot_uv: tuple[float, float] | None,
+        pivot_color: ColorSpec | None,
+        pivot_options: TrackerOptions | None,
+    ) -> None:
+        self.ball = BallTracker(ball, options)
+        pivot_opts = pivot_options or (replace(options, start_uv=None) if options is not None else None)
+        self.pivot = BallTracker(pivot_color, pivot_opts) if pivot_color is not None else None
+        self.fixed = None if pivot_uv is None else (float(pivot_uv[0]), float(pivot_uv[1]))
+        self.sure = self.ball.options.min_confidence
+        self.columns = _Columns()
+
+    def step(self, frame: np.ndarray, t: float) -> tuple[Blob | None, tuple[float, float] | None]:
+        """Track one frame: (the ball's blob or None, the pivot [px] or None)."""
+        cols = self.columns
+        p: tuple[float, float] | None = self.fixed
+        if self.pivot is not None:
+            pb = self.pivot.update(frame, t)
+            cols.revise_pivot(self.pivot)
+            p = (pb.u, pb.v) if pb is not None and self.pivot.confidence >= self.sure else None
+        cols.piv.append(p if p is not None else _NAN2)
+        b = self.ball.update(frame, t, p)
+        cols.revise_ball(self.ball)
+        cols.add(t, b, self.ball.confidence)
+        return b, p
+
+    def finish(self) -> None:
+        """End of the video: the trackers settle what they were still judging."""
+        self.ball.finish()
+        self.columns.revise_ball(self.ball)
+        if self.pivot is not None:
+            self.pivot.finish()
+            self.columns.revise_pivot(self.pivot)
+
+    def notes(self) -> tuple[str, ...]:
+        return tuple(self.ball.notes) + tuple(f"pivot marker: {n}" for n in (self.pivot.notes if self.pivot else ()))
+
+
+def _shown(
+    trackers: _Trackers, angle: ImageAngles, k: int, t: float, b: Blob | None, p: tuple[float, float] | None
+) -> FrameResult:
+    """What one frame shows at the time (for on_frame): the ball only when the tracker is sure of it, θ with a pivot."""
+    shown = b if b is not None and trackers.ball.confidence >= trackers.sure else None
+    th = float(angle(np.array([b.u, b.v]), np.array(p))) if shown is not None and p is not None else math.nan
+    return FrameResult(k, t, shown, p, th)
+
+
+def _make_track(
+    trackers: _Trackers, angle: ImageAngles, calibration: CameraCalibration | None, info: VideoInfo
+) -> Track:
+    """The track from the gathered columns: unsure fixes (confidence below the tracker's minimum) reported not found."""
+    cols = trackers.columns
+    conf_a = np.array(cols.conf, float)
+    seen = np.all(np.isfinite(np.array(cols.uv, float).reshape(-1, 2)), axis=1)
+    trusted = seen & (conf_a >= trackers.sure)
+    uv = [c if ok else _NAN2 for c, ok in zip(cols.uv, trusted)]
+    radius = [r if ok else math.nan for r, ok in zip(cols.radius, trusted)]
+    uv_a = np.array(uv, float).reshape(-1, 2)
+    piv_a = np.array(cols.piv, float).reshape(-1, 2)
+    xy = None
+    if calibration is not None and calibration.plane is not None:
+        xy = to_plane(calibration, uv_a)
+    has_pivot = trackers.pivot is not None or trackers.fixed is not None
+    return Track(
+        t=np.array(cols.t),
+        frame=np.arange(len(cols.t)),
+        uv=uv_a,
+        found=np.all(np.isfinite(uv_a), axis=1),
+        theta=angle(uv_a, piv_a) if has_pivot else None,
+        pivot_uv=piv_a if trackers.pivot is not None else None,
+        xy_m=xy,
+        radius_px=np.array(radius),
+        info=info,
+        full_frame_searches=trackers.ball.full_frame_searches,
+        notes=trackers.notes(),
+        theta_in_plane=angle.axes is not None,
+        confidence=np.where(seen, conf_a, 0.0),
+        unsure=seen & ~trusted,
+    )
+
+
 def track_video(
     path: str | Path,
     ball: ColorSpec,
@@ -105,88 +243,14 @@ def track_video(
     on_frame(bgr, result) are called after each frame (e.g. to draw a preview). Raises InputError for
     unreadable videos or a calibration made for another image size.
     """
-    if pivot_uv is not None and pivot_color is not None:
-        raise ValueError("give a fixed pivot or a pivot colour, not both")
-    info = probe_video(path)
-    if calibration is not None and tuple(calibration.image_size) != info.size:
-        raise InputError(
-            f"calibration is for {calibration.image_size[0]}x{calibration.image_size[1]} images, "
-            f"the video is {info.width}x{info.height}",
-            file=str(path),
-        )
-    ball_tracker = BallTracker(ball, options)
-    pivot_opts = pivot_options or (replace(options, start_uv=None) if options is not None else None)
-    pivot_tracker = BallTracker(pivot_color, pivot_opts) if pivot_color is not None else None
-    fixed = None if pivot_uv is None else (float(pivot_uv[0]), float(pivot_uv[1]))
+    info = _check_inputs(path, pivot_uv, pivot_color, calibration)
+    trackers = _Trackers(ball, options, pivot_uv, pivot_color, pivot_options)
     angle = ImageAngles(calibration, info.size)
-
-    ts: list[float] = []
-    uv: list[tuple[float, float]] = []
-    radius: list[float] = []
-    conf: list[float] = []
-    piv: list[tuple[float, float]] = []
-    nan2 = (math.nan, math.nan)
-    sure = ball_tracker.options.min_confidence
-
-    def revise(tracker: BallTracker, positions: list, radii: list | None, confidences: list | None) -> None:
-        for k, blob, c in tracker.pop_revision():
-            positions[k] = (blob.u, blob.v) if blob is not None else nan2
-            if radii is not None:
-                radii[k] = blob.radius_px if blob is not None else math.nan
-            if confidences is not None:
-                confidences[k] = c if blob is not None else 0.0
-
     for k, t, frame in prefetched(iter_frames(path, fps)):  # decoding overlaps the tracking
-        p: tuple[float, float] | None = fixed
-        if pivot_tracker is not None:
-            pb = pivot_tracker.update(frame, t)
-            revise(pivot_tracker, piv, None, None)
-            p = (pb.u, pb.v) if pb is not None and pivot_tracker.confidence >= sure else None
-        piv.append(p if p is not None else nan2)
-        b = ball_tracker.update(frame, t, p)
-        revise(ball_tracker, uv, radius, conf)
-        ts.append(t)
-        uv.append((b.u, b.v) if b is not None else nan2)
-        radius.append(b.radius_px if b is not None else math.nan)
-        conf.append(ball_tracker.confidence if b is not None else 0.0)
+        b, p = trackers.step(frame, t)
         if on_frame is not None:
-            shown = b if b is not None and ball_tracker.confidence >= sure else None
-            th = float(angle(np.array([b.u, b.v]), np.array(p))) if shown is not None and p is not None else math.nan
-            on_frame(frame, FrameResult(k, t, shown, p, th))
+            on_frame(frame, _shown(trackers, angle, k, t, b, p))
         if progress is not None:
             progress(k + 1)
-    for tracker, positions, radii, confidences in ((ball_tracker, uv, radius, conf), (pivot_tracker, piv, None, None)):
-        if tracker is not None:
-            tracker.finish()
-            revise(tracker, positions, radii, confidences)
-
-    conf_a = np.array(conf, float)
-    seen = np.all(np.isfinite(np.array(uv, float).reshape(-1, 2)), axis=1)
-    trusted = seen & (conf_a >= sure)
-    uv = [c if ok else nan2 for c, ok in zip(uv, trusted)]
-    radius = [r if ok else math.nan for r, ok in zip(radius, trusted)]
-    uv_a = np.array(uv, float).reshape(-1, 2)
-    piv_a = np.array(piv, float).reshape(-1, 2)
-    xy = None
-    if calibration is not None and calibration.plane is not None:
-        xy = to_plane(calibration, uv_a)
-    has_pivot = pivot_tracker is not None or fixed is not None
-    notes = tuple(ball_tracker.notes) + tuple(
-        f"pivot marker: {n}" for n in (pivot_tracker.notes if pivot_tracker else ())
-    )
-    return Track(
-        t=np.array(ts),
-        frame=np.arange(len(ts)),
-        uv=uv_a,
-        found=np.all(np.isfinite(uv_a), axis=1),
-        theta=angle(uv_a, piv_a) if has_pivot else None,
-        pivot_uv=piv_a if pivot_tracker is not None else None,
-        xy_m=xy,
-        radius_px=np.array(radius),
-        info=info,
-        full_frame_searches=ball_tracker.full_frame_searches,
-        notes=notes,
-        theta_in_plane=angle.axes is not None,
-        confidence=np.where(seen, conf_a, 0.0),
-        unsure=seen & ~trusted,
-    )
+    trackers.finish()
+    return _make_track(trackers, angle, calibration, info)

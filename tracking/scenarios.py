@@ -111,7 +111,9 @@ def red_disc_start(path: Path, size, duration_s: float, seed: int = 3) -> Scenar
     disc = Distractor("disc", np.array([piv[0] + L * 0.6, piv[1] + L * 0.8]), radius_px=r)
     gt = render_pendulum_video(path, t, th, piv, L, r, size, 60.0, distractors=[disc], seed=seed)
     start = tuple(float(c) for c in gt.ball_uv[0])
-    return Scenario("static red disc, --start", path, gt, {"options": TrackerOptions(start_uv=start)}, _visible(gt))
+    return Scenario(
+        "static red disc, the ball's start named", path, gt, {"options": TrackerOptions(start_uv=start)}, _visible(gt)
+    )
 
 
 def _exact_calibration(K: np.ndarray, H: np.ndarray, image_size, m_per_plane_px: float) -> CameraCalibration:
@@ -196,11 +198,18 @@ def moving_pivot(path: Path, size, duration_s: float, seed: int = 8) -> Scenario
 
 
 def slow_motion(path: Path, size, duration_s: float, seed: int = 9) -> Scenario:
-    """Filmed at 240 fps, stored as a 30 fps video (slow motion): --fps 240 gives the real times."""
+    """Filmed at 240 fps, stored as a 30 fps video (slow motion): a capture rate of 240 fps gives the real times."""
     piv, L, r = _geometry(size)
     t, th = _swing(duration_s / 8.0 + 0.01, amplitude_deg=30.0, period_s=0.5)
     gt = render_pendulum_video(path, t * 8.0, th, piv, L, r, size, 30.0, exposure=0.1, seed=seed)
-    return Scenario("slow motion, --fps 240", path, gt, {"pivot_uv": piv, "fps": 240.0}, _visible(gt), time_scale=8.0)
+    return Scenario(
+        "slow motion, capture rate 240 fps given",
+        path,
+        gt,
+        {"pivot_uv": piv, "fps": 240.0},
+        _visible(gt),
+        time_scale=8.0,
+    )
 
 
 def compressed(path: Path, size, duration_s: float, seed: int = 10) -> Scenario:

@@ -317,6 +317,94 @@ def tilted_view(
     return H / H[2, 2]
 
 
+class _Motion:
+    """The drawn motion: θ(t) on a string from a (moving) pivot, or a given ball path, interpolated at any time
+    (extrapolated along the end slopes: the exposure of the last frame runs past the last sample), in the plane of
+    motion; ``to_image`` maps plane points through the homography H (None: the plane is the image)."""
+
+    def __init__(self, t, theta, pivot_uv, string_px: float, ball_path, H) -> None:  # noqa: ANN001
+        t = np.asarray(t, dtype=float)
+        theta = np.asarray(theta, dtype=float)
+        if t.ndim != 1 or theta.shape != t.shape or len(t) < 2 or np.any(np.diff(t) <= 0):
+            raise ValueError("t and theta must be (n,) arrays with n ≥ 2 and t increasing")
+        piv = np.asarray(pivot_uv, dtype=float)
+        if piv.shape == (2,):
+            piv = np.tile(piv, (len(t), 1))
+        if piv.shape != (len(t), 2):
+            raise ValueError(f"pivot_uv must be (2,) or ({len(t)}, 2), got {piv.shape}")
+        self.t, self.theta, self.piv = t, theta, piv
+        self.string_px = float(string_px)
+        self.ball_path = ball_path
+        self.H = None if H is None else np.asarray(H, float)
+
+    def _interp(self, times: np.ndarray, y: np.ndarray) -> np.ndarray:
+        t = self.t
+        out = np.interp(times, t, y)
+        for sel, i, j in ((times > t[-1], -2, -1), (times < t[0], 0, 1)):
+            if np.any(sel):
+                slope = (y[j] - y[i]) / (t[j] - t[i])
+                out[sel] = y[j if i < 0 else i] + slope * (times[sel] - t[j if i < 0 else i])
+        return out
+
+    def state(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(θ [rad], pivot, ball) at the times [s], in the plane."""
+        pv = np.column_stack([self._interp(times, self.piv[:, 0]), self._interp(times, self.piv[:, 1])])
+        if self.ball_path is not None:
+            bp = self.ball_path
+            b = np.column_stack([self._interp(times, bp[:, 0]), self._interp(times, bp[:, 1])])
+            return np.arctan2(b[:, 0] - pv[:, 0], b[:, 1] - pv[:, 1]), pv, b
+        th = self._interp(times, self.theta)
+        return th, pv, pv + self.string_px * np.column_stack([np.sin(th), np.cos(th)])
+
+    def to_image(self, pts: np.ndarray) -> np.ndarray:
+        return pts if self.H is None else apply_homography(self.H, pts)
+
+    def exposed(self, tk: float, exposure: float, fps: float, r: float) -> tuple[np.ndarray, float]:
+        """(the ball's sub-frame centres over the exposure of the frame at tk [s], centred on it, in the image (m, 2)
+        [px]; its radius there [px]) — as many centres as keep them ≤ 0.5 px apart, at most 24 (motion blur)."""
+        half = 0.5 * exposure / fps
+        m = 1
+        if exposure > 0:
+            _, _, ends = self.state(np.array([tk - half, tk + half]))
+            m = int(min(24, max(1, math.ceil(np.linalg.norm(ends[1] - ends[0]) / 0.5))))
+        times = tk + (np.linspace(-half, half, m) if m > 1 else np.zeros(1))
+        _, _, centres = self.state(times)
+        rk = r if self.H is None else r * float(homography_scale(self.H, centres.mean(axis=0))[0])
+        return self.to_image(centres), rk
+
+
+@dataclass(frozen=True)
+class _Camera:
+    """What the camera does to a drawn frame: brightness gain(t), defocus blur σ [px], sensor noise σ [grey levels],
+    JPEG compression at a quality (see :func:`render_pendulum_video`)."""
+
+    gain: Callable[[float], float] | None
+    defocus_px: float
+    noise_std: float
+    jpeg_quality: int | None
+    noise: np.ndarray  # (h, w, 3) int16 buffers: the noise drawn
+    frame16: np.ndarray  # ... and the frame with it
+
+    def film(self, frame: np.ndarray, t: float) -> np.ndarray:
+        """The frame at time t [s] (from the start) as the camera delivers it."""
+        import cv2
+
+        if self.gain is not None:
+            g = float(self.gain(t))
+            if g != 1.0:
+                frame = np.clip(frame.astype(np.float32) * g + 0.5, 0, 255).astype(np.uint8)
+        if self.defocus_px > 0:
+            frame = cv2.GaussianBlur(frame, (0, 0), self.defocus_px)
+        if self.noise_std > 0:
+            cv2.randn(self.noise, 0, self.noise_std)
+            np.add(frame, self.noise, out=self.frame16, dtype=np.int16)
+            frame = np.clip(self.frame16, 0, 255).astype(np.uint8)
+        if self.jpeg_quality is not None:  # blocky, chroma-subsampled frames like a low-bitrate stream
+            ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, int(self.jpeg_quality)])
+            frame = cv2.imdecode(buf, cv2.IMREAD_COLOR)
+        return frame
+
+
 def render_pendulum_video(
     path: str | Path,
     t: np.ndarray,
@@ -353,7 +441,7 @@ def render_pendulum_video(
     t[0]). exposure: shutter-open fraction of a frame (motion blur); defocus_px: Gaussian blur σ [px];
     noise_std: sensor noise σ [grey levels]; codec: FourCC for cv2.VideoWriter ('mp4v' lossy, 'MJPG', ...);
     distractors: 'auto' (a red box and a red cable clear of the ball's path), None or explicit ones;
-    pivot_marker: colour name of a disc drawn on the pivot (for --pivot-color tracking), or None;
+    pivot_marker: colour name of a disc drawn on the pivot (a marker to track: track_video's pivot_color), or None;
     gain(t): brightness factor of the frame at time t [s] (e.g. dark early frames); foreground: drawers called
     on every frame after the ball (occluders, a hand); plane_to_image: homography from the plane of motion
     (pivot_uv, string_px and ball_radius_px are then in plane px) to the image (ball radius scaled by the
@@ -366,117 +454,31 @@ def render_pendulum_video(
     """
     import cv2
 
-    t = np.asarray(t, dtype=float)
-    theta = np.asarray(theta, dtype=float)
-    if t.ndim != 1 or theta.shape != t.shape or len(t) < 2 or np.any(np.diff(t) <= 0):
-        raise ValueError("t and theta must be (n,) arrays with n ≥ 2 and t increasing")
-    piv = np.asarray(pivot_uv, dtype=float)
-    if piv.shape == (2,):
-        piv = np.tile(piv, (len(t), 1))
-    if piv.shape != (len(t), 2):
-        raise ValueError(f"pivot_uv must be (2,) or ({len(t)}, 2), got {piv.shape}")
-    w, h = int(size[0]), int(size[1])
-    r = float(ball_radius_px)
-    L = float(string_px)
-
-    n_frames = int(math.floor((t[-1] - t[0]) * fps + 1e-9)) + 1
-    tf = t[0] + np.arange(n_frames) / fps
-
-    def interp(times: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Linear interpolation, extrapolated along the end slopes (the exposure of the last frame runs past t[-1])."""
-        out = np.interp(times, t, y)
-        for sel, i, j in ((times > t[-1], -2, -1), (times < t[0], 0, 1)):
-            if np.any(sel):
-                slope = (y[j] - y[i]) / (t[j] - t[i])
-                out[sel] = y[j if i < 0 else i] + slope * (times[sel] - t[j if i < 0 else i])
-        return out
-
-    def state(times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        pv = np.column_stack([interp(times, piv[:, 0]), interp(times, piv[:, 1])])
-        if ball_path is not None:
-            b = np.column_stack([interp(times, ball_path[:, 0]), interp(times, ball_path[:, 1])])
-            return np.arctan2(b[:, 0] - pv[:, 0], b[:, 1] - pv[:, 1]), pv, b
-        th = interp(times, theta)
-        return th, pv, pv + L * np.column_stack([np.sin(th), np.cos(th)])
-
-    H = None if plane_to_image is None else np.asarray(plane_to_image, float)
-
-    def to_image(pts: np.ndarray) -> np.ndarray:
-        return pts if H is None else apply_homography(H, pts)
-
-    th_f, piv_f, ball_f = state(tf)
-    ball_f_plane = ball_f
-    piv_f, ball_f = to_image(piv_f), to_image(ball_f)
-    if isinstance(distractors, str):
-        dis = _auto_distractors((w, h), ball_f, piv_f, r)
-    else:
-        dis = tuple(distractors or ())
-
-    rng = np.random.default_rng(seed)
-    bg = _background((w, h), rng)
+    motion = _Motion(t, theta, pivot_uv, string_px, ball_path, plane_to_image)
+    w, h, r, t0 = int(size[0]), int(size[1]), float(ball_radius_px), motion.t[0]
+    tf = t0 + np.arange(int(math.floor((motion.t[-1] - t0) * fps + 1e-9)) + 1) / fps
+    th_f, piv_f, ball_f_plane = motion.state(tf)
+    piv_f, ball_f = motion.to_image(piv_f), motion.to_image(ball_f_plane)
+    dis = _auto_distractors((w, h), ball_f, piv_f, r) if isinstance(distractors, str) else tuple(distractors or ())
+    bg = _background((w, h), np.random.default_rng(seed))
     _draw_distractors(bg, dis)
     cv2.setRNGSeed(seed)
-
-    writer = VideoSink(path, codec, fps, (w, h), bitrate_kbps, target=target)
-    noise = np.empty((h, w, 3), np.int16)
-    frame16 = np.empty((h, w, 3), np.int16)
-    try:
-        for k in range(n_frames):
+    buffers = (np.empty((h, w, 3), np.int16), np.empty((h, w, 3), np.int16))
+    camera = _Camera(gain, defocus_px, noise_std, jpeg_quality, *buffers)
+    slack_px = None if ball_path is None else motion.string_px
+    with VideoSink(path, codec, fps, (w, h), bitrate_kbps, target=target) as writer:
+        for k in range(len(tf)):
             frame = bg.copy()
-            p = piv_f[k]
-            # motion blur: sub-frame positions over the exposure, centred on the frame time
-            half = 0.5 * exposure / fps
-            m = 1
-            if exposure > 0:
-                _, _, ends = state(np.array([tf[k] - half, tf[k] + half]))
-                m = int(min(24, max(1, math.ceil(np.linalg.norm(ends[1] - ends[0]) / 0.5))))
-            times = tf[k] + (np.linspace(-half, half, m) if m > 1 else np.zeros(1))
-            _, _, centres = state(times)
-            rk = r if H is None else r * float(homography_scale(H, centres.mean(axis=0))[0])
-            centres = to_image(centres)
-            b = ball_f[k]
-            draw_pendulum(
-                frame,
-                p,
-                centres,
-                rk,
-                ball_bgr,
-                pivot_marker,
-                pivot_marker_radius_px,
-                b,
-                None if ball_path is None else L,
-            )
+            centres, rk = motion.exposed(tf[k], exposure, fps, r)
+            draw_pendulum(frame, piv_f[k], centres, rk, ball_bgr, pivot_marker, pivot_marker_radius_px, ball_f[k],
+                          slack_px)  # fmt: skip
             for draw in foreground:
-                draw(frame, float(tf[k] - t[0]), b)
-            if gain is not None:
-                g = float(gain(float(tf[k] - t[0])))
-                if g != 1.0:
-                    frame = np.clip(frame.astype(np.float32) * g + 0.5, 0, 255).astype(np.uint8)
-            if defocus_px > 0:
-                frame = cv2.GaussianBlur(frame, (0, 0), defocus_px)
-            if noise_std > 0:
-                cv2.randn(noise, 0, noise_std)
-                np.add(frame, noise, out=frame16, dtype=np.int16)
-                frame = np.clip(frame16, 0, 255).astype(np.uint8)
-            if jpeg_quality is not None:  # blocky, chroma-subsampled frames like a low-bitrate stream
-                ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, int(jpeg_quality)])
-                frame = cv2.imdecode(buf, cv2.IMREAD_COLOR)
-            writer.write(frame)
+                draw(frame, float(tf[k] - t0), ball_f[k])
+            writer.write(camera.film(frame, float(tf[k] - t0)))
             if progress is not None:
                 progress(k + 1)
-    finally:
-        writer.close()
-    return GroundTruth(
-        t=tf - t[0],
-        ball_uv=ball_f,
-        pivot_uv=piv_f,
-        theta=th_f,
-        ball_radius_px=r if H is None else r * float(np.median(homography_scale(H, ball_f_plane))),
-        string_px=L,
-        size=(w, h),
-        fps=float(fps),
-        distractors=dis,
-    )
+    scale = 1.0 if motion.H is None else float(np.median(homography_scale(motion.H, ball_f_plane)))
+    return GroundTruth(tf - t0, ball_f, piv_f, th_f, r * scale, motion.string_px, (w, h), float(fps), dis)
 
 
 def swing_up(

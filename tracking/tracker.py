@@ -31,13 +31,16 @@ import numpy as np
 from .ambiguity import choose_pendulum
 from .color import ColorSpec, with_min_saturation
 from .detect import (
+    SHAPE_MIN_AREA_PX,
     TINY_MAX_AREA_PX,
     Blob,
     BlobGates,
     coarse_factor,
     coarse_hsv,
+    detail_scale,
     find_blobs,
     find_blobs_coarse,
+    find_blobs_scaled,
     find_tiny,
     to_hsv,
 )
@@ -58,6 +61,8 @@ class TrackerOptions:
     window_min_half_px: int = 32  # smallest half-size of the search window [px]
     window_radius_factor: float = 2.5  # window half-size ≥ this × the ball radius + the gate ...
     window_streak_radii: float = 1.5  # ... + the last frame step (a motion-blurred streak), at most this × the radius
+    near_radius_factor: float = 2.0  # first a small window: half-size this × the radius + the streak + near_margin_px
+    near_margin_px: float = 8.0  # [px] (where the ball nearly always is: the whole window only when it is not there)
     area_ratio_max: float = 2.5  # once locked, a blob whose area differs by more than this factor is not the ball
     area_history: int = 15  # the learned area is the median of this many last fixes
     area_reset_misses: int = 3  # frames in a row with a blob rejected for its area alone → forget the area
@@ -136,6 +141,8 @@ class _Follower:
         self.area_misses = 0
         self.fit = blob.ellipse_fit
         self.sats: deque[float] = deque([blob.saturation], maxlen=options.area_history)
+        self._peak_cache: tuple[float | None] | None = None  # (median of the finite sats,) once asked
+        self._radius = (math.nan, math.nan)  # (area [px²], radius [px]) last computed
         self._min_s = min(b.lower[1] for b in spec.bands)
         self._sat_specs: dict[int, ColorSpec] = {}
         self.tiny = blob.area_px <= TINY_MAX_AREA_PX and blob.circularity == 1.0 and blob.ellipse_fit == 1.0
@@ -163,8 +170,8 @@ class _Follower:
         Otherwise the ball's own saturation first (keeps out paler objects of the same hue, such as skin
         beside an orange ball), then the colour's."""
         o = self.options
-        sats = [x for x in self.sats if math.isfinite(x)]
-        peak = median(sats) if sats else 255.0
+        known = self._peak()
+        peak = known if known is not None else 255.0
         if pred.frame_step_px > o.blur_min_step_radii * self.radius():
             coverage = min(1.0, self.radius() / pred.frame_step_px)  # allowing the speed to double
             level = int(o.blur_saturation_factor * coverage * peak) // 5 * 5
@@ -173,7 +180,7 @@ class _Follower:
                 return [self._at(level), self.spec]
             return [self.spec]
         level = int(o.learned_saturation_factor * peak) // 10 * 10
-        if sats and level > self._min_s:
+        if known is not None and level > self._min_s:
             return [self._at(level), self.spec]
         return [self.spec]
 
@@ -185,7 +192,18 @@ class _Follower:
         return self._area
 
     def radius(self) -> float:
-        return math.sqrt(self.area / math.pi)
+        """Radius [px] of the disc of the learned area (cached with it)."""
+        area = self.area
+        if self._radius[0] != area:
+            self._radius = (area, math.sqrt(area / math.pi))
+        return self._radius[1]
+
+    def _peak(self) -> float | None:
+        """Median of the learned peak saturations (None before any), cached until the next is learned."""
+        if self._peak_cache is None:
+            sats = [x for x in self.sats if math.isfinite(x)]
+            self._peak_cache = (median(sats) if sats else None,)
+        return self._peak_cache[0]
 
     def min_radius(self) -> float:
         """Radius [px] of the smallest blob that can still be the ball (area_ratio_max below the learned area)."""
@@ -224,11 +242,11 @@ class _Follower:
         """The blob's peak saturation is the ball's, allowing for motion blur (the colour mixed with the
         background over a streak up to a frame's displacement long): a paler object of the same hue that the
         ball merged with or hid behind (a hand) is not taken for it."""
-        sats = [x for x in self.sats if math.isfinite(x)]
-        if not sats or not math.isfinite(b.saturation):
+        peak = self._peak()
+        if peak is None or not math.isfinite(b.saturation):
             return True
         coverage = min(1.0, 2.0 * self.radius() / max(pred.frame_step_px, 1e-9))
-        return b.saturation >= self.options.learned_saturation_factor * coverage * median(sats)
+        return b.saturation >= self.options.learned_saturation_factor * coverage * peak
 
     def choose(self, blobs: list[Blob], pred: Prediction) -> Blob | None:
         """The blob nearest the prediction inside the gate and of a plausible area; counts area-only rejections."""
@@ -301,9 +319,6 @@ class _Follower:
         h, w = frame.shape[:2]
         o = self.options
         box = self.window(pred, w, h)
-        if box is None:
-            return None, False
-        x0, y0, x1, y1 = box
         streak = pred.frame_step_px > 2.0 * self.radius()  # blurred over more than its own size: ragged
         gates = replace(
             o.gates,
@@ -317,6 +332,15 @@ class _Follower:
             # a ball of a few pixels, sharp for a moment (a turning point), may outline less than the general floor
             min_area_px=min(o.gates.min_area_px, max(4.0, self.area / o.area_ratio_max)),
         )
+        scale = detail_scale(self.min_radius())  # a large ball is measured on a shrunk image
+        large = box is None or (box[2] - box[0]) * (box[3] - box[1]) > COARSE_WINDOW_PX
+        if not self.tiny and (scale > 1 or not large):  # (a fast small ball's large window: the coarse pass is cheaper)
+            blob = self._search_near(frame, pred, gates, scale)
+            if blob is not None:
+                return blob, True
+        if box is None:
+            return None, False
+        x0, y0, x1, y1 = box
         sub = frame[y0:y1, x0:x1]
         if self.tiny:  # a few pixels across: no blur, no morphology, no shape
             found = find_tiny(sub, self.spec, (x0, y0), (w, h), max_area_px=max(TINY_MAX_AREA_PX, 4.0 * self.area))
@@ -324,17 +348,43 @@ class _Follower:
             if blob is not None and blob.clipped:
                 return None, False
             return blob, True
-        factor = coarse_factor(w, self.min_radius()) if (x1 - x0) * (y1 - y0) > COARSE_WINDOW_PX else 1
-        hsv = to_hsv(sub) if factor == 1 else coarse_hsv(sub, factor)
+        factor = coarse_factor(w, self.min_radius()) if large else 1
+        hsv = (to_hsv(sub) if scale == 1 else None) if factor == 1 else coarse_hsv(sub, factor)
         for spec in self._specs(pred):
             if factor > 1:  # a large window (a fast ball, or the first frames after a fix): coarse pass first
-                found = find_blobs_coarse(sub, spec, gates, factor, (x0, y0), (w, h), hsv)
+                found = find_blobs_coarse(sub, spec, gates, factor, (x0, y0), (w, h), hsv, scale)
+            elif scale > 1:
+                found = find_blobs_scaled(sub, spec, gates, scale, (x0, y0), (w, h))
             else:
                 found = find_blobs(sub, spec, gates, (x0, y0), (w, h), hsv)
             blob = self.choose(found, pred)
             if blob is not None:
                 return (None, False) if blob.clipped else (blob, True)  # clipped: measure it on the whole frame
         return None, True
+
+    def _search_near(self, frame: np.ndarray, pred: Prediction, gates: BlobGates, scale: int) -> Blob | None:
+        """The ball in a small window around the prediction — what the whole window would choose (the blob nearest
+        the prediction of the ball's area and saturation), found on a fraction of its pixels — or None: nothing
+        there, or a blob cut by the small window's edge (the caller then searches the whole window). scale: a large
+        ball is measured on the window shrunk by this (:func:`tracking.detect.detail_scale`)."""
+        h, w = frame.shape[:2]
+        o = self.options
+        r = self.radius()
+        half = int(o.near_radius_factor * r + min(o.window_streak_radii * r, pred.frame_step_px) + o.near_margin_px)
+        x0, y0 = max(int(pred.u) - half, 0), max(int(pred.v) - half, 0)
+        x1, y1 = min(int(pred.u) + half + 1, w), min(int(pred.v) + half + 1, h)
+        if x1 - x0 <= 4 or y1 - y0 <= 4:
+            return None
+        found = find_blobs_scaled(frame[y0:y1, x0:x1], self._specs(pred)[0], gates, scale, (x0, y0), (w, h))
+        if any(b.clipped for b in found):  # a blob's centre cut off: only the whole window measures it
+            return None
+        reach = min(pred.gate_px, half - 2.0)  # a blob nearer than this to the prediction lies inside (not clipped)
+        for d, b in sorted(((math.hypot(b.u - pred.u, b.v - pred.v), b) for b in found), key=lambda db: db[0]):
+            if d > reach:
+                return None
+            if self._area_ok(b, pred) and self._saturation_ok(b, pred):
+                return b
+        return None
 
     def accept(self, blob: Blob, t: float, pred: Prediction | None = None) -> None:
         """Take the blob as the ball at time t [s]; its area and saturation are learned only while it moves
@@ -347,6 +397,7 @@ class _Follower:
         self.areas.append(blob.area_px)
         self._area = None
         self.sats.append(blob.saturation)
+        self._peak_cache = None
 
 
 def _last_jump(centres: list[tuple[float, float]], radius_px: float) -> int:
@@ -619,7 +670,8 @@ class BallTracker:
         if factor > 1 and (self._coarse is None or self._coarse[0] is not frame or self._coarse[1] != factor):
             self._coarse = (frame, factor, coarse_hsv(frame, factor))
         small = self._coarse[2] if factor > 1 else None
-        return find_blobs_coarse(frame, spec, gates or self.options.gates, factor, small_hsv=small)
+        refine = detail_scale(min_radius_px)
+        return find_blobs_coarse(frame, spec, gates or self.options.gates, factor, small_hsv=small, refine=refine)
 
     def _current(self) -> _Follower | None:
         if self._hyp is not None:
@@ -642,7 +694,7 @@ class BallTracker:
     ) -> tuple[list[Blob], bool]:
         """(candidates on the whole frame, found by the strict gates): the strict gates first, else blobs only
         roughly round (a ball turned into blocks by a low-bitrate codec) and after them balls a few pixels across;
-        the roundest first, tiny ones by saturation.
+        the roundest first (blobs too small for their shape to tell after the others), tiny ones by saturation.
         away: (u, v, distance) [px] — only candidates farther than that from (u, v) count."""
         o = self.options
 
@@ -652,8 +704,8 @@ class BallTracker:
                 return blobs
             return [b for b in blobs if math.hypot(b.u - away[0], b.v - away[1]) > away[2]]
 
-        def roundest(blobs: list[Blob]) -> list[Blob]:
-            return sorted(blobs, key=lambda b: -b.ellipse_fit)
+        def roundest(blobs: list[Blob]) -> list[Blob]:  # blobs too small for a shape to tell last (a codec's fragments)
+            return sorted(blobs, key=lambda b: (b.area_px < SHAPE_MIN_AREA_PX, -b.ellipse_fit))
 
         blobs = roundest(keep(self._whole(frame, self.spec)))
         if not blobs and o.acquire_min_saturation > min(b.lower[1] for b in self.spec.bands):

@@ -413,12 +413,16 @@ _FITTER: Any = None
 
 
 def _fitter():
-    """One identification worker for the whole campaign (spawned once)."""
+    """One identification worker for the whole campaign (spawned once, stopped at exit: a pool left to the
+    interpreter's teardown printed an ignored AttributeError traceback)."""
     global _FITTER
     if _FITTER is None:
+        import atexit
+
         from lbrcli.control.fitter import ProcessFitter
 
         _FITTER = ProcessFitter()
+        atexit.register(_FITTER.close)
     return _FITTER
 
 

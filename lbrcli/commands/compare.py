@@ -89,11 +89,12 @@ def compare(
 
     from trajectories.csvio import PREDICTION_COLUMNS, read_table
     from trajectories.errors import CheckFailed, CsvFormatError, OptionError
-    from tracking.compare import AMBIGUOUS_RMS_RATIO, compare_angles
+    from tracking.compare import AMBIGUOUS_RMS_RATIO, LAG_SETTING, compare_angles
     from tracking.samples import sample_report
     from tracking.trackfile import read_track_csv
 
     from ..console import Reporter
+    from ..option_groups import settings_named
     from ..session_end import require_complete
 
     rep = Reporter(json_out)
@@ -118,7 +119,8 @@ def compare(
     if tr.theta is None:
         raise CsvFormatError("no 'theta' column: track the video with --pivot or --pivot-color", file=tr.path, row=1)
 
-    cmp = compare_angles(t_model, theta_model, tr.t, tr.theta, lag_s=lag, flip=flip, max_lag_s=max_lag)
+    with settings_named({LAG_SETTING: "--lag"}):  # the library names the setting, the user sees the option
+        cmp = compare_angles(t_model, theta_model, tr.t, tr.theta, lag_s=lag, flip=flip, max_lag_s=max_lag)
     how = f"estimated within ±{cmp.lag_window_s:.2f} s" if cmp.lag_estimated else "given"
     rep.print(f"lag {cmp.lag_s:+.4f} s ({how}; track time = prediction time + lag)")
     ambiguous_why = None

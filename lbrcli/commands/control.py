@@ -84,10 +84,17 @@ def _pushes(texts: list[str] | None) -> tuple[tuple[float, float], ...]:
     return tuple(out)
 
 
-@with_options(fri=FRI_OPTIONS.without("sim_start", "length"), lab=UPRIGHT_LAB, flags={
+UPRIGHT_FLAGS = {
     "RigidModuleSpec.rate_hz": "--sensor-rate", "RigidModuleSpec.delay_ms": "--sim-delay", "RigidModuleSpec.jitter_ms":
     "--sim-jitter", "RigidModuleSpec.pushes": "--push", "RigidModuleSpec.noise_counts": "--sim-noise",
-    "RigidModuleSpec.sign": "--sim-encoder-sign", "RigidModuleSpec.zero_count": "--pendulum-zero"})  # fmt: skip
+    "RigidModuleSpec.sign": "--sim-encoder-sign", "RigidModuleSpec.zero_count": "--pendulum-zero",
+    "UprightClient.move_to_start": "--move-to-start", "SessionOptions.encoder_sign": "--encoder-sign",
+    "identify.nominal_length": "--rod-length",
+}  # fmt: skip
+"""`lbr control upright`'s own flags of the settings its libraries name (``Class.field`` → option)."""
+
+
+@with_options(fri=FRI_OPTIONS.without("sim_start", "length"), lab=UPRIGHT_LAB, flags=UPRIGHT_FLAGS)
 def upright(
     fri: FriOptions,
     lab: LabOptions,
@@ -340,7 +347,12 @@ def _print_rail(rep, model, rail, rod_length: float, travel: float) -> None:
 
 
 def _print_upright(rep, f: dict, model, sim_stats) -> None:
-    """What the upright session found: the identified rod, the swing-up and balance, the controller's time."""
+    """What the upright session found: the identified rod, the swing-up and balance, the controller's time. The
+    session's verdict (in ``f``) names this command's flags where it names settings, as its end line does."""
+    from ..option_groups import name_text
+
+    if f.get("verdict"):
+        f["verdict"] = name_text(f["verdict"])
     if f.get("identified_length_m") is not None:
         rep.print(f"identified: equivalent length {f['identified_length_m']:.3f} m (model {model.equivalent_length:.3f} m), "
                   f"dry friction {100 * f['identified_coulomb_share']:.1f} % of its gravity torque, encoder offset "

@@ -7,7 +7,8 @@ from typing import Annotated
 
 import typer
 
-from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt, choice, number
+from ..fri_options import DEFAULT_BALL_LENGTH, DrawnLengthOpt
+from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, LimitsOpt, ToolOpt, choice
 
 
 def _ros_name(text: str) -> str:
@@ -36,16 +37,7 @@ def export(
             help="Robot name: topic namespace, joint names <prefix>_A1..A7 and frames <prefix>_link_0.. as lbr-stack's driver uses them.",
         ),
     ] = "lbr",
-    length: Annotated[
-        float,
-        number(
-            "--length",
-            low=0.01,
-            high=5,
-            unit="m",
-            help="String length \\[m] from the TCP to the simulated ball's centre (the log's ball angles).",
-        ),
-    ] = 0.25,
+    length: DrawnLengthOpt = DEFAULT_BALL_LENGTH,
     compression: Annotated[
         str,
         choice(

@@ -19,6 +19,20 @@ def _check_out(path: Path | None, option: str) -> None:
         raise OptionError(f"{option}: folder does not exist: {path.parent}")
 
 
+_COLOR_FLAGS = {"track_video.ball": "--color", "track_video.pivot_color": "--pivot-color"}
+
+
+def _colors(color: str, pivot_color: str | None):  # noqa: ANN202
+    """The ball's and the pivot marker's colour specs; an unknown colour is an OptionError naming its option."""
+    from tracking.color import color_spec
+
+    from ..option_groups import settings_named
+
+    with settings_named(_COLOR_FLAGS):
+        ball = color_spec(color, "track_video.ball")
+        return ball, color_spec(pivot_color, "track_video.pivot_color") if pivot_color is not None else None
+
+
 def video(
     video_path: Annotated[
         Path, typer.Argument(metavar="VIDEO", help="Experiment video (any format OpenCV/FFmpeg reads).")
@@ -180,7 +194,7 @@ def video(
 
     from trajectories.errors import OptionError
     from tracking.calibration import load_calibration
-    from tracking.color import color_spec, with_min_saturation
+    from tracking.color import with_min_saturation
     from tracking.detect import BlobGates
     from tracking.pipeline import track_video
     from tracking.tracker import TrackerOptions
@@ -193,8 +207,7 @@ def video(
     rep = Reporter(json_out)
     if pivot is not None and pivot_color is not None:
         raise OptionError("give either --pivot or --pivot-color, not both")
-    ball_spec = color_spec(color, "--color")
-    piv_spec = color_spec(pivot_color, "--pivot-color") if pivot_color is not None else None
+    ball_spec, piv_spec = _colors(color, pivot_color)
     if piv_spec is not None and piv_spec.bands == ball_spec.bands:
         raise OptionError("--pivot-color must differ from the ball's --color")
     piv_uv, start_uv = pivot, start
@@ -644,7 +657,6 @@ def live(
     from trajectories.errors import OptionError
     from tracking.calibration import load_calibration
     from tracking.camera_geometry import load_geometry
-    from tracking.color import color_spec
     from tracking.live import LiveTracker, TiltSetup, track_from_results
     from tracking.trackfile import write_track_csv
 
@@ -655,8 +667,7 @@ def live(
         raise OptionError("give either --pivot or --pivot-color, not both")
     for p, name in ((out, "--out"), (plot, "--plot")):
         _check_out(p, name)
-    ball_spec = color_spec(color, "--color")
-    piv_spec = color_spec(pivot_color, "--pivot-color") if pivot_color is not None else None
+    ball_spec, piv_spec = _colors(color, pivot_color)
     piv_uv = pivot
     options = _tracker_options(radius, 0.6, 0.88, None)
     cal = load_calibration(calibration) if calibration is not None else None

@@ -7,7 +7,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from ..fri_options import parse_ip
+from ..fri_options import DEFAULT_BALL_LENGTH, DrawnLengthOpt, parse_ip
 from ..options import DEFAULT_FLANGE, FlangeOpt, JsonOpt, ToolOpt, floats, number
 
 MAX_OFFSET = 86400.0  # [s] the largest --offset
@@ -81,16 +81,7 @@ def view(
             help="Frames per second of the replay \\[1/s]; the files are sampled on this grid.",
         ),
     ] = 30.0,
-    length: Annotated[
-        float,
-        number(
-            "--length",
-            low=0.01,
-            high=5,
-            unit="m",
-            help="String length \\[m] from the TCP to the ball centre (balls given by angles).",
-        ),
-    ] = 0.25,
+    length: DrawnLengthOpt = DEFAULT_BALL_LENGTH,
     ball_radius: Annotated[
         float, number("--ball-radius", low=0.001, high=0.5, unit="m", help="Radius of the drawn ball \\[m].")
     ] = 0.02,

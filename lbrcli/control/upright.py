@@ -65,7 +65,7 @@ class UprightClient(LBRClient):
         if d > self.start_tolerance and not self.move_to_start:
             raise StopSession(
                 f"the robot is {d:.4f} rad from the rail's start pose (more than {self.start_tolerance:g} "
-                "rad); move it there first (lbr ptp) or use --move-to-start",
+                "rad); move it there first (lbr ptp) or let the session move it there (UprightClient.move_to_start)",
                 completed=False,
             )
 

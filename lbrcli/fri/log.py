@@ -156,26 +156,27 @@ class LogLayout:
         extra: Sequence[float] = (),
     ) -> str:
         """One CSV line (with newline) for a monitoring message ``mon`` and the command ``cmd`` [rad] in force."""
+        # (repeated fields copied out with [:], a third of what iterating them costs; the values are the same)
         md = mon.monitorData
         ipo = mon.ipoData
         ci = mon.connectionInfo
         ri = mon.robotInfo
-        msr = md.measuredJointPosition.value
+        msr = md.measuredJointPosition.value[:]
         if len(msr) != 7:
             msr = _ZERO7
-        ipq = ipo.jointPosition.value
+        ipq = ipo.jointPosition.value[:]
         if len(ipq) != 7:
             ipq = _ZERO7
-        tau = md.measuredTorque.value
+        tau = md.measuredTorque.value[:]
         if len(tau) != 7:
             tau = _ZERO7
-        ext = md.externalTorque.value
+        ext = md.externalTorque.value[:]
         if len(ext) != 7:
             ext = _ZERO7
-        ctau = md.commandedTorque.value
+        ctau = md.commandedTorque.value[:]
         if len(ctau) != 7:
             ctau = _ZERO7
-        drives = ri.driveState
+        drives = ri.driveState[:]
         ts = md.timestamp
         vals = (
             t, ci.sessionState, ci.quality, *cmd, *msr, *ipq, *tau, *ext, ipo.trackingPerformance,
@@ -185,13 +186,13 @@ class LogLayout:
             ipo.clientCommandMode, ipo.overlayType, ci.sendPeriod, ci.receiveMultiplier, *ctau,
         )  # fmt: skip
         if self.ctl_q:
-            cq = md.commandedJointPosition.value
+            cq = md.commandedJointPosition.value[:]
             vals += tuple(cq) if len(cq) == 7 else _ZERO7
         if self.ext_force:
-            ef = md.externalForce.element
+            ef = md.externalForce.element[:]
             vals += tuple(ef) if len(ef) == 6 else _ZERO6
         if self.pose:
-            pe = md.measuredCartesianPose.element
+            pe = md.measuredCartesianPose.element[:]
             vals += tuple(pe) if len(pe) == 7 else _ZERO7
         if self.redundancy:
             vals += (md.measuredRedundancyInformation.value,)

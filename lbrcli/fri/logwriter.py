@@ -1,16 +1,16 @@
 """The execution log written by a child process, so that formatting its rows costs the FRI loop nothing.
 
 :class:`LogProcess` is an application observer like :class:`~lbrcli.fri.log.LogObserver` and writes the same file
-(``LogLayout.format``, one complete row per write, valid after any ending), but the FRI loop only hands each accepted
+(``LogLayout.format``, complete rows per write, valid after any ending), but the FRI loop only hands each accepted
 monitoring datagram and the cycle's own figures (time, command, counters, phase, row, the client's extra columns) to
-a pipe — a few µs — and a child process (``python -m lbrcli.fri.logwriter``) decodes and formats them in batches
-every ``BATCH_S`` (5 ms), at nice 19. Formatting a row in Python costs ≈ 30–50 µs of the loop's CPU at 1 kHz on a busy PC, and
-waking a writer per row costs both processes more; see docs/explanations/fri-timing.md.
+a pipe — a few µs — and a child process (``python -m lbrcli.fri.logwriter``, :class:`RowWriter`) parses and formats
+them at nice 19, waking every ``BATCH_S`` and formatting ``SLICE_ROWS`` rows between yields of the CPU. A row costs
+≈ 20–35 µs of CPU to decode and format in Python; see docs/explanations/fri-timing.md and benchmarks/bench_fri_log.py.
 
 The reply path never waits for the log: rows go to the pipe ``FLUSH_ROWS`` at a time (a kill -9 of the loop loses
 at most that many; any other ending writes them all), the pipe is non-blocking (1 MiB where the system allows); records it cannot
 take at once wait in memory and go with the next cycle's. A writer that fails (a full disk) exits with its reason;
-the loop learns it from the broken pipe at its next row and stops as for a failing in-process log (braking when
+the loop learns it from the broken pipe at its next hand-over and stops as for a failing in-process log (braking when
 commanding). Rows handed over when the session ends are written before :meth:`LogProcess.close` returns.
 """
 
@@ -28,9 +28,13 @@ from typing import Any, Sequence
 
 from trajectories.errors import InputError
 
+from .codec import FriCodec
 from .constants import Phase
+from .log import ExecutionLog, LogLayout
+from .messages import FriVersion
 
-_HEAD = struct.Struct("<IBdqBBbq7dH")  # frame length, kind, t, client_seq, answered, sent, phase, row, cmd[7], n_extra
+# a row's frame: this head, the command [rad] and the client's extra values (7 + n_extra doubles), the datagram
+_HEAD = struct.Struct("<IBHdqBBbq")  # frame length, kind, n_extra, t, client_seq, answered, sent, phase, row
 _LEN = struct.Struct("<I")
 _START, _ROW = 0, 1
 _BRAKE = int(Phase.BRAKE)
@@ -39,9 +43,10 @@ MAX_PENDING = 64 << 20  # [bytes] held in memory while the writer is behind, the
 _F_SETPIPE_SZ = 1031
 READY_TIMEOUT_S = 60.0  # [s] for the writer process to start
 FLUSH_ROWS = 16  # rows handed to the pipe in one write (one system call per 16 ms at 1 kHz; all at the end)
-BATCH_S = 0.005  # [s] the writer sleeps this long between reads: rows are formatted in batches (warm caches, no
-# wake-up per row for either process) short enough (≈ 0.2 ms of work) that a batch that runs on the loop's CPU
-# cannot make a reply late (20 ms batches, ≈ 1 ms each, did: a late reply every 20 ms)
+BATCH_S = 0.048  # [s] the writer sleeps this long between reads: three hand-overs' rows per wake-up (its code and
+# data stay in the CPU's caches over the batch: ≈ 25 against ≈ 35 µs per row when it woke for every hand-over)
+SLICE_ROWS = 16  # rows formatted between two yields of the CPU: ≈ 0.3 ms of work, so that a slice that runs on the
+# loop's CPU cannot make a reply late (20 ms batches of ≈ 1 ms each in one piece did: a late reply every 20 ms)
 
 
 class LogProcess:
@@ -82,6 +87,7 @@ class LogProcess:
         self._pending = bytearray()
         self._batch = bytearray()  # rows not yet handed to the pipe
         self._in_batch = 0
+        self._packs: dict[int, Any] = {}  # a row's head, command and extra values, by extra count
         self._started = False
         self._closed = False
         self.rows = 0  # rows handed to the writer
@@ -101,18 +107,14 @@ class LogProcess:
         answered = cyc.answered
         extra = self.extra(app.state) if self.extra is not None else ()
         data = app._last_data
-        cmd = cyc.command
         n = len(extra)
-        head = _HEAD.pack(
-            _HEAD.size + 8 * n + len(data), _ROW, cyc.t, app.client_sequence if answered else -1, answered,
+        pack = self._packs.get(n) or self._packs.setdefault(n, struct.Struct(_HEAD.format + f"{7 + n}d").pack)
+        self._batch += pack(
+            _HEAD.size + 8 * (7 + n) + len(data), _ROW, n, cyc.t, app.client_sequence if answered else -1, answered,
             cyc.sent_position, _BRAKE if braking else (cyc.phase if answered or cyc.state >= 3 else 0),
-            -1 if braking else cyc.row, *cmd, n,
+            -1 if braking else cyc.row, *cyc.command, *extra,
         )  # fmt: skip
-        batch = self._batch
-        batch += head
-        if n:
-            batch += struct.pack(f"<{n}d", *extra)
-        batch += data
+        self._batch += data
         self.rows += 1
         self._in_batch += 1
         if self._in_batch >= FLUSH_ROWS:
@@ -213,54 +215,80 @@ class LogProcess:
         self.close()
 
 
+class RowWriter:
+    """The writer's side: frames to rows, formatted by the in-process log's ``LogLayout`` (the same bytes).
+
+    The loop checked every datagram before it handed it over (framing, CRC-32, required fields, identifier), so the
+    writer parses the protobuf payload directly; :meth:`take` converts the complete frames of what the pipe held and
+    writes their rows in one write."""
+
+    def __init__(self, log: ExecutionLog) -> None:
+        self.log = log
+        self.layout: LogLayout | None = None
+        self.mon: Any = None
+        self.version = FriVersion.V1_15
+        self.extra_names: tuple[str, ...] = ()
+        self._pre = self._post = 0  # [bytes] framing around the protobuf payload (FRI 2.7: length, CRC-32)
+        self._floats: dict[int, struct.Struct] = {}  # the command and extra values of a row, by extra count
+
+    def _start(self, body: bytes) -> None:
+        k = body[0]
+        version = FriVersion(body[1 : 1 + k].decode())
+        names = body[1 + k :].decode()
+        self.extra_names = tuple(names.split("\x1f")) if names else ()
+        codec = FriCodec(version)
+        self.mon, self.version = codec.new_monitoring(), version
+        self._pre, self._post = (4, 4) if codec.framed else (0, 0)
+
+    def take(self, data: bytes, max_rows: int = 1 << 30) -> int:
+        """Write the rows of the complete frames at the start of ``data``, at most ``max_rows`` (one write); the
+        bytes they took."""
+        i, end = 0, len(data)
+        lines: list[str] = []
+        head, hs, size_of = _HEAD.unpack_from, _HEAD.size, _LEN.unpack_from
+        while end - i >= 4 and len(lines) < max_rows:
+            size = size_of(data, i)[0]
+            if end - i < size:
+                break
+            if data[i + 4] == _START:
+                self._start(data[i + 5 : i + size])
+            else:
+                _, _, n, t, cseq, answered, sent, phase, row = head(data, i)
+                floats = self._floats.get(n) or self._floats.setdefault(n, struct.Struct(f"<{7 + n}d"))
+                values = floats.unpack_from(data, i + hs)
+                at = i + hs + floats.size + self._pre
+                mon = self.mon
+                mon.ParseFromString(data[at : i + size - self._post])
+                layout = self.layout
+                if layout is None:
+                    layout = self.layout = LogLayout(mon, self.version, self.extra_names)
+                    self.log.start(layout)
+                lines.append(layout.format(t, mon, values[:7], cseq, answered, sent, phase, row, values[7:]))
+            i += size
+        if lines:
+            self.log.write_rows("".join(lines), len(lines))  # complete rows in one write
+        return i
+
+
 def _serve(fd_out: int, path: str) -> int:
     """The writer: frames from stdin to rows in the file (fd ``fd_out``); prints ``rows N`` or ``error TEXT``."""
-    from .codec import FriCodec
-    from .log import ExecutionLog, LogLayout
-    from .messages import FriVersion
-
     log = ExecutionLog.from_fd(fd_out, path)
     print("ready", flush=True)
-    codec = mon = layout = None
-    extra_names: tuple[str, ...] = ()
+    writer = RowWriter(log)
     fd_in = sys.stdin.fileno()
-    buf = bytearray()
-    hs = _HEAD.size
+    rest = b""
     try:
         while True:
-            need = 4 if len(buf) < 4 else _LEN.unpack_from(buf, 0)[0]
-            if len(buf) < need:  # wait for more (whatever the pipe holds: rows go out in batches)
-                chunk = os.read(fd_in, PIPE_SIZE)
-                if not chunk:
+            chunk = os.read(fd_in, PIPE_SIZE)  # blocks until the loop hands rows over (or closes the pipe)
+            if not chunk:
+                break
+            rest = rest + chunk if rest else chunk
+            while True:  # rows in slices: the CPU goes back to the scheduler between them
+                used = writer.take(rest, SLICE_ROWS)
+                rest = rest[used:]
+                if not used or len(rest) < 4 or len(rest) < _LEN.unpack_from(rest, 0)[0]:
                     break
-                buf += chunk
-                continue
-            i = 0
-            lines: list[str] = []
-            while len(buf) - i >= 4:
-                size = _LEN.unpack_from(buf, i)[0]
-                if len(buf) - i < size:
-                    break
-                if buf[i + 4] == _START:
-                    k = buf[i + 5]
-                    version = FriVersion(bytes(buf[i + 6 : i + 6 + k]).decode())
-                    names = bytes(buf[i + 6 + k : i + size]).decode()
-                    extra_names = tuple(names.split("\x1f")) if names else ()
-                    codec = FriCodec(version)
-                    mon = codec.new_monitoring()
-                else:
-                    _, _, t, cseq, answered, sent, phase, row, *rest = _HEAD.unpack_from(buf, i)
-                    n = rest[7]
-                    extra = struct.unpack_from(f"<{n}d", buf, i + hs) if n else ()
-                    codec.decode_monitoring(bytes(buf[i + hs + 8 * n : i + size]), mon)  # type: ignore[union-attr]
-                    if layout is None:
-                        layout = LogLayout(mon, codec.version, extra_names)  # type: ignore[union-attr]
-                        log.start(layout)
-                    lines.append(layout.format(t, mon, rest[:7], cseq, answered, sent, phase, row, extra))
-                i += size
-            del buf[:i]
-            if lines:
-                log.write_rows("".join(lines), len(lines))  # complete rows in one write
+                os.sched_yield()
             time.sleep(BATCH_S)
     except InputError as exc:
         print(f"error {exc.message}", flush=True)

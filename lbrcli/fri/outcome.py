@@ -113,9 +113,9 @@ def _percentile_ms(sorted_ns: list[int], p: float) -> float | None:
 
 
 def session_result(app: Any, outcome: Outcome, reason: EndReason, text: str, figures: dict[str, Any], *,
-                   cpu_s: float, cpu_cycles: int, unanswered_at_start: int) -> SessionResult:  # fmt: skip
+                   cpu_s: float, cpu_cycles: int) -> SessionResult:  # fmt: skip
     """The result of ``app``'s session (a ClientApplication: its counters, latencies [ns] and supervisor)."""
-    lat = sorted(app._latencies)
+    lat = sorted(app.latencies)
     sup = app._sup
     return SessionResult(
         outcome=outcome,
@@ -133,7 +133,7 @@ def session_result(app: Any, outcome: Outcome, reason: EndReason, text: str, fig
         period_s=app.period_s,
         active_cycles=app.active_cycles,
         braking_cycles=app.braking_cycles,
-        unanswered_at_start=unanswered_at_start,
+        unanswered_at_start=app.unanswered_at_start,
         latency_p50_ms=_percentile_ms(lat, 50),
         latency_p99_ms=_percentile_ms(lat, 99),
         latency_max_ms=lat[-1] * 1e-6 if lat else None,

@@ -1,6 +1,5 @@
-"""How a cycle's reply is made, mixed into :class:`~lbrcli.fri.application.ClientApplication`: the guarded command
-written into the message, replies prepared one cycle ahead, and the rest of the cycle after the reply (counters,
-supervision, the hold after a braking stop, the observers).
+"""How a cycle's reply is made, a collaborator of :class:`~lbrcli.fri.application.ClientApplication`: the guarded
+command written into the message, replies prepared one cycle ahead, the client sequence counter and the latencies.
 
 A client that knows its next command before the next message (``LBRClient.prepare_command``: a stream of
 precomputed positions) has it guarded and encoded right after the current cycle, with the next sequence counter.
@@ -26,7 +25,8 @@ from .command import LBRCommand
 from .constants import ClientCommandMode
 from .motion import ExecutedMotion, Refused
 from .outcome import EndReason, Outcome
-from .supervision import Supervisor, commanding_end, consistent
+from .reply import ReplyMessage
+from .supervision import End
 
 from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE
 
@@ -37,188 +37,114 @@ _WRENCH = int(ClientCommandMode.WRENCH)
 _CARTESIAN = int(ClientCommandMode.CARTESIAN_POSE)
 
 Prepared = tuple[int, bytes, tuple[float, ...]]  # (sequence counter it answers, datagram, joint position [rad])
-Supervised = tuple[bool, bool, Any, int]  # (commanding, moving, command in force [rad], our last sequence counter)
 
 
-class Replying:
-    """The reply of a cycle and what follows it (state it reads is set by the application)."""
+class Replier:
+    """The reply side of a session: one command message (``message``, opened with the session's codec) written
+    each cycle from the guarded command, the reply prepared for the next message, the client sequence counter and
+    the replies' counts and latencies [ns]. ``transformation_client`` and ``tcp_robot``: the application's."""
 
-    client: Any
-    cycle: Any
-    transport: Any
-    prepares: bool
-    prepared_replies: int
-    answered: int
-    cycles: int
-    active_cycles: int
-    position_commands: int
-    _clock: Any
-    _motion: ExecutedMotion | None
-    _sup: Supervisor | None
-    _reply: Any
-    _cmd: Any
-    _stop: Any
-    _ended: bool
-    _prepared: Prepared | None
-    _poses: Any = None  # the PoseSolver, built at the first Cartesian command
-    transformation_client: Any
-    tcp_robot: Any
-    limits: Any
-    _client_seq: int
-    _reply_seq_prev: int | None
-    _last_seq: int
-    _answered_any: bool
-    _unanswered_at_start: int
-    missed: int
-    _latencies: list[int]
-    state: Any
-    _last_data: bytes | None
-    _codec: Any
-    _mon: Any
-    _bound: Any
+    def __init__(self, limits: Any, transformation_client: Any = None, tcp_robot: Any = None) -> None:
+        self.limits = limits
+        self.transformation_client, self.tcp_robot = transformation_client, tcp_robot
+        self.message: ReplyMessage | None = None
+        self.prepared: Prepared | None = None  # the reply to the next message, if the client prepared it
+        self.poses: Any = None  # the PoseSolver, built at the first Cartesian command
+        self.client_seq = 0  # the sequence counter of the next reply
+        self.client_sequence = -1  # ... of the last reply sent (−1 before the first)
+        self.answered = self.position_commands = 0
+        self.prepared_replies = 0  # cycles answered with the reply prepared after the previous one
+        self.unanswered_at_start = 0  # messages that went by before the first reply
+        self.latencies: list[int] = []  # [ns] receive → reply
 
-    def _send_prepared(self, prepared: Prepared, mon: Any, seq: int, now: float, t_rx: int) -> bool | None:
-        """Send the prepared reply to this expected message unless the robot side ended the session; the step's
-        result, or None for the full cycle."""
-        if commanding_end(mon, CMD_ACTIVE, True, self._clock.period_key) is not None:
-            return None  # the full cycle ends the session with it
+    def open(self, codec: Any) -> None:
+        """The session's codec is known: its command message."""
+        self.message = ReplyMessage(codec)
+
+    # -- sending ---------------------------------------------------------------------------------------------
+    def send(self, transport: Any, datagram: bytes, t_rx: int) -> str | None:
+        """Send ``datagram`` (received at ``t_rx``, perf_counter_ns); why it could not be, or None."""
         try:
-            self.transport.send(prepared[1])
+            transport.send(datagram)
         except OSError as exc:
-            self._finish(Outcome.STOPPED, EndReason.SILENT, f"cannot send to the controller: {exc.strerror}")  # type: ignore[attr-defined]
-            return False
-        self._latencies.append(time.perf_counter_ns() - t_rx)
-        return self._after_prepared(now, mon, seq, prepared[2])
+            return f"cannot send to the controller: {exc.strerror}"
+        self.latencies.append(time.perf_counter_ns() - t_rx)
+        return None
 
-    def _after(self, now: float, mon: Any, seq: int, supervised: Supervised, answered: bool) -> bool:
-        """The cycle after its reply went out (or was not due): counters, supervision, the hold, observers, and
-        the next cycle's prepared reply."""
-        sup = self._sup
-        if answered:
-            self._call_client("after_reply")
-            if sup is not None:
-                sup.sent(self._client_seq, seq)
-            if self.cycle.sent_position and self.cycle.state == CMD_ACTIVE:
-                self._reply_seq_prev = self._client_seq
-            if not self._answered_any:
-                self._answered_any = True
-                self._unanswered_at_start = self.missed  # messages that went by before the first reply
-            self._client_seq = (self._client_seq + 1) & 0xFFFFFFFF
-            self.answered += 1
-            self.cycle.answered = True
-            if self.cycle.sent_position:
-                self.position_commands += 1
-        state = self.cycle.state
-        if sup is not None and self._stop is None:
-            commanding, moving, command, last_sent = supervised
-            stamp = getattr(self.transport, "received_ns", None)
-            problem = sup.check(mon, seq, commanding, moving, mon.ipoData.clientCommandMode in (_POSITION, _CARTESIAN), command,
-                                last_sent, stamp() if stamp is not None else None)  # fmt: skip
-            if problem is not None:
-                if sup.measured_period_s is not None and self._motion is not None:
-                    self._motion.retime(sup.measured_period_s)  # brake at the period the robot really runs at
-                self._stop_braking(Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {problem}")
-        if answered and self._motion is not None and self._motion.held_long_enough():
-            self._finish(*self._stop, observe=True)  # type: ignore[misc]
-            return False
-        self._observe()  # type: ignore[attr-defined]
-        if state == CMD_ACTIVE and self.prepares:
-            self._prepare(seq, mon)
-        return self._check_clocks(now)  # type: ignore[attr-defined]
+    def sent(self, cycle: Any, missed: int) -> None:
+        """The reply of ``cycle`` went out (``missed``: the controller's messages lost so far)."""
+        if not self.answered:
+            self.unanswered_at_start = missed
+        self.client_sequence = self.client_seq
+        self.client_seq = (self.client_seq + 1) & 0xFFFFFFFF
+        self.answered += 1
+        cycle.answered = True
+        if cycle.sent_position:
+            self.position_commands += 1
 
-    def _after_prepared(self, now: float, mon: Any, seq: int, q: tuple[float, ...]) -> bool:
-        """The rest of a cycle answered with the prepared reply carrying ``q`` [rad]: what the full cycle records,
-        and the client's ``command`` call, which must set that same position."""
-        clock = self._clock
-        clock.received(now, 1, mon.connectionInfo.sendPeriod)
-        self._last_seq = seq
-        self.cycles += 1
-        self.active_cycles += 1
-        motion = self._motion
-        supervised = (True, motion.moving, motion.prev, self.client_sequence)  # type: ignore[union-attr]
-        cyc = self.cycle
-        cyc.begin(clock.t, CMD_ACTIVE)
-        motion.sent(q, CMD_ACTIVE)  # type: ignore[union-attr]  # before the client's call: a stop brakes from q
-        client = self.client
-        client.reply_due = True
-        client.skipped = 0
-        client.braking = False
-        cmd = self._cmd
-        cmd.reset()  # type: ignore[union-attr]
-        got = self._call_client("command", self.state)
-        if got is None:
-            got = cmd.joint_position  # type: ignore[union-attr]
-        if self._stop is None and (got is None or tuple(got) != q or cmd.torque is not None or cmd.wrench is not None  # type: ignore[union-attr]
-                                   or cmd.io_writes):  # type: ignore[union-attr]  # fmt: skip
-            self._stop_braking(Outcome.FAILED, EndReason.CLIENT_ERROR, "the client's prepare_command() did not predict "
-                               "its command(): prepared a joint position, command() set "
-                               + ("another one" if got is None or tuple(got) != q else "torques, a wrench or IO writes")
-                               + " (the prepared one was sent)")  # fmt: skip
-        cyc.command = q
-        cyc.sent_position = True
-        cyc.phase = client.phase
-        cyc.row = client.row
-        self.prepared_replies += 1
-        return self._after(now, mon, seq, supervised, answered=True)
-
-    def _prepare(self, seq: int, mon: Any) -> None:
+    # -- the reply prepared a cycle ahead ----------------------------------------------------------------------
+    def prepare(self, seq: int, mon: Any, motion: ExecutedMotion, client: Any) -> None:
         """Prepare the reply to the next message (``seq`` + 1) from the client's ``prepare_command``, guarded now:
-        only in COMMANDING_ACTIVE, POSITION mode, receive multiplier 1, and while nothing stops or brakes."""
-        motion = self._motion
-        if (self._stop is not None or self._ended or motion is None or motion.braking
-                or self.transformation_client is not None  # (its provide() runs in the full cycle)
+        only in POSITION mode, receive multiplier 1, without a transformation client and while nothing brakes (the
+        application calls it in COMMANDING_ACTIVE while nothing stops)."""
+        if (motion.braking or self.transformation_client is not None  # (its provide() runs in the full cycle)
                 or mon.ipoData.clientCommandMode != _POSITION or (mon.connectionInfo.receiveMultiplier or 1) != 1):  # fmt: skip
             return
         try:
-            q = self.client.prepare_command()
+            q = client.prepare_command()
         except Exception:  # noqa: BLE001 - no preparation; command() runs when the message is there and reports
             return
         if q is None:
             return
         q = tuple(q)
-        adm = motion.envelope.admit(q, motion.prev, motion.prev2, motion.prev3, self.client.jerk_limited)
+        adm = motion.envelope.admit(q, motion.prev, motion.prev2, motion.prev3, client.jerk_limited)
         if adm.reason is not None or adm.clamped > 0.0 or motion.guard.refuse_position(q, motion.prev, motion.prev2,
                                                                                        False) is not None:  # fmt: skip
             return  # the full cycle decides (clamps it, or refuses it with its reason and brakes)
-        reply = self._reply
+        reply = self.message
         reply.set_motion(_POSITION, q, None, None)  # type: ignore[union-attr]
         reply.set_io(())  # type: ignore[union-attr]
         nxt = (seq + 1) & 0xFFFFFFFF
-        self._prepared = (nxt, reply.datagram(self._client_seq, nxt), q)  # type: ignore[union-attr]
+        self.prepared = (nxt, reply.datagram(self.client_seq, nxt), q)  # type: ignore[union-attr]
 
-    def _warm(self) -> None:
-        """Between messages (the transport's busy-wait): decode the last good datagram again into the message it
-        is already in (the same values) and run the checks a prepared reply waits for, so that their code and data
-        are in the CPU's caches when the next message arrives."""
-        data = self._last_data
-        if data is not None:
-            mon = self._codec.decode_monitoring(data, self._mon)  # type: ignore[union-attr]
-            consistent(mon, self._bound)
-            commanding_end(mon, CMD_ACTIVE, True, self._clock.period_key)
+    def confirm(self, q: tuple[float, ...], client: Any, cmd: LBRCommand, ending: Any, cyc: Any) -> None:
+        """A cycle answered with the prepared reply carrying ``q`` [rad]: the client's ``command`` call (through
+        ``ending``: a SessionEnding), which must set that same position — else the session stops braking."""
+        client.reply_due = True
+        client.skipped = 0
+        client.braking = False
+        cmd.reset()
+        got = ending.call("command", client.robot_state)
+        if got is None:
+            got = cmd.joint_position
+        if ending.stop is None and (got is None or tuple(got) != q or cmd.torque is not None or cmd.wrench is not None
+                                    or cmd.io_writes):  # fmt: skip
+            ending.stop_braking(Outcome.FAILED, EndReason.CLIENT_ERROR, "the client's prepare_command() did not "
+                                "predict its command(): prepared a joint position, command() set "
+                                + ("another one" if got is None or tuple(got) != q else "torques, a wrench or IO writes")
+                                + " (the prepared one was sent)")  # fmt: skip
+        cyc.command = q
+        cyc.sent_position = True
+        cyc.phase = client.phase
+        cyc.row = client.row
+        self.prepared_replies += 1
 
-    def _provide_frames(self) -> None:
-        """The transformation client's ``provide`` for this message (values kept for the reply)."""
-        tc = self.transformation_client
-        if tc is not None:
-            tc.robot_state = self.state
-            tc.values.clear()
-            self._call_client("provide", on=tc)  # type: ignore[attr-defined]
-
-    def _set_extras(self, cmd: LBRCommand) -> None:
+    # -- the reply written in the cycle --------------------------------------------------------------------------
+    def set_extras(self, cmd: LBRCommand) -> None:
         """The client's IO writes and the transformation client's values into this cycle's reply."""
-        self._reply.set_io(cmd.io_writes)
+        self.message.set_io(cmd.io_writes)  # type: ignore[union-attr]
         if self.transformation_client is not None:
-            self._reply.set_transformations(self.transformation_client.values)
+            self.message.set_transformations(self.transformation_client.values)  # type: ignore[union-attr]
 
     def _pose_solver(self, motion: ExecutedMotion) -> Any:
         """The session's PoseSolver (built at the first Cartesian command: pinocchio only for clients that use it)."""
-        if self._poses is None:
+        if self.poses is None:
             from trajectories.robot import Robot
 
             from .cartesian import PoseSolver
 
-            self._poses = PoseSolver(self.tcp_robot or Robot(), self.limits, motion.period_s)
-        return self._poses
+            self.poses = PoseSolver(self.tcp_robot or Robot(), self.limits, motion.period_s)
+        return self.poses
 
     def _pose_joints(self, mon: Any, state: int, cmd: LBRCommand, motion: ExecutedMotion) -> str | None:
         """CARTESIAN_POSE: the joints of the client's pose as its joint command (``cmd.joint_position``), or why
@@ -238,57 +164,45 @@ class Replying:
         cmd.joint_position = tuple(sol.q.tolist())
         return None
 
-    def _build_motion(self, mon: Any, state: int, cmd: LBRCommand) -> bool:
-        """Guard the client's joint position (or take the braking stop's) and write it into the message; False if
-        the session ended instead (a refusal, nothing sent)."""
-        motion = self._motion
-        if motion is None:
-            self._finish(
-                Outcome.REFUSED,
-                EndReason.GUARD,
-                "the controller did not send its send period; no command is safe",
-                observe=True,
-            )
-            return False
+    def build_motion(self, mon: Any, state: int, cmd: LBRCommand, motion: ExecutedMotion, client: Any,
+                     cyc: Any) -> tuple[End, bool] | None:  # fmt: skip
+        """Guard the client's joint position (or take the braking stop's) and write it into the message and ``cyc``.
+        None, or a stop with whether the reply was written: (stop, True) — the motion brakes from here — or
+        (end, False): refused, nothing to send, the session ends."""
         mode = mon.ipoData.clientCommandMode
-        client = self.client
         clamps = motion.clamped_cycles
+        found: End | None = None
         if mode == _CARTESIAN and not motion.braking:
             problem = self._pose_joints(mon, state, cmd, motion)
             if problem is not None:
-                text = f"guard refused the Cartesian command: {problem}"
+                found = (Outcome.REFUSED, EndReason.GUARD, f"guard refused the Cartesian command: {problem}")
                 if state != CMD_ACTIVE or not motion.moving:
-                    self._finish(Outcome.REFUSED, EndReason.GUARD, text, observe=True)
-                    return False
+                    return found, False
                 motion.begin_braking()  # from the joints last sent, within the joint limits, as any stop
-                if self._stop is None:
-                    self._stop = (Outcome.REFUSED, EndReason.GUARD, text)
         try:
             q, tau, wrench, refused = motion.next_command(mon.monitorData.measuredJointPosition.value, state, mode,
                                                           cmd.joint_position, cmd.torque, cmd.wrench,
                                                           client.exact_command, client.jerk_limited)  # fmt: skip
         except Refused as exc:
-            self._finish(Outcome.REFUSED, EndReason.GUARD, str(exc), observe=True)
-            return False
+            return (Outcome.REFUSED, EndReason.GUARD, str(exc)), False
         # (a clamp of a few µrad — after a reply the controller may have bridged — is no reason to re-plan)
         client.clamped = motion.clamped_cycles != clamps and motion.last_clamp > CLIENT_CLAMP
-        if refused is not None and self._stop is None:
+        if refused is not None and found is None:
             if motion.loss_refused:  # not the client's command: the link lost it
-                self._stop = (Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {refused}")
+                found = (Outcome.STOPPED, EndReason.SUPERVISION, f"supervision: {refused}")
             else:
-                self._stop = (Outcome.REFUSED, EndReason.GUARD, refused)
-        cyc = self.cycle
+                found = (Outcome.REFUSED, EndReason.GUARD, refused)
         cyc.braking = motion.braking
         pose = None
         if mode == _CARTESIAN:  # what goes out is the pose of the joints the guard admitted (a stop's too)
             from .cartesian import pose_to_wire
 
             pose = pose_to_wire(*self._pose_solver(motion).tcp(q))
-        self._reply.set_motion(mode, q, tau, wrench, pose)  # type: ignore[union-attr]
+        self.message.set_motion(mode, q, tau, wrench, pose)  # type: ignore[union-attr]
         cyc.torque = tau if mode == _TORQUE else None
         cyc.wrench = wrench if mode == _WRENCH else None
         q = tuple(q)
         motion.sent(q, state)
         cyc.command = q
         cyc.sent_position = True
-        return True
+        return None if found is None else (found, True)

@@ -110,9 +110,9 @@ def identify(t_readings: np.ndarray, readings: np.ndarray, accel: np.ndarray, dt
 
     1. the free swing's turning points give the equilibrium (midpoints of successive extremes: dry friction shifts
        them alternately), the period (between turning points on the same side), and the decay (peak amplitudes
-       A_{n+1} = e^{−σT/2}·A_n − 2μ/ω0²: viscous σ = c/2 and dry μ by a linear fit);
+       A_{n+1} = e^{−σT/2}·A_n − 2μ/ω0²: viscous σ = c/2 and dry μ by a linear fit) — :func:`_free_swing`;
     2. the model's response to the known input, shifted over delays 0..``max_delay``, against the whole record: the
-       delay, the gain k (its sign the encoder's) and the fit's residual.
+       delay, the gain k (its sign the encoder's) and the fit's residual — :func:`_fit_response`.
 
     ``nominal_length`` [m] bounds the search (the period within ±40 % of its). :class:`IdentificationError` when the
     record shows no rod, or none that swings as a pendulum."""
@@ -121,28 +121,38 @@ def identify(t_readings: np.ndarray, readings: np.ndarray, accel: np.ndarray, dt
     a = np.asarray(accel, dtype=float)
     if len(y) < 50 or len(a) < 100:
         raise IdentificationError(f"too short a record ({len(y)} readings)")
-    grid = t0 + np.arange(len(a)) * dt
-    quiet = t_r < t0 + QUIET_S * 0.9
-    rest = y[quiet] if quiet.sum() >= 5 else y[: max(5, len(y) // 20)]
+    rest = _at_rest(t_r, y, t0)
     noise = float(np.std(rest))
     swing = float(np.max(np.abs(y - np.median(rest))))
     if swing < MIN_SWING:
         raise IdentificationError(f"the rod barely moved ({math.degrees(swing):.2f}° at most) when the arm pushed it: "
                                   "is it attached, and the encoder read?")  # fmt: skip
     w_nom = math.sqrt(G / nominal_length)
-    # 1. the free swing: crossings of the equilibrium (midpoints of successive extremes: dry friction shifts them
-    #    alternately) give the period, the turning points' decay the damping
+    seed = _free_swing(t_r, y, a, dt, t0, rest, noise, swing, w_nom)
+    w0, c, mu, (rms, tau, k, off) = _fit_response(t_r, y, a, dt, t0, seed, w_nom, max_delay)
+    if not GAIN_BAND[0] <= abs(k) <= GAIN_BAND[1] or rms > 0.25 * swing:
+        raise IdentificationError(f"the rod's swing does not fit a pendulum on the arm (response {abs(k):.2f}× the "
+                                  f"model's, residual {math.degrees(rms):.2f}° of a {math.degrees(swing):.1f}° "
+                                  "swing): is it a rigid rod on a free bearing, and the encoder's axis the rail's?")  # fmt: skip
+    return RodIdentification(G / (w0 * w0), c, off, 1 if k > 0 else -1, tau, abs(k), noise, rms, swing, mu)
+
+
+def _at_rest(t_r: np.ndarray, y: np.ndarray, t0: float) -> np.ndarray:
+    """The readings [rad] of the hanging rod before the excitation (its offset and noise)."""
+    quiet = t_r < t0 + QUIET_S * 0.9
+    return y[quiet] if quiet.sum() >= 5 else y[: max(5, len(y) // 20)]
+
+
+def _free_swing(t_r: np.ndarray, y: np.ndarray, a: np.ndarray, dt: float, t0: float, rest: np.ndarray, noise: float,
+                swing: float, w_nom: float) -> tuple[float, float, float]:  # fmt: skip
+    """Step 1: (ω0 [rad/s], c [1/s], μ [rad/s²]) read off the free swing after the excitation — the period between
+    crossings of the equilibrium, the decay of the turning points (the seed of :func:`_fit_response`)."""
     moving = np.flatnonzero(np.abs(a) > 1e-9)
     t_free = t0 + (moving[-1] + 1) * dt + 0.05 if len(moving) else t0
     free = t_r >= t_free
     tf, yf = t_r[free], y[free]
     floor = max(4.0 * noise, math.radians(0.3))
-    centre = float(np.median(yf)) if len(yf) else float(np.median(rest))
-    ext = _extrema(tf, yf, centre, floor)
-    if len(ext) >= 2:
-        mids = [(p[1] + q[1]) / 2 for p, q in zip(ext, ext[1:])]
-        centre = float(np.mean(mids[: max(1, 2 * (len(mids) // 2))]))
-        ext = _extrema(tf, yf, centre, floor)
+    centre, ext = _turning_points(tf, yf, float(np.median(yf)) if len(yf) else float(np.median(rest)), floor)
     if len(ext) < 2:
         raise IdentificationError(f"the rod stopped swinging within {len(ext)} half-periods of the push (swing "
                                   f"{math.degrees(swing):.1f}°): too much friction in its bearing, or a push too weak")  # fmt: skip
@@ -151,76 +161,100 @@ def identify(t_readings: np.ndarray, readings: np.ndarray, accel: np.ndarray, dt
         raise IdentificationError("the rod's free swing crossed its equilibrium less than twice: push too weak")
     period = float(np.mean(np.diff(cross[::2])) if len(cross) >= 3 else 2 * np.mean(np.diff(cross)))
     # a large swing takes longer than a small one: T = T0·(1 + θ²/16 + 11θ⁴/3072 + …) at amplitude θ
-    amp = float(np.mean(np.abs(np.array([p[1] for p in ext]) - centre)))
+    amps = np.abs(np.array([p[1] for p in ext]) - centre)
+    amp = float(np.mean(amps))
     period /= 1.0 + amp * amp / 16.0 + 11.0 * amp**4 / 3072.0
     w0 = 2 * math.pi / period
     if not 0.6 * w_nom <= w0 <= 1.4 * w_nom:
         raise IdentificationError(f"the rod swings with a period of {period:.3f} s, the model's is "
-                                  f"{2 * math.pi / w_nom:.3f} s: check --rod-length")  # fmt: skip
-    amps = np.abs(np.array([p[1] for p in ext]) - centre)
-    # per half period A_{n+1} = r·A_n − d with r = e^{−cT/4} (viscous) and d = 2μ/ω0² (dry): whichever of the two
-    # decays fits the turning points better seeds the fit (a rod without either keeps its amplitude)
-    c0 = mu0 = 0.0
-    if len(amps) >= 3 and np.ptp(amps) > 2.0 * floor:
-        n = np.arange(len(amps), dtype=float)
-        slope_log, icpt_log = np.polyfit(n, np.log(amps), 1)
-        slope_lin, icpt_lin = np.polyfit(n, amps, 1)
-        res_log = float(np.sum((amps - np.exp(icpt_log + slope_log * n)) ** 2))
-        res_lin = float(np.sum((amps - (icpt_lin + slope_lin * n)) ** 2))
-        if res_log <= res_lin:
-            c0 = max(0.0, -4.0 * slope_log / period)
-        else:
-            mu0 = max(0.0, -slope_lin * w0 * w0 / 2.0)
+                                  f"{2 * math.pi / w_nom:.3f} s: check identify.nominal_length")  # fmt: skip
+    c0, mu0 = _decay(amps, period, w0, floor)
+    return w0, c0, mu0
 
-    # 2. the nonlinear model's response to the known input over the whole record: delay (scanned), gain and offset
-    #    (linear) for each (ω0, c, μ), refined from the free swing's estimates
-    coarse = np.arange(0.0, max_delay + 1e-9, 0.002)
 
-    def fit(w: float, c: float, mu: float) -> tuple[float, float, float, float]:
-        theta = _simulate(a, dt, w, c, mu)
-        best = _scan(theta, coarse)
-        return _scan(theta, best[1] + np.arange(-0.002, 0.00201, 0.00025), best)
+def _turning_points(tf: np.ndarray, yf: np.ndarray, centre: float, floor: float) -> tuple[float, list]:
+    """The swing's equilibrium [rad] (midpoints of successive extremes: dry friction shifts them alternately) and its
+    turning points about it (:func:`_extrema`)."""
+    ext = _extrema(tf, yf, centre, floor)
+    if len(ext) >= 2:
+        mids = [(p[1] + q[1]) / 2 for p, q in zip(ext, ext[1:])]
+        centre = float(np.mean(mids[: max(1, 2 * (len(mids) // 2))]))
+        ext = _extrema(tf, yf, centre, floor)
+    return centre, ext
 
-    def _scan(theta: np.ndarray, taus: np.ndarray, best=(math.inf, 0.0, 0.0, 0.0)) -> tuple[float, float, float, float]:
-        for tau in taus:
-            if not 0.0 <= tau <= max_delay:
-                continue
-            x = np.interp(t_r - tau, grid, theta, left=0.0, right=theta[-1])
-            sx, sxx = float(x.sum()), float(x @ x)
-            n = len(x)
-            det = n * sxx - sx * sx
-            if det <= 0.0:
-                continue
-            sy, sxy = float(y.sum()), float(x @ y)
-            k = (n * sxy - sx * sy) / det
-            off = (sy - k * sx) / n
-            res = y - k * x - off
-            rms = math.sqrt(float(res @ res) / n)
-            if rms < best[0]:
-                best = (rms, float(tau), k, off)
-        return best
+
+def _decay(amps: np.ndarray, period: float, w0: float, floor: float) -> tuple[float, float]:
+    """(c [1/s], μ [rad/s²]) from the turning points' amplitudes [rad]: per half period A_{n+1} = r·A_n − d with
+    r = e^{−cT/4} (viscous) and d = 2μ/ω0² (dry); whichever of the two decays fits better (a rod without either keeps
+    its amplitude: both 0)."""
+    if len(amps) < 3 or np.ptp(amps) <= 2.0 * floor:
+        return 0.0, 0.0
+    n = np.arange(len(amps), dtype=float)
+    slope_log, icpt_log = np.polyfit(n, np.log(amps), 1)
+    slope_lin, icpt_lin = np.polyfit(n, amps, 1)
+    res_log = float(np.sum((amps - np.exp(icpt_log + slope_log * n)) ** 2))
+    res_lin = float(np.sum((amps - (icpt_lin + slope_lin * n)) ** 2))
+    if res_log <= res_lin:
+        return max(0.0, -4.0 * slope_log / period), 0.0
+    return 0.0, max(0.0, -slope_lin * w0 * w0 / 2.0)
+
+
+_Fit = tuple[float, float, float, float]  # (rms [rad], τ [s], k, offset [rad]) of the model's response
+
+
+def _fit_response(t_r: np.ndarray, y: np.ndarray, a: np.ndarray, dt: float, t0: float, seed: tuple[float, float, float],
+                  w_nom: float, max_delay: float) -> tuple[float, float, float, _Fit]:  # fmt: skip
+    """Step 2: (ω0, c, μ) refined from ``seed`` (Nelder–Mead) so that the nonlinear model's response to the known
+    input fits the whole record, and that fit (:func:`_response_fit`)."""
+    from scipy.optimize import minimize
+
+    grid = t0 + np.arange(len(a)) * dt
 
     def cost(p: np.ndarray) -> float:
         w, c, mu = p
         if not (0.6 * w_nom <= w <= 1.4 * w_nom and 0.0 <= c <= 5.0 and 0.0 <= mu <= 5.0 * w_nom * w_nom):
             return 1e3
-        return fit(w, c, mu)[0]
+        return _response_fit(_simulate(a, dt, w, c, mu), t_r, y, grid, max_delay)[0]
 
-    from scipy.optimize import minimize
-
-    p0 = np.array([w0, c0, mu0])
-    simplex = p0 + np.array(
+    w0, c0, mu0 = seed
+    simplex = np.array(seed) + np.array(
         [[0, 0, 0], [0.004 * w0, 0, 0], [0, 0.05 + 0.2 * c0, 0], [0, 0, 0.005 * w0 * w0 + 0.2 * mu0]]
     )
-    res = minimize(cost, p0, method="Nelder-Mead", options={"xatol": 1e-5, "fatol": 1e-9, "maxiter": 60,
-                                                            "initial_simplex": simplex})  # fmt: skip
+    res = minimize(cost, np.array(seed), method="Nelder-Mead", options={"xatol": 1e-5, "fatol": 1e-9, "maxiter": 60,
+                                                                        "initial_simplex": simplex})  # fmt: skip
     w0, c, mu = (float(v) for v in res.x)
-    rms, tau, k, off = fit(w0, c, mu)
-    if not GAIN_BAND[0] <= abs(k) <= GAIN_BAND[1] or rms > 0.25 * swing:
-        raise IdentificationError(f"the rod's swing does not fit a pendulum on the arm (response {abs(k):.2f}× the "
-                                  f"model's, residual {math.degrees(rms):.2f}° of a {math.degrees(swing):.1f}° "
-                                  "swing): is it a rigid rod on a free bearing, and the encoder's axis the rail's?")  # fmt: skip
-    return RodIdentification(G / (w0 * w0), c, off, 1 if k > 0 else -1, tau, abs(k), noise, rms, swing, mu)
+    return w0, c, mu, _response_fit(_simulate(a, dt, w0, c, mu), t_r, y, grid, max_delay)
+
+
+def _response_fit(theta: np.ndarray, t_r: np.ndarray, y: np.ndarray, grid: np.ndarray, max_delay: float) -> _Fit:
+    """The model's response ``theta`` on ``grid`` against the readings: the delay scanned over 0..``max_delay`` in
+    2 ms steps, then refined to 0.25 ms about the best."""
+    best = _scan(theta, np.arange(0.0, max_delay + 1e-9, 0.002), t_r, y, grid, max_delay)
+    return _scan(theta, best[1] + np.arange(-0.002, 0.00201, 0.00025), t_r, y, grid, max_delay, best)
+
+
+def _scan(theta: np.ndarray, taus: np.ndarray, t_r: np.ndarray, y: np.ndarray, grid: np.ndarray, max_delay: float,
+          best: _Fit = (math.inf, 0.0, 0.0, 0.0)) -> _Fit:  # fmt: skip
+    """The best of ``best`` and the fits at the delays ``taus`` [s]: for each, the gain k and the offset are the
+    linear least-squares fit of the readings to the response shifted by τ."""
+    sy = float(y.sum())
+    for tau in taus:
+        if not 0.0 <= tau <= max_delay:
+            continue
+        x = np.interp(t_r - tau, grid, theta, left=0.0, right=theta[-1])
+        sx, sxx = float(x.sum()), float(x @ x)
+        n = len(x)
+        det = n * sxx - sx * sx
+        if det <= 0.0:
+            continue
+        sxy = float(x @ y)
+        k = (n * sxy - sx * sy) / det
+        off = (sy - k * sx) / n
+        res = y - k * x - off
+        rms = math.sqrt(float(res @ res) / n)
+        if rms < best[0]:
+            best = (rms, float(tau), k, off)
+    return best
 
 
 def _crossings(t: np.ndarray, y: np.ndarray, centre: float, until: float) -> np.ndarray:

@@ -234,7 +234,7 @@ class UprightSession:
         self.rod = rod
         if rod.sign != self.o.encoder_sign:
             self._fail(f"the pendulum module's encoder reads the rod reversed (the arm's push swung it the other way "
-                       f"than the model says, {rod.gain:.2f}× the model's swing): give --encoder-sign "
+                       f"than the model says, {rod.gain:.2f}× the model's swing): give SessionOptions.encoder_sign "
                        f"{-self.o.encoder_sign} or swap the encoder's direction")  # fmt: skip
             return
         self.offset = rod.offset

@@ -44,56 +44,87 @@ class UprightRun:
     falls: int
 
 
+PlantStep = Callable[[float, float, float, float, float], "tuple[float, float]"]
+
+
+class _Bench:
+    """The plant and its encoder link, one cycle at a time (the one home of both loops below): the rod driven by the
+    cart's acceleration ``actuation_delay`` cycles late (RK4 of ``pendulum``, or ``plant_step``), knocked by
+    :meth:`knock`, sampled at the sensor's rate, quantised (sign, offset, noise) and delivered late with jitter."""
+
+    def __init__(self, pendulum: RigidPendulum | None, sensor: Sensor, dt: float, actuation_delay: int, seed: int,
+                 plant_step: PlantStep | None = None) -> None:  # fmt: skip
+        self.pendulum, self.sensor, self.dt, self.plant_step = pendulum, sensor, dt, plant_step
+        self.rng = random.Random(seed)
+        self.applied = [0.0] * (actuation_delay + 1)  # the commanded accelerations, a ring over the actuation delay
+        self.phi = self.omega = 0.0  # the true rod [rad], [rad/s]
+        self._a_prev = 0.0
+        self._queue: list[tuple[float, float]] = []  # (arrival [s], reading [rad])
+        self._next_sample = 0.0
+
+    def plant(self, k: int) -> None:
+        """Cycle ``k``: the rod one step on with the pivot's acceleration applied now."""
+        a_now = self.applied[k % len(self.applied)]
+        if self.plant_step is None:
+            self.phi, self.omega = rk4_step(
+                self.pendulum, self.phi, self.omega, (self._a_prev, 0.0), (a_now, 0.0), self.dt
+            )
+        else:
+            self.phi, self.omega = self.plant_step(self.phi, self.omega, self._a_prev, a_now, self.dt)
+        self._a_prev = a_now
+
+    def knock(self, dphi: float) -> None:
+        self.phi += dphi
+
+    def sense(self, t: float) -> float | None:
+        """At ``t`` [s]: sample the rod when due; the latest reading [rad] that arrived by now, or None."""
+        self.phi = wrap_angle(self.phi)
+        sensor, rng = self.sensor, self.rng
+        if t + 1e-12 >= self._next_sample:
+            self._next_sample += 1.0 / sensor.rate_hz
+            count = sensor.sign * round(self.phi / (2 * math.pi) * sensor.counts) + sensor.offset
+            if sensor.noise:
+                count += rng.randint(-sensor.noise, sensor.noise)
+            self._queue.append((t + sensor.delay + rng.uniform(0, sensor.jitter), count * 2 * math.pi / sensor.counts))
+        reading = None
+        while self._queue and self._queue[0][0] <= t + 1e-12:
+            reading = self._queue.pop(0)[1]
+        return reading
+
+    def actuate(self, k: int, accel: float) -> None:
+        """The cart's acceleration [m/s²] commanded in cycle ``k`` (the pivot's ``actuation_delay`` cycles later)."""
+        self.applied[k % len(self.applied)] = accel
+
+
 def simulate_upright(pendulum: RigidPendulum, limits: CartLimits, duration: float, bounds=None, sensor: Sensor = Sensor(),
                      options: UprightOptions = UprightOptions(), dt: float = 1e-3, actuation_delay: int = 2,
                      pushes: tuple[tuple[float, float], ...] = (), park_at: float | None = None,
                      model_length: float | None = None, seed: int = 0, friction: float = 0.0) -> UprightRun:  # fmt: skip
     """Run the swing-up and balance for ``duration`` [s]; ``pushes`` (t [s], Δφ [rad]) knock the rod; ``friction``
     μ [rad/s²]: the bearing's dry friction the controller and its observer are told (as the identification would)."""
-    rng = random.Random(seed)
     n = int(round(duration / dt))
     cart = Cart(limits, dt, bounds=bounds)
     l_model = model_length or pendulum.equivalent_length
     ctl = UprightController(l_model, cart, options, friction=friction)
-    obs = DelayedObserver(
-        l_model,
-        dt,
-        sensor.delay + 0.5 * sensor.jitter,
-        1.0 / sensor.rate_hz,
-        actuation_delay=actuation_delay,
-        coulomb=friction,
-    )
-    applied = [0.0] * (actuation_delay + 1)
-    phi = omega = 0.0
-    a_prev = 0.0
-    queue: list[tuple[float, float]] = []
-    next_sample = 0.0
+    obs = DelayedObserver(l_model, dt, sensor.delay + 0.5 * sensor.jitter, 1.0 / sensor.rate_hz,
+                          actuation_delay=actuation_delay, coulomb=friction)  # fmt: skip
+    bench = _Bench(pendulum, sensor, dt, actuation_delay, seed)
     push = sorted(pushes)
     out = np.zeros((n, 7))
     for k in range(n):
         t = k * dt
-        # plant: the pivot acceleration is the cart's, actuation_delay cycles late
-        a_now = applied[k % len(applied)]
-        phi, omega = rk4_step(pendulum, phi, omega, (a_prev, 0.0), (a_now, 0.0), dt)
-        a_prev = a_now
+        bench.plant(k)
         while push and push[0][0] <= t:
-            phi += push.pop(0)[1]
-        phi = wrap_angle(phi)
-        if t + 1e-12 >= next_sample:
-            next_sample += 1.0 / sensor.rate_hz
-            count = round(phi / (2 * math.pi) * sensor.counts)
-            queue.append((t + sensor.delay + rng.uniform(0, sensor.jitter), count * 2 * math.pi / sensor.counts))
-        reading = None
-        while queue and queue[0][0] <= t + 1e-12:
-            reading = queue.pop(0)[1]
+            bench.knock(push.pop(0)[1])
+        reading = bench.sense(t)
         if reading is not None:
             obs.correct(reading)
         if park_at is not None and t >= park_at and ctl.mode is not Mode.PARK:
             ctl.park()
         ctl.update(obs.phi, obs.omega)
-        applied[k % len(applied)] = cart.a
+        bench.actuate(k, cart.a)
         obs.predict(cart.a)
-        out[k] = (t, phi, obs.phi, cart.x, cart.v, cart.a, int(ctl.mode))
+        out[k] = (t, bench.phi, obs.phi, cart.x, cart.v, cart.a, int(ctl.mode))
     return UprightRun(
         out[:, 0], out[:, 1], out[:, 2], out[:, 3], out[:, 4], out[:, 5], out[:, 6].astype(int), ctl.catches, ctl.falls
     )
@@ -114,23 +145,17 @@ def simulate_session(pendulum: RigidPendulum, limits: CartLimits, model_length: 
                      sensor: Sensor = Sensor(), duration: float | None = None, dt: float = 1e-3,
                      actuation_delay: int = 2, pushes: tuple[tuple[float, float], ...] = (), bounds=None,
                      seed: int = 0, controller: UprightOptions = UprightOptions(),
-                     plant_step: Callable[[float, float, float, float, float], tuple[float, float]] | None = None,
-                     ) -> SessionRun:  # fmt: skip
+                     plant_step: PlantStep | None = None) -> SessionRun:  # fmt: skip
     """Run :class:`~.session.UprightSession` (options ``options``) for the rod ``pendulum`` while the controller
     assumes ``model_length`` [m]: until the session is done (or ``duration`` [s]); ``pushes`` (t [s] after the
     first catch, Δφ [rad]) knock the rod. ``plant_step(φ, φ̇, a0, a1, h) -> (φ, φ̇)`` integrates the rod over one
     cycle with the pivot's acceleration going from a0 to a1 [m/s²] (default: RK4 of ``pendulum``)."""
     from .session import SessionOptions, UprightSession
 
-    rng = random.Random(seed)
     cart = Cart(limits, dt, bounds=bounds)
     opts = options or SessionOptions()
     session = UprightSession(model_length, cart, 1.0 / sensor.rate_hz, opts, controller)
-    applied = [0.0] * (actuation_delay + 1)
-    phi = omega = 0.0
-    a_prev = 0.0
-    queue: list[tuple[float, float]] = []
-    next_sample = 0.0
+    bench = _Bench(pendulum, sensor, dt, actuation_delay, seed, plant_step)
     push = sorted(pushes)
     limit = duration if duration is not None else (opts.wait_s + 10 + opts.fit_timeout_s + opts.swing_timeout_s
                                                    + opts.hold_s + 3 * opts.recatch_s + opts.lower_timeout_s + 5)  # fmt: skip
@@ -138,32 +163,18 @@ def simulate_session(pendulum: RigidPendulum, limits: CartLimits, model_length: 
     k = 0
     while not session.done and k * dt < limit:
         t = k * dt
-        a_now = applied[k % len(applied)]
-        if plant_step is None:
-            phi, omega = rk4_step(pendulum, phi, omega, (a_prev, 0.0), (a_now, 0.0), dt)
-        else:
-            phi, omega = plant_step(phi, omega, a_prev, a_now, dt)
-        a_prev = a_now
+        bench.plant(k)
         if session.swing_up_s is not None:
             caught = session._swing_t0 + session.swing_up_s
             while push and caught + push[0][0] <= t:
-                phi += push.pop(0)[1]
-        phi = wrap_angle(phi)
-        if t + 1e-12 >= next_sample:
-            next_sample += 1.0 / sensor.rate_hz
-            count = sensor.sign * round(phi / (2 * math.pi) * sensor.counts) + sensor.offset
-            if sensor.noise:
-                count += rng.randint(-sensor.noise, sensor.noise)
-            queue.append((t + sensor.delay + rng.uniform(0, sensor.jitter), count * 2 * math.pi / sensor.counts))
-        reading = None
-        while queue and queue[0][0] <= t + 1e-12:
-            reading = queue.pop(0)[1]
+                bench.knock(push.pop(0)[1])
+        reading = bench.sense(t)
         if reading is not None:
             session.reading(reading)
         session.step()
-        applied[k % len(applied)] = cart.a
+        bench.actuate(k, cart.a)
         ts.append(t)
-        phis.append(phi)
+        phis.append(bench.phi)
         xs.append(cart.x)
         phases.append(session.phase)
         k += 1

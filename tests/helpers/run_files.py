@@ -1,19 +1,17 @@
 """Files of one real run, made once per test session and shared by the xdist workers: a joint CSV executed by
-`lbr execute` on the simulator with its ball (the log), and a track of that ball as a camera would give it
+`lbr execute` on the lock-step simulator with its ball (the log), and a track of that ball as a camera would give it
 (60 fps, a known delay, noise, lost frames) — what `lbr view` and `lbr export` read."""
 
 from __future__ import annotations
 
 import fcntl
 import json
-import subprocess
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from tests.helpers.cli import Q_START
+from tests.helpers.cli import Q_START, run_lbr
 
 Q0 = Q_START  # [rad], thesis start pose
 AXES = np.array([0.35, 0.2, -0.15, 0.3, 0.1, -0.25, 0.4])  # [rad] amplitude of the move per joint
@@ -39,28 +37,10 @@ def _make(folder: Path) -> None:
     t = np.arange(0.0, 1.6 + 1e-12, 0.01)
     s = (1 - np.cos(2 * np.pi * t / 1.6)) / 2
     write_joint_csv(folder / "plan.csv", JointTrajectory(t=t, q=Q0 + s[:, None] * AXES))
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "lbrcli",
-            "execute",
-            str(folder / "plan.csv"),
-            "--port",
-            "0",
-            "--log",
-            str(folder / "log.csv"),
-            "--length",
-            str(LENGTH),
-            "--settle",
-            "0.6",
-            "--sim-lenient",
-            "--json",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    # in this process (the `lbr` script's code path) and in lock-step as fast as the client answers (--sim-fast):
+    # the session the paced simulator runs, stamp for stamp, without waiting for its clock
+    proc = run_lbr("execute", folder / "plan.csv", "--port", "0", "--log", folder / "log.csv", "--length", str(LENGTH),
+                   "--settle", "0.6", "--sim-lenient", "--sim-fast", "--json")  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     log = read_table(folder / "log.csv", LOG_COLUMNS, time="increasing")
     rng = np.random.default_rng(7)

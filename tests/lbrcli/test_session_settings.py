@@ -195,7 +195,8 @@ def test_the_cli_names_the_option_in_one_line(argv, words):
 
 
 @pytest.mark.parametrize("command", [["execute", "x.csv"], ["monitor", "--duration", "1"], ["serve"],
-                                     ["control", "damp", "x.csv"], ["sim"]])  # fmt: skip
+                                     ["control", "damp", "x.csv"], ["sim"], ["view", "x.csv"],
+                                     ["export", "x.csv", "-o", "x.mcap"]])  # fmt: skip
 def test_every_ball_length_option_takes_the_one_rule(command):
     low, high = STRING_LENGTH_M
     flag = "--sim-length" if "damp" in command else "--length"

@@ -65,6 +65,7 @@ def test_zero_vibration_designs_leave_no_sway_at_the_nominal_length(table, shape
     assert table[shaper, a, 0.0][0] <= 0.1
 
 
+@pytest.mark.heavy  # the module's table: 18 plans, 60 nonlinear pendulum runs
 @pytest.mark.parametrize("a", [1.0, 2.0])
 def test_default_is_robust_to_a_wrong_string_length(table, a):
     """The default (±10 % tolerance) stays within its 0.3° budget across the band, quicker than the baseline."""
@@ -75,6 +76,7 @@ def test_default_is_robust_to_a_wrong_string_length(table, a):
     assert max(table["auto", a, e][0] for e in (-0.2, 0.2)) < max(table["accel", a, e][0] for e in (-0.2, 0.2))
 
 
+@pytest.mark.heavy  # the module's table: 18 plans, 60 nonlinear pendulum runs
 def test_baseline_residuals_are_what_the_goals_improve_on(table):
     for a in (1.0, 2.0):
         nominal = table["accel", a, 0.0][0]
@@ -82,6 +84,7 @@ def test_baseline_residuals_are_what_the_goals_improve_on(table):
         assert max(table["accel", a, -0.2][0], table["accel", a, 0.2][0]) > 0.5  # but it is not robust
 
 
+@pytest.mark.heavy  # the module's table: 18 plans, 60 nonlinear pendulum runs
 def test_ei_trades_nominal_residual_for_robustness(table):
     for a in (1.0, 2.0):
         res_nom, res_lo, res_hi = (table["ei", a, e][0] for e in (0.0, -0.2, 0.2))
@@ -89,12 +92,14 @@ def test_ei_trades_nominal_residual_for_robustness(table):
         assert max(res_lo, res_hi) < 2.5 * res_nom  # flat over ±20 %: the insensitivity EI is made for
 
 
+@pytest.mark.heavy  # the module's table: 18 plans, 60 nonlinear pendulum runs
 @pytest.mark.parametrize("a", [1.0, 2.0])
 def test_default_is_faster_than_the_baseline(table, a):
     assert table["auto", a, 0.0][1] <= table["accel", a, 0.0][1]
     assert table["fast", a, 0.0][1] <= 1.05 * table["accel", a, 0.0][1]
 
 
+@pytest.mark.heavy  # the module's table: 18 plans, 60 nonlinear pendulum runs
 def test_robustness_ordering_off_nominal(table):
     for a in (1.0, 2.0):
         worst = {k: max(table[k, a, e][0] for e in (-0.2, 0.2)) for k in ("zv", "zvd", "box-zvd")}

@@ -48,6 +48,7 @@ def test_thesis_example_reaches_theta_d_and_stops(thesis_plan):
     assert np.allclose(np.diff(plan.t), THESIS.dt)
 
 
+@pytest.mark.heavy  # the module's thesis plan: seconds
 def test_energy_law_drives_the_energy_towards_e_d_as_the_thesis_bookkeeping_says(thesis_plan):
     plan = thesis_plan
     pumping = plan.t <= plan.info["t_switch_s"]

@@ -31,6 +31,7 @@ def test_reaches_115_deg_from_rest_within_3_s(fast):
     assert fast.reached and fast.failure() is None
 
 
+@pytest.mark.heavy  # the module's fast plan: an optimisation of many seconds
 def test_inside_all_joint_limits_including_jerk(fast, limits):
     rep = check_trajectory(fast.trajectory, limits, jerk=True)
     assert rep.ok, [v.describe() for v in rep.violations]
@@ -40,6 +41,7 @@ def test_inside_all_joint_limits_including_jerk(fast, limits):
     assert rep.ratios()["acceleration"].max() > 0.5
 
 
+@pytest.mark.heavy  # the module's fast plan: an optimisation of many seconds
 def test_pivot_stays_in_the_band_on_base_y_and_ends_at_rest(fast, robot):
     pos, _ = robot.fk_path(fast.trajectory.q)
     start = pos[0]
@@ -53,6 +55,7 @@ def test_pivot_stays_in_the_band_on_base_y_and_ends_at_rest(fast, robot):
     assert np.ptp(pos[tail, 1]) < 1e-9  # the pivot rests from t_rest on
 
 
+@pytest.mark.heavy  # the module's fast plan: an optimisation of many seconds
 def test_claim_agrees_with_the_ball_simulated_under_the_joint_path(fast):
     ver, plan = fast.verification, fast.plan
     taut = ver.t < ver.first_slack  # the planar claim holds while the real (one-sided) string is taut
@@ -74,6 +77,7 @@ def test_claim_agrees_with_the_ball_simulated_under_the_joint_path(fast):
     assert np.abs(sol.y[2] - plan.theta).max() < math.radians(1)
 
 
+@pytest.mark.heavy  # the module's fast plan: an optimisation of many seconds
 def test_reports_slack_honestly(fast):
     figures = fast.figures()
     assert figures["taut"] is False and figures["first_slack_s"] is not None

@@ -69,7 +69,7 @@ def test_a_rendered_flight_on_a_slack_string_is_tracked_by_position(tmp_path):
         distractors=None,
         seed=2,
     )
-    track = track_video(video, color_spec("red", "--color"), pivot_color=color_spec("green", "--pivot-color"))
+    track = track_video(video, color_spec("red"), pivot_color=color_spec("green"))
     assert track.found.all()
     assert np.abs(track.uv - truth.ball_uv).max() < 1.0
     mask, _, length = slack_frames(track.uv, track.pivot_uv)

@@ -50,6 +50,15 @@ def test_compare_recovers_lag_json_plot(lbr, files, tmp_path):
     assert plot.stat().st_size > 10_000
 
 
+def test_a_constant_prediction_names_the_lag_option(lbr, files, tmp_path):
+    """The library names the setting (compare_angles.lag_s); the user's error line names the option."""
+    _, track = files
+    flat = tmp_path / "flat.csv"
+    t = np.arange(0.0, 3.0, 0.01)
+    write_table(flat, ("t", "theta"), np.column_stack([t, np.zeros_like(t)]), ["%.6f", "%.9f"])
+    assert "a θ series is constant (give --lag)" in one_line_error(lbr("compare", flat, track), code=1)
+
+
 def test_given_lag_and_wrong_lag(lbr, files):
     pred, track = files
     good = json.loads(lbr("compare", pred, track, "--lag", str(LAG), "--json").stdout)

@@ -131,6 +131,7 @@ def test_every_message_read_back_equals_the_log(exported, reader):
     assert pin.buildModelFromXML(description.data).nq == 7
 
 
+@pytest.mark.heavy  # the module's exported session: a simulator run and an export
 def test_robot_description_is_attached_and_the_file_is_a_ros2_bag(exported):
     _, out, fig = exported
     with open(out, "rb") as fh:

@@ -105,6 +105,7 @@ def test_joint_csv_is_what_was_predicted(default_plan):
     np.testing.assert_allclose(task.position, pos, atol=1e-7)
 
 
+@pytest.mark.heavy  # the module's default plan (`lbr plan anti-sway`): seconds
 def test_plan_passes_lbr_check(default_plan, lbr):
     _, files = default_plan
     proc = lbr("check", files["joint.csv"], "--json")

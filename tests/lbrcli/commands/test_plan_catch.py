@@ -57,6 +57,7 @@ def test_the_plan_catches_the_ball_within_the_limits(planned):
     assert run_lbr("check", out, "--jerk").returncode == 0  # every limit, rest at both ends
 
 
+@pytest.mark.heavy  # the module's planned catch (`lbr plan catch`): many seconds
 def test_the_prediction_file_has_the_phases_and_the_paths(planned):
     _, _, pred, _ = planned
     tab = read_table(pred, ("t", "theta", "phase", "ball_x", "ball_y", "ball_z", "anchor_x", "anchor_y", "anchor_z"))
@@ -87,6 +88,7 @@ def test_an_independent_penalty_judge_catches_it_too(planned, robot):
     assert run.t_inside[0] == pytest.approx(f["catch_time_s"], abs=0.02)
 
 
+@pytest.mark.heavy  # the module's planned catch (`lbr plan catch`): many seconds
 def test_the_simulator_ball_plant_catches_it_cycle_by_cycle(planned, robot):
     res, out, _, _ = planned
     f = json.loads(res.stdout)

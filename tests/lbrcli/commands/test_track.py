@@ -139,7 +139,10 @@ def test_bad_inputs_exit_2(lbr, clip, board_images, tmp_path):
     assert "not both" in one_line_error(
         lbr("track", "video", video, "-o", out, "--pivot", "1,2", "--pivot-color", "green")
     )
-    assert "unknown colour" in one_line_error(lbr("track", "video", video, "-o", out, "--color", "purple"))
+    assert "--color: unknown colour" in one_line_error(lbr("track", "video", video, "-o", out, "--color", "purple"))
+    assert "--pivot-color: unknown colour" in one_line_error(
+        lbr("track", "video", video, "-o", out, "--pivot-color", "mauve")
+    )
     assert "must differ" in one_line_error(lbr("track", "video", video, "-o", out, "--pivot-color", "red"))
     assert "folder does not exist" in one_line_error(lbr("track", "video", video, "-o", tmp_path / "no" / "t.csv"))
     cam = tmp_path / "cam.json"

@@ -378,7 +378,7 @@ def test_warming_between_messages_changes_nothing(version):
         last_good = None
         while app.step():
             if warm and app.transport.warm is not None:
-                mon = app._mon
+                mon = app.state.message
                 if mon.IsInitialized():  # a message as decoded: warming keeps it as it is
                     before = (mon.SerializeToString(), app.state.measured_joint_position, app.state.session_state)
                     app.transport.warm()

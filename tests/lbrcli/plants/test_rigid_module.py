@@ -128,6 +128,10 @@ def test_lbr_control_upright_fails_when_it_cannot_catch_and_refuses_bad_input(tm
         "control", "upright", "--sim-lockstep", "--port", "0", "--sim-encoder-sign", "-1", "--hold", "5", timeout=120
     )
     assert p.returncode == 1 and "--encoder-sign -1" in p.stderr  # detected from the push, not guessed
+    # a rod whose period is not the model's (--rod-length 0.9, the simulated rod 0.4 m): the line names the flag
+    p = run_lbr("control", "upright", "--sim-lockstep", "--port", "0", "--rod-length", "0.9", "--sim-rod-length", "0.4",
+                "--hold", "5", timeout=120)  # fmt: skip
+    assert p.returncode == 1 and "check --rod-length" in p.stderr, p.stderr
     for args, text in ((("--rod-length", "0"), "--rod-length"), (("--push", "10deg"), "--push"),
                        (("--robot", "192.0.2.1"), "--pendulum PORT"), (("--push", "10deg@3", "--robot", "192.0.2.1",
                         "--pendulum", "/dev/null"), "--push")):  # fmt: skip

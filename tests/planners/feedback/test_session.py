@@ -50,7 +50,7 @@ def test_a_push_of_10_degrees_is_recovered():
 def test_a_reversed_encoder_is_refused_not_guessed():
     run = simulate_session(_rod(), LIM, NOMINAL.equivalent_length, SessionOptions(hold_s=5.0), Sensor(sign=-1))
     s = run.session
-    assert not s.succeeded and s.done and "--encoder-sign -1" in s.verdict and s.swing_up_s is None
+    assert not s.succeeded and s.done and "SessionOptions.encoder_sign -1" in s.verdict and s.swing_up_s is None
 
 
 @pytest.mark.heavy

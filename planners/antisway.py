@@ -45,7 +45,7 @@ from .robust_shaping import RobustSpec, linear_residual_phasor, nonlinear_phasor
 from .shapers import SHAPER_NAMES, Shaper, identity_shaper, make_shaper
 
 SHAPERS = ("auto", "robust", "accel", "box", *SHAPER_NAMES, "box-zv", "box-zvd", "box-ei")
-"""The `--shaper` designs `lbr plan anti-sway` knows, the default (`auto`) first."""
+"""The designs ``AntiSwayOptions.shaper`` takes, the default (`auto`) first."""
 TUNABLE = ("box", "zv", "mzv")  # designs with a simple zero at the design frequency
 
 # Thesis-like obstacle course (thesis Fig. 4.6: 90° turns on the table beside the robot), base frame [m].
@@ -58,7 +58,7 @@ ROBUST_BUDGET_RAD = math.radians(0.3)  # worst-case residual allowed per layout 
 DEFAULT_LENGTH_TOLERANCE = 0.1  # relative string-length uncertainty the default design is robust to
 BAND_LENGTHS = (-1.0, -0.5, 0.0, 0.5, 1.0)  # where in the tolerance band the paths are simulated [× tolerance]
 DENSE_FACTOR = 5  # robust designs are judged at this many times the frequencies their programme constrains
-DENSE_LENGTHS = 41  # plans are judged (figures, --max-sway) at this many string lengths across the band
+DENSE_LENGTHS = 41  # plans are judged (figures, AntiSwayOptions.max_sway) at this many string lengths across the band
 
 
 @dataclass(frozen=True)
@@ -265,7 +265,7 @@ def _robust_segment(
         if cap is not None and prof.duration > cap:
             try:
                 capped, _ = robust_profile(s, spec, a_max, j_max, options.v_max, max_duration=cap)
-            except ValueError:  # nothing fits within the cap (e.g. with --max-sway): keep the longer move
+            except ValueError:  # nothing fits within the cap (e.g. with a max_sway): keep the longer move
                 capped = None
             if capped is not None:
                 _, res_c, pk_c = check(capped)

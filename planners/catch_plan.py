@@ -4,17 +4,19 @@
 
 1. Swing-up (``catch_swing``): fast energy pumping along base y with the tension governor (taut while the pivot
    accelerates), chosen by differential evolution for an early release and a small spread of the landing points
-   over the string-length band, within ``max_time``.
+   over the string-length band, within ``max_time``. Each variant (``swing_variants``: the pivot ending cruising or
+   at rest, pumping over one or two horizons) is searched on its own.
 2. Release: the pivot ends at a constant velocity (cruising toward where the ball will come down, or at rest) and the
    ball's free swing goes slack by itself; every length of the band is stepped to the moment all have been released
    (``catch_move.prepare_band``).
 3. Catch move (``catch_move``): a jerk-limited move in the base y–z plane to a position and velocity at a chosen
-   time, then a brake to rest; a grid and a Nelder–Mead search maximise the share of the band caught (entry margin
-   and relative entry speed as tie-breakers), the band (5 lengths × the cup one period early, on time, late)
-   stepped with ``string_stepper``.
+   time, then a brake to rest; a grid (every variant) and a Nelder–Mead search (the REFINED variants the grid puts
+   first) maximise the share of the band caught (entry margin and relative entry speed as tie-breakers), the band
+   (5 lengths × the cup one period early, on time, late) stepped with ``string_stepper``.
 4. The joint path (IK per sample, ``swingup_robot``), the limit check (jerk included), and the verdict from the
    nonlinear model driven by the TCP path the joints realise: the event-driven ``string_sim`` for the prediction,
-   the stepper for every member of the robustness band (length × mass × timing of the cup after the release).
+   the stepper for every member of the robustness band (length × mass × timing of the cup after the release). The
+   variant whose verdict ranks first (``_rank``: valid, then the share of the band caught) is the plan.
 """
 
 from __future__ import annotations
@@ -61,7 +63,33 @@ SEARCH_LENGTHS = 5  # string lengths across the band the catch-move search judge
 BAND_LENGTHS = 9  # string lengths across the band of the verdict (× 3 masses × 3 timings)
 SPREAD_SHARE = 0.85  # the swing-up aims at landings of the band spread over at most this share of the opening
 LATERAL_SHARE = 0.5  # the band lands flying over the ground at most this share of the catch move's speed bound
-SWING_HORIZON = 4.0  # [s] longest pumping without --max-time (as --max-time 3 searches: longer found worse plans)
+SWING_HORIZONS = (4.0, 6.0)  # [s] longest pumping without a max_time (with one: max_time + 1 s)
+GOAL_MISSED = 100.0  # a swing-up search cost from this on missed the release goal (``catch_swing.release_score``)
+REFINED = 2  # swing-up variants whose catch move is refined and judged on the whole band (best catch grid first)
+
+
+@dataclass(frozen=True)
+class SwingVariant:
+    """One way to swing up: the pivot ends cruising at a constant velocity the search chooses (else at rest), and
+    the longest pumping [s]. The search over each is its own (a differential evolution finds different optima for
+    each), the verdict on the band picks among them."""
+
+    cruise: bool
+    horizon: float  # [s]
+
+    def describe(self) -> str:
+        return f"{'cruising' if self.cruise else 'rest'} release, pumping up to {self.horizon:g} s"
+
+
+def swing_variants(max_time: float | None) -> tuple[SwingVariant, ...]:
+    """The swing-ups a plan tries: the cruising release (quick; it often lets short strings' bands land close
+    together) and the release from rest (slower, often more robust for long strings), pumping up to max_time + 1 s;
+    without a max_time up to 4 s, and from rest also up to 6 s (cruising over 6 s found worse plans: 0.25 m caught
+    46 % of the band, 0.35 m none)."""
+    if max_time is not None:
+        return (SwingVariant(True, max_time + 1.0), SwingVariant(False, max_time + 1.0))
+    short, long = SWING_HORIZONS
+    return (SwingVariant(True, short), SwingVariant(False, short), SwingVariant(False, long))
 
 
 @dataclass(frozen=True)
@@ -123,6 +151,7 @@ class CatchResult:
     max_ik_error: float  # [m]
     planning_time: float  # [s]
     notes: tuple[str, ...] = field(default=())
+    variant: SwingVariant | None = None  # the swing-up variant chosen
 
     def failure(self) -> str | None:
         """Why the plan fails: the nominal ball is not caught, joint limits, or too little of the band caught."""
@@ -142,7 +171,7 @@ class CatchResult:
             )
         if r.max_time is not None and self.nominal.t_entry is not None and self.nominal.t_entry > r.max_time:
             reasons.append(
-                f"the ball enters the cup at {self.nominal.t_entry:.2f} s, after --max-time {r.max_time:g} s"
+                f"the ball enters the cup at {self.nominal.t_entry:.2f} s, after CatchRequest.max_time {r.max_time:g} s"
             )
         return "; ".join(reasons) or None
 
@@ -198,6 +227,11 @@ class CatchResult:
             **self.check.plan_figures(self.trajectory),
             "max_time_s": r.max_time,
             "swing_up_rest_s": self.swing.t_rest,
+            "swing_up": {
+                "release": None if self.variant is None else ("cruising" if self.variant.cruise else "rest"),
+                "horizon_s": None if self.variant is None else self.variant.horizon,
+                "cruise_m_s": float(self.swing.v[-1]),
+            },
             "catch_move": {
                 "t_start_s": self.move.t_start,
                 "t_catch_s": self.move.t_catch,
@@ -223,7 +257,9 @@ def cup_axis_at_start(robot: Robot, model: StringModel, q_start) -> np.ndarray:
     return rot @ np.asarray(model.axis_flange)
 
 
-def _swing_up(r: CatchRequest, bounds: TaskBounds, move: TaskBounds) -> PivotPlan:
+def _swing_up(r: CatchRequest, bounds: TaskBounds, move: TaskBounds, variant: SwingVariant) -> tuple[PivotPlan, float]:
+    """The variant's swing-up chosen by differential evolution (``catch_swing.release_score``), and its cost (≥ 100:
+    the search could not meet the release goal)."""
     m = r.model
     window = 2.0 * (m.cup.inner_radius - m.ball.radius)  # lateral width of the opening the ball centre fits through
     deadline = math.inf if r.max_time is None else r.max_time - FLIGHT_ALLOWANCE
@@ -232,7 +268,7 @@ def _swing_up(r: CatchRequest, bounds: TaskBounds, move: TaskBounds) -> PivotPla
         reach=0.06,
         spread_target=SPREAD_SHARE * window,
         deadline=deadline,
-        lateral_speed=LATERAL_SHARE * move.v_max,
+        lateral_speed=LATERAL_SHARE * move.v_max if variant.cruise else math.inf,
     )
     problem = FastProblem(
         length=m.length,
@@ -240,14 +276,15 @@ def _swing_up(r: CatchRequest, bounds: TaskBounds, move: TaskBounds) -> PivotPla
         bounds=bounds,
         travel=r.travel,
         dt=r.dt,
-        horizon=SWING_HORIZON if r.max_time is None else r.max_time + 1.0,
+        horizon=variant.horizon,
         release=True,
+        cruise=variant.cruise,
         band=(1.0 - r.length_tol, 1.0 + r.length_tol) if r.length_tol > 0 else (),
         scorer=release_score,
         goal=goal,
     )
-    params, _ = optimise(problem, r.search)
-    return simulate_fast(problem, params)
+    params, scored = optimise(problem, r.search)
+    return simulate_fast(problem, params), scored.cost
 
 
 @dataclass(frozen=True)
@@ -302,30 +339,32 @@ def _landings(model: StringModel, pivot: PivotMotion, lengths) -> list[tuple[flo
     return out
 
 
-def _search_catch(
-    r: CatchRequest, rel: Release, p0: np.ndarray, axis: np.ndarray, by: TaskBounds, bz: TaskBounds
-) -> CatchMove:
-    """Grid, then Nelder–Mead, over the catch move's time, position and velocity; judged on the length band."""
-    from scipy.optimize import minimize
+class CatchSearch:
+    """The catch move's search for one release: a grid over the move's time, position and velocity (``grid``), then
+    Nelder–Mead from its best point (``refine``); each candidate judged on the search band (SEARCH_LENGTHS lengths ×
+    the cup one period early, on time, late) stepped from the release on (``band_score``)."""
 
-    m = r.model
-    lengths = (
-        tuple(m.length * (1 + r.length_tol * np.linspace(-1.0, 1.0, SEARCH_LENGTHS))) if r.length_tol else (m.length,)
-    )
-    shifts = (-r.dt, 0.0, r.dt) if r.timing else (0.0,)
-    members = tuple(BandMember(float(ln), m.ball.mass, s) for ln in lengths for s in shifts)
-    t_start = rel.t_start
-    band = prepare_band(m, members, rel.pivot, t_start)
-    lands = _landings(m, rel.pivot, lengths)
-    if not lands:
-        raise PlanningError("the released ball never comes down through the height of the rim")
-    t_land = float(np.mean([x[0] for x in lands]))
-    y_land = 0.5 * (min(x[1] for x in lands) + max(x[1] for x in lands))
-    vy_ball = float(np.mean([x[2] for x in lands]))
-    clearance = m.cup.inner_radius - m.ball.radius
-    cache: dict[tuple, float] = {}
+    def __init__(
+        self, r: CatchRequest, rel: Release, p0: np.ndarray, axis: np.ndarray, by: TaskBounds, bz: TaskBounds
+    ) -> None:
+        m = r.model
+        lengths = (
+            tuple(m.length * (1 + r.length_tol * np.linspace(-1.0, 1.0, SEARCH_LENGTHS)))
+            if r.length_tol
+            else (m.length,)
+        )
+        shifts = (-r.dt, 0.0, r.dt) if r.timing else (0.0,)
+        members = tuple(BandMember(float(ln), m.ball.mass, s) for ln in lengths for s in shifts)
+        self.r, self.rel, self.p0, self.axis, self.by, self.bz = r, rel, p0, axis, by, bz
+        self.band = prepare_band(m, members, rel.pivot, rel.t_start)
+        self.lands = _landings(m, rel.pivot, lengths)
+        if not self.lands:
+            raise PlanningError("the released ball never comes down through the height of the rim")
+        self.cache: dict[tuple, float] = {}
+        self.best: tuple[float, np.ndarray] | None = None  # (score, point) of the grid
 
-    def move_of(x) -> CatchMove:
+    def move_of(self, x) -> CatchMove:
+        r, t_start = self.r, self.rel.t_start
         return CatchMove(
             t_start,
             max(float(x[0]), t_start + r.dt),
@@ -335,38 +374,53 @@ def _search_catch(
             float(x[4]),
         )
 
-    def score(x) -> float:
+    def score(self, x) -> float:
+        """band_score of the move at x = (t_catch, y, z, vy, vz) (memoised; −10 when ruckig cannot plan it)."""
         key = tuple(np.round(x, 5))
-        if key not in cache:
-            mv = move_of(x)
+        if key not in self.cache:
+            r, rel = self.r, self.rel
             try:
-                path, _ = cup_path(rel.x, rel.v, rel.u, r.dt, mv, by, bz, settle=0.3)
+                path, _ = cup_path(rel.x, rel.v, rel.u, r.dt, self.move_of(x), self.by, self.bz, settle=0.3)
             except PlanningError:
-                cache[key] = -10.0
-                return cache[key]
+                self.cache[key] = -10.0
+                return self.cache[key]
             t = np.arange(len(path)) * r.dt
-            outs = judge_band(m, band, pivot_motion(t, p0, path, axis), float(t[-1]))
-            cache[key] = band_score(outs, clearance)
-        return cache[key]
+            outs = judge_band(r.model, self.band, pivot_motion(t, self.p0, path, self.axis), float(t[-1]))
+            self.cache[key] = band_score(outs, r.model.cup.inner_radius - r.model.ball.radius)
+        return self.cache[key]
 
-    best = None
-    for dtc in (-0.05, -0.025, 0.0):
-        for kappa in (0.0, 0.5, 1.0):
-            for z, vz in ((0.0, 0.0), (-0.02, -0.5 * bz.v_max)):
-                vy = kappa * vy_ball + (1.0 - kappa) * float(rel.v[-1])
-                x = np.array([t_land + dtc, y_land + vy * dtc, z, vy, vz])
-                s = score(x)
-                if best is None or s > best[0]:
-                    best = (s, x)
-    x0 = best[1]
-    simplex = [x0] + [x0 + d for d in np.diag([0.02, 0.01, 0.01, 0.2, 0.1])]
-    res = minimize(
-        lambda x: -score(x),
-        x0,
-        method="Nelder-Mead",
-        options={"maxfev": r.catch_evaluations, "initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-3},
-    )
-    return move_of(res.x if -res.fun >= best[0] else x0)
+    def grid(self) -> float:
+        """Score the grid around where the band lands (a little before, moving between the pivot's and the balls'
+        lateral speed, level or going down); the best score."""
+        lands = self.lands
+        t_land = float(np.mean([x[0] for x in lands]))
+        y_land = 0.5 * (min(x[1] for x in lands) + max(x[1] for x in lands))
+        vy_ball = float(np.mean([x[2] for x in lands]))
+        for dtc in (-0.05, -0.025, 0.0):
+            for kappa in (0.0, 0.5, 1.0):
+                for z, vz in ((0.0, 0.0), (-0.02, -0.5 * self.bz.v_max)):
+                    vy = kappa * vy_ball + (1.0 - kappa) * float(self.rel.v[-1])
+                    x = np.array([t_land + dtc, y_land + vy * dtc, z, vy, vz])
+                    s = self.score(x)
+                    if self.best is None or s > self.best[0]:
+                        self.best = (s, x)
+        return self.best[0]
+
+    def refine(self) -> CatchMove:
+        """Nelder–Mead from the grid's best point; the better of the two."""
+        from scipy.optimize import minimize
+
+        if self.best is None:
+            self.grid()
+        s0, x0 = self.best
+        simplex = [x0] + [x0 + d for d in np.diag([0.02, 0.01, 0.01, 0.2, 0.1])]
+        res = minimize(
+            lambda x: -self.score(x),
+            x0,
+            method="Nelder-Mead",
+            options={"maxfev": self.r.catch_evaluations, "initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-3},
+        )
+        return self.move_of(res.x if -res.fun >= s0 else x0)
 
 
 def _split_ratios(traj: JointTrajectory, limits: JointLimits, k: int) -> tuple[dict[str, float], dict[str, float]]:
@@ -410,9 +464,21 @@ def judge_path(
     return run, nominal, BandResult(members, tuple(judge_band(r.model, band, pivot, end)))
 
 
-def plan_catch(r: CatchRequest, robot: Robot, limits: JointLimits, progress=None) -> CatchResult:
-    """Plan, map onto the arm, check and judge a cup-and-ball catch. Raises PlanningError if no plan can be made."""
-    start = time.perf_counter()
+@dataclass(frozen=True)
+class _Arm:
+    """What every variant of a plan shares: the robot, its limits, the arm setup, the anchor's start [m], the cup
+    axis at the start pose (unit), and the first bounds of the swing-up along y and of the catch move along y, z."""
+
+    robot: Robot
+    limits: JointLimits
+    setup: ArmSetup
+    p0: np.ndarray
+    axis: np.ndarray
+    bounds: tuple[TaskBounds, TaskBounds, TaskBounds]
+
+
+def _arm(r: CatchRequest, robot: Robot, limits: JointLimits) -> _Arm:
+    """Validate the request's model and start pose; the bounds the joint limits allow the pivot there."""
     r.model.validate()
     if r.model.cup is None:
         raise PlanningError("the cup-and-ball plan needs a cup")
@@ -421,7 +487,7 @@ def plan_catch(r: CatchRequest, robot: Robot, limits: JointLimits, progress=None
     if tilt > MAX_AXIS_TILT:
         raise PlanningError(
             f"the cup opens {math.degrees(tilt):.0f}° away from straight up at the start pose; the "
-            f"catch needs it within {math.degrees(MAX_AXIS_TILT):.0f}° (--cup-axis, --q-start)"
+            f"catch needs it within {math.degrees(MAX_AXIS_TILT):.0f}° (Cup.axis, CatchRequest.q_start)"
         )
     setup = ArmSetup(q_start=tuple(float(v) for v in r.q_start), orientation="follow")
     p0 = robot.fk(np.asarray(r.q_start, dtype=float)).translation
@@ -435,15 +501,34 @@ def plan_catch(r: CatchRequest, robot: Robot, limits: JointLimits, progress=None
         bz = axis_bounds(robot, setup, limits, r.z_travel, r.limit_margin, axis="z").scaled(MOVE_SHARE)
     except ValueError as exc:
         raise PlanningError(str(exc)) from None
+    return _Arm(robot, limits, setup, p0, axis, (by, my, bz))
+
+
+@dataclass
+class _Candidate:
+    """A swing-up variant's swing-up and its DE cost, the catch search on its release, the grid's best score."""
+
+    variant: SwingVariant
+    swing: PivotPlan
+    cost: float
+    search: CatchSearch
+    grid: float = -math.inf
+
+
+def _plan_variant(r: CatchRequest, arm: _Arm, c: _Candidate, progress=None) -> CatchResult:
+    """A candidate's catch move refined, mapped onto the arm and judged; a limit violation rescales the bounds of the
+    part that broke it and plans again (up to 3 attempts)."""
+    by, my, bz = arm.bounds
     notes: list[str] = []
     target = 1.0 - r.limit_margin
-    swing, last = None, None
+    swing, search, last = c.swing, c.search, None
     for attempt in range(1, 4):
         try:
             if swing is None:
-                swing = _swing_up(r, by, my)
-            rel = _releases(r, swing, p0, axis)
-            move = _search_catch(r, rel, p0, axis, my, bz)
+                swing, _ = _swing_up(r, by, my, c.variant)
+            if search is None:
+                search = CatchSearch(r, _releases(r, swing, arm.p0, arm.axis), arm.p0, arm.axis, my, bz)
+            rel, move = search.rel, search.refine()
         except PlanningError as exc:
             if last is None:
                 raise
@@ -451,32 +536,77 @@ def plan_catch(r: CatchRequest, robot: Robot, limits: JointLimits, progress=None
             break
         path, _ = cup_path(rel.x, rel.v, rel.u, r.dt, move, my, bz, settle=SETTLE)
         t = np.arange(len(path)) * r.dt
-        traj, ik_err = joint_path(robot, setup, t, path, limits, progress)
-        report = check_trajectory(traj, limits, jerk=True)
+        traj, ik_err = joint_path(arm.robot, arm.setup, t, path, arm.limits, progress)
+        report = check_trajectory(traj, arm.limits, jerk=True)
         last = (swing, move, path, traj, ik_err, report, rel.t_start, (by, my, bz))
         ratios = {q: report.ratios()[q] for q in ("velocity", "acceleration", "jerk")}
         notes.append(f"attempt {attempt}: peak ratios " + ", ".join(f"{q} {v.max():.2f}" for q, v in ratios.items()))
         if report.ok:
             break
-        swing_peak, move_peak = _split_ratios(traj, limits, int(round(rel.t_start / r.dt)))
+        swing_peak, move_peak = _split_ratios(traj, arm.limits, int(round(rel.t_start / r.dt)))
+        search = None
         if max(swing_peak.values()) > target:  # the swing-up breaks a limit: pump with tighter bounds, search again
             by, swing = _rescaled(by, swing_peak, target), None
         else:  # only the catch move does: move within tighter bounds
             my, bz = _rescaled(my, move_peak, target), _rescaled(bz, move_peak, target)
-    swing, move, path, traj, ik_err, report, t_start, (by, my, bz) = last
-    run, nominal, band = judge_path(r, traj, robot, t_start)
+    swing, move, path, traj, ik_err, report, t_start, bounds = last
+    run, nominal, band = judge_path(r, traj, arm.robot, t_start)
     return CatchResult(
-        request=r,
-        swing=swing,
-        move=move,
-        path=path,
-        trajectory=traj,
-        check=report,
-        prediction=run,
-        nominal=nominal,
-        band=band,
-        bounds=(by, my, bz),
-        max_ik_error=ik_err,
-        planning_time=time.perf_counter() - start,
-        notes=tuple(notes),
+        r, swing, move, path, traj, report, run, nominal, band, bounds, ik_err, 0.0, tuple(notes), variant=c.variant
     )
+
+
+def _rank(res: CatchResult) -> tuple:
+    """What the choice among variants maximises: a valid plan (the nominal ball caught within the joint limits and
+    the time asked), then the share of the band caught, then the earlier entry."""
+    n, r = res.nominal, res.request
+    in_time = r.max_time is None or (n.t_entry is not None and n.t_entry <= r.max_time)
+    valid = n.caught and res.check.ok and in_time
+    return (valid, res.band.success, -(n.t_entry if n.t_entry is not None else math.inf))
+
+
+def _candidates(r: CatchRequest, arm: _Arm, notes: list[str]) -> list[_Candidate]:
+    """Every variant's swing-up and the catch grid on its release, best grid score first (a swing-up search that
+    missed its release goal by a little can still catch most of the band); what failed goes to ``notes``."""
+    by, my, bz = arm.bounds
+    out = []
+    for variant in swing_variants(r.max_time):
+        try:
+            swing, cost = _swing_up(r, by, my, variant)
+            search = CatchSearch(r, _releases(r, swing, arm.p0, arm.axis), arm.p0, arm.axis, my, bz)
+        except PlanningError as exc:
+            notes.append(f"{variant.describe()}: {exc}")
+            continue
+        out.append(_Candidate(variant, swing, cost, search))
+    if not out:
+        raise PlanningError("; ".join(notes))
+    for c in out:
+        c.grid = c.search.grid()
+        missed = " (missed its release goal)" if c.cost >= GOAL_MISSED else ""
+        notes.append(f"{c.variant.describe()}: swing-up cost {c.cost:.2f}{missed}, catch grid score {c.grid:.3f}")
+    return sorted(out, key=lambda c: -c.grid)
+
+
+def plan_catch(r: CatchRequest, robot: Robot, limits: JointLimits, progress=None) -> CatchResult:
+    """Plan, map onto the arm, check and judge a cup-and-ball catch: every swing-up variant (``swing_variants``) with
+    the catch grid on its release, then the catch move refined and judged on the whole band for the REFINED best by
+    the grid (stopping early at a valid plan that catches the whole band); the plan ``_rank`` puts first. Raises
+    PlanningError if no plan can be made."""
+    start = time.perf_counter()
+    arm = _arm(r, robot, limits)
+    notes: list[str] = []
+    best = None
+    for c in _candidates(r, arm, notes)[:REFINED]:
+        try:
+            res = _plan_variant(r, arm, c, progress)
+        except PlanningError as exc:
+            notes.append(f"{c.variant.describe()}: {exc}")
+            continue
+        notes.append(f"{c.variant.describe()}: catches {100 * res.band.success:.0f} % of the band")
+        if best is None or _rank(res) > _rank(best):
+            best = res
+        if _rank(best)[:2] == (True, 1.0):
+            break
+    if best is None:
+        raise PlanningError("; ".join(notes))
+    return replace(best, planning_time=time.perf_counter() - start, notes=(*best.notes, *notes))

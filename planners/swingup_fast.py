@@ -42,6 +42,7 @@ class FastProblem:
     taut: bool = False  # require positive tension (claimed) until θ_d is reached (or until the highest angle)
     min_tension: float = 0.5  # [m/s²] tension margin required with ``taut`` or ``release``
     release: bool = False  # cup-and-ball: taut while pumping, then the free swing of energy ≈ θ_d releases the ball
+    cruise: bool = True  # ``release`` only: the pivot may end at a constant velocity (False: it ends at rest)
     governor_margin: float = 1.0  # [m/s²] the governor aims this far above min_tension (the jerk limit lags it)
     governor: bool = False  # cap the acceleration to keep the claimed tension even without ``taut`` (often quicker)
     band: tuple[float, ...] = ()  # string lengths (× length) also driven by the planned pivot path (info["band"])
@@ -74,11 +75,12 @@ class FastParams:
 def param_ranges(problem: "FastProblem") -> tuple[tuple[float, float], ...]:
     """Search box of (speed, first_speed, centring, apex_offset). The apex offset may aim well below θ_d (a pump
     stopped early can still carry the ball to θ_d; with ``taut`` the highest taut swing aims near 90° whatever θ_d),
-    ``release`` aims within ±0.3 rad of θ_d (the apex energy is what it asks for) and ends at a cruise speed of up
-    to 0.8 v_max either way (a pivot at constant velocity leaves the free swing as it is at rest: the cup is
-    already on its way to where the ball will land)."""
+    ``release`` aims within ±0.3 rad of θ_d (the apex energy is what it asks for) and (with ``cruise``) ends at a
+    cruise speed of up to 0.8 v_max either way (a pivot at constant velocity leaves the free swing as it is at rest:
+    the cup is already on its way to where the ball will land)."""
     if problem.release:
-        return ((0.3, 1.0), (0.1, 1.0), (0.0, 6.0), (-0.3, 0.3), (-0.8, 0.8))
+        pumping = ((0.3, 1.0), (0.1, 1.0), (0.0, 6.0), (-0.3, 0.3))
+        return (*pumping, (-0.8, 0.8)) if problem.cruise else pumping
     low = -max(0.4, min(problem.theta_d - 0.2, problem.theta_d - math.pi / 2 + 0.3))
     return ((0.3, 1.0), (0.1, 1.0), (0.0, 6.0), (low, 0.4))
 
@@ -142,98 +144,158 @@ def _jerk_step(x: float, v: float, a: float, want: float, pb: TaskBounds, h: flo
     return x + v * h + h * h * (2.0 * a + a1) / 6.0, v1, a1
 
 
-def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
-    """Run the pumping policy with the planar model (RK4, pivot acceleration linear within a step).
+@dataclass(frozen=True)
+class _Policy:
+    """The pumping policy's constants for one candidate: the energy at which pumping stops [J/kg], the target
+    speeds [m/s] of the first half-swing, the pumping and the end (cruise or 0), the centring gain [1/s] and the
+    string's natural period [s]."""
 
-    With ``problem.governed`` the acceleration is capped every step (``tension_window``) until the pivot rests, so
-    that the claimed tension stays above ``min_tension`` while the pivot moves."""
-    from ruckig import ControlInterface, InputParameter, OutputParameter, Result, Ruckig
+    e_stop: float
+    v_first: float
+    v_pump: float
+    v_end: float
+    centring: float
+    t0: float
 
-    pb, l, h = problem.bounds, problem.length, problem.dt
-    t0 = natural_period(l)
-    apex_stop = problem.theta_d + params.apex_offset
-    e_stop = -G * l * math.cos(min(apex_stop, math.pi))  # per unit mass [J/kg]
-    v_pump = params.speed * pb.v_max
-    v_first = params.first_speed * pb.v_max
-    v_end = params.cruise * pb.v_max if problem.release else 0.0  # [m/s] the pivot's final constant velocity
+    @classmethod
+    def of(cls, problem: FastProblem, params: FastParams) -> "_Policy":
+        pb, l = problem.bounds, problem.length
+        apex_stop = problem.theta_d + params.apex_offset
+        return cls(
+            e_stop=-G * l * math.cos(min(apex_stop, math.pi)),  # per unit mass [J/kg]
+            v_first=params.first_speed * pb.v_max,
+            v_pump=params.speed * pb.v_max,
+            v_end=params.cruise * pb.v_max if problem.release else 0.0,  # [m/s] the pivot's final constant velocity
+            centring=params.centring,
+            t0=natural_period(l),
+        )
+
+
+def _velocity_generator(pb: TaskBounds, h: float):
+    """A one-axis ruckig generator on the velocity interface at the pivot's bounds, from rest at 0; (otg, in, out)."""
+    from ruckig import ControlInterface, InputParameter, OutputParameter, Ruckig
+
     otg = Ruckig(1, h)
     inp, out = InputParameter(1), OutputParameter(1)
     inp.control_interface = ControlInterface.Velocity
     inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [0.0], [0.0]
     inp.max_velocity, inp.max_acceleration, inp.max_jerk = [pb.v_max], [pb.a_max], [pb.j_max]
     inp.target_acceleration = [0.0]
+    return otg, inp, out
 
+
+def _next_phase(problem: FastProblem, pol: _Policy, phase: str, t: float, th: float, om: float) -> str:
+    """The first half-swing turns to pumping once the swing feeds on the pivot's motion; pumping stops at the
+    policy's energy or the horizon ("first", "pump", "stop", "rest")."""
+    l = problem.length
+    e = 0.5 * l * l * om * om - G * l * math.cos(th)
+    if phase in ("first", "pump") and (e >= pol.e_stop or t >= problem.horizon):
+        return "stop"
+    if phase == "first" and t > 0.1 * pol.t0 and om * math.cos(th) > 0.0:
+        return "pump"
+    return phase
+
+
+def _target_velocity(
+    problem: FastProblem, pol: _Policy, phase: str, s: float, x: float, v: float, a: float, power_sign: float
+) -> tuple[float, float]:
+    """The pivot's velocity target [m/s] in this phase, and the sign of the swing's power (kept while it is 0): while
+    pumping −V·sign(θ̇·cos θ) − k·x within ±v_max, 0 when a stop started now would leave the travel band."""
+    if phase == "first":
+        return pol.v_first, power_sign
+    if phase != "pump":
+        return pol.v_end, power_sign
+    pb = problem.bounds
+    if s != 0.0:
+        power_sign = math.copysign(1.0, s)
+    target = -power_sign * pol.v_pump - pol.centring * x
+    target = max(-pb.v_max, min(pb.v_max, target))
+    # band governor: brake if a stop started now would leave the band
+    if abs(x) > problem.travel - (v * v / pb.a_max + abs(v) * pb.a_max / pb.j_max + 0.02):
+        if (
+            StopProfile(v, a, pb).distance + x > problem.travel
+            and v > 0
+            or StopProfile(v, a, pb).distance + x < -problem.travel
+            and v < 0
+        ):
+            target = 0.0
+    return target, power_sign
+
+
+def _pivot_step(problem: FastProblem, generator, phase: str, target: float, th: float, om: float, x, v, a):
+    """One sample step of the pivot toward ``target`` [m/s]: (x, v, a) after it and ruckig's result. Governed, the
+    acceleration stays within the tension window (or, when the window excludes 0, is forced away from the ball at
+    the jerk limit) until the pivot rests."""
+    from ruckig import Result
+
+    otg, inp, out = generator
+    pb, l, h = problem.bounds, problem.length, problem.dt
+    forced = None
+    if problem.governed and phase != "rest":
+        lo, hi = tension_window(th, om, l, problem.min_tension + problem.governor_margin, pb.a_max, pb.a_max / pb.j_max)
+        if lo > 0.0 or hi < 0.0:  # the pivot must accelerate away from the ball: as hard as the jerk allows
+            forced = lo if lo > 0.0 else hi
+        else:
+            floor = 0.02 * pb.a_max
+            inp.min_acceleration, inp.max_acceleration = [min(lo, -floor)], [max(hi, floor)]
+    if forced is not None:
+        x1, v1, a1 = _jerk_step(x, v, a, forced, pb, h)
+        inp.current_position, inp.current_velocity, inp.current_acceleration = [x1], [v1], [a1]
+        return x1, v1, a1, Result.Working
+    inp.target_velocity = [target]
+    res = otg.update(inp, out)
+    if res not in (Result.Working, Result.Finished):
+        raise PlanningError(f"ruckig failed during the fast swing-up: {res}")
+    x1, v1, a1 = out.new_position[0], out.new_velocity[0], out.new_acceleration[0]
+    out.pass_to_input(inp)
+    return x1, v1, a1, res
+
+
+def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
+    """Run the pumping policy with the planar model (RK4, pivot acceleration linear within a step).
+
+    With ``problem.governed`` the acceleration is capped every step (``tension_window``) until the pivot rests, so
+    that the claimed tension stays above ``min_tension`` while the pivot moves."""
+    from ruckig import Result
+
+    l, h = problem.length, problem.dt
+    pol = _Policy.of(problem, params)
+    generator = _velocity_generator(problem.bounds, h)
     band_l = [l * f for f in problem.band]
     band_y = [(problem.theta0, problem.theta_dot0) for _ in band_l]
     band_rec = [([problem.theta0], [problem.theta_dot0]) for _ in band_l]
     th, om = problem.theta0, problem.theta_dot0
     x = v = a = 0.0
-    ts, xs, vs, us, ths, oms = [0.0], [0.0], [0.0], [0.0], [th], [om]
-    phase = "first"  # first half-swing, then "pump", "stop", "rest"
-    t = 0.0
-    t_rest = t_stop = None
-    n_max = int((problem.horizon + 3.0 * t0) / h) + 2
-    power_sign = 0.0
-    for _ in range(n_max):
-        e = 0.5 * l * l * om * om - G * l * math.cos(th)
-        if phase in ("first", "pump") and (e >= e_stop or t >= problem.horizon):
-            phase, t_stop = "stop", t
-        s = om * math.cos(th)
-        if phase == "first":
-            target = v_first
-            if t > 0.1 * t0 and s * (1.0 if problem.theta0 == 0 else 1.0) > 0.0:
-                phase = "pump"
-        if phase == "pump":
-            if s != 0.0:
-                power_sign = math.copysign(1.0, s)
-            target = -power_sign * v_pump - params.centring * x
-            target = max(-pb.v_max, min(pb.v_max, target))
-            # band governor: brake if a stop started now would leave the band
-            if abs(x) > problem.travel - (v * v / pb.a_max + abs(v) * pb.a_max / pb.j_max + 0.02):
-                if (
-                    StopProfile(v, a, pb).distance + x > problem.travel
-                    and v > 0
-                    or StopProfile(v, a, pb).distance + x < -problem.travel
-                    and v < 0
-                ):
-                    target = 0.0
-        if phase in ("stop", "rest"):
-            target = v_end
-        forced = None
-        if problem.governed and phase != "rest":
-            lo, hi = tension_window(
-                th, om, l, problem.min_tension + problem.governor_margin, pb.a_max, pb.a_max / pb.j_max
-            )
-            if lo > 0.0 or hi < 0.0:  # the pivot must accelerate away from the ball: as hard as the jerk allows
-                forced = lo if lo > 0.0 else hi
-            else:
-                floor = 0.02 * pb.a_max
-                inp.min_acceleration, inp.max_acceleration = [min(lo, -floor)], [max(hi, floor)]
-        if forced is None:
-            inp.target_velocity = [target]
-            res = otg.update(inp, out)
-            if res not in (Result.Working, Result.Finished):
-                raise PlanningError(f"ruckig failed during the fast swing-up: {res}")
-            x1, v1, a1 = out.new_position[0], out.new_velocity[0], out.new_acceleration[0]
-            out.pass_to_input(inp)
-        else:
-            x1, v1, a1 = _jerk_step(x, v, a, forced, pb, h)
-            inp.current_position, inp.current_velocity, inp.current_acceleration = [x1], [v1], [a1]
-            res = Result.Working
+    rec = ([0.0], [0.0], [0.0], [0.0], [th], [om])  # t, x, v, u, θ, θ̇
+    phase, t, t_rest, t_stop, power_sign = "first", 0.0, None, None, 0.0
+    for _ in range(int((problem.horizon + 3.0 * pol.t0) / h) + 2):
+        new_phase = _next_phase(problem, pol, phase, t, th, om)
+        if new_phase == "stop" and phase != "stop":
+            t_stop = t
+        phase = new_phase
+        target, power_sign = _target_velocity(problem, pol, phase, om * math.cos(th), x, v, a, power_sign)
+        x1, v1, a1, res = _pivot_step(problem, generator, phase, target, th, om, x, v, a)
         th, om = planar_rk4(th, om, a, a1, h, l)
         for i, lb in enumerate(band_l):  # the same pivot path on the other strings (open loop)
             band_y[i] = planar_rk4(*band_y[i], a, a1, h, lb)
             band_rec[i][0].append(band_y[i][0]), band_rec[i][1].append(band_y[i][1])
         x, v, a = x1, v1, a1
         t += h
-        ts.append(t), xs.append(x), vs.append(v), us.append(a), ths.append(th), oms.append(om)
-        if phase == "stop" and res == Result.Finished and abs(v - v_end) < 1e-12 and abs(a) < 1e-12:
+        for column, value in zip(rec, (t, x, v, a, th, om)):
+            column.append(value)
+        if phase == "stop" and res == Result.Finished and abs(v - pol.v_end) < 1e-12 and abs(a) < 1e-12:
             phase, t_rest = "rest", t
-        if phase == "rest" and t >= t_rest + 0.5 * t0:
+        if phase == "rest" and t >= t_rest + 0.5 * pol.t0:
             break
-    if t_rest is None:
-        t_rest = t
-    tt = np.arange(len(ts)) * h  # uniform times (no accumulated rounding)
+    return _fast_plan(problem, params, rec, band_l, band_rec, t if t_rest is None else t_rest, t_stop)
+
+
+def _fast_plan(problem: FastProblem, params: FastParams, rec, band_l, band_rec, t_rest: float, t_stop) -> PivotPlan:
+    """The PivotPlan of a simulated pumping: the recorded columns (t, x, v, u, θ, θ̇) on uniform times, the band's
+    swings under the same pivot path in ``info["band"]``."""
+    _, xs, vs, us, ths, oms = rec
+    h, n = problem.dt, len(rec[0])
+    tt = np.arange(n) * h  # uniform times (no accumulated rounding)
     theta, theta_dot, u = np.array(ths), np.array(oms), np.array(us)
     reach_angle = problem.theta_d - problem.tolerance
     return PivotPlan(
@@ -244,20 +306,20 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
         u=u,
         theta=theta,
         theta_dot=theta_dot,
-        tension=tension_margin(theta, theta_dot, u, 0.0, l),
+        tension=tension_margin(theta, theta_dot, u, 0.0, problem.length),
         theta_d=problem.theta_d,
         reach_angle=reach_angle,
         t_reach=first_reach(tt, theta, reach_angle),
         t_rest=float(t_rest),
         info={
             "params": params,
-            "bounds": pb,
+            "bounds": problem.bounds,
             "travel_m": problem.travel,
             "t_stop": t_stop if t_stop is not None else t_rest,
             "band": {
                 "lengths": tuple(band_l),
-                "theta": np.array([r[0] for r in band_rec]).reshape(len(band_l), len(ts)),
-                "theta_dot": np.array([r[1] for r in band_rec]).reshape(len(band_l), len(ts)),
+                "theta": np.array([r[0] for r in band_rec]).reshape(len(band_l), n),
+                "theta_dot": np.array([r[1] for r in band_rec]).reshape(len(band_l), n),
             },
         },
     )

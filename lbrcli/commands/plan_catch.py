@@ -46,6 +46,17 @@ from ..options import (
 PREDICTION_COLUMNS = ("t", "theta", "phase", "ball_x", "ball_y", "ball_z", "anchor_x", "anchor_y", "anchor_z")
 
 
+CATCH_FLAGS = {
+    "CatchRequest.max_time": "--max-time",
+    "CatchRequest.q_start": "--q-start",
+    "CatchRequest.length_tol": "--length-tol",
+    "CatchRequest.mass_tol": "--mass-tol",
+    "CatchRequest.min_success": "--min-success",
+    "Cup.axis": "--cup-axis",
+}
+"""The settings :func:`planners.catch_plan.plan_catch` names in its messages → the options they come from."""
+
+
 def plan_catch_files(
     length: float,
     *,
@@ -69,26 +80,17 @@ def plan_catch_files(
     progress=None,
 ) -> dict[str, Any]:
     """Plan a catch and write the joint CSV (+ prediction, plot); the JSON figures (with ``ok`` and ``failure``)."""
-    import numpy as np
-
     from planners.catch_plan import CatchRequest, plan_catch
     from planners.swingup_fast import SearchSettings
-    from trajectories.csvio import write_joint_csv, write_table
 
-    from ..cup_options import build_model, cup_spec
-    from ..options import check_number, limits_from, make_robot, within_limits
+    from ..cup_options import build_model
+    from ..option_groups import settings_named
+    from ..options import limits_from, make_robot, within_limits
     from ..outputs import guard_outputs
     from ..parsing import parse_joint_vector
 
     model = build_model(length, **(model_options or {}))
-    check_number("--max-time", max_time, 0.5, 30.0, unit="s")
-    check_number("--length-tol", length_tol, 0.0, 0.2)
-    check_number("--mass-tol", mass_tol, 0.0, 0.9)
-    check_number("--min-success", min_success, 0.0, 1.0)
-    check_number("--dt", dt, 1e-3, 0.02, unit="s")
-    check_number("--max-travel", travel, 0.05, 0.5, unit="m")
-    check_number("--margin", margin, 0.0, 1.0, high_open=True)
-    check_number("--workers", workers, 1, 64)
+    _validate(max_time, length_tol, mass_tol, min_success, dt, travel, margin, workers)
     guard_outputs({"--limits": limits}, {"-o": out, "--prediction": prediction, "--plot": plot})
     lim = limits_from(limits)
     q0 = within_limits(parse_joint_vector(q_start, "--q-start"), lim, "--q-start")
@@ -107,17 +109,47 @@ def plan_catch_files(
         limit_margin=margin,
         search=SearchSettings(popsize=6, maxiter=14, workers=int(workers)),
     )
-    result = plan_catch(request, robot, lim, progress=progress)
+    with settings_named(CATCH_FLAGS):  # the planner's messages name the options
+        result = plan_catch(request, robot, lim, progress=progress)
+    return _write_outputs(result, length, out, prediction, plot)
+
+
+def _validate(max_time, length_tol, mass_tol, min_success, dt, travel, margin, workers) -> None:
+    """OptionError naming the first option out of its range."""
+    from ..options import check_number
+
+    check_number("--max-time", max_time, 0.5, 30.0, unit="s")
+    check_number("--length-tol", length_tol, 0.0, 0.2)
+    check_number("--mass-tol", mass_tol, 0.0, 0.9)
+    check_number("--min-success", min_success, 0.0, 1.0)
+    check_number("--dt", dt, 1e-3, 0.02, unit="s")
+    check_number("--max-travel", travel, 0.05, 0.5, unit="m")
+    check_number("--margin", margin, 0.0, 1.0, high_open=True)
+    check_number("--workers", workers, 1, 64)
+
+
+def _write_outputs(result, length: float, out: Path, prediction: Path | None, plot: Path | None) -> dict[str, Any]:
+    """Write the joint CSV and the outputs asked for (the predicted ball and anchor, the plot); the JSON figures, the
+    failure naming the options."""
+    import numpy as np
+
+    from trajectories.csvio import write_joint_csv, write_table
+
+    from ..cup_options import cup_spec
+    from ..option_groups import name_text
+
+    model = result.request.model
     write_joint_csv(out, result.trajectory)
     figures: dict[str, Any] = {"out": str(out), **result.figures(), "cup_spec": cup_spec(model)}
+    if figures["failure"]:
+        figures["failure"] = name_text(figures["failure"], CATCH_FLAGS)
     figures["rehearse"] = f"lbr execute {out} --length {length:g} --cup {cup_spec(model)} --log LOG.csv"
     if prediction is not None:
         run = result.prediction
-        anchor = run.pivot
         write_table(
             prediction,
             PREDICTION_COLUMNS,
-            np.column_stack([run.t, run.theta_y, run.phase, run.position, anchor]),
+            np.column_stack([run.t, run.theta_y, run.phase, run.position, run.pivot]),
             fmt=["%.6f", "%.9f", "%d"] + ["%.7f"] * 6,
         )
         figures["prediction"] = str(prediction)
@@ -126,8 +158,7 @@ def plan_catch_files(
 
         plot_catch(result, plot)
         figures["plot"] = str(plot)
-    failure = result.failure()
-    figures["ok"] = failure is None
+    figures["ok"] = result.failure() is None
     return figures
 
 
@@ -271,9 +302,9 @@ def cup_and_ball(
 ) -> None:
     """Plan the cup-and-ball game from the ball hanging at rest to the ball resting in the cup (thesis ch. 5).
 
-    The swing-up pumps along base y with the string taut, the pivot then rests and the free swing releases the ball;
-    the catch move brings the cup (an open cylinder on the flange, the string tied at its bottom) under the falling
-    ball and stops. Chosen to catch across the band of string length, ball mass and timing, judged on the nonlinear
+    The swing-up pumps along base y with the string taut, the pivot then cruises at a constant velocity or rests (both
+    are planned, the one catching more of the band is kept) and the free swing releases the ball; the catch move
+    brings the cup (an open cylinder on the flange, the string tied at its bottom) under the falling ball and stops. Chosen to catch across the band of string length, ball mass and timing, judged on the nonlinear
     string-and-cup model (one-sided string, impacts with the rim, walls and bottom) driven by the TCP path the written
     joints produce. JSON: caught, catch time, entry margin to the rim, relative entry speed, the band's success
     fraction and worst case. Exit 1 when no catch is found (saying where the ball went), a joint limit is violated

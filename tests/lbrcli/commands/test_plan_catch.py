@@ -172,3 +172,19 @@ def test_cup_spec_round_trips_and_bad_specs_are_named():
     ):
         with pytest.raises(OptionError, match=fragment):
             parse_cup_spec(spec, 0.3)
+
+
+def test_the_planners_messages_name_the_options_at_the_cli_edge():
+    """The planner names its settings (no flag in library code); the command shows the flags users typed."""
+    import inspect
+
+    import planners.catch_plan as catch_plan
+    from lbrcli.commands.plan_catch import CATCH_FLAGS
+    from lbrcli.option_groups import name_text
+
+    source = inspect.getsource(catch_plan)
+    assert "--max-time" not in source and "--cup-axis" not in source and "--q-start" not in source
+    for setting, flag in (("CatchRequest.max_time", "--max-time"), ("Cup.axis", "--cup-axis")):
+        assert setting in source
+        text = name_text(f"enters at 3.2 s, after {setting} 3 s", CATCH_FLAGS)
+        assert text == f"enters at 3.2 s, after {flag} 3 s"

@@ -55,9 +55,7 @@ def scripted_session(app: ClientApplication, version: str = "1.15") -> None:
     try:
         app.run()
     finally:
-        ctl.client_done.set()
-        ctl.join()
-        app.close()
+        ctl.finish(app)
 
 
 def record(folder: Path) -> list[bytes]:

@@ -57,23 +57,11 @@ def _per_frame_ms(size: tuple[int, int], scenario: str, duration_s: float) -> di
 
 def _chain(size: tuple[int, int], fps: float, latency_s: float, seconds: float) -> dict:
     from lbrcli.lab.camera_stream import CameraConfig, CameraProcess, read_stamp
-    from planners.pendulum import direction_from_angles, simulate
+    from lbrcli.lab.testing import free_pendulum_scene
     from tracking.color import color_spec
     from tracking.live import LiveTracker, TiltSetup
 
-    grid = np.arange(0.0, seconds + 3.0, 0.001)
-    run = simulate(
-        grid,
-        lambda t: np.zeros(3),
-        STRING_M,
-        s0=direction_from_angles(math.radians(14), math.radians(-6)),
-        sdot0=np.array([0.0, 0.7, 0.0]),
-    )
-
-    def scene(t):
-        k = min(max(t, 0.0), grid[-1] - 2e-3) / 1e-3
-        i = int(k)
-        return PIVOT_M + STRING_M * ((1 - (k - i)) * run.s[i] + (k - i) * run.s[i + 1]), PIVOT_M
+    run, scene = free_pendulum_scene(PIVOT_M, STRING_M, seconds + 3.0)
 
     cfg = CameraConfig(
         position_m=(1.3, -0.6, 1.0),
@@ -100,8 +88,8 @@ def _chain(size: tuple[int, int], fps: float, latency_s: float, seconds: float) 
     st = live.stats
     rs = [r for r in results if r.found and math.isfinite(r.theta_x) and r.seq in stamps]
     t_frame = np.array([stamps[r.seq] / fps for r in rs])
-    ex = np.array([r.theta_x for r in rs]) - np.interp(t_frame, grid, run.theta_x)
-    ey = np.array([r.theta_y for r in rs]) - np.interp(t_frame, grid, run.theta_y)
+    ex = np.array([r.theta_x for r in rs]) - np.interp(t_frame, run.t, run.theta_x)
+    ey = np.array([r.theta_y for r in rs]) - np.interp(t_frame, run.t, run.theta_y)
     delay = np.array([r.t_capture for r in rs]) - (t_start + t_frame)
     lat = np.array(st.latency_s) * 1e3
     frames_sent = (max(stamps.values()) - min(stamps.values()) + 1) if stamps else 0

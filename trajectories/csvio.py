@@ -245,7 +245,7 @@ def _csv_rows(text: str, spath: str, first_line: int = 1) -> list[tuple[int, lis
     return [(first_line + i, r) for i, r in enumerate(rows) if any(c.strip() for c in r)]
 
 
-_DT = "read_table.headerless_dt"  # the setting a headerless file's step comes from (the commands' --dt)
+_DT = "read_table.headerless_dt"  # the setting a headerless file's step comes from (the commands' sample-step option)
 
 
 def read_table(

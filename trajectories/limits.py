@@ -1,4 +1,4 @@
-"""Joint limit tables of the iiwa 7 R800, loaded from one TOML data file (overridable with --limits)."""
+"""Joint limit tables of the iiwa 7 R800, loaded from one TOML data file (a user's TOML file of the same layout may replace it)."""
 
 from __future__ import annotations
 

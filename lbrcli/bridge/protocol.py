@@ -289,7 +289,7 @@ STATE_NAMES = ("IDLE", "MONITORING_WAIT", "MONITORING_READY", "COMMANDING_WAIT",
 
 
 def encode_state_json(s: State) -> bytes:
-    """The JSON state: the keys the MQTT telemetry (``lbr … --mqtt``) and the execution log use for the same values
+    """The JSON state: the keys the MQTT telemetry (MQTT) and the execution log use for the same values
     (``state`` the session state's name, ``msr_q``, ``cmd_q`` [rad], ``ext_tau`` [Nm]), and the bridge's own
     (``state_id`` 0–4, ``braking``, ``following``, ``unreached``, ``seq``, ``target_seq``, ``target_t`` [s], ``t`` [s],
     ``tcp`` [m, quaternion w x y z])."""

@@ -104,9 +104,7 @@ def follow_in_lock_step(source: LockStepSource, limits: JointLimits, *, drop: fl
     try:
         app.run()
     finally:
-        ctl.client_done.set()
-        ctl.join()
-        app.close()
+        ctl.finish(app)
     sent = [(r.cycle, r.position) for r in ctl.replies if r.state == CA and r.position is not None]
     t = (np.array([c for c, _ in sent]) - start) * 1e-3
     return LockStepRun(follower, ctl, t, np.array([p for _, p in sent]), source.q0)

@@ -2,7 +2,7 @@
 θx, θy in the robot's base frame.
 
 The tracking runs in a process of its own (:func:`_tracker_main`: :class:`tracking.live.LiveTracker`, the tracker of
-``lbr track live``), which sends every result as one ``lbr track live --udp`` datagram
+``lbr track live``), which sends every result as one datagram of ``lbr track live``'s UDP output
 (:mod:`lbrcli.lab.camera_publish`) to a loopback socket this side reads without blocking: decoding and tracking
 frames never hold the FRI loop's interpreter lock. Per result, in the FRI loop (about 50 µs): the moment the frame
 shows is its capture time minus the camera's own delay (exposure and transfer, which the tracker cannot see:

@@ -1,4 +1,4 @@
-"""`lbr control damp --sensor camera`: the camera's options (checked together at the CLI edge) turned into the
+"""The camera as the damper's sensor: the camera's options (checked together at the CLI edge) turned into the
 simulator's camera, the geometry the tracker assumes, and the check that this camera can see the sway the move
 makes."""
 
@@ -17,8 +17,8 @@ SIM_LATENCY_MS = 15.0
 SIM_EXPOSURE_MS = 4.0
 SIM_SIZE = (320, 240)  # [px] (with frame stamps the tilt is within 0.05° RMS; 640x480 halves that at twice the CPU)
 FOV_DEG = 50.0  # horizontal field of view of a camera given by position and look-at [deg]
-REAL_CAMERA_DELAY_MS = 20.0  # assumed exposure-to-arrival delay of a real camera without --camera-delay
-TRACKING_ALLOWANCE_MS = 6.0  # the default --sensor-delay adds this to the camera's delay (capture → result)
+REAL_CAMERA_DELAY_MS = 20.0  # assumed exposure-to-arrival delay of a real camera whose delay is not stated
+TRACKING_ALLOWANCE_MS = 6.0  # the default sensor delay adds this to the camera's delay (capture → result)
 MIN_PX_PER_DEG = 0.25  # [px] a 1° tilt must move the ball at least this far in the image
 TRANSFER_MS = 1.0  # the simulated camera's frame: sent → decoded here, about
 
@@ -36,12 +36,12 @@ def observer_bandwidth(fps: float) -> float:
 class CameraOptions:
     """The command's camera options as given (None: not given)."""
 
-    source: str | None = None  # --camera (None: the embedded simulator's camera)
-    geometry: Path | None = None  # --geometry (the JSON of `lbr track live --geometry`)
-    position: tuple[float, float, float] | None = None  # --camera-position [m]
-    look_at: tuple[float, float, float] | None = None  # --camera-look-at [m]
-    fov: float | None = None  # --camera-fov [deg]
-    delay_ms: float | None = None  # --camera-delay
+    source: str | None = None  # the camera's source (None: the embedded simulator's camera)
+    geometry: Path | None = None  # the camera geometry JSON (as `lbr track live` reads)
+    position: tuple[float, float, float] | None = None  # where the simulated camera stands [m]
+    look_at: tuple[float, float, float] | None = None  # the point it looks at [m]
+    fov: float | None = None  # its field of view [deg]
+    delay_ms: float | None = None  # [ms] the camera's own delay, if the user states it
     sim_position: tuple[float, float, float] | None = None
     sim_look_at: tuple[float, float, float] | None = None
     sim_fov: float | None = None
@@ -77,7 +77,7 @@ def sim_camera_config(opts: CameraOptions, pivots_m: np.ndarray, string_m: float
 
 
 def camera_delay_ms(opts: CameraOptions, sim_config) -> float:
-    """The camera's own delay [ms] from the moment a frame shows to its arrival: --camera-delay, else the simulated
+    """The camera's own delay [ms] from the moment a frame shows to its arrival: the one stated, else the simulated
     camera's half exposure + latency + transfer, else REAL_CAMERA_DELAY_MS."""
     if opts.delay_ms is not None:
         return opts.delay_ms
@@ -131,7 +131,7 @@ def camera_sensor_for(opts: CameraOptions, rep, stack, *, robot_factory, rows: n
                       color: str, sensor_delay_ms: float | None, q_rest) -> tuple:  # fmt: skip
     """(the damper's CameraSensor, the simulator's camera plant spec or None, the sensor delay the observer assumes
     [ms]) for the joint path ``rows`` (n, 7) [rad] at times ``t`` [s] with the planned TCP accelerations ``accel``
-    (n, 2) [m/s²]. The camera — --camera, or the simulator's, rendering a scene the simulator will write
+    (n, 2) [m/s²]. The camera — the user's source, or the simulator's, rendering a scene the simulator will write
     (:mod:`lbrcli.plants.camera`; until then the ball of ``true_len`` [m] hangs still at ``q_rest``) — is started
     here and must show the ball; everything started is stopped by ``stack`` (a contextlib.ExitStack). The geometry is
     checked against the move first (CheckFailed: a camera that cannot see the ball or the sway)."""

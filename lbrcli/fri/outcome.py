@@ -11,7 +11,7 @@ from .constants import SessionState
 
 
 class Outcome(str, Enum):
-    """How a session ended, as a whole (the value is what `--json` reports as `outcome`)."""
+    """How a session ended, as a whole (the value is what the commands' JSON reports as `outcome`)."""
 
     COMPLETED = "completed"  # the client finished (or the monitoring duration elapsed)
     INTERRUPTED = "interrupted"  # Ctrl-C or SIGTERM
@@ -21,7 +21,7 @@ class Outcome(str, Enum):
 
 
 class EndReason(str, Enum):
-    """Why a session ended (the value is what `--json` reports as `reason`)."""
+    """Why a session ended (the value is what the commands' JSON reports as `reason`)."""
 
     FINISHED = "finished"  # the client said it is done
     DURATION = "duration"  # run(duration_s) elapsed

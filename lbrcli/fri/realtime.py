@@ -1,6 +1,6 @@
 """Real-time settings for an FRI loop (Linux): SCHED_FIFO, one CPU, memory locked — all or none.
 
-``with realtime(): app.run()`` is what the commands' ``--realtime`` does:
+``with realtime(): app.run()`` is what the commands' real-time option does:
 
 - **SCHED_FIFO** at ``priority`` (default 20): the loop preempts every normally scheduled process the moment its
   message arrives, however busy the PC is (needs root, CAP_SYS_NICE or an ``rtprio`` limit, ``ulimit -r``);
@@ -25,7 +25,7 @@ from typing import Iterator
 
 from trajectories.errors import InputError
 
-DEFAULT_PRIORITY = 20  # SCHED_FIFO priority 1..99 (the simulator's `--realtime` uses 10)
+DEFAULT_PRIORITY = 20  # SCHED_FIFO priority 1..99 (the simulator's real-time loop uses 10)
 MCL_CURRENT, MCL_FUTURE, MCL_ONFAULT = 1, 2, 4  # <sys/mman.h>, Linux
 
 

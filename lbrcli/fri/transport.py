@@ -7,7 +7,7 @@ to the port each datagram came from.
 Waiting (default): the receive blocks in the kernel (one ``recvfrom`` with ``SO_RCVTIMEO``) until a datagram
 arrives or the receive timeout passes, as KUKA's client blocks in ``select``: the process costs no CPU while it waits,
 so on a busy PC the scheduler wakes it at once (a process that polls uses up its share and waits behind the others).
-With a busy-wait window (``busy_wait_s``, the CLI's ``--busy-wait``) and the controller's send period known
+With a busy-wait window (``busy_wait_s``) and the controller's send period known
 (``expect_period``), it sleeps only until the window before the next message is due and then polls the socket without
 sleeping (sleep-then-spin): on a quiet PC the reply no longer waits for the scheduler to wake the process, at the cost
 of the window's CPU per period. While it polls, ``warm`` (if set) is called every ``WARM_EVERY_S``: the application

@@ -1,4 +1,4 @@
-"""The pendulum module and MQTT telemetry attached to an FRI session (`--pendulum`, `--mqtt`).
+"""The pendulum module and MQTT telemetry attached to an FRI session.
 
 Both run off the FRI loop: the loop only reads the reader's newest reading for the log row, and at the telemetry
 rate copies a few dozen numbers into a dict that the publisher's thread serialises and sends.

@@ -65,9 +65,7 @@ def run(script, client, *, version="1.15", detect=False, tmp_path=None, on_cycle
         except Exception as exc:  # noqa: BLE001 - returned to the test
             res, error = None, exc
     finally:
-        ctl.client_done.set()
-        ctl.join()
-        app.close()
+        ctl.finish(app)
         if log is not None:
             log.close()
     return res, ctl, log_path, error

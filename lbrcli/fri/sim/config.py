@@ -86,7 +86,7 @@ IO_PRESETS: dict[str, tuple[IoChannel, ...]] = {
         IoChannel("FRI.In_Bool_Clock_Enabled", "boolean", "in", 1.0),
     ),
 }
-"""IO channel sets of KUKA's example applications by name (`lbr sim --io-preset`); the IOAccess client aborts if a
+"""IO channel sets of KUKA's example applications by name (the simulator's IO presets); the IOAccess client aborts if a
 channel is missing."""
 
 

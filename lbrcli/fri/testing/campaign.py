@@ -161,9 +161,7 @@ def run_case(case: Case, folder: Path | None = None) -> CaseResult:
     except Exception as exc:  # noqa: BLE001 - a traceback is a finding
         error = f"{type(exc).__name__}: {exc}\n" + "".join(tb.format_tb(exc.__traceback__)[-3:])
     finally:
-        ctl.client_done.set()
-        ctl.join()
-        app.close()
+        ctl.finish(app)
         if log is not None:
             log.close()
     readable, rows = True, 0

@@ -205,6 +205,13 @@ class ScriptedController:
         self.sock.close()
         self.foreign_sock.close()
 
+    def finish(self, app: Any = None) -> None:
+        """The client is done: end the script, wait for it and close ``app`` (a ClientApplication) if given."""
+        self.client_done.set()
+        self.join()
+        if app is not None:
+            app.close()
+
     def _message(self, c: Cycle, seq: int, reflected: int) -> bytes:
         m = self.codec.new_monitoring()
         m.header.messageIdentifier = MONITORING_MESSAGE_ID

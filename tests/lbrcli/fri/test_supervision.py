@@ -73,9 +73,7 @@ def test_replies_that_stop_reaching_the_controller_end_the_stream():
     try:
         res = app.run()
     finally:
-        ctl.client_done.set()
-        ctl.join()
-        app.close()
+        ctl.finish(app)
     assert res.reason is EndReason.SUPERVISION and "replies lost" in res.detail
     assert 50 <= res.largest_reply_gap <= 52  # tripped as the gap passed 50 ms
 

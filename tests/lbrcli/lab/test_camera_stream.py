@@ -12,33 +12,19 @@ import pytest
 
 from lbrcli.lab.camera_publish import SIZE, decode
 from lbrcli.lab.camera_stream import CameraConfig, CameraProcess, CameraServer
-from planners.pendulum import direction_from_angles, simulate
+from lbrcli.lab.testing import free_pendulum_scene
 from tracking.color import color_spec
 from tracking.live import LiveTracker, TiltSetup
 
 PIVOT_M = np.array([0.5, 0.0, 0.6])
 STRING_M = 0.3
-T_GRID = np.arange(0.0, 8.0, 0.001)
+SECONDS = 8.0  # [s] of simulated swing
 
 
 @pytest.fixture(scope="module")
 def pendulum():
     """A free spherical pendulum (elliptical orbit: both tilt components move) from planners.pendulum.simulate."""
-    run = simulate(
-        T_GRID,
-        lambda t: np.zeros(3),
-        STRING_M,
-        s0=direction_from_angles(math.radians(14), math.radians(-6)),
-        sdot0=np.array([0.0, 0.7, 0.0]),
-    )
-
-    def scene(t):
-        k = min(max(t, 0.0), T_GRID[-1] - 2e-3) / 1e-3
-        i = int(k)
-        s = (1 - (k - i)) * run.s[i] + (k - i) * run.s[i + 1]
-        return PIVOT_M + STRING_M * s, PIVOT_M
-
-    return run, scene
+    return free_pendulum_scene(PIVOT_M, STRING_M, SECONDS)
 
 
 def judge(results, stamps, fps, t_start, run):
@@ -46,8 +32,8 @@ def judge(results, stamps, fps, t_start, run):
     from the frame's moment to its capture here: (RMS θx, RMS θy [deg], delays (n,), frames judged)."""
     rs = [r for r in results if r.found and math.isfinite(r.theta_x) and r.seq in stamps]
     t_frame = np.array([stamps[r.seq] / fps for r in rs])
-    ex = np.array([r.theta_x for r in rs]) - np.interp(t_frame, T_GRID, run.theta_x)
-    ey = np.array([r.theta_y for r in rs]) - np.interp(t_frame, T_GRID, run.theta_y)
+    ex = np.array([r.theta_x for r in rs]) - np.interp(t_frame, run.t, run.theta_x)
+    ey = np.array([r.theta_y for r in rs]) - np.interp(t_frame, run.t, run.theta_y)
     delay = np.array([r.t_capture for r in rs]) - (t_start + t_frame)
     rms = lambda e: math.degrees(math.sqrt(float(np.mean(e**2))))  # noqa: E731
     return rms(ex), rms(ey), delay, len(rs)

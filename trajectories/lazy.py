@@ -2,7 +2,7 @@
 
 A package names its public API in ``__all__`` and imports each name under ``if TYPE_CHECKING:`` (read by type
 checkers and by the API reference, which documents the names from there). At run time :func:`lazy_exports` imports
-a name's submodule on its first access, so ``import planners`` stays as cheap as before and ``lbr --help`` does not
+a name's submodule on its first access, so ``import planners`` stays as cheap as before and the CLI's help does not
 load scipy or pinocchio for names it never touches::
 
     TYPE_CHECKING = False  # typing.TYPE_CHECKING, without importing typing

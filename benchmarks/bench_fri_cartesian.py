@@ -100,7 +100,9 @@ def our_client(period_ms: int, radius: float, q0, seconds: float):
             self.robot_command.set_cartesian_pose(p, redundancy=e1)
 
     codec = FriCodec("2.7")
-    app = ClientApplication(Circle(), "127.0.0.1", 0, version="2.7")
+    app = ClientApplication(
+        Circle(), "127.0.0.1", 0, version="2.7", paced_by_replies=True
+    )  # the simulator in lock-step
     app.connect()
     with fri_relay.Relay(app.port) as relay:
         cfg = SimConfig(client_port=relay.port, version="2.7", command_mode="cartesian", period_ms=period_ms,

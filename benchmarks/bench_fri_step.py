@@ -43,7 +43,7 @@ def _app(folder: Path, tag: str, prepare: bool = True) -> ClientApplication:
     log = ExecutionLog(folder / f"{tag}.csv")
     player = TrajectoryPlayer(trajectory(ROWS), LIM, period_s=1e-3, settle_cycles=4)
     return ClientApplication(player, "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=LIM,
-                             observers=[LogObserver(log), SessionFigures()], prepare=prepare)  # fmt: skip
+                             observers=[LogObserver(log), SessionFigures()], prepare=prepare, paced_by_replies=True)  # fmt: skip
 
 
 def scripted_session(app: ClientApplication, version: str = "1.15") -> None:

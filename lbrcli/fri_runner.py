@@ -165,9 +165,8 @@ def run_client(rep, client, session: SessionSettings, simulator: SimulatorSettin
     realtime = realtime_context(session.realtime)  # refused before anything starts (exit 2)
     if lab is not None:
         lab.validate(session.embedded)
-    app = session.application(
-        client, [SessionFigures(), *observers], lenient=simulator is not None and simulator.lenient
-    )
+    app = session.application(client, [SessionFigures(), *observers], lenient=simulator is not None and simulator.lenient,
+                              paced_by_replies=simulator is not None and simulator.paced_by_replies)  # fmt: skip
     app.connect()
     parts = _SessionParts(rep, app, session, simulator, lab)
     try:

@@ -79,9 +79,11 @@ class SessionSettings:
         """No robot named: the session runs against the simulator this process starts on loopback."""
         return self.robot is None
 
-    def application(self, client: LBRClient, observers: Sequence[Any] = (), lenient: bool = False) -> ClientApplication:
+    def application(self, client: LBRClient, observers: Sequence[Any] = (), lenient: bool = False,
+                    paced_by_replies: bool = False) -> ClientApplication:  # fmt: skip
         """The :class:`~lbrcli.fri.ClientApplication` of these settings (not bound yet); ``lenient``: the embedded
-        simulator judges its quality leniently, so the supervision tolerates the same loaded PC."""
+        simulator judges its quality leniently, so the supervision tolerates the same loaded PC; ``paced_by_replies``:
+        it runs in lock-step (its messages' arrival times are not judged)."""
         from lbrcli.fri import ClientApplication
 
         sim = self.embedded
@@ -95,6 +97,7 @@ class SessionSettings:
             max_tracking_error=self.max_tracking_error, busy_wait_s=self.busy_wait_s,
             send_period_s=None if sim or self.send_period_ms is None else self.send_period_ms * 1e-3,
             reply_gap_s=LENIENT_REPLY_GAP_S if lenient else None, tracking_lag_s=LENIENT_TRACKING_LAG_S if lenient else None,
+            paced_by_replies=paced_by_replies and sim,
         )  # fmt: skip
 
 

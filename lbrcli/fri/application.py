@@ -84,6 +84,7 @@ class ClientApplication:
         prepare: bool = True,
         transformation_client: TransformationClient | None = None,
         tcp_robot: Any = None,
+        paced_by_replies: bool = False,
     ) -> None:
         self.client = client
         self.transformation_client, self.tcp_robot = transformation_client, tcp_robot
@@ -102,6 +103,9 @@ class ClientApplication:
         self.tracking_lag_s = tracking_lag_s  # [s] the default tracking bound's lag at full speed (None: 20 ms)
         self.busy_wait_s = busy_wait_s  # [s] the receive polls this long before each message is due (transport)
         self.send_period_s = send_period_s  # [s] the send period the controller must have (None: whatever it sends)
+        # a simulator in lock-step sends each message when our reply arrives: its messages' arrival times say nothing
+        # of its period, so the supervision judges its timestamps only
+        self.paced_by_replies = paced_by_replies
         self.transport: UdpTransport | None = None
         self.cycle = Cycle()
         self.state: LBRState | None = None  # view of the last accepted message
@@ -362,7 +366,7 @@ class ClientApplication:
             link.replied(cyc, out.client_seq, seq)
             out.sent(cyc, link.missed)
         if link.sup is not None and end.stop is None:
-            stamp = getattr(self.transport, "received_ns", None)
+            stamp = None if self.paced_by_replies else getattr(self.transport, "received_ns", None)
             problem = link.supervise(mon, seq, supervised, mon.ipoData.clientCommandMode in (_POSITION, _CARTESIAN),
                                      stamp() if stamp is not None else None)  # fmt: skip
             if problem is not None:

@@ -4,7 +4,7 @@ The client binds the port of the robot's FRI configuration (30200 by default), a
 controller's IP address (any source port: a simulator on the same machine cannot own the port too) and replies
 to the port each datagram came from.
 
-Waiting (default): the receive blocks in the kernel (one ``recvfrom`` with ``SO_RCVTIMEO``) until a datagram
+Waiting (default): the receive blocks in the kernel (one ``recvmsg`` with ``SO_RCVTIMEO``) until a datagram
 arrives or the receive timeout passes, as KUKA's client blocks in ``select``: the process costs no CPU while it waits,
 so on a busy PC the scheduler wakes it at once (a process that polls uses up its share and waits behind the others).
 With a busy-wait window (``busy_wait_s``) and the controller's send period known
@@ -37,6 +37,8 @@ _TIMESPEC = struct.Struct("qq")
 _TIMEVAL = struct.Struct("ll")
 _DONTWAIT = socket.MSG_DONTWAIT
 _RX_SIZE = MAX_DATAGRAM + 64
+_SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)  # Linux; the control message's type has the same number
+_ANC_SIZE = socket.CMSG_SPACE(_TIMESPEC.size)  # room for the receive time stamp
 
 
 def resolve_ip(host: str) -> str:
@@ -65,7 +67,7 @@ class UdpTransport:
         sock.setblocking(True)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVTIMEO, _TIMEVAL.pack(int(timeout_s), int(timeout_s % 1 * 1e6)))
         try:  # stamp every datagram on arrival (else the first ones read are stamped when read: see received_ns)
-            sock.setsockopt(socket.SOL_SOCKET, getattr(socket, "SO_TIMESTAMPNS", 35), 1)
+            sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
         except OSError:
             pass
         self.sock = sock
@@ -81,6 +83,7 @@ class UdpTransport:
         self.warm: Callable[[], None] | None = None  # called every WARM_EVERY_S while busy-waiting
         self._stamp = bytearray(16)
         self._stamps = True  # the kernel gives receive times (SIOCGSTAMPNS); off after the first failure
+        self._anc: list = []  # the last datagram's control messages (its receive time stamp)
 
     def expect_period(self, period_s: float | None) -> None:
         """The controller sends every ``period_s`` [s]: busy-wait the window before each message (if any)."""
@@ -91,20 +94,21 @@ class UdpTransport:
         busy = self.busy_wait_s if self.period_s is not None else 0.0
         if busy > 0.0:
             return self._receive_spinning(busy)
-        recvfrom = self.sock.recvfrom
+        recvmsg = self.sock.recvmsg
         while True:
             try:
-                data, addr = recvfrom(_RX_SIZE)  # blocks until a datagram or SO_RCVTIMEO
+                data, anc, _, addr = recvmsg(_RX_SIZE, _ANC_SIZE)  # blocks until a datagram or SO_RCVTIMEO
             except (BlockingIOError, InterruptedError):  # the time-out (EAGAIN)
                 return None
             except ConnectionRefusedError:  # an ICMP error from an earlier reply: nothing to read
                 continue
             if self._take(addr):
+                self._anc = anc
                 return data
 
     def _receive_spinning(self, busy: float) -> bytes | None:
         """Sleep until ``busy`` [s] before the next message is due, then poll until it arrives (or ``busy`` after)."""
-        recvfrom = self.sock.recvfrom
+        recvmsg = self.sock.recvmsg
         sock = self._rlist
         due = self._t_last + self.period_s  # type: ignore[operator]
         spin_until = due + busy
@@ -117,7 +121,7 @@ class UdpTransport:
         t_warm = 0.0
         while True:
             try:
-                data, addr = recvfrom(_RX_SIZE, _DONTWAIT)
+                data, anc, _, addr = recvmsg(_RX_SIZE, _ANC_SIZE, _DONTWAIT)
             except (BlockingIOError, InterruptedError):
                 if busy > 0.0:
                     t = time.perf_counter()
@@ -133,6 +137,7 @@ class UdpTransport:
             except ConnectionRefusedError:  # an ICMP error from an earlier reply: nothing to read
                 continue
             if self._take(addr):
+                self._anc = anc
                 if busy > 0.0:
                     self.polled += 1
                 return data
@@ -148,8 +153,13 @@ class UdpTransport:
 
     def received_ns(self) -> int | None:
         """The kernel's receive time [ns, the ``time.time_ns`` clock] of the last datagram returned by ``receive`` —
-        when it arrived, however late this process read it — or None where the kernel does not say. ≈ 2 µs: called
-        after the reply."""
+        when it arrived, however late this process read it — or None where the kernel does not say. From the
+        datagram's ``SO_TIMESTAMPNS`` control message (kernels since 6.x refuse ``SIOCGSTAMPNS`` on a socket that has
+        it on), else the ``SIOCGSTAMPNS`` ioctl. ≈ 1 µs: called after the reply."""
+        for level, kind, payload in self._anc:
+            if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(payload) >= _TIMESPEC.size:
+                sec, nsec = _TIMESPEC.unpack_from(payload)
+                return sec * 1_000_000_000 + nsec
         if not self._stamps:
             return None
         try:

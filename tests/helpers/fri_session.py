@@ -47,7 +47,7 @@ def run(script, client, *, version="1.15", detect=False, tmp_path=None, on_cycle
         observers=(), prepare=True, **controller):  # fmt: skip
     fig = SessionFigures()
     app = ClientApplication(client, "127.0.0.1", 0, bind_host="127.0.0.1", version=None if detect else version,
-                            limits=LIM, first_message_timeout_s=10, silence_timeout_s=3,
+                            limits=LIM, first_message_timeout_s=10, silence_timeout_s=3, paced_by_replies=True,
                             observers=[fig, *observers], prepare=prepare)  # fmt: skip
     app.connect()
     ctl = ScriptedController(app.port, script, q_start, version=version, **controller)

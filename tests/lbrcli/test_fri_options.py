@@ -21,7 +21,8 @@ def _controller(send_period_ms: int, n_active: int = 0) -> ScriptedController:
     if n_active:
         script += [Cycle(state=MR, send_period=send_period_ms)] * 3 + [Cycle(state=CW, send_period=send_period_ms)] * 4
         script += [Cycle(state=CA, send_period=send_period_ms)] * n_active
-    return ScriptedController(free_udp_port(), script, tuple(Q_START.tolist()), wait_for_client=30).start()
+    return ScriptedController(free_udp_port(), script, tuple(Q_START.tolist()), wait_for_client=30,
+                              pace_s=send_period_ms * 1e-3).start()  # fmt: skip  # a robot keeps its period
 
 
 def _run(ctl: ScriptedController, *args: str):

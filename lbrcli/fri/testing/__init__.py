@@ -7,7 +7,8 @@ Run your own :class:`~lbrcli.fri.LBRClient` against it::
     from lbrcli.fri import ClientApplication
     from lbrcli.fri.testing import Cycle, ScriptedController, session_script
 
-    app = ClientApplication(MyClient(), "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15").connect()
+    app = ClientApplication(MyClient(), "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15",
+                            paced_by_replies=True).connect()  # it answers as soon as our reply is in
     ctl = ScriptedController(app.port, session_script(2000), q0).start()
     result = app.run()
     ctl.client_done.set(); ctl.join()

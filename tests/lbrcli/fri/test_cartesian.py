@@ -223,7 +223,7 @@ class Frames(TransformationClient):
 
 
 def lockstep_session(client, duration=1.2, frames=None):
-    app = ClientApplication(client, "127.0.0.1", 0, version="2.7", transformation_client=frames)
+    app = ClientApplication(client, "127.0.0.1", 0, version="2.7", transformation_client=frames, paced_by_replies=True)
     app.connect()
     if hasattr(client, "app"):
         client.app = app

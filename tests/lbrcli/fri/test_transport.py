@@ -152,3 +152,27 @@ def test_the_default_wait_blocks_in_the_kernel_and_takes_every_message_of_a_1ms_
         assert time.perf_counter() - t0 >= 0.04
     finally:
         tr.close()
+
+
+def test_received_ns_is_the_kernel_arrival_time_not_the_read_time() -> None:
+    """A datagram read 50 ms after it arrived carries its arrival time (the supervision judges the controller's send
+    rate by it), in both the blocking and the busy-waiting receive."""
+    for busy in (0.0, 0.002):
+        tr = UdpTransport("127.0.0.1", 0, bind_host="127.0.0.1", busy_wait_s=busy)
+        if busy:
+            tr.expect_period(0.001)
+        out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            before = time.time_ns()
+            out.sendto(b"one", ("127.0.0.1", tr.port))
+            time.sleep(0.05)
+            read_at = time.time_ns()
+            assert tr.receive() == b"one"
+            stamp = tr.received_ns()
+            if stamp is None and not sys.platform.startswith("linux"):
+                pytest.skip("only Linux gives receive time stamps")
+            assert stamp is not None, "Linux stamps every datagram (SO_TIMESTAMPNS)"
+            assert before <= stamp < read_at  # arrived before the sleep ended, not when it was read
+        finally:
+            out.close()
+            tr.close()

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import time
 
 import numpy as np
@@ -396,3 +397,26 @@ def test_warming_between_messages_changes_nothing(version):
         assert app.result.prepared_replies > n - 10
         sent.append(app.transport.sent)
     assert warmed > n and sent[0] == sent[1] and len(sent[0]) > n
+
+
+@pytest.mark.parametrize("paced_by_replies", [False, True])
+def test_a_controller_that_sends_faster_than_its_clock_says_is_stopped_unless_paced_by_replies(paced_by_replies):
+    """Its timestamps step 5 ms per message but its messages come as fast as we answer (well under 5 ms apart): a
+    controller does not do that, and the kernel's receive times show it; a simulator in lock-step does, on purpose."""
+    if not sys.platform.startswith("linux"):
+        pytest.skip("receive time stamps: Linux")
+    app = ClientApplication(LBRClient(), "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15",
+                            first_message_timeout_s=10, silence_timeout_s=3, paced_by_replies=paced_by_replies)  # fmt: skip
+    app.connect()
+    script = [Cycle(state=MW, quality=1, send_period=5)] * 60 + [Cycle(state=IDLE)]
+    ctl = ScriptedController(app.port, script, tuple(Q0), pace_s=0.0).start()
+    try:
+        res = app.run()
+    finally:
+        ctl.finish(app)
+    if paced_by_replies:
+        assert res.reason is not EndReason.SUPERVISION, res.detail
+        assert res.cycles >= 60
+    else:
+        assert res.reason is EndReason.SUPERVISION and "messages advanced" in res.detail, res.detail
+        assert res.cycles < 30

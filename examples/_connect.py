@@ -48,7 +48,7 @@ def run(client, args, observers=(), **sim_options) -> SessionResult:
 
     with ClientApplication(client, "127.0.0.1", 0, bind_host="127.0.0.1", version=args.fri_version, observers=observers,
                            first_message_timeout_s=20, reply_gap_s=0.5 if args.sim_lenient else None,
-                           paced_by_replies=args.sim_fast or args.sim_lockstep) as app:  # fmt: skip
+                           paced_by_replies=args.sim_fast or args.sim_lockstep, catch_up=not args.sim_lenient) as app:  # fmt: skip
         config = SimConfig(client_port=app.port, version=args.fri_version, period_ms=args.period, **sim_options)
         with SimulatorProcess(config), interrupts_brake(app):
             return app.run(args.duration)

@@ -82,8 +82,10 @@ class SessionSettings:
     def application(self, client: LBRClient, observers: Sequence[Any] = (), lenient: bool = False,
                     paced_by_replies: bool = False) -> ClientApplication:  # fmt: skip
         """The :class:`~lbrcli.fri.ClientApplication` of these settings (not bound yet); ``lenient``: the embedded
-        simulator judges its quality leniently, so the supervision tolerates the same loaded PC; ``paced_by_replies``:
-        it runs in lock-step (its messages' arrival times are not judged)."""
+        simulator judges its quality leniently, so the supervision tolerates the same loaded PC and the client
+        answers every message in turn after a stall (the lenient simulator uses late replies) instead of
+        catching up with the newest (``catch_up``: against a robot, whose controller bridged the periods missed);
+        ``paced_by_replies``: it runs in lock-step (its messages' arrival times are not judged)."""
         from lbrcli.fri import ClientApplication
 
         sim = self.embedded
@@ -97,7 +99,7 @@ class SessionSettings:
             max_tracking_error=self.max_tracking_error, busy_wait_s=self.busy_wait_s,
             send_period_s=None if sim or self.send_period_ms is None else self.send_period_ms * 1e-3,
             reply_gap_s=LENIENT_REPLY_GAP_S if lenient else None, tracking_lag_s=LENIENT_TRACKING_LAG_S if lenient else None,
-            paced_by_replies=paced_by_replies and sim,
+            paced_by_replies=paced_by_replies and sim, catch_up=not lenient,
         )  # fmt: skip
 
 

@@ -31,7 +31,6 @@ from .protocol import KIND_JOINT, KIND_POSE, State, Target
 from .timeline import TargetTimeline, TimelineOptions
 from .tracker import ReferenceTracker, Untrackable
 
-_Z7 = np.zeros(7)
 JUMP_S = 0.05  # [s] the reference's clock jumps when it is this far from where it is due
 MAX_WARP = 0.05  # the reference's clock runs at most 5 % fast or slow while it catches up
 CATCHUP_S = 0.5  # [s] an offset is worked off at offset / CATCHUP_S (up to MAX_WARP)
@@ -212,7 +211,7 @@ class TargetFollower(LBRClient):
         elif self._pose is not None:
             self._refine_pose()
         if tl.empty:  # no target yet: hold
-            q = tracker.step(lambda t: (tracker.q, _Z7, _Z7))
+            q = tracker.hold()
         else:
             # the reference advances one period per command (the controller's clock, steadier than ours). Before
             # the first target's time it stands still, so its clock may be set to where the timeline says it is due;

@@ -96,6 +96,16 @@ class ReferenceTracker:
             self.error = str(exc).strip()
             return Result.ErrorInvalidInput
 
+    def hold(self) -> np.ndarray:
+        """The next commanded position [rad] without a reference: where the commanded state stops. At rest that is
+        where it is, without planning (a holding client's cycle stays short); moving, the jerk-limited stop."""
+        if self.v.any() or self.a.any():
+            zero = np.zeros(len(self.q))
+            return self.step(lambda t, q=self.q: (q, zero, zero))
+        self.intercept_s = self.period_s
+        self.on_reference += 1
+        return self.q
+
     def step(self, reference: Callable[[float], Reference]) -> np.ndarray:
         """The next commanded position [rad]; ``reference(t)`` is the reference's state ``t`` [s] after the next
         command's time minus one period (``reference(period)``: at the next command)."""

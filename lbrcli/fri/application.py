@@ -80,6 +80,7 @@ class ClientApplication:
         reply_gap_s: float | None = None,
         tracking_lag_s: float | None = None,
         busy_wait_s: float = 0.0,
+        catch_up: bool = True,
         send_period_s: float | None = None,
         prepare: bool = True,
         transformation_client: TransformationClient | None = None,
@@ -102,10 +103,9 @@ class ClientApplication:
         self.reply_gap_s = reply_gap_s  # [s] None: 50 ms
         self.tracking_lag_s = tracking_lag_s  # [s] the default tracking bound's lag at full speed (None: 20 ms)
         self.busy_wait_s = busy_wait_s  # [s] the receive polls this long before each message is due (transport)
+        self.catch_up = catch_up  # a client behind answers the newest message waiting, the older ones are missed
         self.send_period_s = send_period_s  # [s] the send period the controller must have (None: whatever it sends)
-        # a simulator in lock-step sends each message when our reply arrives: its messages' arrival times say nothing
-        # of its period, so the supervision judges its timestamps only
-        self.paced_by_replies = paced_by_replies
+        self.paced_by_replies = paced_by_replies  # a lock-step simulator: its messages' arrival times are not judged
         self.transport: UdpTransport | None = None
         self.cycle = Cycle()
         self.state: LBRState | None = None  # view of the last accepted message
@@ -117,7 +117,8 @@ class ClientApplication:
     def connect(self) -> "ClientApplication":
         """Bind the local port (``port`` tells which; 0 binds a free one)."""
         if self.transport is None:
-            self.transport = UdpTransport(self.robot, self.port_requested, self.bind_host, busy_wait_s=self.busy_wait_s)
+            self.transport = UdpTransport(self.robot, self.port_requested, self.bind_host, busy_wait_s=self.busy_wait_s,
+                                          catch_up=self.catch_up)  # fmt: skip
         return self
 
     @property

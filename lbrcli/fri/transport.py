@@ -7,6 +7,9 @@ to the port each datagram came from.
 Waiting (default): the receive blocks in the kernel (one ``recvmsg`` with ``SO_RCVTIMEO``) until a datagram
 arrives or the receive timeout passes, as KUKA's client blocks in ``select``: the process costs no CPU while it waits,
 so on a busy PC the scheduler wakes it at once (a process that polls uses up its share and waits behind the others).
+Either way, when more of the controller's datagrams already wait behind the one read (the client fell behind), the
+newest is returned and the older ones are counted (``overtaken``): their periods are past, the controller bridged them
+(``catch_up=False``: each in turn — for a test controller that sends unanswered datagrams in bursts, not once a period).
 With a busy-wait window (``busy_wait_s``) and the controller's send period known
 (``expect_period``), it sleeps only until the window before the next message is due and then polls the socket without
 sleeping (sleep-then-spin): on a quiet PC the reply no longer waits for the scheduler to wake the process, at the cost
@@ -53,7 +56,13 @@ class UdpTransport:
     """A bound UDP socket that receives from one controller address and answers the last sender."""
 
     def __init__(
-        self, robot_ip: str, port: int, bind_host: str = "", timeout_s: float = RECV_TIMEOUT_S, busy_wait_s: float = 0.0
+        self,
+        robot_ip: str,
+        port: int,
+        bind_host: str = "",
+        timeout_s: float = RECV_TIMEOUT_S,
+        busy_wait_s: float = 0.0,
+        catch_up: bool = True,
     ) -> None:
         self.robot_ip = resolve_ip(robot_ip)
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -80,6 +89,8 @@ class UdpTransport:
         self.foreign = 0  # datagrams from other addresses (ignored)
         self._t_last = 0.0  # [s] perf_counter when the last datagram was taken
         self.polled = 0  # datagrams taken while busy-waiting (not woken by the scheduler)
+        self.catch_up = catch_up  # take the newest of the controller's datagrams waiting (False: each in turn)
+        self.overtaken = 0  # the controller's datagrams skipped because a newer one was already waiting
         self.warm: Callable[[], None] | None = None  # called every WARM_EVERY_S while busy-waiting
         self._stamp = bytearray(16)
         self._stamps = True  # the kernel gives receive times (SIOCGSTAMPNS); off after the first failure
@@ -104,7 +115,7 @@ class UdpTransport:
                 continue
             if self._take(addr):
                 self._anc = anc
-                return data
+                return self._newest(data)
 
     def _receive_spinning(self, busy: float) -> bytes | None:
         """Sleep until ``busy`` [s] before the next message is due, then poll until it arrives (or ``busy`` after)."""
@@ -140,7 +151,25 @@ class UdpTransport:
                 self._anc = anc
                 if busy > 0.0:
                     self.polled += 1
+                return self._newest(data)
+
+    def _newest(self, data: bytes) -> bytes:
+        """``data``, or the newest of the controller's datagrams already waiting behind it: a client that fell
+        behind (a stall) answers the message the controller sent last, not each older one too late (the controller
+        bridged those periods; the application counts them as missed). One non-blocking read when none waits."""
+        if not self.catch_up:
+            return data
+        recvmsg = self.sock.recvmsg
+        while True:
+            try:
+                newer, anc, _, addr = recvmsg(_RX_SIZE, _ANC_SIZE, _DONTWAIT)
+            except (BlockingIOError, InterruptedError):
                 return data
+            except ConnectionRefusedError:
+                continue
+            if self._take(addr):
+                data, self._anc = newer, anc
+                self.overtaken += 1
 
     def _take(self, addr: tuple[str, int]) -> bool:
         """A datagram from ``addr``: True (and it becomes the reply address) if it is the controller's."""

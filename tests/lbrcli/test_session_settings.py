@@ -85,11 +85,12 @@ def test_the_session_defaults_follow_the_target():
     sim_app = SessionSettings(port=0).application(LBRClient(), lenient=True)
     assert (sim_app.robot, sim_app.bind_host, str(sim_app.version.value)) == ("127.0.0.1", "127.0.0.1", "1.15")
     assert sim_app.first_message_timeout_s == 20.0 and sim_app.commanding_timeout_s == 20.0
-    assert sim_app.reply_gap_s == LENIENT_REPLY_GAP_S
+    assert sim_app.reply_gap_s == LENIENT_REPLY_GAP_S and not sim_app.catch_up  # (it uses late replies)
     robot_app = SessionSettings(robot="192.0.2.1", port=0, wait_s=5.0).application(LBRClient(), lenient=True)
     assert (robot_app.robot, robot_app.bind_host, robot_app.version) == ("192.0.2.1", "", None)
     assert robot_app.first_message_timeout_s == 5.0 and robot_app.commanding_timeout_s is None
-    assert robot_app.reply_gap_s is None  # leniency is the simulator's, never a robot's
+    assert robot_app.reply_gap_s is None and robot_app.catch_up  # leniency is the simulator's, never a robot's
+    assert SessionSettings(port=0).application(LBRClient(), lenient=False).catch_up  # as strict as a robot
 
 
 def test_the_simulator_config_carries_the_settings():

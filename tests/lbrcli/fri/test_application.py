@@ -275,6 +275,32 @@ def test_no_message_times_out_naming_the_cause():
         assert time.monotonic() - t0 < 1.0
 
 
+@pytest.mark.parametrize("catch_up", [True, False])
+def test_a_client_behind_answers_the_newest_message_waiting_and_counts_the_older_as_missed(catch_up):
+    from lbrcli.fri.codec import FriCodec
+
+    ctl = ScriptedController(0, [], Q0)  # (for its messages, sent here by hand)
+    ctl.sock.settimeout(2.0)
+    app = ClientApplication(LBRClient(), "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", catch_up=catch_up)
+
+    def send(*seqs: int) -> int:  # the reflected counter of the reply to the next step
+        for seq in seqs:
+            ctl.sock.sendto(ctl._message(Cycle(state=MW, quality=1), seq, 0), ("127.0.0.1", app.port))
+        time.sleep(0.05)  # (loopback delivers at once; a margin for a loaded machine)
+        assert app.step()
+        return FriCodec("1.15").decode_command(ctl.sock.recv(4096)).header.reflectedSequenceCounter
+
+    with app:
+        app.start()
+        assert send(0) == 0
+        # four messages arrived while the client was stalled: caught up, the newest is answered and the three
+        # before it are missed (the controller bridged them); else the oldest, each in turn
+        assert send(1, 2, 3, 4) == (4 if catch_up else 1)
+        assert app.answered == 2 and app.missed == app.transport.overtaken == (3 if catch_up else 0)
+    ctl.sock.close()
+    ctl.foreign_sock.close()
+
+
 @pytest.mark.heavy
 def test_wait_is_honoured_while_garbage_keeps_arriving():
     import socket

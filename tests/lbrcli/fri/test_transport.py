@@ -42,14 +42,16 @@ def _first(tr: UdpTransport) -> bytes:
 
 
 def _stream(tr: UdpTransport, n: int, period_s: float) -> list[int]:
-    """The numbers of ``n`` datagrams another process sends every ``period_s`` [s], as received."""
+    """The numbers of the ``n`` datagrams another process sends every ``period_s`` [s], as received: each one, or
+    the newest waiting when the receiver fell behind (the older ones counted in ``overtaken``)."""
     th = _sender(tr.port, n, period_s)
     got = [int.from_bytes(_first(tr), "little")]
-    while len(got) < n:
+    while got[-1] < n - 1:
         d = tr.receive()
         assert d is not None
         got.append(int.from_bytes(d, "little"))
     th.wait(10)
+    assert got == sorted(set(got)) and len(got) + tr.overtaken == n  # none lost, none twice, in order
     return got
 
 
@@ -59,10 +61,8 @@ def test_receive_times_out_with_none_and_takes_datagrams_in_order() -> None:
         t0 = time.perf_counter()
         assert tr.receive() is None
         assert 0.04 <= time.perf_counter() - t0 < 0.5
-        th = _sender(tr.port, 20, 2e-3)
-        got = [_first(tr)] + [tr.receive() for _ in range(19)]
-        th.wait(10)
-        assert [int.from_bytes(d, "little") for d in got] == list(range(20))  # type: ignore[arg-type]
+        got = _stream(tr, 20, 2e-3)
+        assert got[-1] == 19
         assert tr.polled == 0  # no busy-wait without a period
     finally:
         tr.close()
@@ -73,13 +73,30 @@ def test_busy_wait_takes_the_messages_that_arrive_in_its_window() -> None:
     tr = UdpTransport("127.0.0.1", 0, "127.0.0.1", timeout_s=0.05, busy_wait_s=1.5e-3)
     tr.expect_period(2e-3)
     try:
-        assert _stream(tr, 200, 2e-3) == list(range(200))
-        # the sender keeps its 2 ms grid: most messages land in the 1.5 ms before and after they are due
-        assert tr.polled >= 100
+        got = _stream(tr, 200, 2e-3)
+        # the sender keeps its 2 ms grid: most messages land in the 1.5 ms before and after they are due (a sender
+        # delayed on a loaded machine sends a few at once: the newest is taken)
+        assert tr.polled >= len(got) // 2 and len(got) >= 50
         t0 = time.perf_counter()
         assert tr.receive() is None  # the sender stopped: the window passes, then the plain time-out
         assert time.perf_counter() - t0 < 0.5
     finally:
+        tr.close()
+
+
+def test_a_receiver_behind_takes_the_newest_waiting_datagram_and_counts_the_older_ones() -> None:
+    tr = UdpTransport("127.0.0.1", 0, "127.0.0.1", timeout_s=0.05)
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        for i in range(4):  # the controller sent four messages while the client was stalled
+            s.sendto(bytes([i]), ("127.0.0.1", tr.port))
+        time.sleep(0.05)  # (loopback delivers at once; a margin for a loaded machine)
+        assert tr.receive() == bytes([3]) and tr.overtaken == 3
+        s.sendto(b"\x04", ("127.0.0.1", tr.port))
+        assert tr.receive() == b"\x04" and tr.overtaken == 3  # none waiting: the one datagram
+        assert tr.receive() is None
+    finally:
+        s.close()
         tr.close()
 
 
@@ -105,13 +122,15 @@ def test_warm_is_called_while_busy_waiting_and_never_while_sleeping() -> None:
     tr.warm = lambda: calls.append(time.perf_counter())
     try:
         th = _sender(tr.port, 100, 2e-3)
-        _first(tr)
+        last = int.from_bytes(_first(tr), "little")
         assert calls == []  # no period known yet: a plain wait
         tr.expect_period(2e-3)
         waits = []
-        for _ in range(99):
+        while last < 99:  # (a sender delayed on a loaded machine sends a few at once: the newest is taken)
             n0 = len(calls)
-            assert tr.receive() is not None
+            d = tr.receive()
+            assert d is not None
+            last = int.from_bytes(d, "little")
             waits.append(len(calls) - n0)
         th.wait(10)
         # nothing more comes: after a message, the next receive polls its whole window (from 1.5 ms before the
@@ -127,7 +146,7 @@ def test_warm_is_called_while_busy_waiting_and_never_while_sleeping() -> None:
             if len(spin) > 1:
                 break
         out.close()
-        assert tr.polled >= 50 and sum(1 for w in waits if w) >= 20  # messages waited for while warming
+        assert tr.polled >= len(waits) // 2 and sum(1 for w in waits if w) >= 20  # messages waited for while warming
         gaps = [b - a for a, b in zip(spin, spin[1:])]
         assert 0.4 * 2 * busy / WARM_EVERY_S <= len(spin) <= 2 * busy / WARM_EVERY_S + 2
         assert 0.9 * WARM_EVERY_S <= sorted(gaps)[len(gaps) // 2] < 2 * WARM_EVERY_S  # median
@@ -140,13 +159,15 @@ def test_warm_is_called_while_busy_waiting_and_never_while_sleeping() -> None:
 
 
 @pytest.mark.heavy
-def test_the_default_wait_blocks_in_the_kernel_and_takes_every_message_of_a_1ms_stream() -> None:
+def test_the_default_wait_blocks_in_the_kernel_and_takes_a_1ms_stream_in_order() -> None:
     """No busy-wait by default (the CLI's and the library's): each receive blocks until its datagram, none is lost or
-    reordered, and nothing is ever taken by polling, also once the period is known."""
+    reordered (a receiver behind takes the newest waiting), and nothing is ever taken by polling, also once the period
+    is known."""
     tr = UdpTransport("127.0.0.1", 0, "127.0.0.1", timeout_s=0.05)
     tr.expect_period(1e-3)
     try:
-        assert _stream(tr, 500, 1e-3) == list(range(500)) and tr.polled == 0
+        _stream(tr, 500, 1e-3)  # every one, or the newest of those waiting: none lost, none twice, in order
+        assert tr.polled == 0
         t0 = time.perf_counter()
         assert tr.receive() is None  # then the kernel's receive time-out (SO_RCVTIMEO)
         assert time.perf_counter() - t0 >= 0.04

@@ -20,13 +20,16 @@ import numpy as np
 EDGE_PX = 2.5  # [px] the matte reaches this far beyond the blob's radius (blur and anti-aliasing)
 RING_PX = 2.0  # [px] width of the background ring just outside it
 OFF_LINE = 0.6  # a pixel this share of the contrast away from every blend of background and ball weighs nothing
-MIN_CONTRAST = 10.0  # [grey levels] the ball's colour must differ from the background's by this much (RGB distance)
+MIN_CONTRAST = 10.0
+MAX_SHIFT_PX = 0.75  # [px] the outline's centre is off by a few tenths at most; a matte farther off saw something else
+MAX_ELONGATION = 1.3  # a motion-blurred streak: its ends reach the background ring (kept: the outline's centre)  # [grey levels] the ball's colour must differ from the background's by this much (RGB distance)
 
 
 def matte_centre(frame: np.ndarray, u: float, v: float, radius_px: float) -> tuple[float, float]:
     """The centre (u, v) [px] of the ball seen near the blob centre (u, v) of radius ``radius_px`` [px] in the BGR
     (or grey) ``frame``: the centroid of its matte (see the module). The blob's own centre where the matte cannot be
-    made (the ball at the image's edge, too little contrast) or strays more than the radius from it."""
+    made (the ball at the image's edge, too little contrast), strays more than MAX_SHIFT_PX from it or is elongated
+    (a motion-blurred streak)."""
     if not (math.isfinite(u) and math.isfinite(v) and math.isfinite(radius_px) and radius_px > 0):
         return u, v
     img = frame if frame.ndim == 3 else frame[:, :, None]
@@ -55,6 +58,14 @@ def matte_centre(frame: np.ndarray, u: float, v: float, radius_px: float) -> tup
     if total <= 0.0:
         return u, v
     cu, cv = float((alpha * xx).sum()) / total, float((alpha * yy).sum()) / total
-    if math.hypot(cu - u, cv - v) > radius_px:
-        return u, v
+    if math.hypot(cu - u, cv - v) > MAX_SHIFT_PX or _elongation(alpha, xx - cu, yy - cv, total) > MAX_ELONGATION:
+        return u, v  # not a refinement of the outline's centre: something else in the window, or a streak
     return cu, cv
+
+
+def _elongation(alpha: np.ndarray, dx: np.ndarray, dy: np.ndarray, total: float) -> float:
+    """Length / width of the matte's second-moment ellipse (1 for a disc)."""
+    cov = np.array([[(alpha * dx * dx).sum(), (alpha * dx * dy).sum()], [0.0, (alpha * dy * dy).sum()]]) / total
+    cov[1, 0] = cov[0, 1]
+    lo, hi = np.linalg.eigvalsh(cov)
+    return math.sqrt(hi / lo) if lo > 1e-9 else math.inf

@@ -40,3 +40,13 @@ def test_the_blob_s_centre_is_kept_where_no_matte_can_be_made():
     flat = np.full((120, 160, 3), 128, np.uint8)
     assert matte_centre(flat, 80.0, 60.0, 4.0) == (80.0, 60.0)  # nothing there: no contrast
     assert matte_centre(frame, float("nan"), 60.0, 4.0)[1] == 60.0
+
+
+def test_a_motion_blurred_streak_keeps_the_outline_s_centre():
+    import cv2
+
+    frame = lab_background((160, 120), 3).copy()
+    centres = np.stack([np.linspace(70.0, 90.0, 12), np.full(12, 60.0)], axis=1)  # 20 px of motion in the exposure
+    draw_pendulum(frame, np.array([80.0, 20.0]), centres, 4.0)
+    frame = cv2.GaussianBlur(frame, (0, 0), 0.5)
+    assert matte_centre(frame, 80.3, 60.2, 6.0) == (80.3, 60.2)

@@ -77,21 +77,25 @@ def _tracker_main(source: str, ball, options, file_fps: float | None, port: int,
     from lbrcli.lab.camera_publish import UdpPublisher
     from lbrcli.lab.camera_stream import read_stamp
     from tracking.live import LiveTracker
+    from tracking.subpixel import matte_centre
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the starter decides when it ends
     _yield_to_the_loop()
     pub = UdpPublisher("127.0.0.1", port)
-    index: dict[int, int] = {}  # frame seq → the camera's frame index
+    frames: dict[int, tuple] = {}  # frame seq → (the frame, the camera's frame index or None)
 
     def on_frame(seq: int, frame) -> None:  # noqa: ANN001
-        index[seq] = read_stamp(frame)
+        frames.clear()  # (the tracker takes the newest frame; one skipped never gets a result)
+        frames[seq] = (frame, read_stamp(frame) if stamp else None)
 
     def on_result(r) -> None:  # noqa: ANN001
-        k = index.pop(r.seq, None)
+        frame, k = frames.pop(r.seq, (None, None))
+        if frame is not None and r.found:  # the centre to a fraction of a pixel (tracking.subpixel)
+            u, v = matte_centre(frame, r.u, r.v, r.radius_px)
+            r = replace(r, u=u, v=v)
         pub.publish(r if k is None else replace(r, t_source=stamp[0] + k / stamp[1]))
 
-    tracker = LiveTracker(source, ball, options=options, on_result=on_result if stamp else pub.publish,
-                          on_frame=on_frame if stamp else None, file_fps=file_fps)  # fmt: skip
+    tracker = LiveTracker(source, ball, options=options, on_result=on_result, on_frame=on_frame, file_fps=file_fps)
     try:
         tracker.start()
     except InputError as exc:
@@ -149,7 +153,8 @@ class CameraTilt:
         self.string_source = ""  # "camera" (measured hanging) or "assumed"
         self.hanging_gap_m = math.nan  # [m] how far off the vertical under the pivot the hanging ball was seen
         self.view_px_per_deg: tuple[float, float] | None = None  # [px] a 1° tilt toward x, y moves the ball (at least)
-        self._hanging: list[tuple[float, float, float]] = []  # (moment, length, gap) while the robot stood still
+        self.zero_px = (0.0, 0.0)  # [px] the hanging ball's centre off where the geometry puts it (see freeze())
+        self._hanging: list[tuple] = []  # (moment, length, gap, u, v, pivot) while the robot stood still
         self._latest: TiltReading | None = None
         self._prev_ball: np.ndarray | None = None
         self._last_result = math.nan  # [s, monotonic] of the newest result, found or not
@@ -254,6 +259,7 @@ class CameraTilt:
             "camera_source": str(self.source), "camera_fps": self.fps, "camera_size": list(self.size) if self.size else None,
             "camera_string_m": self.string_m, "camera_string_source": self.string_source or None,
             "camera_hanging_gap_mm": self.hanging_gap_m * 1e3 if math.isfinite(self.hanging_gap_m) else None,
+            "camera_zero_px": list(self.zero_px),
             "camera_delay_ms": self.camera_delay_s * 1e3, "camera_results": self.results, "camera_readings": self.readings,
             "camera_readings_ambiguous": self.ambiguous,
             "camera_position_m": None if self.geometry is None else [float(v) for v in self.geometry.centre],
@@ -301,10 +307,23 @@ class CameraTilt:
             self.string_m = float(np.median([v[1] for v in views]))
             self.hanging_gap_m = float(np.median([v[2] for v in views]))
             self.string_source = "camera"
+            self.zero_px = self._zero(views, self.string_m)
         else:
             self.string_m = self.assumed_string_m
             self.string_source = "assumed"
         return self.string_m
+
+    def _zero(self, views: list[tuple], length: float) -> tuple[float, float]:
+        """The camera's zero [px]: the median offset of the hanging ball's centre from the projection of a ball
+        ``length`` [m] straight below the pivot. At rest the ball hangs plumb, so what is left is the camera's own
+        bias — the calibration's, the detector's (a string over the ball, the image's colour sampling) —, which
+        every tilt reading would carry as a constant tilt of bias / (pixels per radian) and the damper would chase.
+        (Along the vertical the bias went into the measured length; this is the part across it.)"""
+        down = np.array([0.0, 0.0, -length])
+        seen = np.array([(v[3], v[4]) for v in views])
+        expected = self.geometry.project(np.array([v[5] + down for v in views]))
+        du, dv = np.median(seen - expected, axis=0)
+        return (float(du), float(dv)) if math.isfinite(du) and math.isfinite(dv) else (0.0, 0.0)
 
     def latest(self) -> TiltReading | None:
         return self._latest
@@ -356,7 +375,7 @@ class CameraTilt:
             if q is not None:
                 L, gap, angle = hanging_length(self.geometry, uv, self._pivot(q))
                 if math.isfinite(L) and angle >= MIN_RAY_ANGLE and gap <= MAX_HANGING_GAP_M and 0.02 <= L <= 5.0:
-                    self._hanging.append((moment, L, gap))
+                    self._hanging.append((moment, L, gap, uv[0], uv[1], self._pivot(q)))
                     if len(self._hanging) > 1000:
                         del self._hanging[:500]
             return
@@ -365,6 +384,7 @@ class CameraTilt:
             q = self.q_rest
         if q is None:
             return
+        uv = (uv[0] - self.zero_px[0], uv[1] - self.zero_px[1])
         est = tilt_from_pixel(self.geometry, uv, self._pivot(q), length, self._prev_ball)
         self._prev_ball = est.ball
         self.ambiguous += int(est.ambiguous)

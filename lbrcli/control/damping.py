@@ -207,7 +207,9 @@ class DampingClient(TrajectoryPlayer):
     def _start_return(self, stop: StopSession) -> Sequence[float]:
         """The damping time is over: a jerk-limited move from the last command (and its velocity) to the last row."""
         self._finish = stop
-        self._return = OnlineMove(self.limits, self._period, self.move_scale)
+        # the offset (a millimetre or so) moved back fast would swing the ball by offset / length [rad]; a move that
+        # takes one swing period accelerates and brakes over half a period each, which cancel at the string's period
+        self._return = OnlineMove(self.limits, self._period, self.move_scale, self._period_T)
         self._replan_return()
         return self._returning(replanned=True)
 

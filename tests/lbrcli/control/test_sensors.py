@@ -120,3 +120,41 @@ def test_a_tracker_result_becomes_the_tilt_about_the_pivot_where_the_robot_was()
                 "t_source": math.nan})  # fmt: skip
     off = tilt.latest()
     assert math.degrees(math.hypot(off.theta_x - 0.1, off.theta_y + 0.05)) > 0.5
+
+
+def test_the_camera_s_bias_seen_on_the_hanging_ball_is_taken_off_every_tilt():
+    """A detector (or a calibration) that places the ball 0.4 px off to one side: the hanging ball shows it before
+    the first row (the camera's zero) and the tilts read afterwards do not carry it (without the zero, 0.4 px at
+    this view is a tilt of about 0.15°)."""
+    from lbrcli.options import make_robot
+
+    robot = make_robot("touch-electric", None)
+    q0 = np.array([0.0, 0.6, 0.0, -1.4, 0.0, 1.14, 0.0])
+    pivot = robot.fk(q0).translation
+    g = CameraGeometry.from_pose((1.3, 0.8, 0.9), pivot - [0, 0, 0.3], 50.0, (640, 480))
+    bias = np.array([0.4, 0.0])  # [px]
+    tilt = CameraTilt("none", g, robot, None, string_m=0.25, camera_delay_s=0.02, q_rest=q0)
+    t0 = 1000.0
+    for k in range(10):
+        tilt.observe(t0 + 0.01 * k, q0)
+
+    def take(seq: int, t: float, theta: tuple[float, float]) -> None:
+        u, v = g.project(pivot + 0.3 * string_direction(*theta))[0] + bias
+        tilt._take({"seq": seq, "t_capture": t, "latency_s": 0.001, "found": True, "u": u, "v": v,
+                    "t_source": math.nan})  # fmt: skip
+
+    for k in range(10):
+        take(k, t0 + 0.2 + 0.01 * k, (0.0, 0.0))
+    assert tilt.freeze() == pytest.approx(0.3, abs=2e-3)
+    assert math.hypot(*tilt.zero_px) > 0.3
+    take(20, t0 + 0.4, (0.01, -0.005))
+    r = tilt.latest()
+    assert math.degrees(abs(r.theta_x - 0.01)) < 0.01 and math.degrees(abs(r.theta_y + 0.005)) < 0.01
+    raw = CameraTilt("none", g, robot, None, string_m=0.3, camera_delay_s=0.02, q_rest=q0)
+    raw.freeze()  # no hanging view: the assumed length and no zero
+    u, v = g.project(pivot + 0.3 * string_direction(0.01, -0.005))[0] + bias
+    raw._take(
+        {"seq": 1, "t_capture": t0 + 0.4, "latency_s": 0.001, "found": True, "u": u, "v": v, "t_source": math.nan}
+    )
+    off = raw.latest()
+    assert math.degrees(math.hypot(off.theta_x - 0.01, off.theta_y + 0.005)) > 0.05

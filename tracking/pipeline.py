@@ -22,6 +22,7 @@ from .angle import plane_axes, plane_string_angle, string_angle
 from .calibration import CameraCalibration, to_plane, undistort_points
 from .color import ColorSpec
 from .detect import Blob
+from .second_look import SECOND_LOOK, recover
 from .tracker import BallTracker, TrackerOptions
 from .video import VideoInfo, iter_frames, prefetched, probe_video
 
@@ -118,18 +119,25 @@ class _Columns:
         self.radius: list[float] = []
         self.conf: list[float] = []
         self.piv: list[tuple[float, float]] = []
+        self.blobs: list[Blob | None] = []
 
     def add(self, t: float, ball: Blob | None, confidence: float) -> None:
         self.t.append(t)
+        self.blobs.append(ball)
         self.uv.append((ball.u, ball.v) if ball is not None else _NAN2)
         self.radius.append(ball.radius_px if ball is not None else math.nan)
         self.conf.append(confidence if ball is not None else 0.0)
 
     def revise_ball(self, tracker: BallTracker) -> None:
         for k, blob, c in tracker.pop_revision():
-            self.uv[k] = (blob.u, blob.v) if blob is not None else _NAN2
-            self.radius[k] = blob.radius_px if blob is not None else math.nan
-            self.conf[k] = c if blob is not None else 0.0
+            self.set_ball(k, blob, c)
+
+    def set_ball(self, k: int, blob: Blob | None, c: float) -> None:
+        """Frame k's ball: its blob (None when not found) with confidence c."""
+        self.blobs[k] = blob
+        self.uv[k] = (blob.u, blob.v) if blob is not None else _NAN2
+        self.radius[k] = blob.radius_px if blob is not None else math.nan
+        self.conf[k] = c if blob is not None else 0.0
 
     def revise_pivot(self, tracker: BallTracker) -> None:
         for k, blob, _ in tracker.pop_revision():
@@ -175,6 +183,19 @@ class _Trackers:
         if self.pivot is not None:
             self.pivot.finish()
             self.columns.revise_pivot(self.pivot)
+
+    def second_look(self, path: str, fps: float | None) -> None:
+        """The ball's frames recovered by a second look (:func:`tracking.second_look.recover`), with a note."""
+        cols = self.columns
+        got = recover(self.ball, path, fps, cols.blobs, cols.t, cols.piv, cols.conf)
+        for k, blob in got:
+            cols.set_ball(k, blob, SECOND_LOOK)
+        if got:
+            first, last = min(k for k, _ in got), max(k for k, _ in got)
+            self.ball.notes.append(
+                f"second look: {len(got)} frames between t = {cols.t[first]:.3f} and {cols.t[last]:.3f} s found going "
+                "back from the confirmed track"
+            )
 
     def notes(self) -> tuple[str, ...]:
         return tuple(self.ball.notes) + tuple(f"pivot marker: {n}" for n in (self.pivot.notes if self.pivot else ()))
@@ -235,13 +256,16 @@ def track_video(
     fps: float | None = None,
     progress: Callable[[int], None] | None = None,
     on_frame: Callable[[np.ndarray, FrameResult], None] | None = None,
+    second_look: bool = True,
 ) -> Track:
     """Track the ball through every frame of a video.
 
     pivot_uv: fixed pivot [px] in the raw image, or pivot_color: colour of a pivot marker to track (not
     both). fps [1/s] overrides the container's frame rate (times = index / fps). progress(frames_done) and
-    on_frame(bgr, result) are called after each frame (e.g. to draw a preview). Raises InputError for
-    unreadable videos or a calibration made for another image size.
+    on_frame(bgr, result) are called after each frame (e.g. to draw a preview). second_look: the frames before a
+    confirmed stretch of the track where the ball was not found are searched again going back from it
+    (:mod:`tracking.second_look`). Raises InputError for unreadable videos or a calibration made for another image
+    size.
     """
     info = _check_inputs(path, pivot_uv, pivot_color, calibration)
     trackers = _Trackers(ball, options, pivot_uv, pivot_color, pivot_options)
@@ -253,4 +277,6 @@ def track_video(
         if progress is not None:
             progress(k + 1)
     trackers.finish()
+    if second_look:
+        trackers.second_look(str(path), fps)
     return _make_track(trackers, angle, calibration, info)

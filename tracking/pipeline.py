@@ -21,7 +21,7 @@ from trajectories.errors import InputError
 from .angle import plane_axes, plane_string_angle, string_angle
 from .calibration import CameraCalibration, to_plane, undistort_points
 from .color import ColorSpec
-from .detect import Blob
+from .detect import Blob, refine_centre
 from .second_look import SECOND_LOOK, recover
 from .tracker import BallTracker, TrackerOptions
 from .video import VideoInfo, iter_frames, prefetched, probe_video
@@ -111,7 +111,8 @@ _NAN2 = (math.nan, math.nan)
 
 class _Columns:
     """The per-frame results gathered while tracking — time, ball centre, radius and confidence, pivot — with the
-    frames the trackers revise rewritten in place (the on_frame preview shows what was known at the time)."""
+    frames the trackers revise rewritten in place (the on_frame preview shows what was known at the time). A blob's
+    centre is its refined one (:func:`tracking.detect.refine_centre`) when it was refined on its frame."""
 
     def __init__(self) -> None:
         self.t: list[float] = []
@@ -120,13 +121,14 @@ class _Columns:
         self.conf: list[float] = []
         self.piv: list[tuple[float, float]] = []
         self.blobs: list[Blob | None] = []
+        self.refined: dict[int, tuple[Blob, tuple[float, float]]] = {}  # frame → (blob, its refined centre [px])
+        self.refined_pivot: dict[int, tuple[Blob, tuple[float, float]]] = {}
 
     def add(self, t: float, ball: Blob | None, confidence: float) -> None:
         self.t.append(t)
-        self.blobs.append(ball)
-        self.uv.append((ball.u, ball.v) if ball is not None else _NAN2)
-        self.radius.append(ball.radius_px if ball is not None else math.nan)
-        self.conf.append(confidence if ball is not None else 0.0)
+        for column, empty in ((self.blobs, None), (self.uv, _NAN2), (self.radius, math.nan), (self.conf, 0.0)):
+            column.append(empty)
+        self.set_ball(len(self.t) - 1, ball, confidence)
 
     def revise_ball(self, tracker: BallTracker) -> None:
         for k, blob, c in tracker.pop_revision():
@@ -135,13 +137,21 @@ class _Columns:
     def set_ball(self, k: int, blob: Blob | None, c: float) -> None:
         """Frame k's ball: its blob (None when not found) with confidence c."""
         self.blobs[k] = blob
-        self.uv[k] = (blob.u, blob.v) if blob is not None else _NAN2
+        self.uv[k] = _centre(self.refined, k, blob)
         self.radius[k] = blob.radius_px if blob is not None else math.nan
         self.conf[k] = c if blob is not None else 0.0
 
     def revise_pivot(self, tracker: BallTracker) -> None:
         for k, blob, _ in tracker.pop_revision():
-            self.piv[k] = (blob.u, blob.v) if blob is not None else _NAN2
+            self.piv[k] = _centre(self.refined_pivot, k, blob)
+
+
+def _centre(refined: dict[int, tuple[Blob, tuple[float, float]]], k: int, blob: Blob | None) -> tuple[float, float]:
+    """Frame k's centre [px] of the blob: refined when this blob was refined on that frame (NaN for no blob)."""
+    if blob is None:
+        return _NAN2
+    got = refined.get(k)
+    return got[1] if got is not None and got[0] is blob else (blob.u, blob.v)
 
 
 class _Trackers:
@@ -165,13 +175,18 @@ class _Trackers:
     def step(self, frame: np.ndarray, t: float) -> tuple[Blob | None, tuple[float, float] | None]:
         """Track one frame: (the ball's blob or None, the pivot [px] or None)."""
         cols = self.columns
+        k = len(cols.t)
         p: tuple[float, float] | None = self.fixed
         if self.pivot is not None:
             pb = self.pivot.update(frame, t)
             cols.revise_pivot(self.pivot)
-            p = (pb.u, pb.v) if pb is not None and self.pivot.confidence >= self.sure else None
+            if pb is not None:
+                cols.refined_pivot[k] = (pb, refine_centre(frame, self.pivot.spec, pb))
+            p = _centre(cols.refined_pivot, k, pb) if pb is not None and self.pivot.confidence >= self.sure else None
         cols.piv.append(p if p is not None else _NAN2)
         b = self.ball.update(frame, t, p)
+        if b is not None:
+            cols.refined[k] = (b, refine_centre(frame, self.ball.spec, b))
         cols.revise_ball(self.ball)
         cols.add(t, b, self.ball.confidence)
         return b, p
@@ -188,10 +203,11 @@ class _Trackers:
         """The ball's frames recovered by a second look (:func:`tracking.second_look.recover`), with a note."""
         cols = self.columns
         got = recover(self.ball, path, fps, cols.blobs, cols.t, cols.piv, cols.conf)
-        for k, blob in got:
+        for k, blob, centre in got:
+            cols.refined[k] = (blob, centre)
             cols.set_ball(k, blob, SECOND_LOOK)
         if got:
-            first, last = min(k for k, _ in got), max(k for k, _ in got)
+            first, last = min(k for k, _, _ in got), max(k for k, _, _ in got)
             self.ball.notes.append(
                 f"second look: {len(got)} frames between t = {cols.t[first]:.3f} and {cols.t[last]:.3f} s found going "
                 "back from the confirmed track"

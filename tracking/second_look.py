@@ -17,7 +17,7 @@ from typing import Iterable
 
 import numpy as np
 
-from .detect import Blob
+from .detect import Blob, refine_centre
 from .tracker import CONFIRMED, BallTracker, Prediction, follower_from
 
 SECOND_LOOK = 0.75  # confidence of a frame recovered by the second look
@@ -25,7 +25,9 @@ GATE_RADII = 1.5  # a fix lies within this many ball radii of the backward predi
 GATE_MIN_PX = 6.0  # [px] ... or this (a pendulum departs from a straight line by ½·a·Δt², a few pixels per frame)
 MAX_MISSES = 2  # the chain ends after this many frames in a row without a fix (a ghost of the ball lingers there)
 AREA_RANGE = (0.75, 1.5)  # a fix reported by the second look has this share of the confirmed ball's area ...
-MAX_ASPECT = 1.4  # ... and is this round (length / width)
+MAX_ASPECT = 1.4  # ... and is this round (length / width) — or hangs still:
+STILL_PX = 1.0  # [px] moved at most this from the frame after it, ...
+PLUMB_DEG = 2.0  # ... within this of the vertical below the pivot (a turning point of a swing is farther off)
 MEMORY_BUDGET_BYTES = 256 * 2**20  # frames kept in memory for one second look at most
 
 
@@ -95,9 +97,14 @@ def look_back(
             misses += 1
             continue
         misses = 0
-        f.accept(blob, -t, pred)  # followed on, but reported only when round and of the ball's area: a ball the
-        if blob.aspect <= MAX_ASPECT and AREA_RANGE[0] * area_px <= blob.area_px <= AREA_RANGE[1] * area_px:
-            out.append((k, blob))  # codec updated only in part, or merged with its ghost, is centred off
+        last = f.fixes[-1]
+        still = math.hypot(blob.u - last.u, blob.v - last.v) <= STILL_PX
+        f.accept(blob, -t, pred)  # followed on, but reported only when round and of the ball's area (a ball the
+        # codec updated only in part, or merged with its ghost, is centred off), or hanging still below the pivot
+        if (blob.aspect <= MAX_ASPECT and AREA_RANGE[0] * area_px <= blob.area_px <= AREA_RANGE[1] * area_px) or (
+            still and _hangs(blob, pivot)
+        ):
+            out.append((k, blob))
     return out
 
 
@@ -115,10 +122,11 @@ def recover(
     times: list[float],
     pivots: list[tuple[float, float]],
     confidence: list[float],
-) -> list[tuple[int, Blob]]:
+) -> list[tuple[int, Blob, tuple[float, float]]]:
     """The second look over a tracked video (``path``, decoded again up to the last gap, ``fps`` as first): the
     (frame index, blob) recovered before each confirmed stretch that follows frames not found. blobs, times [s],
-    pivots [px] (NaN when unknown) and confidence are the first pass's, per frame."""
+    pivots [px] (NaN when unknown) and confidence are the first pass's, per frame. Each blob comes with its refined
+    centre [px] (:func:`tracking.detect.refine_centre`)."""
     from .video import iter_frames
 
     sure = tracker.options.min_confidence
@@ -140,12 +148,20 @@ def recover(
         if k in wanted:
             frames[k] = frame
     area = float(np.median([b.area_px for b, c in zip(blobs, conf) if b is not None and c >= CONFIRMED]))
-    out: list[tuple[int, Blob]] = []
+    out: list[tuple[int, Blob, tuple[float, float]]] = []
     for anchor, ks in needed.items():
         stretch = [(times[anchor + i], blobs[anchor + i]) for i in range(3)]
         back = ((k, times[k], frames[k], _pivot(pivots[k])) for k in ks if k in frames)
-        out += look_back(tracker, stretch, back, area)
+        out += [(k, b, refine_centre(frames[k], tracker.spec, b)) for k, b in look_back(tracker, stretch, back, area)]
     return out
+
+
+def _hangs(blob: Blob, pivot: tuple[float, float] | None) -> bool:
+    """The blob lies below the pivot within PLUMB_DEG of the vertical (False when the pivot is unknown)."""
+    if pivot is None:
+        return False
+    du, dv = blob.u - pivot[0], blob.v - pivot[1]
+    return dv > 0 and abs(math.degrees(math.atan2(du, dv))) <= PLUMB_DEG
 
 
 def _pivot(p: tuple[float, float]) -> tuple[float, float] | None:

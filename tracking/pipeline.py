@@ -59,6 +59,7 @@ class Track:
     extra: tuple[
         tuple[str, np.ndarray], ...
     ] = ()  # more (name, (n,) values) columns, written last (live: tilt, latency)
+    second_look_frames: int = 0  # frames found by the second look (tracking.second_look)
 
     @property
     def found_fraction(self) -> float:
@@ -171,6 +172,7 @@ class _Trackers:
         self.fixed = None if pivot_uv is None else (float(pivot_uv[0]), float(pivot_uv[1]))
         self.sure = self.ball.options.min_confidence
         self.columns = _Columns()
+        self.recovered = 0  # frames found by the second look
 
     def step(self, frame: np.ndarray, t: float) -> tuple[Blob | None, tuple[float, float] | None]:
         """Track one frame: (the ball's blob or None, the pivot [px] or None)."""
@@ -200,18 +202,13 @@ class _Trackers:
             self.columns.revise_pivot(self.pivot)
 
     def second_look(self, path: str, fps: float | None) -> None:
-        """The ball's frames recovered by a second look (:func:`tracking.second_look.recover`), with a note."""
+        """The ball's frames recovered by a second look (:func:`tracking.second_look.recover`), counted."""
         cols = self.columns
         got = recover(self.ball, path, fps, cols.blobs, cols.t, cols.piv, cols.conf)
         for k, blob, centre in got:
             cols.refined[k] = (blob, centre)
             cols.set_ball(k, blob, SECOND_LOOK)
-        if got:
-            first, last = min(k for k, _, _ in got), max(k for k, _, _ in got)
-            self.ball.notes.append(
-                f"second look: {len(got)} frames between t = {cols.t[first]:.3f} and {cols.t[last]:.3f} s found going "
-                "back from the confirmed track"
-            )
+        self.recovered = len(got)
 
     def notes(self) -> tuple[str, ...]:
         return tuple(self.ball.notes) + tuple(f"pivot marker: {n}" for n in (self.pivot.notes if self.pivot else ()))
@@ -257,6 +254,7 @@ def _make_track(
         theta_in_plane=angle.axes is not None,
         confidence=np.where(seen, conf_a, 0.0),
         unsure=seen & ~trusted,
+        second_look_frames=trackers.recovered,
     )
 
 

@@ -24,7 +24,8 @@ SECOND_LOOK = 0.75  # confidence of a frame recovered by the second look
 GATE_RADII = 1.5  # a fix lies within this many ball radii of the backward prediction (constant velocity) ...
 GATE_MIN_PX = 6.0  # [px] ... or this (a pendulum departs from a straight line by ½·a·Δt², a few pixels per frame)
 MAX_MISSES = 2  # the chain ends after this many frames in a row without a fix (a ghost of the ball lingers there)
-AREA_RANGE = (0.75, 1.5)  # a fix reported by the second look has this share of the confirmed ball's area ...
+SATURATION_SHARE = 0.85  # a fix reported by the second look is this saturated relative to the ball's last fixes,
+AREA_RANGE = (0.75, 1.5)  # ... has this share of the confirmed ball's area ...
 MAX_ASPECT = 1.4  # ... and is this round (length / width) — or hangs still:
 STILL_PX = 1.0  # [px] moved at most this from the frame after it, ...
 PLUMB_DEG = 2.0  # ... within this of the vertical below the pivot (a turning point of a swing is farther off)
@@ -99,11 +100,13 @@ def look_back(
         misses = 0
         last = f.fixes[-1]
         still = math.hypot(blob.u - last.u, blob.v - last.v) <= STILL_PX
-        f.accept(blob, -t, pred)  # followed on, but reported only when round and of the ball's area (a ball the
-        # codec updated only in part, or merged with its ghost, is centred off), or hanging still below the pivot
-        if (blob.aspect <= MAX_ASPECT and AREA_RANGE[0] * area_px <= blob.area_px <= AREA_RANGE[1] * area_px) or (
-            still and _hangs(blob, pivot)
-        ):
+        peak = f.learned_saturation()
+        vivid = peak is None or not math.isfinite(blob.saturation) or blob.saturation >= SATURATION_SHARE * peak
+        f.accept(blob, -t, pred)  # followed on, but reported only when as saturated as the ball has been and round
+        # and of its area (a ball the codec updated only in part, smeared, or merged with its ghost, is centred off),
+        # or hanging still below the pivot
+        whole = blob.aspect <= MAX_ASPECT and AREA_RANGE[0] * area_px <= blob.area_px <= AREA_RANGE[1] * area_px
+        if (vivid and whole) or (still and _hangs(blob, pivot)):
             out.append((k, blob))
     return out
 

@@ -205,6 +205,10 @@ class _Follower:
             self._peak_cache = (median(sats) if sats else None,)
         return self._peak_cache[0]
 
+    def learned_saturation(self) -> float | None:
+        """The ball's learned peak saturation (0–255; the median of the last fixes'), None before any."""
+        return self._peak()
+
     def min_radius(self) -> float:
         """Radius [px] of the smallest blob that can still be the ball (area_ratio_max below the learned area)."""
         return self.radius() / math.sqrt(self.options.area_ratio_max)

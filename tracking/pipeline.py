@@ -21,7 +21,8 @@ from trajectories.errors import InputError
 from .angle import plane_axes, plane_string_angle, string_angle
 from .calibration import CameraCalibration, to_plane, undistort_points
 from .color import ColorSpec
-from .detect import Blob
+from .detect import Blob, refine_centre
+from .second_look import SECOND_LOOK, recover
 from .tracker import BallTracker, TrackerOptions
 from .video import VideoInfo, iter_frames, prefetched, probe_video
 
@@ -58,6 +59,7 @@ class Track:
     extra: tuple[
         tuple[str, np.ndarray], ...
     ] = ()  # more (name, (n,) values) columns, written last (live: tilt, latency)
+    second_look_frames: int = 0  # frames found by the second look (tracking.second_look)
 
     @property
     def found_fraction(self) -> float:
@@ -110,7 +112,8 @@ _NAN2 = (math.nan, math.nan)
 
 class _Columns:
     """The per-frame results gathered while tracking — time, ball centre, radius and confidence, pivot — with the
-    frames the trackers revise rewritten in place (the on_frame preview shows what was known at the time)."""
+    frames the trackers revise rewritten in place (the on_frame preview shows what was known at the time). A blob's
+    centre is its refined one (:func:`tracking.detect.refine_centre`) when it was refined on its frame."""
 
     def __init__(self) -> None:
         self.t: list[float] = []
@@ -118,22 +121,38 @@ class _Columns:
         self.radius: list[float] = []
         self.conf: list[float] = []
         self.piv: list[tuple[float, float]] = []
+        self.blobs: list[Blob | None] = []
+        self.refined: dict[int, tuple[Blob, tuple[float, float]]] = {}  # frame → (blob, its refined centre [px])
+        self.refined_pivot: dict[int, tuple[Blob, tuple[float, float]]] = {}
 
     def add(self, t: float, ball: Blob | None, confidence: float) -> None:
         self.t.append(t)
-        self.uv.append((ball.u, ball.v) if ball is not None else _NAN2)
-        self.radius.append(ball.radius_px if ball is not None else math.nan)
-        self.conf.append(confidence if ball is not None else 0.0)
+        for column, empty in ((self.blobs, None), (self.uv, _NAN2), (self.radius, math.nan), (self.conf, 0.0)):
+            column.append(empty)
+        self.set_ball(len(self.t) - 1, ball, confidence)
 
     def revise_ball(self, tracker: BallTracker) -> None:
         for k, blob, c in tracker.pop_revision():
-            self.uv[k] = (blob.u, blob.v) if blob is not None else _NAN2
-            self.radius[k] = blob.radius_px if blob is not None else math.nan
-            self.conf[k] = c if blob is not None else 0.0
+            self.set_ball(k, blob, c)
+
+    def set_ball(self, k: int, blob: Blob | None, c: float) -> None:
+        """Frame k's ball: its blob (None when not found) with confidence c."""
+        self.blobs[k] = blob
+        self.uv[k] = _centre(self.refined, k, blob)
+        self.radius[k] = blob.radius_px if blob is not None else math.nan
+        self.conf[k] = c if blob is not None else 0.0
 
     def revise_pivot(self, tracker: BallTracker) -> None:
         for k, blob, _ in tracker.pop_revision():
-            self.piv[k] = (blob.u, blob.v) if blob is not None else _NAN2
+            self.piv[k] = _centre(self.refined_pivot, k, blob)
+
+
+def _centre(refined: dict[int, tuple[Blob, tuple[float, float]]], k: int, blob: Blob | None) -> tuple[float, float]:
+    """Frame k's centre [px] of the blob: refined when this blob was refined on that frame (NaN for no blob)."""
+    if blob is None:
+        return _NAN2
+    got = refined.get(k)
+    return got[1] if got is not None and got[0] is blob else (blob.u, blob.v)
 
 
 class _Trackers:
@@ -153,17 +172,23 @@ class _Trackers:
         self.fixed = None if pivot_uv is None else (float(pivot_uv[0]), float(pivot_uv[1]))
         self.sure = self.ball.options.min_confidence
         self.columns = _Columns()
+        self.recovered = 0  # frames found by the second look
 
     def step(self, frame: np.ndarray, t: float) -> tuple[Blob | None, tuple[float, float] | None]:
         """Track one frame: (the ball's blob or None, the pivot [px] or None)."""
         cols = self.columns
+        k = len(cols.t)
         p: tuple[float, float] | None = self.fixed
         if self.pivot is not None:
             pb = self.pivot.update(frame, t)
             cols.revise_pivot(self.pivot)
-            p = (pb.u, pb.v) if pb is not None and self.pivot.confidence >= self.sure else None
+            if pb is not None:
+                cols.refined_pivot[k] = (pb, refine_centre(frame, self.pivot.spec, pb))
+            p = _centre(cols.refined_pivot, k, pb) if pb is not None and self.pivot.confidence >= self.sure else None
         cols.piv.append(p if p is not None else _NAN2)
         b = self.ball.update(frame, t, p)
+        if b is not None:
+            cols.refined[k] = (b, refine_centre(frame, self.ball.spec, b))
         cols.revise_ball(self.ball)
         cols.add(t, b, self.ball.confidence)
         return b, p
@@ -175,6 +200,15 @@ class _Trackers:
         if self.pivot is not None:
             self.pivot.finish()
             self.columns.revise_pivot(self.pivot)
+
+    def second_look(self, path: str, fps: float | None) -> None:
+        """The ball's frames recovered by a second look (:func:`tracking.second_look.recover`), counted."""
+        cols = self.columns
+        got = recover(self.ball, path, fps, cols.blobs, cols.t, cols.piv, cols.conf)
+        for k, blob, centre in got:
+            cols.refined[k] = (blob, centre)
+            cols.set_ball(k, blob, SECOND_LOOK)
+        self.recovered = len(got)
 
     def notes(self) -> tuple[str, ...]:
         return tuple(self.ball.notes) + tuple(f"pivot marker: {n}" for n in (self.pivot.notes if self.pivot else ()))
@@ -220,6 +254,7 @@ def _make_track(
         theta_in_plane=angle.axes is not None,
         confidence=np.where(seen, conf_a, 0.0),
         unsure=seen & ~trusted,
+        second_look_frames=trackers.recovered,
     )
 
 
@@ -235,22 +270,30 @@ def track_video(
     fps: float | None = None,
     progress: Callable[[int], None] | None = None,
     on_frame: Callable[[np.ndarray, FrameResult], None] | None = None,
+    second_look: bool = True,
 ) -> Track:
     """Track the ball through every frame of a video.
 
     pivot_uv: fixed pivot [px] in the raw image, or pivot_color: colour of a pivot marker to track (not
     both). fps [1/s] overrides the container's frame rate (times = index / fps). progress(frames_done) and
-    on_frame(bgr, result) are called after each frame (e.g. to draw a preview). Raises InputError for
-    unreadable videos or a calibration made for another image size.
+    on_frame(bgr, result) are called after each frame (e.g. to draw a preview). second_look: the frames before a
+    confirmed stretch of the track where the ball was not found are searched again going back from it
+    (:mod:`tracking.second_look`). Raises InputError for unreadable videos or a calibration made for another image
+    size.
     """
     info = _check_inputs(path, pivot_uv, pivot_color, calibration)
     trackers = _Trackers(ball, options, pivot_uv, pivot_color, pivot_options)
     angle = ImageAngles(calibration, info.size)
-    for k, t, frame in prefetched(iter_frames(path, fps)):  # decoding overlaps the tracking
+    frames = iter_frames(path, fps)
+    if info.decoder_threads < 2:  # decoding overlaps the tracking: by the decoder's own threads, else by a thread of
+        frames = prefetched(frames)  # ours (on top of the decoder's, it only costs GIL hand-offs: ≈ 0.1–0.3 ms a frame)
+    for k, t, frame in frames:
         b, p = trackers.step(frame, t)
         if on_frame is not None:
             on_frame(frame, _shown(trackers, angle, k, t, b, p))
         if progress is not None:
             progress(k + 1)
     trackers.finish()
+    if second_look:
+        trackers.second_look(str(path), fps)
     return _make_track(trackers, angle, calibration, info)

@@ -205,6 +205,10 @@ class _Follower:
             self._peak_cache = (median(sats) if sats else None,)
         return self._peak_cache[0]
 
+    def learned_saturation(self) -> float | None:
+        """The ball's learned peak saturation (0–255; the median of the last fixes'), None before any."""
+        return self._peak()
+
     def min_radius(self) -> float:
         """Radius [px] of the smallest blob that can still be the ball (area_ratio_max below the learned area)."""
         return self.radius() / math.sqrt(self.options.area_ratio_max)
@@ -400,6 +404,17 @@ class _Follower:
         self._peak_cache = None
 
 
+def follower_from(tracker: "BallTracker", fixes: list[tuple[float, Blob]]) -> _Follower:
+    """A confirmed lock of the tracker's ball made of (time [s], blob) fixes in time order (the last is the newest):
+    the second look follows the confirmed ball from it (:mod:`tracking.second_look`)."""
+    t0, b0 = fixes[0]
+    f = _Follower(tracker.spec, tracker.options, b0, t0)
+    for t, b in fixes[1:]:
+        f.accept(b, t)
+    f.confirmed = True
+    return f
+
+
 def _last_jump(centres: list[tuple[float, float]], radius_px: float) -> int:
     """Index where the last continuous stretch of a followed candidate's centres (NaN where not seen) begins: a fix
     farther than 4 radii + 3 px + the distance covered at the last velocity from where that velocity would have taken
@@ -550,6 +565,23 @@ class BallTracker:
         self._learn(frame, t, blob, pivot_uv)
         return blob
 
+    def could_be_ball(self, blob: Blob, pivot_uv: tuple[float, float] | None) -> bool:
+        """Not on an object found not to be the ball, nor on a place static in its colour, nor beyond the string's
+        reach from the pivot (when known): what the second look asks of a fix (no state changes)."""
+        if not self._candidates([blob], 0.0):
+            return False
+        return self._in_reach(blob, pivot_uv)
+
+    def _in_reach(self, blob: Blob, pivot_uv) -> bool:
+        """Within (1 + string_tolerance) × the learned string length of the pivot (True while either is unknown)."""
+        L = self.string_px
+        if L is None or pivot_uv is None:
+            return True
+        return (
+            math.hypot(blob.u - pivot_uv[0], blob.v - pivot_uv[1])
+            <= (1.0 + self.options.string_tolerance) * L + 2.0 * blob.radius_px
+        )
+
     # ------------------------------------------------------------------ internals
 
     def _size_gates(self, frame: np.ndarray) -> None:
@@ -576,11 +608,7 @@ class BallTracker:
 
     def _within_string(self, f: _Follower, blob: Blob, pivot_uv) -> bool:
         """False for a fix farther from the pivot than the string reaches; after 3 in a row the lock is dropped."""
-        L = self.string_px
-        if L is None or pivot_uv is None:
-            return True
-        d = math.hypot(blob.u - pivot_uv[0], blob.v - pivot_uv[1])
-        if d <= (1.0 + self.options.string_tolerance) * L + 2.0 * blob.radius_px:
+        if self._in_reach(blob, pivot_uv):
             f.string_misses = 0
             return True
         self.rejected_string += 1

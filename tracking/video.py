@@ -30,6 +30,7 @@ class VideoInfo:
     height: int
     fps: float
     frame_count: int
+    decoder_threads: int = 1  # FFmpeg's threads decoding ahead of the reader (its default: the CPU count)
 
     @property
     def size(self) -> tuple[int, int]:
@@ -64,6 +65,7 @@ def _info(cap, spath: str) -> VideoInfo:
         height=int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)),
         fps=fps,
         frame_count=max(count, 0),
+        decoder_threads=max(int(cap.get(cv2.CAP_PROP_N_THREADS) or 1), 1),
     )
 
 

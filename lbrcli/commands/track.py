@@ -306,6 +306,7 @@ def video(
         "fps_given": fps,
         "theta_in_plane": track.theta_in_plane,
         "ambiguities": list(track.notes),
+        "second_look_frames": track.second_look_frames,
     }
     rep.print(
         f"{video_path}: {n} frames over {duration:.3f} s ({info.width}x{info.height}, {figures['fps_measured']:.2f} fps); "
@@ -314,6 +315,8 @@ def video(
     )
     for note in track.notes:
         rep.warn(f"several ball-like blobs: {note}")
+    if track.second_look_frames:
+        rep.print(f"second look: the ball found in {track.second_look_frames} more frames before confirmed stretches")
     if track.theta is not None:
         th = track.theta[np.isfinite(track.theta)]
         figures["theta_frames"] = int(len(th))

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from functools import lru_cache
 
 import numpy as np
 
@@ -374,45 +373,3 @@ def find_tiny(
             continue
         out.append(Blob(u, v, max(total / peak, float(area)), 1.0, 1.0, bool(clipped), peak))
     return out
-
-
-_REFINE_MIN_SATURATION = 40  # the colour's hue counts from this saturation on for the refined centre
-_REFINE_MARGIN_PX = 1.5  # [px] pixels this far beyond the blob's radius count (a soft or blocky edge)
-_REFINE_MAX_RADIUS_PX = 30.0  # [px] larger balls are measured precisely enough by their outline
-
-
-@lru_cache(maxsize=32)
-def _hue_only(spec: ColorSpec) -> ColorSpec:
-    from .color import with_min_saturation
-
-    return with_min_saturation(spec, min(_REFINE_MIN_SATURATION, min(b.lower[1] for b in spec.bands)))
-
-
-def refine_centre(bgr: np.ndarray, spec: ColorSpec, blob: Blob) -> tuple[float, float]:
-    """The blob's centre [px] weighted by how much more saturated than the background each pixel of the colour's hue
-    is, within its radius + 1.5 px of the blob's centroid: a sub-pixel centre that does not follow the blocky outline a
-    low-bitrate codec gives the thresholded mask. The blob's own centre when the ball is tiny (already so weighted) or
-    large, or when the weighted centre moves more than half a radius (something else of the colour in reach)."""
-    import cv2
-
-    r = blob.radius_px
-    if blob.area_px <= TINY_MAX_AREA_PX or r > _REFINE_MAX_RADIUS_PX:
-        return blob.u, blob.v
-    h, w = bgr.shape[:2]
-    reach = r + _REFINE_MARGIN_PX
-    x0, y0 = max(int(blob.u - reach), 0), max(int(blob.v - reach), 0)
-    x1, y1 = min(int(blob.u + reach) + 2, w), min(int(blob.v + reach) + 2, h)
-    hsv = cv2.cvtColor(bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
-    hue = color_mask(hsv, _hue_only(spec))
-    sat = hsv[:, :, 1]
-    background = cv2.mean(sat, cv2.bitwise_not(hue))[0] if cv2.countNonZero(hue) < hue.size else 0.0
-    inside = np.zeros_like(hue)  # the disc of reach around the centroid (4 fractional bits)
-    cv2.circle(inside, (round((blob.u - x0) * 16), round((blob.v - y0) * 16)), round(reach * 16), 255, -1, shift=4)
-    weight = cv2.bitwise_and(cv2.subtract(sat, max(background, _REFINE_MIN_SATURATION)), cv2.bitwise_and(hue, inside))
-    m = cv2.moments(weight)
-    if m["m00"] <= 0.0:
-        return blob.u, blob.v
-    u, v = m["m10"] / m["m00"] + x0, m["m01"] / m["m00"] + y0
-    if math.hypot(u - blob.u, v - blob.v) > 0.5 * r:
-        return blob.u, blob.v
-    return u, v

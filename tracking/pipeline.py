@@ -21,7 +21,8 @@ from trajectories.errors import InputError
 from .angle import plane_axes, plane_string_angle, string_angle
 from .calibration import CameraCalibration, to_plane, undistort_points
 from .color import ColorSpec
-from .detect import Blob, refine_centre
+from .detect import Blob
+from .subpixel import refine_centre
 from .second_look import SECOND_LOOK, recover
 from .tracker import BallTracker, TrackerOptions
 from .video import VideoInfo, iter_frames, prefetched, probe_video
@@ -113,7 +114,7 @@ _NAN2 = (math.nan, math.nan)
 class _Columns:
     """The per-frame results gathered while tracking — time, ball centre, radius and confidence, pivot — with the
     frames the trackers revise rewritten in place (the on_frame preview shows what was known at the time). A blob's
-    centre is its refined one (:func:`tracking.detect.refine_centre`) when it was refined on its frame."""
+    centre is its refined one (:func:`tracking.subpixel.refine_centre`) when it was refined on its frame."""
 
     def __init__(self) -> None:
         self.t: list[float] = []

@@ -17,7 +17,8 @@ from typing import Iterable
 
 import numpy as np
 
-from .detect import Blob, refine_centre
+from .detect import Blob
+from .subpixel import refine_centre
 from .tracker import CONFIRMED, BallTracker, Prediction, follower_from
 
 SECOND_LOOK = 0.75  # confidence of a frame recovered by the second look
@@ -129,7 +130,7 @@ def recover(
     """The second look over a tracked video (``path``, decoded again up to the last gap, ``fps`` as first): the
     (frame index, blob) recovered before each confirmed stretch that follows frames not found. blobs, times [s],
     pivots [px] (NaN when unknown) and confidence are the first pass's, per frame. Each blob comes with its refined
-    centre [px] (:func:`tracking.detect.refine_centre`)."""
+    centre [px] (:func:`tracking.subpixel.refine_centre`)."""
     from .video import iter_frames
 
     sure = tracker.options.min_confidence

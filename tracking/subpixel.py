@@ -1,4 +1,11 @@
-"""The ball's centre to a small fraction of a pixel: the centroid of a soft matte instead of a binary mask.
+"""The ball's centre to a small fraction of a pixel, two ways for two kinds of frame.
+
+- :func:`matte_centre` (the live camera's clean frames): the centroid of a soft matte instead of a binary mask, as
+  below.
+- :func:`refine_centre` (video files, often heavily compressed): the centroid of the colour's hue weighted by its
+  saturation above the background — a codec's 8×8 blocks and ringing blur the ball's colour into its surroundings, so
+  a matte between two medians misjudges the edge there, while saturation survives the chroma subsampling.
+
 
 A detected blob's centre (:mod:`.detect`) is the centroid of its thresholded outline: as the ball moves by a tenth of
 a pixel the outline changes by whole pixels or not at all, so the centre moves in steps of about 0.1–0.2 px for a
@@ -14,8 +21,12 @@ farther its colour is from every blend.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
+
+from .color import ColorSpec, color_mask
+from .detect import TINY_MAX_AREA_PX, Blob
 
 EDGE_PX = 2.5  # [px] the matte reaches this far beyond the blob's radius (blur and anti-aliasing)
 RING_PX = 2.0  # [px] width of the background ring just outside it
@@ -69,3 +80,45 @@ def _elongation(alpha: np.ndarray, dx: np.ndarray, dy: np.ndarray, total: float)
     cov[1, 0] = cov[0, 1]
     lo, hi = np.linalg.eigvalsh(cov)
     return math.sqrt(hi / lo) if lo > 1e-9 else math.inf
+
+
+_REFINE_MIN_SATURATION = 40  # the colour's hue counts from this saturation on for the refined centre
+_REFINE_MARGIN_PX = 1.5  # [px] pixels this far beyond the blob's radius count (a soft or blocky edge)
+_REFINE_MAX_RADIUS_PX = 30.0  # [px] larger balls are measured precisely enough by their outline
+
+
+@lru_cache(maxsize=32)
+def _hue_only(spec: ColorSpec) -> ColorSpec:
+    from .color import with_min_saturation
+
+    return with_min_saturation(spec, min(_REFINE_MIN_SATURATION, min(b.lower[1] for b in spec.bands)))
+
+
+def refine_centre(bgr: np.ndarray, spec: ColorSpec, blob: Blob) -> tuple[float, float]:
+    """The blob's centre [px] weighted by how much more saturated than the background each pixel of the colour's hue
+    is, within its radius + 1.5 px of the blob's centroid: a sub-pixel centre that does not follow the blocky outline a
+    low-bitrate codec gives the thresholded mask. The blob's own centre when the ball is tiny (already so weighted) or
+    large, or when the weighted centre moves more than half a radius (something else of the colour in reach)."""
+    import cv2
+
+    r = blob.radius_px
+    if blob.area_px <= TINY_MAX_AREA_PX or r > _REFINE_MAX_RADIUS_PX:
+        return blob.u, blob.v
+    h, w = bgr.shape[:2]
+    reach = r + _REFINE_MARGIN_PX
+    x0, y0 = max(int(blob.u - reach), 0), max(int(blob.v - reach), 0)
+    x1, y1 = min(int(blob.u + reach) + 2, w), min(int(blob.v + reach) + 2, h)
+    hsv = cv2.cvtColor(bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
+    hue = color_mask(hsv, _hue_only(spec))
+    sat = hsv[:, :, 1]
+    background = cv2.mean(sat, cv2.bitwise_not(hue))[0] if cv2.countNonZero(hue) < hue.size else 0.0
+    inside = np.zeros_like(hue)  # the disc of reach around the centroid (4 fractional bits)
+    cv2.circle(inside, (round((blob.u - x0) * 16), round((blob.v - y0) * 16)), round(reach * 16), 255, -1, shift=4)
+    weight = cv2.bitwise_and(cv2.subtract(sat, max(background, _REFINE_MIN_SATURATION)), cv2.bitwise_and(hue, inside))
+    m = cv2.moments(weight)
+    if m["m00"] <= 0.0:
+        return blob.u, blob.v
+    u, v = m["m10"] / m["m00"] + x0, m["m01"] / m["m00"] + y0
+    if math.hypot(u - blob.u, v - blob.v) > 0.5 * r:
+        return blob.u, blob.v
+    return u, v

@@ -319,7 +319,7 @@ def _releases(r: CatchRequest, swing: PivotPlan, p0: np.ndarray, axis: np.ndarra
     return Release(x, v, u, pivot, r.dt * math.ceil(last / r.dt + 1e-9) + r.dt)
 
 
-def _landings(model: StringModel, pivot: PivotMotion, lengths) -> list[tuple[float, float, float]]:
+def band_landings(model: StringModel, pivot: PivotMotion, lengths) -> list[tuple[float, float, float]]:
     """(time [s], y [m] from the start pose, vy [m/s]) where each length's ball comes down through the rim height
     above the anchor's height at the end (no cup in the way)."""
     out = []
@@ -357,7 +357,7 @@ class CatchSearch:
         members = tuple(BandMember(float(ln), m.ball.mass, s) for ln in lengths for s in shifts)
         self.r, self.rel, self.p0, self.axis, self.by, self.bz = r, rel, p0, axis, by, bz
         self.band = prepare_band(m, members, rel.pivot, rel.t_start)
-        self.lands = _landings(m, rel.pivot, lengths)
+        self.lands = band_landings(m, rel.pivot, lengths)
         if not self.lands:
             raise PlanningError("the released ball never comes down through the height of the rim")
         self.cache: dict[tuple, float] = {}
@@ -385,7 +385,8 @@ class CatchSearch:
                 self.cache[key] = -10.0
                 return self.cache[key]
             t = np.arange(len(path)) * r.dt
-            outs = judge_band(r.model, self.band, pivot_motion(t, self.p0, path, self.axis), float(t[-1]))
+            pivot = pivot_motion(t, self.p0, path, self.axis)
+            outs = judge_band(r.model, self.band, pivot, float(t[-1]), until_missed=True)
             self.cache[key] = band_score(outs, r.model.cup.inner_radius - r.model.ball.radius)
         return self.cache[key]
 

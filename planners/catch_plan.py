@@ -12,7 +12,8 @@
 3. Catch move (``catch_move``): a jerk-limited move in the base y–z plane to a position and velocity at a chosen
    time, then a brake to rest; a grid (every variant) and a Nelder–Mead search (the REFINED variants the grid puts
    first) maximise the share of the band caught (entry margin and relative entry speed as tie-breakers), the band
-   (5 lengths × the cup one period early, on time, late) stepped with ``string_stepper``.
+   (5 lengths × the cup one period early, on time, late) stepped with ``string_stepper`` — each ball only until it
+   passes outside the rim, where the search counts it as missed (most of the planning time is this search).
 4. The joint path (IK per sample, ``swingup_robot``), the limit check (jerk included), and the verdict from the
    nonlinear model driven by the TCP path the joints realise: the event-driven ``string_sim`` for the prediction,
    the stepper for every member of the robustness band (length × mass × timing of the cup after the release). The

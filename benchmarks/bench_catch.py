@@ -5,6 +5,8 @@ pipeline on ONE worker process (planning time on one core), robust by default an
 joint file is then judged again:
 - on the string model stepped at 1 ms (the simulator's integrator) over the whole band map — string length ±3 %
   (13 lengths) × ball mass ±20 % (3) × the cup's motion after the release one FRI period early / on time / late;
+- how the map's missed cases fail (their first crossing of the rim plane outside the opening, or entered and lost
+  again) and the spread of the landing points of 13 lengths across the band (no cup): what one cup must catch;
 - by the independent penalty-force judge (``planners.string_penalty``: Cartesian, stiff springs, spline anchor, its
   own cup geometry, semi-implicit Euler at 40 µs) on 5 lengths of the band as planned, and (at 0.1 ms) over its own
   band of a model the plan was not made for (48 cases): the cup's radius 10 % smaller and larger × restitution and friction
@@ -22,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import os
 import sys
 import tempfile
 import time
@@ -69,6 +72,32 @@ def _band_map(csv: str, length: float, n_length: int) -> tuple[np.ndarray, list]
     outs = judge_band(model, band, pivot, float(traj.t[-1]), substeps=5)
     grid = np.array([o.caught for o in outs], dtype=float).reshape(len(lengths), len(masses), len(shifts))
     return grid, outs
+
+
+def _failures(outs: list) -> dict:
+    """How the map's missed cases fail: the ball's first crossing of the rim plane passes outside the opening (rim),
+    it enters and leaves again or ends on the rim (bounce), or it never comes down into the rim plane at all."""
+    missed = [o for o in outs if not o.caught]
+    rim = sum(o.t_entry is None and o.margin is not None for o in missed)
+    bounce = sum(o.t_entry is not None for o in missed)
+    return {"rim": rim, "bounce": bounce, "other": len(missed) - rim - bounce}
+
+
+def _landing_spread(csv: str, length: float) -> float:
+    """[m] Spread along base y of where the balls of 13 string lengths across ±3 % come down through the rim height
+    (the written path, no cup in the way): what one cup position must catch."""
+    from planners.catch_plan import band_landings
+    from planners.string_model import StringModel
+    from planners.string_sim import PivotMotion
+    from trajectories.csvio import read_joint_csv
+    from trajectories.robot import Robot
+
+    traj = read_joint_csv(csv)
+    model = StringModel(length)
+    pos, rot = Robot().fk_path(traj.q)
+    pivot = PivotMotion(traj.t, pos, rot @ np.asarray(model.axis_flange))
+    ys = [y for _, y, _ in band_landings(model, pivot, length * (1 + 0.03 * np.linspace(-1, 1, MAP_LENGTHS)))]
+    return float(np.ptp(ys)) if len(ys) > 1 else math.nan
 
 
 def _penalty(csv: str, length: float, variants: dict) -> dict:
@@ -140,6 +169,7 @@ def run(
         for max_time in modes:  # the goal's 3 s first
             for length in lengths:
                 tag = f"l={length:g} m, {'robust' if max_time is None else '--max-time 3'}"
+                load = os.getloadavg()[0]  # the machine's 1-minute load before the plan (its times depend on it)
                 try:
                     f = _plan(length, folder, max_time)
                 except Exception as exc:  # a plan that cannot be made is a figure too
@@ -155,6 +185,7 @@ def run(
                     (f"{tag}: limits ok", float(f["limits_ok"]), "-"),
                     (f"{tag}: planning time, one worker", f["wall_s"], "s"),
                     (f"{tag}: planning CPU time, one worker", f["cpu_s"], "s"),
+                    (f"{tag}: load average before planning (2 cores)", load, "-"),
                 ]
                 entry = {
                     k: f[k]
@@ -169,11 +200,23 @@ def run(
                     )
                 }
                 entry["planning_cpu_s"] = f["cpu_s"]
+                entry["load_1min"] = load
                 entry["band_success"] = rob["success_fraction"]
                 if not quick or max_time is None:
-                    grid, _ = _band_map(f["csv"], length, 5 if quick else MAP_LENGTHS)
+                    grid, outs = _band_map(f["csv"], length, 5 if quick else MAP_LENGTHS)
                     entry["map_success"] = float(grid.mean())
-                    rows.append((f"{tag}: band map caught ({grid.size} cases, 1 ms steps)", float(grid.mean()), "-"))
+                    entry["map_failures"] = _failures(outs)
+                    entry["landing_spread_m"] = _landing_spread(f["csv"], length)
+                    rows += [
+                        (f"{tag}: band map caught ({grid.size} cases, 1 ms steps)", float(grid.mean()), "-"),
+                        (f"{tag}: map cases missed at the rim", entry["map_failures"]["rim"], "-"),
+                        (
+                            f"{tag}: map cases entered, then lost (bounce-out, rim)",
+                            entry["map_failures"]["bounce"],
+                            "-",
+                        ),
+                        (f"{tag}: landing spread over the length band (no cup)", entry["landing_spread_m"], "m"),
+                    ]
                     if length == 0.25 and max_time is None:
                         report["map"] = {
                             "lengths": list(length * (1 + 0.03 * np.linspace(-1, 1, grid.shape[0]))),

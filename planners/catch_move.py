@@ -157,15 +157,16 @@ def prepare_band(
 
 
 def judge_band(
-    base: StringModel, band: BandState, pivot: PivotMotion, t_end: float, substeps: int = 1
+    base: StringModel, band: BandState, pivot: PivotMotion, t_end: float, substeps: int = 1, until_missed: bool = False
 ) -> list[CatchOutcome]:
-    """Continue every member from the band state along ``pivot`` to t_end [s] and summarise each run."""
+    """Continue every member from the band state along ``pivot`` to t_end [s] and summarise each run
+    (``until_missed``: a member whose ball passes outside the rim is stopped there, ``string_stepper.step_path``)."""
     out = []
     for member, st0 in zip(band.members, band.steppers):
         st = copy.deepcopy(st0)
         st.m = member.model(base)  # the same string; the mass only changes the drag
         st.k = st.m.drag
-        step_path(st.m, pivot, t_end, substeps, state=st, shift=member.shift)
+        step_path(st.m, pivot, t_end, substeps, state=st, shift=member.shift, until_missed=until_missed)
         out.append(outcome(st.events, st.resting, st.inside))
     return out
 

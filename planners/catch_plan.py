@@ -12,7 +12,8 @@
 3. Catch move (``catch_move``): a jerk-limited move in the base y–z plane to a position and velocity at a chosen
    time, then a brake to rest; a grid (every variant) and a Nelder–Mead search (the REFINED variants the grid puts
    first) maximise the share of the band caught (entry margin and relative entry speed as tie-breakers), the band
-   (5 lengths × the cup one period early, on time, late) stepped with ``string_stepper``.
+   (5 lengths × the cup one period early, on time, late) stepped with ``string_stepper`` — each ball only until it
+   passes outside the rim, where the search counts it as missed (most of the planning time is this search).
 4. The joint path (IK per sample, ``swingup_robot``), the limit check (jerk included), and the verdict from the
    nonlinear model driven by the TCP path the joints realise: the event-driven ``string_sim`` for the prediction,
    the stepper for every member of the robustness band (length × mass × timing of the cup after the release). The
@@ -319,7 +320,7 @@ def _releases(r: CatchRequest, swing: PivotPlan, p0: np.ndarray, axis: np.ndarra
     return Release(x, v, u, pivot, r.dt * math.ceil(last / r.dt + 1e-9) + r.dt)
 
 
-def _landings(model: StringModel, pivot: PivotMotion, lengths) -> list[tuple[float, float, float]]:
+def band_landings(model: StringModel, pivot: PivotMotion, lengths) -> list[tuple[float, float, float]]:
     """(time [s], y [m] from the start pose, vy [m/s]) where each length's ball comes down through the rim height
     above the anchor's height at the end (no cup in the way)."""
     out = []
@@ -357,7 +358,7 @@ class CatchSearch:
         members = tuple(BandMember(float(ln), m.ball.mass, s) for ln in lengths for s in shifts)
         self.r, self.rel, self.p0, self.axis, self.by, self.bz = r, rel, p0, axis, by, bz
         self.band = prepare_band(m, members, rel.pivot, rel.t_start)
-        self.lands = _landings(m, rel.pivot, lengths)
+        self.lands = band_landings(m, rel.pivot, lengths)
         if not self.lands:
             raise PlanningError("the released ball never comes down through the height of the rim")
         self.cache: dict[tuple, float] = {}
@@ -385,7 +386,8 @@ class CatchSearch:
                 self.cache[key] = -10.0
                 return self.cache[key]
             t = np.arange(len(path)) * r.dt
-            outs = judge_band(r.model, self.band, pivot_motion(t, self.p0, path, self.axis), float(t[-1]))
+            pivot = pivot_motion(t, self.p0, path, self.axis)
+            outs = judge_band(r.model, self.band, pivot, float(t[-1]), until_missed=True)
             self.cache[key] = band_score(outs, r.model.cup.inner_radius - r.model.ball.radius)
         return self.cache[key]
 

@@ -357,13 +357,15 @@ def step_path(
     state: StringStepper | None = None,
     shift: float = 0.0,
     record: bool = False,
+    until_missed: bool = False,
 ):
     """Step the ball along a ``string_sim.PivotMotion`` to ``t_end`` [s], ``substeps`` intervals per sample step:
     from the pivot's first sample (hanging, or s0, ṡ0), or on from ``state`` (a stepper at its time ``t``, which is
     advanced in place). ``shift`` [s]: once the ball is slack the anchor is read at t − shift — the cup's motion
     after the release that much late (negative: early), continuing from where the anchor is then (a pivot that is
-    moving then does not jump). Returns the stepper and, with ``record``, the (times,
-    ball positions, phase codes) at the interval ends."""
+    moving then does not jump). ``until_missed``: stop once the ball's first downward crossing of the rim plane
+    passed outside the opening (a search's shortcut: such a ball is missed unless a later bounce brings it in).
+    Returns the stepper and, with ``record``, the (times, ball positions, phase codes) at the interval ends."""
     h = pivot.h / substeps
     if state is None:
         t = pivot.t0
@@ -377,17 +379,29 @@ def step_path(
     lag = 0.0
     offset: Vec3 = (0.0, 0.0, 0.0)
     n = int(math.floor((t_end - t0) / h + 1e-9))
+    seen = len(st.events)
+    nxt = None  # the anchor's state at the end of the last interval: the start of the next one
     for i in range(n):
         t = t0 + i * h
         if shift and not lag and st.phase != TAUT:
-            lag = shift
+            lag, nxt = shift, None
             # the cup goes on from where it is: a pivot moving when the shift begins does not jump (at rest: 0)
             offset = sub(pivot.state(t)[0], pivot.state(t - lag)[0])
-        p, v, a = pivot.state(t - lag)
+        p, v, a = nxt if nxt is not None else pivot.state(t - lag)
+        nxt = pivot.state(t + h - lag)
         if lag:
             p = axpy(1.0, offset, p)
-        a1 = pivot.state(t + h - lag)[2]
-        st.advance(h, p, v, a, a1, pivot.axis(t - lag))
+        st.advance(h, p, v, a, nxt[2], pivot.axis(t - lag))
         if rec is not None:
             rec[0].append(st.t), rec[1].append(st.b), rec[2].append(st.phase_code)
+        if until_missed and len(st.events) > seen:
+            seen = len(st.events)
+            if _missed(st.events):
+                break
     return st, rec
+
+
+def _missed(events) -> bool:
+    """The first downward crossing of the rim plane among ``events`` passed outside the opening."""
+    first = next((e for e in events if e.kind == "entry"), None)
+    return first is not None and first.info["margin_m"] <= 0.0

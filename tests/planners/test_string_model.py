@@ -155,6 +155,19 @@ def test_a_ball_beside_the_rim_is_not_caught_and_says_how_far_out():
     assert "40 mm outside the rim" in o.failure
 
 
+@pytest.mark.parametrize("lateral", [0.0, 0.06])
+def test_a_search_stops_stepping_a_ball_at_its_miss_and_reaches_the_same_verdict(lateral):
+    model = StringModel(0.25, ball=NO_DRAG)
+    t, pos = fixed_pivot(1.5, 0.001)
+    full, _ = step_path(model, PivotMotion(t, pos), 1.4, state=_drop(model, 0.12, lateral=lateral))
+    short, _ = step_path(model, PivotMotion(t, pos), 1.4, state=_drop(model, 0.12, lateral=lateral), until_missed=True)
+    verdicts = [outcome(st.events, st.resting, st.inside) for st in (full, short)]
+    assert verdicts[0].caught == verdicts[1].caught == (lateral == 0.0)
+    assert verdicts[0].margin == verdicts[1].margin
+    fall = math.sqrt(2 * (0.12 - model.cup.rim_height) / G)  # [s] to the rim plane
+    assert short.t == pytest.approx(1.4, abs=1e-9) if lateral == 0.0 else fall < short.t < fall + 0.002
+
+
 def _swing_cases():
     """Free swings released by the string into a resting cup: (model, apex [deg]) of several lengths and cups."""
     cups = [

@@ -89,6 +89,7 @@ class ExecutedMotion:
         self.wrench_ramp = EffortRamp([b / EFFORT_RANGE_S for b in [max_force] * 3 + [max_moment] * 3], period_s)
         self.hold_cycles = hold_cycles
         self.prev = self.prev2 = self.prev3 = tuple(q)  # what the controller executed, newest first
+        self._s1 = self._s2 = self._s3 = self.prev  # the last commands sent, newest first
         self.active_sent = 0  # joint positions sent in COMMANDING_ACTIVE
         self.braking = False
         self.hold_left = 0
@@ -149,6 +150,9 @@ class ExecutedMotion:
             nxt = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(prev, prev2, cap))
             self.prev3, self.prev2, self.prev = prev2, prev, nxt
         self.extrapolated_cycles += n
+        if n:  # the client re-plans from here (it is told the periods it skipped): no offset from its old path
+            self._s1, self._s2, self._s3 = self.prev, self.prev2, self.prev3
+            self._forget_path()
         if self.braking and n:  # the stop's profile no longer starts where the robot is: re-plan it from there
             self.brake.start(self.prev, self.prev2, self.prev3)
         return n
@@ -157,24 +161,37 @@ class ExecutedMotion:
         """The controller's reflected counter says our last command had not reached it when it sent its message: it
         bridged that period (it held the velocity of the commands before) or executed our command late (our
         simulator carries a late command forward by its lateness). The message's ``position`` [rad] (the commanded
-        position it reports, else the measured one) may say which: the bridged position (within ``MATCH_TOL``) is the
-        executed history from now on — True, :attr:`rebased`; a braking stop is re-planned from it, any other motion
+        position it reports, else the measured one) may say which: the bridged position, or the command sent the
+        period before carried forward by a period (within ``MATCH_TOL``), is the executed history from now on — True, :attr:`rebased`; a braking stop is re-planned from it, any other motion
         rejoins the client's path (:class:`~lbrcli.fri.rejoin.Rejoin`); our command: nothing changes. Anything else
-        (a late command carried forward, a real robot's measured position, which lags): for the next ``ALT_CYCLES``
+        (a command later still, a real robot's measured position, which lags): for the next ``ALT_CYCLES``
         commands the envelope admits only what is admissible after either the sent or the bridged history."""
         cap = self.guard.max_step
         base = self._alt if self._alt is not None else (self.prev, self.prev2, self.prev3)  # losses in a row: its own
         bridged = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(base[1], base[2], cap))
         if position is not None and len(position) == 7:
-            if max(abs(x - y) for x, y in zip(position, bridged)) <= MATCH_TOL:
-                self._rebase((bridged, base[1], base[2]))
-                return True
+            # bridged, or the command we sent the period before carried forward by one period (a late reply)
+            late = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(self._s2, self._s3, cap))
+            for executed in (bridged, late):
+                new = (executed, base[1], base[2])  # (a history the envelope cannot brake from: not taken)
+                if (
+                    max(abs(x - y) for x, y in zip(position, executed)) <= MATCH_TOL
+                    and self.envelope.state_ok(*new) < 0
+                ):
+                    self._rebase(new)
+                    return True
             if max(abs(x - y) for x, y in zip(position, self.prev)) <= MATCH_TOL:  # it executed our command
                 self._alt, self._alt_left = None, 0
                 return False
         self._alt = (bridged, base[1], base[2])
         self._alt_left = ALT_CYCLES
+        self._forget_path()  # the executed history is a guess now: no offset planned from it
         return False
+
+    def _forget_path(self) -> None:
+        """No offset back onto the client's path (the client re-plans from the executed state, as after a clamp)."""
+        self._d1 = self._d2 = self._d3 = self._pend = None
+        self.rejoin.done = True
 
     def _rebase(self, new: tuple) -> None:
         """``new`` (three positions [rad], newest first) is the history the controller executed."""
@@ -315,6 +332,7 @@ class ExecutedMotion:
         """``q`` [rad] went out: in COMMANDING_ACTIVE the controller executes it."""
         if state == _CMD_ACTIVE:
             self.prev3, self.prev2, self.prev = self.prev2, self.prev, q
+            self._s3, self._s2, self._s1 = self._s2, self._s1, q  # (what was sent, also where a rebase replaced it)
             self.active_sent += 1
             self.rebased = False
             self._d3, self._d2, self._d1, self._pend = self._d2, self._d1, self._pend, None
@@ -330,4 +348,4 @@ class ExecutedMotion:
                 if self._alt_left <= 0:
                     self._alt = None
         else:
-            self.prev = self.prev2 = self.prev3 = q
+            self.prev = self.prev2 = self.prev3 = self._s1 = self._s2 = self._s3 = q

@@ -109,11 +109,15 @@ def test_jerk_limited_clients_are_clamped_in_jerk_too():
     assert v <= 1 + 1e-9 and a <= 1 + 1e-9 and j <= 1 + 1e-6
 
 
-def _bridging_session(m: ExecutedMotion, wants, lost: set[int], n: int, jerk: bool = True, braking_at: int = -1):
-    """A controller that bridges every reply in ``lost`` (cycle numbers) by holding the velocity, as KUKA's and the
-    scripted one do, and reports where it stands in its next message; ``wants(k)`` the client's command. The
-    executed positions and, per executed step, whether it was ours (our command) or the controller's bridge."""
-    exe, ours = [np.array(m.prev)] * 3, [True] * 3
+def _bridging_session(m: ExecutedMotion, wants, lost: set[int], n: int, jerk: bool = True, braking_at: int = -1,
+                      late: frozenset[int] = frozenset()):  # fmt: skip
+    """A controller that bridges every reply in ``lost`` or ``late`` (cycle numbers) by holding the velocity, as
+    KUKA's and the scripted one do, executes a ``late`` one a period later carried forward by that period (as our
+    simulator does, unless the next reply is in time), and reports where it stands in its next message;
+    ``wants(k)`` the client's command. The executed positions and, per executed step, whether it was ours (our
+    command, in time) or the controller's."""
+    exe, ours, sent = [np.array(m.prev)] * 3, [True] * 3, [np.array(m.prev)] * 2
+    lost = set(lost) | set(late)
     for k in range(n):
         if k - 1 in lost:  # the message says our last reply had not arrived: it shows where the robot is
             m.reply_lost(tuple(exe[-1]))
@@ -122,9 +126,14 @@ def _bridging_session(m: ExecutedMotion, wants, lost: set[int], n: int, jerk: bo
         want = wants(k)
         cmd, _, _, why = m.next_command(want, ACTIVE, POSITION, want, None, None, False, jerk)
         m.sent(tuple(cmd), ACTIVE)
-        bridged = k in lost
-        exe.append(2 * exe[-1] - exe[-2] if bridged else np.array(cmd))
-        ours.append(not bridged)
+        sent.append(np.array(cmd))
+        if k not in lost:
+            exe.append(sent[-1])
+        elif k - 1 in late:  # the late reply arrives now, carried forward by its lateness
+            exe.append(2 * sent[-2] - sent[-3])
+        else:
+            exe.append(2 * exe[-1] - exe[-2])
+        ours.append(k not in lost)
     return np.array(exe), np.array(ours)
 
 
@@ -139,9 +148,10 @@ def _our_ratios(exe: np.ndarray, ours: np.ndarray, dt: float, lim) -> tuple[floa
 
 def test_after_a_reply_the_controller_bridged_our_commands_rejoin_the_path_within_the_limits_of_what_it_executed():
     """A jerk-limited client (ruckig at half the limits intercepting a smooth wave at 20 % of A1's and A4's
-    acceleration limits, as the bridge's follower does); replies lost singly and two in a row. The controller's
-    bridge steps its acceleration to 0 (its own); every command after it keeps the velocity, acceleration and jerk
-    limits measured against the history the controller executed, and the motion is back on the client's path."""
+    acceleration limits, as the bridge's follower does); replies lost singly and two in a row, two late (the first
+    executed a period late). The controller's bridge steps its acceleration to 0 (its own); every command after it
+    keeps the velocity, acceleration and jerk limits measured against the history the controller executed, and the
+    motion is back on the client's path."""
     from lbrcli.bridge.tracker import ReferenceTracker
 
     lim, dt = default_limits(), 1e-3
@@ -155,9 +165,9 @@ def test_after_a_reply_the_controller_bridged_our_commands_rejoin_the_path_withi
 
     tracker = ReferenceTracker(lim.scaled(0.5), dt, m.prev)
     plan = [tuple(tracker.step(lambda t, k=k: ref(k * dt + t))) for k in range(1200)]
-    exe, ours = _bridging_session(m, lambda k: plan[k], {150, 220, 221, 400, 470}, 1200)
+    exe, ours = _bridging_session(m, lambda k: plan[k], {150, 220, 221, 400, 470}, 1200, late=frozenset({300, 301}))
     v, a, j = _our_ratios(exe, ours, dt, lim)
-    assert m.rebased_cycles == 5 and m.rejoin_cycles > 0 and not m.braking
+    assert m.rebased_cycles == 7 and m.rejoin_cycles > 0 and not m.braking
     assert v <= 1 + 1e-9 and a <= 1 + 1e-9 and j <= 1 + 1e-6
     assert np.abs(exe[-1] - plan[-1]).max() < 1e-12  # back on the client's path
 

@@ -61,7 +61,7 @@ class Rejoin:
             return (0.0,) * 7
         try:
             res = self._otg.update(self._inp, self._out)
-        except RuckigError:  # (its numerics on a degenerate offset, a few ulp from zero)
+        except (RuckigError, ValueError):  # (its numerics on a degenerate offset; a result code the binding lacks)
             res = Result.Error
         self.cycles += 1
         if res not in (Result.Working, Result.Finished):  # no profile: no offset

@@ -257,24 +257,27 @@ def _bands(quick: bool) -> list[tuple[str, float, str]]:
     for rate, ff in cases[:2] if quick else cases:
         for drop in (0.0, 0.01, 0.05) if quick else (0.0, 0.01, 0.05, 0.2):
             for late_ms in (2.0,) if quick else (1.0, 5.0):
-                worst, delays, ours, bridging, stopped = 0.0, [], [], [], 0
+                worst, delays, ours, bridging, stopped = math.nan, [], [], [], 0
                 for seed in (0,) if quick else (0, 1):
                     r = follow_in_lock_step(LockStepSource(rate, ff, seed=seed, lateness_s=late_ms * 1e-3), lim,
                                             drop=drop, seed=seed)  # fmt: skip
                     d = r.follower.timeline.delay
                     keep = r.t > 1.5
-                    stopped += int(r.t[-1] < 2.9)  # ended early: the braking stop after too many bridged commands
+                    ended = r.t[-1] < 2.9  # ended early: the braking stop after too many bridged commands
+                    stopped += int(ended)
                     ref = np.array([wave(x - d)[0] for x in r.t[keep]])
-                    if keep.any():
-                        worst = max(worst, float(np.degrees(np.abs(r.q[keep, 0] - r.q0[0] - ref).max())))
+                    if keep.any() and not ended:  # (the error of a session that kept following)
+                        err = float(np.degrees(np.abs(r.q[keep, 0] - r.q0[0] - ref).max()))
+                        worst = err if math.isnan(worst) else max(worst, err)
                     delays.append(d * 1e3)
                     ours.append(r.controller.motion_ratios(lim.velocity, lim.acceleration, lim.jerk))
                     bridging.append(r.controller.motion_ratios(lim.velocity, lim.acceleration, lim.jerk, bridged=True))
                 name = (
                     f"lock step {rate:g} Hz {'ff' if ff else 'positions'}, {drop:.0%} replies lost, {late_ms:g} ms late"
                 )
-                rows += [(f"{name}: max error behind the delay", worst, "deg"),
-                         (f"{name}: delay", max(delays), "ms"),
+                if not math.isnan(worst):  # (none when every session of the case ended early)
+                    rows.append((f"{name}: max error behind the delay", worst, "deg"))
+                rows += [(f"{name}: delay", max(delays), "ms"),
                          (f"{name}: sessions ended by the lost replies (braking stop)", float(stopped), "")]  # fmt: skip
                 for who, ratios in (("ours", ours), ("the controller's bridging steps", bridging)):
                     for i, what in enumerate(("velocity", "acceleration", "jerk")):

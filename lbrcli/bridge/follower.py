@@ -192,9 +192,10 @@ class TargetFollower(LBRClient):
             return self._q  # type: ignore[return-value]
         tracker = self._tracker
         ex = self.executed
-        if ex is not None and (self.skipped or ex.last_clamp > 0.0):  # (any clamp: the next step starts from it)
-            # the controller extrapolated our last commands (lost messages), or the safety core clamped one:
-            # re-plan from what it executed
+        if ex is not None and (self.skipped or (ex.last_clamp > 0.0 and ex.rejoin.done)):  # (any clamp: the next
+            # step starts from it) the controller extrapolated our last commands (lost messages), or the safety core
+            # clamped one: re-plan from what it executed (unless the core is taking the motion back onto our path
+            # after a command the controller bridged)
             tracker.reset(ex.position, ex.velocity, ex.acceleration)
         src = self.source
         if src.fresh:

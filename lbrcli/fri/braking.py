@@ -21,6 +21,16 @@ from trajectories.limits import JointLimits
 INSIDE = 1.0 - 1e-6  # the stop's limits, a hair inside the guard's (ruckig's rounding at the limits)
 
 
+def set_continuous_state(inp: InputParameter, q: Sequence[float], q_1: Sequence[float], q_2: Sequence[float],
+                         dt: float) -> None:  # fmt: skip
+    """Ruckig's current state from the positions ``q``, ``q_1``, ``q_2`` [rad] one period ``dt`` [s] apart (newest
+    first): the continuous state the step history continues into — v_k + a_k·dt/2 (second-order backward
+    difference) and a_k — so that the first sampled step continues the history within the jerk limit."""
+    inp.current_position = list(q)
+    inp.current_velocity = [(3.0 * a - 4.0 * b + c) / (2.0 * dt) for a, b, c in zip(q, q_1, q_2)]
+    inp.current_acceleration = [(a - 2.0 * b + c) / (dt * dt) for a, b, c in zip(q, q_1, q_2)]
+
+
 class BrakingStop:
     """Online braking profile; ``start()`` it with the last commands, then ``next()`` once per cycle."""
 
@@ -44,12 +54,8 @@ class BrakingStop:
 
     def start(self, q: Sequence[float], q_1: Sequence[float], q_2: Sequence[float]) -> None:
         """Brake from the command ``q`` [rad] that followed ``q_1`` and ``q_2`` (one and two periods before)."""
-        dt = self.period_s
         inp = self._inp
-        inp.current_position = list(q)
-        # the continuous state the step history continues into: v_k + a_k·dt/2 (second-order backward difference)
-        inp.current_velocity = [(3.0 * a - 4.0 * b + c) / (2.0 * dt) for a, b, c in zip(q, q_1, q_2)]
-        inp.current_acceleration = [(a - 2.0 * b + c) / (dt * dt) for a, b, c in zip(q, q_1, q_2)]
+        set_continuous_state(inp, q, q_1, q_2, self.period_s)
         self.cycles = 0
         self.done = not any(inp.current_velocity) and not any(inp.current_acceleration)
         self._hold = tuple(q)

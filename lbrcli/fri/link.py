@@ -16,6 +16,7 @@ from .supervision import Supervisor
 
 from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE, STATE_IDLE as IDLE
 
+_COMMANDED = "commandedJointPosition"
 Supervised = tuple[bool, bool, Any, int]  # (commanding, moving, command in force [rad], our last sequence counter)
 
 
@@ -69,7 +70,9 @@ class Link:
                     return -1
                 skipped = self.motion.extrapolate((d - 1) // (clock.period_key[1] if clock.period_key else 1))  # type: ignore[union-attr]
         if lost_reply and moving:
-            self.motion.reply_lost()  # type: ignore[union-attr]
+            md = mon.monitorData  # the position the controller commanded (FRI 1.15), else the measured one
+            cmd = md.commandedJointPosition.value if _COMMANDED in md.DESCRIPTOR.fields_by_name else ()
+            self.motion.reply_lost(cmd if len(cmd) == 7 else md.measuredJointPosition.value)  # type: ignore[union-attr]
             self.lost_replies += 1  # (late replies: the controller had not received it when it sent this message)
         return skipped
 

@@ -22,6 +22,7 @@ from .braking import BrakingStop
 from .constants import STATE_COMMANDING_ACTIVE as _CMD_ACTIVE
 from .constants import ClientCommandMode
 from .guard import CommandGuard
+from .rejoin import Rejoin
 
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
@@ -31,6 +32,8 @@ CLAMP_TOL = 1e-12  # [rad] a change below this is rounding, not a clamp
 BENT_CYCLES = 50  # after a clamp of the bridged history's making, an exact client's rows are clamped back onto
 # the path (not refused) for this many commands
 ALT_CYCLES = 3  # commands judged also against the bridged history after a reply the controller reported missing
+MATCH_TOL = 1e-9  # [rad] the position a message reports is the bridged one or ours (rounding of its arithmetic)
+REJOIN_MAX = 0.05  # [rad] an offset back onto the client's path larger than this ends the session (braking stop)
 EFFORT_RAMP_MIN_S = 0.05  # [s] the shortest effort ramp of a stop
 EFFORT_RANGE_S = (
     0.25  # [s] a stop ramps an effort down at most at its whole range (torque limit, wrench bound) per this
@@ -86,6 +89,7 @@ class ExecutedMotion:
         self.wrench_ramp = EffortRamp([b / EFFORT_RANGE_S for b in [max_force] * 3 + [max_moment] * 3], period_s)
         self.hold_cycles = hold_cycles
         self.prev = self.prev2 = self.prev3 = tuple(q)  # what the controller executed, newest first
+        self._s1 = self._s2 = self._s3 = self.prev  # the last commands sent, newest first
         self.active_sent = 0  # joint positions sent in COMMANDING_ACTIVE
         self.braking = False
         self.hold_left = 0
@@ -101,6 +105,16 @@ class ExecutedMotion:
         self._alt_left = 0
         self.loss_refused = False  # the last refusal came from replies the controller reported missing
         self._bent = 0  # cycles left in which an exact client's rows may be clamped back onto the path
+        self.rebased = False  # the history was just replaced by the one the controller bridged (until the next send)
+        self.rebased_cycles = 0  # replies the controller reported missing whose bridged history it confirmed
+        self.rejoin = Rejoin(limits, period_s)  # the offset back onto the client's path after such a bridge
+        self.rejoin_cycles = 0  # commands sent with a rejoin offset
+        # the executed history minus the client's own commands, newest first (None: none), and the next one's
+        self._d1: tuple | None = None
+        self._d2: tuple | None = None
+        self._d3: tuple | None = None
+        self._pend: tuple | None = None
+        self._replan = False
 
     @property
     def moving(self) -> bool:
@@ -136,20 +150,64 @@ class ExecutedMotion:
             nxt = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(prev, prev2, cap))
             self.prev3, self.prev2, self.prev = prev2, prev, nxt
         self.extrapolated_cycles += n
+        if n:  # the client re-plans from here (it is told the periods it skipped): no offset from its old path
+            self._s1, self._s2, self._s3 = self.prev, self.prev2, self.prev3
+            self._forget_path()
         if self.braking and n:  # the stop's profile no longer starts where the robot is: re-plan it from there
             self.brake.start(self.prev, self.prev2, self.prev3)
         return n
 
-    def reply_lost(self) -> None:
-        """The controller's reflected counter says our last command had not reached it when it sent its message. A
-        controller may have bridged that period by extrapolating the two commands before it, or may still execute
-        the command late (our simulator carries a late command forward): for the next ``ALT_CYCLES`` commands the
-        envelope admits only what is admissible after either history."""
+    def reply_lost(self, position: Sequence[float] | None = None) -> bool:
+        """The controller's reflected counter says our last command had not reached it when it sent its message: it
+        bridged that period (it held the velocity of the commands before) or executed our command late (our
+        simulator carries a late command forward by its lateness). The message's ``position`` [rad] (the commanded
+        position it reports, else the measured one) may say which: the bridged position, or the command sent the
+        period before carried forward by a period (within ``MATCH_TOL``), is the executed history from now on — True, :attr:`rebased`; a braking stop is re-planned from it, any other motion
+        rejoins the client's path (:class:`~lbrcli.fri.rejoin.Rejoin`); our command: nothing changes. Anything else
+        (a command later still, a real robot's measured position, which lags): for the next ``ALT_CYCLES``
+        commands the envelope admits only what is admissible after either the sent or the bridged history."""
         cap = self.guard.max_step
         base = self._alt if self._alt is not None else (self.prev, self.prev2, self.prev3)  # losses in a row: its own
         bridged = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(base[1], base[2], cap))
+        if position is not None and len(position) == 7:
+            # bridged, or the command we sent the period before carried forward by one period (a late reply)
+            late = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(self._s2, self._s3, cap))
+            for executed in (bridged, late):
+                new = (executed, base[1], base[2])  # (a history the envelope cannot brake from: not taken)
+                if (
+                    max(abs(x - y) for x, y in zip(position, executed)) <= MATCH_TOL
+                    and self.envelope.state_ok(*new) < 0
+                ):
+                    self._rebase(new)
+                    return True
+            if max(abs(x - y) for x, y in zip(position, self.prev)) <= MATCH_TOL:  # it executed our command
+                self._alt, self._alt_left = None, 0
+                return False
         self._alt = (bridged, base[1], base[2])
         self._alt_left = ALT_CYCLES
+        self._forget_path()  # the executed history is a guess now: no offset planned from it
+        return False
+
+    def _forget_path(self) -> None:
+        """No offset back onto the client's path (the client re-plans from the executed state, as after a clamp)."""
+        self._d1 = self._d2 = self._d3 = self._pend = None
+        self.rejoin.done = True
+
+    def _rebase(self, new: tuple) -> None:
+        """``new`` (three positions [rad], newest first) is the history the controller executed."""
+        old = (self.prev, self.prev2, self.prev3)
+        d = [tuple(x - y + z for x, y, z in zip(n, o, dk or _ZERO7))
+             for n, o, dk in zip(new, old, (self._d1, self._d2, self._d3))]  # fmt: skip
+        self._d1, self._d2, self._d3 = d  # (the executed history minus the client's commands)
+        self.prev, self.prev2, self.prev3 = new
+        self._alt, self._alt_left = None, 0
+        self.rebased = True
+        self.rebased_cycles += 1
+        self._bent = BENT_CYCLES  # an exact client's next rows, measured against it, may need a clamp
+        if self.braking:  # the stop's profile no longer starts where the robot is: re-plan it from there
+            self.brake.start(self.prev, self.prev2, self.prev3)
+        else:  # back onto the client's path within the limits
+            self.rejoin.start(*d)
 
     def retime(self, period_s: float) -> None:
         """The controller executes each command in ``period_s`` [s], faster than its period says: plan the braking
@@ -177,11 +235,22 @@ class ExecutedMotion:
         would change it)."""
         env = self.envelope
         self.loss_refused = False
+        raw = q
+        if not self.rejoin.done and q is not None and len(q) == 7:  # after a bridged command: the offset back
+            off = self.rejoin.next()
+            self.rejoin_cycles += 1
+            far = max(abs(e) for e in off)
+            if far > REJOIN_MAX:  # bridged so often that the motion cannot keep to the path within the limits
+                self.loss_refused = True
+                return None, (f"replies lost: the commands the controller bridged left the motion {far:.4f} rad off "
+                              f"the client's path (more than {REJOIN_MAX:g} rad)")  # fmt: skip
+            q = tuple(x + e for x, e in zip(q, off))
         adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk)
         if adm.reason is not None:
             return None, adm.reason
-        if exact and adm.clamped > CLAMP_TOL and not self._bent:  # the client's own command leaves the envelope:
-            # refuse, never bend it (unless we bent the path just before, after a reply the controller may have bridged)
+        if exact and adm.clamped > CLAMP_TOL and not self._bent and self.rejoin.done:  # the client's own command
+            # leaves the envelope: refuse, never bend it (unless we bent the path just before, after a reply the
+            # controller may have bridged, or are taking the motion back onto it)
             j = adm.joint
             dt = self.period_s
             p1, p2 = self.prev[j], self.prev2[j]
@@ -200,6 +269,9 @@ class ExecutedMotion:
             self.clamped_cycles += 1
             if adm.clamped > self.largest_clamp:
                 self.largest_clamp = adm.clamped
+        if raw is not q or adm.clamped > 0.0:  # what is sent differs from the client's command by this much
+            self._pend = tuple(x - y for x, y in zip(adm.q, raw))
+            self._replan = raw is not q and adm.clamped > 0.0  # a clamp of the offset: re-plan it from there
         return adm.q, None
 
     def next_command(self, measured: Sequence[float], state: int, mode: int, q: Sequence[float],
@@ -260,7 +332,13 @@ class ExecutedMotion:
         """``q`` [rad] went out: in COMMANDING_ACTIVE the controller executes it."""
         if state == _CMD_ACTIVE:
             self.prev3, self.prev2, self.prev = self.prev2, self.prev, q
+            self._s3, self._s2, self._s1 = self._s2, self._s1, q  # (what was sent, also where a rebase replaced it)
             self.active_sent += 1
+            self.rebased = False
+            self._d3, self._d2, self._d1, self._pend = self._d2, self._d1, self._pend, None
+            if self._replan:
+                self._replan = False
+                self.rejoin.start(self._d1, self._d2 or _ZERO7, self._d3 or _ZERO7)  # type: ignore[arg-type]
             if self._bent:
                 self._bent -= 1
             if self._alt is not None:
@@ -270,4 +348,4 @@ class ExecutedMotion:
                 if self._alt_left <= 0:
                     self._alt = None
         else:
-            self.prev = self.prev2 = self.prev3 = q
+            self.prev = self.prev2 = self.prev3 = self._s1 = self._s2 = self._s3 = q

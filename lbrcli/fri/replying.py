@@ -87,7 +87,8 @@ class Replier:
         """Prepare the reply to the next message (``seq`` + 1) from the client's ``prepare_command``, guarded now:
         only in POSITION mode, receive multiplier 1, without a transformation client and while nothing brakes (the
         application calls it in COMMANDING_ACTIVE while nothing stops)."""
-        if (motion.braking or self.transformation_client is not None  # (its provide() runs in the full cycle)
+        if (motion.braking or not motion.rejoin.done  # (the way back onto the path after a bridge: the full cycle)
+                or self.transformation_client is not None  # (its provide() runs in the full cycle)
                 or mon.ipoData.clientCommandMode != _POSITION or (mon.connectionInfo.receiveMultiplier or 1) != 1):  # fmt: skip
             return
         try:

@@ -33,11 +33,17 @@ def limit_ratios(tab, dt=PERIOD_S, following_only=False) -> tuple[float, float, 
 def judge_following(tab, f: dict, scale: float = 0.5) -> None:
     """The commands within ``scale`` of the limits while following and within the full limits in the braking stop;
     after replies that reached the controller late (a busy machine) the safety core's clamps may use the full
-    limits, and the jerk is judged in lock step instead (test_bridge_timeline.py)."""
+    limits, and after a command the controller bridged what we send next suits what it executed, not the commands
+    we sent: the acceleration and jerk are then judged in lock step instead (test_timeline.py, test_motion.py)."""
     v, a, j = limit_ratios(tab, following_only=True)
     clean = f["lost_replies"] == 0 and f["clamped_cycles"] == 0
     step = f["largest_clamp_rad"] / (PERIOD_S * float(np.min(LIM.velocity)))  # a clamp's share of one step
-    assert v <= scale + step + 1e-6 and a <= (scale if clean else 1.0) + 1e-6, (v, a, f)
+    assert v <= scale + step + 1e-6 and (a <= (scale if clean else 1.0) + 1e-6 or f["lost_replies"]), (v, a, f)
     assert j <= scale + 1e-6 or not clean, (j, f)
     v, a, j = limit_ratios(tab)
-    assert v <= scale + step + 1e-6 and a <= 1.0 + 1e-6 and (j <= 1.0 + 1e-6 or not clean), (v, a, j, f)
+    assert v <= scale + step + 1e-6 and (a <= 1.0 + 1e-6 or f["lost_replies"]) and (j <= 1.0 + 1e-6 or not clean), (
+        v,
+        a,
+        j,
+        f,
+    )

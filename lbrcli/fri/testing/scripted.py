@@ -152,12 +152,18 @@ class ScriptedController:
         limit × period²) over the received commands, against the robot's executed positions."""
         return self.motion_ratios(velocity, acceleration)[:2]
 
-    def motion_ratios(self, velocity, acceleration, jerk=None) -> tuple[float, float, float]:
+    def motion_ratios(self, velocity, acceleration, jerk=None, bridged: bool = False) -> tuple[float, float, float]:
         """As :meth:`command_ratios`, and the largest third difference / (jerk limit × period³) (0 without
-        ``jerk``)."""
+        ``jerk``). ``bridged``: over the controller's own bridging steps (COMMANDING_ACTIVE cycles without a
+        command, extrapolated) instead of the received commands."""
         step_r = second_r = third_r = 0.0
         e = self.executed
-        for i in self.command_at:
+        steps = self.command_at
+        if bridged:
+            got = set(steps)
+            start = steps[0] if steps else len(e)
+            steps = [i for i in range(start, len(e)) if i not in got]
+        for i in steps:
             if i < 2:
                 continue
             dt = self.periods[i]

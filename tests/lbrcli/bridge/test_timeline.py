@@ -78,7 +78,7 @@ def test_a_restarted_source_clock_goes_on_from_where_its_targets_arrive():
 @pytest.mark.parametrize("rate_hz, ff, drop, bound_deg", [
     (1000.0, True, 0.0, 0.1),  # a Simulink model at 1 kHz with the feed-forward
     (30.0, False, 0.0, 1.0),  # a teleoperation device at 30 Hz, positions only
-    (100.0, True, 0.05, 0.5),  # 5 % of the replies lost on the way to the controller
+    (100.0, True, 0.02, 0.5),  # 2 % of the replies lost on the way to the controller
 ])  # fmt: skip
 def test_the_follower_tracks_a_late_bursty_source_within_its_speed_scale(rate_hz, ff, drop, bound_deg):
     run = follow_in_lock_step(LockStepSource(rate_hz, ff, seed=1), LIM, drop=drop)
@@ -92,5 +92,7 @@ def test_the_follower_tracks_a_late_bursty_source_within_its_speed_scale(rate_hz
     if drop == 0.0:  # the controller executed ruckig's motion: --speed-scale 0.5 of every limit
         _, _, j = ctl.motion_ratios(LIM.velocity, LIM.acceleration, LIM.jerk)
         assert v <= 0.5 + 1e-6 and a <= 0.5 + 1e-6 and j <= 0.5 + 1e-6
-    else:  # the safety core's clamps after replies the controller bridged: within the full limits
-        assert v <= 0.5 + 1e-3 and a <= 1.0 + 1e-6
+    else:  # the safety core's way back onto the path after commands the controller bridged: within the full limits,
+        # measured against what the controller executed (its own bridging steps aside)
+        _, _, j = ctl.motion_ratios(LIM.velocity, LIM.acceleration, LIM.jerk)
+        assert v <= 0.5 + 1e-3 and a <= 1.0 + 1e-6 and j <= 1.0 + 1e-6

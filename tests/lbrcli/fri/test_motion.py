@@ -109,6 +109,82 @@ def test_jerk_limited_clients_are_clamped_in_jerk_too():
     assert v <= 1 + 1e-9 and a <= 1 + 1e-9 and j <= 1 + 1e-6
 
 
+def _bridging_session(m: ExecutedMotion, wants, lost: set[int], n: int, jerk: bool = True, braking_at: int = -1,
+                      late: frozenset[int] = frozenset()):  # fmt: skip
+    """A controller that bridges every reply in ``lost`` or ``late`` (cycle numbers) by holding the velocity, as
+    KUKA's and the scripted one do, executes a ``late`` one a period later carried forward by that period (as our
+    simulator does, unless the next reply is in time), and reports where it stands in its next message;
+    ``wants(k)`` the client's command. The executed positions and, per executed step, whether it was ours (our
+    command, in time) or the controller's."""
+    exe, ours, sent = [np.array(m.prev)] * 3, [True] * 3, [np.array(m.prev)] * 2
+    lost = set(lost) | set(late)
+    for k in range(n):
+        if k - 1 in lost:  # the message says our last reply had not arrived: it shows where the robot is
+            m.reply_lost(tuple(exe[-1]))
+        if k == braking_at:
+            m.begin_braking()
+        want = wants(k)
+        cmd, _, _, why = m.next_command(want, ACTIVE, POSITION, want, None, None, False, jerk)
+        m.sent(tuple(cmd), ACTIVE)
+        sent.append(np.array(cmd))
+        if k not in lost:
+            exe.append(sent[-1])
+        elif k - 1 in late:  # the late reply arrives now, carried forward by its lateness
+            exe.append(2 * sent[-2] - sent[-3])
+        else:
+            exe.append(2 * exe[-1] - exe[-2])
+        ours.append(k not in lost)
+    return np.array(exe), np.array(ours)
+
+
+def _our_ratios(exe: np.ndarray, ours: np.ndarray, dt: float, lim) -> tuple[float, float, float]:
+    """Peak velocity, acceleration and jerk over the limits of our steps, measured against the executed history."""
+    v = np.diff(exe, axis=0) / dt
+    a = np.diff(v, axis=0) / dt
+    j = np.diff(a, axis=0) / dt
+    return (float((np.abs(v[ours[1:]]) / lim.velocity).max()), float((np.abs(a[ours[2:]]) / lim.acceleration).max()),
+            float((np.abs(j[ours[3:]]) / lim.jerk).max()))  # fmt: skip
+
+
+def test_after_a_reply_the_controller_bridged_our_commands_rejoin_the_path_within_the_limits_of_what_it_executed():
+    """A jerk-limited client (ruckig at half the limits intercepting a smooth wave at 20 % of A1's and A4's
+    acceleration limits, as the bridge's follower does); replies lost singly and two in a row, two late (the first
+    executed a period late). The controller's bridge steps its acceleration to 0 (its own); every command after it
+    keeps the velocity, acceleration and jerk limits measured against the history the controller executed, and the
+    motion is back on the client's path."""
+    from lbrcli.bridge.tracker import ReferenceTracker
+
+    lim, dt = default_limits(), 1e-3
+    m = ExecutedMotion(lim, dt, 1e9, 1e9, hold_cycles=1, q=(0.0,) * 7)
+    w = 2 * np.pi  # [rad/s]; (1 − cos wt)² starts at rest with no acceleration, its peak is 2.25·w²
+    amp = np.array([0.2, 0, 0, 0.2, 0, 0, 0]) * lim.acceleration / (2.25 * w**2)
+
+    def ref(t: float):
+        c, s = np.cos(w * t), np.sin(w * t)
+        return amp * (1 - c) ** 2, amp * 2 * w * (1 - c) * s, amp * 2 * w**2 * (s * s + c - c * c)
+
+    tracker = ReferenceTracker(lim.scaled(0.5), dt, m.prev)
+    plan = [tuple(tracker.step(lambda t, k=k: ref(k * dt + t))) for k in range(1200)]
+    exe, ours = _bridging_session(m, lambda k: plan[k], {150, 220, 221, 400, 470}, 1200, late=frozenset({300, 301}))
+    v, a, j = _our_ratios(exe, ours, dt, lim)
+    assert m.rebased_cycles == 7 and m.rejoin_cycles > 0 and not m.braking
+    assert v <= 1 + 1e-9 and a <= 1 + 1e-9 and j <= 1 + 1e-6
+    assert np.abs(exe[-1] - plan[-1]).max() < 1e-12  # back on the client's path
+
+
+def test_a_braking_stop_after_a_reply_the_controller_bridged_brakes_within_the_limits_of_what_it_executed():
+    """Braking from 80 % of the velocity limits, a reply lost mid-stop: the stop is re-planned from the bridged
+    history, so its steps keep every limit against what the controller executed."""
+    lim, dt = default_limits(), 1e-3
+    m = ExecutedMotion(lim, dt, 1e9, 1e9, hold_cycles=1, q=(0.0,) * 7)
+    speed = lambda k: np.minimum(0.8 * lim.velocity, 0.4 * lim.acceleration * k * dt)  # noqa: E731
+    pos = np.cumsum([speed(k) * dt for k in range(400)], axis=0)
+    exe, ours = _bridging_session(m, lambda k: tuple(pos[min(k, 399)]), {415, 470}, 900, jerk=False, braking_at=400)
+    v, a, j = _our_ratios(exe[400:], ours[400:], dt, lim)  # (the cruise before: a file's rows, not jerk-limited)
+    assert m.brake.done and m.rebased_cycles == 2
+    assert v <= 1 + 1e-9 and a <= 1 + 1e-6 and j <= 1 + 1e-6
+
+
 @pytest.mark.parametrize("mode", [3, 2])  # TORQUE, WRENCH
 def test_a_stop_in_torque_or_wrench_mode_ramps_the_effort_down_within_its_rate(mode):
     lim, dt = default_limits(), 1e-3

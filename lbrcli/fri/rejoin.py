@@ -1,0 +1,75 @@
+"""Back onto the client's path after the controller bridged a command: a jerk-limited offset that decays to zero.
+
+When a message shows that the controller bridged our last command (it held the velocity: its acceleration stepped
+to 0), the history it executed is no longer the one the client planned from. Rather than admitting the client's next
+command against it (its acceleration jumps back to the path's within one period), the core sends the client's
+command plus an offset e(t) — the executed history minus the client's commands — that ruckig (position interface,
+each joint on its own) brings to rest at zero within ``REJOIN_SCALE`` of the velocity, acceleration and jerk limits.
+The offset starts from the continuous state of its discrete history (step velocity + half a period of its
+acceleration, as :class:`~lbrcli.fri.braking.BrakingStop`), so its first sampled step continues the executed history
+within its share of the jerk limit; a client within the rest of the limits stays within them. Computed only while an
+offset is left (a loss, not the hot path).
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from ruckig import InputParameter, OutputParameter, Result, Ruckig, RuckigError, Synchronization
+
+from trajectories.limits import JointLimits
+
+from .braking import set_continuous_state
+
+REJOIN_SCALE = 1.0  # the offset's share of the velocity and jerk limits (the envelope clamps the sum)
+REJOIN_ACCELERATION_SCALE = 0.25  # ... of the acceleration limit: a bridge during the way back zeroes the executed
+# acceleration, and the offset's own acceleration adds to that step
+
+
+class Rejoin:
+    """The offset [rad] to add to the client's commands; ``start()`` it with the offset's last three values, then
+    ``next()`` once per command until ``done``."""
+
+    def __init__(self, limits: JointLimits, period_s: float, scale: float = REJOIN_SCALE,
+                 acceleration_scale: float = REJOIN_ACCELERATION_SCALE) -> None:  # fmt: skip
+        self.period_s = period_s
+        self._otg = Ruckig(7, period_s)
+        self._inp = InputParameter(7)
+        self._out = OutputParameter(7)
+        self._inp.synchronization = Synchronization.No
+        lim = limits.scaled(scale)
+        self._inp.max_velocity = lim.velocity.tolist()
+        self._inp.max_acceleration = (limits.acceleration * acceleration_scale).tolist()
+        self._inp.max_jerk = lim.jerk.tolist()
+        self._inp.target_position = [0.0] * 7
+        self._inp.target_velocity = [0.0] * 7
+        self._inp.target_acceleration = [0.0] * 7
+        self.done = True
+        self.cycles = 0  # offsets computed since the last start
+        self.failed = 0  # starts ruckig found no profile for (no offset then: the envelope's clamps instead)
+
+    def start(self, e: Sequence[float], e_1: Sequence[float], e_2: Sequence[float]) -> None:
+        """Bring the offset to zero from its values ``e`` (newest), ``e_1`` and ``e_2`` [rad], one period apart."""
+        inp = self._inp
+        set_continuous_state(inp, e, e_1, e_2, self.period_s)
+        self.cycles = 0
+        self.done = not (any(inp.current_position) or any(inp.current_velocity) or any(inp.current_acceleration))
+
+    def next(self) -> tuple[float, ...]:
+        """The offset for the next command [rad] (zeros once ``done``)."""
+        if self.done:
+            return (0.0,) * 7
+        try:
+            res = self._otg.update(self._inp, self._out)
+        except (RuckigError, ValueError):  # (its numerics on a degenerate offset; a result code the binding lacks)
+            res = Result.Error
+        self.cycles += 1
+        if res not in (Result.Working, Result.Finished):  # no profile: no offset
+            self.done = True
+            self.failed += 1
+            return (0.0,) * 7
+        e = tuple(self._out.new_position)
+        self._out.pass_to_input(self._inp)
+        if res == Result.Finished:
+            self.done = True
+        return e

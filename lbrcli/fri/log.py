@@ -63,7 +63,8 @@ PHASE_WAIT = int(Phase.WAIT)
 
 _ZERO7 = (0.0,) * 7
 _ZERO6 = (0.0,) * 6
-_CMD = "%r"  # the commanded position exactly as sent (shortest text that round-trips the double)
+_CMD = "%s"  # the commanded position exactly as sent: the shortest text that round-trips the double, also for a
+# numpy scalar (whose %r is "np.float64(…)" under numpy 2: a client's numpy commands made the log unreadable)
 _Q = "%.12g"
 _F = "%.9g"
 _I = "%d"

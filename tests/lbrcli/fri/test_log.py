@@ -40,3 +40,22 @@ def test_log_without_any_message_is_removed(tmp_path):
     assert (tmp_path / "empty.csv").exists()
     log.close()
     assert not (tmp_path / "empty.csv").exists()
+
+
+def test_numpy_commands_are_logged_as_the_exact_doubles_sent(tmp_path):
+    """A client commanding numpy scalars or an array (the upright controller does) gets a readable log, each value
+    the exact double sent (numpy 2 writes ``np.float64(…)`` for ``%r``)."""
+    codec = FriCodec("1.15")
+    m = codec.new_monitoring()
+    m.header.messageIdentifier = 0x245142
+    layout = LogLayout(m, "1.15")
+    q = np.array(Q0) + np.array([1e-17, 1 / 3, -2e-9, 1e16, 0.1, -0.0, 123.456])
+    path = tmp_path / "l.csv"
+    with ExecutionLog(path) as log:
+        log.start(layout)
+        log.write(layout.format(0.0, m, q, -1, 0, 0, 0, -1))
+        log.write(layout.format(0.001, m, tuple(np.float64(v) for v in q), 0, 1, 0, 0, -1))
+        log.write(layout.format(0.002, m, tuple(q.tolist()), 0, 1, 0, 0, -1))
+    tab = read_table(path, LOG_COLUMNS, time="increasing")
+    for j in range(7):
+        np.testing.assert_array_equal(tab.column(f"cmd_q{j + 1}"), [q[j]] * 3)

@@ -96,7 +96,8 @@ def follow_in_lock_step(source: LockStepSource, limits: JointLimits, *, drop: fl
     script = preamble() + [Cycle(state=CA, drop_reply=bool(d)) for d in rng.random(cycles) < drop]
     start = len(preamble())
     app = ClientApplication(follower, "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=limits,
-                            first_message_timeout_s=10, silence_timeout_s=3, paced_by_replies=True)  # fmt: skip
+                            first_message_timeout_s=10, silence_timeout_s=3, paced_by_replies=True,
+                            catch_up=False)  # fmt: skip  # the scripted controller waits for each reply
     app.connect()
     ctl = ScriptedController(app.port, script, tuple(source.q0), tolerate_unanswered=10**6)
     ctl.on_cycle = lambda i: setattr(source, "now", max(0, i - start) * 1e-3)

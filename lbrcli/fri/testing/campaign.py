@@ -134,7 +134,8 @@ def run_case(case: Case, folder: Path | None = None) -> CaseResult:
     lim = case.limits or default_limits()
     client = case.client()
     app = ClientApplication(client, "127.0.0.1", 0, bind_host="127.0.0.1", version=case.version, limits=lim,
-                            first_message_timeout_s=10, silence_timeout_s=3, paced_by_replies=True)  # fmt: skip
+                            first_message_timeout_s=10, silence_timeout_s=3, paced_by_replies=True,
+                            catch_up=False)  # fmt: skip  # the scripted controller waits for each reply
     app.connect()
     ctl = ScriptedController(app.port, case.script, tuple(case.q_start), version=case.version, **case.controller)
     run = Run(app, ctl, client)

@@ -159,6 +159,13 @@ def _on_time(tab) -> np.ndarray:
     return tab.column("seq") - tab.column("reflected_seq") == 1
 
 
+def _consecutive(tab, keep, k: int) -> np.ndarray:
+    """Per k-th difference of the rows kept: True where its k + 1 rows are consecutive messages (a client that caught
+    up with the newest message logs none of those it skipped: a difference across them spans several periods)."""
+    gap = np.diff(tab.column("seq")[keep]) != 1
+    return np.convolve(gap.astype(float), np.ones(k), "valid") == 0 if len(gap) >= k else np.zeros(0, dtype=bool)
+
+
 def _step_ratios(tab, lim, keep, in_time: bool = False) -> list[np.ndarray]:
     """|first, second, third differences| of the commands kept, per cycle and joint, over the velocity,
     acceleration and jerk limits. ``in_time``: NaN where a command of the difference did not reach the controller in
@@ -168,6 +175,7 @@ def _step_ratios(tab, lim, keep, in_time: bool = False) -> list[np.ndarray]:
     out = []
     for k, lim_k in ((1, lim.velocity), (2, lim.acceleration), (3, lim.jerk)):
         r = np.abs(np.diff(q, k, axis=0)) / 1e-3**k / lim_k
+        r[~_consecutive(tab, keep, k)] = np.nan
         if in_time and len(r):  # the commands i..i+k, each confirmed by the next row's counter (rows i..i+k+1)
             confirmed = np.append(np.convolve(late, np.ones(k + 2), "valid") == 0, False)[: len(r)]
             r[~confirmed] = np.nan
@@ -206,7 +214,7 @@ def _executed(tab, lim, keep) -> tuple[tuple[float, float, float], tuple[float, 
         peaks = []
         for k, lim_k in ((1, lim.velocity), (2, lim.acceleration), (3, lim.jerk)):
             r = np.abs(np.diff(m, k, axis=0)) / 1e-3**k / lim_k
-            sel = mask[k:]  # the difference ending at row i + k is the step into that row
+            sel = mask[k:] & _consecutive(tab, keep, k)  # the difference ending at row i + k is the step into it
             peaks.append(float(r[sel].max()) if sel.any() else 0.0)
         out.append(tuple(peaks))
     return out[0], out[1]  # type: ignore[return-value]

@@ -43,7 +43,8 @@ class _Extremes:
         self._hi: deque[tuple[float, float]] = deque()
         self._lo: deque[tuple[float, float]] = deque()
 
-    def push(self, t: float, value: float) -> None:
+    def add(self, t: float, value: float, t0: float) -> float:
+        """Take ``value`` at ``t`` [s], forget the values before ``t0`` [s]: the span (largest − least) left."""
         hi, lo = self._hi, self._lo
         while hi and not hi[-1][1] > value:
             hi.pop()
@@ -51,17 +52,11 @@ class _Extremes:
         while lo and not lo[-1][1] < value:
             lo.pop()
         lo.append((t, value))
-
-    def drop_before(self, t0: float) -> None:
-        hi, lo = self._hi, self._lo
         while hi[0][0] < t0:
             hi.popleft()
         while lo[0][0] < t0:
             lo.popleft()
-
-    @property
-    def span(self) -> float:
-        return self._hi[0][1] - self._lo[0][1]
+        return hi[0][1] - lo[0][1]
 
 
 class SensorHealth:
@@ -110,24 +105,18 @@ class SensorHealth:
         self._t_last = t
         rec = self._recent
         rec.append((t, value, pred))
-        self._pred.push(t, pred)
-        self._still.push(t, value)
-        self._pushed.push(t, self._dv)
-        t_window = t - max(o.still_s, o.window_s)
+        t_window, t_still = t - max(o.still_s, o.window_s), t - o.still_s
         while rec[0][0] < t_window:
             rec.popleft()
-        self._pred.drop_before(t_window)
-        t_still = t - o.still_s
-        self._still.drop_before(t_still)
-        self._pushed.drop_before(t_still)
+        spread = self._pred.add(t, pred, t_window)
+        still = self._still.add(t, value, t_still)
+        pushed = self._pushed.add(t, self._dv, t_still)
         if t - rec[0][0] < 0.9 * min(o.still_s, o.window_s):
             return None
-        spread = self._pred.span
-        still = self._still.span
-        if still <= o.still_range and (spread > o.moving_range or self._pushed.span > o.drive):
+        if still <= o.still_range and (spread > o.moving_range or pushed > o.drive):
             return self._set(f"{self.name} stood still ({math.degrees(still):.3f}° over {o.still_s:g} s) while the move "
                              f"must have swung the ball (the model: {math.degrees(spread):.1f}°; the pivot's speed "
-                             f"changed {self._pushed.span:.3f} m/s): stuck, frozen, or not seeing the ball")  # fmt: skip
+                             f"changed {pushed:.3f} m/s): stuck, frozen, or not seeing the ball")  # fmt: skip
         if not self._sign_judged and spread > o.moving_range:
             return self._judge_sign()
         return None

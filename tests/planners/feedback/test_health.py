@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from planners.feedback.health import SensorHealth, swing_amplitude
+from tests.helpers.tracing import line_events
 
 G = 9.81
 
@@ -121,25 +122,6 @@ def test_the_windowed_checks_judge_as_a_pass_over_the_window(seed):
     assert expected is not None  # the case reached a verdict (it tests something)
 
 
-def _line_events(fn) -> int:
-    """Lines of Python executed by ``fn()`` (every frame it runs): the work it does, independent of the CPU's speed."""
-    import sys
-
-    count = [0]
-
-    def local(frame, event, arg):
-        if event == "line":
-            count[0] += 1
-        return local
-
-    sys.settrace(lambda frame, event, arg: local)
-    try:
-        fn()
-    finally:
-        sys.settrace(None)
-    return count[0]
-
-
 @pytest.mark.parametrize("window_s", [1.0, 4.0])
 def test_a_reading_costs_the_same_however_long_the_window(window_s):
     """`lbr control damp` judges each reading inside the 1 ms FRI cycle: once the window was full, a pass over it
@@ -152,7 +134,7 @@ def test_a_reading_costs_the_same_however_long_the_window(window_s):
     for k in range(len(t) - 300):  # the window full (and the sign judged once)
         h.reading(float(t[k]), float(true[k]), float(true[k]), float(ref[k]), float(drive[k]))
     rest = range(len(t) - 300, len(t))
-    lines = _line_events(lambda: [h.reading(float(t[k]), float(true[k]), float(true[k]), float(ref[k]),
+    lines = line_events(lambda: [h.reading(float(t[k]), float(true[k]), float(true[k]), float(ref[k]),
                                             float(drive[k])) for k in rest])  # fmt: skip
     assert h.fault is None
     assert lines / len(rest) < 150  # (≈ 70) a pass over the window ran thousands of lines per reading

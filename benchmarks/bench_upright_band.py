@@ -60,8 +60,19 @@ def _rail():
         from trajectories.limits import default_limits
         from trajectories.robot import Robot
 
-        _RAIL = build_rail(Robot(), THESIS_Q_START, default_limits(), 0.3)  # lbr control upright's default rail
+        _RAIL = build_rail(
+            Robot(), THESIS_Q_START, default_limits(), cli_travel()
+        )  # lbr control upright's default rail
     return _RAIL
+
+
+def cli_travel() -> float:
+    """``lbr control upright``'s default ``--travel`` [m] (read from the command, not typed here)."""
+    import inspect
+
+    from lbrcli.commands.control import upright
+
+    return float(inspect.signature(upright).parameters["travel"].default)
 
 
 def fast_case(args: tuple) -> dict:

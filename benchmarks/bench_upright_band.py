@@ -594,6 +594,12 @@ def _corner_section(result: dict, head: list[str]) -> list[str]:
     for r in result["rail_travel_floor"]:
         cell = ["—" if r["floor_m"][k] is None else "{:.3f}–{:.3f}".format(*r["floor_m"][k]) for k in ("0.0", "0.05")]
         lines.append(f"| {r['scale']:g} | {r['tip_kg']:g} | {cell[0]} | {cell[1]} |")
+    if "rail_reach" in result:
+        r = result["rail_reach"]
+        lines += ["", f"The default rail (±{r['travel_m']:g} m at the thesis start pose): along it the joints use at most "
+                  f"{r['joint_share']:.0%} of their position range (the start pose's own elbow, A4, is the largest); the "
+                  f"acceleration bound at rest is {r['accel_end']:.2f} m/s² at its ends, {r['accel_centre']:.2f} m/s² at "
+                  "its centre."]  # fmt: skip
     return lines + [""]
 
 
@@ -723,6 +729,20 @@ def judge_part(pool) -> dict:
     }
 
 
+def rail_reach() -> dict:
+    """What the default rail asks of the arm: its travel [m], the largest share of a joint's position range it uses,
+    and the acceleration bound at rest at its ends [m/s²] (at its centre, for comparison)."""
+    from trajectories.limits import default_limits
+
+    rail, lim = _rail(), default_limits()
+    travel = rail.limits.travel
+    xs = np.linspace(-travel, travel, 81)
+    share = max(float(np.max(np.abs(rail.joints(float(x))) / lim.position)) for x in xs)
+    end = min(min(-b[1], b[2]) for b in (rail.local_bounds(travel, 0.0, 0.0), rail.local_bounds(-travel, 0.0, 0.0)))
+    _, lo, hi, _, _ = rail.local_bounds(0.0, 0.0, 0.0)
+    return dict(travel_m=travel, joint_share=share, accel_end=end, accel_centre=min(-lo, hi))
+
+
 def corner_part(pool) -> dict:
     """The corner under another plant (:func:`corner_cases`), and why the rail needs to be longer than ±0.3 m for it:
     the knock's travel floor within the rail's own (speed-dependent) bounds (:func:`rail_travel_floor`)."""
@@ -747,6 +767,7 @@ def corner_part(pool) -> dict:
         "corner_wall_s": round(wall, 1),
         "corner": corner,
         "rail_travel_floor": floors,
+        "rail_reach": rail_reach(),
     }
 
 

@@ -500,6 +500,8 @@ def write_page(result: dict, path: Path) -> None:
 
     if "fast_by_friction" in result:
         lines += _fast_section(result, measured("fast"))
+    if "fast_rerun" in result:
+        lines += _rerun_section(result["fast_rerun"])
     if "off" in result:
         lines += _off_section(result, measured("off"))
     if "corner" in result:
@@ -556,6 +558,33 @@ def _fast_section(result: dict, head: list[str]) -> list[str]:
             lines.append(f"| {r['scale']:g} | {r['tip_kg']:g} | {r['delay_ms']:g} | {r['fixed_m']:.3f} | "
                          f"{'—' if m is None else f'{m[0]:.3f}–{m[1]:.3f}'} | {r['fixed_no_friction_m']:.3f} | "
                          f"{r['best_m']:.3f} | {tuple(r['best_weights'])} |")  # fmt: skip
+    return lines + [""]
+
+
+def band_rerun(rows: list[dict], date: str, commit: str, how: str) -> dict:
+    """The band's figures from ``rows`` (:func:`fast_case` over the fast part's grid) without the floors and the
+    weight scan: a rerun of the grid after a change, kept beside the full part until that is run again."""
+    ok = [r for r in rows if r["succeeded"] and r["falls"] == 0 and r["on_rail"]]
+    swing = [r["swing_up_s"] for r in rows if r["swing_up_s"] is not None]
+    return dict(date=date, commit=commit, how=how, cases=len(rows), without_fall=len(ok),
+                falls=sum(r["falls"] for r in rows), by_friction=_summary(rows, "friction"),
+                swing_up_s=[min(swing), float(np.median(swing)), max(swing)],
+                settled_deg=_spread(rows, 0.05, "max_up_deg_settled"),
+                cart_m_after_push={str(f): _spread(rows, f, "max_cart_m_after_push") for f in (0.0, 0.05)},
+                failures=[r for r in rows if r not in ok], rows=rows)  # fmt: skip
+
+
+def _rerun_section(r: dict) -> list[str]:
+    lines = ["## The band rerun on the default rail (fast simulation; the floors and the weight scan not rerun)", "",
+             f"Measured {r['date']} on commit {r['commit']} ({r['how']}).", "",
+             f"{r['without_fall']} of {r['cases']} cases without a fall, {r['falls']} falls; swing-up "
+             f"{r['swing_up_s'][0]:.2f}–{r['swing_up_s'][2]:.2f} s. The cart's excursion in the 4 s after the push "
+             "[m], median / largest over the cases without a fall:", "", "| bearing's dry friction | excursion [m] |",
+             "|---|---:|"]  # fmt: skip
+    for k, v in r["cart_m_after_push"].items():
+        lines.append(f"| {float(k):.0%} | {'—' if v is None else f'{v[0]:.3f} / {v[1]:.3f}'} |")
+    lines += [f"- did not count: {f['scale']:g} ×, tip {f['tip_kg']:g} kg, {f['friction']:.0%}, {f['delay_ms']:g} ms, "
+              f"{f['actuation_cycles']} cycles, seed {f['seed']}: {f['verdict']}" for f in r["failures"]]  # fmt: skip
     return lines + [""]
 
 

@@ -24,6 +24,7 @@ from .color import ColorSpec
 from .detect import Blob
 from .subpixel import refine_centre
 from .second_look import SECOND_LOOK, recover
+from .smoothing import smooth_centres
 from .tracker import BallTracker, TrackerOptions
 from .video import VideoInfo, iter_frames, prefetched, probe_video
 
@@ -61,6 +62,7 @@ class Track:
         tuple[str, np.ndarray], ...
     ] = ()  # more (name, (n,) values) columns, written last (live: tilt, latency)
     second_look_frames: int = 0  # frames found by the second look (tracking.second_look)
+    smoothed_frames: int = 0  # frames whose centre was smoothed around the fixed pivot (tracking.smoothing)
 
     @property
     def found_fraction(self) -> float:
@@ -225,9 +227,14 @@ def _shown(
 
 
 def _make_track(
-    trackers: _Trackers, angle: ImageAngles, calibration: CameraCalibration | None, info: VideoInfo
+    trackers: _Trackers,
+    angle: ImageAngles,
+    calibration: CameraCalibration | None,
+    info: VideoInfo,
+    smooth_fps: float | None = None,
 ) -> Track:
-    """The track from the gathered columns: unsure fixes (confidence below the tracker's minimum) reported not found."""
+    """The track from the gathered columns: unsure fixes (confidence below the tracker's minimum) reported not found;
+    with smooth_fps [1/s] and a fixed pivot, the centres smoothed (:func:`tracking.smoothing.smooth_centres`)."""
     cols = trackers.columns
     conf_a = np.array(cols.conf, float)
     seen = np.all(np.isfinite(np.array(cols.uv, float).reshape(-1, 2)), axis=1)
@@ -235,6 +242,10 @@ def _make_track(
     uv = [c if ok else _NAN2 for c, ok in zip(cols.uv, trusted)]
     radius = [r if ok else math.nan for r, ok in zip(cols.radius, trusted)]
     uv_a = np.array(uv, float).reshape(-1, 2)
+    smoothed = 0
+    if smooth_fps is not None and trackers.fixed is not None:
+        raw, uv_a = uv_a, smooth_centres(uv_a, trusted, trackers.fixed, smooth_fps)
+        smoothed = int(np.sum(np.any(np.abs(uv_a - raw) > 0.0, axis=1)))
     piv_a = np.array(cols.piv, float).reshape(-1, 2)
     xy = None
     if calibration is not None and calibration.plane is not None:
@@ -256,6 +267,7 @@ def _make_track(
         confidence=np.where(seen, conf_a, 0.0),
         unsure=seen & ~trusted,
         second_look_frames=trackers.recovered,
+        smoothed_frames=smoothed,
     )
 
 
@@ -272,6 +284,7 @@ def track_video(
     progress: Callable[[int], None] | None = None,
     on_frame: Callable[[np.ndarray, FrameResult], None] | None = None,
     second_look: bool = True,
+    smooth: bool = True,
 ) -> Track:
     """Track the ball through every frame of a video.
 
@@ -279,7 +292,8 @@ def track_video(
     both). fps [1/s] overrides the container's frame rate (times = index / fps). progress(frames_done) and
     on_frame(bgr, result) are called after each frame (e.g. to draw a preview). second_look: the frames before a
     confirmed stretch of the track where the ball was not found are searched again going back from it
-    (:mod:`tracking.second_look`). Raises InputError for unreadable videos or a calibration made for another image
+    (:mod:`tracking.second_look`). smooth: with a fixed pivot, the centres are smoothed over a few frames where the
+    motion allows (:mod:`tracking.smoothing`; the on_frame preview shows them unsmoothed). Raises InputError for unreadable videos or a calibration made for another image
     size.
     """
     info = _check_inputs(path, pivot_uv, pivot_color, calibration)
@@ -297,4 +311,4 @@ def track_video(
     trackers.finish()
     if second_look:
         trackers.second_look(str(path), fps)
-    return _make_track(trackers, angle, calibration, info)
+    return _make_track(trackers, angle, calibration, info, (fps or info.fps) if smooth else None)

@@ -1,0 +1,87 @@
+"""Smoothing a ball's centres around a fixed pivot: codec-like noise is reduced, real motion is kept, and what the fits
+cannot vouch for (a jerk, a slack string, an oblique view, frames not found) keeps its measured centre."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from tracking.smoothing import MAX_SHIFT_PX, local_quadratic, smooth_centres
+
+PIVOT = (640.0, 110.0)  # [px]
+FPS = 60.0
+
+
+def _swing(seconds: float = 4.0, length_px: float = 430.0, amplitude_deg: float = 35.0, period_s: float = 1.0):
+    t = np.arange(int(seconds * FPS)) / FPS
+    th = math.radians(amplitude_deg) * np.exp(-0.1 * t) * np.sin(2 * np.pi * t / period_s)
+    return np.column_stack([PIVOT[0] + length_px * np.sin(th), PIVOT[1] + length_px * np.cos(th)])
+
+
+def _rms(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.sqrt(np.nanmean(np.sum((a - b) ** 2, axis=1))))
+
+
+def test_local_quadratic_is_exact_on_a_parabola_with_gaps_and_needs_both_sides():
+    k = np.arange(40, dtype=float)
+    y = 3.0 - 0.5 * k + 0.02 * k**2
+    ok = np.ones(40, bool)
+    ok[[10, 11, 25]] = False
+    c, rms, usable = local_quadratic(np.where(ok, y, 0.0), ok, 3)
+    assert np.allclose(c[usable, 0], y[usable], atol=1e-9)
+    assert np.all(rms[usable] < 1e-6)
+    assert not usable[[0, 39, 10, 25]].any()  # an end (no frame on one side) and the frames not found
+    assert usable[12]  # one found frame before it (9) is enough
+
+
+def test_codec_like_noise_is_reduced_and_a_clean_swing_is_left_where_it_is():
+    truth = _swing()
+    clean = smooth_centres(truth, np.ones(len(truth), bool), PIVOT, FPS)
+    assert _rms(clean, truth) < 0.02  # real pendulum motion is not flattened
+    noisy = truth + np.random.default_rng(1).normal(0.0, 0.6, truth.shape)
+    got = smooth_centres(noisy, np.ones(len(truth), bool), PIVOT, FPS)
+    assert _rms(got, truth) < 0.6 * _rms(noisy, truth)
+
+
+def test_a_fast_swing_up_is_kept():
+    truth = _swing(amplitude_deg=150.0, length_px=280.0)  # ≈ 2,800 px/s at the bottom
+    got = smooth_centres(truth, np.ones(len(truth), bool), PIVOT, FPS)
+    assert _rms(got, truth) < 0.05
+
+
+def test_a_jerk_and_frames_not_found_keep_their_measured_centres():
+    truth = _swing()
+    meas = truth.copy()
+    meas[100:] += np.array([0.0, 4.0])  # the string snaps 4 px longer at frame 100 (a re-tension, a hit)
+    found = np.ones(len(meas), bool)
+    found[50:53] = False
+    meas[50:53] = np.nan
+    got = smooth_centres(meas, found, PIVOT, FPS)
+    assert np.all(np.isnan(got[50:53]))
+    shift = np.hypot(*(got - meas).T)
+    assert np.nanmax(shift) <= MAX_SHIFT_PX + 1e-9
+    assert np.all(shift[97:103] < 1e-12)  # around the jump the fits miss their frames: not smoothed
+
+
+def test_an_oblique_view_where_the_circle_is_an_ellipse_is_not_smoothed():
+    truth = _swing()
+    d = truth - np.array(PIVOT)
+    ellipse = np.array(PIVOT) + d * np.array([1.0, 0.8])  # the plane of motion seen 37° off
+    got = smooth_centres(ellipse, np.ones(len(ellipse), bool), PIVOT, FPS)
+    assert np.array_equal(got, ellipse)  # left as measured (an ellipse's radius changes over the window) ...
+    on_circle = smooth_centres(truth, np.ones(len(truth), bool), PIVOT, FPS)
+    assert np.mean(np.any(on_circle != truth, axis=1)) > 0.9  # ... where the same swing seen square on is smoothed
+
+
+def test_a_clip_shorter_than_the_string_length_window_is_smoothed_within_it():
+    truth = _swing(seconds=0.3)  # 18 frames, the length window ±0.25 s would be 31
+    noisy = truth + np.random.default_rng(2).normal(0.0, 0.6, truth.shape)
+    got = smooth_centres(noisy, np.ones(len(truth), bool), PIVOT, FPS)
+    assert _rms(got, truth) < _rms(noisy, truth)
+
+
+def test_too_few_frames_are_returned_unchanged():
+    truth = _swing(seconds=0.05)
+    got = smooth_centres(truth, np.ones(len(truth), bool), PIVOT, FPS)
+    assert np.array_equal(got, truth)

@@ -24,6 +24,8 @@ from .color import ColorSpec
 from .detect import Blob
 from .subpixel import refine_centre
 from .second_look import SECOND_LOOK, recover
+from .model_look import MODEL_LOOK
+from .model_look import recover as model_recover
 from .smoothing import smooth_centres
 from .tracker import BallTracker, TrackerOptions
 from .video import VideoInfo, iter_frames, prefetched, probe_video
@@ -62,6 +64,7 @@ class Track:
         tuple[str, np.ndarray], ...
     ] = ()  # more (name, (n,) values) columns, written last (live: tilt, latency)
     second_look_frames: int = 0  # frames found by the second look (tracking.second_look)
+    model_look_frames: int = 0  # frames reported at a fitted pendulum's place (tracking.model_look)
     smoothed_frames: int = 0  # frames whose centre was smoothed around the fixed pivot (tracking.smoothing)
 
     @property
@@ -176,6 +179,7 @@ class _Trackers:
         self.sure = self.ball.options.min_confidence
         self.columns = _Columns()
         self.recovered = 0  # frames found by the second look
+        self.modelled = 0  # frames reported by the model look
 
     def step(self, frame: np.ndarray, t: float) -> tuple[Blob | None, tuple[float, float] | None]:
         """Track one frame: (the ball's blob or None, the pivot [px] or None)."""
@@ -212,6 +216,20 @@ class _Trackers:
             cols.refined[k] = (blob, centre)
             cols.set_ball(k, blob, SECOND_LOOK)
         self.recovered = len(got)
+
+    def model_look(self, path: str, fps: float) -> None:
+        """With a fixed pivot, the ball's frames reported by the model look (:func:`tracking.model_look.recover`)."""
+        cols = self.columns
+        conf = np.array(cols.conf, float)
+        uv = np.array(cols.uv, float).reshape(-1, 2)
+        trusted = np.all(np.isfinite(uv), axis=1) & (conf >= self.sure)
+        if self.fixed is None or trusted.sum() < 2:
+            return
+        radius = float(np.median(np.array(cols.radius, float)[trusted]))
+        got = model_recover(self.ball, path, fps, uv, trusted, self.fixed, radius)
+        for k, blob in got:
+            cols.set_ball(k, blob, MODEL_LOOK)
+        self.modelled = len(got)
 
     def notes(self) -> tuple[str, ...]:
         return tuple(self.ball.notes) + tuple(f"pivot marker: {n}" for n in (self.pivot.notes if self.pivot else ()))
@@ -267,6 +285,7 @@ def _make_track(
         confidence=np.where(seen, conf_a, 0.0),
         unsure=seen & ~trusted,
         second_look_frames=trackers.recovered,
+        model_look_frames=trackers.modelled,
         smoothed_frames=smoothed,
     )
 
@@ -311,4 +330,5 @@ def track_video(
     trackers.finish()
     if second_look:
         trackers.second_look(str(path), fps)
+        trackers.model_look(str(path), fps or info.fps)
     return _make_track(trackers, angle, calibration, info, (fps or info.fps) if smooth else None)

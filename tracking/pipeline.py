@@ -26,7 +26,7 @@ from .subpixel import refine_centre
 from .second_look import SECOND_LOOK, recover
 from .model_look import MODEL_LOOK
 from .model_look import recover as model_recover
-from .smoothing import smooth_centres
+from .smoothing import outliers, smooth_centres
 from .tracker import BallTracker, TrackerOptions
 from .video import VideoInfo, iter_frames, prefetched, probe_video
 
@@ -65,6 +65,7 @@ class Track:
     ] = ()  # more (name, (n,) values) columns, written last (live: tilt, latency)
     second_look_frames: int = 0  # frames found by the second look (tracking.second_look)
     model_look_frames: int = 0  # frames reported at a fitted pendulum's place (tracking.model_look)
+    outlier_frames: int = 0  # fixes off their neighbours' motion, reported unsure (tracking.smoothing.outliers)
     smoothed_frames: int = 0  # frames whose centre was smoothed around the fixed pivot (tracking.smoothing)
 
     @property
@@ -114,6 +115,7 @@ def _check_inputs(
 
 
 _NAN2 = (math.nan, math.nan)
+OUTLIER = 0.3  # confidence of a fix found to lie off the motion of its neighbours (reported unsure)
 
 
 class _Columns:
@@ -180,6 +182,7 @@ class _Trackers:
         self.columns = _Columns()
         self.recovered = 0  # frames found by the second look
         self.modelled = 0  # frames reported by the model look
+        self.outliers = 0  # fixes their neighbours placed elsewhere (reported unsure)
 
     def step(self, frame: np.ndarray, t: float) -> tuple[Blob | None, tuple[float, float] | None]:
         """Track one frame: (the ball's blob or None, the pivot [px] or None)."""
@@ -217,12 +220,27 @@ class _Trackers:
             cols.set_ball(k, blob, SECOND_LOOK)
         self.recovered = len(got)
 
+    def trusted(self) -> tuple[np.ndarray, np.ndarray]:
+        """The ball's centres [px] (n, 2) so far and which of them are trusted (confidence ≥ the tracker's minimum)."""
+        uv = np.array(self.columns.uv, float).reshape(-1, 2)
+        conf = np.array(self.columns.conf, float)
+        return uv, np.all(np.isfinite(uv), axis=1) & (conf >= self.sure)
+
+    def reject_outliers(self, fps: float) -> None:
+        """With a fixed pivot, the fixes their neighbours place elsewhere (:func:`tracking.smoothing.outliers`) are
+        marked unsure (confidence OUTLIER)."""
+        uv, trusted = self.trusted()
+        if self.fixed is None:
+            return
+        odd = np.flatnonzero(outliers(uv, trusted, self.fixed, fps))
+        for k in odd:
+            self.columns.conf[k] = OUTLIER
+        self.outliers = len(odd)
+
     def model_look(self, path: str, fps: float) -> None:
         """With a fixed pivot, the ball's frames reported by the model look (:func:`tracking.model_look.recover`)."""
         cols = self.columns
-        conf = np.array(cols.conf, float)
-        uv = np.array(cols.uv, float).reshape(-1, 2)
-        trusted = np.all(np.isfinite(uv), axis=1) & (conf >= self.sure)
+        uv, trusted = self.trusted()
         if self.fixed is None or trusted.sum() < 2:
             return
         radius = float(np.median(np.array(cols.radius, float)[trusted]))
@@ -286,6 +304,7 @@ def _make_track(
         unsure=seen & ~trusted,
         second_look_frames=trackers.recovered,
         model_look_frames=trackers.modelled,
+        outlier_frames=trackers.outliers,
         smoothed_frames=smoothed,
     )
 
@@ -311,8 +330,10 @@ def track_video(
     both). fps [1/s] overrides the container's frame rate (times = index / fps). progress(frames_done) and
     on_frame(bgr, result) are called after each frame (e.g. to draw a preview). second_look: the frames before a
     confirmed stretch of the track where the ball was not found are searched again going back from it
-    (:mod:`tracking.second_look`). smooth: with a fixed pivot, the centres are smoothed over a few frames where the
-    motion allows (:mod:`tracking.smoothing`; the on_frame preview shows them unsmoothed). Raises InputError for unreadable videos or a calibration made for another image
+    (:mod:`tracking.second_look`), and with a fixed pivot the frames a fitted pendulum places where the frame shows the
+    ball (:mod:`tracking.model_look`). smooth: with a fixed pivot, fixes off their neighbours' motion are reported
+    unsure, and the centres are smoothed over a few frames where the motion allows (:mod:`tracking.smoothing`; the
+    on_frame preview shows neither). Raises InputError for unreadable videos or a calibration made for another image
     size.
     """
     info = _check_inputs(path, pivot_uv, pivot_color, calibration)
@@ -330,5 +351,8 @@ def track_video(
     trackers.finish()
     if second_look:
         trackers.second_look(str(path), fps)
+    if smooth:
+        trackers.reject_outliers(fps or info.fps)
+    if second_look:
         trackers.model_look(str(path), fps or info.fps)
     return _make_track(trackers, angle, calibration, info, (fps or info.fps) if smooth else None)

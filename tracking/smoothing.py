@@ -29,19 +29,26 @@ MIN_HALF_FRAMES = 2  # frames either side a fit needs at least (and one found on
 MAX_RESIDUAL_PX = 1.5  # [px] a fit whose frames lie farther than this from it (RMS) is not used
 MAX_RADIUS_CHANGE_PX = 2.0  # [px] the fitted string length may change by this over its window (else not smoothed)
 MAX_SHIFT_PX = 1.5  # [px] a smoothed centre farther than this from the measured one is not used
+OUTLIER_HALF_S = 0.07  # [s] a fix is judged by a parabola through the fixes this far either side ...
+OUTLIER_PX = 4.0  # [px] ... and taken out when it lies farther than this from it
+OUTLIER_ROUNDS = 8  # at most this many rounds of taking the worst out
 
 
-def local_quadratic(y: np.ndarray, ok: np.ndarray, half: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def local_quadratic(
+    y: np.ndarray, ok: np.ndarray, half: int, leave_out: bool = False
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per frame k, the least-squares parabola c0 + c1·j + c2·j² through the frames k+j, j = −half … half, where ``ok``:
     (coefficients (n, 3), RMS residual of those frames, usable). Usable needs ≥ 4 frames, one on each side. Frames evenly
-    spaced; y (n,), ok (n,) bool. A window longer than the clip is cut to it."""
+    spaced; y (n,), ok (n,) bool. A window longer than the clip is cut to it. leave_out: frame k itself is left out
+    of its own fit (the parabola then predicts it from its neighbours)."""
     half = min(half, (len(y) - 1) // 2)
     d = np.arange(-half, half + 1, dtype=float)
+    keep = (d != 0) if leave_out else np.ones_like(d, bool)
     f = ok.astype(float)
     fy = np.where(ok, y, 0.0)
 
     def conv(a: np.ndarray, m: int) -> np.ndarray:  # Σ_j a[k+j]·j^m over the window, per k
-        return np.convolve(a, (d**m)[::-1], mode="same")
+        return np.convolve(a, (np.where(keep, d**m, 0.0))[::-1], mode="same")
 
     s = [conv(f, m) for m in range(5)]
     t = [conv(fy, m) for m in range(3)]
@@ -50,6 +57,8 @@ def local_quadratic(y: np.ndarray, ok: np.ndarray, half: int) -> tuple[np.ndarra
     left = np.convolve(f, np.r_[np.zeros(half + 1), np.ones(half)], mode="same")  # found frames before k
     right = np.convolve(f, np.r_[np.ones(half), np.zeros(half + 1)], mode="same")  # ... and after k
     usable = ok & (s[0] >= 4) & (left >= 1) & (right >= 1)
+    if leave_out:
+        usable = (s[0] >= 4) & (left >= 2) & (right >= 2)
     safe = np.where(usable[:, None, None], a, np.eye(3))
     c = np.linalg.solve(safe, np.where(usable[:, None], b, 0.0)[..., None])[..., 0]
     u2 = conv(np.where(ok, y * y, 0.0), 0)
@@ -77,3 +86,36 @@ def smooth_centres(uv: np.ndarray, found: np.ndarray, pivot_uv: tuple[float, flo
     out = np.asarray(pivot_uv, float) + r_fit[:, :1] * np.column_stack([np.sin(a_fit[:, 0]), np.cos(a_fit[:, 0])])
     ok &= np.hypot(*(out - uv).T) <= MAX_SHIFT_PX
     return np.where(ok[:, None], out, uv)
+
+
+def outliers(uv: np.ndarray, found: np.ndarray, pivot_uv: tuple[float, float], fps: float) -> np.ndarray:
+    """(n,) bool: the fixes that their neighbours place elsewhere — farther than OUTLIER_PX along the swing from the
+    parabola through the fixes within OUTLIER_HALF_S either side (the frame itself left out), or than OUTLIER_PX
+    from the string's length there. The worst in reach goes first and the rest are judged again without it (one
+    far-off fix does not condemn its neighbours). A codec's ghost taken for the ball, a few pixels beside it."""
+    uv = np.asarray(uv, float)
+    ok = np.asarray(found, bool) & np.all(np.isfinite(uv), axis=1)
+    out = np.zeros(len(ok), bool)
+    if ok.sum() < 7 or not (math.isfinite(fps) and fps > 0):
+        return out
+    d = uv - np.asarray(pivot_uv, float)
+    r = np.hypot(d[:, 0], d[:, 1])
+    th = np.zeros(len(ok))
+    th[ok] = np.unwrap(np.arctan2(d[ok, 0], d[ok, 1]))
+    half_a = max(MIN_HALF_FRAMES, round(OUTLIER_HALF_S * fps))
+    half_r = max(MIN_HALF_FRAMES, round(RADIUS_HALF_S * fps))
+    for _ in range(OUTLIER_ROUNDS):
+        a_fit, _, a_ok = local_quadratic(np.where(ok, th, 0.0), ok, half_a, leave_out=True)
+        r_fit, _, r_ok = local_quadratic(np.where(ok, r, 0.0), ok, half_r, leave_out=True)
+        miss = np.maximum(
+            np.where(a_ok, np.abs(a_fit[:, 0] - th) * r, 0.0), np.where(r_ok, np.abs(r_fit[:, 0] - r), 0.0)
+        )
+        miss = np.where(ok, miss, 0.0)
+        bad = miss > OUTLIER_PX
+        if not bad.any():
+            break
+        peak = np.array([miss[k] >= miss[max(0, k - half_a) : k + half_a + 1].max() for k in range(len(miss))])
+        worst = bad & peak
+        out |= worst
+        ok &= ~worst
+    return out

@@ -13,8 +13,10 @@ PIVOT = (640.0, 110.0)  # [px]
 FPS = 60.0
 
 
-def _swing(seconds: float = 4.0, length_px: float = 430.0, amplitude_deg: float = 35.0, period_s: float = 1.0):
-    t = np.arange(int(seconds * FPS)) / FPS
+def _swing(
+    seconds: float = 4.0, length_px: float = 430.0, amplitude_deg: float = 35.0, period_s: float = 1.0, fps: float = FPS
+):
+    t = np.arange(int(seconds * fps)) / fps
     th = math.radians(amplitude_deg) * np.exp(-0.1 * t) * np.sin(2 * np.pi * t / period_s)
     return np.column_stack([PIVOT[0] + length_px * np.sin(th), PIVOT[1] + length_px * np.cos(th)])
 
@@ -85,3 +87,19 @@ def test_too_few_frames_are_returned_unchanged():
     truth = _swing(seconds=0.05)
     got = smooth_centres(truth, np.ones(len(truth), bool), PIVOT, FPS)
     assert np.array_equal(got, truth)
+
+
+def test_outliers_are_the_ghosts_a_few_pixels_off_and_never_the_real_motion():
+    from tracking.smoothing import outliers
+
+    truth = _swing()
+    rng = np.random.default_rng(4)
+    meas = truth + rng.normal(0.0, 0.6, truth.shape)
+    ghosts = {40: (6.0, 0.0), 41: (0.0, 7.0), 122: (-40.0, 10.0), 180: (4.0, 4.0)}  # a codec's ghosts taken for it
+    for k, off in ghosts.items():
+        meas[k] += off
+    found = np.ones(len(meas), bool)
+    assert set(np.flatnonzero(outliers(meas, found, PIVOT, FPS))) == set(ghosts)
+    assert not outliers(truth + rng.normal(0.0, 0.6, truth.shape), found, PIVOT, FPS).any()
+    fast = _swing(amplitude_deg=150.0, length_px=280.0, fps=30.0)
+    assert not outliers(fast, np.ones(len(fast), bool), PIVOT, 30.0).any()  # a swing-up at 30 fps: ≈ 90 px a frame

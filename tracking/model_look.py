@@ -210,11 +210,12 @@ def recover(
     trusted: np.ndarray,
     pivot: tuple[float, float],
     radius_px: float,
+    kept: dict[int, np.ndarray] | None = None,
 ) -> list[tuple[int, Blob]]:
-    """The model look over a tracked video (``path``, decoded again up to the last run's frame, frames evenly spaced
-    at ``fps`` [1/s]): (frame index, blob at the fitted place) of the frames it reports. uv (n, 2) [px] and trusted
+    """The model look over a tracked video (``path``, frames evenly spaced at ``fps`` [1/s]; the frames ``kept`` since
+    the first pass used, the rest decoded again): (frame index, blob at the fitted place) of the frames it reports. uv (n, 2) [px] and trusted
     (n,) are the track's centres and its fixes to trust; pivot [px] fixed; radius_px the ball's."""
-    from .video import iter_frames
+    from .video import frames_at
 
     d = np.asarray(uv, float) - np.asarray(pivot, float)
     theta = np.full(len(d), np.nan)
@@ -226,13 +227,9 @@ def recover(
             plans[k] = place(fit, pivot, k, fps, radius_px)
     if not plans:
         return []
-    out: list[tuple[int, Blob]] = []
-    last = max(plans)
-    for k, _, frame in iter_frames(path):
-        if k in plans:
-            b = plans[k]
-            if shows_ball(frame, tracker.spec, b.u, b.v, radius_px) and tracker.could_be_ball(b, pivot):
-                out.append((k, b))
-        if k >= last:
-            break
-    return out
+    frames = frames_at(path, None, plans, kept)
+    return [
+        (k, b)
+        for k, b in sorted(plans.items())
+        if shows_ball(frames[k], tracker.spec, b.u, b.v, radius_px) and tracker.could_be_ball(b, pivot)
+    ]

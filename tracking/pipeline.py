@@ -115,6 +115,7 @@ def _check_inputs(
 
 
 _NAN2 = (math.nan, math.nan)
+KEEP_BYTES = 256 * 2**20  # frames where the ball was not surely found are kept for the looks after, up to this
 OUTLIER = 0.3  # confidence of a fix found to lie off the motion of its neighbours (reported unsure)
 
 
@@ -183,6 +184,9 @@ class _Trackers:
         self.recovered = 0  # frames found by the second look
         self.modelled = 0  # frames reported by the model look
         self.outliers = 0  # fixes their neighbours placed elsewhere (reported unsure)
+        self.kept: dict[int, np.ndarray] = {}  # frames where the ball was not (surely) found, for the looks after
+        self.kept_bytes = 0
+        self.frame_bytes = 0
 
     def step(self, frame: np.ndarray, t: float) -> tuple[Blob | None, tuple[float, float] | None]:
         """Track one frame: (the ball's blob or None, the pivot [px] or None)."""
@@ -201,6 +205,10 @@ class _Trackers:
             cols.refined[k] = (b, refine_centre(frame, self.ball.spec, b))
         cols.revise_ball(self.ball)
         cols.add(t, b, self.ball.confidence)
+        if (b is None or self.ball.confidence < self.sure) and self.kept_bytes + frame.nbytes <= KEEP_BYTES:
+            self.kept[k] = frame  # (each decoded frame is a new array: kept without a copy)
+            self.kept_bytes += frame.nbytes
+        self.frame_bytes = frame.nbytes
         return b, p
 
     def finish(self) -> None:
@@ -214,7 +222,7 @@ class _Trackers:
     def second_look(self, path: str, fps: float | None) -> None:
         """The ball's frames recovered by a second look (:func:`tracking.second_look.recover`), counted."""
         cols = self.columns
-        got = recover(self.ball, path, fps, cols.blobs, cols.t, cols.piv, cols.conf)
+        got = recover(self.ball, path, fps, cols.blobs, cols.t, cols.piv, cols.conf, self.kept, self.frame_bytes)
         for k, blob, centre in got:
             cols.refined[k] = (blob, centre)
             cols.set_ball(k, blob, SECOND_LOOK)
@@ -244,7 +252,7 @@ class _Trackers:
         if self.fixed is None or trusted.sum() < 2:
             return
         radius = float(np.median(np.array(cols.radius, float)[trusted]))
-        got = model_recover(self.ball, path, fps, uv, trusted, self.fixed, radius)
+        got = model_recover(self.ball, path, fps, uv, trusted, self.fixed, radius, self.kept)
         for k, blob in got:
             cols.set_ball(k, blob, MODEL_LOOK)
         self.modelled = len(got)

@@ -4,9 +4,10 @@ trusted fixes, where the decoded frame shows the ball's colour where a pendulum 
 At a low bitrate the encoder's first frames and a fast ball's frames are blocks: the ball's colour is there, but no
 blob has the ball's shape, and a centroid of the blocks is off by 2–5 px. The motion around them is well measured.
 So, per run of frames not found (at most ``MAX_GAP_S`` long), a pendulum θ'' = −ω²·sin θ − c·θ' about the fixed pivot
-(string length the median of the fixes') is fitted to the trusted fixes within ``FIT_HALF_S`` of the run (the longest
-window that the pendulum fits within ``MAX_FIT_RMS_PX``, also on the ``NEAR_FIXES`` fixes nearest the run: a push,
-a release or a catch inside a window makes it fail). A frame of the run is then reported at the fitted place, with
+(string length the median of the fixes') is fitted to the trusted fixes in one of ``WINDOWS`` around the run (the first
+window that the pendulum fits within ``MAX_FIT_RMS_PX``, and the ``NEAR_FIXES`` fixes nearest the run within
+``MAX_NEAR_RMS_PX``: a push, a release or a catch inside a window makes it fail; and that places the frame to within
+``MAX_SPREAD_PX``, one standard deviation from the fit's covariance). A frame is then reported at the fitted place, with
 confidence ``MODEL_LOOK``, only when the frame shows the ball there: at least ``MIN_SHARE`` of the ball's disc in its
 colour, the colour's centroid within ``MAX_OFF_RADII`` ball radii of the fitted place, and the place not one the
 tracker found static in the ball's colour, excluded, or out of the string's reach. The live sensor never does this.
@@ -26,7 +27,8 @@ from .tracker import BallTracker
 
 MODEL_LOOK = 0.6  # confidence of a frame reported by the model look
 MAX_GAP_S = 0.4  # [s] runs of frames not found longer than this are left alone
-FIT_HALF_S = (1.2, 0.6, 0.3)  # [s] fit windows either side of a run, the longest that fits first
+WINDOWS = ((1.2, 1.2), (0.6, 0.6), (0.3, 0.3), (0.0, 0.6), (0.6, 0.0), (0.0, 0.3), (0.3, 0.0))  # [s] (before, after)
+# a run: fit windows tried in this order, the longest first, then one side only (a push or a release on the other)
 MIN_FIXES = 12  # trusted fixes a fit needs at least
 MAX_FIT_RMS_PX = 1.2  # [px] the pendulum must fit the window's fixes within this (RMS) ...
 NEAR_FIXES = 6  # ... and the fixes nearest the run within
@@ -146,20 +148,28 @@ def runs(trusted: np.ndarray, max_len: int) -> list[tuple[int, int]]:
 
 
 def fit_around(
-    run: tuple[int, int], trusted: np.ndarray, theta: np.ndarray, radius: np.ndarray, fps: float
+    run: tuple[int, int],
+    trusted: np.ndarray,
+    theta: np.ndarray,
+    radius: np.ndarray,
+    fps: float,
+    cache: dict | None = None,
 ) -> dict[int, PendulumFit]:
     """Per frame of the run, the pendulum it is placed by: the first of the windows around the run (both sides, the
     longest first, then one side only: a push or a release on the other) that the pendulum fits (see the module) and
-    that places that frame to within MAX_SPREAD_PX (one standard deviation)."""
+    that places that frame to within MAX_SPREAD_PX (one standard deviation). cache: fits by window, kept between runs."""
+    cache = {} if cache is None else cache
     first, end = run
     idx = np.flatnonzero(trusted)
     out: dict[int, PendulumFit] = {}
-    windows = [(h, h) for h in FIT_HALF_S] + [w for h in FIT_HALF_S[1:] for w in ((0, h), (h, 0))]
-    for before_s, after_s in windows:
+    for before_s, after_s in WINDOWS:
         sel = idx[(idx >= first - round(before_s * fps)) & (idx < end + round(after_s * fps))]
         if len(sel) < MIN_FIXES:
             continue
-        fit = fit_pendulum(sel, theta[sel], float(np.median(radius[sel])), fps)
+        key = (int(sel[0]), int(sel[-1]), len(sel))
+        if key not in cache:  # runs close together share windows
+            cache[key] = fit_pendulum(sel, theta[sel], float(np.median(radius[sel])), fps)
+        fit = cache[key]
         if fit is None or fit.rms_px > MAX_FIT_RMS_PX:
             continue
         near = sel[np.argsort(np.minimum(np.abs(sel - first), np.abs(sel - (end - 1))))[:NEAR_FIXES]]
@@ -222,8 +232,9 @@ def recover(
     theta[trusted] = np.unwrap(np.arctan2(d[trusted, 0], d[trusted, 1]))  # across gaps too (a swing-up passes 180°)
     radius = np.hypot(d[:, 0], d[:, 1])
     plans: dict[int, Blob] = {}
+    cache: dict = {}
     for run in runs(trusted, round(MAX_GAP_S * fps)):
-        for k, fit in fit_around(run, trusted, theta, radius, fps).items():
+        for k, fit in fit_around(run, trusted, theta, radius, fps, cache).items():
             plans[k] = place(fit, pivot, k, fps, radius_px)
     if not plans:
         return []

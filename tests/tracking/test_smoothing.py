@@ -103,3 +103,16 @@ def test_outliers_are_the_ghosts_a_few_pixels_off_and_never_the_real_motion():
     assert not outliers(truth + rng.normal(0.0, 0.6, truth.shape), found, PIVOT, FPS).any()
     fast = _swing(amplitude_deg=150.0, length_px=280.0, fps=30.0)
     assert not outliers(fast, np.ones(len(fast), bool), PIVOT, 30.0).any()  # a swing-up at 30 fps: ≈ 90 px a frame
+
+
+def test_a_tracked_video_is_smoothed_and_no_worse_for_it(run):
+    from tracking import scenarios
+    from tracking.color import color_spec
+    from tracking.pipeline import track_video
+
+    sc, track, out = run("plain")
+    raw = track_video(sc.path, color_spec("red"), smooth=False, **sc.track_kwargs)
+    assert raw.smoothed_frames == 0 and raw.outlier_frames == 0
+    assert track.smoothed_frames > 0.8 * len(track.t)
+    assert track.outlier_frames == 0
+    assert out.centre_rms_px <= scenarios.score(sc, raw).centre_rms_px

@@ -26,7 +26,7 @@ from .subpixel import refine_centre
 from .second_look import SECOND_LOOK, recover
 from .model_look import MODEL_LOOK
 from .model_look import recover as model_recover
-from .smoothing import outliers, smooth_centres
+from .smoothing import on_circle, outliers, smooth_centres
 from .tracker import BallTracker, TrackerOptions
 from .video import VideoInfo, iter_frames, prefetched, probe_video
 
@@ -235,10 +235,10 @@ class _Trackers:
         return uv, np.all(np.isfinite(uv), axis=1) & (conf >= self.sure)
 
     def reject_outliers(self, fps: float) -> None:
-        """With a fixed pivot, the fixes their neighbours place elsewhere (:func:`tracking.smoothing.outliers`) are
-        marked unsure (confidence OUTLIER)."""
+        """With a fixed pivot and the ball on a circle about it (:func:`tracking.smoothing.on_circle`), the fixes their
+        neighbours place elsewhere (:func:`tracking.smoothing.outliers`) are marked unsure (confidence OUTLIER)."""
         uv, trusted = self.trusted()
-        if self.fixed is None:
+        if self.fixed is None or not on_circle(uv, trusted, self.fixed):
             return
         odd = np.flatnonzero(outliers(uv, trusted, self.fixed, fps))
         for k in odd:
@@ -246,10 +246,11 @@ class _Trackers:
         self.outliers = len(odd)
 
     def model_look(self, path: str, fps: float) -> None:
-        """With a fixed pivot, the ball's frames reported by the model look (:func:`tracking.model_look.recover`)."""
+        """With a fixed pivot and the ball on a circle about it, the ball's frames reported by the model look
+        (:func:`tracking.model_look.recover`)."""
         cols = self.columns
         uv, trusted = self.trusted()
-        if self.fixed is None or trusted.sum() < 2:
+        if self.fixed is None or not on_circle(uv, trusted, self.fixed):
             return
         radius = float(np.median(np.array(cols.radius, float)[trusted]))
         got = model_recover(self.ball, path, fps, uv, trusted, self.fixed, radius, self.kept)

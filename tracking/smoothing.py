@@ -29,6 +29,8 @@ MIN_HALF_FRAMES = 2  # frames either side a fit needs at least (and one found on
 MAX_RESIDUAL_PX = 1.5  # [px] a fit whose frames lie farther than this from it (RMS) is not used
 MAX_RADIUS_CHANGE_PX = 2.0  # [px] the fitted string length may change by this over its window (else not smoothed)
 MAX_SHIFT_PX = 1.5  # [px] a smoothed centre farther than this from the measured one is not used
+CIRCLE_SPREAD_PX = 4.0  # [px] the fixes' distances from the pivot (5th to 95th percentile) span at most this, or
+CIRCLE_SPREAD_SHARE = 0.01  # ... this share of the string, for the image of the swing to be a circle about the pivot
 OUTLIER_HALF_S = 0.07  # [s] a fix is judged by a parabola through the fixes this far either side ...
 OUTLIER_PX = 4.0  # [px] ... and taken out when it lies farther than this from it
 OUTLIER_ROUNDS = 8  # at most this many rounds of taking the worst out
@@ -88,10 +90,25 @@ def smooth_centres(uv: np.ndarray, found: np.ndarray, pivot_uv: tuple[float, flo
     return np.where(ok[:, None], out, uv)
 
 
+def on_circle(uv: np.ndarray, found: np.ndarray, pivot_uv: tuple[float, float]) -> bool:
+    """The found centres [px] lie on a circle about the pivot [px] (5th–95th percentile of their distances within
+    CIRCLE_SPREAD_PX, or CIRCLE_SPREAD_SHARE of the string): a taut string seen square on. A camera that sees the plane
+    of motion obliquely (an ellipse), a slack string, or a pivot given wrongly, is not — and the checks and fits that
+    take the motion for a circle (:func:`outliers`, :mod:`tracking.model_look`) are not made."""
+    uv = np.asarray(uv, float)
+    ok = np.asarray(found, bool) & np.all(np.isfinite(uv), axis=1)
+    if ok.sum() < 7:
+        return False
+    r = np.hypot(*(uv[ok] - np.asarray(pivot_uv, float)).T)
+    lo, mid, hi = np.percentile(r, [5, 50, 95])
+    return bool(hi - lo <= max(CIRCLE_SPREAD_PX, CIRCLE_SPREAD_SHARE * mid))
+
+
 def outliers(uv: np.ndarray, found: np.ndarray, pivot_uv: tuple[float, float], fps: float) -> np.ndarray:
     """(n,) bool: the fixes that their neighbours place elsewhere — farther than OUTLIER_PX along the swing from the
     parabola through the fixes within OUTLIER_HALF_S either side (the frame itself left out), or than OUTLIER_PX
-    from the string's length there. The worst in reach goes first and the rest are judged again without it (one
+    from the string's length there. A kink of the motion (a ball hit from rest, a catch) loses its fix at the kink
+    too: unsure, never false. The worst in reach goes first and the rest are judged again without it (one
     far-off fix does not condemn its neighbours). A codec's ghost taken for the ball, a few pixels beside it."""
     uv = np.asarray(uv, float)
     ok = np.asarray(found, bool) & np.all(np.isfinite(uv), axis=1)
@@ -105,12 +122,10 @@ def outliers(uv: np.ndarray, found: np.ndarray, pivot_uv: tuple[float, float], f
     half_a = max(MIN_HALF_FRAMES, round(OUTLIER_HALF_S * fps))
     half_r = max(MIN_HALF_FRAMES, round(RADIUS_HALF_S * fps))
     for _ in range(OUTLIER_ROUNDS):
-        a_fit, _, a_ok = local_quadratic(np.where(ok, th, 0.0), ok, half_a, leave_out=True)
         r_fit, _, r_ok = local_quadratic(np.where(ok, r, 0.0), ok, half_r, leave_out=True)
-        miss = np.maximum(
-            np.where(a_ok, np.abs(a_fit[:, 0] - th) * r, 0.0), np.where(r_ok, np.abs(r_fit[:, 0] - r), 0.0)
-        )
-        miss = np.where(ok, miss, 0.0)
+        miss = np.where(r_ok, np.abs(r_fit[:, 0] - r), 0.0)
+        a_fit, _, a_ok = local_quadratic(np.where(ok, th, 0.0), ok, half_a, leave_out=True)
+        miss = np.where(ok, np.maximum(miss, np.where(a_ok, np.abs(a_fit[:, 0] - th) * r, 0.0)), 0.0)
         bad = miss > OUTLIER_PX
         if not bad.any():
             break

@@ -116,3 +116,27 @@ def test_a_tracked_video_is_smoothed_and_no_worse_for_it(run):
     assert track.smoothed_frames > 0.8 * len(track.t)
     assert track.outlier_frames == 0
     assert out.centre_rms_px <= scenarios.score(sc, raw).centre_rms_px
+
+
+def test_a_swing_seen_square_on_is_on_a_circle_and_an_oblique_one_is_not():
+    from tracking.smoothing import on_circle
+
+    truth = _swing()
+    found = np.ones(len(truth), bool)
+    noisy = truth + np.random.default_rng(5).normal(0.0, 0.7, truth.shape)  # a low-bitrate codec's centres
+    assert on_circle(noisy, found, PIVOT)
+    ellipse = np.array(PIVOT) + (truth - np.array(PIVOT)) * np.array([1.0, 0.9])  # the plane seen 26° off
+    assert not on_circle(ellipse, found, PIVOT)
+    assert not on_circle(truth, found, (PIVOT[0] + 30.0, PIVOT[1]))  # a pivot given 30 px off
+
+
+def test_a_ball_hit_from_rest_loses_at_most_the_frames_at_the_kink():
+    from tracking.smoothing import outliers
+
+    t = np.arange(240) / FPS
+    s = np.clip(t - 0.3, 0.0, None)
+    th = math.radians(32.0) * np.sin(2 * np.pi * s)  # hanging still, then hit: ≈ 25 px a frame at once
+    uv = np.column_stack([PIVOT[0] + 430.0 * np.sin(th), PIVOT[1] + 430.0 * np.cos(th)])
+    uv += np.random.default_rng(6).normal(0.0, 0.5, uv.shape)
+    odd = np.flatnonzero(outliers(uv, np.ones(len(uv), bool), PIVOT, FPS))
+    assert len(odd) <= 3 and all(abs(k - 18) <= 2 for k in odd), odd  # unsure there, never elsewhere

@@ -27,9 +27,10 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
-def guard_outputs(inputs: Named, outputs: Named) -> None:
+def guard_outputs(inputs: Named, outputs: Named, folders: bool = False) -> None:
     """Raise OptionError (exit 2, naming both paths) when an output is an input or two outputs are one file, and
-    OutputRefused (exit 2) when an output exists as a symbolic link, a device, a FIFO or a socket."""
+    OutputRefused (exit 2) when an output exists as a symbolic link, a device, a FIFO or a socket; ``folders``: also
+    :func:`require_folders` (before long work)."""
     from trajectories.atomic import refuse_special
     from trajectories.errors import OptionError
 
@@ -43,6 +44,8 @@ def guard_outputs(inputs: Named, outputs: Named) -> None:
                 raise OptionError(
                     f"{oname} {opath} is the input {iname} {ipath}: refusing to overwrite an input (choose another name)"
                 )
+    if folders:
+        require_folders(outputs)
     for k, (aname, apath) in enumerate(outs):
         for bname, bpath in outs[k + 1 :]:
             if _same_file(apath, bpath):

@@ -309,14 +309,28 @@ def _gentle(setup: _Setup, a_max: float, options, failed: AntiSwayResult) -> tup
         if not segs:
             return None  # it failed on something a lower acceleration does not cure here
         accels[[k - 1 for k in segs]] *= GENTLE_STEP
-        res = _attempt(setup, tuple(accels), options)
+        res = _attempt(setup, tuple(accels), options, trial=True)
         if res.failure is None:
             return res, tuple(accels)
     return None
 
 
-def _attempt(setup: _Setup, a_max, options, progress=None) -> AntiSwayResult:
-    """Plan, IK, check, predict across the band; ``failure`` says why the plan cannot be used (or None)."""
+def _limits_failure(plan, report, a_max) -> str:
+    """Why a plan that breaks a joint limit cannot be used: the first failing segment and the check's violation."""
+    failing = _failing_segments(plan, report)
+    seg = plan.segments[failing[0] - 1]
+    first = next(v for v in report.failing if plan.segment_of(v.t) == failing[0])
+    others = f" (segments {', '.join(map(str, failing))} exceed the limits)" if len(failing) > 1 else ""
+    return (
+        f"a_max = {_accel_text(a_max)} m/s² does not fit the joint limits at segment {failing[0]}{others} "
+        f"({seg.start[0]:.3f},{seg.start[1]:.3f})→({seg.end[0]:.3f},{seg.end[1]:.3f}): {first.describe()}"
+    )
+
+
+def _attempt(setup: _Setup, a_max, options, progress=None, trial: bool = False) -> AntiSwayResult:
+    """Plan, IK, check, predict across the band; ``failure`` says why the plan cannot be used (or None).
+    ``trial``: one of several tried (a fallback, a lower a_max) — one that breaks a joint limit is not simulated
+    (its ``run``, ``band`` None, its baseline NaN): it is discarded."""
     from planners.antisway import band_lengths, plan_layout
 
     from .commands.check import run_check
@@ -331,6 +345,10 @@ def _attempt(setup: _Setup, a_max, options, progress=None) -> AntiSwayResult:
     t0 = time.perf_counter()
     report = run_check(joints, setup.limits, setup.margin, setup.jerk, False, setup.robot)
     timings["check"] = time.perf_counter() - t0
+    if trial and not report.ok:
+        failure = _limits_failure(plan, report, a_max)
+        return AntiSwayResult(plan, joints, ik_error, report, None, plan.stop_time, math.nan, timings, None,  # type: ignore[arg-type]
+                              setup.obstacles, setup.max_sway, failure)  # fmt: skip
     t0 = time.perf_counter()
     tol = options.length_tolerance
     lengths = band_lengths(setup.length, tol)
@@ -346,14 +364,7 @@ def _attempt(setup: _Setup, a_max, options, progress=None) -> AntiSwayResult:
     ).stop_time
     failure = None
     if not report.ok:
-        failing = _failing_segments(plan, report)
-        seg = plan.segments[failing[0] - 1]
-        first = next(v for v in report.failing if plan.segment_of(v.t) == failing[0])
-        others = f" (segments {', '.join(map(str, failing))} exceed the limits)" if len(failing) > 1 else ""
-        failure = (
-            f"a_max = {_accel_text(a_max)} m/s² does not fit the joint limits at segment {failing[0]}{others} "
-            f"({seg.start[0]:.3f},{seg.start[1]:.3f})→({seg.end[0]:.3f},{seg.end[1]:.3f}): {first.describe()}"
-        )
+        failure = _limits_failure(plan, report, a_max)
     elif setup.max_sway is not None and band.worst_peak > setup.max_sway and max(band.peak) <= setup.max_sway:
         failure = (
             f"predicted sway {math.degrees(band.worst_peak):.2f}° for a string length between the simulated ones "
@@ -397,7 +408,7 @@ def _largest_fitting_accel(setup: _Setup, a_max: float, options) -> float:
     """
 
     def fits(a: float) -> bool:
-        return a > 0 and _attempt(setup, a, options).failure is None
+        return a > 0 and _attempt(setup, a, options, trial=True).failure is None
 
     hi, lo = a_max, a_max
     for _ in range(6):
@@ -525,7 +536,7 @@ def _fallback(setup: _Setup, a_max: float, options, result: AntiSwayResult) -> A
             if design == "robust-slow"
             else replace(options, shaper=design)
         )
-        alt = _attempt(setup, a_max, alt_opts)
+        alt = _attempt(setup, a_max, alt_opts, trial=True)
         if alt.failure is None and (tol == 0 or alt.band.worst_residual[0] <= FALLBACK_RESIDUAL):
             tried.append((alt, ""))
     if not tried:

@@ -28,6 +28,7 @@ All shapers have non-negative impulses, so velocity, acceleration and jerk limit
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Sequence
@@ -226,6 +227,15 @@ def robust_spec(length: float, a_max: float, tolerance: float, residual: float, 
     return RobustSpec(lo, hi, residual, max_sway)
 
 
+@functools.lru_cache(maxsize=128)
+def _robust_segment_cached(*args) -> tuple[RampProfile, float, float]:
+    """:func:`_robust_segment`, remembered: a fallback re-plans a layout with a lower a_max on some segments only,
+    and the designs of the others are the same (their profile's array is read-only: shared)."""
+    prof, res, pk = _robust_segment(*args)
+    prof.accel.setflags(write=False)
+    return prof, res, pk
+
+
 def _robust_segment(
     s: float,
     length: float,
@@ -316,7 +326,7 @@ def design_segment(
     if robust:
         cap = baseline_segment(s, a_max, T).duration if options.shaper == "auto" and options.time_cap else None
         tb = budget if total_budget is None else total_budget
-        prof, res, pk = _robust_segment(s, length, a_max, j_max, options, budget, cap, tb)
+        prof, res, pk = _robust_segment_cached(s, length, a_max, j_max, options, budget, cap, tb)
         return SegmentPlan(index, start, end, "robust", prof, T, prof.peaks()[1], res, pk)
     design = options.shaper
     if options.shaper == "auto":

@@ -75,3 +75,28 @@ class BrakingStop:
             self.done = True
             self._hold = q
         return q
+
+
+class Coast(BrakingStop):
+    """While the controller's confirmations lag (late or lost replies), the motion every bridging model agrees on:
+    the acceleration brought to 0 within the jerk limit, then constant velocity — so that a controller that
+    extrapolates, holds the velocity or carries a late command forward executes the same positions we send."""
+
+    def start(self, q: Sequence[float], q_1: Sequence[float], q_2: Sequence[float]) -> None:
+        super().start(q, q_1, q_2)
+        inp = self._inp
+        # the velocity reached when the acceleration goes to 0 at the jerk limit (within the velocity limit)
+        inp.target_velocity = [max(-vm, min(vm, v + a * abs(a) / (2.0 * j))) for v, a, j, vm
+                               in zip(inp.current_velocity, inp.current_acceleration, inp.max_jerk, inp.max_velocity)]  # fmt: skip
+        self.done = not any(inp.current_acceleration)
+        self._step = tuple((a - b) for a, b in zip(q, q_1)) if self.done else (0.0,) * len(q)
+
+    def next(self) -> tuple[float, ...]:
+        """The next command [rad]: along the profile, then at its final velocity."""
+        if self.done:
+            self._hold = tuple(x + s for x, s in zip(self._hold, self._step))
+            return self._hold
+        q = super().next()
+        if self.done:  # (the profile's end: constant velocity from here)
+            self._step = tuple(v * self.period_s for v in self._out.new_velocity)
+        return q

@@ -353,8 +353,10 @@ class ExecutedMotion:
                 return None, (f"replies lost: the commands the controller bridged left the motion {far:.4f} rad off "
                               f"the client's path (more than {REJOIN_MAX:g} rad)")  # fmt: skip
             q = tuple(x + e for x, e in zip(q, off))
-        jerk = jerk or self._jerk_left > 0 or not self.rejoin.done or self.coasting
-        adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk)
+        forced = not jerk and (self._jerk_left > 0 or not self.rejoin.done or self.coasting)
+        adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk or forced)
+        if adm.reason is not None and forced:  # (no command within the jerk limit is brakeable: the limits first)
+            adm = env.admit(q, self.prev, self.prev2, self.prev3, False)
         if adm.reason is not None:
             return None, adm.reason
         if (
@@ -382,7 +384,8 @@ class ExecutedMotion:
                 self.largest_clamp = adm.clamped
         if raw is not q or adm.clamped > 0.0:  # what is sent differs from the client's command by this much
             self._pend = tuple(x - y for x, y in zip(adm.q, raw))
-            self._replan = raw is not q and adm.clamped > 0.0  # a clamp of the offset: re-plan it from there
+            self._replan = (raw is not q or forced) and adm.clamped > 0.0  # a clamp of the offset (or one the jerk
+            # limit forced on the client): re-plan the offset back onto its path from there
         return adm.q, None
 
     def next_command(self, measured: Sequence[float], state: int, mode: int, q: Sequence[float],

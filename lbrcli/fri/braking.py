@@ -12,6 +12,7 @@ cycle at a time; done when ruckig says Finished.
 
 from __future__ import annotations
 
+import math
 from typing import Sequence
 
 from ruckig import ControlInterface, InputParameter, OutputParameter, Result, Ruckig, Synchronization
@@ -19,6 +20,7 @@ from ruckig import ControlInterface, InputParameter, OutputParameter, Result, Ru
 from trajectories.limits import JointLimits
 
 INSIDE = 1.0 - 1e-6  # the stop's limits, a hair inside the guard's (ruckig's rounding at the limits)
+EFFORT_RAMP_MIN_S = 0.05  # [s] the shortest effort ramp of a stop
 
 
 def set_continuous_state(inp: InputParameter, q: Sequence[float], q_1: Sequence[float], q_2: Sequence[float],
@@ -100,3 +102,32 @@ class Coast(BrakingStop):
         if self.done:  # (the profile's end: constant velocity from here)
             self._step = tuple(v * self.period_s for v in self._out.new_velocity)
         return q
+
+
+class EffortRamp:
+    """The torque or wrench of a stop: from the last one sent to zero along a raised cosine whose steepest rate is at
+    most ``rates`` [Nm/s or N/s per component] (and that lasts at least ``EFFORT_RAMP_MIN_S``)."""
+
+    def __init__(self, rates: Sequence[float], period_s: float) -> None:
+        self.rates = tuple(rates)
+        self.period_s = period_s
+        self._from: tuple[float, ...] = ()
+        self._n = 0
+        self._k = 0
+
+    def start(self, effort: Sequence[float]) -> None:
+        self._from = tuple(effort)
+        # a raised cosine from e to 0 over T has its steepest rate π·|e| / (2T)
+        t = max([EFFORT_RAMP_MIN_S] + [math.pi * abs(e) / (2.0 * r) for e, r in zip(self._from, self.rates)])
+        self._n = max(1, int(math.ceil(t / self.period_s)))
+        self._k = 0
+
+    @property
+    def done(self) -> bool:
+        return self._k >= self._n
+
+    def next(self) -> tuple[float, ...]:
+        if self._k < self._n:
+            self._k += 1
+        s = 0.5 * (1.0 + math.cos(math.pi * self._k / self._n))
+        return tuple(e * s for e in self._from)

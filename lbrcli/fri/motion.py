@@ -12,17 +12,16 @@ session, built when the command period is known; the same for every client.
 
 from __future__ import annotations
 
-import math
 from typing import Any, Sequence
 
 from trajectories.envelope import BrakingEnvelope
 from trajectories.limits import JointLimits
 
-from .braking import BrakingStop, Coast
+from .braking import EFFORT_RAMP_MIN_S, BrakingStop, Coast, EffortRamp  # noqa: F401 (re-exported)
 from .constants import STATE_COMMANDING_ACTIVE as _CMD_ACTIVE
 from .constants import ClientCommandMode
 from .guard import CommandGuard
-from .rejoin import Rejoin
+from .rejoin import Rejoin, gap_offsets, far as _far, held as _held
 
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
@@ -37,54 +36,13 @@ NOISE_ALLOWANCE = 2e-5  # [rad] a measured position (FRI 2.x) this close to the 
 JERK_CYCLES = 100  # after the controller bridged a period: commands held to the jerk limit of what it executed, for
 # this many commands after the last one that needed it (every client, jerk-limited or not)
 REJOIN_MAX = 0.05  # [rad] an offset back onto the client's path larger than this ends the session (braking stop)
-EFFORT_RAMP_MIN_S = 0.05  # [s] the shortest effort ramp of a stop
 EFFORT_RANGE_S = (
     0.25  # [s] a stop ramps an effort down at most at its whole range (torque limit, wrench bound) per this
 )
 
 
-def _far(a: Sequence[float], b: Sequence[float]) -> float:
-    """[rad] the largest joint distance of two positions."""
-    return max(abs(x - y) for x, y in zip(a, b))
-
-
-def _held(step: float, before: float) -> float:
-    """[rad/period] the velocity after a step of the controller's own that left the limits: 0 after a hold (no step:
-    the robot stopped), else the velocity ``before`` it (a jump to a late command neither stops nor speeds it)."""
-    return 0.0 if abs(step) <= MATCH_TOL else before
-
-
 class Refused(Exception):
     """A command failed the guard and nothing is moving under our command: end without sending it."""
-
-
-class EffortRamp:
-    """The torque or wrench of a stop: from the last one sent to zero along a raised cosine whose steepest rate is at
-    most ``rates`` [Nm/s or N/s per component] (and that lasts at least ``EFFORT_RAMP_MIN_S``)."""
-
-    def __init__(self, rates: Sequence[float], period_s: float) -> None:
-        self.rates = tuple(rates)
-        self.period_s = period_s
-        self._from: tuple[float, ...] = ()
-        self._n = 0
-        self._k = 0
-
-    def start(self, effort: Sequence[float]) -> None:
-        self._from = tuple(effort)
-        # a raised cosine from e to 0 over T has its steepest rate π·|e| / (2T)
-        t = max([EFFORT_RAMP_MIN_S] + [math.pi * abs(e) / (2.0 * r) for e, r in zip(self._from, self.rates)])
-        self._n = max(1, int(math.ceil(t / self.period_s)))
-        self._k = 0
-
-    @property
-    def done(self) -> bool:
-        return self._k >= self._n
-
-    def next(self) -> tuple[float, ...]:
-        if self._k < self._n:
-            self._k += 1
-        s = 0.5 * (1.0 + math.cos(math.pi * self._k / self._n))
-        return tuple(e * s for e in self._from)
 
 
 class ExecutedMotion:
@@ -261,15 +219,7 @@ class ExecutedMotion:
         :class:`~lbrcli.fri.rejoin.Rejoin` brings to zero (none if the client re-planned from where the robot is)."""
         c1, c2, n = self._gap_path  # type: ignore[misc]
         self._gap_path = None
-        # Lagrange weights at t = −1, −2, −3 of the parabola through (−(n + 2), c2), (−(n + 1), c1), (0, q)
-        t0, t1 = -(n + 2.0), -(n + 1.0)
-        d = []
-        for t, h in zip((-1.0, -2.0, -3.0), (self.prev, self.prev2, self.prev3)):
-            w0 = (t - t1) * t / ((t0 - t1) * t0)
-            w1 = (t - t0) * t / ((t1 - t0) * t1)
-            w2 = (t - t0) * (t - t1) / (t0 * t1)
-            d.append(tuple(x - (w0 * a + w1 * b + w2 * c) for x, a, b, c in zip(h, c2, c1, q)))
-        self._d1, self._d2, self._d3 = d
+        self._d1, self._d2, self._d3 = d = gap_offsets((self.prev, self.prev2, self.prev3), c1, c2, n, q)
         self.rejoin.start(*d)
 
     def _forget_path(self) -> None:

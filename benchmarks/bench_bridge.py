@@ -235,7 +235,7 @@ def _reported_judge(tab, lim, keep) -> tuple[np.ndarray, np.ndarray]:
     follows = np.append(False, np.diff(seq) == 1)
     last3 = [(ctl[i], ctl[i - 1], ctl[i - 2]) if i >= 2 and follows[i] and follows[i - 1] else None
              for i in range(len(ctl))]  # fmt: skip
-    hist = reference_histories(last3, ours, follows, 1e-3, lim.velocity, lim.acceleration)
+    hist = reference_histories(last3, ours, follows, 1e-3, lim)
     own = []
     for i in range(3, len(ctl)):
         if not ours[i] and follows[i] and follows[i - 1] and follows[i - 2]:

@@ -122,17 +122,19 @@ class BurstController(ScriptedController):
         self.on_time.append(False)
 
 
-def _feasible(h: tuple, dt: float, velocity, acceleration) -> bool:
-    x, x1, x2 = h
-    v = (x - x1) / dt
-    a = (x - 2.0 * x1 + x2) / (dt * dt)
-    return bool(np.all(np.abs(v) <= velocity * (1 + 1e-6)) and np.all(np.abs(a) <= acceleration * (1 + 1e-6)))
+def _envelope(limits, dt: float):
+    from trajectories.envelope import BrakingEnvelope
+
+    return BrakingEnvelope.from_limits(limits, dt)
 
 
-def reference_histories(last3: list, ours, follows, dt: float, velocity, acceleration) -> list[tuple | None]:
+def reference_histories(last3: list, ours, follows, dt: float, limits) -> list[tuple | None]:
     """Per message i, the executed history [rad] (newest first) its reply is judged against. ``last3[i]``: the last
     three positions executed before the message was sent (newest first; None: unknown); ``ours[i]``: the step into
-    the newest applied our reply to message i − 1 in time; ``follows[i]``: message i − 1 was judged (no gap)."""
+    the newest applied our reply to message i − 1 in time; ``follows[i]``: message i − 1 was judged (no gap). A step
+    of the controller's own "left the limits" when a braking stop cannot start from the state it leaves (the braking
+    envelope of ``limits``, as the safety core tests it)."""
+    env = _envelope(limits, dt)
     out: list[tuple | None] = []
     prev: tuple | None = None
     for i, l3 in enumerate(last3):
@@ -147,7 +149,7 @@ def reference_histories(last3: list, ours, follows, dt: float, velocity, acceler
             h = (x, prev[0], prev[1])
         else:
             h = (x, l3[1], prev[1] if prev is not None else l3[2])
-            if not _feasible(h, dt, velocity, acceleration):  # the controller's own step left the limits: it holds
+            if env.state_ok(*h) >= 0:  # the controller's own step left the limits: it holds
                 # a hold (no step) stops the robot; after a jump it goes on at the velocity before
                 s = np.where(np.abs(x - h[1]) <= 1e-9, 0.0, h[1] - h[2])
                 h = (x, x - s, x - 2.0 * s)
@@ -181,7 +183,7 @@ def command_ratios(ctl: BurstController, limits, dt: float = 1e-3) -> tuple[floa
     last3 = [(e[k - 1], e[k - 2], e[k - 3]) if k >= 3 else None for _, k, _ in rows]
     ours = [o for _, _, o in rows]
     follows = [j > 0 and rows[j - 1][0] == s - 1 for j, (s, _, _) in enumerate(rows)]
-    hist = reference_histories(last3, ours, follows, dt, limits.velocity, limits.acceleration)
+    hist = reference_histories(last3, ours, follows, dt, limits)
     by_seq = {s: h for (s, _, _), h in zip(rows, hist)}
     replies = [r for r in ctl.replies if r.state == CA and r.position is not None and r.seq in by_seq]
     r = step_ratios(np.array([x.position for x in replies]), [by_seq[x.seq] for x in replies], limits, dt)

@@ -14,7 +14,7 @@ def test_after_a_hold_the_reference_is_the_robot_at_rest_and_after_our_steps_the
     ours = [True] * 5 + [False]
     follows = [False] + [True] * 5
     hist = reference_histories([(x[i], x[i - 1], x[i - 2]) if i >= 2 else None for i in range(6)], ours, follows,
-                               dt, lim.velocity, lim.acceleration)  # fmt: skip
+                               dt, lim)  # fmt: skip
     assert hist[1] is None and np.allclose(hist[4][2], 2 * v)
     assert all(np.array_equal(h, 4 * v) for h in hist[5])  # held: at rest
     on = step_ratios(np.array([x[5] + v, x[5] + lim.jerk * dt**3]), [hist[5], hist[5]], lim)

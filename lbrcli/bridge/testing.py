@@ -104,7 +104,7 @@ def follow_in_lock_step(source: LockStepSource, limits: JointLimits, *, drop: fl
                             first_message_timeout_s=10, silence_timeout_s=3, paced_by_replies=True,
                             catch_up=False)  # fmt: skip  # the scripted controller waits for each reply
     app.connect()
-    ctl = controller(app.port, script, tuple(source.q0), tolerate_unanswered=10**6)
+    ctl = controller(app.port, script, tuple(source.q0), tolerate_unanswered=10**6, version=version)
     ctl.on_cycle = lambda i: setattr(source, "now", max(0, i - start) * 1e-3)
     ctl.start()
     try:

@@ -396,7 +396,7 @@ class ClientApplication:
         motion = link.motion
         supervised = (True, motion.moving, motion.prev, self._out.client_sequence)  # type: ignore[union-attr]
         self.cycle.begin(link.clock.t, CMD_ACTIVE)
-        motion.sent(q, CMD_ACTIVE)  # type: ignore[union-attr]  # before the client's call: a stop brakes from q
+        motion.sent(q, CMD_ACTIVE, True)  # type: ignore[union-attr]  # before the client's call: a stop brakes from q
         self._out.confirm(q, self.client, self._in.command, self._end, self.cycle)
         return self._after(now, mon, seq, supervised, answered=True)
 

@@ -81,9 +81,9 @@ class Link:
                     self.motion.gap_seen(pos, skipped, measured)  # type: ignore[union-attr]
         if lost_reply and moving:
             self.motion.reply_lost(*_reported(mon))  # type: ignore[union-attr]
+            self.lost_replies += 1  # (late replies: the controller had not received it when it sent this message)
         elif d == 1 and self.motion is not None and self.motion.coasting:
             self.motion.confirmed()  # (reflected: our last reply was in time)
-            self.lost_replies += 1  # (late replies: the controller had not received it when it sent this message)
         return skipped
 
     def learn_period(self, mon: Any) -> bool:

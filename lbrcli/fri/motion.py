@@ -96,10 +96,9 @@ class ExecutedMotion:
         self._c2: tuple | None = None
         self._gap_path: tuple | None = None  # (those two, the periods bridged) at a gap, until the client's next
 
-    @property
-    def moving(self) -> bool:
-        """Commands were sent in COMMANDING_ACTIVE: a stop must brake."""
-        return self.active_sent > 0
+    moving = property(lambda self: self.active_sent > 0, doc="Commands were sent in COMMANDING_ACTIVE: a stop must brake.")  # fmt: skip
+    steady = property(lambda self: self.rejoin.done and not (self.coasting or self._gap or self._gap_path),
+                      doc="No bridge being made up for: a prepared reply may go out (held to the jerk limit).")  # fmt: skip
 
     # -- the executed state, for clients that re-plan ---------------------------------------------------------
     @property
@@ -392,9 +391,11 @@ class ExecutedMotion:
                 wrench = self._ramp.next()
         return q, tau, wrench, None
 
-    def sent(self, q: tuple[float, ...], state: int) -> None:
-        """``q`` [rad] went out: in COMMANDING_ACTIVE the controller executes it."""
+    def sent(self, q: tuple[float, ...], state: int, prepared: bool = False) -> None:
+        """``q`` [rad] went out: in COMMANDING_ACTIVE the controller executes it (``prepared``: the client's own)."""
         if state == _CMD_ACTIVE:
+            if prepared:  # (the client's command history, as :meth:`admit` keeps it)
+                self._c1, self._c2 = q, self._c1
             self.prev3, self.prev2, self.prev = self.prev2, self.prev, q
             self._s3, self._s2, self._s1 = self._s2, self._s1, q  # (what was sent, also where a rebase replaced it)
             self.active_sent += 1

@@ -57,7 +57,9 @@ def test_gaps_stale_foreign_and_garbage_take_the_full_cycle_and_change_nothing()
     (res, ctl), (res0, ctl0) = both(script, lambda: TrajectoryPlayer(traj, LIM, period_s=1e-3),
                                     tolerate_unanswered=0)  # fmt: skip
     assert res.outcome is Outcome.COMPLETED and res.missed == 3 and res.stale == 2 and res.malformed == 1
-    assert res.prepared_replies > n - 20
+    # every cycle before the first gap went out prepared; after a bridged period the core takes the motion back onto
+    # the path by a jerk-limited offset (the bridge zeroed the executed acceleration), and that runs the full cycle
+    assert 95 <= res.prepared_replies < n - 20
     assert replies(ctl) == replies(ctl0)  # (the sent positions skip what the controller extrapolated)
 
 
@@ -82,7 +84,9 @@ def test_an_inconsistent_message_is_never_answered_even_with_a_reply_prepared(mu
                                     tolerate_unanswered=1, reply_timeout=1.0)  # fmt: skip
     assert res.outcome is Outcome.COMPLETED and res.malformed == 1
     assert k in ctl.unanswered and all(r.cycle != k for r in ctl.replies)
-    assert res.prepared_replies > n - 20  # preparing went on after it
+    # preparing went on after it — until a message the controller bridged (one it refused takes its period; the way
+    # back onto the path after a bridge runs the full cycle)
+    assert res.prepared_replies > 45
     assert replies(ctl) == replies(ctl0)
 
 
@@ -172,6 +176,7 @@ def test_moves_to_the_start_are_prepared_step_by_step_and_change_nothing(shaped,
     assert res.outcome is Outcome.COMPLETED and res0.outcome is Outcome.COMPLETED
     assert replies(ctl) == replies(ctl0)
     moved = sent_positions(ctl)
-    assert 10 < len(moved) and res.prepared_replies > 0.9 * (len(moved) - res.braking_cycles)
+    # (before a gap, everything; from a gap on, the way back onto the path runs the full cycle)
+    assert 10 < len(moved) and res.prepared_replies > 0.9 * (min(gap_at or len(moved), len(moved)) - res.braking_cycles)
     if gap_at is None:
         assert_within_limits(moved, 1e-3, before=np.array([Q0, Q0]))

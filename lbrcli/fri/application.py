@@ -303,6 +303,7 @@ class ClientApplication:
             send_period_ms = mon.connectionInfo.sendPeriod
             end.motion = link.motion
             self.client.executed, self.client.command_period_s = link.motion, link.clock.period_s
+            link.motion.replans = self.client.replans  # type: ignore[union-attr]
             if self.busy_wait_s > 0.0:
                 self.transport.expect_period(send_period_ms * 1e-3)  # type: ignore[union-attr]
                 self.transport.warm = self._warm  # type: ignore[union-attr]

@@ -82,7 +82,7 @@ class Link:
         if lost_reply and moving:
             self.motion.reply_lost(*_reported(mon))  # type: ignore[union-attr]
             self.lost_replies += 1  # (late replies: the controller had not received it when it sent this message)
-        elif d == 1 and self.motion is not None and self.motion.coasting:
+        elif d == 1 and self.motion is not None and self.motion.lagging:
             self.motion.confirmed()  # (reflected: our last reply was in time)
         return skipped
 

@@ -21,7 +21,7 @@ from .braking import EFFORT_RAMP_MIN_S, BrakingStop, Coast, EffortRamp  # noqa: 
 from .constants import STATE_COMMANDING_ACTIVE as _CMD_ACTIVE
 from .constants import ClientCommandMode
 from .guard import CommandGuard
-from .rejoin import Rejoin, gap_offsets, far as _far, held as _held
+from .rejoin import Rejoin, executed_history, gap_history, gap_offsets, far as _far
 
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
@@ -35,6 +35,8 @@ MATCH_TOL = 1e-9  # [rad] the commanded position a message reports is ours (roun
 NOISE_ALLOWANCE = 2e-5  # [rad] a measured position (FRI 2.x) this close to the model's is the model's (sensor noise)
 JERK_CYCLES = 100  # after the controller bridged a period: commands held to the jerk limit of what it executed, for
 # this many commands after the last one that needed it (every client, jerk-limited or not)
+COAST_MAX = 10  # commands coasting at most, then back onto the client's path while replies stay late (no coast
+# again until the controller confirms one in time: a busy machine would coast off the path)
 REJOIN_MAX = 0.05  # [rad] an offset back onto the client's path larger than this ends the session (braking stop)
 EFFORT_RANGE_S = (
     0.25  # [s] a stop ramps an effort down at most at its whole range (torque limit, wrench bound) per this
@@ -82,6 +84,9 @@ class ExecutedMotion:
         self.rejoin = Rejoin(limits, period_s)  # the offset back onto the client's path after such a bridge
         self.coast = Coast(limits, period_s)  # our commands while the controller's confirmations lag
         self.coasting = False
+        self.lagging, self._coast_left = False, COAST_MAX  # lagging: no reply confirmed in time since one was bridged
+        self.replans = False  # the client re-plans from the executed state (``replan_due``) instead of an offset
+        self.replan_due = False  # set when it should (until the client's next command)
         self.coast_cycles = 0  # commands sent coasting
         self.rejoin_cycles = 0  # commands sent with a rejoin offset
         # the executed history minus the client's own commands, newest first (None: none), and the next one's
@@ -97,19 +102,15 @@ class ExecutedMotion:
         self._gap_path: tuple | None = None  # (those two, the periods bridged) at a gap, until the client's next
 
     moving = property(lambda self: self.active_sent > 0, doc="Commands were sent in COMMANDING_ACTIVE: a stop must brake.")  # fmt: skip
-    steady = property(lambda self: self.rejoin.done and not (self.coasting or self._gap or self._gap_path),
+    steady = property(lambda self: self.rejoin.done and not (self.coasting or self.replan_due or self._gap or self._gap_path),
                       doc="No bridge being made up for: a prepared reply may go out (held to the jerk limit).")  # fmt: skip
 
     # -- the executed state, for clients that re-plan ---------------------------------------------------------
-    @property
-    def position(self) -> tuple[float, ...]:
-        """[rad] where the controller was last commanded (its extrapolation included)."""
-        return self.prev
+    position = property(lambda self: self.prev, doc="[rad] where the controller was last commanded (extrapolation included).")  # fmt: skip
 
     @property
     def velocity(self) -> tuple[float, ...]:
-        """[rad/s] the continuous velocity the history continues into (step velocity + half a period of its
-        acceleration): what a re-planned motion starts from."""
+        """[rad/s] the history's continuous velocity (step velocity + half a period of its acceleration)."""
         dt = self.period_s
         return tuple((3.0 * a - 4.0 * b + c) / (2.0 * dt) for a, b, c in zip(self.prev, self.prev2, self.prev3))
 
@@ -150,7 +151,7 @@ class ExecutedMotion:
         the message's ``position`` [rad] says — the commanded position of FRI 1.15, exactly; ``measured`` (FRI 2.x): the
         measured one, taken as the bridged extrapolation within ``NOISE_ALLOWANCE``, else as it is. Unless it is
         our command, that position is the executed one from now on (True, :attr:`rebased`): the history is
-        :meth:`executed_history`, a braking stop is re-planned from it, any other motion rejoins the client's path
+        :func:`~lbrcli.fri.rejoin.executed_history`, a braking stop is re-planned from it, any other motion rejoins the client's path
         (:class:`~lbrcli.fri.rejoin.Rejoin`) and, for ``JERK_CYCLES``, every client is held to the jerk limit.
         Without a position: for the next ``ALT_CYCLES`` commands the envelope admits only what is admissible after
         either the sent or the bridged history."""
@@ -166,7 +167,7 @@ class ExecutedMotion:
                 return False
             if measured and _far(x, bridged) <= tol:  # (a measured position: the model's, not the noise)
                 x = bridged
-            self._rebase(self.executed_history(x, self.prev2, self.prev3))
+            self._rebase(executed_history(self.envelope, x, self.prev2, self.prev3))
             return True
         self._alt = (bridged, base[1], base[2])
         self._alt_left = ALT_CYCLES
@@ -186,11 +187,7 @@ class ExecutedMotion:
         x = tuple(position)
         if _far(x, self.prev) <= (NOISE_ALLOWANCE if measured else MATCH_TOL):
             return False
-        if n == 1:
-            new = self.executed_history(x, c, c1)
-        else:
-            s = tuple((a - b) / n for a, b in zip(x, c))
-            new = self.executed_history(x, tuple(a - v for a, v in zip(x, s)), tuple(a - 2.0 * v for a, v in zip(x, s)))
+        new = gap_history(self.envelope, x, c, c1, n)
         self.prev, self.prev2, self.prev3 = new
         self._s1, self._s2, self._s3 = new
         self.rebased = True
@@ -200,17 +197,6 @@ class ExecutedMotion:
         if self.braking:
             self.brake.start(*new)
         return True
-
-    def executed_history(self, x: Sequence[float], x1: Sequence[float], x2: Sequence[float]) -> tuple:
-        """The executed history (newest first) that ends at the reported ``x`` after ``x1`` and ``x2`` [rad]: these
-        three if the state they leave is brakeable (its acceleration within the limit); else the controller's own
-        step left the limits (a hold of a moving robot, a jump to a late command) and the state is ``x`` at the
-        velocity it holds (:func:`_held`), acceleration 0."""
-        x, x1, x2 = tuple(x), tuple(x1), tuple(x2)
-        if self.envelope.state_ok(x, x1, x2) < 0:
-            return x, x1, x2
-        s = tuple(_held(a - b, b - c) for a, b, c in zip(x, x1, x2))
-        return x, tuple(a - v for a, v in zip(x, s)), tuple(a - 2.0 * v for a, v in zip(x, s))
 
     def _join_gap(self, q: Sequence[float]) -> None:
         """The client's first command ``q`` [rad] after a gap: its path over the gap is taken as the parabola through
@@ -242,16 +228,31 @@ class ExecutedMotion:
             self.brake.start(self.prev, self.prev2, self.prev3)
         else:  # coast until the controller confirms our commands again, then back onto the client's path
             self.rejoin.done = True
-            self.coast.start(self.prev, self.prev2, self.prev3)
-            self.coasting = True
+            self.lagging = True
+            if self._coast_left > 0:
+                self.coast.start(self.prev, self.prev2, self.prev3)
+                self.coasting = True
+            else:
+                self._back_to_path()
 
     def confirmed(self) -> None:
-        """The controller's message reflects our last reply, in time: coasting ends, the offset from the client's
-        path (the commands sent minus the client's) is brought back to zero (:class:`~lbrcli.fri.rejoin.Rejoin`)."""
+        """The controller's message reflects our last reply, in time: coasting ends, back onto the client's path."""
+        self.lagging = False
+        self._coast_left = COAST_MAX
         if self.coasting:
             self.coasting = False
-            if self._d1 is not None and not self.braking:
-                self.rejoin.start(self._d1, self._d2 or _ZERO7, self._d3 or _ZERO7)
+            self._back_to_path()
+
+    def _back_to_path(self) -> None:
+        """The offset from the client's path (the commands sent minus the client's) brought back to zero
+        (:class:`~lbrcli.fri.rejoin.Rejoin`), or the client told to re-plan from the executed state."""
+        if self.braking:
+            return
+        if self.replans:
+            self._forget_path()
+            self.replan_due = True
+        elif self._d1 is not None:
+            self.rejoin.start(self._d1, self._d2 or _ZERO7, self._d3 or _ZERO7)
 
     def retime(self, period_s: float) -> None:
         """The controller executes each command in ``period_s`` [s], faster than its period says: plan the braking
@@ -279,7 +280,7 @@ class ExecutedMotion:
         (None, why) when it cannot be sent (not 7 finite values, no admissible command, or ``exact`` and a clamp
         would change it)."""
         env = self.envelope
-        self.loss_refused = False
+        self.loss_refused = self.replan_due = end_coast = False
         raw = q
         if q is not None and len(q) == 7:
             if self._gap_path is not None and not self.braking and not self.coasting:
@@ -288,6 +289,8 @@ class ExecutedMotion:
         if self.coasting and q is not None and len(q) == 7:  # the controller's confirmations lag: ours is the coast
             q = self.coast.next()
             self.coast_cycles += 1
+            self._coast_left -= 1
+            end_coast = self._coast_left <= 0  # (this one is the coast's last: the next goes back onto the path)
             far = _far(q, raw)
             if far > REJOIN_MAX:
                 self.loss_refused = True
@@ -333,8 +336,12 @@ class ExecutedMotion:
                 self.largest_clamp = adm.clamped
         if raw is not q or adm.clamped > 0.0:  # what is sent differs from the client's command by this much
             self._pend = tuple(x - y for x, y in zip(adm.q, raw))
-            self._replan = (raw is not q or forced) and adm.clamped > 0.0  # a clamp of the offset (or one the jerk
-            # limit forced on the client): re-plan the offset back onto its path from there
+            # a clamp of the offset (or one the jerk limit forced on the client): re-plan the offset from there
+            self._replan = (raw is not q or forced) and adm.clamped > CLAMP_TOL
+        if end_coast:  # (from the history this command ends: in :meth:`sent`)
+            self.coasting = False
+            self._replan = not self.replans and not self.braking
+            self.replan_due = self.replans
         return adm.q, None
 
     def next_command(self, measured: Sequence[float], state: int, mode: int, q: Sequence[float],
@@ -385,10 +392,8 @@ class ExecutedMotion:
                 self._ramp = self.torque_ramp if mode == _TORQUE else self.wrench_ramp
                 last = self.last_torque if mode == _TORQUE else self.last_wrench
                 self._ramp.start(last if last is not None else (_ZERO7 if mode == _TORQUE else _ZERO6))
-            if mode == _TORQUE:
-                tau = self._ramp.next()
-            else:
-                wrench = self._ramp.next()
+            e = self._ramp.next()
+            tau, wrench = (e, None) if mode == _TORQUE else (None, e)
         return q, tau, wrench, None
 
     def sent(self, q: tuple[float, ...], state: int, prepared: bool = False) -> None:
@@ -406,15 +411,10 @@ class ExecutedMotion:
             if self._replan:
                 self._replan = False
                 self.rejoin.start(self._d1, self._d2 or _ZERO7, self._d3 or _ZERO7)  # type: ignore[arg-type]
-            if self._bent:
-                self._bent -= 1
-            if self._jerk_left:
-                self._jerk_left -= 1
+            self._bent, self._jerk_left = max(0, self._bent - 1), max(0, self._jerk_left - 1)
             if self._alt is not None:
                 a = self._alt
-                self._alt = (q, a[0], a[1])
                 self._alt_left -= 1
-                if self._alt_left <= 0:
-                    self._alt = None
+                self._alt = (q, a[0], a[1]) if self._alt_left > 0 else None
         else:
             self.prev = self.prev2 = self.prev3 = self._s1 = self._s2 = self._s3 = q

@@ -13,7 +13,7 @@ offset is left (a loss, not the hot path).
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Sequence
 
 from ruckig import InputParameter, OutputParameter, Result, Ruckig, RuckigError, Synchronization
 
@@ -22,7 +22,8 @@ from trajectories.limits import JointLimits
 from .braking import set_continuous_state
 
 HOLD_TOL = 1e-9  # [rad] a step this small is no step: the controller held
-REJOIN_SCALE = 1.0  # the offset's share of the velocity and jerk limits (the envelope clamps the sum)
+REJOIN_SCALE = 0.5  # the offset's share of the velocity and jerk limits: a client within the other half is never
+# clamped by the sum (a clamp re-plans the offset, and one on every cycle keeps it from converging)
 REJOIN_ACCELERATION_SCALE = 0.25  # ... of the acceleration limit: a bridge during the way back zeroes the executed
 # acceleration, and the offset's own acceleration adds to that step
 
@@ -98,3 +99,24 @@ def gap_offsets(history: Sequence[Sequence[float]], c1: Sequence[float], c2: Seq
         w0, w1, w2 = (t - t1) * t / ((t0 - t1) * t0), (t - t0) * t / ((t1 - t0) * t1), (t - t0) * (t - t1) / (t0 * t1)
         out.append(tuple(x - (w0 * a + w1 * b + w2 * c) for x, a, b, c in zip(h, c2, c1, q)))
     return out
+
+
+def executed_history(envelope: Any, x: Sequence[float], x1: Sequence[float], x2: Sequence[float]) -> tuple:
+    """The executed history (newest first) that ends at the reported ``x`` after ``x1`` and ``x2`` [rad]: these three
+    if the state they leave is brakeable (``envelope.state_ok``: its acceleration within the limit); else the
+    controller's own step left the limits (a hold of a moving robot, a jump to a late command) and the state is ``x``
+    at the velocity it holds (:func:`held`), acceleration 0."""
+    x, x1, x2 = tuple(x), tuple(x1), tuple(x2)
+    if envelope.state_ok(x, x1, x2) < 0:
+        return x, x1, x2
+    s = tuple(held(a - b, b - c) for a, b, c in zip(x, x1, x2))
+    return x, tuple(a - v for a, v in zip(x, s)), tuple(a - 2.0 * v for a, v in zip(x, s))
+
+
+def gap_history(envelope: Any, x: Sequence[float], c: Sequence[float], c1: Sequence[float], n: int) -> tuple:
+    """The executed history after a gap of ``n`` periods that ends at the reported ``x`` [rad], from our last two
+    commands ``c`` (newest) and ``c1`` before it: at the velocity held over the gap (the average from ``c``)."""
+    if n == 1:
+        return executed_history(envelope, x, c, c1)
+    s = tuple((a - b) / n for a, b in zip(x, c))
+    return executed_history(envelope, x, tuple(a - v for a, v in zip(x, s)), tuple(a - 2.0 * v for a, v in zip(x, s)))

@@ -57,9 +57,7 @@ def test_gaps_stale_foreign_and_garbage_take_the_full_cycle_and_change_nothing()
     (res, ctl), (res0, ctl0) = both(script, lambda: TrajectoryPlayer(traj, LIM, period_s=1e-3),
                                     tolerate_unanswered=0)  # fmt: skip
     assert res.outcome is Outcome.COMPLETED and res.missed == 3 and res.stale == 2 and res.malformed == 1
-    # every cycle before the first gap went out prepared; after a bridged period the core takes the motion back onto
-    # the path by a jerk-limited offset (the bridge zeroed the executed acceleration), and that runs the full cycle
-    assert 95 <= res.prepared_replies < n - 20
+    assert res.prepared_replies > n - 20  # (after the gaps the player rejoins its rows itself: no offset, prepared)
     assert replies(ctl) == replies(ctl0)  # (the sent positions skip what the controller extrapolated)
 
 
@@ -84,9 +82,7 @@ def test_an_inconsistent_message_is_never_answered_even_with_a_reply_prepared(mu
                                     tolerate_unanswered=1, reply_timeout=1.0)  # fmt: skip
     assert res.outcome is Outcome.COMPLETED and res.malformed == 1
     assert k in ctl.unanswered and all(r.cycle != k for r in ctl.replies)
-    # preparing went on after it — until a message the controller bridged (one it refused takes its period; the way
-    # back onto the path after a bridge runs the full cycle)
-    assert res.prepared_replies > 45
+    assert res.prepared_replies > n - 20  # preparing went on after it
     assert replies(ctl) == replies(ctl0)
 
 

@@ -14,6 +14,7 @@ import pytest
 
 from lbrcli.bridge.testing import LockStepSource, follow_in_lock_step
 from lbrcli.fri.testing import CA, Cycle
+from lbrcli.fri.motion import COAST_MAX
 from lbrcli.fri.testing.holding import BurstController, command_ratios
 from trajectories.limits import default_limits
 
@@ -64,3 +65,19 @@ def test_late_bursts_of_replies_keep_every_command_within_the_limits_of_what_was
     m = run.follower.executed
     assert m.rebased_cycles > 0 and m.coast_cycles > 0
     assert m.braking or run.t[-1] > 2.9
+
+
+@pytest.mark.parametrize("hold, lateness", [(True, 1), (False, 2)])
+def test_replies_late_for_1400_cycles_in_a_row_are_followed_to_the_end_within_the_limits(hold, lateness):
+    """Every reply 1–2 periods late for 1.4 s (a machine too busy to answer in time): the core coasts at most
+    ``COAST_MAX`` commands, then the follower re-plans from what the controller executed at each bridge — the session
+    goes on to the end, every command within the limits of the executed history (the previous code coasted until
+    the motion was 0.05 rad off the path and stopped at 0.7–2.1 s)."""
+    lim = default_limits()
+    late = {11 + i: lateness for i in range(600, 2000)}
+    ctl = functools.partial(BurstController, hold=hold, late=late)
+    run = follow_in_lock_step(LockStepSource(1000.0, True, seed=0), lim, controller=ctl)
+    _within(run, lim)
+    m = run.follower.executed
+    assert run.t[-1] > 2.9 and not m.braking
+    assert m.rebased_cycles > 1000 and m.coast_cycles <= 2 * COAST_MAX

@@ -6,7 +6,9 @@ received are then replayed to a new application whose transport hands them over 
 replies. Figures: the best of ``REPEATS`` timed replays [µs per step] (the best, as timeit: other work on a shared
 machine only ever slows a run) and their median, with the reply prepared a cycle ahead and built in step, and the
 best of the replays with a sleep of ``GAP_S`` before each step, as between the messages of a session (the code and
-data of a cycle are then out of the CPU's caches: what a session's cycle costs, system calls apart); with
+data of a cycle are then out of the CPU's caches: what a session's cycle costs, system calls apart). The same for a
+user's LBRClient (KUKA's sine overlay, built in step, no observers), with its Python function calls per cycle (the
+work, independent of the machine's speed and load); with
 ``--profile`` the cProfile of one replay (top functions by own time). It measures the code of a cycle (decode,
 checks, client callback, guard, encode, observers), not the system calls.
 
@@ -22,9 +24,11 @@ import tempfile
 import time
 from pathlib import Path
 
+import math
+
 import numpy as np
 
-from lbrcli.fri import ClientApplication, ExecutionLog, LogObserver, SessionFigures, TrajectoryPlayer
+from lbrcli.fri import ClientApplication, ExecutionLog, LBRClient, LogObserver, SessionFigures, TrajectoryPlayer
 from lbrcli.fri.testing import CA, CW, IDLE, MR, MW, Cycle, ScriptedController
 from trajectories.limits import default_limits
 
@@ -42,7 +46,27 @@ def trajectory(n: int) -> np.ndarray:
     return np.array(Q0) + 0.3 * p[:, None] * np.array([1, 0.5, -0.5, 1, 0.3, -1, 1])
 
 
-def _app(folder: Path, tag: str, prepare: bool = True) -> ClientApplication:
+class SineOverlay(LBRClient):
+    """A user's LBRClient as KUKA's LBRJointSineOverlay example (examples/joint_sine_overlay.py): a filtered sine on
+    A4 over where the session started (the scripted controller's ipo echoes the command; a controller's would not),
+    built in ``command`` (nothing prepared), no observers."""
+
+    def __init__(self) -> None:
+        self.offset = self.phi = 0.0
+        self.base: tuple[float, ...] | None = None
+
+    def command(self, state):
+        if self.base is None:
+            self.base = tuple(state.ipo_joint_position)
+        self.offset = self.offset * 0.99 + 0.04 * math.sin(self.phi) * 0.01
+        self.phi = (self.phi + 2 * math.pi * 0.25e-3) % (2 * math.pi)
+        return [x + self.offset if j == 3 else x for j, x in enumerate(self.base)]
+
+
+def _app(folder: Path, tag: str, prepare: bool = True, client: str = "player") -> ClientApplication:
+    if client == "overlay":
+        return ClientApplication(SineOverlay(), "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=LIM,
+                                 paced_by_replies=True)  # fmt: skip
     log = ExecutionLog(folder / f"{tag}.csv")
     player = TrajectoryPlayer(trajectory(ROWS), LIM, period_s=1e-3, settle_cycles=4)
     return ClientApplication(player, "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=LIM,
@@ -61,9 +85,9 @@ def scripted_session(app: ClientApplication, version: str = "1.15") -> None:
         ctl.finish(app)
 
 
-def record(folder: Path) -> list[bytes]:
+def record(folder: Path, client: str = "player") -> list[bytes]:
     """The monitoring datagrams of one scripted session, as the client received them."""
-    app = _app(folder, "record").connect()
+    app = _app(folder, "record", client=client).connect()
     got: list[bytes] = []
     receive = app.transport.receive  # type: ignore[union-attr]
 
@@ -99,12 +123,11 @@ class ReplayTransport:
         pass
 
 
-def replay(
-    folder: Path, datagrams: list[bytes], prepare: bool, profile: cProfile.Profile | None = None, gap_s: float = 0.0
-) -> tuple[float, int, str]:
+def replay(folder: Path, datagrams: list[bytes], prepare: bool, profile: cProfile.Profile | None = None,
+           gap_s: float = 0.0, client: str = "player") -> tuple[float, int, str]:  # fmt: skip
     """[µs] per step over one replay, the steps, and how the session ended. ``gap_s`` [s]: a sleep before each step
     (as between two messages of a session; only the steps' CPU time is counted)."""
-    app = _app(folder, "replay", prepare)
+    app = _app(folder, "replay", prepare, client)
     app.transport = ReplayTransport(datagrams)  # type: ignore[assignment]
     app.start()
     step, n, cpu, clock = app.step, 0, 0, time.thread_time_ns
@@ -147,6 +170,19 @@ def run(quick: bool = False, profile: bool = False) -> list[tuple[str, float, st
                 prof = cProfile.Profile()
                 replay(folder, datagrams, prepare, prof)
                 pstats.Stats(prof).sort_stats("tottime").print_stats(12)
+        # a user's LBRClient (the sine overlay): its command built in step, no observers — the library's own cycle
+        datagrams = record(folder, "overlay")
+        for gap in (0.0, GAP_S):
+            us = [replay(folder, datagrams, False, gap_s=gap, client="overlay")[0] for _ in range(repeats)]
+            when = f", {GAP_S * 1e3:g} ms sleep before each" if gap else ""
+            rows.append((f"step, a user's LBRClient (sine overlay){when}: CPU per cycle, best of {repeats}",
+                         round(min(us), 2), "µs"))  # fmt: skip
+        prof = cProfile.Profile()
+        n = replay(folder, datagrams, False, prof, client="overlay")[1]
+        calls = sum(v[1] for v in pstats.Stats(prof).stats.values())  # the work, whatever the machine's speed
+        rows.append(
+            ("step, a user's LBRClient (sine overlay): Python function calls per cycle", round(calls / n, 1), "")
+        )
     return rows
 
 

@@ -25,7 +25,8 @@ within each round (the VM's noise comes and goes over minutes) and reported as m
 
 Writes benchmarks/results/fri_timing.json and its tables, benchmarks/results/fri_timing.md (:func:`markdown`; the FRI
 timing page includes them). Run: `python benchmarks/bench_fri_timing.py [--quick] [--rounds N]
-[--seconds S] [--kuka-src PATH]` or `python benchmarks/run_all.py fri_timing [--quick]`.
+[--seconds S] [--kuka-src PATH] [--clients damp,serve]` or `python benchmarks/run_all.py fri_timing [--quick]`
+(``--clients``: a smaller run of some clients beside KUKA's, without the ``--realtime`` run; results not written).
 """
 
 from __future__ import annotations
@@ -430,7 +431,7 @@ def markdown(results: dict[str, Any]) -> str:
 
 
 def run(quick: bool = False, rounds: int | None = None, seconds: float | None = None, kuka_src: str | None = None,
-        realtime_seconds: float | None = None) -> list[tuple[str, float, str]]:  # fmt: skip
+        realtime_seconds: float | None = None, only: str | None = None) -> list[tuple[str, float, str]]:  # fmt: skip
     rounds = rounds or (2 if quick else 3)
     seconds = seconds or (3.0 if quick else 10.0)
     realtime_seconds = realtime_seconds or (10.0 if quick else 60.0)
@@ -447,6 +448,9 @@ def run(quick: bool = False, rounds: int | None = None, seconds: float | None = 
     }  # fmt: skip
     with tempfile.TemporaryDirectory() as tmp:
         names = clients(kuka, Path(tmp), seconds)
+        if only:  # a smaller run: the clients whose names contain one of these words (KUKA's kept as the reference)
+            words = [w.strip() for w in only.split(",") if w.strip()]
+            names = {n: a for n, a in names.items() if n == KUKA_NAME or any(w in n for w in words)}
         print("CPU per message (lenient quality rule: sessions that last)", flush=True)
         results["cpu"] = cpu_condition(names, seconds)
         print("condition quiet", flush=True)
@@ -454,8 +458,15 @@ def run(quick: bool = False, rounds: int | None = None, seconds: float | None = 
         print("condition busy (two spinning processes beside it)", flush=True)
         with Busy(2):
             results["conditions"]["busy"] = condition(names, rounds, seconds)
+    if only:  # a partial run: no --realtime run, and the results are not replaced
+        return _rows(results)
     print(f"lbr execute --realtime, {realtime_seconds:g} s, two spinning processes beside it", flush=True)
     results["realtime"] = realtime_run(realtime_seconds)
+    _write(results)
+    return _rows(results)
+
+
+def _write(results: dict[str, Any]) -> None:
     RESULTS.parent.mkdir(parents=True, exist_ok=True)
     tmp_out = RESULTS.with_suffix(".json.tmp")
     tmp_out.write_text(json.dumps(results, indent=1) + "\n")
@@ -463,6 +474,9 @@ def run(quick: bool = False, rounds: int | None = None, seconds: float | None = 
     tmp_md = RESULTS.with_suffix(".md.tmp")
     tmp_md.write_text(markdown(results))
     tmp_md.replace(RESULTS.with_suffix(".md"))
+
+
+def _rows(results: dict[str, Any]) -> list[tuple[str, float, str]]:
     rows: list[tuple[str, float, str]] = []
     for cond, c in results["conditions"].items():
         for name, s in c["clients"].items():
@@ -484,11 +498,12 @@ def run(quick: bool = False, rounds: int | None = None, seconds: float | None = 
         rows.append(
             (f"CPU per message in steady commanding: {name}", r["cpu_us_per_message_steady"] or float("nan"), "µs")
         )
-    rt = results["realtime"]
-    rows += [
-        ("--realtime: session kept", float(rt["kept"]), "bool"),
-        ("--realtime: late or missed replies", rt["late_share"] * 100, "%"),
-    ]
+    rt = results.get("realtime")
+    if rt is not None:
+        rows += [
+            ("--realtime: session kept", float(rt["kept"]), "bool"),
+            ("--realtime: late or missed replies", rt["late_share"] * 100, "%"),
+        ]
     return rows
 
 
@@ -499,6 +514,8 @@ if __name__ == "__main__":
     ap.add_argument("--seconds", type=float)
     ap.add_argument("--realtime-seconds", type=float)
     ap.add_argument("--kuka-src")
+    ap.add_argument("--clients", help="only the clients whose names contain one of these comma-separated words "
+                    "(e.g. 'damp,serve'; KUKA's client always runs); the results files are then not written")  # fmt: skip
     a = ap.parse_args()
-    for n, v, u in run(a.quick, a.rounds, a.seconds, a.kuka_src, a.realtime_seconds):
+    for n, v, u in run(a.quick, a.rounds, a.seconds, a.kuka_src, a.realtime_seconds, a.clients):
         print(f"  {n:<75} {v:>10.4g} {u}")

@@ -19,10 +19,17 @@ model's length with the rod's mass 20 % off, with and without a 15 g tip; 8 or 1
 4 cycles of actuation delay, seeds the band does not use, and pushes of ±10° at times that are no whole number of
 seconds after the catch (so that they meet the balance's 3 Hz dither at other phases than the band's).
 
+The band's last corner (``--parts corner``, :func:`corner_cases`): the 1.2 × rod with a 20 g tip, 5 % friction and 15
+ms of delay under another plant — :class:`StribeckRod` stepped by the explicit midpoint rule (neither the band's RK4
+nor the judge's RK45), the rod's mass ±20 % — with knocks in both directions, 3 s after the catch, twice in one run,
+and beyond the band (1.25 ×, 12°, 20 ms); and :func:`rail_travel_floor`, the knock's travel floor within the rail's
+own speed-dependent bounds: why the rail (``lbr control upright``'s default ``--travel``, read from the command) is
+longer than ±0.3 m.
+
 FRI simulator (``lbr control upright --sim-lockstep``, the real arm model, the module's serial lines on a pty): the
 nominal rod and the rod 20 % short and long with friction and noise, 60 s hold and the push.
 
-``python benchmarks/bench_upright_band.py [--quick] [--parts fast,off,fri,judge] [--processes N]`` writes
+``python benchmarks/bench_upright_band.py [--quick] [--parts fast,off,corner,fri,judge] [--processes N]`` writes
 benchmarks/results/upright_band.json and benchmarks/results/upright_band.md (the docs' page) after each part it runs
 (the parts not run keep what the file had; each part is stamped with its date and commit; ``--quick`` writes
 nothing: a smoke run). The judge is the slowest part (scipy's RK45 over every 1 ms cycle, ≈ 2 min of CPU a case).
@@ -60,8 +67,19 @@ def _rail():
         from trajectories.limits import default_limits
         from trajectories.robot import Robot
 
-        _RAIL = build_rail(Robot(), THESIS_Q_START, default_limits(), 0.3)  # lbr control upright's default rail
+        _RAIL = build_rail(
+            Robot(), THESIS_Q_START, default_limits(), cli_travel()
+        )  # lbr control upright's default rail
     return _RAIL
+
+
+def cli_travel() -> float:
+    """``lbr control upright``'s default ``--travel`` [m] (read from the command, not typed here)."""
+    import inspect
+
+    from lbrcli.commands.control import upright
+
+    return float(inspect.signature(upright).parameters["travel"].default)
 
 
 def fast_case(args: tuple) -> dict:
@@ -145,6 +163,17 @@ class StribeckRod:
         r = solve_ivp(f, (0.0, h), (phi, omega), method="RK45", rtol=1e-6, atol=1e-8)
         return float(r.y[0, -1]), float(r.y[1, -1])
 
+    def midpoint(self, phi: float, omega: float, a0: float, a1: float, h: float) -> tuple[float, float]:
+        """As :meth:`step` by the explicit midpoint rule in 4 steps of h/4: another integrator than the band's RK4
+        and the judge's RK45 (stable here: the friction's stiffest slope times h/4 is below 0.1)."""
+        k = h / 4
+        for i in range(4):
+            t = i * k
+            w_dot = self.acceleration(phi, omega, a0 + (a1 - a0) * t / h)
+            pm, wm = phi + 0.5 * k * omega, omega + 0.5 * k * w_dot
+            phi, omega = phi + k * wm, omega + k * self.acceleration(pm, wm, a0 + (a1 - a0) * (t + 0.5 * k) / h)
+        return phi, omega
+
 
 def judge_cases() -> list[tuple]:
     """(scale, rod mass [kg], tip [kg], kinetic share, delay [s], seed, push time [s], push [deg]) of the judge."""
@@ -174,6 +203,48 @@ def judge_case(args: tuple) -> dict:
                 push_s=push_t, push_deg=push, succeeded=bool(s.succeeded), falls=int(s.falls),
                 on_rail=bool(np.all(np.abs(np.asarray(run.x)) <= rail.limits.travel + 1e-9)),
                 identified_coulomb_share=f.get("identified_coulomb_share"), verdict=s.verdict or s.error)  # fmt: skip
+
+
+def corner_cases() -> list[tuple]:
+    """The band's last corner under another plant (:func:`corner_case`): (rod ×, rod mass [kg], tip [kg], kinetic
+    share, delay [s], actuation [cycles], seed, knocks ((t after the catch [s], [deg]), ...)) — the corner (1.2 ×, a
+    20 g tip, 5 % friction, 15 ms) with the rod's mass ±20 %, both knock directions, knocks 3 s after the catch
+    (the dither still ramping), two knocks in one run, and beyond the band: a 1.25 × rod, a 12° knock, 20 ms."""
+    return [(1.2, 0.10, 0.02, 0.05, 0.015, 2, 70, ((20.0, 10.0),)),
+            (1.2, 0.10, 0.02, 0.05, 0.015, 6, 71, ((20.0, -10.0),)),
+            (1.2, 0.12, 0.02, 0.05, 0.015, 4, 72, ((3.0, 10.0),)),
+            (1.2, 0.08, 0.02, 0.05, 0.015, 4, 73, ((12.35, -10.0), (31.1, 10.0))),
+            (1.25, 0.10, 0.02, 0.05, 0.015, 2, 74, ((20.0, 10.0),)),
+            (1.25, 0.12, 0.02, 0.05, 0.015, 6, 75, ((27.77, -10.0),)),
+            (1.2, 0.10, 0.02, 0.05, 0.015, 2, 76, ((20.0, 12.0),)),
+            (1.2, 0.10, 0.02, 0.05, 0.020, 2, 77, ((20.0, -10.0),))]  # fmt: skip
+
+
+def corner_case(args: tuple) -> dict:
+    """One :func:`corner_cases` case: the :class:`StribeckRod` (static friction 1.3 × the kinetic) stepped by the
+    explicit midpoint rule, ±2 counts of noise, 2 ms of jitter; the largest excursion in the 4 s after each knock."""
+    from planners.feedback.session import SessionOptions
+    from planners.feedback.simulate import Sensor, simulate_session
+    from planners.rigid_pendulum import RigidPendulum
+
+    scale, mass, tip, kinetic, delay, actuation, seed, knocks = args
+    rail = _rail()
+    rod = StribeckRod(NOMINAL_ROD * scale, mass, tip, kinetic)
+    pushes = tuple((t, math.radians(deg)) for t, deg in knocks)
+    run = simulate_session(None, rail.limits, RigidPendulum(rod_length=NOMINAL_ROD).equivalent_length,
+                           SessionOptions(hold_s=HOLD_S), Sensor(noise=2, delay=delay, jitter=0.002, offset=11 * seed),
+                           actuation_delay=actuation, seed=seed, pushes=pushes, bounds=rail.local_bounds,
+                           plant_step=rod.midpoint)  # fmt: skip
+    s, t, x = run.session, np.asarray(run.t), np.abs(np.asarray(run.x))
+    bal = np.flatnonzero(np.array([p == "balance" for p in run.phase]))
+    after = []
+    for t_k, _ in knocks:
+        m = (t > t[bal[0]] + t_k) & (t < t[bal[0]] + t_k + 4.0) if bal.size else np.zeros(len(t), bool)
+        after.append(float(x[m].max()) if m.any() else None)
+    return dict(scale=scale, rod_mass_kg=mass, tip_kg=tip, kinetic=kinetic, delay_ms=delay * 1e3,
+                actuation_cycles=actuation, seed=seed, knocks=[list(k) for k in knocks], succeeded=bool(s.succeeded),
+                falls=int(s.falls), on_rail=bool(np.all(x <= rail.limits.travel + 1e-9)), excursion_after_m=after,
+                swing_up_s=s.swing_up_s, verdict=s.verdict or s.error)  # fmt: skip
 
 
 def fri_case(sim_scale: float, friction: float, noise: int) -> dict:
@@ -267,6 +338,66 @@ def push_travel_floor(length: float, share: float, accel: float, jerk: float, pu
         rate = out[1]
         out = solve(np.where(np.abs(rate) > 0.02, -mu * np.sign(rate), 0.0))
     return max(best[-2:])
+
+
+def _knock_model(length: float, n: int, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """z_k = P_k·z0 + G_k·u + D_k·d, k = 1..n, of the upright linear model (planners.feedback.lqr) with the jerk u and
+    a friction acceleration d of the rod held over each ``step`` [s]: P (n, 5, 5), G and D (n, 5, n)."""
+    from scipy.linalg import expm
+
+    from planners.feedback.lqr import cart_pendulum
+
+    a, b = cart_pendulum(length, True)
+    m = np.zeros((7, 7))
+    m[:5, :5], m[:5, 5], m[4, 6] = a, b[:, 0], 1.0
+    e = expm(m * step)
+    ad, bd, dd = e[:5, :5], e[:5, 5], e[:5, 6]
+    p, g, d = np.empty((n, 5, 5)), np.zeros((n, 5, n)), np.zeros((n, 5, n))
+    pk = np.eye(5)
+    for k in range(n):
+        pk = ad @ pk
+        p[k] = pk
+        if k:
+            g[k, :, :k], d[k, :, :k] = ad @ g[k - 1, :, :k], ad @ d[k - 1, :, :k]
+        g[k, :, k], d[k, :, k] = bd, dd
+    return p, g, d
+
+
+def rail_travel_floor(length: float, share: float, bounds, push_deg: float = PUSH_DEG, horizon: float = 3.0,
+                      step: float = 0.01, passes: int = 12) -> list[float] | None:  # fmt: skip
+    """As :func:`push_travel_floor` from rest at the rail's centre, but within the rail's own bounds where the plan
+    takes the cart: ``bounds(x, v, a)`` (:meth:`planners.rail.Rail.local_bounds` — the acceleration bound shrinks with
+    the speed, which a constant bound leaves out). The bounds and the friction's sign are taken along the previous
+    plans (a sequential linear programme, started from 0.6 × the bounds at rest; it does not settle on one plan):
+    [least, largest] excursion [m] of the last 4 passes' plans that keep the rail's bounds along themselves (within
+    2 %), or None."""
+    from scipy.optimize import linprog
+
+    n = int(round(horizon / step))
+    p, g, d = _knock_model(length, n, step)
+    z0 = np.array([0.0, 0.0, 0.0, math.radians(push_deg), 0.0])
+    mu = share * 9.81 / length
+    one, zero = np.ones((n, 1)), np.zeros((n, 1))
+    a_ub = np.vstack([np.hstack(b) for b in ((g[:, 0], -one), (-g[:, 0], -one), (g[:, 1], zero), (-g[:, 1], zero),
+                                             (g[:, 2], zero), (-g[:, 2], zero))])  # fmt: skip
+    along, found = np.repeat(z0[None], n, axis=0), []
+    for k in range(passes):
+        rate = along[:, 4]
+        free = p @ z0 + d @ np.where(np.abs(rate) > 0.02, -mu * np.sign(rate), 0.0)
+        b = np.array([bounds(float(z[0]), float(z[1]), float(z[2])) for z in along]) * (0.6 if k == 0 else 1.0)
+        fx, fv, fa = free[:, 0], free[:, 1], free[:, 2]
+        rhs = np.concatenate([-fx, fx, b[:, 0] - fv, b[:, 0] + fv, b[:, 2] - fa, fa - b[:, 1]])
+        jerk = float(min(-b[:, 3].max(), b[:, 4].min()))
+        res = linprog(np.r_[np.zeros(n), 1.0], A_ub=a_ub, b_ub=rhs, A_eq=np.c_[g[-1], np.zeros(5)], b_eq=-free[-1],
+                      bounds=[(-jerk, jerk)] * n + [(0, None)], method="highs")  # fmt: skip
+        if res.status != 0:
+            break
+        new = free + g @ res.x[:n]
+        own = np.array([bounds(float(z[0]), float(z[1]), float(z[2])) for z in new])
+        if k >= passes - 4 and np.all(new[:, 2] <= 1.02 * own[:, 2]) and np.all(new[:, 2] >= 1.02 * own[:, 1]):
+            found.append(float(np.abs(new[:, 0]).max()))
+        along = new if k == 0 else 0.5 * (along + new)
+    return [min(found), max(found)] if found else None
 
 
 def knock_excursion(length: float, weights: tuple, friction: float, delay: float, limits, dt: float = 1e-3,
@@ -369,8 +500,12 @@ def write_page(result: dict, path: Path) -> None:
 
     if "fast_by_friction" in result:
         lines += _fast_section(result, measured("fast"))
+    if "fast_rerun" in result:
+        lines += _rerun_section(result["fast_rerun"])
     if "off" in result:
         lines += _off_section(result, measured("off"))
+    if "corner" in result:
+        lines += _corner_section(result, measured("corner"))
     if "judge" in result:
         lines += _judge_section(result, measured("judge"))
     else:
@@ -426,6 +561,33 @@ def _fast_section(result: dict, head: list[str]) -> list[str]:
     return lines + [""]
 
 
+def band_rerun(rows: list[dict], date: str, commit: str, how: str) -> dict:
+    """The band's figures from ``rows`` (:func:`fast_case` over the fast part's grid) without the floors and the
+    weight scan: a rerun of the grid after a change, kept beside the full part until that is run again."""
+    ok = [r for r in rows if r["succeeded"] and r["falls"] == 0 and r["on_rail"]]
+    swing = [r["swing_up_s"] for r in rows if r["swing_up_s"] is not None]
+    return dict(date=date, commit=commit, how=how, cases=len(rows), without_fall=len(ok),
+                falls=sum(r["falls"] for r in rows), by_friction=_summary(rows, "friction"),
+                swing_up_s=[min(swing), float(np.median(swing)), max(swing)],
+                settled_deg=_spread(rows, 0.05, "max_up_deg_settled"),
+                cart_m_after_push={str(f): _spread(rows, f, "max_cart_m_after_push") for f in (0.0, 0.05)},
+                failures=[r for r in rows if r not in ok], rows=rows)  # fmt: skip
+
+
+def _rerun_section(r: dict) -> list[str]:
+    lines = ["## The band rerun on the default rail (fast simulation; the floors and the weight scan not rerun)", "",
+             f"Measured {r['date']} on commit {r['commit']} ({r['how']}).", "",
+             f"{r['without_fall']} of {r['cases']} cases without a fall, {r['falls']} falls; swing-up "
+             f"{r['swing_up_s'][0]:.2f}–{r['swing_up_s'][2]:.2f} s. The cart's excursion in the 4 s after the push "
+             "[m], median / largest over the cases without a fall:", "", "| bearing's dry friction | excursion [m] |",
+             "|---|---:|"]  # fmt: skip
+    for k, v in r["cart_m_after_push"].items():
+        lines.append(f"| {float(k):.0%} | {'—' if v is None else f'{v[0]:.3f} / {v[1]:.3f}'} |")
+    lines += [f"- did not count: {f['scale']:g} ×, tip {f['tip_kg']:g} kg, {f['friction']:.0%}, {f['delay_ms']:g} ms, "
+              f"{f['actuation_cycles']} cycles, seed {f['seed']}: {f['verdict']}" for f in r["failures"]]  # fmt: skip
+    return lines + [""]
+
+
 def _off_section(result: dict, head: list[str]) -> list[str]:
     lines = ["## Off the band's grid (fast simulation: rods 0.75 and 1.25 ×, 8 ms jitter, other knocks)", "", *head,
              f"{result['off_succeeded_without_fall']} of {result['off_cases']} cases without a fall, "
@@ -437,6 +599,38 @@ def _off_section(result: dict, head: list[str]) -> list[str]:
         lines.append(f"| {r['scale']:g} | {r['tip_kg']:g} | {r['friction']:.0%} | {r['delay_ms']:g} + {r['jitter_ms']:g} | "
                      f"{r['actuation_cycles']} | {r['push_deg']:+g}° at {r['push_s']:g} s | "
                      f"{'—' if run is None else f'{run:.3f}'} | {r['falls']} | {r['verdict']} |")  # fmt: skip
+    return lines + [""]
+
+
+def _corner_section(result: dict, head: list[str]) -> list[str]:
+    lines = ["## The band's last corner under another plant (Stribeck friction, explicit midpoint rule)", "", *head,
+             f"{result['corner_succeeded_without_fall']} of {result['corner_cases']} cases without a fall, "
+             f"{result['corner_falls_total']} fall{'' if result['corner_falls_total'] == 1 else 's'}; the largest excursion "
+             f"after a knock {result['corner_max_excursion_m']:.3f} m (rail ±{result['corner_travel_m']:g} m). Static "
+             "friction 1.3 × the kinetic, ±2 counts of noise, 2 ms of jitter; the last three rows are beyond the band.", "",
+             "| rod × | rod mass [kg] | tip [kg] | kinetic | delay [ms] | actuation [cycles] | knocks (s after the catch: °) "
+             "| excursion after each [m] | falls | verdict |", "|---:|---:|---:|---:|---:|---:|---|---|---:|---|"]  # fmt: skip
+    for r in result["corner"]:
+        knocks = ", ".join(f"{t:g}: {d:+g}" for t, d in r["knocks"])
+        after = ", ".join("—" if e is None else f"{e:.3f}" for e in r["excursion_after_m"])
+        lines.append(f"| {r['scale']:g} | {r['rod_mass_kg']:g} | {r['tip_kg']:g} | {r['kinetic']:.0%} | {r['delay_ms']:g} | "
+                     f"{r['actuation_cycles']} | {knocks} | {after} | {r['falls']} | {r['verdict']} |")  # fmt: skip
+    lines += ["", "Why the rail is longer than ±0.3 m rather than a recovery planned within it: the least largest excursion [m] "
+              "of a 10° knock from rest at the rail's centre within the rail's own bounds along the plan — its "
+              "acceleration bound shrinks with the cart's speed (`rail_travel_floor`, the range over the last passes of "
+              "a sequential linear programme) — is a few centimetres short of 0.3 m for the corner's rod with friction, "
+              "before the delay, the noise and a cart not at rest at the centre; the floor above, with constant bounds "
+              "at rest, leaves the speed out:", "",
+              "| rod × | tip [kg] | no friction | 5 % friction |", "|---:|---:|---|---|"]  # fmt: skip
+    for r in result["rail_travel_floor"]:
+        cell = ["—" if r["floor_m"][k] is None else "{:.3f}–{:.3f}".format(*r["floor_m"][k]) for k in ("0.0", "0.05")]
+        lines.append(f"| {r['scale']:g} | {r['tip_kg']:g} | {cell[0]} | {cell[1]} |")
+    if "rail_reach" in result:
+        r = result["rail_reach"]
+        lines += ["", f"The default rail (±{r['travel_m']:g} m at the thesis start pose): along it the joints use at most "
+                  f"{r['joint_share']:.0%} of their position range (the start pose's own elbow, A4, is the largest); the "
+                  f"acceleration bound at rest is {r['accel_end']:.2f} m/s² at its ends, {r['accel_centre']:.2f} m/s² at "
+                  "its centre."]  # fmt: skip
     return lines + [""]
 
 
@@ -471,7 +665,7 @@ def _fri_section(result: dict, head: list[str]) -> list[str]:
     return lines
 
 
-PARTS = ("fast", "off", "fri", "judge")  # the order they run in (the slowest, the judge's RK45 per cycle, last)
+PARTS = ("fast", "off", "corner", "fri", "judge")  # the order they run in (the slowest, the judge's RK45, last)
 
 
 def _stamp() -> dict:
@@ -566,6 +760,49 @@ def judge_part(pool) -> dict:
     }
 
 
+def rail_reach() -> dict:
+    """What the default rail asks of the arm: its travel [m], the largest share of a joint's position range it uses,
+    and the acceleration bound at rest at its ends [m/s²] (at its centre, for comparison)."""
+    from trajectories.limits import default_limits
+
+    rail, lim = _rail(), default_limits()
+    travel = rail.limits.travel
+    xs = np.linspace(-travel, travel, 81)
+    share = max(float(np.max(np.abs(rail.joints(float(x))) / lim.position)) for x in xs)
+    end = min(min(-b[1], b[2]) for b in (rail.local_bounds(travel, 0.0, 0.0), rail.local_bounds(-travel, 0.0, 0.0)))
+    _, lo, hi, _, _ = rail.local_bounds(0.0, 0.0, 0.0)
+    return dict(travel_m=travel, joint_share=share, accel_end=end, accel_centre=min(-lo, hi))
+
+
+def corner_part(pool) -> dict:
+    """The corner under another plant (:func:`corner_cases`), and why the rail needs to be longer than ±0.3 m for it:
+    the knock's travel floor within the rail's own (speed-dependent) bounds (:func:`rail_travel_floor`)."""
+    from planners.rigid_pendulum import RigidPendulum
+
+    t0 = time.perf_counter()
+    corner = pool.map(corner_case, corner_cases())
+    wall = time.perf_counter() - t0
+    rail = _rail()
+    floors = []
+    for scale, tip in ((1.0, 0.0), (1.2, 0.02)):
+        length = RigidPendulum(rod_length=NOMINAL_ROD * scale, tip_mass=tip).equivalent_length
+        floors.append(dict(scale=scale, tip_kg=tip,
+                           floor_m={str(fr): rail_travel_floor(length, fr, rail.local_bounds) for fr in (0.0, 0.05)}))  # fmt: skip
+    return {
+        "corner_cases": len(corner),
+        "corner_succeeded_without_fall": sum(r["succeeded"] and r["falls"] == 0 and r["on_rail"] for r in corner),
+        "corner_falls_total": sum(r["falls"] for r in corner),
+        "corner_max_excursion_m": max(
+            (e for r in corner for e in r["excursion_after_m"] if e is not None), default=None
+        ),
+        "corner_travel_m": rail.limits.travel,
+        "corner_wall_s": round(wall, 1),
+        "corner": corner,
+        "rail_travel_floor": floors,
+        "rail_reach": rail_reach(),
+    }
+
+
 def _write(result: dict) -> None:
     out = ROOT / "benchmarks" / "results" / "upright_band.json"
     tmp = out.with_suffix(".json.part")
@@ -593,6 +830,10 @@ def main(quick: bool = False, parts: tuple[str, ...] = PARTS, processes: int = 2
                 if quick:
                     continue
                 result.update(judge_part(pool))
+            elif part == "corner":
+                if quick:
+                    continue
+                result.update(corner_part(pool))
             else:
                 if quick:
                     continue
@@ -602,13 +843,15 @@ def main(quick: bool = False, parts: tuple[str, ...] = PARTS, processes: int = 2
             if not quick:
                 _write(result)
     print(json.dumps({k: v for k, v in result.items()
-                      if k not in ("fast", "fast_failures", "judge", "off", "push_travel_floor")}, indent=1))  # fmt: skip
+                      if k not in ("fast", "fast_failures", "judge", "off", "corner", "push_travel_floor")}, indent=1))  # fmt: skip
     for r in result.get("fast_failures", []):
         print("failed:", r)
     for r in result.get("off", []):
         print("off the grid:", r)
     for r in result.get("judge", []):
         print("judge:", r)
+    for r in result.get("corner", []):
+        print("corner:", r)
     return result
 
 

@@ -51,6 +51,21 @@ def guard_outputs(inputs: Named, outputs: Named) -> None:
                 )
 
 
+def require_folders(outputs: Named) -> None:
+    """Before long work (a plan): an output whose folder does not exist, or that is a folder, raises the OSError its
+    write would raise (exit 2, naming the path) — now, not after minutes of planning."""
+    import errno
+
+    for _, p in outputs.items():
+        if p is None:
+            continue
+        path = Path(p)
+        if path.is_dir():
+            raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+        if not path.absolute().parent.is_dir():
+            raise FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), str(path))
+
+
 INPUT_OPTIONS = frozenset(
     {"limits", "calibration", "plane", "obstacles", "secret", "geometry"}
 )  # Path options that are read

@@ -24,6 +24,9 @@ from .color import ColorSpec
 from .detect import Blob
 from .subpixel import refine_centre
 from .second_look import SECOND_LOOK, recover
+from .model_look import MODEL_LOOK
+from .model_look import recover as model_recover
+from .smoothing import on_circle, outliers, smooth_centres
 from .tracker import BallTracker, TrackerOptions
 from .video import VideoInfo, iter_frames, prefetched, probe_video
 
@@ -61,6 +64,9 @@ class Track:
         tuple[str, np.ndarray], ...
     ] = ()  # more (name, (n,) values) columns, written last (live: tilt, latency)
     second_look_frames: int = 0  # frames found by the second look (tracking.second_look)
+    model_look_frames: int = 0  # frames reported at a fitted pendulum's place (tracking.model_look)
+    outlier_frames: int = 0  # fixes off their neighbours' motion, reported unsure (tracking.smoothing.outliers)
+    smoothed_frames: int = 0  # frames whose centre was smoothed around the fixed pivot (tracking.smoothing)
 
     @property
     def found_fraction(self) -> float:
@@ -109,6 +115,8 @@ def _check_inputs(
 
 
 _NAN2 = (math.nan, math.nan)
+KEEP_BYTES = 256 * 2**20  # frames where the ball was not surely found are kept for the looks after, up to this
+OUTLIER = 0.3  # confidence of a fix found to lie off the motion of its neighbours (reported unsure)
 
 
 class _Columns:
@@ -174,6 +182,11 @@ class _Trackers:
         self.sure = self.ball.options.min_confidence
         self.columns = _Columns()
         self.recovered = 0  # frames found by the second look
+        self.modelled = 0  # frames reported by the model look
+        self.outliers = 0  # fixes their neighbours placed elsewhere (reported unsure)
+        self.kept: dict[int, np.ndarray] = {}  # frames where the ball was not (surely) found, for the looks after
+        self.kept_bytes = 0
+        self.frame_bytes = 0
 
     def step(self, frame: np.ndarray, t: float) -> tuple[Blob | None, tuple[float, float] | None]:
         """Track one frame: (the ball's blob or None, the pivot [px] or None)."""
@@ -192,6 +205,10 @@ class _Trackers:
             cols.refined[k] = (b, refine_centre(frame, self.ball.spec, b))
         cols.revise_ball(self.ball)
         cols.add(t, b, self.ball.confidence)
+        if (b is None or self.ball.confidence < self.sure) and self.kept_bytes + frame.nbytes <= KEEP_BYTES:
+            self.kept[k] = frame  # (each decoded frame is a new array: kept without a copy)
+            self.kept_bytes += frame.nbytes
+        self.frame_bytes = frame.nbytes
         return b, p
 
     def finish(self) -> None:
@@ -205,11 +222,41 @@ class _Trackers:
     def second_look(self, path: str, fps: float | None) -> None:
         """The ball's frames recovered by a second look (:func:`tracking.second_look.recover`), counted."""
         cols = self.columns
-        got = recover(self.ball, path, fps, cols.blobs, cols.t, cols.piv, cols.conf)
+        got = recover(self.ball, path, fps, cols.blobs, cols.t, cols.piv, cols.conf, self.kept, self.frame_bytes)
         for k, blob, centre in got:
             cols.refined[k] = (blob, centre)
             cols.set_ball(k, blob, SECOND_LOOK)
         self.recovered = len(got)
+
+    def trusted(self) -> tuple[np.ndarray, np.ndarray]:
+        """The ball's centres [px] (n, 2) so far and which of them are trusted (confidence ≥ the tracker's minimum)."""
+        uv = np.array(self.columns.uv, float).reshape(-1, 2)
+        conf = np.array(self.columns.conf, float)
+        return uv, np.all(np.isfinite(uv), axis=1) & (conf >= self.sure)
+
+    def reject_outliers(self, fps: float) -> None:
+        """With a fixed pivot and the ball on a circle about it (:func:`tracking.smoothing.on_circle`), the fixes their
+        neighbours place elsewhere (:func:`tracking.smoothing.outliers`) are marked unsure (confidence OUTLIER)."""
+        uv, trusted = self.trusted()
+        if self.fixed is None or not on_circle(uv, trusted, self.fixed):
+            return
+        odd = np.flatnonzero(outliers(uv, trusted, self.fixed, fps))
+        for k in odd:
+            self.columns.conf[k] = OUTLIER
+        self.outliers = len(odd)
+
+    def model_look(self, path: str, fps: float) -> None:
+        """With a fixed pivot and the ball on a circle about it, the ball's frames reported by the model look
+        (:func:`tracking.model_look.recover`)."""
+        cols = self.columns
+        uv, trusted = self.trusted()
+        if self.fixed is None or not on_circle(uv, trusted, self.fixed):
+            return
+        radius = float(np.median(np.array(cols.radius, float)[trusted]))
+        got = model_recover(self.ball, path, fps, uv, trusted, self.fixed, radius, self.kept)
+        for k, blob in got:
+            cols.set_ball(k, blob, MODEL_LOOK)
+        self.modelled = len(got)
 
     def notes(self) -> tuple[str, ...]:
         return tuple(self.ball.notes) + tuple(f"pivot marker: {n}" for n in (self.pivot.notes if self.pivot else ()))
@@ -225,9 +272,14 @@ def _shown(
 
 
 def _make_track(
-    trackers: _Trackers, angle: ImageAngles, calibration: CameraCalibration | None, info: VideoInfo
+    trackers: _Trackers,
+    angle: ImageAngles,
+    calibration: CameraCalibration | None,
+    info: VideoInfo,
+    smooth_fps: float | None = None,
 ) -> Track:
-    """The track from the gathered columns: unsure fixes (confidence below the tracker's minimum) reported not found."""
+    """The track from the gathered columns: unsure fixes (confidence below the tracker's minimum) reported not found;
+    with smooth_fps [1/s] and a fixed pivot, the centres smoothed (:func:`tracking.smoothing.smooth_centres`)."""
     cols = trackers.columns
     conf_a = np.array(cols.conf, float)
     seen = np.all(np.isfinite(np.array(cols.uv, float).reshape(-1, 2)), axis=1)
@@ -235,6 +287,10 @@ def _make_track(
     uv = [c if ok else _NAN2 for c, ok in zip(cols.uv, trusted)]
     radius = [r if ok else math.nan for r, ok in zip(cols.radius, trusted)]
     uv_a = np.array(uv, float).reshape(-1, 2)
+    smoothed = 0
+    if smooth_fps is not None and trackers.fixed is not None:
+        raw, uv_a = uv_a, smooth_centres(uv_a, trusted, trackers.fixed, smooth_fps)
+        smoothed = int(np.sum(np.any(np.abs(uv_a - raw) > 0.0, axis=1)))
     piv_a = np.array(cols.piv, float).reshape(-1, 2)
     xy = None
     if calibration is not None and calibration.plane is not None:
@@ -256,6 +312,9 @@ def _make_track(
         confidence=np.where(seen, conf_a, 0.0),
         unsure=seen & ~trusted,
         second_look_frames=trackers.recovered,
+        model_look_frames=trackers.modelled,
+        outlier_frames=trackers.outliers,
+        smoothed_frames=smoothed,
     )
 
 
@@ -272,6 +331,7 @@ def track_video(
     progress: Callable[[int], None] | None = None,
     on_frame: Callable[[np.ndarray, FrameResult], None] | None = None,
     second_look: bool = True,
+    smooth: bool = True,
 ) -> Track:
     """Track the ball through every frame of a video.
 
@@ -279,7 +339,10 @@ def track_video(
     both). fps [1/s] overrides the container's frame rate (times = index / fps). progress(frames_done) and
     on_frame(bgr, result) are called after each frame (e.g. to draw a preview). second_look: the frames before a
     confirmed stretch of the track where the ball was not found are searched again going back from it
-    (:mod:`tracking.second_look`). Raises InputError for unreadable videos or a calibration made for another image
+    (:mod:`tracking.second_look`), and with a fixed pivot the frames a fitted pendulum places where the frame shows the
+    ball (:mod:`tracking.model_look`). smooth: with a fixed pivot, fixes off their neighbours' motion are reported
+    unsure, and the centres are smoothed over a few frames where the motion allows (:mod:`tracking.smoothing`; the
+    on_frame preview shows neither). Raises InputError for unreadable videos or a calibration made for another image
     size.
     """
     info = _check_inputs(path, pivot_uv, pivot_color, calibration)
@@ -297,4 +360,8 @@ def track_video(
     trackers.finish()
     if second_look:
         trackers.second_look(str(path), fps)
-    return _make_track(trackers, angle, calibration, info)
+    if smooth:
+        trackers.reject_outliers(fps or info.fps)
+    if second_look:
+        trackers.model_look(str(path), fps or info.fps)
+    return _make_track(trackers, angle, calibration, info, (fps or info.fps) if smooth else None)

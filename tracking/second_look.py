@@ -126,12 +126,15 @@ def recover(
     times: list[float],
     pivots: list[tuple[float, float]],
     confidence: list[float],
+    kept: dict[int, np.ndarray] | None = None,
+    frame_bytes: int = 0,
 ) -> list[tuple[int, Blob, tuple[float, float]]]:
-    """The second look over a tracked video (``path``, decoded again up to the last gap, ``fps`` as first): the
-    (frame index, blob) recovered before each confirmed stretch that follows frames not found. blobs, times [s],
-    pivots [px] (NaN when unknown) and confidence are the first pass's, per frame. Each blob comes with its refined
-    centre [px] (:func:`tracking.subpixel.refine_centre`)."""
-    from .video import iter_frames
+    """The second look over a tracked video (``path``, ``fps`` as first; the frames ``kept`` since the first pass
+    used, the rest decoded again): the (frame index, blob) recovered before each confirmed stretch that follows frames
+    not found. blobs, times [s], pivots [px] (NaN when unknown) and confidence are the first pass's, per frame;
+    frame_bytes the size of a frame. Each blob comes with its refined centre [px]
+    (:func:`tracking.subpixel.refine_centre`)."""
+    from .video import frames_at
 
     sure = tracker.options.min_confidence
     conf = np.array(confidence, float)
@@ -139,18 +142,8 @@ def recover(
     todo = gaps(found, conf, sure)
     if not todo:
         return []
-    needed: dict[int, list[int]] = {}
-    wanted: set[int] = set()
-    frames: dict[int, np.ndarray] = {}
-    last = max(g.anchor for g in todo)
-    for k, _, frame in iter_frames(path, fps):
-        if not needed:
-            needed = frames_needed(todo, frame.nbytes)
-            wanted = {j for ks in needed.values() for j in ks}
-        if k >= last:
-            break
-        if k in wanted:
-            frames[k] = frame
+    needed = frames_needed(todo, frame_bytes)
+    frames = frames_at(path, fps, (j for ks in needed.values() for j in ks), kept)
     area = float(np.median([b.area_px for b, c in zip(blobs, conf) if b is not None and c >= CONFIRMED]))
     out: list[tuple[int, Blob, tuple[float, float]]] = []
     for anchor, ks in needed.items():

@@ -12,7 +12,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
+from typing import Iterable, Iterator
 
 import numpy as np
 
@@ -163,6 +163,25 @@ def iter_frames(path: str | Path, fps: float | None = None) -> Iterator[tuple[in
             raise InputError("video has no decodable frames", file=spath)
     finally:
         cap.release()
+
+
+def frames_at(
+    path: str | Path, fps: float | None, wanted: Iterable[int], kept: dict[int, np.ndarray] | None = None
+) -> dict[int, np.ndarray]:
+    """The BGR frames of the indices wanted: those in ``kept`` (frames held since a first pass) as they are, the rest
+    decoded again up to the last of them (none when all were kept)."""
+    kept = kept or {}
+    wanted = set(wanted)
+    out = {k: kept[k] for k in wanted if k in kept}
+    missing = wanted - set(out)
+    if missing:
+        last = max(missing)
+        for k, _, frame in iter_frames(path, fps):
+            if k in missing:
+                out[k] = frame
+            if k >= last:
+                break
+    return out
 
 
 def prefetched(items: Iterator, depth: int = 8) -> Iterator:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Sequence
 
 import numpy as np
@@ -182,13 +183,18 @@ class BrakingEnvelope:
         idt2 = 1.0 / (dt * dt)
         out: list[float] | None = None
         worst, worst_j = 0.0, -1
-        for j in range(7):
-            x, p1, p2, p3 = q[j], q1[j], q2[j], q3[j]
+        for j, x, p1, p2, p3, (A, JD, V, J2, free) in zip(range(7), q, q1, q2, q3, self._fast_bounds):
             a = (x - 2.0 * p1 + p2) * idt2
             v1 = (p1 - p2) / dt
+            # most commands: inside every bound and far from the position limit — a few float operations, inline
+            # (this runs for every joint of every cycle)
+            if -A <= a <= A and (not jerk or -JD <= a - (p1 - 2.0 * p2 + p3) * idt2 <= JD):  # (also NaN)
+                v = v1 + a * dt
+                v_c = v + 0.5 * a * dt
+                if -V <= v <= V and -V <= v_c <= V and -V <= v_c + a * abs(a) / J2 <= V:
+                    if -free <= x <= free or self.room_to_stop(j, x, v_c, a):
+                        continue
             a1 = (p1 - 2.0 * p2 + p3) * idt2
-            if self._fast_ok(j, x, v1, a, a1, jerk):
-                continue
             if not math.isfinite(x):
                 return Admission(tuple(q1), 0.0, j, f"A{j + 1} command is {x}: not a number")
             lo, hi = self._bounds(j, v1, a1, p1, p2, jerk)
@@ -265,24 +271,13 @@ class BrakingEnvelope:
         base = 2.0 * p1 - p2
         return base + lo * dt * dt, base + hi * dt * dt
 
-    def _fast_ok(self, j: int, x: float, v1: float, a: float, a1: float, jerk: bool) -> bool:
-        """Most commands: inside every bound and far from the position limit (a few float operations)."""
+    @cached_property
+    def _fast_bounds(self) -> tuple[tuple[float, float, float, float, float], ...]:
+        """Per joint the bounds of :meth:`admit`'s quick acceptance: A·k [rad/s²], J·dt·k [rad/s²] (the jerk bound on one
+        step's change of acceleration), V·k [rad/s], 2·J [rad/s³] and free [rad], k = 1 + REL_TOL."""
         k = 1.0 + REL_TOL
-        A = self.acceleration[j] * k
-        if not -A <= a <= A:  # also NaN
-            return False
-        if jerk and not -self.jerk[j] * self.dt * k <= a - a1 <= self.jerk[j] * self.dt * k:
-            return False
-        dt = self.dt
-        V = self.velocity[j] * k
-        v = v1 + a * dt
-        v_c = v + 0.5 * a * dt
-        if not (-V <= v <= V and -V <= v_c <= V):
-            return False
-        peak = v_c + a * abs(a) / (2.0 * self.jerk[j])
-        if not -V <= peak <= V:
-            return False
-        return -self.free[j] <= x <= self.free[j] or self.room_to_stop(j, x, v_c, a)
+        return tuple((self.acceleration[j] * k, self.jerk[j] * self.dt * k, self.velocity[j] * k, 2.0 * self.jerk[j],
+                      self.free[j]) for j in range(7))  # fmt: skip
 
     def _position_bound(self, j: int, p1: float, v1: float, a: float, lo: float, hi: float,
                         strict: bool) -> float | None:  # fmt: skip

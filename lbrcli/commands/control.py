@@ -162,7 +162,7 @@ def upright(
             unit="m",
             help="The cart's travel along base y either side of the start \\[m].",
         ),
-    ] = 0.3,
+    ] = 0.4,
     q_start: Annotated[
         JointVector, joints("--q-start", help="The rail's centre pose: 7 joint angles (deg/rad).")
     ] = THESIS_Q_START,

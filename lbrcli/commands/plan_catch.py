@@ -86,12 +86,13 @@ def plan_catch_files(
     from ..cup_options import build_model
     from ..option_groups import settings_named
     from ..options import limits_from, make_robot, within_limits
-    from ..outputs import guard_outputs
+    from ..outputs import guard_outputs, require_folders
     from ..parsing import parse_joint_vector
 
     model = build_model(length, **(model_options or {}))
     _validate(max_time, length_tol, mass_tol, min_success, dt, travel, margin, workers)
     guard_outputs({"--limits": limits}, {"-o": out, "--prediction": prediction, "--plot": plot})
+    require_folders({"-o": out, "--prediction": prediction, "--plot": plot})
     lim = limits_from(limits)
     q0 = within_limits(parse_joint_vector(q_start, "--q-start"), lim, "--q-start")
     robot = make_robot(flange, tool)

@@ -126,12 +126,13 @@ def plan_swing_up_files(
 
     from ..option_groups import settings_named
     from ..options import limits_from, make_robot, within_limits
-    from ..outputs import guard_outputs
+    from ..outputs import guard_outputs, require_folders
     from ..parsing import parse_joint_vector
 
     _validate(length, mass, theta_d, method, theta0, dt, duration, travel, k_e, k_p, k_d, tolerance, margin,
               orientation, push, side, workers)  # fmt: skip
     guard_outputs({"--limits": limits}, {"-o": out, "--prediction": prediction, "--plot": plot, "--task-out": task_out})
+    require_folders({"-o": out, "--prediction": prediction, "--plot": plot, "--task-out": task_out})
     robot, lim = make_robot(flange, tool), limits_from(limits)
     q0 = within_limits(parse_joint_vector(q_start, "--q-start"), lim, "--q-start")
     request = SwingUpRequest(

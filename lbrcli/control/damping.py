@@ -163,7 +163,7 @@ class DampingClient(TrajectoryPlayer):
         cx, cy = self.damper.carts
         dx, dy = cx.x, cy.x
         mx, my = self._maps[row]
-        out = tuple(a + u * dx + w * dy for a, u, w in zip(q, mx, my))
+        out = tuple([a + u * dx + w * dy for a, u, w in zip(q, mx, my)])  # (a list: no generator per cycle)
         off = abs(dx) if abs(dx) > abs(dy) else abs(dy)
         if off > self.max_offset:
             self.max_offset = off

@@ -166,7 +166,7 @@ class TrajectoryPlayer(LBRClient):
 
     # -- streaming -------------------------------------------------------------------------------------------
     def command(self, state: LBRState) -> Sequence[float] | None:
-        if self.sway is not None:
+        if self.sway is not None and not self._started:  # (only the start is judged by the sway)
             self.sway.update(state)
         if self._last is None:  # activation: the robot must still be where the start was checked
             self._check_start(state, "at activation")

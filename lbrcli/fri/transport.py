@@ -81,6 +81,8 @@ class UdpTransport:
             pass
         self.sock = sock
         self._rlist = (sock,)  # for select, built once
+        self._waiting = select.poll()  # is a datagram waiting? (no system call that fails, no exception, per message)
+        self._waiting.register(sock, select.POLLIN)
         self.port: int = sock.getsockname()[1]
         self.timeout_s = timeout_s
         self.busy_wait_s = max(0.0, busy_wait_s)  # [s]
@@ -156,11 +158,11 @@ class UdpTransport:
     def _newest(self, data: bytes) -> bytes:
         """``data``, or the newest of the controller's datagrams already waiting behind it: a client that fell
         behind (a stall) answers the message the controller sent last, not each older one too late (the controller
-        bridged those periods; the application counts them as missed). One non-blocking read when none waits."""
+        bridged those periods; the application counts them as missed). One poll of the socket when none waits."""
         if not self.catch_up:
             return data
-        recvmsg = self.sock.recvmsg
-        while True:
+        recvmsg, waiting = self.sock.recvmsg, self._waiting.poll
+        while waiting(0):
             try:
                 newer, anc, _, addr = recvmsg(_RX_SIZE, _ANC_SIZE, _DONTWAIT)
             except (BlockingIOError, InterruptedError):
@@ -170,6 +172,7 @@ class UdpTransport:
             if self._take(addr):
                 data, self._anc = newer, anc
                 self.overtaken += 1
+        return data
 
     def _take(self, addr: tuple[str, int]) -> bool:
         """A datagram from ``addr``: True (and it becomes the reply address) if it is the controller's."""

@@ -71,9 +71,10 @@ def snapshot(mon: Any, pendulum: PendulumReader | None) -> dict[str, Any]:
     }
     for io in md.readIORequest:
         d[io.name] = io.analogValue if io.HasField("analogValue") else int(io.digitalValue)
-    if pendulum is not None and pendulum.latest is not None:
-        d["pend_theta"] = pendulum.latest.theta
-        d["pend_omega"] = pendulum.latest.omega
+    r = pendulum.seen if pendulum is not None else None
+    if r is not None:
+        d["pend_theta"] = r.theta
+        d["pend_omega"] = r.omega
     return d
 
 
@@ -107,8 +108,8 @@ class LabAttachments:
 
     def extra(self, mon: Any) -> tuple[float, ...]:
         """pend_theta, pend_omega, pend_age for the log row (0, 0, −1 before the first reading: no missing values,
-        so every CSV reader types the columns as numbers)."""
-        r = self.pendulum.latest if self.pendulum is not None else None
+        so every CSV reader types the columns as numbers): the reading the cycle saw."""
+        r = self.pendulum.seen if self.pendulum is not None else None
         if r is None:
             return (0.0, 0.0, -1.0)
         return (r.theta, r.omega, time.monotonic() - r.host_time)

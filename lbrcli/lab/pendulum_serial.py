@@ -83,6 +83,13 @@ class PendulumReader:
     def latest(self, reading: PendulumReading | None) -> None:
         self._latest = reading
 
+    @property
+    def seen(self) -> PendulumReading | None:
+        """The newest reading taken so far, without reading the port (for the log, written after the reply: the
+        unthreaded reader must not take the next cycle's line while the lock-step simulator waits to see it on the
+        reader's side)."""
+        return self._latest
+
     def start(self) -> "PendulumReader":
         """Open the port (raises OptionError if it cannot be opened) and start reading."""
         import serial

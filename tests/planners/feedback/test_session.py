@@ -90,3 +90,37 @@ def test_with_5_percent_dry_friction_a_push_of_10_degrees_is_recovered_on_the_ar
     s = run.session
     assert s.succeeded and s.falls == 0, s.figures()
     assert np.all(np.abs(run.x) <= rail.limits.travel + 1e-9)
+
+
+def _default_travel() -> float:
+    """``lbr control upright``'s default ``--travel`` [m]."""
+    import inspect
+
+    from lbrcli.commands.control import upright
+
+    return float(inspect.signature(upright).parameters["travel"].default)
+
+
+@pytest.mark.heavy
+@pytest.mark.parametrize("travel", [0.3, None])  # None: lbr control upright's default rail
+def test_the_bands_last_corner_needs_more_than_a_30_cm_rail_and_the_default_rail_gives_it(robot, limits, travel):
+    """The 1.2 × rod with a 20 g tip, 5 % dry friction and 15 ms of delay, knocked by 10°: its recovery runs the cart
+    past 0.3 m (on a ±0.3 m rail the governor stops it at the end and the rod falls); the default rail holds it."""
+    from tests.helpers.cli import Q_START
+    from planners.rail import build_rail
+
+    rail = build_rail(robot, Q_START, limits, travel or _default_travel())
+    shape = RigidPendulum(rod_length=0.6, tip_mass=0.02)
+    rod = RigidPendulum(rod_length=0.6, tip_mass=0.02, coulomb=0.05 * shape.mass * shape.com * 9.81)
+    run = simulate_session(rod, rail.limits, RigidPendulum(rod_length=0.5).equivalent_length, SessionOptions(hold_s=12.0),
+                           Sensor(noise=2, delay=0.015, offset=17), pushes=((6.0, math.radians(10.0)),),
+                           bounds=rail.local_bounds)  # fmt: skip
+    s = run.session
+    t_catch = run.t[run.phase.index("balance")]
+    after = np.abs(run.x[(run.t > t_catch + 6.0) & (run.t < t_catch + 10.0)]).max()
+    assert after > 0.3 - 1e-3  # the knock's recovery needs more than 30 cm of rail
+    if travel == 0.3:
+        assert s.falls >= 1
+    else:
+        assert s.succeeded and s.falls == 0, s.figures()
+        assert after < 0.95 * rail.limits.travel and np.all(np.abs(run.x) <= rail.limits.travel + 1e-9)

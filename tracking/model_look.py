@@ -1,0 +1,246 @@
+"""A look guided by the pendulum's motion, for video files with a fixed pivot: the frames not found between or next to
+trusted fixes, where the decoded frame shows the ball's colour where a pendulum fitted to those fixes puts the ball.
+
+At a low bitrate the encoder's first frames and a fast ball's frames are blocks: the ball's colour is there, but no
+blob has the ball's shape, and a centroid of the blocks is off by 2–5 px. The motion around them is well measured.
+So, per run of frames not found (at most ``MAX_GAP_S`` long), a pendulum θ'' = −ω²·sin θ − c·θ' about the fixed pivot
+(string length the median of the fixes') is fitted to the trusted fixes in one of ``WINDOWS`` around the run (the first
+window that the pendulum fits within ``MAX_FIT_RMS_PX``, and the ``NEAR_FIXES`` fixes nearest the run within
+``MAX_NEAR_RMS_PX``: a push, a release or a catch inside a window makes it fail; and that places the frame to within
+``MAX_SPREAD_PX``, one standard deviation from the fit's covariance). A frame is then reported at the fitted place, with
+confidence ``MODEL_LOOK``, only when the frame shows the ball there: at least ``MIN_SHARE`` of the ball's disc in its
+colour, the colour's centroid within ``MAX_OFF_RADII`` ball radii of the fitted place, and the place not one the
+tracker found static in the ball's colour, excluded, or out of the string's reach. The live sensor never does this.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from .color import ColorSpec, color_mask, with_min_saturation
+from .detect import Blob
+from .tracker import BallTracker
+
+MODEL_LOOK = 0.6  # confidence of a frame reported by the model look
+MAX_GAP_S = 0.4  # [s] runs of frames not found longer than this are left alone
+WINDOWS = ((1.2, 1.2), (0.6, 0.6), (0.3, 0.3), (0.0, 0.6), (0.6, 0.0), (0.0, 0.3), (0.3, 0.0))  # [s] (before, after)
+# a run: fit windows tried in this order, the longest first, then one side only (a push or a release on the other)
+MIN_FIXES = 12  # trusted fixes a fit needs at least
+MAX_FIT_RMS_PX = 1.2  # [px] the pendulum must fit the window's fixes within this (RMS) ...
+NEAR_FIXES = 6  # ... and the fixes nearest the run within
+MAX_NEAR_RMS_PX = 2.0  # ... this [px] (RMS)
+MAX_SPREAD_PX = (
+    1.0  # [px] a frame is placed only where the fit's standard deviation there is at most this (the true miss
+)
+# can be 3× that: the codec's errors of neighbouring frames are alike, which the covariance does not know)
+MIN_SHARE = 0.45  # share of the ball's disc at the fitted place that must be in its colour ...
+MIN_SATURATION = 60  # ... (its hue, at least this saturated)
+MAX_OFF_RADII = 0.4  # ... and the colour's centroid there within this many ball radii (at least 3 px) of it
+
+
+@dataclass(frozen=True)
+class PendulumFit:
+    """θ(t) of a pendulum about a fixed pivot from frame ``anchor``: θ'' = −w2·sin θ − c·θ' (θ from the downward
+    vertical towards +u [rad], t [s]); ``length_px`` the string's length, ``rms_px`` the fit's RMS miss [px]."""
+
+    anchor: int
+    theta: float  # [rad] at the anchor frame
+    rate: float  # [rad/s] at the anchor frame
+    w2: float  # [1/s²]
+    c: float  # [1/s]
+    length_px: float
+    rms_px: float
+    cov: np.ndarray | None = None  # (4, 4) covariance of (theta, rate, w2, c)
+
+
+def integrate(theta: float, rate: float, w2: float, c: float, dt: float, steps: int) -> np.ndarray:
+    """θ [rad] at 0, dt, …, steps·dt (dt may be negative: backwards in time) by classical Runge–Kutta."""
+    out = np.empty(steps + 1)
+    out[0] = theta
+    y, z = theta, rate
+    for i in range(steps):
+        k1y, k1z = z, -w2 * math.sin(y) - c * z
+        y2, z2 = y + 0.5 * dt * k1y, z + 0.5 * dt * k1z
+        k2y, k2z = z2, -w2 * math.sin(y2) - c * z2
+        y3, z3 = y + 0.5 * dt * k2y, z + 0.5 * dt * k2z
+        k3y, k3z = z3, -w2 * math.sin(y3) - c * z3
+        y4, z4 = y + dt * k3y, z + dt * k3z
+        k4y, k4z = z4, -w2 * math.sin(y4) - c * z4
+        y += dt / 6.0 * (k1y + 2 * k2y + 2 * k3y + k4y)
+        z += dt / 6.0 * (k1z + 2 * k2z + 2 * k3z + k4z)
+        out[i + 1] = y
+    return out
+
+
+def angles(fit: PendulumFit, frames: np.ndarray, fps: float) -> np.ndarray:
+    """θ [rad] of the fit at the frame indices (evenly spaced at fps [1/s])."""
+    frames = np.asarray(frames, int)
+    out = np.empty(len(frames))
+    for sign in (1, -1):
+        sel = (frames - fit.anchor) * sign >= 0
+        if sel.any():
+            steps = int(np.max(np.abs(frames[sel] - fit.anchor)))
+            path = integrate(fit.theta, fit.rate, fit.w2, fit.c, sign / fps, steps)
+            out[sel] = path[np.abs(frames[sel] - fit.anchor)]
+    return out
+
+
+def fit_pendulum(frames: np.ndarray, theta: np.ndarray, length_px: float, fps: float) -> PendulumFit | None:
+    """The pendulum that best fits θ [rad] at the frame indices (least squares in px along the string's arc), from
+    the frame nearest their middle, with the covariance of its parameters (θ, θ', w2, c) in ``cov``; None when there
+    are too few fixes."""
+    frames, theta = np.asarray(frames, int), np.asarray(theta, float)
+    if len(frames) < MIN_FIXES:
+        return None
+    k = int(np.argmin(np.abs(frames - np.median(frames))))
+    anchor = int(frames[k])
+    lo, hi = max(k - 1, 0), min(k + 1, len(frames) - 1)
+    rate0 = (theta[hi] - theta[lo]) * fps / max(1, frames[hi] - frames[lo])
+
+    def miss(p: np.ndarray) -> np.ndarray:
+        f = PendulumFit(anchor, p[0], p[1], p[2], p[3], length_px, 0.0)
+        return length_px * (angles(f, frames, fps) - theta)
+
+    p0 = [theta[k], rate0, _w2_guess(frames, theta, fps), 0.0]
+    sol = least_squares(miss, p0, x_scale=[0.1, 1.0, 10.0, 0.1], max_nfev=60)
+    dof = max(len(frames) - 4, 1)
+    sigma2 = float(np.sum(sol.fun**2)) / dof
+    try:
+        cov = np.linalg.inv(sol.jac.T @ sol.jac) * sigma2
+    except np.linalg.LinAlgError:
+        return None
+    rms = float(np.sqrt(np.mean(sol.fun**2)))
+    return PendulumFit(anchor, *map(float, sol.x), length_px, rms, cov)
+
+
+def spread_px(fit: PendulumFit, frames: np.ndarray, fps: float) -> np.ndarray:
+    """Standard deviation [px] of the fitted place at the frame indices, from the parameters' covariance."""
+    p = np.array([fit.theta, fit.rate, fit.w2, fit.c])
+    base = angles(fit, frames, fps)
+    grad = np.empty((len(frames), 4))
+    for i, step in enumerate((1e-5, 1e-4, 1e-3, 1e-4)):
+        q = p.copy()
+        q[i] += step
+        grad[:, i] = (angles(replace(fit, theta=q[0], rate=q[1], w2=q[2], c=q[3]), frames, fps) - base) / step
+    var = np.einsum("ni,ij,nj->n", grad, fit.cov, grad)
+    return fit.length_px * np.sqrt(np.clip(var, 0.0, None))
+
+
+def _w2_guess(frames: np.ndarray, theta: np.ndarray, fps: float) -> float:
+    """ω² [1/s²] from θ'' ≈ −ω²·sin θ over consecutive triples of fixes ((2π)², a 1 s swing, when they tell nothing)."""
+    triple = (frames[2:] - frames[1:-1] == 1) & (frames[1:-1] - frames[:-2] == 1)
+    acc = (theta[2:] - 2 * theta[1:-1] + theta[:-2]) * fps * fps
+    s = np.sin(theta[1:-1])
+    den = float(np.sum(s[triple] ** 2))
+    w2 = -float(np.sum(acc[triple] * s[triple])) / den if den > 1e-6 else math.nan
+    return w2 if math.isfinite(w2) and w2 > 0 else (2 * math.pi) ** 2
+
+
+def runs(trusted: np.ndarray, max_len: int) -> list[tuple[int, int]]:
+    """(first, last + 1) of each run of frames not trusted, at most max_len long, with a trusted frame beside it."""
+    n = len(trusted)
+    edges = np.flatnonzero(np.diff(np.r_[False, ~np.asarray(trusted, bool), False].astype(np.int8)))
+    return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2]) if b - a <= max_len and (a > 0 or b < n)]
+
+
+def fit_around(
+    run: tuple[int, int],
+    trusted: np.ndarray,
+    theta: np.ndarray,
+    radius: np.ndarray,
+    fps: float,
+    cache: dict | None = None,
+) -> dict[int, PendulumFit]:
+    """Per frame of the run, the pendulum it is placed by: the first of the windows around the run (both sides, the
+    longest first, then one side only: a push or a release on the other) that the pendulum fits (see the module) and
+    that places that frame to within MAX_SPREAD_PX (one standard deviation). cache: fits by window, kept between runs."""
+    cache = {} if cache is None else cache
+    first, end = run
+    idx = np.flatnonzero(trusted)
+    out: dict[int, PendulumFit] = {}
+    for before_s, after_s in WINDOWS:
+        sel = idx[(idx >= first - round(before_s * fps)) & (idx < end + round(after_s * fps))]
+        if len(sel) < MIN_FIXES:
+            continue
+        key = (int(sel[0]), int(sel[-1]), len(sel))
+        if key not in cache:  # runs close together share windows
+            cache[key] = fit_pendulum(sel, theta[sel], float(np.median(radius[sel])), fps)
+        fit = cache[key]
+        if fit is None or fit.rms_px > MAX_FIT_RMS_PX:
+            continue
+        near = sel[np.argsort(np.minimum(np.abs(sel - first), np.abs(sel - (end - 1))))[:NEAR_FIXES]]
+        miss = fit.length_px * (angles(fit, near, fps) - theta[near])
+        if float(np.sqrt(np.mean(miss**2))) > MAX_NEAR_RMS_PX:
+            continue
+        todo = np.array([k for k in range(first, end) if k not in out], int)
+        for k, s in zip(todo, spread_px(fit, todo, fps)):
+            if s <= MAX_SPREAD_PX:
+                out[int(k)] = fit
+        if len(out) == end - first:
+            break
+    return out
+
+
+def shows_ball(bgr: np.ndarray, spec: ColorSpec, u: float, v: float, radius_px: float) -> bool:
+    """The frame shows the ball's colour at (u, v) [px]: MIN_SHARE of the disc of radius_px there, its centroid
+    within MAX_OFF_RADII radii (≥ 3 px)."""
+    import cv2
+
+    h, w = bgr.shape[:2]
+    x0, y0 = int(math.floor(u - radius_px)), int(math.floor(v - radius_px))
+    x1, y1 = int(math.ceil(u + radius_px)) + 1, int(math.ceil(v + radius_px)) + 1
+    if x0 < 0 or y0 < 0 or x1 > w or y1 > h:
+        return False
+    hue = color_mask(cv2.cvtColor(bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV), with_min_saturation(spec, MIN_SATURATION))
+    ys, xs = np.mgrid[y0:y1, x0:x1]
+    disc = (xs - u) ** 2 + (ys - v) ** 2 <= radius_px * radius_px
+    on = (hue > 0) & disc
+    if not disc.any() or on.sum() < MIN_SHARE * disc.sum():
+        return False
+    off = math.hypot(float(xs[on].mean()) - u, float(ys[on].mean()) - v)
+    return off <= max(3.0, MAX_OFF_RADII * radius_px)
+
+
+def place(fit: PendulumFit, pivot: tuple[float, float], k: int, fps: float, radius_px: float) -> Blob:
+    """A blob of the ball's radius [px] at the fitted place in frame k (for the tracker's checks)."""
+    (th,) = angles(fit, np.array([k]), fps)
+    u, v = pivot[0] + fit.length_px * math.sin(th), pivot[1] + fit.length_px * math.cos(th)
+    return Blob(u, v, math.pi * radius_px**2, 1.0, 1.0, False)
+
+
+def recover(
+    tracker: BallTracker,
+    path: str,
+    fps: float,
+    uv: np.ndarray,
+    trusted: np.ndarray,
+    pivot: tuple[float, float],
+    radius_px: float,
+    kept: dict[int, np.ndarray] | None = None,
+) -> list[tuple[int, Blob]]:
+    """The model look over a tracked video (``path``, frames evenly spaced at ``fps`` [1/s]; the frames ``kept`` since
+    the first pass used, the rest decoded again): (frame index, blob at the fitted place) of the frames it reports. uv (n, 2) [px] and trusted
+    (n,) are the track's centres and its fixes to trust; pivot [px] fixed; radius_px the ball's."""
+    from .video import frames_at
+
+    d = np.asarray(uv, float) - np.asarray(pivot, float)
+    theta = np.full(len(d), np.nan)
+    theta[trusted] = np.unwrap(np.arctan2(d[trusted, 0], d[trusted, 1]))  # across gaps too (a swing-up passes 180°)
+    radius = np.hypot(d[:, 0], d[:, 1])
+    plans: dict[int, Blob] = {}
+    cache: dict = {}
+    for run in runs(trusted, round(MAX_GAP_S * fps)):
+        for k, fit in fit_around(run, trusted, theta, radius, fps, cache).items():
+            plans[k] = place(fit, pivot, k, fps, radius_px)
+    if not plans:
+        return []
+    frames = frames_at(path, None, plans, kept)
+    return [
+        (k, b)
+        for k, b in sorted(plans.items())
+        if shows_ball(frames[k], tracker.spec, b.u, b.v, radius_px) and tracker.could_be_ball(b, pivot)
+    ]

@@ -22,8 +22,8 @@ from trajectories.limits import JointLimits
 from .braking import set_continuous_state
 
 HOLD_TOL = 1e-9  # [rad] a step this small is no step: the controller held
-REJOIN_SCALE = 0.5  # the offset's share of the velocity and jerk limits: a client within the other half is never
-# clamped by the sum (a clamp re-plans the offset, and one on every cycle keeps it from converging)
+REJOIN_SCALE = 1.0  # the offset's share of the velocity and jerk limits (the envelope clamps the sum; a clamp beyond
+# rounding re-plans the offset from there)
 REJOIN_ACCELERATION_SCALE = 0.25  # ... of the acceleration limit: a bridge during the way back zeroes the executed
 # acceleration, and the offset's own acceleration adds to that step
 

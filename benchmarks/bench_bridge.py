@@ -220,11 +220,48 @@ def _executed(tab, lim, keep) -> tuple[tuple[float, float, float], tuple[float, 
     return out[0], out[1]  # type: ignore[return-value]
 
 
+def _reported_judge(tab, lim, keep) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 3) ratios to the velocity, acceleration and jerk limits of every command kept, as the next step after the
+    history the controller had executed when it sent the message answered (FRI 1.15's commanded positions,
+    :func:`lbrcli.fri.testing.holding.reference_histories`: the held state after a step of its own beyond the
+    limits); and (m, 3) those of the controller's own steps (the ones that did not execute our previous reply in
+    time: bridged, or a late reply carried forward) over its commanded positions."""
+    from lbrcli.fri.testing.holding import reference_histories, step_ratios
+
+    ctl = np.column_stack([tab.column(f"ctl_q{j}") for j in range(1, 8)])[keep]
+    cmd = np.column_stack([tab.column(f"cmd_q{j}") for j in range(1, 8)])[keep]
+    seq = tab.column("seq")[keep]
+    ours = _on_time(tab)[keep]
+    follows = np.append(False, np.diff(seq) == 1)
+    last3 = [(ctl[i], ctl[i - 1], ctl[i - 2]) if i >= 2 and follows[i] and follows[i - 1] else None
+             for i in range(len(ctl))]  # fmt: skip
+    hist = reference_histories(last3, ours, follows, 1e-3, lim)
+    own = []
+    for i in range(3, len(ctl)):
+        if not ours[i] and follows[i] and follows[i - 1] and follows[i - 2]:
+            d = (ctl[i] - ctl[i - 1], ctl[i] - 2 * ctl[i - 1] + ctl[i - 2],
+                 ctl[i] - 3 * ctl[i - 1] + 3 * ctl[i - 2] - ctl[i - 3])  # fmt: skip
+            own.append([np.max(np.abs(x) / (lk * 1e-3 ** (k + 1)))
+                        for k, (x, lk) in enumerate(zip(d, (lim.velocity, lim.acceleration, lim.jerk)))])  # fmt: skip
+    return step_ratios(cmd, hist, lim), np.array(own).reshape(-1, 3)
+
+
 def _executed_rows(name: str, tab, lim, keep) -> list[tuple[str, float, str]]:
     ours, bridging = _executed(tab, lim, keep)
-    return [(f"{name}: executed peak {what} / limit ({who})", x, "")
+    rows = [(f"{name}: executed peak {what} / limit ({who})", x, "")
             for who, peaks in (("ours", ours), ("the controller's bridging steps", bridging))
             for what, x in zip(("velocity", "acceleration", "jerk"), peaks)]  # fmt: skip
+    if "ctl_q1" not in tab.names:
+        return rows
+    mine, own = _reported_judge(tab, lim, keep)
+    for who, r in (("our commands after the executed history", mine), ("the controller's own steps", own)):
+        for k, what in enumerate(("velocity", "acceleration", "jerk")):
+            x = r[:, k] if len(r) else np.zeros(0)
+            rows.append((f"{name}: {who}: peak {what} / limit", float(np.nanmax(x)) if np.isfinite(x).any() else 0.0,
+                         ""))  # fmt: skip
+    x = mine[:, 2] if len(mine) else np.zeros(0)
+    rows.append((f"{name}: our commands over the jerk limit", float(np.sum(x > 1.0 + 1e-6)), ""))
+    return rows
 
 
 def _online_ik(n: int) -> list[tuple[str, float, str]]:

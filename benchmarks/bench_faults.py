@@ -16,13 +16,15 @@ from dataclasses import asdict
 from pathlib import Path
 
 from lbrcli.campaign import all_cases
-from lbrcli.fri.testing.campaign import run_case, summarize
+from lbrcli.fri.testing.campaign import CaseResult, run_case, summarize
 
 RESULTS = Path(__file__).parent / "results" / "faults.json"
 
 
-def results(quick: bool = False, surfaces: tuple[str, ...] = (), verbose: bool = False):
-    cases = [c for c in all_cases() if not surfaces or c.surface in surfaces]
+def results(quick: bool = False, surfaces: tuple[str, ...] = (), verbose: bool = False, prefixes: tuple[str, ...] = (),
+            categories: tuple[str, ...] = ()):  # fmt: skip
+    cases = [c for c in all_cases() if (not surfaces or c.surface in surfaces)
+             and (not prefixes or c.name.startswith(prefixes)) and (not categories or c.category in categories)]  # fmt: skip
     if quick:
         cases = cases[::4]
     out = []
@@ -62,12 +64,29 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
     ]
 
 
+def merge(rs) -> dict:
+    """Replace the cases of ``rs`` (by name) in the results file and rewrite its table: a rerun of some cases."""
+    old = json.loads(RESULTS.read_text())
+    new = {r.name: asdict(r) for r in rs}
+    cases = [new.pop(c["name"], c) for c in old["cases"]] + list(new.values())
+    table = summarize([CaseResult(**c) for c in cases])
+    RESULTS.write_text(json.dumps({"date": time.strftime("%Y-%m-%d"), "surfaces": table, "cases": cases}, indent=1,
+                                  default=float))  # fmt: skip
+    return table
+
+
 if __name__ == "__main__":
+    # NAME: a surface; --case=PREFIX: the cases whose name starts so; --category=C: of that category; --merge: write
+    # them into the results file
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
-    rs = results("--quick" in sys.argv, tuple(args), verbose=True)
+    prefixes = tuple(a.split("=", 1)[1] for a in sys.argv[1:] if a.startswith("--case="))
+    cats = tuple(a.split("=", 1)[1] for a in sys.argv[1:] if a.startswith("--category="))
+    rs = results("--quick" in sys.argv, tuple(args), verbose=True, prefixes=prefixes, categories=cats)
     table = (
         write(rs)
-        if not args and "--quick" not in sys.argv
+        if not args and not prefixes and not cats and "--quick" not in sys.argv
+        else merge(rs)
+        if "--merge" in sys.argv
         else __import__("lbrcli.fri.testing.campaign", fromlist=["summarize"]).summarize(rs)
     )
     print(f"\n{'surface':<10} {'cases':>5} {'ok':>5} {'v/lim':>6} {'a/lim':>6} {'j/lim':>7} {'non-brk':>7} {'tb':>3} "

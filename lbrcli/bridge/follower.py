@@ -42,6 +42,7 @@ class TargetFollower(LBRClient):
     """Follows ``source``'s targets; sends the state back every ``state_every`` messages (0: never)."""
 
     jerk_limited = True  # its motion is ruckig's: the safety core keeps any clamp within the jerk limit too
+    replans = True  # after a command the controller bridged: the tracker re-plans from what it executed
 
     def __init__(self, source: TargetInbox, limits: JointLimits, *, robot: Robot | None = None,
                  timeout_s: float = 0.1, first_target_s: float = 30.0, speed_scale: float = 0.5,
@@ -192,7 +193,9 @@ class TargetFollower(LBRClient):
             return self._q  # type: ignore[return-value]
         tracker = self._tracker
         ex = self.executed
-        if ex is not None and (self.skipped or (ex.last_clamp > 0.0 and ex.rejoin.done)):  # (any clamp: the next
+        if ex is not None and (
+            self.skipped or ex.replan_due or (ex.last_clamp > 0.0 and ex.rejoin.done)
+        ):  # (any clamp: the next
             # step starts from it) the controller extrapolated our last commands (lost messages), or the safety core
             # clamped one: re-plan from what it executed (unless the core is taking the motion back onto our path
             # after a command the controller bridged)

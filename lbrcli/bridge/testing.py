@@ -88,18 +88,23 @@ class LockStepRun:
 
 def follow_in_lock_step(source: LockStepSource, limits: JointLimits, *, drop: float = 0.0, seed: int = 0,
                         cycles: int = 3000, speed_scale: float = 0.5,
-                        timeline: TimelineOptions = TimelineOptions()) -> LockStepRun:  # fmt: skip
-    """``cycles`` COMMANDING_ACTIVE cycles at 1 ms, a share ``drop`` of the replies lost on the way."""
+                        timeline: TimelineOptions = TimelineOptions(), controller: Callable = ScriptedController,
+                        at: dict[int, Cycle] | None = None, version: str = "1.15") -> LockStepRun:  # fmt: skip
+    """``cycles`` COMMANDING_ACTIVE cycles at 1 ms, a share ``drop`` of the replies lost on the way; ``at``: cycles
+    that replace those COMMANDING_ACTIVE cycles (by index); ``controller(port, script, q0, tolerate_unanswered)``
+    (e.g. a :class:`~lbrcli.fri.testing.holding.BurstController` partial)."""
     rng = np.random.default_rng(seed)
     follower = TargetFollower(source, limits, timeout_s=0.5, speed_scale=speed_scale, timeline=timeline,  # type: ignore[arg-type]
                               clock=lambda: source.now)  # fmt: skip
     script = preamble() + [Cycle(state=CA, drop_reply=bool(d)) for d in rng.random(cycles) < drop]
     start = len(preamble())
-    app = ClientApplication(follower, "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=limits,
+    for i, c in (at or {}).items():
+        script[start + i] = c
+    app = ClientApplication(follower, "127.0.0.1", 0, bind_host="127.0.0.1", version=version, limits=limits,
                             first_message_timeout_s=10, silence_timeout_s=3, paced_by_replies=True,
                             catch_up=False)  # fmt: skip  # the scripted controller waits for each reply
     app.connect()
-    ctl = ScriptedController(app.port, script, tuple(source.q0), tolerate_unanswered=10**6)
+    ctl = controller(app.port, script, tuple(source.q0), tolerate_unanswered=10**6, version=version)
     ctl.on_cycle = lambda i: setattr(source, "now", max(0, i - start) * 1e-3)
     ctl.start()
     try:

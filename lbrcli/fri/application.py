@@ -303,6 +303,7 @@ class ClientApplication:
             send_period_ms = mon.connectionInfo.sendPeriod
             end.motion = link.motion
             self.client.executed, self.client.command_period_s = link.motion, link.clock.period_s
+            link.motion.replans = self.client.replans  # type: ignore[union-attr]
             if self.busy_wait_s > 0.0:
                 self.transport.expect_period(send_period_ms * 1e-3)  # type: ignore[union-attr]
                 self.transport.warm = self._warm  # type: ignore[union-attr]
@@ -396,7 +397,7 @@ class ClientApplication:
         motion = link.motion
         supervised = (True, motion.moving, motion.prev, self._out.client_sequence)  # type: ignore[union-attr]
         self.cycle.begin(link.clock.t, CMD_ACTIVE)
-        motion.sent(q, CMD_ACTIVE)  # type: ignore[union-attr]  # before the client's call: a stop brakes from q
+        motion.sent(q, CMD_ACTIVE, True)  # type: ignore[union-attr]  # before the client's call: a stop brakes from q
         self._out.confirm(q, self.client, self._in.command, self._end, self.cycle)
         return self._after(now, mon, seq, supervised, answered=True)
 

@@ -12,6 +12,7 @@ cycle at a time; done when ruckig says Finished.
 
 from __future__ import annotations
 
+import math
 from typing import Sequence
 
 from ruckig import ControlInterface, InputParameter, OutputParameter, Result, Ruckig, Synchronization
@@ -19,6 +20,7 @@ from ruckig import ControlInterface, InputParameter, OutputParameter, Result, Ru
 from trajectories.limits import JointLimits
 
 INSIDE = 1.0 - 1e-6  # the stop's limits, a hair inside the guard's (ruckig's rounding at the limits)
+EFFORT_RAMP_MIN_S = 0.05  # [s] the shortest effort ramp of a stop
 
 
 def set_continuous_state(inp: InputParameter, q: Sequence[float], q_1: Sequence[float], q_2: Sequence[float],
@@ -75,3 +77,57 @@ class BrakingStop:
             self.done = True
             self._hold = q
         return q
+
+
+class Coast(BrakingStop):
+    """While the controller's confirmations lag (late or lost replies), the motion every bridging model agrees on:
+    the acceleration brought to 0 within the jerk limit, then constant velocity — so that a controller that
+    extrapolates, holds the velocity or carries a late command forward executes the same positions we send."""
+
+    def start(self, q: Sequence[float], q_1: Sequence[float], q_2: Sequence[float]) -> None:
+        super().start(q, q_1, q_2)
+        inp = self._inp
+        # the velocity reached when the acceleration goes to 0 at the jerk limit (within the velocity limit)
+        inp.target_velocity = [max(-vm, min(vm, v + a * abs(a) / (2.0 * j))) for v, a, j, vm
+                               in zip(inp.current_velocity, inp.current_acceleration, inp.max_jerk, inp.max_velocity)]  # fmt: skip
+        self.done = not any(inp.current_acceleration)
+        self._step = tuple((a - b) for a, b in zip(q, q_1)) if self.done else (0.0,) * len(q)
+
+    def next(self) -> tuple[float, ...]:
+        """The next command [rad]: along the profile, then at its final velocity."""
+        if self.done:
+            self._hold = tuple(x + s for x, s in zip(self._hold, self._step))
+            return self._hold
+        q = super().next()
+        if self.done:  # (the profile's end: constant velocity from here)
+            self._step = tuple(v * self.period_s for v in self._out.new_velocity)
+        return q
+
+
+class EffortRamp:
+    """The torque or wrench of a stop: from the last one sent to zero along a raised cosine whose steepest rate is at
+    most ``rates`` [Nm/s or N/s per component] (and that lasts at least ``EFFORT_RAMP_MIN_S``)."""
+
+    def __init__(self, rates: Sequence[float], period_s: float) -> None:
+        self.rates = tuple(rates)
+        self.period_s = period_s
+        self._from: tuple[float, ...] = ()
+        self._n = 0
+        self._k = 0
+
+    def start(self, effort: Sequence[float]) -> None:
+        self._from = tuple(effort)
+        # a raised cosine from e to 0 over T has its steepest rate π·|e| / (2T)
+        t = max([EFFORT_RAMP_MIN_S] + [math.pi * abs(e) / (2.0 * r) for e, r in zip(self._from, self.rates)])
+        self._n = max(1, int(math.ceil(t / self.period_s)))
+        self._k = 0
+
+    @property
+    def done(self) -> bool:
+        return self._k >= self._n
+
+    def next(self) -> tuple[float, ...]:
+        if self._k < self._n:
+            self._k += 1
+        s = 0.5 * (1.0 + math.cos(math.pi * self._k / self._n))
+        return tuple(e * s for e in self._from)

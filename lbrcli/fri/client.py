@@ -46,6 +46,8 @@ class LBRClient:
     # inside the limits; a command outside is clamped to that envelope (``clamped`` is set for that cycle) …
     exact_command: bool = False  # … unless the client sets this: then the session ends with a braking stop instead
     jerk_limited: bool = False  # the clamp also keeps the command within the jerk limit of what was executed
+    replans: bool = False  # after a command the controller bridged, re-plan from ``executed`` when its ``replan_due``
+    # is set (rather than the core taking the motion back onto this client's path by an offset)
     clamped: bool = False  # set by the application: the last command sent was clamped into the envelope
     executed: Any = None  # set by the application (ExecutedMotion, once the period is known): the executed
     # position [rad], velocity [rad/s] and acceleration [rad/s²] — the controller's extrapolation included — to

@@ -20,6 +20,13 @@ _COMMANDED = "commandedJointPosition"
 Supervised = tuple[bool, bool, Any, int]  # (commanding, moving, command in force [rad], our last sequence counter)
 
 
+def _reported(mon: Any) -> tuple[Any, bool]:
+    """The position the controller commanded (FRI 1.15) [rad] and False, else the measured one and True."""
+    md = mon.monitorData
+    cmd = md.commandedJointPosition.value if _COMMANDED in md.DESCRIPTOR.fields_by_name else ()
+    return (cmd, False) if len(cmd) == 7 else (md.measuredJointPosition.value, True)
+
+
 class Link:
     """One session's link: ``clock`` and, once the period is known, ``motion`` and ``sup`` (built from ``limits``,
     the wrench bounds ``max_force`` [N] and ``max_moment`` [Nm], ``hold_cycles`` and the supervision's bounds, as
@@ -69,11 +76,14 @@ class Link:
                 if self.sup is not None and d - 1 > self.sup.max_reply_gap:
                     return -1
                 skipped = self.motion.extrapolate((d - 1) // (clock.period_key[1] if clock.period_key else 1))  # type: ignore[union-attr]
+                if skipped:  # where the controller really is after the gap (it may have held, not extrapolated)
+                    pos, measured = _reported(mon)
+                    self.motion.gap_seen(pos, skipped, measured)  # type: ignore[union-attr]
         if lost_reply and moving:
-            md = mon.monitorData  # the position the controller commanded (FRI 1.15), else the measured one
-            cmd = md.commandedJointPosition.value if _COMMANDED in md.DESCRIPTOR.fields_by_name else ()
-            self.motion.reply_lost(cmd if len(cmd) == 7 else md.measuredJointPosition.value)  # type: ignore[union-attr]
+            self.motion.reply_lost(*_reported(mon))  # type: ignore[union-attr]
             self.lost_replies += 1  # (late replies: the controller had not received it when it sent this message)
+        elif d == 1 and self.motion is not None and self.motion.lagging:
+            self.motion.confirmed()  # (reflected: our last reply was in time)
         return skipped
 
     def learn_period(self, mon: Any) -> bool:

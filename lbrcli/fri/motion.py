@@ -12,17 +12,16 @@ session, built when the command period is known; the same for every client.
 
 from __future__ import annotations
 
-import math
 from typing import Any, Sequence
 
 from trajectories.envelope import BrakingEnvelope
 from trajectories.limits import JointLimits
 
-from .braking import BrakingStop
+from .braking import EFFORT_RAMP_MIN_S, BrakingStop, Coast, EffortRamp  # noqa: F401 (re-exported)
 from .constants import STATE_COMMANDING_ACTIVE as _CMD_ACTIVE
 from .constants import ClientCommandMode
 from .guard import CommandGuard
-from .rejoin import Rejoin
+from .rejoin import Rejoin, executed_history, gap_history, gap_offsets, far as _far
 
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
@@ -32,9 +31,13 @@ CLAMP_TOL = 1e-12  # [rad] a change below this is rounding, not a clamp
 BENT_CYCLES = 50  # after a clamp of the bridged history's making, an exact client's rows are clamped back onto
 # the path (not refused) for this many commands
 ALT_CYCLES = 3  # commands judged also against the bridged history after a reply the controller reported missing
-MATCH_TOL = 1e-9  # [rad] the position a message reports is the bridged one or ours (rounding of its arithmetic)
+MATCH_TOL = 1e-9  # [rad] the commanded position a message reports is ours (rounding of its arithmetic)
+NOISE_ALLOWANCE = 2e-5  # [rad] a measured position (FRI 2.x) this close to the model's is the model's (sensor noise)
+JERK_CYCLES = 100  # after the controller bridged a period: commands held to the jerk limit of what it executed, for
+# this many commands after the last one that needed it (every client, jerk-limited or not)
+COAST_MAX = 10  # commands coasting at most, then back onto the client's path while replies stay late (no coast
+# again until the controller confirms one in time: a busy machine would coast off the path)
 REJOIN_MAX = 0.05  # [rad] an offset back onto the client's path larger than this ends the session (braking stop)
-EFFORT_RAMP_MIN_S = 0.05  # [s] the shortest effort ramp of a stop
 EFFORT_RANGE_S = (
     0.25  # [s] a stop ramps an effort down at most at its whole range (torque limit, wrench bound) per this
 )
@@ -42,35 +45,6 @@ EFFORT_RANGE_S = (
 
 class Refused(Exception):
     """A command failed the guard and nothing is moving under our command: end without sending it."""
-
-
-class EffortRamp:
-    """The torque or wrench of a stop: from the last one sent to zero along a raised cosine whose steepest rate is at
-    most ``rates`` [Nm/s or N/s per component] (and that lasts at least ``EFFORT_RAMP_MIN_S``)."""
-
-    def __init__(self, rates: Sequence[float], period_s: float) -> None:
-        self.rates = tuple(rates)
-        self.period_s = period_s
-        self._from: tuple[float, ...] = ()
-        self._n = 0
-        self._k = 0
-
-    def start(self, effort: Sequence[float]) -> None:
-        self._from = tuple(effort)
-        # a raised cosine from e to 0 over T has its steepest rate π·|e| / (2T)
-        t = max([EFFORT_RAMP_MIN_S] + [math.pi * abs(e) / (2.0 * r) for e, r in zip(self._from, self.rates)])
-        self._n = max(1, int(math.ceil(t / self.period_s)))
-        self._k = 0
-
-    @property
-    def done(self) -> bool:
-        return self._k >= self._n
-
-    def next(self) -> tuple[float, ...]:
-        if self._k < self._n:
-            self._k += 1
-        s = 0.5 * (1.0 + math.cos(math.pi * self._k / self._n))
-        return tuple(e * s for e in self._from)
 
 
 class ExecutedMotion:
@@ -108,6 +82,12 @@ class ExecutedMotion:
         self.rebased = False  # the history was just replaced by the one the controller bridged (until the next send)
         self.rebased_cycles = 0  # replies the controller reported missing whose bridged history it confirmed
         self.rejoin = Rejoin(limits, period_s)  # the offset back onto the client's path after such a bridge
+        self.coast = Coast(limits, period_s)  # our commands while the controller's confirmations lag
+        self.coasting = False
+        self.lagging, self._coast_left = False, COAST_MAX  # lagging: no reply confirmed in time since one was bridged
+        self.replans = False  # the client re-plans from the executed state (``replan_due``) instead of an offset
+        self.replan_due = False  # set when it should (until the client's next command)
+        self.coast_cycles = 0  # commands sent coasting
         self.rejoin_cycles = 0  # commands sent with a rejoin offset
         # the executed history minus the client's own commands, newest first (None: none), and the next one's
         self._d1: tuple | None = None
@@ -115,22 +95,22 @@ class ExecutedMotion:
         self._d3: tuple | None = None
         self._pend: tuple | None = None
         self._replan = False
+        self._gap: tuple | None = None  # (our last two commands) before the gap just extrapolated
+        self._jerk_left = 0  # commands left that are held to the jerk limit whatever the client asked
+        self._c1: tuple | None = None  # the client's last two commands (before any offset), newest first
+        self._c2: tuple | None = None
+        self._gap_path: tuple | None = None  # (those two, the periods bridged) at a gap, until the client's next
 
-    @property
-    def moving(self) -> bool:
-        """Commands were sent in COMMANDING_ACTIVE: a stop must brake."""
-        return self.active_sent > 0
+    moving = property(lambda self: self.active_sent > 0, doc="Commands were sent in COMMANDING_ACTIVE: a stop must brake.")  # fmt: skip
+    steady = property(lambda self: self.rejoin.done and not (self.coasting or self.replan_due or self._gap or self._gap_path),
+                      doc="No bridge being made up for: a prepared reply may go out (held to the jerk limit).")  # fmt: skip
 
     # -- the executed state, for clients that re-plan ---------------------------------------------------------
-    @property
-    def position(self) -> tuple[float, ...]:
-        """[rad] where the controller was last commanded (its extrapolation included)."""
-        return self.prev
+    position = property(lambda self: self.prev, doc="[rad] where the controller was last commanded (extrapolation included).")  # fmt: skip
 
     @property
     def velocity(self) -> tuple[float, ...]:
-        """[rad/s] the continuous velocity the history continues into (step velocity + half a period of its
-        acceleration): what a re-planned motion starts from."""
+        """[rad/s] the history's continuous velocity (step velocity + half a period of its acceleration)."""
         dt = self.period_s
         return tuple((3.0 * a - 4.0 * b + c) / (2.0 * dt) for a, b, c in zip(self.prev, self.prev2, self.prev3))
 
@@ -145,48 +125,87 @@ class ExecutedMotion:
         last commands' velocity, within the velocity limit); ``n`` (≤ 64). A braking stop goes on from there."""
         n = min(n, 64)
         cap = self.guard.max_step
+        self._gap = (self.prev, self.prev2) if n else None  # (what the first message after the gap is judged from)
+        if n:
+            self._jerk_left = JERK_CYCLES
+            # the client's path before the gap: its next command after it is joined to the executed history
+            self._gap_path = (self._c1, self._c2, n) if self._c2 is not None else None
         for _ in range(n):
             prev, prev2 = self.prev, self.prev2
             nxt = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(prev, prev2, cap))
             self.prev3, self.prev2, self.prev = prev2, prev, nxt
         self.extrapolated_cycles += n
-        if n:  # the client re-plans from here (it is told the periods it skipped): no offset from its old path
+        if n and self.coasting:  # the coast no longer starts where the robot is
+            self.coast.start(self.prev, self.prev2, self.prev3)
+        if n:  # the client re-plans from here (it is told the periods it skipped), or goes on along its path: the
+            # offset from where the controller went is planned at its next command (:meth:`_join_gap`)
             self._s1, self._s2, self._s3 = self.prev, self.prev2, self.prev3
             self._forget_path()
         if self.braking and n:  # the stop's profile no longer starts where the robot is: re-plan it from there
             self.brake.start(self.prev, self.prev2, self.prev3)
         return n
 
-    def reply_lost(self, position: Sequence[float] | None = None) -> bool:
+    def reply_lost(self, position: Sequence[float] | None = None, measured: bool = False) -> bool:
         """The controller's reflected counter says our last command had not reached it when it sent its message: it
-        bridged that period (it held the velocity of the commands before) or executed our command late (our
-        simulator carries a late command forward by its lateness). The message's ``position`` [rad] (the commanded
-        position it reports, else the measured one) may say which: the bridged position, or the command sent the
-        period before carried forward by a period (within ``MATCH_TOL``), is the executed history from now on — True, :attr:`rebased`; a braking stop is re-planned from it, any other motion
-        rejoins the client's path (:class:`~lbrcli.fri.rejoin.Rejoin`); our command: nothing changes. Anything else
-        (a command later still, a real robot's measured position, which lags): for the next ``ALT_CYCLES``
-        commands the envelope admits only what is admissible after either the sent or the bridged history."""
+        bridged that period (held, or extrapolated, its velocity) or executed an older command of ours late. Which,
+        the message's ``position`` [rad] says — the commanded position of FRI 1.15, exactly; ``measured`` (FRI 2.x): the
+        measured one, taken as the bridged extrapolation within ``NOISE_ALLOWANCE``, else as it is. Unless it is
+        our command, that position is the executed one from now on (True, :attr:`rebased`): the history is
+        :func:`~lbrcli.fri.rejoin.executed_history`, a braking stop is re-planned from it, any other motion rejoins the client's path
+        (:class:`~lbrcli.fri.rejoin.Rejoin`) and, for ``JERK_CYCLES``, every client is held to the jerk limit.
+        Without a position: for the next ``ALT_CYCLES`` commands the envelope admits only what is admissible after
+        either the sent or the bridged history."""
         cap = self.guard.max_step
         base = self._alt if self._alt is not None else (self.prev, self.prev2, self.prev3)  # losses in a row: its own
         bridged = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(base[1], base[2], cap))
         if position is not None and len(position) == 7:
-            # bridged, or the command we sent the period before carried forward by one period (a late reply)
-            late = tuple(p + max(-c, min(c, p - b)) for p, b, c in zip(self._s2, self._s3, cap))
-            for executed in (bridged, late):
-                new = (executed, base[1], base[2])  # (a history the envelope cannot brake from: not taken)
-                if (
-                    max(abs(x - y) for x, y in zip(position, executed)) <= MATCH_TOL
-                    and self.envelope.state_ok(*new) < 0
-                ):
-                    self._rebase(new)
-                    return True
-            if max(abs(x - y) for x, y in zip(position, self.prev)) <= MATCH_TOL:  # it executed our command
+            x = tuple(position)
+            tol = NOISE_ALLOWANCE if measured else MATCH_TOL
+            if _far(x, self.prev) <= tol:  # it executed our command (late, carried forward): it follows us again
                 self._alt, self._alt_left = None, 0
+                self.confirmed()
                 return False
+            if measured and _far(x, bridged) <= tol:  # (a measured position: the model's, not the noise)
+                x = bridged
+            self._rebase(executed_history(self.envelope, x, self.prev2, self.prev3))
+            return True
         self._alt = (bridged, base[1], base[2])
         self._alt_left = ALT_CYCLES
         self._forget_path()  # the executed history is a guess now: no offset planned from it
         return False
+
+    def gap_seen(self, position: Sequence[float] | None, n: int, measured: bool = False) -> bool:
+        """After :meth:`extrapolate` of ``n`` periods: the first message after the gap reports ``position`` [rad]
+        (as :meth:`reply_lost`). If it is not where the extrapolation put the robot (a controller that held, or
+        braked), the executed history becomes the one that ends there at the velocity it held over the gap (the
+        average from our last command): True. The client re-plans from the executed state (no offset); for
+        ``JERK_CYCLES`` every client is held to the jerk limit of it."""
+        if self._gap is None or position is None or len(position) != 7:
+            return False
+        c, c1 = self._gap
+        self._gap = None
+        x = tuple(position)
+        if _far(x, self.prev) <= (NOISE_ALLOWANCE if measured else MATCH_TOL):
+            return False
+        new = gap_history(self.envelope, x, c, c1, n)
+        self.prev, self.prev2, self.prev3 = new
+        self._s1, self._s2, self._s3 = new
+        self.rebased = True
+        self.rebased_cycles += 1
+        self._bent = BENT_CYCLES
+        self._jerk_left = JERK_CYCLES
+        if self.braking:
+            self.brake.start(*new)
+        return True
+
+    def _join_gap(self, q: Sequence[float]) -> None:
+        """The client's first command ``q`` [rad] after a gap: its path over the gap is taken as the parabola through
+        its last two commands before and ``q``; the executed history minus that path is the offset that
+        :class:`~lbrcli.fri.rejoin.Rejoin` brings to zero (none if the client re-planned from where the robot is)."""
+        c1, c2, n = self._gap_path  # type: ignore[misc]
+        self._gap_path = None
+        self._d1, self._d2, self._d3 = d = gap_offsets((self.prev, self.prev2, self.prev3), c1, c2, n, q)
+        self.rejoin.start(*d)
 
     def _forget_path(self) -> None:
         """No offset back onto the client's path (the client re-plans from the executed state, as after a clamp)."""
@@ -204,10 +223,36 @@ class ExecutedMotion:
         self.rebased = True
         self.rebased_cycles += 1
         self._bent = BENT_CYCLES  # an exact client's next rows, measured against it, may need a clamp
+        self._jerk_left = JERK_CYCLES
         if self.braking:  # the stop's profile no longer starts where the robot is: re-plan it from there
             self.brake.start(self.prev, self.prev2, self.prev3)
-        else:  # back onto the client's path within the limits
-            self.rejoin.start(*d)
+        else:  # coast until the controller confirms our commands again, then back onto the client's path
+            self.rejoin.done = True
+            self.lagging = True
+            if self._coast_left > 0:
+                self.coast.start(self.prev, self.prev2, self.prev3)
+                self.coasting = True
+            else:
+                self._back_to_path()
+
+    def confirmed(self) -> None:
+        """The controller's message reflects our last reply, in time: coasting ends, back onto the client's path."""
+        self.lagging = False
+        self._coast_left = COAST_MAX
+        if self.coasting:
+            self.coasting = False
+            self._back_to_path()
+
+    def _back_to_path(self) -> None:
+        """The offset from the client's path (the commands sent minus the client's) brought back to zero
+        (:class:`~lbrcli.fri.rejoin.Rejoin`), or the client told to re-plan from the executed state."""
+        if self.braking:
+            return
+        if self.replans:
+            self._forget_path()
+            self.replan_due = True
+        elif self._d1 is not None:
+            self.rejoin.start(self._d1, self._d2 or _ZERO7, self._d3 or _ZERO7)
 
     def retime(self, period_s: float) -> None:
         """The controller executes each command in ``period_s`` [s], faster than its period says: plan the braking
@@ -216,6 +261,7 @@ class ExecutedMotion:
             self.brake = BrakingStop(self._limits, period_s)
 
     def begin_braking(self) -> None:
+        self.coasting = False
         if not self.braking:
             self.brake.start(self.prev, self.prev2, self.prev3)
             self.braking = True
@@ -234,9 +280,23 @@ class ExecutedMotion:
         (None, why) when it cannot be sent (not 7 finite values, no admissible command, or ``exact`` and a clamp
         would change it)."""
         env = self.envelope
-        self.loss_refused = False
+        self.loss_refused = self.replan_due = end_coast = False
         raw = q
-        if not self.rejoin.done and q is not None and len(q) == 7:  # after a bridged command: the offset back
+        if q is not None and len(q) == 7:
+            if self._gap_path is not None and not self.braking and not self.coasting:
+                self._join_gap(q)
+            self._c1, self._c2 = tuple(q), self._c1
+        if self.coasting and q is not None and len(q) == 7:  # the controller's confirmations lag: ours is the coast
+            q = self.coast.next()
+            self.coast_cycles += 1
+            self._coast_left -= 1
+            end_coast = self._coast_left <= 0  # (this one is the coast's last: the next goes back onto the path)
+            far = _far(q, raw)
+            if far > REJOIN_MAX:
+                self.loss_refused = True
+                return None, (f"replies lost or late: coasting until the controller confirmed our commands left the "
+                              f"motion {far:.4f} rad off the client's path (more than {REJOIN_MAX:g} rad)")  # fmt: skip
+        elif not self.rejoin.done and q is not None and len(q) == 7:  # after a bridged command: the offset back
             off = self.rejoin.next()
             self.rejoin_cycles += 1
             far = max(abs(e) for e in off)
@@ -245,10 +305,15 @@ class ExecutedMotion:
                 return None, (f"replies lost: the commands the controller bridged left the motion {far:.4f} rad off "
                               f"the client's path (more than {REJOIN_MAX:g} rad)")  # fmt: skip
             q = tuple(x + e for x, e in zip(q, off))
-        adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk)
+        forced = not jerk and (self._jerk_left > 0 or not self.rejoin.done or self.coasting)
+        adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk or forced)
+        if adm.reason is not None and forced:  # (no command within the jerk limit is brakeable: the limits first)
+            adm = env.admit(q, self.prev, self.prev2, self.prev3, False)
         if adm.reason is not None:
             return None, adm.reason
-        if exact and adm.clamped > CLAMP_TOL and not self._bent and self.rejoin.done:  # the client's own command
+        if (
+            exact and adm.clamped > CLAMP_TOL and not (self._bent or self._jerk_left) and self.rejoin.done
+        ):  # the client's own command
             # leaves the envelope: refuse, never bend it (unless we bent the path just before, after a reply the
             # controller may have bridged, or are taking the motion back onto it)
             j = adm.joint
@@ -271,7 +336,12 @@ class ExecutedMotion:
                 self.largest_clamp = adm.clamped
         if raw is not q or adm.clamped > 0.0:  # what is sent differs from the client's command by this much
             self._pend = tuple(x - y for x, y in zip(adm.q, raw))
-            self._replan = raw is not q and adm.clamped > 0.0  # a clamp of the offset: re-plan it from there
+            # a clamp of the offset (or one the jerk limit forced on the client): re-plan the offset from there
+            self._replan = (raw is not q or forced) and adm.clamped > CLAMP_TOL
+        if end_coast:  # (from the history this command ends: in :meth:`sent`)
+            self.coasting = False
+            self._replan = not self.replans and not self.braking
+            self.replan_due = self.replans
         return adm.q, None
 
     def next_command(self, measured: Sequence[float], state: int, mode: int, q: Sequence[float],
@@ -322,30 +392,29 @@ class ExecutedMotion:
                 self._ramp = self.torque_ramp if mode == _TORQUE else self.wrench_ramp
                 last = self.last_torque if mode == _TORQUE else self.last_wrench
                 self._ramp.start(last if last is not None else (_ZERO7 if mode == _TORQUE else _ZERO6))
-            if mode == _TORQUE:
-                tau = self._ramp.next()
-            else:
-                wrench = self._ramp.next()
+            e = self._ramp.next()
+            tau, wrench = (e, None) if mode == _TORQUE else (None, e)
         return q, tau, wrench, None
 
-    def sent(self, q: tuple[float, ...], state: int) -> None:
-        """``q`` [rad] went out: in COMMANDING_ACTIVE the controller executes it."""
+    def sent(self, q: tuple[float, ...], state: int, prepared: bool = False) -> None:
+        """``q`` [rad] went out: in COMMANDING_ACTIVE the controller executes it (``prepared``: the client's own)."""
         if state == _CMD_ACTIVE:
+            if prepared:  # (the client's command history, as :meth:`admit` keeps it)
+                self._c1, self._c2 = q, self._c1
             self.prev3, self.prev2, self.prev = self.prev2, self.prev, q
             self._s3, self._s2, self._s1 = self._s2, self._s1, q  # (what was sent, also where a rebase replaced it)
             self.active_sent += 1
             self.rebased = False
             self._d3, self._d2, self._d1, self._pend = self._d2, self._d1, self._pend, None
+            if self._replan and self.coasting:
+                self._replan = False
             if self._replan:
                 self._replan = False
                 self.rejoin.start(self._d1, self._d2 or _ZERO7, self._d3 or _ZERO7)  # type: ignore[arg-type]
-            if self._bent:
-                self._bent -= 1
+            self._bent, self._jerk_left = max(0, self._bent - 1), max(0, self._jerk_left - 1)
             if self._alt is not None:
                 a = self._alt
-                self._alt = (q, a[0], a[1])
                 self._alt_left -= 1
-                if self._alt_left <= 0:
-                    self._alt = None
+                self._alt = (q, a[0], a[1]) if self._alt_left > 0 else None
         else:
             self.prev = self.prev2 = self.prev3 = self._s1 = self._s2 = self._s3 = q

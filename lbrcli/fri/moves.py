@@ -15,6 +15,8 @@ from trajectories.limits import JointLimits
 from .errors import StopSession
 
 _EYE3 = np.eye(3)
+REJOIN_JERK_SHARE = 0.9  # of the jerk limit a rejoin plans at: its samples where it meets the rows (whose
+# velocity and acceleration are differences, not the profile's own) stay within the limit
 
 
 def _move_input(limits: JointLimits, scale: float, minimum_duration: float | None) -> InputParameter:
@@ -233,7 +235,7 @@ def rejoin(
     inp = InputParameter(7)
     vmax, amax = limits.velocity * share, limits.acceleration * share
     inp.max_velocity, inp.max_acceleration = vmax.tolist(), amax.tolist()
-    inp.max_jerk = (limits.jerk * share).tolist()
+    inp.max_jerk = (limits.jerk * share * REJOIN_JERK_SHARE).tolist()
     inp.current_position = list(q)
     inp.current_velocity = list(v)
     inp.current_acceleration = [0.0] * 7  # the controller extrapolates at constant velocity

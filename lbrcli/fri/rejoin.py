@@ -13,7 +13,7 @@ offset is left (a loss, not the hot path).
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Sequence
 
 from ruckig import InputParameter, OutputParameter, Result, Ruckig, RuckigError, Synchronization
 
@@ -21,7 +21,9 @@ from trajectories.limits import JointLimits
 
 from .braking import set_continuous_state
 
-REJOIN_SCALE = 1.0  # the offset's share of the velocity and jerk limits (the envelope clamps the sum)
+HOLD_TOL = 1e-9  # [rad] a step this small is no step: the controller held
+REJOIN_SCALE = 1.0  # the offset's share of the velocity and jerk limits (the envelope clamps the sum; a clamp beyond
+# rounding re-plans the offset from there)
 REJOIN_ACCELERATION_SCALE = 0.25  # ... of the acceleration limit: a bridge during the way back zeroes the executed
 # acceleration, and the offset's own acceleration adds to that step
 
@@ -73,3 +75,48 @@ class Rejoin:
         if res == Result.Finished:
             self.done = True
         return e
+
+
+def far(a: Sequence[float], b: Sequence[float]) -> float:
+    """[rad] the largest joint distance of two positions."""
+    return max(abs(x - y) for x, y in zip(a, b))
+
+
+def held(step: float, before: float) -> float:
+    """[rad/period] the velocity after a step of the controller's own that left the limits: 0 after a hold (no step:
+    the robot stopped), else the velocity ``before`` it (a jump to a late command neither stops nor speeds it)."""
+    return 0.0 if abs(step) <= HOLD_TOL else before
+
+
+def gap_offsets(history: Sequence[Sequence[float]], c1: Sequence[float], c2: Sequence[float], n: int,
+                q: Sequence[float]) -> list[tuple[float, ...]]:  # fmt: skip
+    """The executed ``history`` (three positions [rad], newest first) minus the client's path over a gap of ``n``
+    periods: the parabola through its last two commands before the gap (``c1`` newest, ``c2``) and its first after
+    (``q``), at the same three instants — the offset to start a :class:`Rejoin` from."""
+    t0, t1 = -(n + 2.0), -(n + 1.0)  # (Lagrange weights at t = −1, −2, −3 periods before q)
+    out = []
+    for t, h in zip((-1.0, -2.0, -3.0), history):
+        w0, w1, w2 = (t - t1) * t / ((t0 - t1) * t0), (t - t0) * t / ((t1 - t0) * t1), (t - t0) * (t - t1) / (t0 * t1)
+        out.append(tuple(x - (w0 * a + w1 * b + w2 * c) for x, a, b, c in zip(h, c2, c1, q)))
+    return out
+
+
+def executed_history(envelope: Any, x: Sequence[float], x1: Sequence[float], x2: Sequence[float]) -> tuple:
+    """The executed history (newest first) that ends at the reported ``x`` after ``x1`` and ``x2`` [rad]: these three
+    if the state they leave is brakeable (``envelope.state_ok``: its acceleration within the limit); else the
+    controller's own step left the limits (a hold of a moving robot, a jump to a late command) and the state is ``x``
+    at the velocity it holds (:func:`held`), acceleration 0."""
+    x, x1, x2 = tuple(x), tuple(x1), tuple(x2)
+    if envelope.state_ok(x, x1, x2) < 0:
+        return x, x1, x2
+    s = tuple(held(a - b, b - c) for a, b, c in zip(x, x1, x2))
+    return x, tuple(a - v for a, v in zip(x, s)), tuple(a - 2.0 * v for a, v in zip(x, s))
+
+
+def gap_history(envelope: Any, x: Sequence[float], c: Sequence[float], c1: Sequence[float], n: int) -> tuple:
+    """The executed history after a gap of ``n`` periods that ends at the reported ``x`` [rad], from our last two
+    commands ``c`` (newest) and ``c1`` before it: at the velocity held over the gap (the average from ``c``)."""
+    if n == 1:
+        return executed_history(envelope, x, c, c1)
+    s = tuple((a - b) / n for a, b in zip(x, c))
+    return executed_history(envelope, x, tuple(a - v for a, v in zip(x, s)), tuple(a - 2.0 * v for a, v in zip(x, s)))

@@ -87,7 +87,7 @@ class Replier:
         """Prepare the reply to the next message (``seq`` + 1) from the client's ``prepare_command``, guarded now:
         only in POSITION mode, receive multiplier 1, without a transformation client and while nothing brakes (the
         application calls it in COMMANDING_ACTIVE while nothing stops)."""
-        if (motion.braking or not motion.rejoin.done  # (the way back onto the path after a bridge: the full cycle)
+        if (motion.braking or not motion.steady  # (coasting or on the way back onto the path after a bridge: the full cycle)
                 or self.transformation_client is not None  # (its provide() runs in the full cycle)
                 or mon.ipoData.clientCommandMode != _POSITION or (mon.connectionInfo.receiveMultiplier or 1) != 1):  # fmt: skip
             return
@@ -98,7 +98,9 @@ class Replier:
         if q is None:
             return
         q = tuple(q)
-        adm = motion.envelope.admit(q, motion.prev, motion.prev2, motion.prev3, client.jerk_limited)
+        adm = motion.envelope.admit(
+            q, motion.prev, motion.prev2, motion.prev3, client.jerk_limited or motion._jerk_left > 0
+        )
         if adm.reason is not None or adm.clamped > 0.0 or motion.guard.refuse_position(q, motion.prev, motion.prev2,
                                                                                        False) is not None:  # fmt: skip
             return  # the full cycle decides (clamps it, or refuses it with its reason and brakes)

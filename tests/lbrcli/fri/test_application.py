@@ -371,7 +371,8 @@ class _Memory:
         c = self.ctl.script[self.i]
         self.ctl.clock_ns = self.i * 1_000_000  # [ns] the controller's clock at 1 ms
         self.i += 1
-        return c.raw if c.raw is not None else self.ctl._message(c, self.i - 1, max(len(self.sent) - 1, 0))
+        self.raws = getattr(self, "raws", 0) + (c.raw is not None)  # (a garbage datagram takes no sequence number)
+        return c.raw if c.raw is not None else self.ctl._message(c, self.i - 1 - self.raws, max(len(self.sent) - 1, 0))
 
     def send(self, data: bytes) -> None:
         self.sent.append(data)

@@ -121,6 +121,8 @@ def _bridging_session(m: ExecutedMotion, wants, lost: set[int], n: int, jerk: bo
     for k in range(n):
         if k - 1 in lost:  # the message says our last reply had not arrived: it shows where the robot is
             m.reply_lost(tuple(exe[-1]))
+        elif m.coasting:  # it says our last reply arrived in time (as the link tells the motion)
+            m.confirmed()
         if k == braking_at:
             m.begin_braking()
         want = wants(k)
@@ -167,7 +169,8 @@ def test_after_a_reply_the_controller_bridged_our_commands_rejoin_the_path_withi
     plan = [tuple(tracker.step(lambda t, k=k: ref(k * dt + t))) for k in range(1200)]
     exe, ours = _bridging_session(m, lambda k: plan[k], {150, 220, 221, 400, 470}, 1200, late=frozenset({300, 301}))
     v, a, j = _our_ratios(exe, ours, dt, lim)
-    assert m.rebased_cycles == 7 and m.rejoin_cycles > 0 and not m.braking
+    # (7 replies bridged; the second late one executed our first one carried forward, which was ours: the coast's)
+    assert m.rebased_cycles == 6 and m.rejoin_cycles > 0 and m.coast_cycles > 0 and not m.braking
     assert v <= 1 + 1e-9 and a <= 1 + 1e-9 and j <= 1 + 1e-6
     assert np.abs(exe[-1] - plan[-1]).max() < 1e-12  # back on the client's path
 

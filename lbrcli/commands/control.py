@@ -84,6 +84,8 @@ def _pushes(texts: list[str] | None) -> tuple[tuple[float, float], ...]:
     return tuple(out)
 
 
+FIT_WAIT_S = 4.0  # [s] in a lock-step simulation the rod's fit is taken this long after the free swing (simulated
+# time): the session then does not depend on how fast this computer fits
 UPRIGHT_FLAGS = {
     "RigidModuleSpec.rate_hz": "--sensor-rate", "RigidModuleSpec.delay_ms": "--sim-delay", "RigidModuleSpec.jitter_ms":
     "--sim-jitter", "RigidModuleSpec.pushes": "--push", "RigidModuleSpec.noise_counts": "--sim-noise",
@@ -281,8 +283,9 @@ def upright(
     rail = _rail(q0, lim, travel)
     assumed_ms = sensor_delay if sensor_delay is not None else (
         sim_delay + 0.5 * sim_jitter if fri.robot is None else 6.0)  # fmt: skip
+    paced = fri.robot is None and (fri.sim_lockstep or fri.sim_fast)  # (a lock-step simulation: deterministic)
     plan = SessionOptions(hold_s=hold, swing_timeout_s=swing_timeout, recatch_s=recatch, identify=identify,
-                          encoder_sign=encoder_sign, sensor_delay_s=assumed_ms * 1e-3)  # fmt: skip
+                          encoder_sign=encoder_sign, sensor_delay_s=assumed_ms * 1e-3, fit_wait_s=FIT_WAIT_S * paced)  # fmt: skip
     client = UprightClient(rail, model.equivalent_length, lim, session=plan, sensor_rate_hz=sensor_rate,
                            move_to_start=move_to_start)  # fmt: skip
     _print_rail(rep, model, rail, rod_length, travel)
@@ -290,7 +293,9 @@ def upright(
                           zero_count=lab.pendulum_zero, noise_counts=sim_noise, sign=sim_encoder_sign)  # fmt: skip
     simulator = fri.simulator(max_runtime_s=hold + swing_timeout + 3 * recatch + 180.0, start=q0, plants=(rod,),
                               limits=limits)  # fmt: skip
-    with contextlib.closing(ProcessFitter()) if identify else contextlib.nullcontext() as client.fitter:
+    with (
+        contextlib.closing(ProcessFitter(0 if paced else 15)) if identify else contextlib.nullcontext() as client.fitter
+    ):
         result, sim_stats, lab_figures = run_client(rep, client, fri.session(lim), simulator, lab=replace(lab, pendulum=lab.pendulum or "sim"),
                                                     extra=LogColumns(LOG_COLUMNS, client.log_values))  # fmt: skip
     figures = print_summary(rep, result, sim_stats, fri.log) | lab_figures  # the client's figures join the session's

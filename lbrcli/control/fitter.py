@@ -8,13 +8,13 @@ import multiprocessing
 from concurrent.futures import Future, ProcessPoolExecutor
 
 
-def _warm() -> None:
+def _warm(niceness: int = 15) -> None:
     """Import what the fit needs in the worker, before it is needed; and yield the CPU to the FRI loop and the
     controller whenever they want it (the fit is not urgent: the cart holds meanwhile)."""
     import os
 
     try:
-        os.nice(15)
+        os.nice(niceness)
     except OSError:
         pass
     import planners.feedback.session  # noqa: F401
@@ -25,8 +25,10 @@ def _warm() -> None:
 class ProcessFitter:
     """``fitter(args) -> Future`` for :class:`planners.feedback.session.UprightSession`; a context manager."""
 
-    def __init__(self) -> None:
-        self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"), initializer=_warm)
+    def __init__(self, niceness: int = 15) -> None:
+        """``niceness``: the worker's (0 in a lock-step simulation, whose loop never leaves the CPU idle)."""
+        self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"), initializer=_warm,
+                                         initargs=(niceness,))  # fmt: skip
         self._pool.submit(int).result(timeout=120)  # the worker is up (and has imported) before the session
 
     def __call__(self, args: tuple) -> Future:

@@ -47,6 +47,8 @@ class SessionOptions:
     excite_amplitude: float | None = None
     excite_swing: float = 0.8
     fit_timeout_s: float = 30.0
+    fit_wait_s: float = 0.0  # the fit's result is taken no earlier than this after the free swing: in a lock-step
+    # simulation the same simulated instant however fast the computer fits (0: as soon as it is ready)
     lower_ramp_s: float = 6.0  # the energy ramp of the gentle lowering
     lower_timeout_s: float = 20.0  # the lowering and the park together
     encoder_sign: int = 1  # the sign the module's encoder is expected to have
@@ -218,7 +220,7 @@ class UprightSession:
 
     def _collect_fit(self) -> None:
         h = self._fit
-        if not h.done():
+        if not h.done() or self._phase_t < self.o.fit_wait_s:
             if self._phase_t > self.o.fit_timeout_s:
                 self._fail(f"the identification did not finish within {self.o.fit_timeout_s:g} s")
             return

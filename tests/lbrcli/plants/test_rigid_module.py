@@ -139,9 +139,10 @@ def test_lbr_control_upright_fails_when_it_cannot_catch_and_refuses_bad_input(tm
         assert p.returncode == 2 and text in p.stderr and "Traceback" not in p.stderr, (args, p.stderr)
 
 
-@pytest.mark.slow  # run to run the rod falls and is re-caught 0–3 times under these faults, in lock-step on an idle
-# machine too (10 runs on 27 Nov: 0 falls in 5; a wall-clock dependence of the upright client under lost messages,
-# not found) — not a gate for CI until it is found; the session always completed and re-balanced
+@pytest.mark.slow  # ≈ 1 min, not a CI gate: run to run the rod fell and was re-caught 0–3 times under these faults (the
+# fit's result was taken when the worker finished, in wall-clock time; now at FIT_WAIT_S of simulated time, as the CLI
+# does in lock-step); since the safety core rebases after every bridged reply, the session ends by its 0.05 rad
+# rejoin limit (28 Nov: 2 of 2 runs) — the upright client's own gap offset and the core's are not yet reconciled
 def test_upright_rides_through_lost_and_malformed_messages(robot):
     """2 % of the controller's messages lost, 1 % malformed: the controller extrapolates the commands along the
     rail's tangent; the cart coasts as the joints did, the commands fade back onto the rail, a cart past the end
@@ -160,10 +161,12 @@ def test_upright_rides_through_lost_and_malformed_messages(robot):
     rail = build_rail(robot, Q_START, lim, 0.3)
     from planners.feedback.session import SessionOptions
 
+    from lbrcli.commands.control import FIT_WAIT_S
     from lbrcli.control.fitter import ProcessFitter
 
-    fitter = ProcessFitter()  # the fit outside the cycle, as the CLI does
-    client = UprightClient(rail, model.equivalent_length, lim, session=SessionOptions(hold_s=3.0), fitter=fitter)
+    fitter = ProcessFitter(0)  # the fit outside the cycle, as the CLI does in lock-step
+    opts = SessionOptions(hold_s=3.0, fit_wait_s=FIT_WAIT_S)
+    client = UprightClient(rail, model.equivalent_length, lim, session=opts, fitter=fitter)
     sim = SimulatorSettings(
         start=tuple(Q_START.tolist()),
         plants=(RigidModuleSpec(model),),

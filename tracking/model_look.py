@@ -76,6 +76,9 @@ def integrate(theta: float, rate: float, w2: float, c: float, dt: float, steps: 
     return out
 
 
+_AT_REST = (0.0,) * 10  # a Runge–Kutta stage not moved: the rates at the state itself
+
+
 def trajectory(theta: float, rate: float, w2: float, c: float, dt: float, steps: int) -> np.ndarray:
     """(steps + 1, 5): θ [rad] at 0, dt, …, steps·dt and its derivatives by (θ₀, θ'₀, w2, c) — the pendulum and its
     variational equations (a' = b, b' = −w2·cos θ·a − c·b − [sin θ for w2, θ' for c]) by classical Runge–Kutta in one
@@ -86,19 +89,7 @@ def trajectory(theta: float, rate: float, w2: float, c: float, dt: float, steps:
     out[0] = (y, 1.0, 0.0, 0.0, 0.0)
     h2, h6, sin, cos = 0.5 * dt, dt / 6.0, math.sin, math.cos
     for i in range(steps):
-        s, m = sin(y), -w2 * cos(y)
-        k1 = (
-            z,
-            -w2 * s - c * z,
-            b0,
-            m * a0 - c * b0,
-            b1,
-            m * a1 - c * b1,
-            b2,
-            m * a2 - c * b2 - s,
-            b3,
-            m * a3 - c * b3 - z,
-        )
+        k1 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, _AT_REST, 0.0, w2, c, sin, cos)
         k2 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k1, h2, w2, c, sin, cos)
         k3 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k2, h2, w2, c, sin, cos)
         k4 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k3, dt, w2, c, sin, cos)

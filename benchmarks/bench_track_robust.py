@@ -89,6 +89,8 @@ def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repe
         "model_look_frames": track.model_look_frames,
         "outlier_frames": track.outlier_frames,
         "smoothed_frames": track.smoothed_frames,
+        "off_pendulum_frames": track.off_pendulum_frames,
+        "on_pendulum_frames": track.on_pendulum_frames,
         "judge2": name in scenarios.JUDGE2,
         "track_over_decode": tracking / decode,
         "decode_fps": len(sc.truth.t) / decode,

@@ -146,10 +146,13 @@ def angles_jac(fit: PendulumFit, frames: np.ndarray, fps: float) -> np.ndarray:
     return _along(fit, frames, fps, trajectory)
 
 
-def fit_pendulum(frames: np.ndarray, theta: np.ndarray, length_px: float, fps: float) -> PendulumFit | None:
+def fit_pendulum(
+    frames: np.ndarray, theta: np.ndarray, length_px: float, fps: float, guess: PendulumFit | None = None
+) -> PendulumFit | None:
     """The pendulum that best fits θ [rad] at the frame indices (least squares in px along the string's arc,
     Levenberg–Marquardt with the variational equations' Jacobian), from the frame nearest their middle, with the
-    covariance of its parameters (θ, θ', w2, c) in ``cov``; None when there are too few fixes."""
+    covariance of its parameters (θ, θ', w2, c) in ``cov``; None when there are too few fixes. guess: a fit of
+    the same motion nearby (an overlapping window) to start from: fewer iterations."""
     frames, theta = np.asarray(frames, int), np.asarray(theta, float)
     if len(frames) < MIN_FIXES:
         return None
@@ -167,6 +170,9 @@ def fit_pendulum(frames: np.ndarray, theta: np.ndarray, length_px: float, fps: f
         return last[key]
 
     p0 = [theta[k], rate0, _w2_guess(frames, theta, fps), 0.0]
+    if guess is not None:  # its angle and rate at this anchor (central difference: only a start)
+        th = angles(guess, np.array([anchor - 1, anchor, anchor + 1]), fps)
+        p0 = [th[1], 0.5 * (th[2] - th[0]) * fps, guess.w2, guess.c]
     with np.errstate(all="ignore"):  # a diverging trial step overflows; LM then shortens it
         sol = least_squares(
             lambda p: length_px * (run(p)[:, 0] - theta),

@@ -368,8 +368,8 @@ def video(
 
 
 def _report_looks(rep, track, figures: dict) -> None:  # noqa: ANN001
-    """What the looks after the first pass did (tracking.second_look, tracking.model_look, tracking.smoothing): in the
-    figures always, printed when they did something."""
+    """What the looks and checks after the first pass did (tracking.second_look, tracking.model_look,
+    tracking.smoothing, tracking.pendulum_check): in the figures always, printed when they did something."""
     looks = {
         "second_look_frames": (
             track.second_look_frames,
@@ -384,6 +384,14 @@ def _report_looks(rep, track, figures: dict) -> None:  # noqa: ANN001
             "outlier check: {} fixes off their neighbours' motion reported unsure (not found)",
         ),
         "smoothed_frames": (track.smoothed_frames, "smoothing: {} centres smoothed about the fixed pivot"),
+        "off_pendulum_frames": (
+            track.off_pendulum_frames,
+            "pendulum check: {} fixes off the pendulum fitted over their second reported unsure (not found)",
+        ),
+        "on_pendulum_frames": (
+            track.on_pendulum_frames,
+            "pendulum check: {} noisy centres put on the pendulum fitted over their second",
+        ),
     }
     unsure = int(track.unsure.sum()) if track.unsure is not None else 0
     figures.update({k: int(n) for k, (n, _) in looks.items()}, unsure_frames=unsure)

@@ -45,7 +45,8 @@ def test_track_fixed_pivot_json_plot_preview(lbr, clip, tmp_path):
     from tracking.pipeline import track_video
 
     lib = track_video(video, color_spec("red"), pivot_uv=PIVOT)
-    counts = ("second_look_frames", "model_look_frames", "outlier_frames", "smoothed_frames")
+    counts = ("second_look_frames", "model_look_frames", "outlier_frames", "smoothed_frames", "off_pendulum_frames")
+    counts += ("on_pendulum_frames",)
     assert [fig[k] for k in counts] == [getattr(lib, k) for k in counts]
     assert fig["unsure_frames"] == int(lib.unsure.sum()) == 0
     assert fig["smoothed_frames"] > 0.5 * fig["frames"]

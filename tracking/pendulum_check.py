@@ -1,0 +1,93 @@
+"""The pendulum over sliding windows of a video file's track with a fixed pivot: fixes off it reported unsure, and
+the centres of a noisy track put on it.
+
+A low-bitrate codec moves the ball's colour by a pixel or two, alike in neighbouring frames (a stale reference's
+chroma, blocks that move together), and now and then drags a fast ball's blob several pixels behind it (the ball and
+its last place merged). A parabola over a few frames (:mod:`tracking.smoothing`) follows such errors; the pendulum
+θ'' = −w2·sin θ − c·θ' over ``WINDOW_S`` does not. Per window (centred every half window; a frame is judged by the
+window centred nearest to it), the pendulum is fitted to the trusted fixes (:func:`tracking.model_look.fit_pendulum`),
+fitted again without the fixes more than ``TRIM_PX`` off it (a few at most), and used only when it then fits within
+``model_look.MAX_FIT_RMS_PX`` (a push, a release, a catch or a slack string inside the window: not used). Then a fix
+more than ``OFF_PX`` off it is reported unsure, and — only where the fixes scatter about it by at least
+``MIN_NOISE_PX`` (the median's σ: a clean video's fixes are better than any model of them) — a fix is moved onto it: the fitted
+angle at the window's median string length. The live sensor never does this (it needs later frames).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .model_look import MAX_FIT_RMS_PX, PendulumFit, angles, fit_pendulum
+
+WINDOW_S = 1.0  # [s] the pendulum is fitted over windows this long
+TRIM_PX = 3.0  # [px] fixes farther than this from the first fit are left out of the second
+MAX_TRIMMED, MAX_TRIMMED_SHARE = 3, 0.1  # ... at most this many, or this share of the window's (else: not used)
+OFF_PX = 4.0  # [px] a fix farther than this from the window's pendulum is reported unsure
+MIN_NOISE_PX = 0.3  # [px] the fixes are put on the pendulum only where they scatter about it by at least this
+# (a robust σ: 1.4826 × the median miss — a few fixes cut by an occluder do not make a clean window noisy)
+
+
+@dataclass(frozen=True)
+class PendulumCheck:
+    """Per frame: ``off`` (n,) bool, a trusted fix off its window's pendulum; ``uv`` (n, 2) [px] the place on the
+    pendulum of each trusted fix to move there (NaN elsewhere)."""
+
+    off: np.ndarray
+    uv: np.ndarray
+
+    @property
+    def moved(self) -> np.ndarray:
+        return np.all(np.isfinite(self.uv), axis=1)
+
+
+def _window_fit(
+    sel: np.ndarray, theta: np.ndarray, length_px: float, fps: float, guess: PendulumFit | None
+) -> PendulumFit | None:
+    """The pendulum fitted to the fixes sel (frame indices) and again without those more than TRIM_PX off it; None
+    when it does not fit them within MAX_FIT_RMS_PX. guess: the previous window's fit to start from (from the
+    fixes' own guess when that does not fit: a push between the windows)."""
+    for start in (guess, None) if guess is not None else (None,):
+        fit = fit_pendulum(sel, theta[sel], length_px, fps, start)
+        if fit is None:
+            return None
+        keep = np.abs(length_px * (angles(fit, sel, fps) - theta[sel])) <= TRIM_PX
+        if (~keep).sum() > max(MAX_TRIMMED, MAX_TRIMMED_SHARE * len(sel)):  # a push or a release, not a few bad fixes
+            continue
+        if not keep.all():
+            fit = fit_pendulum(sel[keep], theta[sel[keep]], length_px, fps, fit)
+        if fit is not None and fit.rms_px <= MAX_FIT_RMS_PX:
+            return fit
+    return None
+
+
+def check(uv: np.ndarray, trusted: np.ndarray, pivot_uv: tuple[float, float], fps: float) -> PendulumCheck:
+    """The pendulum check of a track (see the module): uv (n, 2) [px] the centres, trusted (n,) bool the fixes to
+    judge, pivot_uv [px] fixed, fps [1/s] (frames evenly spaced)."""
+    uv, trusted = np.asarray(uv, float), np.asarray(trusted, bool) & np.all(np.isfinite(uv), axis=1)
+    n = len(uv)
+    off, out = np.zeros(n, bool), np.full((n, 2), np.nan)
+    d = uv - np.asarray(pivot_uv, float)
+    theta = np.zeros(n)
+    theta[trusted] = np.unwrap(np.arctan2(d[trusted, 0], d[trusted, 1]))
+    length = np.hypot(d[:, 0], d[:, 1])
+    half = max(3, round(0.5 * WINDOW_S * fps))
+    fit = None
+    for c in range(0, n, half):
+        lo, hi = max(0, c - half), min(n, c + half + 1)
+        sel = lo + np.flatnonzero(trusted[lo:hi])
+        length_px = float(np.median(length[sel])) if len(sel) else 0.0
+        fit = _window_fit(sel, theta, length_px, fps, fit) if len(sel) else None
+        if fit is None:
+            continue
+        inner = sel[(sel >= c - half // 2) & (sel < c - half // 2 + half)]  # the frames nearest to this centre
+        th = angles(fit, inner, fps)
+        miss = length_px * np.abs(th - theta[inner])
+        off[inner[miss > OFF_PX]] = True
+        noise = 1.4826 * float(np.median(np.abs(length_px * (angles(fit, sel, fps) - theta[sel]))))  # robust σ
+        if noise >= MIN_NOISE_PX:
+            on = inner[miss <= OFF_PX]
+            th = th[miss <= OFF_PX]
+            out[on] = np.asarray(pivot_uv, float) + length_px * np.column_stack([np.sin(th), np.cos(th)])
+    return PendulumCheck(off, out)

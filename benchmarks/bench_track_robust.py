@@ -195,6 +195,5 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
 
 
 if __name__ == "__main__":
-
     for name, value, unit in run(quick="--quick" in sys.argv):
         print(f"{name:<75} {value:>12.4g} {unit}")

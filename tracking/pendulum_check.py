@@ -23,7 +23,8 @@ from .model_look import MAX_FIT_RMS_PX, PendulumFit, angles, fit_pendulum
 
 WINDOW_S = 1.0  # [s] the pendulum is fitted over windows this long
 TRIM_PX = 3.0  # [px] fixes farther than this from the first fit are left out of the second
-MAX_TRIMMED, MAX_TRIMMED_SHARE = 3, 0.1  # ... at most this many, or this share of the window's (else: not used)
+MAX_TRIMMED = 3  # ... at most this many of them ...
+MAX_TRIMMED_SHARE = 0.1  # ... or this share of the window's (else the window is not used)
 OFF_PX = 4.0  # [px] a fix farther than this from the window's pendulum is reported unsure
 MIN_NOISE_PX = 0.3  # [px] the fixes are put on the pendulum only where they scatter about it by at least this
 # (a robust σ: 1.4826 × the median miss — a few fixes cut by an occluder do not make a clean window noisy)

@@ -22,9 +22,11 @@ def _swing(n: int = 240) -> np.ndarray:
 
 
 def _codec_noise(n: int, px: float, seed: int) -> np.ndarray:
-    """(n, 2) [px] noise alike in neighbouring frames (white noise averaged over 4 frames), px RMS per axis."""
-    w = np.random.default_rng(seed).normal(0.0, 1.0, (n + 3, 2))
-    return px * (w[:-3] + w[1:-2] + w[2:-1] + w[3:]) / 2.0
+    """(n, 2) [px] a codec-like error, px RMS per axis: half its variance alike in neighbouring frames (white noise
+    averaged over 4 frames), half new in each frame."""
+    w = np.random.default_rng(seed).normal(0.0, 1.0, (n + 4, 2))
+    alike = (w[:-4] + w[1:-3] + w[2:-2] + w[3:-1]) / 2.0
+    return px * np.sqrt(0.5) * (alike + w[4:])
 
 
 def _rms(a: np.ndarray, b: np.ndarray) -> float:
@@ -34,7 +36,7 @@ def _rms(a: np.ndarray, b: np.ndarray) -> float:
 def test_noise_alike_in_neighbouring_frames_is_taken_out_and_a_dragged_fix_is_off():
     th = _swing()
     truth = _uv(th)
-    uv = truth + _codec_noise(len(th), 0.5, 1)
+    uv = truth + _codec_noise(len(th), 0.9, 1)
     k = 119  # a fast frame, the blob dragged 6 px behind the ball along its motion
     step = truth[k] - truth[k - 1]
     uv[k] -= 6.0 * step / np.linalg.norm(step)

@@ -16,7 +16,7 @@ tracker found static in the ball's colour, excluded, or out of the string's reac
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -76,23 +76,83 @@ def integrate(theta: float, rate: float, w2: float, c: float, dt: float, steps: 
     return out
 
 
-def angles(fit: PendulumFit, frames: np.ndarray, fps: float) -> np.ndarray:
-    """θ [rad] of the fit at the frame indices (evenly spaced at fps [1/s])."""
+_AT_REST = (0.0,) * 10  # a Runge–Kutta stage not moved: the rates at the state itself
+
+
+def trajectory(theta: float, rate: float, w2: float, c: float, dt: float, steps: int) -> np.ndarray:
+    """(steps + 1, 5): θ [rad] at 0, dt, …, steps·dt and its derivatives by (θ₀, θ'₀, w2, c) — the pendulum and its
+    variational equations (a' = b, b' = −w2·cos θ·a − c·b − [sin θ for w2, θ' for c]) by classical Runge–Kutta in one
+    pass: the least-squares fit's Jacobian without finite differences (written out: Python's cost is per operation)."""
+    out = np.empty((steps + 1, 5))
+    y, z = theta, rate
+    a0, b0, a1, b1, a2, b2, a3, b3 = 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0
+    out[0] = (y, 1.0, 0.0, 0.0, 0.0)
+    h2, h6, sin, cos = 0.5 * dt, dt / 6.0, math.sin, math.cos
+    for i in range(steps):
+        k1 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, _AT_REST, 0.0, w2, c, sin, cos)
+        k2 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k1, h2, w2, c, sin, cos)
+        k3 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k2, h2, w2, c, sin, cos)
+        k4 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k3, dt, w2, c, sin, cos)
+        y, z, a0, b0, a1, b1, a2, b2, a3, b3 = (
+            x + h6 * (p + 2.0 * q + 2.0 * r + t)
+            for x, p, q, r, t in zip((y, z, a0, b0, a1, b1, a2, b2, a3, b3), k1, k2, k3, k4)
+        )
+        out[i + 1] = (y, a0, a1, a2, a3)
+    return out
+
+
+def _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k, h, w2, c, sin, cos) -> tuple:  # noqa: ANN001
+    """The rates of (θ, θ', the four sensitivity pairs) at the state moved by h·k (one Runge–Kutta stage)."""
+    y, z = y + h * k[0], z + h * k[1]
+    a0, b0, a1, b1 = a0 + h * k[2], b0 + h * k[3], a1 + h * k[4], b1 + h * k[5]
+    a2, b2, a3, b3 = a2 + h * k[6], b2 + h * k[7], a3 + h * k[8], b3 + h * k[9]
+    s, m = sin(y), -w2 * cos(y)
+    return (
+        z,
+        -w2 * s - c * z,
+        b0,
+        m * a0 - c * b0,
+        b1,
+        m * a1 - c * b1,
+        b2,
+        m * a2 - c * b2 - s,
+        b3,
+        m * a3 - c * b3 - z,
+    )
+
+
+def _along(fit: PendulumFit, frames: np.ndarray, fps: float, path) -> np.ndarray:  # noqa: ANN001
+    """path(θ, θ', w2, c, dt, steps) run forwards and backwards from the anchor, taken at the frame indices."""
     frames = np.asarray(frames, int)
-    out = np.empty(len(frames))
+    out: np.ndarray | None = None
     for sign in (1, -1):
         sel = (frames - fit.anchor) * sign >= 0
         if sel.any():
             steps = int(np.max(np.abs(frames[sel] - fit.anchor)))
-            path = integrate(fit.theta, fit.rate, fit.w2, fit.c, sign / fps, steps)
-            out[sel] = path[np.abs(frames[sel] - fit.anchor)]
-    return out
+            got = path(fit.theta, fit.rate, fit.w2, fit.c, sign / fps, steps)
+            if out is None:
+                out = np.empty((len(frames), *got.shape[1:]))
+            out[sel] = got[np.abs(frames[sel] - fit.anchor)]
+    return out if out is not None else np.empty(0)
 
 
-def fit_pendulum(frames: np.ndarray, theta: np.ndarray, length_px: float, fps: float) -> PendulumFit | None:
-    """The pendulum that best fits θ [rad] at the frame indices (least squares in px along the string's arc), from
-    the frame nearest their middle, with the covariance of its parameters (θ, θ', w2, c) in ``cov``; None when there
-    are too few fixes."""
+def angles(fit: PendulumFit, frames: np.ndarray, fps: float) -> np.ndarray:
+    """θ [rad] of the fit at the frame indices (evenly spaced at fps [1/s])."""
+    return _along(fit, frames, fps, integrate)
+
+
+def angles_jac(fit: PendulumFit, frames: np.ndarray, fps: float) -> np.ndarray:
+    """(len(frames), 5): θ [rad] of the fit at the frame indices and its derivatives by (θ, θ', w2, c)."""
+    return _along(fit, frames, fps, trajectory)
+
+
+def fit_pendulum(
+    frames: np.ndarray, theta: np.ndarray, length_px: float, fps: float, guess: PendulumFit | None = None
+) -> PendulumFit | None:
+    """The pendulum that best fits θ [rad] at the frame indices (least squares in px along the string's arc,
+    Levenberg–Marquardt with the variational equations' Jacobian), from the frame nearest their middle, with the
+    covariance of its parameters (θ, θ', w2, c) in ``cov``; None when there are too few fixes. guess: a fit of
+    the same motion nearby (an overlapping window) to start from: fewer iterations."""
     frames, theta = np.asarray(frames, int), np.asarray(theta, float)
     if len(frames) < MIN_FIXES:
         return None
@@ -100,13 +160,33 @@ def fit_pendulum(frames: np.ndarray, theta: np.ndarray, length_px: float, fps: f
     anchor = int(frames[k])
     lo, hi = max(k - 1, 0), min(k + 1, len(frames) - 1)
     rate0 = (theta[hi] - theta[lo]) * fps / max(1, frames[hi] - frames[lo])
+    last: dict[bytes, np.ndarray] = {}  # the residuals and the Jacobian come from one integration
 
-    def miss(p: np.ndarray) -> np.ndarray:
-        f = PendulumFit(anchor, p[0], p[1], p[2], p[3], length_px, 0.0)
-        return length_px * (angles(f, frames, fps) - theta)
+    def run(p: np.ndarray) -> np.ndarray:
+        key = p.tobytes()
+        if key not in last:
+            last.clear()
+            last[key] = angles_jac(PendulumFit(anchor, p[0], p[1], p[2], p[3], length_px, 0.0), frames, fps)
+        return last[key]
 
     p0 = [theta[k], rate0, _w2_guess(frames, theta, fps), 0.0]
-    sol = least_squares(miss, p0, x_scale=[0.1, 1.0, 10.0, 0.1], max_nfev=60)
+    if guess is not None:  # its angle and rate at this anchor (central difference: only a start)
+        th = angles(guess, np.array([anchor - 1, anchor, anchor + 1]), fps)
+        p0 = [th[1], 0.5 * (th[2] - th[0]) * fps, guess.w2, guess.c]
+    with np.errstate(all="ignore"):  # a diverging trial step overflows; LM then shortens it
+        sol = least_squares(
+            lambda p: length_px * (run(p)[:, 0] - theta),
+            p0,
+            jac=lambda p: length_px * run(p)[:, 1:],
+            method="lm",
+            x_scale=[0.1, 1.0, 10.0, 0.1],
+            max_nfev=60,
+            ftol=1e-6,  # a fit's RMS to a thousandth of a pixel is enough: fewer iterations
+            xtol=1e-6,
+            gtol=1e-6,
+        )
+    if not np.all(np.isfinite(sol.fun)) or not np.all(np.isfinite(sol.jac)):
+        return None
     dof = max(len(frames) - 4, 1)
     sigma2 = float(np.sum(sol.fun**2)) / dof
     try:
@@ -119,13 +199,7 @@ def fit_pendulum(frames: np.ndarray, theta: np.ndarray, length_px: float, fps: f
 
 def spread_px(fit: PendulumFit, frames: np.ndarray, fps: float) -> np.ndarray:
     """Standard deviation [px] of the fitted place at the frame indices, from the parameters' covariance."""
-    p = np.array([fit.theta, fit.rate, fit.w2, fit.c])
-    base = angles(fit, frames, fps)
-    grad = np.empty((len(frames), 4))
-    for i, step in enumerate((1e-5, 1e-4, 1e-3, 1e-4)):
-        q = p.copy()
-        q[i] += step
-        grad[:, i] = (angles(replace(fit, theta=q[0], rate=q[1], w2=q[2], c=q[3]), frames, fps) - base) / step
+    grad = angles_jac(fit, frames, fps)[:, 1:]
     var = np.einsum("ni,ij,nj->n", grad, fit.cov, grad)
     return fit.length_px * np.sqrt(np.clip(var, 0.0, None))
 

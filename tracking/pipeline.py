@@ -26,6 +26,7 @@ from .subpixel import refine_centre
 from .second_look import SECOND_LOOK, recover
 from .model_look import MODEL_LOOK
 from .model_look import recover as model_recover
+from .pendulum_check import check as pendulum_check
 from .smoothing import on_circle, outliers, smooth_centres
 from .tracker import BallTracker, TrackerOptions
 from .video import VideoInfo, iter_frames, prefetched, probe_video
@@ -67,6 +68,10 @@ class Track:
     model_look_frames: int = 0  # frames reported at a fitted pendulum's place (tracking.model_look)
     outlier_frames: int = 0  # fixes off their neighbours' motion, reported unsure (tracking.smoothing.outliers)
     smoothed_frames: int = 0  # frames whose centre was smoothed around the fixed pivot (tracking.smoothing)
+    off_pendulum_frames: int = 0  # fixes off the pendulum fitted over their window, reported unsure
+    on_pendulum_frames: int = (
+        0  # noisy fixes moved onto the pendulum fitted over their window (tracking.pendulum_check)
+    )
 
     @property
     def found_fraction(self) -> float:
@@ -184,6 +189,8 @@ class _Trackers:
         self.recovered = 0  # frames found by the second look
         self.modelled = 0  # frames reported by the model look
         self.outliers = 0  # fixes their neighbours placed elsewhere (reported unsure)
+        self.off_pendulum = 0  # fixes off the pendulum over their window (reported unsure)
+        self.on_pendulum: np.ndarray | None = None  # (n, 2) [px] the fixes' places on that pendulum (NaN: kept)
         self.kept: dict[int, np.ndarray] = {}  # frames where the ball was not (surely) found, for the looks after
         self.kept_bytes = 0
         self.frame_bytes = 0
@@ -245,6 +252,19 @@ class _Trackers:
             self.columns.conf[k] = OUTLIER
         self.outliers = len(odd)
 
+    def check_pendulum(self, fps: float) -> None:
+        """With a fixed pivot and the ball on a circle about it, the fixes off the pendulum fitted over their window
+        marked unsure (confidence OUTLIER), and the places on it kept for the noisy ones
+        (:func:`tracking.pendulum_check.check`)."""
+        uv, trusted = self.trusted()
+        if self.fixed is None or not on_circle(uv, trusted, self.fixed):
+            return
+        got = pendulum_check(uv, trusted, self.fixed, fps)
+        for k in np.flatnonzero(got.off):
+            self.columns.conf[k] = OUTLIER
+        self.off_pendulum = int(got.off.sum())
+        self.on_pendulum = got.uv
+
     def model_look(self, path: str, fps: float) -> None:
         """With a fixed pivot and the ball on a circle about it, the ball's frames reported by the model look
         (:func:`tracking.model_look.recover`)."""
@@ -287,10 +307,14 @@ def _make_track(
     uv = [c if ok else _NAN2 for c, ok in zip(cols.uv, trusted)]
     radius = [r if ok else math.nan for r, ok in zip(cols.radius, trusted)]
     uv_a = np.array(uv, float).reshape(-1, 2)
-    smoothed = 0
+    smoothed = on_pendulum = 0
     if smooth_fps is not None and trackers.fixed is not None:
         raw, uv_a = uv_a, smooth_centres(uv_a, trusted, trackers.fixed, smooth_fps)
         smoothed = int(np.sum(np.any(np.abs(uv_a - raw) > 0.0, axis=1)))
+        if trackers.on_pendulum is not None:
+            moved = trusted & np.all(np.isfinite(trackers.on_pendulum), axis=1)
+            uv_a[moved] = trackers.on_pendulum[moved]
+            on_pendulum = int(moved.sum())
     piv_a = np.array(cols.piv, float).reshape(-1, 2)
     xy = None
     if calibration is not None and calibration.plane is not None:
@@ -315,6 +339,8 @@ def _make_track(
         model_look_frames=trackers.modelled,
         outlier_frames=trackers.outliers,
         smoothed_frames=smoothed,
+        off_pendulum_frames=trackers.off_pendulum,
+        on_pendulum_frames=on_pendulum,
     )
 
 
@@ -362,6 +388,7 @@ def track_video(
         trackers.second_look(str(path), fps)
     if smooth:
         trackers.reject_outliers(fps or info.fps)
+        trackers.check_pendulum(fps or info.fps)
     if second_look:
         trackers.model_look(str(path), fps or info.fps)
     return _make_track(trackers, angle, calibration, info, (fps or info.fps) if smooth else None)

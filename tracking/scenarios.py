@@ -325,6 +325,8 @@ def oblique(
     tilt=(-30.0, 38.0, -5.0),
     fps: float = 60.0,
     name: str = "oblique camera, sharp ball + calibration",
+    codec: str = "mp4v",
+    bitrate_kbps: float | None = None,
 ) -> Scenario:
     """A camera far off the plane's normal, short exposure (the ball sharp at the turning points), calibrated."""
     w, h = size
@@ -333,10 +335,25 @@ def oblique(
     H = tilted_view(size, focal, tilt, (w / 2.0, 0.45 * h))
     K = np.array([[focal, 0.0, w / 2.0], [0.0, focal, h / 2.0], [0.0, 0.0, 1.0]])
     t, th = _swing(duration_s, amplitude_deg=40.0, period_s=1.1)
-    gt = render_pendulum_video(path, t, th, piv, L, r, size, fps, plane_to_image=H, exposure=0.15, seed=seed)
+    gt = render_pendulum_video(
+        path,
+        t,
+        th,
+        piv,
+        L,
+        r,
+        size,
+        fps,
+        plane_to_image=H,
+        exposure=0.15,
+        seed=seed,
+        codec=codec,
+        bitrate_kbps=bitrate_kbps,
+    )
     cal = _exact_calibration(K, H, (w, h), 0.3 / L)
     pivot_image = tuple(float(c) for c in gt.pivot_uv[0])
-    return Scenario(name, path, gt, {"pivot_uv": pivot_image, "calibration": cal}, _visible(gt))
+    track = {"pivot_uv": pivot_image, "calibration": cal}
+    return Scenario(name, path, gt, track, _visible(gt), lossy=bitrate_kbps is not None)
 
 
 def dark_start_30(path: Path, size, duration_s: float, seed: int = 14) -> Scenario:
@@ -475,6 +492,42 @@ JUDGE2: dict[str, Callable[..., Scenario]] = {
         codec="hevc",
         ball_scale=0.7,
         name="judge 2: HEVC 60 kbit/s, ball 0.7× as large",
+    ),
+}
+
+
+# A third judge (track9): renders made after the pendulum check was written, never tuned on — other bitrates, ball
+# sizes, codecs, a faster swing, and an oblique camera on a low-bitrate stream
+JUDGE3: dict[str, Callable[..., Scenario]] = {
+    "h264_40k_j3": lambda p, s, d: h264(p, s, d, seed=51, bitrate_kbps=40.0, name="judge 3: H.264 40 kbit/s"),
+    "h264_120k_small_j3": lambda p, s, d: h264(
+        p, s, d, seed=52, bitrate_kbps=120.0, ball_scale=0.5, name="judge 3: H.264 120 kbit/s, ball 0.5× as large"
+    ),
+    "hevc_80k_clutter_j3": lambda p, s, d: clutter(
+        p, s, d, seed=53, codec="hevc", bitrate_kbps=80.0, name="judge 3: clutter + HEVC 80 kbit/s"
+    ),
+    "h264_60k_fast_j3": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=54,
+        bitrate_kbps=60.0,
+        amplitude_deg=45.0,
+        period_s=0.8,
+        name="judge 3: H.264 60 kbit/s, 45° swing of 0.8 s",
+    ),
+    "vp9_70k_big_j3": lambda p, s, d: h264(
+        p, s, d, seed=55, bitrate_kbps=70.0, codec="vp9", ball_scale=1.3, name="judge 3: VP9 70 kbit/s, ball 1.3×"
+    ),
+    "oblique_h264_j3": lambda p, s, d: oblique(
+        p,
+        s,
+        d,
+        seed=56,
+        tilt=(25.0, 30.0, -4.0),
+        name="judge 3: oblique camera + H.264 150 kbit/s",
+        codec="h264",
+        bitrate_kbps=150.0,
     ),
 }
 

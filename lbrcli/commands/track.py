@@ -306,7 +306,6 @@ def video(
         "fps_given": fps,
         "theta_in_plane": track.theta_in_plane,
         "ambiguities": list(track.notes),
-        "second_look_frames": track.second_look_frames,
     }
     rep.print(
         f"{video_path}: {n} frames over {duration:.3f} s ({info.width}x{info.height}, {figures['fps_measured']:.2f} fps); "
@@ -315,8 +314,7 @@ def video(
     )
     for note in track.notes:
         rep.warn(f"several ball-like blobs: {note}")
-    if track.second_look_frames:
-        rep.print(f"second look: the ball found in {track.second_look_frames} more frames before confirmed stretches")
+    _report_looks(rep, track, figures)
     if track.theta is not None:
         th = track.theta[np.isfinite(track.theta)]
         figures["theta_frames"] = int(len(th))
@@ -367,6 +365,41 @@ def video(
             f"the {pivot_color} pivot marker was not found in any frame: no θ (try another --pivot-color or --pivot U,V)"
         )
         raise typer.Exit(1)
+
+
+def _report_looks(rep, track, figures: dict) -> None:  # noqa: ANN001
+    """What the looks and checks after the first pass did (tracking.second_look, tracking.model_look,
+    tracking.smoothing, tracking.pendulum_check): in the figures always, printed when they did something."""
+    looks = {
+        "second_look_frames": (
+            track.second_look_frames,
+            "second look: the ball found in {} more frames before confirmed stretches",
+        ),
+        "model_look_frames": (
+            track.model_look_frames,
+            "model look: {} frames placed by a pendulum fitted to the fixes around them, where the frame shows the ball",
+        ),
+        "outlier_frames": (
+            track.outlier_frames,
+            "outlier check: {} fixes off their neighbours' motion reported unsure (not found)",
+        ),
+        "smoothed_frames": (track.smoothed_frames, "smoothing: {} centres smoothed about the fixed pivot"),
+        "off_pendulum_frames": (
+            track.off_pendulum_frames,
+            "pendulum check: {} fixes off the pendulum fitted over their second reported unsure (not found)",
+        ),
+        "on_pendulum_frames": (
+            track.on_pendulum_frames,
+            "pendulum check: {} noisy centres put on the pendulum fitted over their second",
+        ),
+    }
+    unsure = int(track.unsure.sum()) if track.unsure is not None else 0
+    figures.update({k: int(n) for k, (n, _) in looks.items()}, unsure_frames=unsure)
+    for n, text in looks.values():
+        if n:
+            rep.print(text.format(n))
+    if unsure:
+        rep.print(f"{unsure} frames with a candidate not trusted: reported not found")
 
 
 def _write_candidates(video_path: Path, spec, gates, png: Path) -> int:  # noqa: ANN001

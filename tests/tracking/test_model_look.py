@@ -19,6 +19,7 @@ from tracking.model_look import (
     runs,
     shows_ball,
     spread_px,
+    trajectory,
 )
 from tracking.pipeline import track_video
 
@@ -39,6 +40,19 @@ def test_integration_matches_the_small_angle_solution():
     assert np.max(np.abs(th - 1e-3 * np.cos(math.sqrt(40.0) * t))) < 2e-8  # 2e-5 of the amplitude after 2 swings
     back = integrate(th[-1], -1e-3 * math.sqrt(40.0) * math.sin(math.sqrt(40.0) * 2.0), 40.0, 0.0, -1.0 / FPS, 120)
     assert abs(back[-1] - 1e-3) < 5e-8  # backwards in time to the start
+
+
+def test_the_variational_equations_give_the_derivatives_of_the_integration():
+    p = np.array([0.6, -1.5, 39.0, 0.2])  # θ₀ [rad], θ'₀ [rad/s], w2 [1/s²], c [1/s]: a 34° swing, damped
+    for dt in (1.0 / FPS, -1.0 / FPS):
+        got = trajectory(*p, dt, 90)
+        assert np.max(np.abs(got[:, 0] - integrate(*p, dt, 90))) < 1e-12  # the same θ as the plain integration
+        for i, step in enumerate((1e-6, 1e-6, 1e-5, 1e-6)):
+            hi, lo = p.copy(), p.copy()
+            hi[i] += step
+            lo[i] -= step
+            fd = (integrate(*hi, dt, 90) - integrate(*lo, dt, 90)) / (2 * step)
+            assert np.max(np.abs(got[:, 1 + i] - fd)) < 1e-6 * max(1.0, np.max(np.abs(fd)))
 
 
 def test_a_noisy_swing_is_fitted_and_its_spread_is_small_inside_and_grows_outside():

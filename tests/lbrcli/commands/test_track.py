@@ -40,6 +40,16 @@ def test_track_fixed_pivot_json_plot_preview(lbr, clip, tmp_path):
     assert np.sqrt(np.nanmean(np.degrees(tr.theta - gt.theta) ** 2)) < 0.2
     assert fig["theta_max_deg"] == pytest.approx(28.0, abs=0.5)
     assert plot.stat().st_size > 10_000
+    # the looks' and checks' counts are the tracker's own (a clean swing about a fixed pivot: smoothed, nothing else)
+    from tracking.color import color_spec
+    from tracking.pipeline import track_video
+
+    lib = track_video(video, color_spec("red"), pivot_uv=PIVOT)
+    counts = ("second_look_frames", "model_look_frames", "outlier_frames", "smoothed_frames", "off_pendulum_frames")
+    counts += ("on_pendulum_frames",)
+    assert [fig[k] for k in counts] == [getattr(lib, k) for k in counts]
+    assert fig["unsure_frames"] == int(lib.unsure.sum()) == 0
+    assert fig["smoothed_frames"] > 0.5 * fig["frames"]
     info = probe_video(preview)
     assert info.size == SIZE and info.frame_count == len(gt.t)
 

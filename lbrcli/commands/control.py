@@ -263,7 +263,6 @@ def upright(
     the balance holds it for --hold in one run (a fall is caught again within --recatch), and it is lowered gently in
     ever smaller swings before the arm parks. Exit 0 only when the hold was met; 1 otherwise (the reason on stderr).
     """
-    from lbrcli.control.fitter import ProcessFitter
     from lbrcli.control.upright import LOG_COLUMNS, UprightClient
     from lbrcli.plants.rigid_module import RigidModuleSpec
     from planners.feedback.session import SessionOptions
@@ -283,9 +282,9 @@ def upright(
     rail = _rail(q0, lim, travel)
     assumed_ms = sensor_delay if sensor_delay is not None else (
         sim_delay + 0.5 * sim_jitter if fri.robot is None else 6.0)  # fmt: skip
-    paced = fri.robot is None and (fri.sim_lockstep or fri.sim_fast)  # (a lock-step simulation: deterministic)
+    fit_wait, fitting = _fitting(fri, identify)
     plan = SessionOptions(hold_s=hold, swing_timeout_s=swing_timeout, recatch_s=recatch, identify=identify,
-                          encoder_sign=encoder_sign, sensor_delay_s=assumed_ms * 1e-3, fit_wait_s=FIT_WAIT_S * paced)  # fmt: skip
+                          encoder_sign=encoder_sign, sensor_delay_s=assumed_ms * 1e-3, fit_wait_s=fit_wait)  # fmt: skip
     client = UprightClient(rail, model.equivalent_length, lim, session=plan, sensor_rate_hz=sensor_rate,
                            move_to_start=move_to_start)  # fmt: skip
     _print_rail(rep, model, rail, rod_length, travel)
@@ -293,9 +292,7 @@ def upright(
                           zero_count=lab.pendulum_zero, noise_counts=sim_noise, sign=sim_encoder_sign)  # fmt: skip
     simulator = fri.simulator(max_runtime_s=hold + swing_timeout + 3 * recatch + 180.0, start=q0, plants=(rod,),
                               limits=limits)  # fmt: skip
-    with (
-        contextlib.closing(ProcessFitter(0 if paced else 15)) if identify else contextlib.nullcontext() as client.fitter
-    ):
+    with fitting() as client.fitter:
         result, sim_stats, lab_figures = run_client(rep, client, fri.session(lim), simulator, lab=replace(lab, pendulum=lab.pendulum or "sim"),
                                                     extra=LogColumns(LOG_COLUMNS, client.log_values))  # fmt: skip
     figures = print_summary(rep, result, sim_stats, fri.log) | lab_figures  # the client's figures join the session's
@@ -306,6 +303,18 @@ def upright(
     plot_error = plot_log(plot, fri.log, rep, "upright", figures, draw=plot_upright)
     rep.emit(figures)
     exit_for(result, lab_figures, failed=plot_error)
+
+
+def _fitting(fri: FriOptions, identify: bool):
+    """(the fit's wait [s], a factory of the fitter's context): in a lock-step simulation the rod's fit is taken
+    ``FIT_WAIT_S`` of simulated time after the free swing, by a worker that is not niced (the same session on any
+    computer); else as soon as a niced worker has it (the FRI loop first)."""
+    from lbrcli.control.fitter import ProcessFitter
+
+    paced = fri.robot is None and (fri.sim_lockstep or fri.sim_fast)
+    if not identify:
+        return 0.0, contextlib.nullcontext
+    return FIT_WAIT_S * paced, lambda: contextlib.closing(ProcessFitter(0 if paced else 15))
 
 
 def _check_upright(

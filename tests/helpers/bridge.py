@@ -21,13 +21,24 @@ def limit_ratios(tab, dt=PERIOD_S, following_only=False) -> tuple[float, float, 
     """Largest step / velocity limit, second difference / acceleration limit, third / jerk limit of the commands the
     bridge sent in COMMANDING_ACTIVE (with ``following_only`` before the braking stop). The commands, not what the
     simulator executed: on a loaded machine some replies reach it late, and what it makes of those (it holds, then
-    takes the late one) is its own, not the bridge's."""
+    takes the late one) is its own, not the bridge's. A client that fell behind answers the newest message and skips
+    the ones before it (the log has a row per message answered): a step then spans as many periods as the controller's
+    sequence counter moved, and the differences of higher order are judged only over consecutive messages."""
     keep = tab.column("state") == 4
     if following_only:
         keep &= np.cumsum(tab.column("phase") == PHASE_BRAKE) == 0
     q = np.column_stack([tab.column(f"cmd_q{j}") for j in range(1, 8)])[keep]
-    return tuple(float((np.abs(np.diff(q, k, axis=0)) / dt**k / lim).max())
-                 for k, lim in ((1, LIM.velocity), (2, LIM.acceleration), (3, LIM.jerk)))  # fmt: skip
+    gap = np.diff(tab.column("seq")[keep])  # [periods] between the messages of consecutive rows
+    out = []
+    for k, lim in ((1, LIM.velocity), (2, LIM.acceleration), (3, LIM.jerk)):
+        d = np.diff(q, k, axis=0)
+        if k == 1:
+            d = d / np.maximum(gap, 1)[:, None]
+        else:  # only where the k steps are one period each
+            whole = np.convolve(gap != 1, np.ones(k), "valid") == 0
+            d = d[whole]
+        out.append(float((np.abs(d) / dt**k / lim).max()) if len(d) else 0.0)
+    return tuple(out)
 
 
 def judge_following(tab, f: dict, scale: float = 0.5) -> None:

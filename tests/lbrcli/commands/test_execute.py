@@ -107,7 +107,7 @@ def test_far_start_is_refused_and_move_to_start_gets_there(tmp_path):
 
     log2 = tmp_path / "move.csv"
     proc = run_lbr("execute", tmp_path / "j.csv", "--port", "0", "--sim-start", far, "--move-to-start", "--log", log2,
-                   "--settle", "0.1", "--json")  # fmt: skip
+                   "--settle", "0.1", "--sim-fast", "--json")  # fmt: skip  (lock-step: the move, not the timing)
     assert proc.returncode == 0, proc.stderr
     f = figures(proc)
     assert f["move_rows"] > 20 and f["trajectory_rows"] == len(traj)
@@ -304,8 +304,28 @@ def test_move_to_start_leaves_the_ball_at_rest_and_the_rows_wait_until_it_is_cal
     traj = write_traj(tmp_path / "j.csv", 0.005, 0.6, amp=0.2)
     log = tmp_path / "run.csv"
     far = ",".join(f"{v:.6f}" for v in FAR)
-    proc = run_lbr("execute", tmp_path / "j.csv", "--port", "0", "--sim-start", far, "--move-to-start", "--length", "0.4",
-                   "--damping", "0.3", "--start-sway", "0.05", "--settle", "0.1", "--sim-lenient", "--log", log, "--json")  # fmt: skip
+    proc = run_lbr(
+        "execute",
+        tmp_path / "j.csv",
+        "--port",
+        "0",
+        "--sim-start",
+        far,
+        "--move-to-start",
+        "--length",
+        "0.4",
+        "--damping",
+        "0.3",
+        "--start-sway",
+        "0.05",
+        "--settle",
+        "0.1",
+        "--sim-lenient",
+        "--sim-fast",
+        "--log",
+        log,
+        "--json",
+    )  # fmt: skip  (lock-step: the wait and the sway, not this machine's timing, are judged)
     assert proc.returncode == 0, proc.stderr
     f = figures(proc)
     assert f["trajectory_rows"] == len(traj) and f["move_rows"] > 100
@@ -329,8 +349,24 @@ def test_move_to_start_leaves_the_ball_at_rest_and_the_rows_wait_until_it_is_cal
 def test_a_swing_that_outlasts_sway_wait_is_reported_and_the_rows_start(tmp_path):
     traj = write_traj(tmp_path / "j.csv", 0.005, 0.4, amp=0.2)
     far = ",".join(f"{v:.6f}" for v in FAR)
-    proc = run_lbr("execute", tmp_path / "j.csv", "--port", "0", "--sim-start", far, "--move-to-start",
-                   "--start-sway", "0.0001", "--sway-wait", "0.3", "--settle", "0.1", "--sim-lenient", "--json")  # fmt: skip
+    proc = run_lbr(
+        "execute",
+        tmp_path / "j.csv",
+        "--port",
+        "0",
+        "--sim-start",
+        far,
+        "--move-to-start",
+        "--start-sway",
+        "0.0001",
+        "--sway-wait",
+        "0.3",
+        "--settle",
+        "0.1",
+        "--sim-lenient",
+        "--sim-fast",
+        "--json",
+    )  # fmt: skip  (lock-step: the wait, not this machine's timing, is judged)
     assert proc.returncode == 0, proc.stderr
     f = figures(proc)
     assert f["trajectory_rows"] == len(traj) and f["sway_wait_s"] == pytest.approx(0.3)

@@ -106,8 +106,21 @@ def test_far_start_is_refused_and_move_to_start_gets_there(tmp_path):
     np.testing.assert_allclose(tab.data[-1, 10:17], Q0 + np.array([0.02, -0.03, 0, 0.06, 0, 0, 0.05]), atol=1e-9)
 
     log2 = tmp_path / "move.csv"
-    proc = run_lbr("execute", tmp_path / "j.csv", "--port", "0", "--sim-start", far, "--move-to-start", "--log", log2,
-                   "--settle", "0.1", "--sim-fast", "--json")  # fmt: skip  (lock-step: the move, not the timing)
+    proc = run_lbr(
+        "execute",
+        tmp_path / "j.csv",
+        "--port",
+        "0",
+        "--sim-start",
+        far,
+        "--move-to-start",
+        "--log",
+        log2,
+        "--settle",
+        "0.1",
+        "--sim-fast",
+        "--json",
+    )  # fmt: skip  (lock-step: the move, not the timing)
     assert proc.returncode == 0, proc.stderr
     f = figures(proc)
     assert f["move_rows"] > 20 and f["trajectory_rows"] == len(traj)

@@ -120,16 +120,15 @@ def test_lbr_control_upright_swings_up_balances_and_survives_a_push(tmp_path):
 
 @pytest.mark.heavy
 def test_lbr_control_upright_fails_when_it_cannot_catch_and_refuses_bad_input(tmp_path):
-    p = run_lbr(
-        "control", "upright", "--sim-lockstep", "--port", "0", "--swing-timeout", "1", "--hold", "5", timeout=120
-    )
+    # lock-step as fast as computed (--sim-fast): which failure, not when — the same encoder lines as --sim-lockstep
+    p = run_lbr("control", "upright", "--sim-fast", "--port", "0", "--swing-timeout", "1", "--hold", "5", timeout=120)
     assert p.returncode == 1 and "no catch upright within 1 s" in p.stderr
     p = run_lbr(
-        "control", "upright", "--sim-lockstep", "--port", "0", "--sim-encoder-sign", "-1", "--hold", "5", timeout=120
+        "control", "upright", "--sim-fast", "--port", "0", "--sim-encoder-sign", "-1", "--hold", "5", timeout=120
     )
     assert p.returncode == 1 and "--encoder-sign -1" in p.stderr  # detected from the push, not guessed
     # a rod whose period is not the model's (--rod-length 0.9, the simulated rod 0.4 m): the line names the flag
-    p = run_lbr("control", "upright", "--sim-lockstep", "--port", "0", "--rod-length", "0.9", "--sim-rod-length", "0.4",
+    p = run_lbr("control", "upright", "--sim-fast", "--port", "0", "--rod-length", "0.9", "--sim-rod-length", "0.4",
                 "--hold", "5", timeout=120)  # fmt: skip
     assert p.returncode == 1 and "check --rod-length" in p.stderr, p.stderr
     for args, text in ((("--rod-length", "0"), "--rod-length"), (("--push", "10deg"), "--push"),

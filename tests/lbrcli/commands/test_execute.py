@@ -106,21 +106,9 @@ def test_far_start_is_refused_and_move_to_start_gets_there(tmp_path):
     np.testing.assert_allclose(tab.data[-1, 10:17], Q0 + np.array([0.02, -0.03, 0, 0.06, 0, 0, 0.05]), atol=1e-9)
 
     log2 = tmp_path / "move.csv"
-    proc = run_lbr(
-        "execute",
-        tmp_path / "j.csv",
-        "--port",
-        "0",
-        "--sim-start",
-        far,
-        "--move-to-start",
-        "--log",
-        log2,
-        "--settle",
-        "0.1",
-        "--sim-fast",
-        "--json",
-    )  # fmt: skip  (lock-step: the move, not the timing)
+    # lock-step (--sim-fast): the move and the wait are judged, not this machine's timing
+    proc = run_lbr("execute", tmp_path / "j.csv", "--port", "0", "--sim-start", far, "--move-to-start", "--log",
+                   log2, "--settle", "0.1", "--sim-fast", "--json")  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     f = figures(proc)
     assert f["move_rows"] > 20 and f["trajectory_rows"] == len(traj)
@@ -317,28 +305,10 @@ def test_move_to_start_leaves_the_ball_at_rest_and_the_rows_wait_until_it_is_cal
     traj = write_traj(tmp_path / "j.csv", 0.005, 0.6, amp=0.2)
     log = tmp_path / "run.csv"
     far = ",".join(f"{v:.6f}" for v in FAR)
-    proc = run_lbr(
-        "execute",
-        tmp_path / "j.csv",
-        "--port",
-        "0",
-        "--sim-start",
-        far,
-        "--move-to-start",
-        "--length",
-        "0.4",
-        "--damping",
-        "0.3",
-        "--start-sway",
-        "0.05",
-        "--settle",
-        "0.1",
-        "--sim-lenient",
-        "--sim-fast",
-        "--log",
-        log,
-        "--json",
-    )  # fmt: skip  (lock-step: the wait and the sway, not this machine's timing, are judged)
+    # lock-step (--sim-fast): the move and the wait are judged, not this machine's timing
+    proc = run_lbr("execute", tmp_path / "j.csv", "--port", "0", "--sim-start", far, "--move-to-start", "--length",
+                   "0.4", "--damping", "0.3", "--start-sway", "0.05", "--settle", "0.1", "--sim-lenient",
+                   "--sim-fast", "--log", log, "--json")  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     f = figures(proc)
     assert f["trajectory_rows"] == len(traj) and f["move_rows"] > 100
@@ -362,24 +332,10 @@ def test_move_to_start_leaves_the_ball_at_rest_and_the_rows_wait_until_it_is_cal
 def test_a_swing_that_outlasts_sway_wait_is_reported_and_the_rows_start(tmp_path):
     traj = write_traj(tmp_path / "j.csv", 0.005, 0.4, amp=0.2)
     far = ",".join(f"{v:.6f}" for v in FAR)
-    proc = run_lbr(
-        "execute",
-        tmp_path / "j.csv",
-        "--port",
-        "0",
-        "--sim-start",
-        far,
-        "--move-to-start",
-        "--start-sway",
-        "0.0001",
-        "--sway-wait",
-        "0.3",
-        "--settle",
-        "0.1",
-        "--sim-lenient",
-        "--sim-fast",
-        "--json",
-    )  # fmt: skip  (lock-step: the wait, not this machine's timing, is judged)
+    # lock-step (--sim-fast): the move and the wait are judged, not this machine's timing
+    proc = run_lbr("execute", tmp_path / "j.csv", "--port", "0", "--sim-start", far, "--move-to-start",
+                   "--start-sway", "0.0001", "--sway-wait", "0.3", "--settle", "0.1", "--sim-lenient", "--sim-fast",
+                   "--json")  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     f = figures(proc)
     assert f["trajectory_rows"] == len(traj) and f["sway_wait_s"] == pytest.approx(0.3)

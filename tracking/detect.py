@@ -110,21 +110,53 @@ def ellipse_fit(contour: np.ndarray) -> float:
     cx, cy = m["m10"] / m["m00"], m["m01"] / m["m00"]
     # per row, the pixel centres inside: c02 dx² − 2 c11 dy dx + c20 dy² ≤ 4 det, an interval of dx
     half = 2.0 * math.sqrt(c02) + 1.0  # [px] beyond the ellipse's vertical half-extent (dy² ≤ 4 c02)
-    rows = np.arange(math.floor(cy - half), math.ceil(cy + half) + 1)
+    first, last = math.floor(cy - half), math.ceil(cy + half)
+    cs = np.zeros((h, w + 1), np.int32)
+    np.cumsum(fill, axis=1, out=cs[:, 1:])
+    count = _rows_in_ellipse_py if last - first < _PY_ROWS else _rows_in_ellipse_np
+    inner, both = count(cs, first, last, cx, cy, c20, c11, c02, det)
+    union = m["m00"] + inner - both
+    return both / union if union > 0 else 0.0
+
+
+_PY_ROWS = 48  # an ellipse over fewer rows is counted row by row in Python (numpy's cost is per call, not per row)
+
+
+def _rows_in_ellipse_py(cs, first, last, cx, cy, c20, c11, c02, det) -> tuple[float, float]:  # noqa: ANN001
+    """(pixels of the ellipse, of them the blob's) over rows first..last of the box (cs: the blob's per-row cumulative
+    sums); the same arithmetic as :func:`_rows_in_ellipse_np`, one row at a time."""
+    h, w = cs.shape[0], cs.shape[1] - 1
+    rows = cs.tolist()
+    a2, b2 = c11 * c11 - c02 * c20, 4.0 * det * c02
+    inner = both = 0.0
+    for r in range(first, last + 1):
+        dy = r - cy
+        disc = a2 * dy * dy + b2
+        root = math.sqrt(max(disc, 0.0))
+        lo = math.ceil(cx + (c11 * dy - root) / c02)
+        hi = max(math.floor(cx + (c11 * dy + root) / c02) + 1, lo) if disc >= 0.0 else lo
+        inner += hi - lo
+        if 0 <= r < h:
+            row = rows[r]
+            both += row[min(max(hi, 0), w)] - row[min(max(lo, 0), w)]
+    return inner, both
+
+
+def _rows_in_ellipse_np(cs, first, last, cx, cy, c20, c11, c02, det) -> tuple[float, float]:  # noqa: ANN001
+    """:func:`_rows_in_ellipse_py` for all rows at once."""
+    h, w = cs.shape[0], cs.shape[1] - 1
+    rows = np.arange(first, last + 1)
     dy = rows - cy
     disc = (c11 * c11 - c02 * c20) * dy * dy + 4.0 * det * c02
     root = np.sqrt(np.maximum(disc, 0.0))
     lo = np.ceil(cx + (c11 * dy - root) / c02)
     hi = np.where(disc >= 0.0, np.maximum(np.floor(cx + (c11 * dy + root) / c02) + 1.0, lo), lo)
     inbox = (rows >= 0) & (rows < h)
-    cs = np.zeros((h, w + 1), np.int32)
-    np.cumsum(fill, axis=1, out=cs[:, 1:])
     r = rows[inbox]
     both = float(
         (cs[r, np.clip(hi[inbox], 0, w).astype(np.intp)] - cs[r, np.clip(lo[inbox], 0, w).astype(np.intp)]).sum()
     )
-    union = m["m00"] + float((hi - lo).sum()) - both
-    return both / union if union > 0 else 0.0
+    return float((hi - lo).sum()), both
 
 
 def _aspect(m: dict) -> float:

@@ -29,7 +29,7 @@ from .model_look import recover as model_recover
 from .pendulum_check import check as pendulum_check
 from .smoothing import on_circle, outliers, smooth_centres
 from .tracker import BallTracker, TrackerOptions
-from .video import VideoInfo, iter_frames, prefetched, probe_video
+from .video import FrameBuffers, VideoInfo, iter_frames, prefetched, probe_video
 
 
 @dataclass(frozen=True)
@@ -213,7 +213,7 @@ class _Trackers:
         cols.revise_ball(self.ball)
         cols.add(t, b, self.ball.confidence)
         if (b is None or self.ball.confidence < self.sure) and self.kept_bytes + frame.nbytes <= KEEP_BYTES:
-            self.kept[k] = frame  # (each decoded frame is a new array: kept without a copy)
+            self.kept[k] = frame  # (its buffer is not decoded into again: kept without a copy)
             self.kept_bytes += frame.nbytes
         self.frame_bytes = frame.nbytes
         return b, p
@@ -374,13 +374,17 @@ def track_video(
     info = _check_inputs(path, pivot_uv, pivot_color, calibration)
     trackers = _Trackers(ball, options, pivot_uv, pivot_color, pivot_options)
     angle = ImageAngles(calibration, info.size)
-    frames = iter_frames(path, fps)
+    buffers = FrameBuffers()  # frames not kept for the looks are decoded into again
+    frames = iter_frames(path, fps, buffers)
     if info.decoder_threads < 2:  # decoding overlaps the tracking: by the decoder's own threads, else by a thread of
         frames = prefetched(frames)  # ours (on top of the decoder's, it only costs GIL hand-offs: ≈ 0.1–0.3 ms a frame)
     for k, t, frame in frames:
         b, p = trackers.step(frame, t)
-        if on_frame is not None:
-            on_frame(frame, _shown(trackers, angle, k, t, b, p))
+        kept = k in trackers.kept
+        if on_frame is not None:  # (a preview draws on its frame: not on one kept for the looks)
+            on_frame(frame.copy() if kept else frame, _shown(trackers, angle, k, t, b, p))
+        if not kept:
+            buffers.give_back(frame)
         if progress is not None:
             progress(k + 1)
     trackers.finish()

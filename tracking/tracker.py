@@ -528,6 +528,7 @@ class BallTracker:
         """
         index = self._n
         self._n += 1
+        self._coarse = None  # (a frame's buffer may be decoded into again: its coarse image is not kept past it)
         if not self._sized:
             self._size_gates(frame)
         self.confidence = 0.0

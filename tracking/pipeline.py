@@ -26,6 +26,7 @@ from .subpixel import refine_centre
 from .second_look import SECOND_LOOK, recover
 from .model_look import MODEL_LOOK
 from .model_look import recover as model_recover
+from .patches import Patch, patch_around
 from .pendulum_check import check as pendulum_check
 from .smoothing import on_circle, outliers, smooth_centres
 from .tracker import BallTracker, TrackerOptions
@@ -192,6 +193,7 @@ class _Trackers:
         self.off_pendulum = 0  # fixes off the pendulum over their window (reported unsure)
         self.on_pendulum: np.ndarray | None = None  # (n, 2) [px] the fixes' places on that pendulum (NaN: kept)
         self.kept: dict[int, np.ndarray] = {}  # frames where the ball was not (surely) found, for the looks after
+        self.patches: dict[int, Patch] = {}  # ... and patches of the others around the fix (tracking.patches)
         self.kept_bytes = 0
         self.frame_bytes = 0
 
@@ -215,6 +217,11 @@ class _Trackers:
         if (b is None or self.ball.confidence < self.sure) and self.kept_bytes + frame.nbytes <= KEEP_BYTES:
             self.kept[k] = frame  # (its buffer is not decoded into again: kept without a copy)
             self.kept_bytes += frame.nbytes
+        elif b is not None and self.fixed is not None:  # (the model look's, which needs a fixed pivot)
+            patch = patch_around(frame, *cols.uv[k], b.radius_px)
+            if patch is not None and self.kept_bytes + patch.pixels.nbytes <= KEEP_BYTES:
+                self.patches[k] = patch
+                self.kept_bytes += patch.pixels.nbytes
         self.frame_bytes = frame.nbytes
         return b, p
 
@@ -273,7 +280,7 @@ class _Trackers:
         if self.fixed is None or not on_circle(uv, trusted, self.fixed):
             return
         radius = float(np.median(np.array(cols.radius, float)[trusted]))
-        got = model_recover(self.ball, path, fps, uv, trusted, self.fixed, radius, self.kept)
+        got = model_recover(self.ball, path, fps, uv, trusted, self.fixed, radius, self.kept, self.patches)
         for k, blob in got:
             cols.set_ball(k, blob, MODEL_LOOK)
         self.modelled = len(got)

@@ -324,8 +324,7 @@ class _Follower:
         o = self.options
         box = self.window(pred, w, h)
         streak = pred.frame_step_px > 2.0 * self.radius()  # blurred over more than its own size: ragged
-        gates = replace(
-            o.gates,
+        gates = BlobGates(  # (all four fields: cheaper than dataclasses.replace, once a frame)
             min_circularity=min(
                 o.gates.min_circularity, o.streak_min_circularity if streak else o.locked_min_circularity
             ),

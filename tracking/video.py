@@ -148,6 +148,8 @@ class FrameBuffers:
 
     def give_back(self, frame: np.ndarray) -> None:
         """The frame is no longer used: it may be decoded into again."""
+        if self._shape is None and frame.ndim == 3 and frame.dtype == np.uint8 and frame.flags.c_contiguous:
+            self._shape = frame.shape  # (the first frame, decoded before the size was known)
         if frame.shape == self._shape:
             self._free.append(frame)
 

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-PATCH_RADII = 4.0  # a patch reaches this many ball radii ...
-PATCH_MARGIN_PX = 24  # ... + this [px] from the fix
+PATCH_RADII = 3.0  # a patch reaches this many ball radii ...
+PATCH_MARGIN_PX = 16  # ... + this [px] from the fix (the fitted place is a few px off it)
 MAX_SHARE = 1.0 / 8.0  # a patch larger than this share of the frame is not kept (a large ball: decoded again)
 
 

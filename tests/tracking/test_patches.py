@@ -24,15 +24,15 @@ def _ball(img: np.ndarray, u: float, v: float, r: float, bgr) -> None:
 
 def test_a_patch_is_a_copy_around_the_fix_and_covers_only_its_box():
     frame = np.random.default_rng(0).integers(0, 255, (360, 640, 3), np.uint8)
-    p = patch_around(frame, 100.4, 50.7, 5.0)  # reach 4·5 + 24 = 44 px
-    assert (p.x0, p.y0) == (56, 6) and p.pixels.shape == (89, 89, 3)
-    assert np.array_equal(p.pixels, frame[6:95, 56:145])
+    p = patch_around(frame, 100.4, 50.7, 5.0)  # reach 3·5 + 16 = 31 px
+    assert (p.x0, p.y0) == (69, 19) and p.pixels.shape == (63, 63, 3)
+    assert np.array_equal(p.pixels, frame[19:82, 69:132])
     frame[:] = 0  # the frame's buffer decoded into again: the patch keeps its pixels
     assert p.pixels.any()
-    assert p.covers(56, 6, 145, 95) and not p.covers(55, 6, 145, 95) and not p.covers(56, 6, 146, 95)
+    assert p.covers(69, 19, 132, 82) and not p.covers(68, 19, 132, 82) and not p.covers(69, 19, 133, 82)
     edge = patch_around(frame, 3.0, 2.0, 5.0)  # cut by the frame's corner
-    assert (edge.x0, edge.y0) == (0, 0) and edge.pixels.shape == (47, 48, 3)
-    assert patch_around(frame, 300.0, 180.0, 40.0) is None  # 2·184 px square: more than an eighth of the frame
+    assert (edge.x0, edge.y0) == (0, 0) and edge.pixels.shape == (34, 35, 3)
+    assert patch_around(frame, 300.0, 180.0, 40.0) is None  # 2·136 px square: more than an eighth of the frame
 
 
 def test_shows_ball_on_a_patch_answers_as_on_the_whole_frame():

@@ -122,6 +122,7 @@ def _check_inputs(
 
 _NAN2 = (math.nan, math.nan)
 KEEP_BYTES = 256 * 2**20  # frames where the ball was not surely found are kept for the looks after, up to this
+PATCH_BYTES = 64 * 2**20  # ... and patches around the other fixes (tracking.patches), up to this
 OUTLIER = 0.3  # confidence of a fix found to lie off the motion of its neighbours (reported unsure)
 
 
@@ -195,6 +196,7 @@ class _Trackers:
         self.kept: dict[int, np.ndarray] = {}  # frames where the ball was not (surely) found, for the looks after
         self.patches: dict[int, Patch] = {}  # ... and patches of the others around the fix (tracking.patches)
         self.kept_bytes = 0
+        self.patch_bytes = 0
         self.frame_bytes = 0
 
     def step(self, frame: np.ndarray, t: float) -> tuple[Blob | None, tuple[float, float] | None]:
@@ -219,9 +221,9 @@ class _Trackers:
             self.kept_bytes += frame.nbytes
         elif b is not None and self.fixed is not None:  # (the model look's, which needs a fixed pivot)
             patch = patch_around(frame, *cols.uv[k], b.radius_px)
-            if patch is not None and self.kept_bytes + patch.pixels.nbytes <= KEEP_BYTES:
+            if patch is not None and self.patch_bytes + patch.pixels.nbytes <= PATCH_BYTES:
                 self.patches[k] = patch
-                self.kept_bytes += patch.pixels.nbytes
+                self.patch_bytes += patch.pixels.nbytes
         self.frame_bytes = frame.nbytes
         return b, p
 

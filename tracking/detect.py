@@ -343,6 +343,17 @@ def find_blobs_coarse(
     return out
 
 
+def too_dark(bgr: np.ndarray, min_value: int) -> bool:
+    """No pixel of the BGR image reaches the HSV value min_value (V = max(B, G, R)): no colour band starting there can
+    hold any of it, blurred, shrunk or not (a frame of a dark start: its whole-frame searches skipped)."""
+    import cv2
+
+    flat = (
+        bgr.reshape(bgr.shape[0], -1) if bgr.flags.c_contiguous else np.ascontiguousarray(bgr).reshape(bgr.shape[0], -1)
+    )
+    return cv2.minMaxLoc(flat)[1] < min_value
+
+
 TINY_MAX_AREA_PX = 40.0  # [px²] a blob up to this area is searched by :func:`find_tiny` (a disc of radius ≈ 3.5 px)
 _TINY_MIN_SATURATION = 45  # a 3 px ball blurred by the lens and the codec keeps about half its saturation
 _TINY_MIN_CONTRAST = 35  # ... and stands out by this much from the saturation of its surroundings
@@ -372,8 +383,7 @@ def find_tiny(
     h, w = mask.shape
     x0, y0 = origin
     fw, fh = frame_size if frame_size is not None else (w + x0, h + y0)
-    sat_all = hsv[:, :, 1]
-    sat = sat_all.astype(np.float32) * (mask > 0)
+    sat_all = hsv[:, :, 1]  # (weighted by the mask per region below: not a whole frame's float copy)
     out: list[Blob] = []
     for c in contours:
         bx, by, bw, bh = cv2.boundingRect(c)
@@ -384,7 +394,7 @@ def find_tiny(
             continue
         cx0, cy0 = max(bx - 2, 0), max(by - 2, 0)
         cx1, cy1 = min(bx + bw + 2, w), min(by + bh + 2, h)
-        patch = sat[cy0:cy1, cx0:cx1]
+        patch = sat_all[cy0:cy1, cx0:cx1].astype(np.float32) * (mask[cy0:cy1, cx0:cx1] > 0)
         total = float(patch.sum())
         if total <= 0:
             continue

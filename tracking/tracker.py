@@ -43,6 +43,7 @@ from .detect import (
     find_blobs_scaled,
     find_tiny,
     to_hsv,
+    too_dark,
 )
 from .static_map import StaticMap
 
@@ -475,6 +476,7 @@ class BallTracker:
         self.notes: list[str] = []  # ambiguities met and how they were resolved (for the user)
         self._started = False  # a first fix was made (start_uv only applies before it)
         self._acquire_spec = with_min_saturation(spec, self.options.acquire_min_saturation)
+        self._min_value = min(b.lower[2] for sp in (spec, self._acquire_spec) for b in sp.bands)  # HSV V = max(B,G,R)
         self._static = StaticMap(spec, self.options.static_time_constant_s)
         self._excluded: list[tuple[float, float, float]] = []  # (u, v, radius) [px] of objects found not to be the ball
         self._string: deque[float] = deque(maxlen=300)  # distances [px] of confident fixes from the pivot
@@ -725,6 +727,8 @@ class BallTracker:
         the roundest first (blobs too small for their shape to tell after the others), tiny ones by saturation.
         away: (u, v, distance) [px] — only candidates farther than that from (u, v) count."""
         o = self.options
+        if too_dark(frame, self._min_value):  # no pixel bright enough for the colour: nothing of it anywhere
+            return [], o.start_uv is not None
 
         def keep(blobs: list[Blob]) -> list[Blob]:
             blobs = self._candidates(blobs, t)

@@ -110,21 +110,53 @@ def ellipse_fit(contour: np.ndarray) -> float:
     cx, cy = m["m10"] / m["m00"], m["m01"] / m["m00"]
     # per row, the pixel centres inside: c02 dx² − 2 c11 dy dx + c20 dy² ≤ 4 det, an interval of dx
     half = 2.0 * math.sqrt(c02) + 1.0  # [px] beyond the ellipse's vertical half-extent (dy² ≤ 4 c02)
-    rows = np.arange(math.floor(cy - half), math.ceil(cy + half) + 1)
+    first, last = math.floor(cy - half), math.ceil(cy + half)
+    cs = np.zeros((h, w + 1), np.int32)
+    np.cumsum(fill, axis=1, out=cs[:, 1:])
+    count = _rows_in_ellipse_py if last - first < _PY_ROWS else _rows_in_ellipse_np
+    inner, both = count(cs, first, last, cx, cy, c20, c11, c02, det)
+    union = m["m00"] + inner - both
+    return both / union if union > 0 else 0.0
+
+
+_PY_ROWS = 48  # an ellipse over fewer rows is counted row by row in Python (numpy's cost is per call, not per row)
+
+
+def _rows_in_ellipse_py(cs, first, last, cx, cy, c20, c11, c02, det) -> tuple[float, float]:  # noqa: ANN001
+    """(pixels of the ellipse, of them the blob's) over rows first..last of the box (cs: the blob's per-row cumulative
+    sums); the same arithmetic as :func:`_rows_in_ellipse_np`, one row at a time."""
+    h, w = cs.shape[0], cs.shape[1] - 1
+    rows = cs.tolist()
+    a2, b2 = c11 * c11 - c02 * c20, 4.0 * det * c02
+    inner = both = 0.0
+    for r in range(first, last + 1):
+        dy = r - cy
+        disc = a2 * dy * dy + b2
+        root = math.sqrt(max(disc, 0.0))
+        lo = math.ceil(cx + (c11 * dy - root) / c02)
+        hi = max(math.floor(cx + (c11 * dy + root) / c02) + 1, lo) if disc >= 0.0 else lo
+        inner += hi - lo
+        if 0 <= r < h:
+            row = rows[r]
+            both += row[min(max(hi, 0), w)] - row[min(max(lo, 0), w)]
+    return inner, both
+
+
+def _rows_in_ellipse_np(cs, first, last, cx, cy, c20, c11, c02, det) -> tuple[float, float]:  # noqa: ANN001
+    """:func:`_rows_in_ellipse_py` for all rows at once."""
+    h, w = cs.shape[0], cs.shape[1] - 1
+    rows = np.arange(first, last + 1)
     dy = rows - cy
     disc = (c11 * c11 - c02 * c20) * dy * dy + 4.0 * det * c02
     root = np.sqrt(np.maximum(disc, 0.0))
     lo = np.ceil(cx + (c11 * dy - root) / c02)
     hi = np.where(disc >= 0.0, np.maximum(np.floor(cx + (c11 * dy + root) / c02) + 1.0, lo), lo)
     inbox = (rows >= 0) & (rows < h)
-    cs = np.zeros((h, w + 1), np.int32)
-    np.cumsum(fill, axis=1, out=cs[:, 1:])
     r = rows[inbox]
     both = float(
         (cs[r, np.clip(hi[inbox], 0, w).astype(np.intp)] - cs[r, np.clip(lo[inbox], 0, w).astype(np.intp)]).sum()
     )
-    union = m["m00"] + float((hi - lo).sum()) - both
-    return both / union if union > 0 else 0.0
+    return float((hi - lo).sum()), both
 
 
 def _aspect(m: dict) -> float:
@@ -311,6 +343,17 @@ def find_blobs_coarse(
     return out
 
 
+def too_dark(bgr: np.ndarray, min_value: int) -> bool:
+    """No pixel of the BGR image reaches the HSV value min_value (V = max(B, G, R)): no colour band starting there can
+    hold any of it, blurred, shrunk or not (a frame of a dark start: its whole-frame searches skipped)."""
+    import cv2
+
+    flat = (
+        bgr.reshape(bgr.shape[0], -1) if bgr.flags.c_contiguous else np.ascontiguousarray(bgr).reshape(bgr.shape[0], -1)
+    )
+    return cv2.minMaxLoc(flat)[1] < min_value
+
+
 TINY_MAX_AREA_PX = 40.0  # [px²] a blob up to this area is searched by :func:`find_tiny` (a disc of radius ≈ 3.5 px)
 _TINY_MIN_SATURATION = 45  # a 3 px ball blurred by the lens and the codec keeps about half its saturation
 _TINY_MIN_CONTRAST = 35  # ... and stands out by this much from the saturation of its surroundings
@@ -340,8 +383,7 @@ def find_tiny(
     h, w = mask.shape
     x0, y0 = origin
     fw, fh = frame_size if frame_size is not None else (w + x0, h + y0)
-    sat_all = hsv[:, :, 1]
-    sat = sat_all.astype(np.float32) * (mask > 0)
+    sat_all = hsv[:, :, 1]  # (weighted by the mask per region below: not a whole frame's float copy)
     out: list[Blob] = []
     for c in contours:
         bx, by, bw, bh = cv2.boundingRect(c)
@@ -352,7 +394,7 @@ def find_tiny(
             continue
         cx0, cy0 = max(bx - 2, 0), max(by - 2, 0)
         cx1, cy1 = min(bx + bw + 2, w), min(by + bh + 2, h)
-        patch = sat[cy0:cy1, cx0:cx1]
+        patch = sat_all[cy0:cy1, cx0:cx1].astype(np.float32) * (mask[cy0:cy1, cx0:cx1] > 0)
         total = float(patch.sum())
         if total <= 0:
             continue

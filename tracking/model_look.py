@@ -23,6 +23,7 @@ from scipy.optimize import least_squares
 
 from .color import ColorSpec, color_mask, with_min_saturation
 from .detect import Blob
+from .patches import Patch
 from .tracker import BallTracker
 
 MODEL_LOOK = 0.6  # confidence of a frame reported by the model look
@@ -76,36 +77,50 @@ def integrate(theta: float, rate: float, w2: float, c: float, dt: float, steps: 
     return out
 
 
-_AT_REST = (0.0,) * 10  # a Runge–Kutta stage not moved: the rates at the state itself
-
-
 def trajectory(theta: float, rate: float, w2: float, c: float, dt: float, steps: int) -> np.ndarray:
     """(steps + 1, 5): θ [rad] at 0, dt, …, steps·dt and its derivatives by (θ₀, θ'₀, w2, c) — the pendulum and its
     variational equations (a' = b, b' = −w2·cos θ·a − c·b − [sin θ for w2, θ' for c]) by classical Runge–Kutta in one
     pass: the least-squares fit's Jacobian without finite differences (written out: Python's cost is per operation)."""
-    out = np.empty((steps + 1, 5))
+    rows = [(theta, 1.0, 0.0, 0.0, 0.0)]
     y, z = theta, rate
     a0, b0, a1, b1, a2, b2, a3, b3 = 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0
-    out[0] = (y, 1.0, 0.0, 0.0, 0.0)
     h2, h6, sin, cos = 0.5 * dt, dt / 6.0, math.sin, math.cos
-    for i in range(steps):
-        k1 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, _AT_REST, 0.0, w2, c, sin, cos)
-        k2 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k1, h2, w2, c, sin, cos)
-        k3 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k2, h2, w2, c, sin, cos)
-        k4 = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k3, dt, w2, c, sin, cos)
-        y, z, a0, b0, a1, b1, a2, b2, a3, b3 = (
-            x + h6 * (p + 2.0 * q + 2.0 * r + t)
-            for x, p, q, r, t in zip((y, z, a0, b0, a1, b1, a2, b2, a3, b3), k1, k2, k3, k4)
+    for _ in range(steps):
+        s, m = sin(y), -w2 * cos(y)  # the first stage: the rates at the state itself
+        p = (
+            z,
+            -w2 * s - c * z,
+            b0,
+            m * a0 - c * b0,
+            b1,
+            m * a1 - c * b1,
+            b2,
+            m * a2 - c * b2 - s,
+            b3,
+            m * a3 - c * b3 - z,
         )
-        out[i + 1] = (y, a0, a1, a2, a3)
-    return out
+        q = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, *p, h2, w2, c, sin, cos)
+        r = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, *q, h2, w2, c, sin, cos)
+        t = _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, *r, dt, w2, c, sin, cos)
+        y += h6 * (p[0] + 2.0 * q[0] + 2.0 * r[0] + t[0])
+        z += h6 * (p[1] + 2.0 * q[1] + 2.0 * r[1] + t[1])
+        a0 += h6 * (p[2] + 2.0 * q[2] + 2.0 * r[2] + t[2])
+        b0 += h6 * (p[3] + 2.0 * q[3] + 2.0 * r[3] + t[3])
+        a1 += h6 * (p[4] + 2.0 * q[4] + 2.0 * r[4] + t[4])
+        b1 += h6 * (p[5] + 2.0 * q[5] + 2.0 * r[5] + t[5])
+        a2 += h6 * (p[6] + 2.0 * q[6] + 2.0 * r[6] + t[6])
+        b2 += h6 * (p[7] + 2.0 * q[7] + 2.0 * r[7] + t[7])
+        a3 += h6 * (p[8] + 2.0 * q[8] + 2.0 * r[8] + t[8])
+        b3 += h6 * (p[9] + 2.0 * q[9] + 2.0 * r[9] + t[9])
+        rows.append((y, a0, a1, a2, a3))
+    return np.array(rows)
 
 
-def _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k, h, w2, c, sin, cos) -> tuple:  # noqa: ANN001
+def _stage(y, z, a0, b0, a1, b1, a2, b2, a3, b3, k0, k1, k2, k3, k4, k5, k6, k7, k8, k9, h, w2, c, sin, cos) -> tuple:  # noqa: ANN001
     """The rates of (θ, θ', the four sensitivity pairs) at the state moved by h·k (one Runge–Kutta stage)."""
-    y, z = y + h * k[0], z + h * k[1]
-    a0, b0, a1, b1 = a0 + h * k[2], b0 + h * k[3], a1 + h * k[4], b1 + h * k[5]
-    a2, b2, a3, b3 = a2 + h * k[6], b2 + h * k[7], a3 + h * k[8], b3 + h * k[9]
+    y, z = y + h * k0, z + h * k1
+    a0, b0, a1, b1 = a0 + h * k2, b0 + h * k3, a1 + h * k4, b1 + h * k5
+    a2, b2, a3, b3 = a2 + h * k6, b2 + h * k7, a3 + h * k8, b3 + h * k9
     s, m = sin(y), -w2 * cos(y)
     return (
         z,
@@ -259,17 +274,21 @@ def fit_around(
     return out
 
 
-def shows_ball(bgr: np.ndarray, spec: ColorSpec, u: float, v: float, radius_px: float) -> bool:
+def shows_ball(
+    bgr: np.ndarray, spec: ColorSpec, u: float, v: float, radius_px: float, origin: tuple[int, int] = (0, 0)
+) -> bool:
     """The frame shows the ball's colour at (u, v) [px]: MIN_SHARE of the disc of radius_px there, its centroid
-    within MAX_OFF_RADII radii (≥ 3 px)."""
+    within MAX_OFF_RADII radii (≥ 3 px). origin: bgr is a patch of the frame whose first pixel is the frame's (x, y)
+    (False when the disc is not inside it)."""
     import cv2
 
     h, w = bgr.shape[:2]
-    x0, y0 = int(math.floor(u - radius_px)), int(math.floor(v - radius_px))
-    x1, y1 = int(math.ceil(u + radius_px)) + 1, int(math.ceil(v + radius_px)) + 1
-    if x0 < 0 or y0 < 0 or x1 > w or y1 > h:
+    ox, oy = origin
+    x0, y0, x1, y1 = disc_box(u, v, radius_px)
+    if x0 < ox or y0 < oy or x1 > ox + w or y1 > oy + h:
         return False
-    hue = color_mask(cv2.cvtColor(bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV), with_min_saturation(spec, MIN_SATURATION))
+    patch = bgr[y0 - oy : y1 - oy, x0 - ox : x1 - ox]
+    hue = color_mask(cv2.cvtColor(patch, cv2.COLOR_BGR2HSV), with_min_saturation(spec, MIN_SATURATION))
     ys, xs = np.mgrid[y0:y1, x0:x1]
     disc = (xs - u) ** 2 + (ys - v) ** 2 <= radius_px * radius_px
     on = (hue > 0) & disc
@@ -277,6 +296,16 @@ def shows_ball(bgr: np.ndarray, spec: ColorSpec, u: float, v: float, radius_px: 
         return False
     off = math.hypot(float(xs[on].mean()) - u, float(ys[on].mean()) - v)
     return off <= max(3.0, MAX_OFF_RADII * radius_px)
+
+
+def disc_box(u: float, v: float, radius_px: float) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1) [px]: the pixels x0 ≤ x < x1, y0 ≤ y < y1 :func:`shows_ball` looks at."""
+    return (
+        int(math.floor(u - radius_px)),
+        int(math.floor(v - radius_px)),
+        int(math.ceil(u + radius_px)) + 1,
+        int(math.ceil(v + radius_px)) + 1,
+    )
 
 
 def place(fit: PendulumFit, pivot: tuple[float, float], k: int, fps: float, radius_px: float) -> Blob:
@@ -295,10 +324,12 @@ def recover(
     pivot: tuple[float, float],
     radius_px: float,
     kept: dict[int, np.ndarray] | None = None,
+    patches: dict[int, Patch] | None = None,
 ) -> list[tuple[int, Blob]]:
     """The model look over a tracked video (``path``, frames evenly spaced at ``fps`` [1/s]; the frames ``kept`` since
-    the first pass used, the rest decoded again): (frame index, blob at the fitted place) of the frames it reports. uv (n, 2) [px] and trusted
-    (n,) are the track's centres and its fixes to trust; pivot [px] fixed; radius_px the ball's."""
+    the first pass used, then the ``patches`` kept around its fixes that hold the place, the rest decoded again):
+    (frame index, blob at the fitted place) of the frames it reports. uv (n, 2) [px] and trusted (n,) are the track's
+    centres and its fixes to trust; pivot [px] fixed; radius_px the ball's."""
     from .video import frames_at
 
     d = np.asarray(uv, float) - np.asarray(pivot, float)
@@ -312,9 +343,16 @@ def recover(
             plans[k] = place(fit, pivot, k, fps, radius_px)
     if not plans:
         return []
-    frames = frames_at(path, None, plans, kept)
+    kept, patches = kept or {}, patches or {}
+    local = {
+        k: patches[k]
+        for k, b in plans.items()
+        if k not in kept and k in patches and patches[k].covers(*disc_box(b.u, b.v, radius_px))
+    }
+    frames = frames_at(path, None, [k for k in plans if k not in local], kept)
+    looks = {k: (p.pixels, (p.x0, p.y0)) for k, p in local.items()} | {k: (f, (0, 0)) for k, f in frames.items()}
     return [
         (k, b)
         for k, b in sorted(plans.items())
-        if shows_ball(frames[k], tracker.spec, b.u, b.v, radius_px) and tracker.could_be_ball(b, pivot)
+        if shows_ball(looks[k][0], tracker.spec, b.u, b.v, radius_px, looks[k][1]) and tracker.could_be_ball(b, pivot)
     ]

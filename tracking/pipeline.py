@@ -26,10 +26,11 @@ from .subpixel import refine_centre
 from .second_look import SECOND_LOOK, recover
 from .model_look import MODEL_LOOK
 from .model_look import recover as model_recover
+from .patches import Patch, patch_around
 from .pendulum_check import check as pendulum_check
 from .smoothing import on_circle, outliers, smooth_centres
 from .tracker import BallTracker, TrackerOptions
-from .video import VideoInfo, iter_frames, prefetched, probe_video
+from .video import FrameBuffers, VideoInfo, iter_frames, prefetched, probe_video
 
 
 @dataclass(frozen=True)
@@ -121,6 +122,7 @@ def _check_inputs(
 
 _NAN2 = (math.nan, math.nan)
 KEEP_BYTES = 256 * 2**20  # frames where the ball was not surely found are kept for the looks after, up to this
+PATCH_BYTES = 64 * 2**20  # ... and patches around the other fixes (tracking.patches), up to this
 OUTLIER = 0.3  # confidence of a fix found to lie off the motion of its neighbours (reported unsure)
 
 
@@ -192,7 +194,9 @@ class _Trackers:
         self.off_pendulum = 0  # fixes off the pendulum over their window (reported unsure)
         self.on_pendulum: np.ndarray | None = None  # (n, 2) [px] the fixes' places on that pendulum (NaN: kept)
         self.kept: dict[int, np.ndarray] = {}  # frames where the ball was not (surely) found, for the looks after
+        self.patches: dict[int, Patch] = {}  # ... and patches of the others around the fix (tracking.patches)
         self.kept_bytes = 0
+        self.patch_bytes = 0
         self.frame_bytes = 0
 
     def step(self, frame: np.ndarray, t: float) -> tuple[Blob | None, tuple[float, float] | None]:
@@ -213,8 +217,13 @@ class _Trackers:
         cols.revise_ball(self.ball)
         cols.add(t, b, self.ball.confidence)
         if (b is None or self.ball.confidence < self.sure) and self.kept_bytes + frame.nbytes <= KEEP_BYTES:
-            self.kept[k] = frame  # (each decoded frame is a new array: kept without a copy)
+            self.kept[k] = frame  # (its buffer is not decoded into again: kept without a copy)
             self.kept_bytes += frame.nbytes
+        elif b is not None and self.fixed is not None:  # (the model look's, which needs a fixed pivot)
+            patch = patch_around(frame, *cols.uv[k], b.radius_px)
+            if patch is not None and self.patch_bytes + patch.pixels.nbytes <= PATCH_BYTES:
+                self.patches[k] = patch
+                self.patch_bytes += patch.pixels.nbytes
         self.frame_bytes = frame.nbytes
         return b, p
 
@@ -273,7 +282,7 @@ class _Trackers:
         if self.fixed is None or not on_circle(uv, trusted, self.fixed):
             return
         radius = float(np.median(np.array(cols.radius, float)[trusted]))
-        got = model_recover(self.ball, path, fps, uv, trusted, self.fixed, radius, self.kept)
+        got = model_recover(self.ball, path, fps, uv, trusted, self.fixed, radius, self.kept, self.patches)
         for k, blob in got:
             cols.set_ball(k, blob, MODEL_LOOK)
         self.modelled = len(got)
@@ -374,13 +383,17 @@ def track_video(
     info = _check_inputs(path, pivot_uv, pivot_color, calibration)
     trackers = _Trackers(ball, options, pivot_uv, pivot_color, pivot_options)
     angle = ImageAngles(calibration, info.size)
-    frames = iter_frames(path, fps)
+    buffers = FrameBuffers()  # frames not kept for the looks are decoded into again
+    frames = iter_frames(path, fps, buffers)
     if info.decoder_threads < 2:  # decoding overlaps the tracking: by the decoder's own threads, else by a thread of
         frames = prefetched(frames)  # ours (on top of the decoder's, it only costs GIL hand-offs: ≈ 0.1–0.3 ms a frame)
     for k, t, frame in frames:
         b, p = trackers.step(frame, t)
-        if on_frame is not None:
-            on_frame(frame, _shown(trackers, angle, k, t, b, p))
+        kept = k in trackers.kept
+        if on_frame is not None:  # (a preview draws on its frame: not on one kept for the looks)
+            on_frame(frame.copy() if kept else frame, _shown(trackers, angle, k, t, b, p))
+        if not kept:
+            buffers.give_back(frame)
         if progress is not None:
             progress(k + 1)
     trackers.finish()

@@ -28,6 +28,7 @@ class StaticMap:
         self.tau = float(time_constant_s)
         self.factor = 1
         self._map: np.ndarray | None = None
+        self._static: np.ndarray | None = None  # _map ≥ STATIC_LEVEL (asked per frame, changed at ≈ 10 Hz)
         self._t: float | None = None
         self.frames = 0
 
@@ -45,6 +46,7 @@ class StaticMap:
         mask = color_mask(cv2.cvtColor(small, cv2.COLOR_BGR2HSV), self.spec).astype(np.float32) * (1.0 / 255.0)
         if self._map is None or self._map.shape != mask.shape:
             self._map = np.zeros_like(mask)
+            self._static = np.zeros(mask.shape, bool)
             self._t = t
         alpha = float(min(1.0, max(0.0, (t - self._t) / self.tau))) if self.frames else 0.0
         self._t = t
@@ -56,6 +58,7 @@ class StaticMap:
         cv2.accumulateWeighted(mask, self._map, alpha)
         for (x0, y0, x1, y1), old in zip(keep, saved):
             self._map[y0:y1, x0:x1] = old
+        np.greater_equal(self._map, STATIC_LEVEL, out=self._static)
 
     def _cells(self, u: float, v: float, r: float) -> tuple[int, int, int, int]:
         f = self.factor
@@ -76,4 +79,4 @@ class StaticMap:
         x1, y1 = int(min(w, math.ceil((u + rr) / f))), int(min(h, math.ceil((v + rr) / f)))
         if x1 <= x0 or y1 <= y0:
             return 0.0
-        return float(np.mean(self._map[y0:y1, x0:x1] >= STATIC_LEVEL))
+        return np.count_nonzero(self._static[y0:y1, x0:x1]) / ((y1 - y0) * (x1 - x0))

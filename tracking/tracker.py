@@ -43,6 +43,7 @@ from .detect import (
     find_blobs_scaled,
     find_tiny,
     to_hsv,
+    too_dark,
 )
 from .static_map import StaticMap
 
@@ -324,8 +325,7 @@ class _Follower:
         o = self.options
         box = self.window(pred, w, h)
         streak = pred.frame_step_px > 2.0 * self.radius()  # blurred over more than its own size: ragged
-        gates = replace(
-            o.gates,
+        gates = BlobGates(  # (all four fields: cheaper than dataclasses.replace, once a frame)
             min_circularity=min(
                 o.gates.min_circularity, o.streak_min_circularity if streak else o.locked_min_circularity
             ),
@@ -476,6 +476,7 @@ class BallTracker:
         self.notes: list[str] = []  # ambiguities met and how they were resolved (for the user)
         self._started = False  # a first fix was made (start_uv only applies before it)
         self._acquire_spec = with_min_saturation(spec, self.options.acquire_min_saturation)
+        self._min_value = min(b.lower[2] for sp in (spec, self._acquire_spec) for b in sp.bands)  # HSV V = max(B,G,R)
         self._static = StaticMap(spec, self.options.static_time_constant_s)
         self._excluded: list[tuple[float, float, float]] = []  # (u, v, radius) [px] of objects found not to be the ball
         self._string: deque[float] = deque(maxlen=300)  # distances [px] of confident fixes from the pivot
@@ -528,6 +529,7 @@ class BallTracker:
         """
         index = self._n
         self._n += 1
+        self._coarse = None  # (a frame's buffer may be decoded into again: its coarse image is not kept past it)
         if not self._sized:
             self._size_gates(frame)
         self.confidence = 0.0
@@ -725,6 +727,8 @@ class BallTracker:
         the roundest first (blobs too small for their shape to tell after the others), tiny ones by saturation.
         away: (u, v, distance) [px] — only candidates farther than that from (u, v) count."""
         o = self.options
+        if too_dark(frame, self._min_value):  # no pixel bright enough for the colour: nothing of it anywhere
+            return [], o.start_uv is not None
 
         def keep(blobs: list[Blob]) -> list[Blob]:
             blobs = self._candidates(blobs, t)

@@ -124,11 +124,44 @@ def probe_video(path: str | Path) -> VideoInfo:
         cap.release()
 
 
-def iter_frames(path: str | Path, fps: float | None = None) -> Iterator[tuple[int, float, np.ndarray]]:
+class FrameBuffers:
+    """Frames to decode into, allocated CHUNK_FRAMES at a time and handed back for reuse once looked at: a reader
+    that keeps some frames for later (the tracker's looks) would otherwise fault in fresh 4 KiB pages for every frame
+    (≈ 0.7k page faults a 720p frame); a chunk is one large array, which numpy backs with huge pages. Thread-safe for
+    one taker and one giver (list append and pop under the GIL)."""
+
+    CHUNK_FRAMES = 8
+
+    def __init__(self) -> None:
+        self._free: list[np.ndarray] = []
+        self._shape: tuple[int, ...] | None = None
+
+    def take(self, shape: tuple[int, ...] | None) -> np.ndarray | None:
+        """A free frame of ``shape`` (h, w, 3) uint8 — its content undefined —, or None while the shape is unknown."""
+        if shape is None:
+            return None
+        if shape != self._shape:
+            self._free, self._shape = [], shape
+        if not self._free:
+            self._free.extend(np.empty((self.CHUNK_FRAMES, *shape), np.uint8))
+        return self._free.pop()
+
+    def give_back(self, frame: np.ndarray) -> None:
+        """The frame is no longer used: it may be decoded into again."""
+        if self._shape is None and frame.ndim == 3 and frame.dtype == np.uint8 and frame.flags.c_contiguous:
+            self._shape = frame.shape  # (the first frame, decoded before the size was known)
+        if frame.shape == self._shape:
+            self._free.append(frame)
+
+
+def iter_frames(
+    path: str | Path, fps: float | None = None, buffers: FrameBuffers | None = None
+) -> Iterator[tuple[int, float, np.ndarray]]:
     """Yield (frame index, time [s] from the first frame, BGR frame (h, w, 3) uint8) for every frame.
 
     fps: the capture rate [1/s] when the container's is wrong (slow-motion videos state their playback rate):
-    times are then index / fps, ignoring the container's timestamps.
+    times are then index / fps, ignoring the container's timestamps. buffers: frames are decoded into these (the
+    caller hands each back once done with it); else each frame is a new array.
 
     Raises InputError when the file cannot be opened or yields no frame at all.
     """
@@ -141,10 +174,15 @@ def iter_frames(path: str | Path, fps: float | None = None) -> Iterator[tuple[in
         t0: float | None = None
         last = -math.inf
         k = 0
+        shape: tuple[int, ...] | None = None
         while True:
-            ok, frame = cap.read()
+            buf = buffers.take(shape) if buffers is not None else None
+            ok, frame = cap.read(buf) if buf is not None else cap.read()
             if not ok or frame is None:
+                if buf is not None:
+                    buffers.give_back(buf)
                 break
+            shape = frame.shape
             if fps is not None:
                 yield k, k / fps, frame
                 k += 1

@@ -167,3 +167,22 @@ def test_a_large_ball_measured_on_a_shrunk_image(scale):
         assert b.area_px == pytest.approx(math.pi * 60.0**2, rel=0.06)
     (cut,) = find_blobs_scaled(img[0:300, 0:256], RED, BlobGates(max_area_px=2e4), scale, (0, 0), (400, 300))
     assert cut.clipped
+
+
+def test_too_dark_is_a_frame_where_no_pixel_reaches_the_colours_value_and_nothing_of_it_is_found():
+    import cv2
+    import numpy as np
+
+    from tracking.color import color_spec
+    from tracking.detect import BlobGates, find_blobs, find_tiny, too_dark
+
+    red = color_spec("red")
+    low = min(b.lower[2] for b in red.bands)
+    frame = np.full((120, 160, 3), 5, np.uint8)
+    cv2.circle(frame, (80, 60), 8, (0, 0, low - 1), -1)  # a red ball just too dark to have a hue band's value
+    cv2.circle(frame, (30, 30), 2, (0, 0, low - 1), -1)
+    assert too_dark(frame, low) and not too_dark(frame, low - 1)
+    assert find_blobs(frame, red, BlobGates()) == [] and find_tiny(frame, red) == []
+    frame[60, 80] = (0, 0, low)  # one pixel bright enough: the search must run
+    assert not too_dark(frame, low)
+    assert too_dark(frame[:, 100:], low)  # a window of a frame (not contiguous)

@@ -69,3 +69,28 @@ def test_frames_at_takes_the_kept_frames_and_decodes_only_the_others(tmp_path):
     assert got[5] is marker  # kept: not decoded again
     assert abs(float(got[7].mean()) - 140.0) < 3.0 and abs(float(got[2].mean()) - 40.0) < 3.0
     assert frames_at(path, None, [5], kept={5: marker}) == {5: marker}  # nothing to decode
+
+
+def test_frames_decoded_into_buffers_are_those_decoded_afresh_and_the_buffers_are_reused(tmp_path):
+    import cv2
+    import numpy as np
+
+    from tracking.video import FrameBuffers, iter_frames
+
+    path = tmp_path / "noise.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, (64, 48))
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        writer.write(rng.integers(0, 255, (48, 64, 3), np.uint8))
+    writer.release()
+    fresh = [f for _, _, f in iter_frames(path)]
+    buffers, kept, seen = FrameBuffers(), {}, set()
+    for k, _, frame in iter_frames(path, buffers=buffers):
+        assert np.array_equal(frame, fresh[k])
+        seen.add(frame.__array_interface__["data"][0])
+        if k in (3, 17):
+            kept[k] = frame  # not handed back: never decoded into again
+        else:
+            buffers.give_back(frame)
+    assert len(seen) <= 3  # two kept, the others decoded into one buffer again and again
+    assert all(np.array_equal(f, fresh[k]) for k, f in kept.items())

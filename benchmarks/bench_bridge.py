@@ -154,9 +154,15 @@ def _session(transport, source_proc, duration_s: float, tmp: Path, timeout_s: fl
 
 
 def _on_time(tab) -> np.ndarray:
-    """Rows whose message says our previous reply reached the controller in time (its reflected counter is the one
-    before its own): the controller executed that command, not its extrapolation of the two before it."""
-    return tab.column("seq") - tab.column("reflected_seq") == 1
+    """Rows whose message says our previous reply reached the controller in time (its reflected counter is the counter
+    of our reply to the message just before): the controller executed that command, not its extrapolation of the two
+    before it. (Our counter counts our replies, not the controller's messages: after a message we never answered it
+    lags the message counter for good — comparing those two read every reply of such a session as late.)"""
+    seq, refl = tab.column("seq"), tab.column("reflected_seq")
+    ours, answered = tab.column("client_seq"), tab.column("answered")
+    ok = np.zeros(len(seq), dtype=bool)
+    ok[1:] = (np.diff(seq) == 1) & (refl[1:] == ours[:-1]) & (answered[:-1] == 1)
+    return ok
 
 
 def _consecutive(tab, keep, k: int) -> np.ndarray:

@@ -11,7 +11,9 @@ of every command we send measured against what it executed.
 
 :func:`command_ratios` judges every reply (decoded from its datagram) against the history executed when the message
 it answers was sent: the last three positions, continued by our previous command where the controller applied it
-in time; after a step of the controller's own (a hold, a bridge, a late reply) whose state leaves the acceleration
+in time; :func:`queued_ratios` judges the robot's own motion where the controller applies our replies one after
+the other, late (its replies queue: a judge at the message's time alone passed a core whose queued commands moved the
+robot at 100× the acceleration limit); after a step of the controller's own (a hold, a bridge, a late reply) whose state leaves the acceleration
 or velocity limit, the state it holds — that position, at rest after a hold, else at the velocity before the
 step; acceleration 0.
 """
@@ -45,6 +47,7 @@ class BurstController(ScriptedController):
         self._reflected = 0  # the client's sequence counter of the newest reply applied
         self._msg_step: dict[int, int] = {}  # message seq → the step its reply was meant for
         self._last_cmd: tuple[float, ...] | None = None  # the last reply applied, as sent
+        self.applied: dict[int, int] = {}  # message seq → the index into executed its reply was applied at
         self.on_time: list[bool] = []  # per executed step: it applied the reply to the message just before, in time
 
     def _robot_step(self, c: Cycle, pos: tuple[float, ...] | None) -> None:
@@ -115,6 +118,7 @@ class BurstController(ScriptedController):
                 q = tuple(a + late * (a - b) / gap for a, b in zip(q, self._last_cmd))
             self._last_cmd = best[2] if best[2] is not None else self._last_cmd
             self._applied_seq, self._reflected = best[1], best[3]
+            self.applied[best[1]] = now
             self._robot_step(c, q)
             self.on_time.append(best[1] == seq and best[0] == now)
             return
@@ -188,3 +192,21 @@ def command_ratios(ctl: BurstController, limits, dt: float = 1e-3) -> tuple[floa
     replies = [r for r in ctl.replies if r.state == CA and r.position is not None and r.seq in by_seq]
     r = step_ratios(np.array([x.position for x in replies]), [by_seq[x.seq] for x in replies], limits, dt)
     return tuple(float(np.nanmax(r[:, k])) if np.isfinite(r[:, k]).any() else 0.0 for k in range(3))  # type: ignore[return-value]
+
+
+def queued_ratios(ctl: BurstController, limits, dt: float = 1e-3) -> tuple[float, float, float]:
+    """The largest velocity, acceleration and jerk over their limits of the robot's executed motion where each step
+    applied a late reply of ours right after the one before it (the controller's replies queue): differences of order
+    k wherever the last k steps all did so — the steps of the controller's own (holds, bridges, dropped replies) and
+    the replies in time (:func:`command_ratios`) left out."""
+    e = np.array(ctl.executed)
+    step_of = {k: s for s, k in ctl.applied.items()}
+    queued = np.zeros(len(e), bool)  # step k applied the reply to the message after the one step k − 1 applied, late
+    for k, s in step_of.items():
+        queued[k] = k > 0 and step_of.get(k - 1) == s - 1 and k != ctl.histories[s][0]
+    out = []
+    for order, lim in ((1, limits.velocity), (2, limits.acceleration), (3, limits.jerk)):
+        d = np.abs(np.diff(e, order, axis=0)) / (lim * dt**order)
+        ok = np.convolve(~queued[1:], np.ones(order), "valid") == 0  # the last ``order`` steps all queued
+        out.append(float(d[ok].max()) if ok.any() else 0.0)
+    return tuple(out)  # type: ignore[return-value]

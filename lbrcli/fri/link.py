@@ -2,16 +2,23 @@
 :class:`~lbrcli.fri.application.ClientApplication`: the session's clock, the controller's messages lost on the way
 (bridged by its extrapolation), our replies it reports not received (its reflected counter), and — once the first
 message outside IDLE tells the period — the executed motion (:class:`~lbrcli.fri.motion.ExecutedMotion`) and the
-supervision of the trends (:class:`~lbrcli.fri.supervision.Supervisor`)."""
+supervision of the trends (:class:`~lbrcli.fri.supervision.Supervisor`).
+
+A controller whose replies arrive a steady few periods late executes our commands in order, late: each message
+reflects the reply after the one the previous message reflected, and reports that reply's position. Our commands
+are then not bridged but queued: the history stays ours (re-basing it on the old position the message reports would
+make each next command a jump from the ones still in flight — 100× the acceleration limit at 1–5 periods late)."""
 
 from __future__ import annotations
 
+from collections import deque
 from typing import Any
 
 from trajectories.limits import JointLimits
 
 from .clock import SessionClock
-from .motion import ExecutedMotion
+from .motion import MATCH_TOL, NOISE_ALLOWANCE, ExecutedMotion
+from .rejoin import far
 from .supervision import Supervisor
 
 from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE, STATE_IDLE as IDLE
@@ -45,6 +52,9 @@ class Link:
         self.missed = 0  # the controller's messages that never arrived
         self.lost_replies = 0  # commands the controller reported not received (reflected counter) while moving
         self.reply_seq_prev: int | None = None  # our reply to the previous message, if it carried a position
+        self.late_in_order = 0  # messages that reflected our commands executed in order, late (not bridged)
+        self._sent: deque[tuple[int, tuple[float, ...]]] = deque(maxlen=64)  # (client seq, position) sent moving
+        self._reflected: int | None = None  # the reflected counter of the previous message
 
     @property
     def braking_cycles(self) -> int:
@@ -79,12 +89,26 @@ class Link:
                 if skipped:  # where the controller really is after the gap (it may have held, not extrapolated)
                     pos, measured = _reported(mon)
                     self.motion.gap_seen(pos, skipped, measured)  # type: ignore[union-attr]
+        reflected, self._reflected = self._reflected, mon.header.reflectedSequenceCounter
         if lost_reply and moving:
-            self.motion.reply_lost(*_reported(mon))  # type: ignore[union-attr]
+            pos, measured = _reported(mon)
+            if self._in_order(reflected, pos, measured):
+                self.late_in_order += 1
+            else:
+                self.motion.reply_lost(pos, measured)  # type: ignore[union-attr]
             self.lost_replies += 1  # (late replies: the controller had not received it when it sent this message)
         elif d == 1 and self.motion is not None and self.motion.lagging:
             self.motion.confirmed()  # (reflected: our last reply was in time)
         return skipped
+
+    def _in_order(self, reflected: int | None, pos: Any, measured: bool) -> bool:
+        """The message reflects the reply after the one the previous message reflected (``reflected``) and reports
+        its position: the controller executes our commands in order, late."""
+        r = self._reflected
+        if reflected is None or r != (reflected + 1) & 0xFFFFFFFF or len(pos) != 7:
+            return False
+        q = next((q for c, q in reversed(self._sent) if c == r), None)
+        return q is not None and far(pos, q) <= (NOISE_ALLOWANCE if measured else MATCH_TOL)
 
     def learn_period(self, mon: Any) -> bool:
         """The first message outside IDLE tells the command period: the executed motion and its supervision are
@@ -105,6 +129,8 @@ class Link:
             self.sup.sent(client_seq, seq)
         if cyc.sent_position and cyc.state == CMD_ACTIVE:
             self.reply_seq_prev = client_seq
+            if self.motion is not None:
+                self._sent.append((client_seq, self.motion.prev))
 
     def supervise(
         self, mon: Any, seq: int, supervised: Supervised, position_mode: bool, stamp_ns: int | None

@@ -9,8 +9,9 @@ of every command we send measured against what it executed.
   older ones are dropped; a message reflects the newest reply applied;
 - its measured positions carry noise (``noise`` [rad], seeded); FRI 1.15 also reports the exact commanded one.
 
-:func:`command_ratios` judges every reply (decoded from its datagram) against the history executed when the message
-it answers was sent: the last three positions, continued by our previous command where the controller applied it
+:func:`reply_ratios` judges every reply applied (decoded from its datagram) against the history executed when the
+message it answers was sent — or, where the controller applies our replies one after the other, late (they queue),
+when it was applied: the last three positions, continued by our previous command where the controller applied it
 in time; after a step of the controller's own (a hold, a bridge, a late reply) whose state leaves the acceleration
 or velocity limit, the state it holds — that position, at rest after a hold, else at the velocity before the
 step; acceleration 0.
@@ -45,6 +46,7 @@ class BurstController(ScriptedController):
         self._reflected = 0  # the client's sequence counter of the newest reply applied
         self._msg_step: dict[int, int] = {}  # message seq → the step its reply was meant for
         self._last_cmd: tuple[float, ...] | None = None  # the last reply applied, as sent
+        self.applied: dict[int, int] = {}  # message seq → the index into executed its reply was applied at
         self.on_time: list[bool] = []  # per executed step: it applied the reply to the message just before, in time
 
     def _robot_step(self, c: Cycle, pos: tuple[float, ...] | None) -> None:
@@ -115,6 +117,7 @@ class BurstController(ScriptedController):
                 q = tuple(a + late * (a - b) / gap for a, b in zip(q, self._last_cmd))
             self._last_cmd = best[2] if best[2] is not None else self._last_cmd
             self._applied_seq, self._reflected = best[1], best[3]
+            self.applied[best[1]] = now
             self._robot_step(c, q)
             self.on_time.append(best[1] == seq and best[0] == now)
             return
@@ -173,18 +176,74 @@ def step_ratios(commands: np.ndarray, hist: list[tuple | None], limits, dt: floa
     return out
 
 
-def command_ratios(ctl: BurstController, limits, dt: float = 1e-3) -> tuple[float, float, float]:
-    """The largest velocity, acceleration and jerk of our replies in COMMANDING_ACTIVE over their limits, each the next
-    step after the history the controller had executed when it sent the message answered (:func:`reference_histories`
-    over its own positions, not the noisy ones it reported)."""
-    seqs = sorted(ctl.histories)
+def _at_messages(ctl: BurstController, limits, dt: float) -> dict[int, tuple | None]:
+    """Message seq → the history executed when it was sent (:func:`reference_histories`)."""
     e = [np.asarray(x) for x in ctl.executed]
-    rows = [(s, *ctl.histories[s]) for s in seqs]
+    rows = [(s, *ctl.histories[s]) for s in sorted(ctl.histories)]
     last3 = [(e[k - 1], e[k - 2], e[k - 3]) if k >= 3 else None for _, k, _ in rows]
-    ours = [o for _, _, o in rows]
     follows = [j > 0 and rows[j - 1][0] == s - 1 for j, (s, _, _) in enumerate(rows)]
-    hist = reference_histories(last3, ours, follows, dt, limits)
-    by_seq = {s: h for (s, _, _), h in zip(rows, hist)}
+    hist = reference_histories(last3, [o for _, _, o in rows], follows, dt, limits)
+    return {s: h for (s, _, _), h in zip(rows, hist)}
+
+
+def _at_application(ctl: BurstController, limits, dt: float) -> dict[int, tuple | None]:
+    """Message seq → for each reply applied, the history it is judged against (see :func:`reply_ratios`)."""
+    e = [np.asarray(x) for x in ctl.executed]
+    rows = sorted((k, s) for s, k in ctl.applied.items())  # (step applied at, message seq)
+    at: list[int] = []
+    ours, follows = [], []
+    for j, (k, s) in enumerate(rows):
+        queued = j > 0 and rows[j - 1] == (k - 1, s - 1) and k != ctl.histories[s][0]
+        at.append(k if queued else ctl.histories[s][0])
+        ours.append(queued or ctl.histories[s][1])
+        follows.append(j > 0 and rows[j - 1][1] == s - 1 and (not queued or at[j - 1] == k - 1))
+    last3 = [(e[k - 1], e[k - 2], e[k - 3]) if k >= 3 else None for k in at]
+    return {s: h for (_, s), h in zip(rows, reference_histories(last3, ours, follows, dt, limits))}
+
+
+def reply_ratios(ctl: BurstController, limits, dt: float = 1e-3) -> tuple[list[int], np.ndarray]:
+    """(message seqs, (n, 3) ratios): each of our replies in COMMANDING_ACTIVE, its velocity, acceleration and jerk
+    over their limits as the next step after the history it is judged against (:func:`step_ratios`; the controller's
+    own positions, not the noisy ones it reported). A reply applied right after our reply to the message before, late
+    (the controller's replies queue), is judged against what was executed before it was applied; any other against
+    what was executed when its message was sent — the client cannot know that a controller will hold, bridge or drop
+    the replies in flight (a judge at application only would blame the reply for the controller's own step; one at
+    the message's time only passed a core whose queued commands moved the robot at 100× the acceleration limit)."""
+    by_seq = _at_messages(ctl, limits, dt) | _at_application(ctl, limits, dt)
     replies = [r for r in ctl.replies if r.state == CA and r.position is not None and r.seq in by_seq]
-    r = step_ratios(np.array([x.position for x in replies]), [by_seq[x.seq] for x in replies], limits, dt)
+    pos = np.array([x.position for x in replies]).reshape(-1, 7)
+    return [r.seq for r in replies], step_ratios(pos, [by_seq[x.seq] for x in replies], limits, dt)
+
+
+def command_ratios(ctl: BurstController, limits, dt: float = 1e-3) -> tuple[float, float, float]:
+    """The largest velocity, acceleration and jerk of our applied replies over their limits (:func:`reply_ratios`)."""
+    r = reply_ratios(ctl, limits, dt)[1]
     return tuple(float(np.nanmax(r[:, k])) if np.isfinite(r[:, k]).any() else 0.0 for k in range(3))  # type: ignore[return-value]
+
+
+AROUND_CHANGE = (-1, 4)  # the replies to messages around a change of lateness (script indices from the change)
+
+
+def late_bursts(seed: int, start: int = 600, end: int = 2800, offset: int = 11) -> dict[int, int]:
+    """Script index (``offset`` past the preamble) → lateness [periods]: bursts of 5–60 replies each 2–20 periods
+    late, 100–400 replies apart (seeded)."""
+    rng = np.random.default_rng(seed)
+    late, k = {}, start
+    while k < end:
+        lateness, n = int(rng.integers(2, 21)), int(rng.integers(5, 60))
+        late.update({offset + i: lateness for i in range(k, k + n)})
+        k += n + int(rng.integers(100, 400))
+    return late
+
+
+def over_limits(ctl: BurstController, limits, late: dict[int, int], dt: float = 1e-3) -> tuple[list, list]:
+    """(over, stray): the replies the controller applied that break a limit as the robot executed them
+    (:func:`reply_ratios`), as (message seq, ratios); ``stray``: those not answering a message ``AROUND_CHANGE`` a
+    change of lateness — where no client can tell whether the controller held or will apply its replies late
+    (entry), or will drop the ones in flight (exit). Replies the controller dropped never moved the robot."""
+    index = {s: i for i, s in enumerate(ctl.sent_seqs)}
+    seqs, r = reply_ratios(ctl, limits, dt)
+    over = [(s, row) for s, row in zip(seqs, np.nan_to_num(r)) if row.max() > 1 + 1e-6 and s in ctl.applied]
+    changes = [i for i in range(1, len(ctl.script)) if late.get(i, 0) != late.get(i - 1, 0)]
+    lo, hi = AROUND_CHANGE
+    return over, [(s, row) for s, row in over if not any(lo <= index[s] - c < hi for c in changes)]

@@ -14,7 +14,7 @@ import functools
 import numpy as np
 
 from lbrcli.bridge.testing import LockStepSource, follow_in_lock_step
-from lbrcli.fri.testing.holding import BurstController, late_bursts, over_limits
+from lbrcli.fri.testing.holding import BurstController, executed_ratios, late_bursts, over_limits
 from trajectories.limits import default_limits
 
 
@@ -31,6 +31,9 @@ def _cases(quick: bool) -> dict[str, dict]:
             )
     late = {11 + i: 3 for i in range(600, 2000)}
     out["3 periods late for 1.4 s, FRI 2.7, noise 5 µrad"] = dict(late=late, hold=False, noise=5e-6, version="2.7")
+    for lateness in (1, 3):  # a controller that carries a late reply forward at our commands' velocity (lbr sim)
+        late = {11 + i: lateness for i in range(600, 2000)}
+        out[f"{lateness} periods late for 1.4 s, controller carries late replies forward"] = dict(late=late, carry=True)
     return out
 
 
@@ -42,7 +45,11 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         r = follow_in_lock_step(LockStepSource(1000.0, True, seed=0), lim, controller=ctl, version=version)
         over, stray = over_limits(r.controller, lim, kw["late"])
         worst = np.max([row for _, row in over], axis=0) if over else np.zeros(3)
-        rows += [(f"{name}: replies over a limit", len(over), ""),
+        ex = executed_ratios(r.controller, lim, kw["late"])
+        rows += [(f"{name}: executed away from a change: largest {w} / limit", round(float(x), 2), "×")
+                 for w, x in zip(("velocity", "acceleration", "jerk"), ex)]  # fmt: skip
+        rows += [(f"{name}: session length", round(float(r.t[-1]), 3), "s"),
+                 (f"{name}: replies over a limit", len(over), ""),
                  (f"{name}: of them away from a change of lateness", len(stray), ""),
                  (f"{name}: largest acceleration / limit", round(float(worst[1]), 2), "×"),
                  (f"{name}: braking stop", float(r.follower.executed.braking), "")]  # fmt: skip

@@ -103,12 +103,22 @@ class Link:
 
     def _in_order(self, reflected: int | None, pos: Any, measured: bool) -> bool:
         """The message reflects the reply after the one the previous message reflected (``reflected``) and reports
-        its position: the controller executes our commands in order, late."""
+        its position, as sent or carried forward a whole number of periods at our commands' velocity (as our simulator
+        does with a late reply): the controller executes our commands in order, late."""
         r = self._reflected
         if reflected is None or r != (reflected + 1) & 0xFFFFFFFF or len(pos) != 7:
             return False
-        q = next((q for c, q in reversed(self._sent) if c == r), None)
-        return q is not None and far(pos, q) <= (NOISE_ALLOWANCE if measured else MATCH_TOL)
+        q = q1 = None
+        for c, x in reversed(self._sent):
+            if c == r:
+                q = x
+            elif c == r - 1 and q is not None:
+                q1 = x
+                break
+        tol = NOISE_ALLOWANCE if measured else MATCH_TOL
+        if q is None:
+            return False
+        return far(pos, q) <= tol or (q1 is not None and _carried(pos, q, q1, tol))
 
     def learn_period(self, mon: Any) -> bool:
         """The first message outside IDLE tells the command period: the executed motion and its supervision are
@@ -145,3 +155,13 @@ class Link:
         if problem is not None and sup.measured_period_s is not None and self.motion is not None:
             self.motion.retime(sup.measured_period_s)
         return problem
+
+
+def _carried(pos: Any, q: tuple[float, ...], q1: tuple[float, ...], tol: float) -> bool:
+    """``pos`` [rad] is our command ``q`` carried forward 1–63 periods at the velocity from ``q1`` (the one before)."""
+    d = [a - b for a, b in zip(q, q1)]
+    dd = sum(x * x for x in d)
+    if dd <= 0.0:
+        return False
+    n = round(sum((p - a) * x for p, a, x in zip(pos, q, d)) / dd)
+    return 0 < n < 64 and far(pos, [a + n * x for a, x in zip(q, d)]) <= tol

@@ -47,6 +47,7 @@ class BurstController(ScriptedController):
         self._msg_step: dict[int, int] = {}  # message seq → the step its reply was meant for
         self._last_cmd: tuple[float, ...] | None = None  # the last reply applied, as sent
         self.applied: dict[int, int] = {}  # message seq → the index into executed its reply was applied at
+        self.applied_q: dict[int, tuple[float, ...]] = {}  # message seq → the position its reply was applied as [rad]
         self.on_time: list[bool] = []  # per executed step: it applied the reply to the message just before, in time
 
     def _robot_step(self, c: Cycle, pos: tuple[float, ...] | None) -> None:
@@ -118,6 +119,8 @@ class BurstController(ScriptedController):
             self._last_cmd = best[2] if best[2] is not None else self._last_cmd
             self._applied_seq, self._reflected = best[1], best[3]
             self.applied[best[1]] = now
+            if q is not None:
+                self.applied_q[best[1]] = q
             self._robot_step(c, q)
             self.on_time.append(best[1] == seq and best[0] == now)
             return
@@ -208,10 +211,11 @@ def reply_ratios(ctl: BurstController, limits, dt: float = 1e-3) -> tuple[list[i
     (the controller's replies queue), is judged against what was executed before it was applied; any other against
     what was executed when its message was sent — the client cannot know that a controller will hold, bridge or drop
     the replies in flight (a judge at application only would blame the reply for the controller's own step; one at
-    the message's time only passed a core whose queued commands moved the robot at 100× the acceleration limit)."""
+    the message's time only passed a core whose queued commands moved the robot at 100× the acceleration limit). A
+    reply applied is judged as the position it was applied as (``carry``: carried forward, not as sent)."""
     by_seq = _at_messages(ctl, limits, dt) | _at_application(ctl, limits, dt)
     replies = [r for r in ctl.replies if r.state == CA and r.position is not None and r.seq in by_seq]
-    pos = np.array([x.position for x in replies]).reshape(-1, 7)
+    pos = np.array([ctl.applied_q.get(x.seq, x.position) for x in replies]).reshape(-1, 7)
     return [r.seq for r in replies], step_ratios(pos, [by_seq[x.seq] for x in replies], limits, dt)
 
 
@@ -247,3 +251,20 @@ def over_limits(ctl: BurstController, limits, late: dict[int, int], dt: float = 
     changes = [i for i in range(1, len(ctl.script)) if late.get(i, 0) != late.get(i - 1, 0)]
     lo, hi = AROUND_CHANGE
     return over, [(s, row) for s, row in over if not any(lo <= index[s] - c < hi for c in changes)]
+
+
+def executed_ratios(ctl, lim, late: dict[int, int], margin: int = 6, dt: float = 1e-3) -> np.ndarray:
+    """(3,) the largest velocity, acceleration and jerk over their limits of the robot's executed motion, leaving out
+    the steps from each change of lateness to ``margin`` after the lateness around it (the controller's own steps
+    there: a hold or bridge, then the queue it applies or drops)."""
+    e = np.array(ctl.executed)
+    changes = [i for i in range(1, len(ctl.script)) if late.get(i, 0) != late.get(i - 1, 0)]
+    skip = np.zeros(len(e), bool)
+    for c in changes:
+        k = ctl.histories[ctl.sent_seqs[c]][0]
+        skip[max(0, k - 3) : k + max(late.get(c, 0), late.get(c - 1, 0)) + margin] = True
+    out = []
+    for order, limit in ((1, lim.velocity), (2, lim.acceleration), (3, lim.jerk)):
+        r = (np.abs(np.diff(e, order, axis=0)) / (limit * dt**order)).max(1)
+        out.append(r[~skip[order:]].max())
+    return np.array(out)

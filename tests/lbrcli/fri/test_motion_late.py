@@ -16,7 +16,14 @@ import pytest
 from lbrcli.bridge.testing import LockStepSource, follow_in_lock_step
 from lbrcli.fri.testing import CA, Cycle
 from lbrcli.fri.motion import COAST_MAX
-from lbrcli.fri.testing.holding import AROUND_CHANGE, BurstController, command_ratios, late_bursts, over_limits
+from lbrcli.fri.testing.holding import (
+    AROUND_CHANGE,
+    BurstController,
+    command_ratios,
+    executed_ratios,
+    late_bursts,
+    over_limits,
+)
 from trajectories.limits import default_limits
 
 TOL = 1 + 1e-6
@@ -85,3 +92,19 @@ def test_replies_late_for_1400_cycles_in_a_row_are_followed_to_the_end_within_th
     m = run.follower.executed
     assert run.t[-1] > 2.9 and not m.braking
     assert m.rebased_cycles <= 2 and m.coast_cycles <= 2 * COAST_MAX  # (the old core: > 1,000 re-bases)
+
+
+@pytest.mark.parametrize("hold, lateness", [(False, 1), (True, 3)])
+def test_late_replies_carried_forward_by_the_controller_do_not_feed_back(hold, lateness):
+    """A controller that carries a late reply forward by its lateness at our commands' velocity (as `lbr sim` does),
+    every reply 1–3 periods late for 1.4 s: the message reports our command carried forward, the core recognises it
+    as ours (no re-base). The old core re-based on it; the next command jumped by the carry, the controller carried the
+    jump forward — a loop that diverged within 20 ms (4,756× the velocity limit as executed, the session lost at
+    0.63 s). Executed velocity and acceleration within the limits away from the stretch's ends; jerk within
+    1 + 2 × lateness of it (the carry adds lateness × our commands' fourth difference)."""
+    lim = default_limits()
+    late = {11 + i: lateness for i in range(600, 2000)}
+    ctl = functools.partial(BurstController, hold=hold, late=late, carry=True)
+    run = follow_in_lock_step(LockStepSource(1000.0, True, seed=0), lim, controller=ctl)
+    v, a, j = executed_ratios(run.controller, lim, late)
+    assert run.t[-1] > 2.9 and v <= TOL and a <= TOL and j <= 1 + 2 * lateness, (run.t[-1], v, a, j)

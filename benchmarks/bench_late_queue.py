@@ -30,7 +30,7 @@ def _cases(quick: bool) -> dict[str, dict]:
                 late=late_bursts(seed), hold=hold
             )
     late = {11 + i: 3 for i in range(600, 2000)}
-    out["3 periods late for 1.4 s, FRI 2.7, noise 5 µrad"] = dict(late=late, hold=False, noise=5e-6, version="2.7")
+    out["3 periods late for 1.4 s, FRI 2.7, noise 10 µrad"] = dict(late=late, hold=False, noise=1e-5, version="2.7")
     for lateness in (1, 3):  # a controller that carries a late reply forward at our commands' velocity (lbr sim)
         late = {11 + i: lateness for i in range(600, 2000)}
         out[f"{lateness} periods late for 1.4 s, controller carries late replies forward"] = dict(late=late, carry=True)

@@ -17,7 +17,7 @@ from typing import Any
 from trajectories.limits import JointLimits
 
 from .clock import SessionClock
-from .motion import MATCH_TOL, NOISE_ALLOWANCE, ExecutedMotion
+from .motion import MATCH_TOL, ExecutedMotion
 from .rejoin import far
 from .supervision import Supervisor
 
@@ -102,9 +102,10 @@ class Link:
         return skipped
 
     def _in_order(self, reflected: int | None, pos: Any, measured: bool) -> bool:
-        """The message reflects the reply after the one the previous message reflected (``reflected``) and reports
-        its position, as sent or carried forward a whole number of periods at our commands' velocity (as our simulator
-        does with a late reply): the controller executes our commands in order, late."""
+        """The message reflects the reply after the one the previous message reflected (``reflected``) and — its
+        commanded position exact (FRI 1.15) — reports that reply's position, as sent or carried forward a whole number
+        of periods at our commands' velocity (as our simulator does with a late reply): the controller executes our
+        commands in order, late. A measured position (FRI 2.x) carries noise and the servo's lag: the counter decides."""
         r = self._reflected
         if reflected is None or r != (reflected + 1) & 0xFFFFFFFF or len(pos) != 7:
             return False
@@ -115,10 +116,9 @@ class Link:
             elif c == r - 1 and q is not None:
                 q1 = x
                 break
-        tol = NOISE_ALLOWANCE if measured else MATCH_TOL
         if q is None:
             return False
-        return far(pos, q) <= tol or (q1 is not None and _carried(pos, q, q1, tol))
+        return measured or far(pos, q) <= MATCH_TOL or (q1 is not None and _carried(pos, q, q1, MATCH_TOL))
 
     def learn_period(self, mon: Any) -> bool:
         """The first message outside IDLE tells the command period: the executed motion and its supervision are

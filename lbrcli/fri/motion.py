@@ -353,7 +353,7 @@ class ExecutedMotion:
         guard = self.guard
         if state == _CMD_ACTIVE:
             prev, prev2 = self.prev, self.prev2
-        else:  # COMMANDING_WAIT: the robot stands where it is measured, the command must be reachable from there
+        else:  # COMMANDING_WAIT: the robot stands at ``measured`` (the ipo position), the command must reach it
             prev = prev2 = tuple(measured)
         if self.braking:
             return self._braking_command(mode, prev, prev2)

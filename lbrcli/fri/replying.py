@@ -183,7 +183,7 @@ class Replier:
                     return found, False
                 motion.begin_braking()  # from the joints last sent, within the joint limits, as any stop
         try:
-            q, tau, wrench, refused = motion.next_command(mon.monitorData.measuredJointPosition.value, state, mode,
+            q, tau, wrench, refused = motion.next_command(_standing(mon), state, mode,
                                                           cmd.joint_position, cmd.torque, cmd.wrench,
                                                           client.exact_command, client.jerk_limited)  # fmt: skip
         except Refused as exc:
@@ -209,3 +209,12 @@ class Replier:
         cyc.command = q
         cyc.sent_position = True
         return None if found is None else (found, True)
+
+
+def _standing(mon: Any) -> Any:
+    """Where the robot stands before commanding [rad]: the controller's ipo position (what it holds, and what a
+    COMMANDING_WAIT reply mirrors), else the measured one. (The measured position carries sensor noise and the
+    servo's standing error: judged from it, a mirror of the ipo position broke the acceleration limit — 10 µrad in
+    one 1 ms period is 10 rad/s² — and the session was refused before it began.)"""
+    ipo = mon.ipoData.jointPosition.value
+    return ipo if len(ipo) == 7 else mon.monitorData.measuredJointPosition.value

@@ -243,14 +243,15 @@ def late_bursts(seed: int, start: int = 600, end: int = 2800, offset: int = 11) 
 def over_limits(ctl: BurstController, limits, late: dict[int, int], dt: float = 1e-3) -> tuple[list, list]:
     """(over, stray): the replies the controller applied that break a limit as the robot executed them
     (:func:`reply_ratios`), as (message seq, ratios); ``stray``: those not answering a message ``AROUND_CHANGE`` a
-    change of lateness — where no client can tell whether the controller held or will apply its replies late
+    change of lateness (the end widened by the lateness around it: the replies in flight then) — where no client can tell whether the controller held or will apply its replies late
     (entry), or will drop the ones in flight (exit). Replies the controller dropped never moved the robot."""
     index = {s: i for i, s in enumerate(ctl.sent_seqs)}
     seqs, r = reply_ratios(ctl, limits, dt)
     over = [(s, row) for s, row in zip(seqs, np.nan_to_num(r)) if row.max() > 1 + 1e-6 and s in ctl.applied]
     changes = [i for i in range(1, len(ctl.script)) if late.get(i, 0) != late.get(i - 1, 0)]
     lo, hi = AROUND_CHANGE
-    return over, [(s, row) for s, row in over if not any(lo <= index[s] - c < hi for c in changes)]
+    span = [(c, hi + max(late.get(c, 0), late.get(c - 1, 0))) for c in changes]  # (and the replies then in flight)
+    return over, [(s, row) for s, row in over if not any(lo <= index[s] - c < h for c, h in span)]
 
 
 def executed_ratios(ctl, lim, late: dict[int, int], margin: int = 6, dt: float = 1e-3) -> np.ndarray:
@@ -260,11 +261,12 @@ def executed_ratios(ctl, lim, late: dict[int, int], margin: int = 6, dt: float =
     e = np.array(ctl.executed)
     changes = [i for i in range(1, len(ctl.script)) if late.get(i, 0) != late.get(i - 1, 0)]
     skip = np.zeros(len(e), bool)
-    for c in changes:
+    for c in (c for c in changes if c < len(ctl.sent_seqs)):  # (a session that ended early: the changes sent)
         k = ctl.histories[ctl.sent_seqs[c]][0]
         skip[max(0, k - 3) : k + max(late.get(c, 0), late.get(c - 1, 0)) + margin] = True
     out = []
     for order, limit in ((1, lim.velocity), (2, lim.acceleration), (3, lim.jerk)):
         r = (np.abs(np.diff(e, order, axis=0)) / (limit * dt**order)).max(1)
-        out.append(r[~skip[order:]].max())
+        kept = r[~skip[order:]]
+        out.append(kept.max() if kept.size else 0.0)
     return np.array(out)

@@ -13,8 +13,10 @@ import hashlib
 import os
 import pickle
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import TypeVar
+from unittest.mock import patch
 
 import pytest
 
@@ -53,20 +55,43 @@ def once(tmp_path_factory: pytest.TempPathFactory, key: str, make: Callable[[Pat
     return value
 
 
+def shared_optimise(tmp_path_factory: pytest.TempPathFactory) -> Callable:
+    """``planners.swingup_fast.optimise`` with each search made once per run, shared by the workers.
+
+    The differential evolution runs on the problem at the search's coarse step whatever the plan's step, so a plan at
+    1 ms and one at 5 ms of the same request make the very same search (the key: the coarse problem, the settings and
+    the start); the result at the asked step is evaluated here each time, as ``optimise`` does.
+    """
+    from planners.swingup_fast import evaluate, optimise
+
+    def shared(problem, settings, start=None):
+        coarse = replace(problem, dt=max(problem.dt, settings.coarse_dt))
+        key = f"optimise {coarse!r} {settings!r} {start!r}"
+        params = once(tmp_path_factory, key, lambda _folder: optimise(coarse, settings, start)[0])
+        return params, evaluate(problem, params)
+
+    return shared
+
+
 def shared_swing_up(tmp_path_factory: pytest.TempPathFactory) -> Callable:
     """``planners.swingup.plan_swing_up`` with each fast request planned once per run, shared by the workers.
 
     The fast swing-up's optimisation takes 30 s or more on a busy machine; the planner's tests and the tutorial that
-    runs `lbr plan swing-up --method fast` ask for the very same request (the key: the request and the limits).
+    runs `lbr plan swing-up --method fast` ask for the very same request (the key: the request and the limits); its
+    searches are shared too (``shared_optimise``: the command's test plans the same request at 1 ms).
     """
     from planners import swingup
 
     plan = swingup.plan_swing_up
 
+    def planned(request, robot, limits):
+        with patch.object(swingup, "optimise", shared_optimise(tmp_path_factory)):
+            return plan(request, robot, limits)
+
     def shared(request, robot, limits, progress=None):
         if request.method != "fast":
             return plan(request, robot, limits, progress=progress)
         key = f"plan_swing_up {request!r} {limits!r} {type(robot).__name__}"
-        return once(tmp_path_factory, key, lambda _folder: plan(request, robot, limits))
+        return once(tmp_path_factory, key, lambda _folder: planned(request, robot, limits))
 
     return shared

@@ -29,6 +29,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.helpers.shared import shared_swing_up
+
 ROOT = Path(__file__).resolve().parents[2]
 PAGES = sorted((ROOT / "docs" / "tutorials").glob("*.md")) + sorted((ROOT / "docs" / "guides").glob("*.md"))
 _FENCE = re.compile(r"^```(bash|console|sh|shell)\s*$")
@@ -170,7 +172,10 @@ def run_page(path: Path, tmp: Path, with_slow: bool, ran_before: list[tuple[str,
 
 @pytest.mark.heavy
 @pytest.mark.parametrize("chain", chains(), ids=lambda c: "+".join(p.name for p in c))
-def test_pages_run_as_written(chain, tmp_path):
+def test_pages_run_as_written(chain, tmp_path, tmp_path_factory, monkeypatch):
+    # a fast swing-up the planner's tests plan with the very same request (tests/planners/test_swingup_fast.py) is
+    # planned once per run: the command still parses, writes and checks it; only the optimisation is not run twice
+    monkeypatch.setattr("planners.swingup.plan_swing_up", shared_swing_up(tmp_path_factory))
     ran: list[tuple[str, ...]] = []
     for page in chain:
         run_page(page, tmp_path, with_slow=False, ran_before=ran)

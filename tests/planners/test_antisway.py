@@ -21,6 +21,8 @@ from planners.accel_shaping import plan_accel_shaping
 from planners.pendulum import natural_period, simulate
 from planners.profiles import BoxProfile
 
+from tests.helpers.shared import once
+
 LAYOUT = np.array(DEFAULT_LAYOUT)
 L = 0.25  # [m]
 Z = 0.45  # [m]
@@ -39,8 +41,12 @@ def residual_deg(plan, true_length):
 
 
 @pytest.fixture(scope="module")
-def table():
-    """shaper × a_max × length error → (residual [deg], moving time [s]) on the default layout."""
+def table(tmp_path_factory):
+    """shaper × a_max × length error → (residual [deg], moving time [s]) on the default layout (made once per run)."""
+    return once(tmp_path_factory, "anti-sway shaper table (test_antisway)", lambda _folder: _table())
+
+
+def _table():
     out = {}
     for shaper in ("accel", "auto", "fast", "box", "zv", "mzv", "zvd", "ei", "box-zvd"):
         for a in (1.0, 2.0):

@@ -8,18 +8,22 @@ from scipy.integrate import solve_ivp
 
 from planners.cartpole import rhs
 from planners.pendulum import SampledAcceleration
-from planners.swingup import SwingUpRequest, plan_swing_up
+from planners.swingup import SwingUpRequest
 from planners.swingup_fast import FastParams, FastProblem, SearchSettings, optimise, simulate_fast
 from planners.swingup_plan import StopProfile, TaskBounds
 from trajectories.check import check_trajectory
 from trajectories.differences import derivatives
 
+from tests.helpers.shared import shared_swing_up
+
 THETA_D = math.radians(115)
 
 
 @pytest.fixture(scope="module")
-def fast(robot, limits):
-    return plan_swing_up(SwingUpRequest(length=0.25, mass=0.0139, theta_d=THETA_D, method="fast"), robot, limits)
+def fast(robot, limits, tmp_path_factory):
+    # the request of the tutorial's `lbr plan swing-up --method fast … --side +y`: planned once per run for both
+    request = SwingUpRequest(length=0.25, mass=0.0139, theta_d=THETA_D, method="fast", side=1)
+    return shared_swing_up(tmp_path_factory)(request, robot, limits)
 
 
 @pytest.mark.heavy

@@ -71,6 +71,9 @@ def test_execute_on_the_simulator_streams_every_row_and_logs(tmp_path, version):
         "--json",
         "--fri-version",
         version,
+        # lock step as fast as computed: it judges the rows streamed and logged, not their timing (paced, at load 4-5
+        # replies lost under load made 115 of 847 held rows differ; paced: the SIGINT tests below, test_lab.py)
+        "--sim-fast",
     ]
     if version == "2.7":
         args += ["--plot", png]

@@ -14,6 +14,8 @@ from planners.sway_judge import judge_sway
 from trajectories.csvio import read_joint_csv, read_table, read_task_csv
 from trajectories.robot import Robot
 
+from tests.helpers.shared import once
+
 L = 0.25
 
 
@@ -27,28 +29,32 @@ def _fk_residual_deg(joint_csv, true_length, stop_time):
 
 @pytest.fixture(scope="module")
 def default_plan(tmp_path_factory):
-    d = tmp_path_factory.mktemp("antisway")
-    from tests.helpers.cli import run_lbr
+    """The default plan made once per run (this module's tests on both workers share it; they only read its files)."""
 
-    files = {k: d / f"{k}" for k in ("joint.csv", "task.csv", "pred.csv", "plot.png")}
-    proc = run_lbr(
-        "plan",
-        "anti-sway",
-        "--length",
-        L,
-        "--a-max",
-        2.0,
-        "-o",
-        files["joint.csv"],
-        "--task-out",
-        files["task.csv"],
-        "--prediction",
-        files["pred.csv"],
-        "--plot",
-        files["plot.png"],
-        "--json",
-    )
-    return proc, files
+    def make(d):
+        from tests.helpers.cli import run_lbr
+
+        files = {k: d / f"{k}" for k in ("joint.csv", "task.csv", "pred.csv", "plot.png")}
+        proc = run_lbr(
+            "plan",
+            "anti-sway",
+            "--length",
+            L,
+            "--a-max",
+            2.0,
+            "-o",
+            files["joint.csv"],
+            "--task-out",
+            files["task.csv"],
+            "--prediction",
+            files["pred.csv"],
+            "--plot",
+            files["plot.png"],
+            "--json",
+        )
+        return proc, files
+
+    return once(tmp_path_factory, "lbr plan anti-sway default (test_plan_antisway)", make)
 
 
 @pytest.mark.heavy

@@ -13,34 +13,39 @@ from planners.string_penalty import judge
 from trajectories.csvio import read_joint_csv, read_table
 
 from tests.helpers.cli import Q_START, run_in_process, run_lbr
+from tests.helpers.shared import once
 
 LENGTH = 0.2
 
 
 @pytest.fixture(scope="module")
 def planned(tmp_path_factory):
-    d = tmp_path_factory.mktemp("catch")
-    out, pred, plot = d / "catch.csv", d / "pred.csv", d / "catch.png"
-    res = run_lbr(
-        "plan",
-        "cup-and-ball",
-        "--length",
-        LENGTH,
-        "--length-tol",
-        "0.01",
-        "--mass-tol",
-        "0",
-        "--no-timing",
-        "-o",
-        out,
-        "--prediction",
-        pred,
-        "--plot",
-        plot,
-        "--json",
-        timeout=600,
-    )
-    return res, out, pred, plot
+    """The catch planned once per run (tests of this module on both workers share it; tests only read its files)."""
+
+    def make(d):
+        out, pred, plot = d / "catch.csv", d / "pred.csv", d / "catch.png"
+        res = run_lbr(
+            "plan",
+            "cup-and-ball",
+            "--length",
+            LENGTH,
+            "--length-tol",
+            "0.01",
+            "--mass-tol",
+            "0",
+            "--no-timing",
+            "-o",
+            out,
+            "--prediction",
+            pred,
+            "--plot",
+            plot,
+            "--json",
+            timeout=600,
+        )
+        return res, out, pred, plot
+
+    return once(tmp_path_factory, "lbr plan cup-and-ball (test_plan_catch)", make)
 
 
 @pytest.mark.heavy

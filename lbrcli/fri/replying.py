@@ -31,6 +31,8 @@ from .supervision import End
 from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE
 
 CLIENT_CLAMP = 1e-4  # [rad] a clamp the client is told about (``LBRClient.clamped``)
+STANDING_TOL = 5e-4  # [rad] the measured position this close to the ipo one before commanding: noise and the servo's
+# standing error, not a push (judged from the ipo position)
 _POSITION = int(ClientCommandMode.POSITION)
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
@@ -213,8 +215,11 @@ class Replier:
 
 def _standing(mon: Any) -> Any:
     """Where the robot stands before commanding [rad]: the controller's ipo position (what it holds, and what a
-    COMMANDING_WAIT reply mirrors), else the measured one. (The measured position carries sensor noise and the
-    servo's standing error: judged from it, a mirror of the ipo position broke the acceleration limit — 10 µrad in
-    one 1 ms period is 10 rad/s² — and the session was refused before it began.)"""
-    ipo = mon.ipoData.jointPosition.value
-    return ipo if len(ipo) == 7 else mon.monitorData.measuredJointPosition.value
+    COMMANDING_WAIT reply mirrors) if the measured one is within ``STANDING_TOL`` of it, else the measured one (a
+    robot pushed away from where it is held: the mirror then breaks the limits and the session is refused). (Judged
+    from the measured position alone, sensor noise or the servo's standing error of 10 µrad in one 1 ms period — 10
+    rad/s², over the acceleration limit — refused sessions before they began.)"""
+    ipo, measured = mon.ipoData.jointPosition.value, mon.monitorData.measuredJointPosition.value
+    if len(ipo) == 7 and len(measured) == 7 and max(abs(a - b) for a, b in zip(ipo, measured)) <= STANDING_TOL:
+        return ipo
+    return measured

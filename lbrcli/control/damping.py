@@ -51,7 +51,8 @@ class DampingClient(TrajectoryPlayer):
                  damp_s: float, sensor_delay_s: float, io_names: tuple[str, str] | None = ("ball_theta_x", "ball_theta_y"),
                  module_axis: int = 1, sensor_rate_hz: float | None = None, options: DampingOptions = DampingOptions(),
                  active: bool = True, actuation_delay: int = 1, sensor=None, target: float = math.radians(0.3),
-                 tail_periods: float = 1.0, health: HealthOptions = HealthOptions(), **player) -> None:  # fmt: skip
+                 tail_periods: float = 1.0, health: HealthOptions = HealthOptions(), reply_first: bool = True,
+                 **player) -> None:  # fmt: skip
         player.setdefault("rejoin_share", plan.rejoin_share)  # a rejoin leaves the offsets the rest (rejoin_bounds)
         super().__init__(rows, limits, period_s=period_s, settle_s=damp_s, **player)
         if len(plan) != len(self.rows):
@@ -74,6 +75,11 @@ class DampingClient(TrajectoryPlayer):
         self._bound = self._bounds[0]
         interval = sensor.interval_s or period_s
         opts = replace(options, travel=plan.travel)
+        # reply first: each message's readings are read after its reply went out, for the next command — one
+        # period more between a reading and the command it corrects
+        self.reply_first = reply_first
+        self._defer_s = period_s if reply_first else 0.0  # [s]
+        sensor_delay_s += self._defer_s
         self.damper = SwayDamper(length, period_s, sensor_delay_s, interval, opts, actuation_delay=actuation_delay,
                                  bounds=lambda x, v, a: self._bound, max_delay=getattr(sensor, "max_age_s", None))  # fmt: skip
         self.damper.active = active
@@ -86,6 +92,9 @@ class DampingClient(TrajectoryPlayer):
         self.sensor_fault: str | None = None
         self._fault_at: float | None = None  # [s] after the first row
         self._k = -1  # damper cycles since the first row (index into the tables)
+        self._pending: int | None = None  # reply first: the cycle (_k) the damper was stepped for after the last reply
+        self._read_now = False  # this message's readings were read in its command() (the first row)
+        self._applied = (0.0, 0.0)  # [m] the offsets (x, y) in this cycle's command
         self._return: OnlineMove | None = None
         self._finish: StopSession | None = None
         self._held = 0  # cycles held on the last row after the return move
@@ -120,7 +129,7 @@ class DampingClient(TrajectoryPlayer):
         last = len(self._ref) - 1
         for reading in self.sensor.poll(state):
             axis, value = reading[0], reading[1]
-            age = reading[2] if len(reading) > 2 else None  # [s] the reading's own age, if the sensor knows it
+            age = reading[2] + self._defer_s if len(reading) > 2 else None  # [s] its own age, if the sensor knows it
             obs = d.observers[axis]
             if self.sensor_fault is None:
                 lag = self._lag if age is None else obs.lag_of(age) + self._actuation
@@ -146,7 +155,8 @@ class DampingClient(TrajectoryPlayer):
         self.sensor_fault, self._fault_at = why, t
         self.damper.active = False
 
-    def _corrected(self, q: Sequence[float], k: int) -> tuple[float, ...]:
+    def _step_damper(self, k: int) -> None:
+        """The damper's step for cycle ``k`` (its offsets for that command) and the estimate's health."""
         t0 = time.perf_counter_ns()
         n = len(self._bounds)
         row = k if k < n else n - 1
@@ -160,15 +170,48 @@ class DampingClient(TrajectoryPlayer):
                 fault = h.estimate(self.damper.observers[axis].phi)
                 if fault is not None:
                     self._stop_correcting(fault, k * self._period)
+        self.cost_ns.append(time.perf_counter_ns() - t0)
+
+    def _offset(self, q: Sequence[float], k: int) -> tuple[float, ...]:
+        """The planned command ``q`` [rad] of cycle ``k`` plus the damper's offsets, mapped onto the joints."""
+        n = len(self._maps)
         cx, cy = self.damper.carts
         dx, dy = cx.x, cy.x
-        mx, my = self._maps[row]
-        out = tuple([a + u * dx + w * dy for a, u, w in zip(q, mx, my)])  # (a list: no generator per cycle)
-        off = abs(dx) if abs(dx) > abs(dy) else abs(dy)
+        mx, my = self._maps[k if k < n else n - 1]
+        return tuple([a + u * dx + w * dy for a, u, w in zip(q, mx, my)])  # (a list: no generator per cycle)
+
+    def _corrected(self, q: Sequence[float], k: int) -> tuple[float, ...]:
+        if self._pending is None:
+            self._step_damper(k)
+        else:  # stepped for cycle _pending after the last reply; periods the controller bridged since: coasted
+            for _ in range(k - self._pending):
+                self.damper.coast((0.0, 0.0))
+            self._pending = None
+        cx, cy = self.damper.carts
+        self._applied = (cx.x, cy.x)
+        off = abs(cx.x) if abs(cx.x) > abs(cy.x) else abs(cy.x)
         if off > self.max_offset:
             self.max_offset = off
-        self.cost_ns.append(time.perf_counter_ns() - t0)
-        return out
+        return self._offset(q, k)
+
+    def after_reply(self) -> None:
+        """Reply first: this message's readings and the damper's step for the next cycle, after the reply."""
+        if (not self.reply_first or self._k < 0 or self._return is not None or self.braking or self._pending is not None
+                or self.phase not in (Phase.TRAJECTORY, Phase.SETTLE)):  # fmt: skip
+            self._read_now = False
+            return
+        if not self._read_now:
+            self._read(self.robot_state)
+        self._read_now = False
+        self._step_damper(self._k + 1)
+        self._pending = self._k + 1
+
+    def prepare_command(self) -> Sequence[float] | None:
+        """The next row plus the offsets the damper was stepped to after this reply (reply first), else None."""
+        if self._pending is None or self._pending != self._k + 1 or self._return is not None:
+            return None
+        q = self._next_planned()
+        return None if q is None else self._offset(q, self._pending)
 
     def monitor(self, state: LBRState) -> None:
         if self._observe is not None:
@@ -185,10 +228,11 @@ class DampingClient(TrajectoryPlayer):
             self._observe(state)
         if self._return is not None:
             return self._returning()
-        if self._k >= 0 and self.reply_due:
+        if self._k >= 0 and self.reply_due and self._pending is None:  # (reply first: read after the reply)
             for _ in range(self.skipped):  # the controller extrapolated our command: the offsets moved on as it did
                 self.damper.coast((0.0, 0.0))  # (constant joint velocity: about no pivot acceleration)
             self._read(state)
+            self._read_now = True
         try:
             q = super().command(state)
         except StopSession as stop:
@@ -200,6 +244,7 @@ class DampingClient(TrajectoryPlayer):
         self._k += 1 + (self.skipped if self._k >= 0 else 0)
         if self._k == 0:
             self._read(state)
+            self._read_now = True
         self._cmd_prev, self._cmd = self._cmd, self._corrected(q, self._k)
         self.exact_command = False  # a row plus the damper's offset: feedback, clamped into the envelope if need be
         return self._cmd
@@ -262,10 +307,9 @@ class DampingClient(TrajectoryPlayer):
     def log_values(self, mon=None) -> tuple[float, ...]:
         if self._k < 0:
             return (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # before the first row (phase < TRAJECTORY): nothing estimated yet
-        d = self.damper
         kk = min(self._k, len(self._ref) - 1)
-        ox, oy = d.observers
-        return (d.carts[0].x, d.carts[1].x, ox.phi, oy.phi, self._ref[kk][0], self._ref[kk][1])
+        ox, oy = self.damper.observers
+        return (*self._applied, ox.phi, oy.phi, self._ref[kk][0], self._ref[kk][1])
 
     def figures(self) -> dict:
         f = super().figures()

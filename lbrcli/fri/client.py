@@ -6,8 +6,8 @@ monitoring message, ``on_state_change(old, new)`` when the session state changed
 commanding states set the joint position (always, as KUKA requires) through ``self.robot_command``, plus torques in
 TORQUE mode or a wrench in WRENCH mode (FRI 2.7 CARTESIAN_POSE mode: ``set_cartesian_pose`` instead of joints). ``command`` may instead return the joint position [rad] (7 values).
 ``after_reply`` runs once the reply is on its way, for work that should not delay it. A client whose next command does
-not depend on the next message (a stream of precomputed positions) may say so in ``prepare_command``: its reply then
-goes out as soon as the message is checked.
+not depend on the next message (a stream of precomputed positions, or a feedback computed in ``after_reply`` from this
+message) may say so in ``prepare_command``: its reply then goes out as soon as the message is checked.
 To end the session raise :class:`~lbrcli.fri.errors.StopSession`; the application then brakes within the limits.
 Every joint position passes the motion-safety core (:mod:`~lbrcli.fri.motion`): it is clamped into the braking
 envelope (``clamped``), or — with ``exact_command`` — a command that would need the clamp ends the session braking.
@@ -74,7 +74,8 @@ class LBRClient:
         — whatever that message says — or None (the default: ``command`` decides when the message is there). Called
         after each reply; the application guards the prepared position then and sends it as soon as the message
         arrives, before calling ``command`` with it, which must set exactly that position and nothing else (else
-        the session ends with a braking stop). A stream of precomputed positions prepares; a closed loop cannot."""
+        the session ends with a braking stop). A stream of precomputed positions prepares; so can a closed loop that
+        computes its next command in ``after_reply`` from this message (one period more of delay)."""
         return None
 
     def after_reply(self) -> None:

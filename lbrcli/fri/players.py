@@ -201,6 +201,10 @@ class TrajectoryPlayer(LBRClient):
         that overrides ``command`` (corrections from the measured state) prepares nothing unless it overrides this."""
         if type(self).command is not TrajectoryPlayer.command:
             return None
+        return self._next_planned()
+
+    def _next_planned(self) -> tuple[float, ...] | None:
+        """What :meth:`prepare_command` prepares, for a subclass that adds to the planned command [rad]."""
         if self._last is None:
             return None
         if self._queue:

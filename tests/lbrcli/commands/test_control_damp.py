@@ -60,6 +60,9 @@ def test_damping_removes_the_sway_a_wrong_string_length_leaves(tmp_path, sensor,
     # the log carries the damper's own view
     assert np.nanmax(np.abs(closed["damp_x"])) > 0 or np.nanmax(np.abs(closed["damp_y"])) > 0
     assert fig["controller_us_p50"] is not None and fig["measured_residual_deg"] is not None
+    # reply first: the feedback is computed after each reply, for the next message, whose reply goes out at once
+    for f in (fig, fig_open):
+        assert f["prepared_replies"] > 0.9 * f["trajectory_rows"]
 
 
 @pytest.mark.parametrize(
@@ -130,6 +133,7 @@ def test_damping_rides_through_lost_and_malformed_messages(tmp_path):
                               extra=LogColumns(LOG_COLUMNS, client.log_values))  # fmt: skip
     assert result.outcome.value == "completed", result.detail
     assert result.missed > 10 and client.skipped_rows > 10  # the faults happened and were bridged
+    assert result.prepared_replies > 0.5 * client.trajectory_rows  # reply first between the faults
     assert sway_after(read_log(log), move_end, 2, 0.30) <= 0.5
     assert 0.0 < client.max_offset < plan.travel
 

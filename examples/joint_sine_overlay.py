@@ -20,19 +20,27 @@ class JointSineOverlay(LBRClient):
         self.mask, self.freq_hz, self.amplitude = joint_mask, freq_hz, amplitude  # bit j = A(j+1), [Hz], [rad]
         self.filter_coeff = filter_coeff  # 0 (off) to 1
         self.offset = self.phi = self.step = 0.0  # [rad], [rad], [rad per cycle]
+        self.next_q: list[float] | None = None  # prepared after the last reply
         self.history: list[tuple[tuple[float, ...], tuple[float, ...]]] = []  # (measured, commanded) per cycle
 
     def on_state_change(self, old: SessionState, new: SessionState) -> None:
         if new is SessionState.MONITORING_READY:
-            self.offset = self.phi = 0.0
+            self.offset, self.phi, self.next_q = 0.0, 0.0, None
             self.step = 2 * math.pi * self.freq_hz * self.robot_state.sample_time
 
-    def command(self, state):
+    def _sine(self, ipo) -> list[float]:
         self.offset = self.offset * self.filter_coeff + self.amplitude * math.sin(self.phi) * (1 - self.filter_coeff)
         self.phi = (self.phi + self.step) % (2 * math.pi)
-        q = [x + self.offset if self.mask & (1 << j) else x for j, x in enumerate(state.ipo_joint_position)]
+        return [x + self.offset if self.mask & (1 << j) else x for j, x in enumerate(ipo)]
+
+    def command(self, state):
+        q, self.next_q = self.next_q or self._sine(state.ipo_joint_position), None
         self.history.append((state.measured_joint_position, tuple(q)))
         return q
+
+    def prepare_command(self):  # the next command from this message's ipo (held still): its reply goes out at once
+        self.next_q = self._sine(self.robot_state.ipo_joint_position)
+        return self.next_q
 
 
 def main(argv=None):

@@ -38,6 +38,7 @@ def test_joint_sine_overlay_moves_the_measured_position_by_the_sine(version):
     assert np.abs(measured - measured[0]).max() < 0.04 + 1e-9  # bounded by the amplitude: nothing accumulates
     assert 1e-4 < np.ptp(commanded[:, 3]) <= 2 * 0.04 + 1e-9  # the filtered sine on A4 only, within ± its amplitude
     assert np.ptp(commanded[:, 0]) == 0.0
+    assert result.prepared_replies > 0.9 * len(client.history)  # reply first (prepare_command)
 
 
 @pytest.mark.heavy

@@ -92,9 +92,21 @@ class ReferenceTracker:
     def _calculate(self) -> Result:
         try:
             return self._otg.calculate(self._inp, self._traj)
-        except RuckigError as exc:  # an input ruckig refuses: reported as a result
+        except RuckigError as exc:  # an input ruckig refuses: reported as a result …
             self.error = str(exc).strip()
-            return Result.ErrorInvalidInput
+        # … unless it is one of ruckig's numerical edge cases (its step 2 fails to synchronise an axis for some exact
+        # states): the start's velocity (then also its acceleration) smaller by a relative 1e-9 (then 1e-7), far
+        # below what a command resolves
+        inp = self._inp
+        for shrink in (1e-9, 1e-7):
+            inp.current_velocity = [v * (1.0 - shrink) for v in inp.current_velocity]
+            if shrink > 1e-9:
+                inp.current_acceleration = [a * (1.0 - shrink) for a in inp.current_acceleration]
+            try:
+                return self._otg.calculate(inp, self._traj)
+            except RuckigError:
+                pass
+        return Result.ErrorInvalidInput
 
     def hold(self) -> np.ndarray:
         """The next commanded position [rad] without a reference: where the commanded state stops. At rest that is

@@ -34,6 +34,8 @@ from lbrcli.fri.outcome import cost_figures_us
 
 from .sensors import IoSensor, ModuleSensor
 
+REPLY_FIRST_MAX_PERIOD_S = 2e-3  # [s] up to this period the feedback runs after the reply (by default): there the
+# cycle's work is a large share of the period; at longer periods one period more of delay would cost the damping more
 LOG_COLUMNS = ("damp_x", "damp_y", "est_theta_x", "est_theta_y", "ref_theta_x", "ref_theta_y")  # [m] ×2, [rad] ×4
 
 
@@ -45,13 +47,16 @@ class DampingClient(TrajectoryPlayer):
     (:class:`planners.feedback.health.SensorHealth`): a sensor that is not telling the truth stops the correction —
     the rows finish as planned — and ends the session as failed. The residual sway is the amplitude of the swing
     fitted to the readings of the last ``tail_periods`` periods of the damping time; the session is completed only
-    when it is at most ``target`` [rad]."""
+    when it is at most ``target`` [rad]. ``reply_first`` (default: at periods up to ``REPLY_FIRST_MAX_PERIOD_S``):
+    each message's readings are read and the damper stepped after its reply, and the next command is prepared then,
+    so that the reply goes out as soon as the message is checked (one period more between a reading and its
+    correction)."""
 
     def __init__(self, rows: np.ndarray, limits: JointLimits, period_s: float, length: float, plan: CorrectionPlan, *,
                  damp_s: float, sensor_delay_s: float, io_names: tuple[str, str] | None = ("ball_theta_x", "ball_theta_y"),
                  module_axis: int = 1, sensor_rate_hz: float | None = None, options: DampingOptions = DampingOptions(),
                  active: bool = True, actuation_delay: int = 1, sensor=None, target: float = math.radians(0.3),
-                 tail_periods: float = 1.0, health: HealthOptions = HealthOptions(), reply_first: bool = True,
+                 tail_periods: float = 1.0, health: HealthOptions = HealthOptions(), reply_first: bool | None = None,
                  **player) -> None:  # fmt: skip
         player.setdefault("rejoin_share", plan.rejoin_share)  # a rejoin leaves the offsets the rest (rejoin_bounds)
         super().__init__(rows, limits, period_s=period_s, settle_s=damp_s, **player)
@@ -77,8 +82,8 @@ class DampingClient(TrajectoryPlayer):
         opts = replace(options, travel=plan.travel)
         # reply first: each message's readings are read after its reply went out, for the next command — one
         # period more between a reading and the command it corrects
-        self.reply_first = reply_first
-        self._defer_s = period_s if reply_first else 0.0  # [s]
+        self.reply_first = period_s <= REPLY_FIRST_MAX_PERIOD_S if reply_first is None else reply_first
+        self._defer_s = period_s if self.reply_first else 0.0  # [s]
         sensor_delay_s += self._defer_s
         self.damper = SwayDamper(length, period_s, sensor_delay_s, interval, opts, actuation_delay=actuation_delay,
                                  bounds=lambda x, v, a: self._bound, max_delay=getattr(sensor, "max_age_s", None))  # fmt: skip

@@ -22,8 +22,10 @@ def min_jerk_profile(n: int) -> np.ndarray:
 
 
 def write_moves(path, moves=((np.array([0.3, 0, 0, 0, 0, 0, 0]), 1.0), (np.array([0, 0.12, 0, 0.15, 0, 0, 0]), 0.9)),
-                 hold: float = 0.4, q0: np.ndarray = Q0) -> float:  # fmt: skip
-    """Unshaped joint moves (Δq [rad], duration [s]) with holds; returns the time the last move ends [s]."""
+                 hold: float = 0.4, q0: np.ndarray = Q0, dt: float = DT) -> float:  # fmt: skip
+    """Unshaped joint moves (Δq [rad], duration [s]) with holds, rows every ``dt`` [s]; returns the time the last
+    move ends [s]."""
+    DT = dt  # noqa: N806
     q = np.array(q0, dtype=float)
     rows = [np.repeat(q[None], int(hold / DT), axis=0)]
     for dq, dur in moves:

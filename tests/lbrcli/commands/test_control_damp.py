@@ -60,9 +60,25 @@ def test_damping_removes_the_sway_a_wrong_string_length_leaves(tmp_path, sensor,
     # the log carries the damper's own view
     assert np.nanmax(np.abs(closed["damp_x"])) > 0 or np.nanmax(np.abs(closed["damp_y"])) > 0
     assert fig["controller_us_p50"] is not None and fig["measured_residual_deg"] is not None
-    # reply first: the feedback is computed after each reply, for the next message, whose reply goes out at once
-    for f in (fig, fig_open):
-        assert f["prepared_replies"] > 0.9 * f["trajectory_rows"]
+    # at 5 ms the feedback runs in the cycle (reply first only up to REPLY_FIRST_MAX_PERIOD_S): nothing prepared
+    assert fig["prepared_replies"] == 0
+
+
+@pytest.mark.heavy
+def test_at_1_ms_the_damper_replies_first_and_still_removes_the_sway(tmp_path):
+    """At a 1 ms period each message's readings are read after its reply and the next command is prepared then:
+    the replies go out as soon as the messages are checked, and the sway the moves leave (a string 20 % longer than
+    the model, the readings 10 ms late) is still damped."""
+    traj = tmp_path / "moves.csv"
+    move_end = write_moves(traj, dt=1e-3)
+    log = tmp_path / "closed.csv"
+    p = run_lbr("control", "damp", traj, "--length", "0.25", "--sim-length", "0.30", "--sim-delay", "10", "--sensor",
+                "io", "--log", log, "--port", "0", "--sim-lenient", "--sim-fast", "--json", timeout=240)  # fmt: skip
+    assert p.returncode == 0, p.stderr[-2000:]
+    fig = json.loads(p.stdout)
+    assert fig["outcome"] == "completed"
+    assert fig["prepared_replies"] > 0.9 * fig["trajectory_rows"]
+    assert sway_after(read_log(log), move_end, 2, 0.30) <= 0.5  # (open loop these moves leave > 1°)
 
 
 @pytest.mark.parametrize(
@@ -124,7 +140,9 @@ def test_damping_rides_through_lost_and_malformed_messages(tmp_path):
     )
     lim, traj = default_limits(), read_joint_csv(path, None)
     plan = correction_plan(Robot(RobotConfig(flange=Flange("touch-electric"))), traj.q, lim, DT)  # the simulator's
-    client = DampingClient(traj.q, lim, DT, 0.25, plan, damp_s=3 * natural_period(0.25), sensor_delay_s=0.015)
+    client = DampingClient(
+        traj.q, lim, DT, 0.25, plan, damp_s=3 * natural_period(0.25), sensor_delay_s=0.015, reply_first=True
+    )  # (the 1 ms default, here at 5 ms: with the faults)
     # the same closed loop on a busy machine, as fast as it computes
     sim = SimulatorSettings(period_ms=5, start=traj.q[0], ball=BallSpec(0.30, 0.0, io_delay_ms=10), max_runtime_s=60,
                             fast=True, loss=0.03, malformed=0.01, seed=6)  # fmt: skip

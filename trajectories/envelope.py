@@ -32,6 +32,7 @@ import numpy as np
 from .limits import JointLimits
 
 REL_TOL = 1e-9  # relative slack on every limit (a command exactly at a limit passes)
+_NO_FLOOR = (0.0,) * 7
 SHRINK = 1e-10  # relative: clamped commands aim this far inside the bounds (rounding of q → differences)
 STOP_SLACK_STEPS = 2.0  # [periods] at the current speed added to every stop distance (sampling of the stop)
 
@@ -147,14 +148,17 @@ class BrakingEnvelope:
             return q + d + slack <= Q and q - back - rs >= -Q
         return q + d - slack >= -Q and q + back + rs <= Q
 
-    def _bounds(self, j: int, v1: float, a1: float, q1: float, q2: float, jerk: bool) -> tuple[float, float]:
-        """The interval [rad/s²] of next accelerations of joint ``j`` that keep it brakeable, the position aside."""
+    def _bounds(self, j: int, v1: float, a1: float, q1: float, q2: float, jerk: bool,
+                jerk_floor: float = 0.0) -> tuple[float, float]:  # fmt: skip
+        """The interval [rad/s²] of next accelerations of joint ``j`` that keep it brakeable, the position aside
+        (``jerk``: within max(J, ``jerk_floor`` [rad/s³]) of the last acceleration too)."""
         dt = self.dt
         s = 1.0 - SHRINK
         V, A, J = self.velocity[j] * s, self.acceleration[j] * s, self.jerk[j] * s
         lo, hi = -A, A
         if jerk:
-            lo, hi = max(lo, a1 - J * dt), min(hi, a1 + J * dt)
+            JF = max(J, jerk_floor * s)
+            lo, hi = max(lo, a1 - JF * dt), min(hi, a1 + JF * dt)
         # step velocity v1 + a·dt and continuous velocity v1 + 1.5·a·dt within ±V
         lo = max(lo, (-V - v1) / dt, (-V - v1) / (1.5 * dt))
         hi = min(hi, (V - v1) / dt, (V - v1) / (1.5 * dt))
@@ -170,11 +174,12 @@ class BrakingEnvelope:
 
     # -- a command ---------------------------------------------------------------------------------------------
     def admit(self, q: Sequence[float], q1: Sequence[float], q2: Sequence[float], q3: Sequence[float],
-              jerk: bool = False) -> Admission:  # fmt: skip
+              jerk: bool = False, jerk_floor: Sequence[float] | None = None) -> Admission:  # fmt: skip
         """The command nearest ``q`` [rad] (per joint) that keeps a braking stop available, after the executed
         commands ``q1``, ``q2``, ``q3`` (one, two and three periods before). ``jerk``: also within the jerk limit
-        relative to them. ``reason`` is set (and ``q`` is meaningless) when the history itself leaves no admissible
-        command (the robot must brake) or ``q`` is not 7 finite values."""
+        relative to them — per joint at least ``jerk_floor`` [rad/s³] if given (a path's own jerk, which the
+        envelope does not judge). ``reason`` is set (and ``q`` is meaningless) when the history itself leaves no
+        admissible command (the robot must brake) or ``q`` is not 7 finite values."""
         if q is None or len(q) != 7:
             return Admission(
                 tuple(q1), 0.0, -1, f"the joint position command has {0 if q is None else len(q)} values, not 7"
@@ -183,7 +188,11 @@ class BrakingEnvelope:
         idt2 = 1.0 / (dt * dt)
         out: list[float] | None = None
         worst, worst_j = 0.0, -1
-        for j, x, p1, p2, p3, (A, JD, V, J2, free) in zip(range(7), q, q1, q2, q3, self._fast_bounds):
+        floor = jerk_floor if jerk and jerk_floor is not None else _NO_FLOOR
+        k = (1.0 + REL_TOL) * dt
+        for j, x, p1, p2, p3, (A, JD, V, J2, free), jf in zip(range(7), q, q1, q2, q3, self._fast_bounds, floor):
+            if jf * k > JD:
+                JD = jf * k
             a = (x - 2.0 * p1 + p2) * idt2
             v1 = (p1 - p2) / dt
             # most commands: inside every bound and far from the position limit — a few float operations, inline
@@ -197,7 +206,7 @@ class BrakingEnvelope:
             a1 = (p1 - 2.0 * p2 + p3) * idt2
             if not math.isfinite(x):
                 return Admission(tuple(q1), 0.0, j, f"A{j + 1} command is {x}: not a number")
-            lo, hi = self._bounds(j, v1, a1, p1, p2, jerk)
+            lo, hi = self._bounds(j, v1, a1, p1, p2, jerk, jf)
             if lo > hi:
                 return Admission(tuple(q1), 0.0, j, self._describe(j, v1, a1))
             b = min(max(a, lo), hi)

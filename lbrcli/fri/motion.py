@@ -21,7 +21,7 @@ from .braking import EFFORT_RAMP_MIN_S, BrakingStop, Coast, EffortRamp  # noqa: 
 from .constants import STATE_COMMANDING_ACTIVE as _CMD_ACTIVE
 from .constants import ClientCommandMode
 from .guard import CommandGuard
-from .rejoin import Rejoin, executed_history, gap_history, gap_offsets, far as _far
+from .rejoin import Rejoin, executed_history, gap_history, gap_offsets, path_jerk, far as _far
 
 _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
@@ -97,8 +97,10 @@ class ExecutedMotion:
         self._replan = False
         self._gap: tuple | None = None  # (our last two commands) before the gap just extrapolated
         self._jerk_left = 0  # commands left that are held to the jerk limit whatever the client asked
-        self._c1: tuple | None = None  # the client's last two commands (before any offset), newest first
+        self._c1: tuple | None = None  # the client's last three commands (before any offset), newest first
         self._c2: tuple | None = None
+        self._c3: tuple | None = None
+        self._c_run = 0  # of those, how many are one period apart (none across a gap)
         self._gap_path: tuple | None = None  # (those two, the periods bridged) at a gap, until the client's next
 
     moving = property(lambda self: self.active_sent > 0, doc="Commands were sent in COMMANDING_ACTIVE: a stop must brake.")  # fmt: skip
@@ -108,17 +110,10 @@ class ExecutedMotion:
     # -- the executed state, for clients that re-plan ---------------------------------------------------------
     position = property(lambda self: self.prev, doc="[rad] where the controller was last commanded (extrapolation included).")  # fmt: skip
 
-    @property
-    def velocity(self) -> tuple[float, ...]:
-        """[rad/s] the history's continuous velocity (step velocity + half a period of its acceleration)."""
-        dt = self.period_s
-        return tuple((3.0 * a - 4.0 * b + c) / (2.0 * dt) for a, b, c in zip(self.prev, self.prev2, self.prev3))
-
-    @property
-    def acceleration(self) -> tuple[float, ...]:
-        """[rad/s²] the last step acceleration."""
-        dt2 = self.period_s * self.period_s
-        return tuple((a - 2.0 * b + c) / dt2 for a, b, c in zip(self.prev, self.prev2, self.prev3))
+    velocity = property(lambda self: tuple((3.0 * a - 4.0 * b + c) / (2.0 * self.period_s) for a, b, c in zip(self.prev, self.prev2, self.prev3)),
+                        doc="[rad/s] the history's continuous velocity (step velocity + half a period of its acceleration).")  # fmt: skip
+    acceleration = property(lambda self: tuple((a - 2.0 * b + c) / self.period_s**2 for a, b, c in zip(self.prev, self.prev2, self.prev3)),
+                            doc="[rad/s²] the last step acceleration.")  # fmt: skip
 
     def extrapolate(self, n: int) -> int:
         """The controller bridged ``n`` command periods without our commands: continue the history as it did (at the
@@ -126,8 +121,8 @@ class ExecutedMotion:
         n = min(n, 64)
         cap = self.guard.max_step
         self._gap = (self.prev, self.prev2) if n else None  # (what the first message after the gap is judged from)
-        if n:
-            self._jerk_left = JERK_CYCLES
+        if n:  # (the client's next command comes n periods after its last: no jerk of its own from those)
+            self._jerk_left, self._c_run = JERK_CYCLES, 0
             # the client's path before the gap: its next command after it is joined to the executed history
             self._gap_path = (self._c1, self._c2, n) if self._c2 is not None else None
         for _ in range(n):
@@ -281,11 +276,13 @@ class ExecutedMotion:
         would change it)."""
         env = self.envelope
         self.loss_refused = self.replan_due = end_coast = False
-        raw = q
+        raw, floor = q, None
         if q is not None and len(q) == 7:
             if self._gap_path is not None and not self.braking and not self.coasting:
                 self._join_gap(q)
-            self._c1, self._c2 = tuple(q), self._c1
+            floor = path_jerk(q, self._c1, self._c2, self._c3, self.period_s) if self._c_run >= 3 else None
+            self._c1, self._c2, self._c3 = tuple(q), self._c1, self._c2
+            self._c_run += 1
         if self.coasting and q is not None and len(q) == 7:  # the controller's confirmations lag: ours is the coast
             q = self.coast.next()
             self.coast_cycles += 1
@@ -306,7 +303,9 @@ class ExecutedMotion:
                               f"the client's path (more than {REJOIN_MAX:g} rad)")  # fmt: skip
             q = tuple(x + e for x, e in zip(q, off))
         forced = not jerk and (self._jerk_left > 0 or not self.rejoin.done or self.coasting)
-        adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk or forced)
+        # (jerk: at least the path's own; a limit path + offset cannot keep would bend it against the offset's plan)
+        adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk or forced,
+                        floor if forced and not self.coasting else None)  # fmt: skip
         if adm.reason is not None and forced:  # (no command within the jerk limit is brakeable: the limits first)
             adm = env.admit(q, self.prev, self.prev2, self.prev3, False)
         if adm.reason is not None:
@@ -400,7 +399,8 @@ class ExecutedMotion:
         """``q`` [rad] went out: in COMMANDING_ACTIVE the controller executes it (``prepared``: the client's own)."""
         if state == _CMD_ACTIVE:
             if prepared:  # (the client's command history, as :meth:`admit` keeps it)
-                self._c1, self._c2 = q, self._c1
+                self._c1, self._c2, self._c3 = q, self._c1, self._c2
+                self._c_run += 1
             self.prev3, self.prev2, self.prev = self.prev2, self.prev, q
             self._s3, self._s2, self._s1 = self._s2, self._s1, q  # (what was sent, also where a rebase replaced it)
             self.active_sent += 1

@@ -82,6 +82,13 @@ def far(a: Sequence[float], b: Sequence[float]) -> float:
     return max(abs(x - y) for x, y in zip(a, b))
 
 
+def path_jerk(q: Sequence[float], c1: Sequence[float], c2: Sequence[float], c3: Sequence[float],
+              period_s: float) -> tuple[float, ...]:  # fmt: skip
+    """[rad/s³] per joint, |the jerk| of a path's command ``q`` after ``c1``, ``c2``, ``c3`` (one period apart)."""
+    k = 1.0 / period_s**3
+    return tuple(abs(a - 3.0 * b + 3.0 * c - d) * k for a, b, c, d in zip(q, c1, c2, c3))
+
+
 def held(step: float, before: float) -> float:
     """[rad/period] the velocity after a step of the controller's own that left the limits: 0 after a hold (no step:
     the robot stopped), else the velocity ``before`` it (a jump to a late command neither stops nor speeds it)."""

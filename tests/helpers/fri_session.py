@@ -44,7 +44,7 @@ def preamble(k: int = 1, **kw) -> list[Cycle]:
 
 
 def run(script, client, *, version="1.15", detect=False, tmp_path=None, on_cycle=None, q_start=Q0, duration=None,
-        observers=(), prepare=True, **controller):  # fmt: skip
+        observers=(), prepare=True, controller_type=ScriptedController, **controller):  # fmt: skip
     # the scripted controller sends its unanswered datagrams (stale, garbage, not due) in bursts, not once a period:
     # the client reads each in turn (catch_up off) for the counts to be exact on a loaded machine
     fig = SessionFigures()
@@ -52,7 +52,7 @@ def run(script, client, *, version="1.15", detect=False, tmp_path=None, on_cycle
                             limits=LIM, first_message_timeout_s=10, silence_timeout_s=3, paced_by_replies=True,
                             observers=[fig, *observers], prepare=prepare, catch_up=False)  # fmt: skip
     app.connect()
-    ctl = ScriptedController(app.port, script, q_start, version=version, **controller)
+    ctl = controller_type(app.port, script, q_start, version=version, **controller)
     if on_cycle is not None:
         ctl.on_cycle = lambda i: on_cycle(i, app)
     log_path = tmp_path / "log.csv" if tmp_path is not None else None

@@ -154,3 +154,20 @@ def test_a_history_already_outside_leaves_no_admissible_command() -> None:
     q3 = (-2 * v * dt + a * dt * dt,) + (0.0,) * 6
     adm = env.admit(q1, q1, q2, q3, jerk=True)
     assert adm.reason is not None and "A1" in adm.reason
+
+
+def test_a_jerk_floor_widens_only_the_jerk_bound_to_the_paths_own_jerk() -> None:
+    """From rest at 5 ms, an acceleration step of 1.5× the jerk limit (a file's own jerk): clamped to the limit with
+    ``jerk``, admitted as it is with a floor of 1.6× the limit — and, with that floor, a step beyond the acceleration
+    limit is still clamped to it."""
+    env = BrakingEnvelope.from_limits(LIM, 5e-3)
+    dt, zero = env.dt, (0.0,) * 7
+    step = tuple(1.5 * j * dt * dt * dt for j in LIM.jerk)  # [rad]: acceleration 1.5·J·dt after one period
+    floor = tuple(1.6 * j for j in LIM.jerk)
+    clamped = env.admit(step, zero, zero, zero, jerk=True)
+    assert clamped.reason is None and clamped.clamped > 0.3 * min(step)
+    assert max(q / (j * dt**3) for q, j in zip(clamped.q, LIM.jerk)) == pytest.approx(1.0, rel=1e-6)
+    assert env.admit(step, zero, zero, zero, jerk=True, jerk_floor=floor).clamped == 0.0
+    over = tuple(1.2 * a * dt * dt for a in LIM.acceleration)  # (an unbounded floor: the acceleration limit holds)
+    adm = env.admit(over, zero, zero, zero, jerk=True, jerk_floor=tuple(1e9 for _ in LIM.jerk))
+    assert max(q / (a * dt * dt) for q, a in zip(adm.q, LIM.acceleration)) == pytest.approx(1.0, rel=1e-6)

@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import functools
 
+import numpy as np
 import pytest
+from tests.helpers.fri_session import Q0, preamble, run, sent_positions
 
 from lbrcli.bridge.testing import LockStepSource, follow_in_lock_step
 from lbrcli.fri.testing import CA, Cycle
+from lbrcli.fri import Outcome, TrajectoryPlayer
 from lbrcli.fri.motion import COAST_MAX
 from lbrcli.fri.testing.holding import (
     AROUND_CHANGE,
@@ -122,3 +125,48 @@ def test_measured_positions_with_10_urad_of_noise_neither_refuse_the_start_nor_b
     run = follow_in_lock_step(LockStepSource(1000.0, True, seed=0), lim, controller=ctl, version=version)
     assert len(run.t) and run.t[-1] > 2.9 and not run.follower.executed.braking
     _within(run, lim)
+
+
+def _over_the_jerk_limit(dt: float = 5e-3, moves: int = 4) -> np.ndarray:
+    """(n, 7) [rad] rows ``dt`` apart from Q0: rest-to-rest moves, back and forth, whose acceleration reaches 0.13–0.6
+    of each joint's limit along ramps at 1.6× its jerk limit (a file's jerk is not enforced: ``lbr check`` notes it)."""
+    lim = default_limits()
+    share = np.array([0.3, 0.45, 0.25, 0.6, 0.13, 0.2, 0.2])
+    top, slope = share * lim.acceleration, 1.6 * lim.jerk  # [rad/s²], [rad/s³]
+    ramp = int(np.ceil(np.max(top / slope) / dt))
+    up = np.minimum(np.arange(1, ramp + 1)[:, None] * dt * slope, top)  # (the ramp to the top, then held)
+    lobe = np.vstack([up, np.repeat(top[None], 20, 0), up[::-1]])
+    acc = np.vstack([np.zeros((20, 7))] + [s * np.vstack([lobe, -lobe]) for s in (1, -1) * (moves // 2)]
+                    + [np.zeros((40, 7))])  # fmt: skip
+    q = np.empty((len(acc) + 1, 7))
+    q[0] = q[1] = Q0
+    for k in range(1, len(acc)):
+        q[k + 1] = 2.0 * q[k] - q[k - 1] + acc[k] * dt * dt
+    return q
+
+
+@pytest.mark.parametrize("row, periods, carry", [(40, 4, False), (110, 4, True), (150, 4, False), (200, 2, False)])
+def test_a_late_burst_at_5_ms_in_a_file_beyond_the_jerk_limit_is_followed_back_onto_its_rows(row, periods, carry):
+    """A file at 5 ms whose own jerk is 1.6× the limit (not enforced for files), the replies to ``periods`` messages
+    from ``row`` late (the client stalled for that long; the controller extrapolates, or carries the late replies
+    forward as `lbr sim` does): the core's offset back onto the rows ends, the file is sent to its last row exactly,
+    every command within the velocity and acceleration limits of what was executed. The core before held the sum of
+    rows and offset to the jerk limit the rows themselves break: each clamp bent the path against the offset's plan
+    and re-planned it from there; the offset grew to 0.05 rad and the session ended with a braking stop (13 of 24
+    stall positions 10 rows apart along this file; now none — with 8 periods, 7 of 12: see the note on the band)."""
+    lim = default_limits()
+    traj = _over_the_jerk_limit()
+    start = len(preamble())
+    late = {start + row + i: periods - i for i in range(periods)}
+    script = preamble(send_period=5) + [Cycle(state=CA, send_period=5)] * (len(traj) + 40)
+    seen = []
+    res, ctl, _, err = run(script, TrajectoryPlayer(traj, lim, period_s=5e-3), controller_type=BurstController,
+                           on_cycle=lambda i, app: seen.append(app), tolerate_unanswered=10**6, hold=False, late=late,
+                           carry=carry)  # fmt: skip
+    assert err is None and res.outcome is Outcome.COMPLETED, res.detail
+    m = seen[-1]._motion
+    assert m.rebased_cycles > 0 and m.rejoin.done and m.rejoin_cycles > 0
+    sent = sent_positions(ctl)
+    np.testing.assert_array_equal(sent[len(traj) - 1], traj[-1])
+    v, a, _ = command_ratios(ctl, lim, 5e-3)
+    assert v <= TOL and a <= TOL, (v, a)

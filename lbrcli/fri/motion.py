@@ -94,7 +94,7 @@ class ExecutedMotion:
         self._d2: tuple | None = None
         self._d3: tuple | None = None
         self._pend: tuple | None = None
-        self._replan = False
+        self._replan: bool | tuple = False  # a clamp to re-plan the offset from (a tuple: shift its plan by it)
         self._gap: tuple | None = None  # (our last two commands) before the gap just extrapolated
         self._jerk_left = 0  # commands left that are held to the jerk limit whatever the client asked
         self._c1: tuple | None = None  # the client's last three commands (before any offset), newest first
@@ -303,7 +303,7 @@ class ExecutedMotion:
                               f"the client's path (more than {REJOIN_MAX:g} rad)")  # fmt: skip
             q = tuple(x + e for x, e in zip(q, off))
         forced = not jerk and (self._jerk_left > 0 or not self.rejoin.done or self.coasting)
-        # (jerk: at least the path's own; a limit path + offset cannot keep would bend it against the offset's plan)
+        # (jerk: at least the client's own; a limit path + offset cannot keep would bend it against the offset's plan)
         adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk or forced,
                         floor if forced and not self.coasting else None)  # fmt: skip
         if adm.reason is not None and forced:  # (no command within the jerk limit is brakeable: the limits first)
@@ -337,6 +337,8 @@ class ExecutedMotion:
             self._pend = tuple(x - y for x, y in zip(adm.q, raw))
             # a clamp of the offset (or one the jerk limit forced on the client): re-plan the offset from there
             self._replan = (raw is not q or forced) and adm.clamped > CLAMP_TOL
+            if self._replan and raw is not q and not self.rejoin.done:  # (the offset's plan goes on, shifted by it)
+                self._replan = tuple(a - b for a, b in zip(adm.q, q))
         if end_coast:  # (from the history this command ends: in :meth:`sent`)
             self.coasting = False
             self._replan = not self.replans and not self.braking
@@ -406,11 +408,9 @@ class ExecutedMotion:
             self.active_sent += 1
             self.rebased = False
             self._d3, self._d2, self._d1, self._pend = self._d2, self._d1, self._pend, None
-            if self._replan and self.coasting:
-                self._replan = False
-            if self._replan:
-                self._replan = False
-                self.rejoin.start(self._d1, self._d2 or _ZERO7, self._d3 or _ZERO7)  # type: ignore[arg-type]
+            r, self._replan = self._replan, False
+            if r is not False and not self.coasting:  # a clamp: new offset from the history, or the running one shifted
+                self.rejoin.start(self._d1, self._d2 or _ZERO7, self._d3 or _ZERO7) if r is True or self.rejoin.done else self.rejoin.shift(r)  # type: ignore[arg-type]  # fmt: skip
             self._bent, self._jerk_left = max(0, self._bent - 1), max(0, self._jerk_left - 1)
             if self._alt is not None:
                 a = self._alt

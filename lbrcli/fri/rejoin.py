@@ -57,6 +57,16 @@ class Rejoin:
         self.cycles = 0
         self.done = not (any(inp.current_position) or any(inp.current_velocity) or any(inp.current_acceleration))
 
+    def shift(self, d: Sequence[float]) -> None:
+        """The offset sent was ``d`` [rad] off the plan (the envelope clamped the command): go on from the state that
+        step leaves — the plan's, plus the step's change of position, continuous velocity (step velocity + half a
+        period of its acceleration) and acceleration. (A re-start from the offset's discrete history would lag the
+        acceleration a period: re-started every few commands, a ramp of it never ends and the offset runs away.)"""
+        inp, dt = self._inp, self.period_s
+        inp.current_position = [p + x for p, x in zip(inp.current_position, d)]
+        inp.current_velocity = [v + 1.5 * x / dt for v, x in zip(inp.current_velocity, d)]
+        inp.current_acceleration = [a + x / (dt * dt) for a, x in zip(inp.current_acceleration, d)]
+
     def next(self) -> tuple[float, ...]:
         """The offset for the next command [rad] (zeros once ``done``)."""
         if self.done:

@@ -151,3 +151,17 @@ def test_a_loop_that_dies_loses_at_most_the_rows_not_yet_handed_over_and_signals
     assert len(rows.data) == handed
     np.testing.assert_allclose(rows.column("row"), np.arange(handed))
     np.testing.assert_allclose(rows.column("msr_q3"), 0.1 * np.arange(handed) + 2)
+
+
+@pytest.mark.heavy
+@pytest.mark.skipif(not hasattr(os, "SCHED_IDLE") or not os.path.exists("/proc/self/stat"), reason="Linux only")
+def test_the_writer_runs_under_sched_idle_so_a_woken_loop_preempts_it_at_once(tmp_path):
+    log = LogProcess(tmp_path / "log.csv")
+    try:
+        pid = log._proc.pid
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        assert int(fields[41 - 3]) == os.SCHED_IDLE  # field 41 (policy); the split starts at field 3
+        assert int(fields[19 - 3]) == 19  # nice
+    finally:
+        log.close()

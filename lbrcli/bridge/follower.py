@@ -72,6 +72,8 @@ class TargetFollower(LBRClient):
         self._seq = 0
         self._q: Sequence[float] | None = None
         self._pending: tuple[LBRState, Sequence[float]] | None = None  # the state to send after the reply
+        self._prepared: list[float] | None = None  # the next command, computed after the last reply
+        self._tau_prepared = 0.0  # [s] _tau before that
         self._pose: tuple[np.ndarray, np.ndarray, Target] | None = None  # a pose still being refined
         self._ik_q: np.ndarray | None = None  # [rad] the last IK solution (the next seed)
         self._posture: np.ndarray | None = None  # [rad] where the arm stood at activation: the IK's redundancy pull
@@ -128,10 +130,12 @@ class TargetFollower(LBRClient):
                                tuple(msg.monitorData.externalTorque.value), (*pos.tolist(), w, x, y, z)))  # fmt: skip
 
     def monitor(self, state: LBRState) -> None:
+        self._prepared = None
         self.source.poll()
         self._send_state(state, state.measured_joint_position)
 
     def wait_for_command(self, state: LBRState) -> None:
+        self._prepared = None
         self.source.poll()
         self.hold_ipo(state)
         self._send_state(state, state.ipo_joint_position)
@@ -181,7 +185,6 @@ class TargetFollower(LBRClient):
 
     def command(self, state: LBRState) -> Sequence[float]:
         now = self.clock()
-        tl = self.timeline
         if self._tracker is None:  # activation: start from where the controller holds the robot, at rest
             self._t_start = now
             self._dt = self.command_period_s
@@ -191,10 +194,34 @@ class TargetFollower(LBRClient):
         self._check_source(now)
         if not self.reply_due:
             return self._q  # type: ignore[return-value]
+        q, self._prepared = self._prepared, None
+        ex = self.executed
+        if q is None or self.skipped or (ex is not None and ex.replan_due):  # (prepared before a message was lost,
+            if q is not None:  # or before the controller's history said to re-plan: the reference as before)
+                self._tau = self._tau_prepared
+            q = self._next(now, self.skipped)
+        self._q = q
+        self._send_state(state, q)
+        return q
+
+    def prepare_command(self) -> Sequence[float] | None:
+        """Reply first: the next command [rad], computed after this reply from the targets polled in this cycle —
+        the reference one period on, as the next message's cycle would step it (None before activation). A source
+        that ends or goes quiet is found in the next cycle (one period later than in its own cycle)."""
+        if self._tracker is None:
+            return None
+        self._tau_prepared = self._tau
+        self._prepared = self._next(self.clock(), 0)
+        return self._prepared
+
+    def _next(self, now: float, skipped: int) -> list[float]:
+        """The next command [rad] ``skipped`` periods after the last one the controller missed: the targets that
+        arrived, followed by the tracker."""
+        tl = self.timeline
         tracker = self._tracker
         ex = self.executed
         if ex is not None and (
-            self.skipped or ex.replan_due or (ex.last_clamp > 0.0 and ex.rejoin.done)
+            skipped or ex.replan_due or (ex.last_clamp > 0.0 and ex.rejoin.done)
         ):  # (any clamp: the next
             # step starts from it) the controller extrapolated our last commands (lost messages), or the safety core
             # clamped one: re-plan from what it executed (unless the core is taking the motion back onto our path
@@ -223,7 +250,7 @@ class TargetFollower(LBRClient):
             # critically damped filter (the tracker sees a small, smooth change of the reference's velocity); more
             # than JUMP_S off (a stall), it jumps
             dt = self._dt
-            tau = self._tau + dt * (1 + self.skipped)
+            tau = self._tau + dt * (1 + skipped)
             due = tl.due(now)
             off = due - tau
             if tau <= tl.oldest or abs(off) > JUMP_S:
@@ -253,10 +280,7 @@ class TargetFollower(LBRClient):
                 q = tracker.step(reference)
             except Untrackable as exc:
                 raise StopSession(str(exc), completed=False) from None
-        q = q.tolist()
-        self._q = q
-        self._send_state(state, q)
-        return q
+        return q.tolist()
 
     def figures(self) -> dict:
         f = dict(self.source.figures())

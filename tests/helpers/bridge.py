@@ -23,17 +23,23 @@ def limit_ratios(tab, dt=PERIOD_S, following_only=False) -> tuple[float, float, 
     simulator executed: on a loaded machine some replies reach it late, and what it makes of those (it holds, then
     takes the late one) is its own, not the bridge's. A client that fell behind answers the newest message and skips
     the ones before it (the log has a row per message answered): a step then spans as many periods as the controller's
-    sequence counter moved, and the differences of higher order are judged only over consecutive messages."""
+    sequence counter moved, and the differences of higher order are judged only over consecutive messages. A step
+    after a reply the controller did not get in time (the next message reflects an older reply) is not judged: the
+    controller bridged that period, and the safety core holds the next command to what it executed, not to the
+    command we sent before (the core's tests judge that in lock step: test_motion_late.py, test_rejoin.py)."""
     keep = tab.column("state") == 4
     if following_only:
         keep &= np.cumsum(tab.column("phase") == PHASE_BRAKE) == 0
     q = np.column_stack([tab.column(f"cmd_q{j}") for j in range(1, 8)])[keep]
     gap = np.diff(tab.column("seq")[keep])  # [periods] between the messages of consecutive rows
+    # the controller had our previous reply when it sent the next message
+    taken = tab.column("reflected_seq")[keep][1:] == tab.column("client_seq")[keep][:-1]
+    assert taken.mean() >= 0.5 if len(taken) else True, f"only {taken.mean():.0%} of the steps could be judged"
     out = []
     for k, lim in ((1, LIM.velocity), (2, LIM.acceleration), (3, LIM.jerk)):
         d = np.diff(q, k, axis=0)
         if k == 1:
-            d = d / np.maximum(gap, 1)[:, None]
+            d = (d / np.maximum(gap, 1)[:, None])[taken]
         else:  # only where the k steps are one period each
             whole = np.convolve(gap != 1, np.ones(k), "valid") == 0
             d = d[whole]

@@ -322,6 +322,7 @@ def test_the_follower_against_a_controller_that_loses_and_garbles_messages():
     assert max(ctl.command_ratios(LIM.velocity, LIM.acceleration)) <= 1.0
     sent = np.array([r.position for r in ctl.replies if r.state == CA and r.position is not None])
     assert abs(sent[-1][0] - (Q0[0] + 0.2)) < 1e-6  # reached the end of the ramp
+    assert res.prepared_replies > 1500  # reply first: each command computed after the previous reply
 
 
 def _scripted_source(targets_by_poll):

@@ -391,11 +391,12 @@ def markdown(results: dict[str, Any]) -> str:
              f"Python {results['machine']['python']}), {results['rounds']} interleaved rounds × "
              f"{results['seconds_per_session']:g} s of COMMANDING_ACTIVE per client and condition; KUKA's client: "
              f"{'measured' if results['kuka_client']['path'] else 'skipped — ' + results['kuka_client']['how']}.", "",
-             "| client | CPU per message, steady commanding [µs] |", "|---|---|"]  # fmt: skip
+             "| client | CPU per message, steady commanding [µs] | COMMANDING_ACTIVE cycles without a timely reply [%] |",
+             "|---|---|---|"]  # fmt: skip
     for name, r in results["cpu"]["clients"].items():
         cpu = r["cpu_us_per_message_steady"]
         shown = f"{cpu:.0f}" if cpu is not None else f"session did not last ({r['end_reason']})"
-        lines.append(f"| {name} | {shown} |")
+        lines.append(f"| {name} | {shown} | {r['late_share'] * 100:.2f} |")
     lines += [
         "",
         f"Load average (1, 5, 15 min) at the start of that part: {_loads(results['cpu']['load_average_1_5_15_start'])}.",

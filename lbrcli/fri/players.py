@@ -96,6 +96,7 @@ class TrajectoryPlayer(LBRClient):
         self._last: tuple[float, ...] | None = None
         self._last2: tuple[float, ...] | None = None  # the command before _last
         self._queue: list[tuple[float, ...]] = []  # commands of a rejoin after lost messages
+        self._deferred = 0  # rows passed while a rejoin waits to be planned after the reply (0: none waits)
         self._period = 0.0  # [s] command period (known at activation)
         # figures
         self.move_rows = self.trajectory_rows = self.settle_rows = 0
@@ -189,11 +190,58 @@ class TrajectoryPlayer(LBRClient):
         if not self.reply_due:  # with receive multiplier k only every k-th command is sent: advance then
             return self._last
         if self.skipped and self._last2 is not None:
+            if self._defers():  # the rejoin is planned after the reply: this command goes on at constant velocity
+                return self._go_on(self.skipped)
             self._bridged(self.skipped)
+        elif self._deferred:  # (the reply went out without after_reply: planned now)
+            self._plan_deferred()
         self._last2 = self._last
         if self._advance():
             return self._last
         raise StopSession(self.finish_text)
+
+    def after_reply(self) -> None:
+        """The rejoin after lost messages, planned behind the reply (ruckig, up to a few tenths of a ms): the cycle
+        that found the loss answered at once with the controller's own constant-velocity continuation."""
+        if self._deferred:
+            self._plan_deferred()
+
+    def _defers(self) -> bool:
+        """Whether a loss found now is answered by going on at constant velocity, its rejoin planned after the reply:
+        streaming the rows (not moving to the start), and a client whose command and after_reply are these."""
+        move = self._move
+        cls = type(self)
+        return (
+            cls.command is TrajectoryPlayer.command
+            and cls.after_reply is TrajectoryPlayer.after_reply
+            and self._started
+            and (move is None or move.done)
+            and self._ahead is None
+            and (bool(self._queue) or self._i < len(self.rows))
+        )
+
+    def _go_on(self, n: int) -> tuple[float, ...]:
+        """After ``n`` lost periods: where the controller's extrapolation is one period on — the command that agrees
+        with every bridging model; the rows it passed (``n`` + 1) are rejoined from there (:meth:`_plan_deferred`)."""
+        q, self._last2, _ = extrapolated(self._last, self._last2, n + 1, self._period)  # type: ignore[arg-type]
+        self._last = q
+        self._deferred += n + 1
+        self.skipped_rows += n
+        self.trajectory_rows += 1  # (as a rejoin's commands: in place of the row due now)
+        self.phase, self.row = PHASE_TRAJECTORY, min(self._i + self._deferred - len(self._queue), len(self.rows)) - 1
+        self.exact_command = False
+        return q
+
+    def _plan_deferred(self) -> None:
+        """The rejoin from the last command [rad] and its velocity onto the rows, ``_deferred`` rows on."""
+        k, self._deferred = self._deferred, 0
+        dt = self._period
+        vel = [(a - b) / dt for a, b in zip(self._last, self._last2)]  # type: ignore[arg-type]
+        first = self._i + k - len(self._queue)
+        self._queue, self._i = rejoin(
+            self.limits, dt, self._last, vel, self.rows, min(first, len(self.rows)), share=self.rejoin_share
+        )
+        self._queue.reverse()  # popped from the end
 
     def prepare_command(self) -> Sequence[float] | None:
         """The next move, row, rejoin or settle command [rad] (None at activation, on arrival at the first row, during a
@@ -205,7 +253,7 @@ class TrajectoryPlayer(LBRClient):
 
     def _next_planned(self) -> tuple[float, ...] | None:
         """What :meth:`prepare_command` prepares, for a subclass that adds to the planned command [rad]."""
-        if self._last is None:
+        if self._last is None or self._deferred:
             return None
         if self._queue:
             return self._queue[-1]

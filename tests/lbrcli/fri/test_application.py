@@ -116,6 +116,48 @@ def test_gaps_stale_foreign_and_malformed_are_counted_and_never_answered():
     assert max(ctl.command_ratios(LIM.velocity, LIM.acceleration)) <= 1.0
 
 
+def test_a_loss_is_answered_at_once_by_the_constant_velocity_continuation_and_rejoined_after_the_reply(monkeypatch):
+    """The cycle that finds lost messages does not plan the rejoin (ruckig, tenths of a ms at 1 ms: the reply would be
+    late and the next message found waiting, a cascade of late replies): it answers with where the controller's
+    extrapolation is one period on, and the rejoin is planned in ``after_reply``."""
+    from lbrcli.fri import players
+
+    n = 400
+    traj = min_jerk(n)
+    inside, calls = [False], []
+    plan = players.rejoin
+
+    def recording(*a, **k):
+        calls.append(inside[0])
+        return plan(*a, **k)
+
+    class Player(TrajectoryPlayer):  # (a subclass that overrides nothing of the streaming)
+        pass
+
+    def after_reply(self):
+        inside[0] = True
+        try:
+            if self._deferred:
+                self._plan_deferred()
+        finally:
+            inside[0] = False
+
+    monkeypatch.setattr(players, "rejoin", recording)
+    monkeypatch.setattr(TrajectoryPlayer, "after_reply", after_reply)
+    player = Player(traj, LIM, period_s=1e-3)
+    script = preamble() + [Cycle(state=CA)] * 100 + [Cycle(state=CA, seq_jump=3)] + [Cycle(state=CA)] * (n + 100)
+    res, ctl, _, err = run(script, player)
+    assert err is None and res.outcome is Outcome.COMPLETED and res.missed == 3
+    assert calls == [True]  # planned once, behind the reply
+    sent = sent_positions(ctl)
+    np.testing.assert_array_equal(sent[:100], traj[:100])
+    np.testing.assert_allclose(sent[100], traj[99] + 4 * (traj[99] - traj[98]), atol=1e-12)  # 3 bridged + 1
+    back = next(k for k in range(101, n - 3) if np.array_equal(sent[k : n - 3], traj[k + 3 :]))
+    assert back <= 100 + 120  # (as a rejoin planned in the cycle after one more lost period)
+    assert player.skipped_rows == 3 and player.trajectory_rows + player.skipped_rows == n
+    assert max(ctl.command_ratios(LIM.velocity, LIM.acceleration)) <= 1.0
+
+
 @pytest.mark.heavy
 @pytest.mark.parametrize(
     "mutate",

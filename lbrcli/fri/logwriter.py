@@ -4,7 +4,7 @@
 (``LogLayout.format``, complete rows per write, valid after any ending), but the FRI loop only hands each accepted
 monitoring datagram and the cycle's own figures (time, command, counters, phase, row, the client's extra columns) to
 a pipe — a few µs — and a child process (``python -m lbrcli.fri.logwriter``, :class:`RowWriter`) parses and formats
-them at nice 19, waking every ``BATCH_S`` and formatting ``SLICE_ROWS`` rows between yields of the CPU. A row costs
+them under SCHED_IDLE (nice 19 where it is missing), waking every ``BATCH_S`` and formatting ``SLICE_ROWS`` rows between yields of the CPU. A row costs
 ≈ 20–35 µs of CPU to decode and format in Python; see docs/explanations/fri-timing.md and benchmarks/bench_fri_log.py.
 
 The reply path never waits for the log: rows go to the pipe ``FLUSH_ROWS`` at a time (a kill -9 of the loop loses

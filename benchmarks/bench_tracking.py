@@ -33,16 +33,18 @@ def _decode_only(path: Path) -> tuple[float, float]:
 
 
 def _tracker_alone(path: Path, red) -> float:  # noqa: ANN001
-    """CPU time [s] of the ball's tracker alone (frames decoded beforehand, a fixed pivot, no refinement)."""
+    """CPU time [s] of the ball's tracker alone (frames decoded beforehand, a fixed pivot, no refinement), with one
+    OpenCV thread as in ``track_video``."""
     from tracking.tracker import BallTracker
-    from tracking.video import iter_frames
+    from tracking.video import iter_frames, opencv_threads
 
     frames = [(t, f) for _, t, f in iter_frames(path)]
     tracker = BallTracker(red)
-    c0 = time.process_time()
-    for t, f in frames:
-        tracker.update(f, t, PIVOT)
-    return time.process_time() - c0
+    with opencv_threads(1):
+        c0 = time.process_time()
+        for t, f in frames:
+            tracker.update(f, t, PIVOT)
+        return time.process_time() - c0
 
 
 def run(quick: bool = False) -> list[tuple[str, float, str]]:

@@ -30,7 +30,7 @@ from .patches import Patch, patch_around
 from .pendulum_check import check as pendulum_check
 from .smoothing import on_circle, outliers, smooth_centres
 from .tracker import BallTracker, TrackerOptions
-from .video import FrameBuffers, VideoInfo, iter_frames, prefetched, probe_video
+from .video import FrameBuffers, VideoInfo, iter_frames, opencv_threads, prefetched, probe_video
 
 
 @dataclass(frozen=True)
@@ -380,28 +380,30 @@ def track_video(
     on_frame preview shows neither). Raises InputError for unreadable videos or a calibration made for another image
     size.
     """
-    info = _check_inputs(path, pivot_uv, pivot_color, calibration)
-    trackers = _Trackers(ball, options, pivot_uv, pivot_color, pivot_options)
-    angle = ImageAngles(calibration, info.size)
-    buffers = FrameBuffers()  # frames not kept for the looks are decoded into again
-    frames = iter_frames(path, fps, buffers)
-    if info.decoder_threads < 2:  # decoding overlaps the tracking: by the decoder's own threads, else by a thread of
-        frames = prefetched(frames)  # ours (on top of the decoder's, it only costs GIL hand-offs: ≈ 0.1–0.3 ms a frame)
-    for k, t, frame in frames:
-        b, p = trackers.step(frame, t)
-        kept = k in trackers.kept
-        if on_frame is not None:  # (a preview draws on its frame: not on one kept for the looks)
-            on_frame(frame.copy() if kept else frame, _shown(trackers, angle, k, t, b, p))
-        if not kept:
-            buffers.give_back(frame)
-        if progress is not None:
-            progress(k + 1)
-    trackers.finish()
-    if second_look:
-        trackers.second_look(str(path), fps)
-    if smooth:
-        trackers.reject_outliers(fps or info.fps)
-        trackers.check_pendulum(fps or info.fps)
-    if second_look:
-        trackers.model_look(str(path), fps or info.fps)
-    return _make_track(trackers, angle, calibration, info, (fps or info.fps) if smooth else None)
+    with opencv_threads(1):  # OpenCV's pool costs more than it saves on the tracker's windows
+        info = _check_inputs(path, pivot_uv, pivot_color, calibration)
+        trackers = _Trackers(ball, options, pivot_uv, pivot_color, pivot_options)
+        angle = ImageAngles(calibration, info.size)
+        buffers = FrameBuffers()  # frames not kept for the looks are decoded into again
+        frames = iter_frames(path, fps, buffers)
+        # read ahead by a thread of ours: FFmpeg's frame threads decode ahead only while the reader waits in read(),
+        # so without it they idled while the tracker worked (720p benchmark: wall 1.5-1.6x decoding -> 1.2-1.4x)
+        frames = prefetched(frames)
+        for k, t, frame in frames:
+            b, p = trackers.step(frame, t)
+            kept = k in trackers.kept
+            if on_frame is not None:  # (a preview draws on its frame: not on one kept for the looks)
+                on_frame(frame.copy() if kept else frame, _shown(trackers, angle, k, t, b, p))
+            if not kept:
+                buffers.give_back(frame)
+            if progress is not None:
+                progress(k + 1)
+        trackers.finish()
+        if second_look:
+            trackers.second_look(str(path), fps)
+        if smooth:
+            trackers.reject_outliers(fps or info.fps)
+            trackers.check_pendulum(fps or info.fps)
+        if second_look:
+            trackers.model_look(str(path), fps or info.fps)
+        return _make_track(trackers, angle, calibration, info, (fps or info.fps) if smooth else None)

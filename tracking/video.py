@@ -8,6 +8,7 @@ frame interval for that frame).
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 from dataclasses import dataclass
@@ -19,6 +20,24 @@ import numpy as np
 from trajectories.errors import InputError
 
 _DEFAULT_FPS = 30.0  # [1/s] when the container does not state a frame rate
+
+
+@contextlib.contextmanager
+def opencv_threads(n: int = 1) -> Iterator[None]:
+    """OpenCV's own worker threads (``cv2.setNumThreads``, process-wide) set to ``n`` for the block, then as before.
+
+    The tracker's calls work on windows of a few thousand pixels, where handing each call to OpenCV's thread pool
+    costs more than it saves: per frame of the 720p benchmark the pool added ≈ 0.5 of the decoding CPU (tracking
+    2.0× against 1.4–1.8× decoding with one thread; benchmarks/bench_tracking.py). FFmpeg's decoder threads are
+    FFmpeg's own and not affected: decoding still overlaps the tracking."""
+    import cv2
+
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(n)
+    try:
+        yield
+    finally:
+        cv2.setNumThreads(before)
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,6 @@
 """Frame prefetching: order kept, the producer's errors raised in the consumer, an early stop closes the source; frames
-fetched again for the looks after a first pass."""
+fetched again for the looks after a first pass; OpenCV's pool set for a block; a video tracked with one OpenCV thread
+and read ahead by the prefetch thread."""
 
 import threading
 
@@ -94,3 +95,60 @@ def test_frames_decoded_into_buffers_are_those_decoded_afresh_and_the_buffers_ar
             buffers.give_back(frame)
     assert len(seen) <= 3  # two kept, the others decoded into one buffer again and again
     assert all(np.array_equal(f, fresh[k]) for k, f in kept.items())
+
+
+def test_opencv_threads_sets_the_pool_for_the_block_and_restores_it_after_an_error_too():
+    import cv2
+
+    from tracking.video import opencv_threads
+
+    before = cv2.getNumThreads()
+    with opencv_threads(1):
+        assert cv2.getNumThreads() == 1
+    assert cv2.getNumThreads() == before
+    with pytest.raises(RuntimeError), opencv_threads(1):
+        raise RuntimeError
+    assert cv2.getNumThreads() == before
+
+
+def test_a_video_is_tracked_with_one_opencv_thread_and_read_ahead_by_another_thread(tmp_path, monkeypatch):
+    """The tracker's calls run without OpenCV's pool (see opencv_threads) and the frames come from the prefetch
+    thread, so that FFmpeg's threads decode ahead while the tracker works; the pool is as before afterwards."""
+    import cv2
+    import numpy as np
+
+    from tracking import pipeline
+    from tracking.color import color_spec
+    from tracking.pipeline import track_video
+
+    producers: list[str] = []
+
+    def spy(items):  # noqa: ANN001, ANN202
+        def named():
+            for item in items:
+                producers.append(threading.current_thread().name)
+                yield item
+
+        return real(named())
+
+    real = pipeline.prefetched
+    monkeypatch.setattr(pipeline, "prefetched", spy)
+    path = tmp_path / "ball.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 30.0, (160, 120))
+    for k in range(12):
+        frame = np.full((120, 160, 3), 30, np.uint8)
+        cv2.circle(frame, (60 + 3 * k, 70), 6, (0, 0, 220), -1)
+        writer.write(frame)
+    writer.release()
+    seen: list[tuple[int, str]] = []
+    before = cv2.getNumThreads()
+    track = track_video(
+        path, color_spec("red"), pivot_uv=(80.0, 10.0),
+        on_frame=lambda bgr, res: seen.append((cv2.getNumThreads(), threading.current_thread().name)),
+    )  # fmt: skip
+    assert cv2.getNumThreads() == before
+    assert len(seen) == 12 and {n for n, _ in seen} == {1}
+    assert track.found_fraction > 0.9
+    # the frames were decoded by the prefetch thread, the tracker ran in the caller's
+    assert producers and set(producers) == {"frame-prefetch"}
+    assert {name for _, name in seen} == {threading.current_thread().name}

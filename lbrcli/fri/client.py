@@ -7,7 +7,8 @@ commanding states set the joint position (always, as KUKA requires) through ``se
 TORQUE mode or a wrench in WRENCH mode (FRI 2.7 CARTESIAN_POSE mode: ``set_cartesian_pose`` instead of joints). ``command`` may instead return the joint position [rad] (7 values).
 ``after_reply`` runs once the reply is on its way, for work that should not delay it. A client whose next command does
 not depend on the next message (a stream of precomputed positions, or a feedback computed in ``after_reply`` from this
-message) may say so in ``prepare_command``: its reply then goes out as soon as the message is checked.
+message) may say so in ``prepare_command`` (in TORQUE/WRENCH mode with ``prepare_overlay``): its reply then goes out as soon as
+the message is checked.
 To end the session raise :class:`~lbrcli.fri.errors.StopSession`; the application then brakes within the limits.
 Every joint position passes the motion-safety core (:mod:`~lbrcli.fri.motion`): it is clamped into the braking
 envelope (``clamped``), or — with ``exact_command`` — a command that would need the clamp ends the session braking.
@@ -75,7 +76,15 @@ class LBRClient:
         after each reply; the application guards the prepared position then and sends it as soon as the message
         arrives, before calling ``command`` with it, which must set exactly that position and nothing else (else
         the session ends with a braking stop). A stream of precomputed positions prepares; so can a closed loop that
-        computes its next command in ``after_reply`` from this message (one period more of delay)."""
+        computes its next command in ``after_reply`` from this message (one period more of delay). In TORQUE or
+        WRENCH mode the reply is prepared only when ``prepare_overlay`` also gives the torque or wrench."""
+        return None
+
+    def prepare_overlay(self) -> Sequence[float] | None:
+        """Optional, with ``prepare_command`` in TORQUE or WRENCH mode: the torque [Nm] (7 values) or wrench [N, Nm]
+        (6 values) the next ``command`` call will set beside the prepared position, or None (the default: that
+        cycle's reply is made when the message is there). Guarded with the prepared position; ``command`` must set
+        exactly this torque or wrench (else the session ends with a braking stop)."""
         return None
 
     def after_reply(self) -> None:

@@ -5,7 +5,8 @@ A client that knows its next command before the next message (``LBRClient.prepar
 precomputed positions) has it guarded and encoded right after the current cycle, with the next sequence counter.
 When that message arrives it is decoded and checked as every message (self-consistent, the robot side has not ended
 the session), and the prepared reply goes out at once; the client's ``command`` call, which must set the same
-position, and the rest of the cycle follow. Any other message (lost ones before it, a state change, a stop) takes
+position (and, in TORQUE or WRENCH mode, the torque or wrench its ``prepare_overlay`` gave), and the rest of the cycle
+follow. Any other message (lost ones before it, a state change, a stop) takes
 the full cycle. Supervision judges each message after its reply: a problem it finds brakes from the next command.
 
 FRI 2.7: in CARTESIAN_POSE mode the client's pose is turned into joints (:class:`~lbrcli.fri.cartesian.PoseSolver`,
@@ -38,6 +39,7 @@ _TORQUE = int(ClientCommandMode.TORQUE)
 _WRENCH = int(ClientCommandMode.WRENCH)
 _CARTESIAN = int(ClientCommandMode.CARTESIAN_POSE)
 
+_PREPARED_MODES = (_POSITION, _TORQUE, _WRENCH)
 Prepared = tuple[int, bytes, tuple[float, ...]]  # (sequence counter it answers, datagram, joint position [rad])
 
 
@@ -51,6 +53,8 @@ class Replier:
         self.transformation_client, self.tcp_robot = transformation_client, tcp_robot
         self.message: ReplyMessage | None = None
         self.prepared: Prepared | None = None  # the reply to the next message, if the client prepared it
+        self._overlay: tuple[int, tuple[float, ...] | None, Any] = (_POSITION, None, None)  # (mode, torque [Nm] or
+        # wrench [N, Nm] of the prepared reply, the motion): what its confirmation compares and records
         self.poses: Any = None  # the PoseSolver, built at the first Cartesian command
         self.client_seq = 0  # the sequence counter of the next reply
         self.client_sequence = -1  # ... of the last reply sent (−1 before the first)
@@ -86,35 +90,45 @@ class Replier:
 
     # -- the reply prepared a cycle ahead ----------------------------------------------------------------------
     def prepare(self, seq: int, mon: Any, motion: ExecutedMotion, client: Any) -> None:
-        """Prepare the reply to the next message (``seq`` + 1) from the client's ``prepare_command``, guarded now:
-        only in POSITION mode, receive multiplier 1, without a transformation client and while nothing brakes (the
-        application calls it in COMMANDING_ACTIVE while nothing stops)."""
+        """Prepare the reply to the next message (``seq`` + 1) from the client's ``prepare_command`` (and in TORQUE or
+        WRENCH mode its ``prepare_overlay``), guarded now: only in POSITION, TORQUE or WRENCH mode, receive multiplier
+        1, without a transformation client and while nothing brakes (the application calls it in COMMANDING_ACTIVE
+        while nothing stops)."""
+        mode = mon.ipoData.clientCommandMode
         if (motion.braking or not motion.steady  # (coasting or on the way back onto the path after a bridge: the full cycle)
                 or self.transformation_client is not None  # (its provide() runs in the full cycle)
-                or mon.ipoData.clientCommandMode != _POSITION or (mon.connectionInfo.receiveMultiplier or 1) != 1):  # fmt: skip
+                or mode not in _PREPARED_MODES or (mon.connectionInfo.receiveMultiplier or 1) != 1):  # fmt: skip
             return
         try:
             q = client.prepare_command()
+            overlay = None if q is None or mode == _POSITION else client.prepare_overlay()
         except Exception:  # noqa: BLE001 - no preparation; command() runs when the message is there and reports
             return
-        if q is None:
+        if q is None or (mode != _POSITION and overlay is None):
             return
         q = tuple(q)
         adm = motion.envelope.admit(
             q, motion.prev, motion.prev2, motion.prev3, client.jerk_limited or motion._jerk_left > 0
         )
-        if adm.reason is not None or adm.clamped > 0.0 or motion.guard.refuse_position(q, motion.prev, motion.prev2,
-                                                                                       False) is not None:  # fmt: skip
+        guard = motion.guard
+        if adm.reason is not None or adm.clamped > 0.0 or guard.refuse_position(q, motion.prev, motion.prev2,
+                                                                                False) is not None:  # fmt: skip
             return  # the full cycle decides (clamps it, or refuses it with its reason and brakes)
+        if overlay is not None:
+            overlay = tuple(overlay)
+            if (guard.refuse_torque if mode == _TORQUE else guard.refuse_wrench)(overlay) is not None:
+                return  # (the full cycle refuses it with its reason and brakes)
         reply = self.message
-        reply.set_motion(_POSITION, q, None, None)  # type: ignore[union-attr]
+        reply.set_motion(mode, q, overlay if mode == _TORQUE else None, overlay if mode == _WRENCH else None)  # type: ignore[union-attr]
         reply.set_io(())  # type: ignore[union-attr]
         nxt = (seq + 1) & 0xFFFFFFFF
         self.prepared = (nxt, reply.datagram(self.client_seq, nxt), q)  # type: ignore[union-attr]
+        self._overlay = (mode, overlay, motion)
 
     def confirm(self, q: tuple[float, ...], client: Any, cmd: LBRCommand, ending: Any, cyc: Any) -> None:
-        """A cycle answered with the prepared reply carrying ``q`` [rad]: the client's ``command`` call (through
-        ``ending``: a SessionEnding), which must set that same position — else the session stops braking."""
+        """A cycle answered with the prepared reply carrying ``q`` [rad] (and the prepared torque or wrench): the client's
+        ``command`` call (through ``ending``: a SessionEnding), which must set that same position (torque, wrench) —
+        else the session stops braking."""
         client.reply_due = True
         client.skipped = 0
         client.braking = False
@@ -122,12 +136,24 @@ class Replier:
         got = ending.call("command", client.robot_state)
         if got is None:
             got = cmd.joint_position
-        if ending.stop is None and (got is None or tuple(got) != q or cmd.torque is not None or cmd.wrench is not None
-                                    or cmd.io_writes):  # fmt: skip
+        mode, overlay, motion = self._overlay
+        tau = None if cmd.torque is None else tuple(cmd.torque)
+        wrench = None if cmd.wrench is None else tuple(cmd.wrench)
+        if ending.stop is None and (got is None or tuple(got) != q or cmd.io_writes
+                                    or tau != (overlay if mode == _TORQUE else None)
+                                    or wrench != (overlay if mode == _WRENCH else None)):  # fmt: skip
+            what = "a joint position" + (", a torque" if mode == _TORQUE else ", a wrench" if mode == _WRENCH else "")
             ending.stop_braking(Outcome.FAILED, EndReason.CLIENT_ERROR, "the client's prepare_command() did not "
-                                "predict its command(): prepared a joint position, command() set "
-                                + ("another one" if got is None or tuple(got) != q else "torques, a wrench or IO writes")
+                                f"predict its command(): prepared {what}, command() set "
+                                + ("another joint position" if got is None or tuple(got) != q
+                                   else "IO writes" if cmd.io_writes else "another torque or wrench")
                                 + " (the prepared one was sent)")  # fmt: skip
+        if mode == _TORQUE:  # (where a braking stop's torque ramp starts)
+            motion.last_torque = overlay
+        elif mode == _WRENCH:
+            motion.last_wrench = overlay
+        cyc.torque = overlay if mode == _TORQUE else None
+        cyc.wrench = overlay if mode == _WRENCH else None
         cyc.command = q
         cyc.sent_position = True
         cyc.phase = client.phase

@@ -50,9 +50,11 @@ def test_torque_sine_moves_the_joint_and_wrench_sine_moves_the_flange():
     assert result.ok, result.detail
     q = np.array(client.measured)
     assert np.ptp(q[:, 3]) > 1e-4 and np.ptp(q[:, 0]) < np.ptp(q[:, 3]) / 10  # 5 Nm on A4 against 1000 Nm/rad
+    assert result.prepared_replies > 0.9 * len(client.measured)  # reply first (prepare_command + prepare_overlay)
     result, client = wrench_sine_overlay.main(["--duration", "2", "--sim-fast"])
     assert result.ok, result.detail
     assert np.ptp(np.array(client.measured), axis=0).max() > 1e-5
+    assert result.prepared_replies > 0.9 * len(client.measured)
 
 
 @pytest.mark.heavy

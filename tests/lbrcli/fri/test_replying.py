@@ -1,7 +1,9 @@
 """Replies prepared one cycle ahead (``LBRClient.prepare_command``, ``lbrcli.fri.replying``) against the scripted
 controller: the same commands as the cycle-by-cycle path bit for bit (both wire formats, gaps, stale, foreign and
 garbage datagrams, robot-side ends, a pushed robot), inconsistent messages never answered, a client whose
-prediction is wrong stopped by a braking stop, and the supervision's stop one command later within the limits."""
+prediction is wrong stopped by a braking stop, and the supervision's stop one command later within the limits; torque
+and wrench replies prepared with ``prepare_overlay`` (the same as cycle by cycle, a wrong one stopped with its effort
+ramped down from the last sent, one outside the guard left to the full cycle)."""
 
 from __future__ import annotations
 
@@ -176,3 +178,84 @@ def test_moves_to_the_start_are_prepared_step_by_step_and_change_nothing(shaped,
     assert 10 < len(moved) and res.prepared_replies > 0.9 * (min(gap_at or len(moved), len(moved)) - res.braking_cycles)
     if gap_at is None:
         assert_within_limits(moved, 1e-3, before=np.array([Q0, Q0]))
+
+
+class TorqueOrWrench(LBRClient):
+    """Holds Q0 and overlays a sine torque on A4 (TORQUE) or a sine force along x (WRENCH), predicting both;
+    ``lie_at``: from that cycle on, command() sets the effort 1e-9 off the prediction; ``amplitude`` [Nm] or [N]."""
+
+    def __init__(self, wrench: bool, lie_at: int | None = None, amplitude: float = 5.0) -> None:
+        self.wrench, self.lie_at, self.amplitude = wrench, lie_at, amplitude
+        self.k, self.next, self.efforts = 0, None, []
+
+    def _effort(self, k: int) -> tuple[float, ...]:
+        e = self.amplitude * math.sin(0.05 * k)
+        return (e, 0.0, 0.0, 0.0, 0.0, 0.0) if self.wrench else (0.0, 0.0, 0.0, e, 0.0, 0.0, 0.0)
+
+    def prepare_command(self):
+        return tuple(Q0)
+
+    def prepare_overlay(self):
+        return self._effort(self.k)
+
+    def command(self, state):
+        e = self._effort(self.k)
+        if self.lie_at is not None and self.k >= self.lie_at:
+            e = (e[0] + 1e-9, *e[1:])
+        self.k += 1
+        self.efforts.append(e)
+        self.robot_command.set_wrench(e) if self.wrench else self.robot_command.set_torque(e)
+        return tuple(Q0)
+
+
+@pytest.mark.parametrize("wrench", [False, True], ids=["torque", "wrench"])
+def test_torque_and_wrench_replies_are_prepared_and_carry_what_the_cycle_by_cycle_path_sends(wrench):
+    from dataclasses import replace
+
+    mode = 2 if wrench else 3
+    script = [replace(c, mode=mode) for c in preamble() + [Cycle(state=CA)] * 200]
+    runs = []
+    for prepare in (True, False):
+        client = TorqueOrWrench(wrench)
+        res, ctl, _, err = run(script, client, prepare=prepare, version="2.7" if wrench else "1.15")
+        assert err is None and ctl.unexpected == []
+        runs.append((res, ctl, client))
+    (res, ctl, client), (res0, ctl0, _) = runs
+    assert res.prepared_replies >= 195 and res0.prepared_replies == 0
+    assert replies(ctl) == replies(ctl0)
+    efforts = [r.wrench if wrench else r.torque for r in ctl.replies if r.state == CA]
+    assert efforts == [r.wrench if wrench else r.torque for r in ctl0.replies if r.state == CA]
+    np.testing.assert_array_equal(np.array(efforts), np.array(client.efforts))  # each cycle's, none skipped
+    assert max(abs(e[0 if wrench else 3]) for e in efforts) > 4.0
+
+
+@pytest.mark.parametrize("wrench", [False, True], ids=["torque", "wrench"])
+def test_a_wrong_torque_or_wrench_prediction_ends_in_a_braking_stop_whose_effort_ramps_from_the_last_sent(wrench):
+    from dataclasses import replace
+
+    script = [replace(c, mode=2 if wrench else 3) for c in preamble() + [Cycle(state=CA)] * 400]
+    client = TorqueOrWrench(wrench, lie_at=120)
+    res, ctl, _, err = run(script, client, version="2.7" if wrench else "1.15")
+    assert err is None and res.outcome is Outcome.FAILED and res.reason is EndReason.CLIENT_ERROR
+    assert "prepare_command" in res.detail and ("wrench" if wrench else "torque") in res.detail
+    efforts = np.array([r.wrench if wrench else r.torque for r in ctl.replies if r.state == CA])
+    j = 0 if wrench else 3
+    np.testing.assert_array_equal(efforts[:120], np.array(client.efforts[:120]))  # the prepared ones, as predicted
+    # the stop ramps the effort down from the last one sent (the prepared one), with no step at its start
+    step = np.abs(np.diff(efforts[:, j]))
+    assert step.max() < 0.3 and abs(efforts[-1, j]) < 1e-9
+
+
+def test_a_prepared_torque_outside_the_guard_is_not_sent_and_the_full_cycle_refuses_it_as_before():
+    from dataclasses import replace
+
+    script = [replace(c, mode=3) for c in preamble() + [Cycle(state=CA)] * 60]
+    out = []
+    for prepare in (True, False):
+        res, ctl, _, err = run(script, TorqueOrWrench(False, amplitude=1e4), prepare=prepare)
+        assert err is None
+        out.append((res, ctl))
+    (res, ctl), (res0, ctl0) = out
+    assert res.reason is res0.reason and res.detail == res0.detail and "torque" in res.detail
+    assert replies(ctl) == replies(ctl0)
+    assert all(abs(r.torque[3]) <= 200.0 for r in ctl.replies if r.torque is not None)

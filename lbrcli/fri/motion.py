@@ -38,9 +38,7 @@ JERK_CYCLES = 100  # after the controller bridged a period: commands held to the
 COAST_MAX = 10  # commands coasting at most, then back onto the client's path while replies stay late (no coast
 # again until the controller confirms one in time: a busy machine would coast off the path)
 REJOIN_MAX = 0.05  # [rad] an offset back onto the client's path larger than this ends the session (braking stop)
-EFFORT_RANGE_S = (
-    0.25  # [s] a stop ramps an effort down at most at its whole range (torque limit, wrench bound) per this
-)
+EFFORT_RANGE_S = 0.25  # [s] a stop ramps an effort down by at most its range (torque limit, wrench bound) per this
 
 
 class Refused(Exception):
@@ -194,16 +192,15 @@ class ExecutedMotion:
         return True
 
     def _join_gap(self, q: Sequence[float]) -> None:
-        """The client's first command ``q`` [rad] after a gap: its path over the gap is taken as the parabola through
-        its last two commands before and ``q``; the executed history minus that path is the offset that
-        :class:`~lbrcli.fri.rejoin.Rejoin` brings to zero (none if the client re-planned from where the robot is)."""
+        """The client's first command ``q`` [rad] after a gap: its path over the gap is the parabola through its last
+        two commands before and ``q``; the executed history minus it is the offset that :class:`Rejoin` brings to 0."""
         c1, c2, n = self._gap_path  # type: ignore[misc]
         self._gap_path = None
-        self._d1, self._d2, self._d3 = d = gap_offsets((self.prev, self.prev2, self.prev3), c1, c2, n, q)
-        self.rejoin.start(*d)
+        if not self.replans:  # (a client that re-planned from the executed history: a path through it counts it twice)
+            self._d1, self._d2, self._d3 = d = gap_offsets((self.prev, self.prev2, self.prev3), c1, c2, n, q)
+            self.rejoin.start(*d)
 
-    def _forget_path(self) -> None:
-        """No offset back onto the client's path (the client re-plans from the executed state, as after a clamp)."""
+    def _forget_path(self) -> None:  # no offset back onto the client's path (it re-plans from the executed state)
         self._d1 = self._d2 = self._d3 = self._pend = None
         self.rejoin.done = True
 
@@ -409,7 +406,10 @@ class ExecutedMotion:
             self.rebased = False
             self._d3, self._d2, self._d1, self._pend = self._d2, self._d1, self._pend, None
             r, self._replan = self._replan, False
-            if r is not False and not self.coasting:  # a clamp: new offset from the history, or the running one shifted
+            if r is not False and not self.coasting and self.replans:  # a clamp: the client re-plans from there
+                self._forget_path()
+                self.replan_due = True
+            elif r is not False and not self.coasting:  # a new offset from the history, or the running one shifted
                 self.rejoin.start(self._d1, self._d2 or _ZERO7, self._d3 or _ZERO7) if r is True or self.rejoin.done else self.rejoin.shift(r)  # type: ignore[arg-type]  # fmt: skip
             self._bent, self._jerk_left = max(0, self._bent - 1), max(0, self._jerk_left - 1)
             if self._alt is not None:

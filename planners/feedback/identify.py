@@ -149,6 +149,9 @@ def _free_swing(t_r: np.ndarray, y: np.ndarray, a: np.ndarray, dt: float, t0: fl
     crossings of the equilibrium, the decay of the turning points (the seed of :func:`_fit_response`)."""
     moving = np.flatnonzero(np.abs(a) > 1e-9)
     t_free = t0 + (moving[-1] + 1) * dt + 0.05 if len(moving) else t0
+    # (at the latest one period after the push began, as planned: after lost messages the controller held the
+    # cart's velocity, not its acceleration, and the cart is still being brought to rest — the fit has that motion)
+    t_free = min(t_free, t0 + QUIET_S + 2 * math.pi / w_nom + 0.05)
     free = t_r >= t_free
     tf, yf = t_r[free], y[free]
     floor = max(4.0 * noise, math.radians(0.3))

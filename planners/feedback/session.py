@@ -206,8 +206,10 @@ class UprightSession:
         amplitude = o.excite_amplitude
         if amplitude is None:
             amplitude = min(max(o.excite_swing * self.length / math.pi, 0.02), 0.4 * self.cart.limits.travel)
-        a_plan = excitation(t - QUIET_S, period, amplitude)
-        self.cart.track(a_plan, self.dt)  # the governor keeps the rail's bounds; the record has what it did
+        if t < QUIET_S + period:
+            self.cart.track(excitation(t - QUIET_S, period, amplitude), self.dt)
+        else:  # (after lost messages the controller held the cart's velocity, not its acceleration: the push may
+            self._hold()  # end moving; brought to rest, not left drifting to the rail's end)  # the governor keeps the rail's bounds; the record has what it did
         self._rec_a.append(self.cart.a)
         if raw is not None:
             self._rec_t.append(t)

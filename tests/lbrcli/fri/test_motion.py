@@ -215,3 +215,38 @@ def test_a_stop_in_torque_or_wrench_mode_ramps_the_effort_down_within_its_rate(m
     bound = (lim.torque if mode == 3 else np.array([20.0] * 3 + [2.0] * 3)) / EFFORT_RANGE_S
     assert np.all(rate <= bound * (1 + 1e-6))  # … no faster than the whole range per EFFORT_RANGE_S
     assert np.all(np.abs(np.diff(e, axis=0)).max(axis=0) < np.abs(e[0]) / 10)  # never in one cycle
+
+
+def test_a_client_that_replans_from_the_executed_motion_gets_no_offset_of_the_core_on_top():
+    """A client that re-plans from what the controller executed (``replans``: the upright cart, the bridge's follower)
+    ramps A1 and A4 to 0.6 of their acceleration limits within the jerk limit, messages lost now and then (the
+    controller held the velocity). The core takes no path through the gap and plans no offset back onto it (the
+    client's re-plan already starts from the executed history: an offset would count the gap twice, and a clamp's
+    offset, started at the clamp's acceleration, ran away to 0.05 rad in the upright session); a clamp tells the
+    client to re-plan. Every step stays within the limits of the executed history, and the client's commands are
+    sent as they are."""
+    lim, dt = default_limits(), 1e-3
+    m = ExecutedMotion(lim, dt, 1e9, 1e9, hold_cycles=1, q=(0.0,) * 7)
+    m.replans = True
+    target = np.array([0.6, 0, 0, 0.6, 0, 0, 0]) * lim.acceleration  # [rad/s²]
+    jerk = 0.9 * lim.jerk  # [rad/s³]
+    exe, ours, gaps, clamps = [np.array(m.prev)] * 3, [True] * 3, {60, 61, 140, 200, 230, 231, 232, 300}, []
+    for k in range(400):
+        if k in gaps:  # the controller's message is lost: it extrapolated our last command
+            m.extrapolate(1)
+            exe.append(np.array(m.prev))
+            ours.append(False)
+            continue
+        p, v, a = np.array(m.position), np.array(m.velocity), np.array(m.acceleration)  # re-planned each cycle
+        a_next = np.clip(target, a - jerk * dt, a + jerk * dt)
+        want = tuple(p + (v - 0.5 * a * dt) * dt + 0.5 * (a + a_next) * dt * dt)  # (continuous → step velocity)
+        cmd, _, _, why = m.next_command(want, ACTIVE, POSITION, want, None, None, False, False)
+        assert why is None, why
+        clamps.append(float(np.abs(np.array(cmd) - want).max()))
+        m.sent(tuple(cmd), ACTIVE)
+        exe.append(np.array(cmd))
+        ours.append(True)
+    v, a, j = _our_ratios(np.array(exe), np.array(ours), dt, lim)
+    assert m.extrapolated_cycles == len(gaps) and m.rejoin_cycles == 0 and m.rejoin.done
+    assert v <= 1 + 1e-9 and a <= 1 + 1e-9 and j <= 1 + 1e-6, (v, a, j)
+    assert max(clamps) < 1e-9, max(clamps)

@@ -17,7 +17,7 @@ NOMINAL = 0.2667  # [m] the model's equivalent length (a 0.4 m uniform rod)
 
 
 def _record(length: float, friction: float = 0.0, delay: float = 0.006, noise: int = 0, offset: int = 0,
-            sign: int = 1, amplitude: float = 0.06, seed: int = 0):  # fmt: skip
+            sign: int = 1, amplitude: float = 0.06, seed: int = 0, tail: float = 0.0):  # fmt: skip
     """The readings of a rod of equivalent ``length`` [m] (a point-mass model: φ̈ = −(g sin φ + a cos φ)/l with dry
     friction μ = friction·g/l) under the excitation for the nominal rod, as the module delivers them."""
     rng = np.random.default_rng(seed)
@@ -25,6 +25,8 @@ def _record(length: float, friction: float = 0.0, delay: float = 0.006, noise: i
     dt = 1e-3
     n = int((QUIET_S + period + DECAY_S) / dt)
     a = np.array([excitation(k * dt - QUIET_S, period, amplitude) for k in range(n)])
+    after = np.arange(n) * dt - QUIET_S - period  # [s] since the push ended
+    a += np.where(after >= 0.0, tail * np.exp(-np.maximum(after, 0.0) / 0.8), 0.0)  # the cart brought to rest
     lag = 2  # the controller's interpolation: the pivot moves two cycles after the command
     pivot = np.concatenate([np.zeros(lag), a])[:n]
     mu = friction * G / length
@@ -72,3 +74,13 @@ def test_no_rod_or_one_outside_the_band_is_refused_with_a_reason():
     t, y, a, dt = _record(3.0 * NOMINAL)  # a rod 3 × the model's: its period is 1.7 × the model's
     with pytest.raises(IdentificationError, match="period"):
         identify(t, y, a, dt, NOMINAL)
+
+
+def test_a_cart_still_coming_to_rest_after_the_push_leaves_the_free_swing_to_be_read():
+    """After lost messages the controller held the cart's velocity, not its acceleration: the push ends moving and
+    the cart is brought to rest over the next seconds (here 2 % of the push's peak acceleration, decaying over
+    0.8 s). The free swing is read from one period after the push began, as planned (not from the cart's last
+    acceleration, seconds later), and the rod is found as without it."""
+    t, y, a, dt = _record(NOMINAL, tail=0.02 * 0.06 * (2 * math.pi) ** 2 * G / NOMINAL)
+    rod = identify(t, y, a, dt, NOMINAL)
+    assert rod.equivalent_length == pytest.approx(NOMINAL, rel=0.02) and rod.sign == 1

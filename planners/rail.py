@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 
@@ -60,40 +59,6 @@ class Rail:
         """:meth:`joints` as a list of floats, for the FRI command (allocation of one list)."""
         (c0, c1, c2, c3), s = self._segment(x)
         return [((c0[j] * s + c1[j]) * s + c2[j]) * s + c3[j] for j in range(len(c0))]
-
-    def locate(self, q: Sequence[float], x: float) -> float:
-        """The cart position [m] whose joints are nearest ``q`` [rad] (Newton on the spline from ``x`` [m]; q near
-        the rail, as the executed joints of a cart the controller extrapolated or the safety core clamped)."""
-        lo, hi = float(self.x[0]), float(self.x[-1])
-        for _ in range(8):
-            (c0, c1, c2, c3), s = self._segment(x)
-            g = h = 0.0  # the gradient and the curvature of ½|q(x) − q|² by x
-            for j in range(len(c0)):
-                d1 = (3.0 * c0[j] * s + 2.0 * c1[j]) * s + c2[j]
-                r = (((c0[j] * s + c1[j]) * s + c2[j]) * s + c3[j]) - q[j]
-                g += d1 * r
-                h += d1 * d1 + (6.0 * c0[j] * s + 2.0 * c1[j]) * r
-            if h <= 0.0:
-                break
-            step = g / h
-            x = min(max(x - step, lo), hi)
-            if abs(step) < 1e-13:
-                break
-        return x
-
-    def state(
-        self, q: Sequence[float], qd: Sequence[float], qdd: Sequence[float], x: float
-    ) -> tuple[float, float, float]:
-        """The cart's (position [m], velocity [m/s], acceleration [m/s²]) nearest joints at ``q`` [rad] moving at
-        ``qd`` [rad/s] and ``qdd`` [rad/s²] (least squares along the rail's tangent q'(x); ``x`` [m]: a guess)."""
-        x = self.locate(q, x)
-        (c0, c1, c2, _), s = self._segment(x)
-        d1 = [(3.0 * c0[j] * s + 2.0 * c1[j]) * s + c2[j] for j in range(len(c0))]
-        d2 = [6.0 * c0[j] * s + 2.0 * c1[j] for j in range(len(c0))]
-        n = sum(v * v for v in d1)
-        v = sum(a * b for a, b in zip(d1, qd)) / n
-        acc = sum(a * (b - c * v * v) for a, b, c in zip(d1, qdd, d2)) / n
-        return x, v, acc
 
     def __post_init__(self) -> None:
         # per-segment spline coefficients and joint bounds as Python lists: local_bounds runs every FRI cycle, and

@@ -93,18 +93,11 @@ class UprightClient(LBRClient):
             return self._last
         if self.skipped:
             self._bridged(self.skipped)
-        ex = self.executed
-        if self.replans and ex is not None and ex.replan_due and not self.skipped:
-            self._resync(ex)  # (lost replies coasted, or the core clamped a command: the cart is where it went)
         move = self._move
         if not move.done:  # type: ignore[union-attr]
             self._last2, self._last = self._last, move.next()  # type: ignore[union-attr]
             self.phase = Phase.MOVE
             return self._last
-        if not self.replans:  # the controller runs: from now on the cart re-plans from what was executed
-            self.replans = True  # (the move before goes on along its plan; the core takes it back onto that)
-            if ex is not None:
-                ex.replans = True
         t0 = time.perf_counter_ns()
         session = self.session
         r = self.reader.latest if self.reader is not None else None
@@ -134,37 +127,20 @@ class UprightClient(LBRClient):
         if not self._move.done:  # type: ignore[union-attr]
             self._move.skip(n)  # type: ignore[union-attr]
             return
-        obs = self.session.obs if self.session is not None else None
-        for _ in range(n):  # (the cart held its velocity: no acceleration)
-            if obs is not None:
-                obs.predict(0.0)
-        if self.executed is not None:
-            self._resync(self.executed)
-            return
         cart = self.cart
+        obs = self.session.obs if self.session is not None else None
+        # the cart's acceleration resumes where it was: ramping it up from 0 again would starve the balance of
+        # acceleration at every gap (the extrapolation's own jump is the controller's)
         for _ in range(n):
             cart.x += cart.v * dt  # type: ignore[union-attr]
-        self._off_rail(q, self._last2)
-
-    def _resync(self, ex: Any) -> None:
-        """The cart's state from the joints the controller executed (``ex``: the safety core's history, its
-        extrapolation over lost messages and its clamps included): its position on the rail and the velocity and
-        acceleration of those positions, so that the controller's next jerk starts from what the arm does (a cart
-        model that ran on alone would leave the arm behind, and the core's offsets back onto it would pile up)."""
-        cart = self.cart
-        cart.x, cart.v, cart.a = self.rail.state(ex.prev, ex.velocity, ex.acceleration, cart.x)  # type: ignore[union-attr]
-        self._last, self._last2 = ex.prev, ex.prev2
-        self._off_rail(ex.prev, ex.prev2)
-
-    def _off_rail(self, q: Sequence[float], q_prev: Sequence[float]) -> None:
-        """The joints ``q`` (and ``q_prev`` a period before) [rad] off the rail's curve at the cart's state (the
-        extrapolation left it along its tangent): the commands carry that offset on and fade it, so that the next
-        command's second difference is the rail's own (no doubled curvature term)."""
-        cart, dt = self.cart, self._period
+            if obs is not None:
+                obs.predict(0.0)
+        # the extrapolation left the rail's curve along its tangent: the commands carry that offset on, and fade it,
+        # so that the next command's second difference is the rail's own (no doubled curvature term)
         on_rail = self.rail.joints_list(cart.x)  # type: ignore[union-attr]
         before = self.rail.joints_list(cart.x - cart.v * dt)  # type: ignore[union-attr]
         self._off = [a - b for a, b in zip(q, on_rail)]
-        self._off_prev = [a - b for a, b in zip(q_prev, before)]
+        self._off_prev = [a - b for a, b in zip(self._last2, before)]
 
     def _offset(self, q: Sequence[float]) -> tuple[float, ...]:
         """``q`` plus the off-rail offset of an extrapolation, decaying with a double pole at ``_FADE`` per cycle."""

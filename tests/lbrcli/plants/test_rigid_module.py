@@ -145,10 +145,10 @@ def test_lbr_control_upright_refuses_bad_input():
         assert p.returncode == 2 and text in p.stderr and "Traceback" not in p.stderr, (args, p.stderr)
 
 
-@pytest.mark.slow  # ≈ 30 s, not a CI gate (lock-step, so the same on any machine). With the cart re-planned from the
-# executed joints (``UprightClient.replans``) it completes on seeds 2 and 3 of 0-5 at these faults; on the others the
-# rod is not caught (an honest failure, not the old 0.05 rad offset stop: every gap restarts the cart's acceleration
-# at the jerk limit, which starves the swing-up at 2 % loss)
+@pytest.mark.slow  # ≈ 1 min, not a CI gate: run to run the rod fell and was re-caught 0–3 times under these faults (the
+# fit's result was taken when the worker finished, in wall-clock time; now at FIT_WAIT_S of simulated time, as the CLI
+# does in lock-step); since the safety core rebases after every bridged reply, the session ends by its 0.05 rad
+# rejoin limit (28 Nov: 2 of 2 runs) — the upright client's own gap offset and the core's are not yet reconciled
 def test_upright_rides_through_lost_and_malformed_messages(robot):
     """2 % of the controller's messages lost, 1 % malformed: the controller extrapolates the commands along the
     rail's tangent; the cart coasts as the joints did, the commands fade back onto the rail, a cart past the end

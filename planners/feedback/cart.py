@@ -6,7 +6,9 @@ jerk interval; :meth:`planners.rail.Rail.local_bounds`) — or, without it, the 
 governor keeps the jerk and the acceleration in their intervals and brakes early enough that the velocity reached
 when the acceleration has been ramped back to zero at the jerk bound stays within the speed bound, and within the
 speed from which the cart can still stop before the end of the rail (|x| ≤ travel) at half the acceleration bound.
-A request that would break a bound is trimmed (``trimmed`` counts those cycles).
+A request that would break a bound is trimmed (``trimmed`` counts those cycles). A state already outside the bounds
+(set from outside, or coasted onto another part of the rail) goes back into the acceleration interval at the constant
+jerk bound: the rail's jerk interval there can lie wholly on the far side (its curvature terms grow with v·a).
 """
 
 from __future__ import annotations
@@ -79,12 +81,26 @@ class Cart:
             j = max(top, j_lo)
         if j < bottom:
             j = min(bottom, j_hi)
+        if (self.a > a_hi and j > 0.0) or (self.a < a_lo and j < 0.0) or j_lo > j_hi:
+            j = self._recover(jerk, a_lo, a_hi)
         if j != jerk:
             self.trimmed += 1
         a0 = self.a
         self.a = a0 + j * dt
         self.x += self.v * dt + (0.5 * a0 + j * dt / 6.0) * dt * dt
         self.v += 0.5 * (a0 + self.a) * dt
+
+    def _recover(self, jerk: float, a_lo: float, a_hi: float) -> float:
+        """The jerk [m/s³] from a state outside the bounds (set from outside the governor, e.g. coasted through lost
+        messages onto another part of the rail): the rail's jerk interval there can push the acceleration further out
+        (its curvature terms grow with v·a: a runaway), so the acceleration goes back into its interval at the
+        constant jerk bound instead."""
+        lim, a, dt = self.limits.jerk, self.a, self.dt
+        if a > a_hi:
+            return max(-lim, (a_hi - a) / dt) if a_lo <= a_hi else -lim
+        if a < a_lo:
+            return min(lim, (a_lo - a) / dt) if a_lo <= a_hi else lim
+        return min(max(jerk, -lim, (a_lo - a) / dt), lim, (a_hi - a) / dt)
 
     def track(self, accel: float, time_constant: float) -> None:
         """Step toward the acceleration ``accel`` [m/s²] with a first-order lag ``time_constant`` [s]."""

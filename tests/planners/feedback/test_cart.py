@@ -43,3 +43,29 @@ def test_tracking_an_acceleration_and_back_to_rest():
     for _ in range(6000):
         cart.track(-4.0 * cart.x - 3.0 * cart.v, 0.03)
     assert abs(cart.x) < 5e-3 and abs(cart.v) < 5e-3
+
+
+def _curved_rail_bounds(x: float, v: float, a: float) -> tuple[float, float, float, float, float]:
+    """Bounds like a curved rail's (Rail.local_bounds): the joints' jerk q'·j + 3·q''·v·a + q'''·v³ within ±100, so the
+    cart's jerk interval shifts with v·a (here q''/q' = −30 /m)."""
+    rest = -90.0 * v * a
+    return 0.8, -3.5, 3.5, -100.0 - rest, 100.0 - rest
+
+
+def test_a_state_outside_the_bounds_is_brought_back_not_run_away():
+    # a cart whose state was set from outside its governor (coasted onto another part of the rail), its acceleration
+    # above the interval while moving: there the rail's jerk interval lies wholly above 0, and following it drove the
+    # acceleration up without end (to 1e150 m/s² within 60 cycles, the balance observer after it)
+    cart = Cart(LIMITS, 1e-3, bounds=_curved_rail_bounds)
+    cart.v, cart.a = 0.7, 4.5
+    accs = []
+    for _ in range(400):
+        cart.track(6.0, 0.02)  # (the controller asks for more still)
+        accs.append(cart.a)
+    a = np.array(accs)
+    assert np.all(np.isfinite(a)) and a.max() <= 4.5 + 1e-9
+    assert a[-1] <= 3.5 + 1e-9  # back inside its interval
+    out = a > 3.5
+    jerk = np.abs(np.diff(np.r_[4.5, a])) / 1e-3
+    assert np.max(jerk[out]) <= LIMITS.jerk + 1e-6  # back at the constant jerk bound ...
+    assert np.max(jerk) <= 100.0 + 90.0 * 0.8 * 4.5  # ... then within the rail's interval

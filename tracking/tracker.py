@@ -418,8 +418,11 @@ def follower_from(tracker: "BallTracker", fixes: list[tuple[float, Blob]]) -> _F
 def _last_jump(centres: list[tuple[float, float]], radius_px: float) -> int:
     """Index where the last continuous stretch of a followed candidate's centres (NaN where not seen) begins: a fix
     farther than 4 radii + 3 px + the distance covered at the last velocity from where that velocity would have taken
-    it (after a gap) starts a new stretch; judged once a velocity is known (0 when there is no such jump)."""
+    it (after a gap) starts a new stretch; judged once a velocity is known (0 when there is no such jump). A stretch's
+    first fix is judged backwards, from the velocity of its second and third: a follower that started on an object
+    and (after a gap) went on with the ball jumped there."""
     start, prev, step = 0, None, None  # prev: (frame, u, v); step: last velocity [px/frame]
+    first: tuple[int, float, float] | None = None  # a stretch's first fix, until its third judges it
     for j, (u, v) in enumerate(centres):
         if not math.isfinite(u):
             continue
@@ -428,9 +431,18 @@ def _last_jump(centres: list[tuple[float, float]], radius_px: float) -> int:
             if step is not None:
                 miss = math.hypot(u - prev[1] - step[0] * g, v - prev[2] - step[1] * g)
                 if miss > 4.0 * radius_px + 3.0 + math.hypot(*step) * g:
-                    start, prev, step = j, (j, u, v), None
+                    start, prev, step, first = j, (j, u, v), None, None
                     continue
-            step = ((u - prev[1]) / g, (v - prev[2]) / g)
+            new = ((u - prev[1]) / g, (v - prev[2]) / g)
+            if first is not None:  # (prev is the stretch's second fix: back from it to the first at this velocity)
+                g0 = prev[0] - first[0]
+                miss = math.hypot(first[1] - prev[1] + new[0] * g0, first[2] - prev[2] + new[1] * g0)
+                if miss > 4.0 * radius_px + 3.0 + math.hypot(*new) * g0:
+                    start = prev[0]
+                first = None
+            elif step is None:
+                first = prev
+            step = new
         prev = (j, u, v)
     return start
 

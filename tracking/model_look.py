@@ -27,7 +27,8 @@ from .patches import Patch
 from .tracker import BallTracker
 
 MODEL_LOOK = 0.6  # confidence of a frame reported by the model look
-MAX_GAP_S = 0.4  # [s] runs of frames not found longer than this are left alone
+MAX_GAP_S = 0.7  # [s] runs of frames not found longer than this are left alone (a released ball smeared
+# by a codec's first frames lasts 0.5-0.6 s)
 WINDOWS = ((1.2, 1.2), (0.6, 0.6), (0.3, 0.3), (0.0, 0.6), (0.6, 0.0), (0.0, 0.3), (0.3, 0.0))  # [s] (before, after)
 # a run: fit windows tried in this order, the longest first, then one side only (a push or a release on the other)
 MIN_FIXES = 12  # trusted fixes a fit needs at least
@@ -37,7 +38,11 @@ MAX_NEAR_RMS_PX = 2.0  # ... this [px] (RMS)
 MAX_SPREAD_PX = (
     1.0  # [px] a frame is placed only where the fit's standard deviation there is at most this (the true miss
 )
-# can be 3× that: the codec's errors of neighbouring frames are alike, which the covariance does not know)
+# can be 3× that: the codec's errors of neighbouring frames are alike, which the covariance does not know) ...
+MAX_SPREAD_OUT_PX = 0.7  # [px] ... or this, in a run longer than SHORT_GAP_S where the frame lies outside the
+# window's fixes (extrapolated far: the model's own error — damping, the codec's lag of a fast ball — grows there
+# faster than its covariance says)
+SHORT_GAP_S = 0.4  # [s]
 MIN_SHARE = 0.45  # share of the ball's disc at the fitted place that must be in its colour ...
 MIN_SATURATION = 60  # ... (its hue, at least this saturated)
 MAX_OFF_RADII = 0.4  # ... and the colour's centroid there within this many ball radii (at least 3 px) of it
@@ -266,8 +271,10 @@ def fit_around(
         if float(np.sqrt(np.mean(miss**2))) > MAX_NEAR_RMS_PX:
             continue
         todo = np.array([k for k in range(first, end) if k not in out], int)
-        for k, s in zip(todo, spread_px(fit, todo, fps)):
-            if s <= MAX_SPREAD_PX:
+        # (a long run's frames outside the window's fixes, extrapolated: held to MAX_SPREAD_OUT_PX)
+        between = (todo > sel[0]) & (todo < sel[-1]) | (end - first <= round(SHORT_GAP_S * fps))
+        for k, s, inner in zip(todo, spread_px(fit, todo, fps), between):
+            if s <= (MAX_SPREAD_PX if inner else MAX_SPREAD_OUT_PX):
                 out[int(k)] = fit
         if len(out) == end - first:
             break

@@ -10,6 +10,8 @@ import numpy as np
 
 from tracking.color import color_spec
 from tracking.model_look import (
+    MAX_GAP_S,
+    MAX_SPREAD_OUT_PX,
     MODEL_LOOK,
     PendulumFit,
     angles,
@@ -90,6 +92,22 @@ def test_a_gap_is_filled_and_a_push_beside_it_is_not_fitted_across():
     for k, fit in placed.items():
         assert fit.anchor > 100
         assert LENGTH * abs(angles(fit, np.array([k]), FPS)[0] - th[k]) < 0.2  # [px]
+
+
+def test_a_release_smeared_by_the_codec_is_placed_back_from_the_fixes_after_it_only_while_the_fit_is_tight():
+    # a ball released from 30°: a low-bitrate codec's first 0.63 s show it as a smear (no fix), then it is tracked
+    # with 1 px of noise; the frames nearest the fixes are placed, extrapolated back only while the fit's spread
+    # stays within the bound for extrapolated frames (tighter than between fixes), none of them a pixel off
+    th = _pendulum(240)
+    trusted = np.ones(240, bool)
+    trusted[:38] = False
+    noisy = th + np.random.default_rng(5).normal(0.0, 1.0 / LENGTH, 240)
+    assert (0, 38) in runs(trusted, round(MAX_GAP_S * FPS))
+    placed = fit_around((0, 38), trusted, noisy, np.full(240, LENGTH), FPS)
+    assert 5 <= len(placed) < 38 and max(placed) == 37 and sorted(placed) == list(range(min(placed), 38))
+    for k, fit in placed.items():
+        assert LENGTH * abs(angles(fit, np.array([k]), FPS)[0] - th[k]) < 1.0  # [px]
+        assert spread_px(fit, np.array([k]), FPS)[0] <= MAX_SPREAD_OUT_PX
 
 
 def _ball(img: np.ndarray, u: float, v: float, r: float, bgr) -> None:

@@ -73,6 +73,9 @@ def test_a_noisy_swing_is_fitted_and_its_spread_is_small_inside_and_grows_outsid
 def test_runs_are_the_frames_not_trusted_beside_trusted_ones_and_not_too_long():
     trusted = np.array([0, 0, 1, 1, 0, 1, 0, 0, 0, 0, 1], bool)
     assert runs(trusted, 3) == [(0, 2), (4, 5)]  # 6–9 is four frames long
+    late = np.array([0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0], bool)  # runs of five at the start, four inside
+    assert runs(late, 3, 5) == [(0, 5), (12, 16)]  # and four at the end: the edges may be longer
+    assert runs(late, 3) == []
 
 
 def test_a_gap_is_filled_and_a_push_beside_it_is_not_fitted_across():

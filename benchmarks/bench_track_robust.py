@@ -67,6 +67,7 @@ def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repe
         **scenarios.JUDGE3,
         **scenarios.JUDGE4,
         **scenarios.JUDGE5,
+        **scenarios.JUDGE6,
     }[name]
     sc = make(folder / f"{name}_{size[0]}.mp4", size, duration_s)
     kw = dict(sc.track_kwargs)

@@ -206,23 +206,25 @@ def test_garbage_from_the_source_brakes_and_a_second_source_is_ignored(tmp_path)
     proc = _serve(tmp_path, port, "--timeout", "1")
     client = BridgeClient("127.0.0.1", port)
     intruder = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    stop = threading.Event()
+
+    def intrude():
+        while not stop.is_set():
+            intruder.sendto(encode_target(Q0 + 0.5), ("127.0.0.1", port))  # far away: must never be followed
+            time.sleep(0.005)
+
+    th = threading.Thread(target=intrude, daemon=True)
     try:
         _ready(client)
-        stop = threading.Event()
-
-        def intrude():
-            while not stop.is_set():
-                intruder.sendto(encode_target(Q0 + 0.5), ("127.0.0.1", port))  # far away: must never be followed
-                time.sleep(0.005)
-
-        th = threading.Thread(target=intrude, daemon=True)
         _stream(client, 200.0, 0.5)  # the owner first
         th.start()
         _stream(client, 200.0, 1.5)
         client.sock.sendto(b"\x00garbage", ("127.0.0.1", port))
         out, err = proc.communicate(timeout=60)
-        stop.set()
     finally:
+        stop.set()
+        if th.is_alive():  # (joined before its socket closes: a send on a closed socket raised in the thread)
+            th.join(timeout=5)
         proc.kill()
         client.close()
         intruder.close()

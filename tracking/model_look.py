@@ -26,6 +26,11 @@ from .detect import Blob
 from .patches import Patch
 from .tracker import BallTracker
 
+try:  # the compiled integration (setup.py builds it when a C compiler is present); else the pure-Python one below
+    from . import _rk4
+except ImportError:  # pragma: no cover - depends on the install
+    _rk4 = None
+
 MODEL_LOOK = 0.6  # confidence of a frame reported by the model look
 MAX_GAP_S = 0.7  # [s] runs of frames not found longer than this are left alone (a released ball smeared
 # by a codec's first frames lasts 0.5-0.6 s)
@@ -66,7 +71,23 @@ class PendulumFit:
 
 
 def integrate(theta: float, rate: float, w2: float, c: float, dt: float, steps: int) -> np.ndarray:
-    """θ [rad] at 0, dt, …, steps·dt (dt may be negative: backwards in time) by classical Runge–Kutta."""
+    """θ [rad] at 0, dt, …, steps·dt (dt may be negative: backwards in time) by classical Runge–Kutta (compiled
+    when built: the same values to the last bit as :func:`integrate_py`, about a hundred times faster)."""
+    if _rk4 is not None:
+        return np.frombuffer(_rk4.integrate(theta, rate, w2, c, dt, steps))
+    return integrate_py(theta, rate, w2, c, dt, steps)
+
+
+def trajectory(theta: float, rate: float, w2: float, c: float, dt: float, steps: int) -> np.ndarray:
+    """(steps + 1, 5): θ [rad] at 0, dt, …, steps·dt and its derivatives by (θ₀, θ'₀, w2, c) (compiled when built,
+    as :func:`integrate`; else :func:`trajectory_py`)."""
+    if _rk4 is not None:
+        return np.frombuffer(_rk4.trajectory(theta, rate, w2, c, dt, steps)).reshape(steps + 1, 5)
+    return trajectory_py(theta, rate, w2, c, dt, steps)
+
+
+def integrate_py(theta: float, rate: float, w2: float, c: float, dt: float, steps: int) -> np.ndarray:
+    """:func:`integrate` in pure Python (the fallback without the compiled extension)."""
     out = np.empty(steps + 1)
     out[0] = theta
     y, z = theta, rate
@@ -84,8 +105,8 @@ def integrate(theta: float, rate: float, w2: float, c: float, dt: float, steps: 
     return out
 
 
-def trajectory(theta: float, rate: float, w2: float, c: float, dt: float, steps: int) -> np.ndarray:
-    """(steps + 1, 5): θ [rad] at 0, dt, …, steps·dt and its derivatives by (θ₀, θ'₀, w2, c) — the pendulum and its
+def trajectory_py(theta: float, rate: float, w2: float, c: float, dt: float, steps: int) -> np.ndarray:
+    """:func:`trajectory` in pure Python: θ [rad] and its derivatives by (θ₀, θ'₀, w2, c) — the pendulum and its
     variational equations (a' = b, b' = −w2·cos θ·a − c·b − [sin θ for w2, θ' for c]) by classical Runge–Kutta in one
     pass: the least-squares fit's Jacobian without finite differences (written out: Python's cost is per operation)."""
     rows = [(theta, 1.0, 0.0, 0.0, 0.0)]

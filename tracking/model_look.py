@@ -9,7 +9,8 @@ window that the pendulum fits within ``MAX_FIT_RMS_PX``, and the ``NEAR_FIXES`` 
 ``MAX_NEAR_RMS_PX``: a push, a release or a catch inside a window makes it fail; and that places the frame to within
 ``MAX_SPREAD_PX``, one standard deviation from the fit's covariance). A frame is then reported at the fitted place, with
 confidence ``MODEL_LOOK``, only when the frame shows the ball there: at least ``MIN_SHARE`` of the ball's disc in its
-colour, the colour's centroid within ``MAX_OFF_RADII`` ball radii of the fitted place, and the place not one the
+colour, the colour's centroid within ``MAX_OFF_RADII`` ball radii of the fitted place (or ``MIN_SHARE_CENTRED``
+within ``MAX_OFF_CENTRED_RADII``: a ball smeared along its motion), and the place not one the
 tracker found static in the ball's colour, excluded, or out of the string's reach. The live sensor never does this.
 """
 
@@ -52,7 +53,9 @@ MAX_EDGE_GAP_S = 1.5  # [s] a run at the video's start or end may be this long (
 # frames are all extrapolated, each placed only within MAX_SPREAD_OUT_PX)
 MIN_SHARE = 0.45  # share of the ball's disc at the fitted place that must be in its colour ...
 MIN_SATURATION = 60  # ... (its hue, at least this saturated)
-MAX_OFF_RADII = 0.4  # ... and the colour's centroid there within this many ball radii (at least 3 px) of it
+MAX_OFF_RADII = 0.4  # ... and the colour's centroid there within this many ball radii (at least 3 px) of it;
+MIN_SHARE_CENTRED = 0.3  # or this share, with the colour centred on the place within MAX_OFF_CENTRED_RADII (no
+MAX_OFF_CENTRED_RADII = 0.25  # floor in px): a released ball's first swing smeared by motion blur and the codec
 
 
 @dataclass(frozen=True)
@@ -314,7 +317,7 @@ def shows_ball(
     bgr: np.ndarray, spec: ColorSpec, u: float, v: float, radius_px: float, origin: tuple[int, int] = (0, 0)
 ) -> bool:
     """The frame shows the ball's colour at (u, v) [px]: MIN_SHARE of the disc of radius_px there, its centroid
-    within MAX_OFF_RADII radii (≥ 3 px). origin: bgr is a patch of the frame whose first pixel is the frame's (x, y)
+    within MAX_OFF_RADII radii (≥ 3 px), or MIN_SHARE_CENTRED with the centroid within MAX_OFF_CENTRED_RADII. origin: bgr is a patch of the frame whose first pixel is the frame's (x, y)
     (False when the disc is not inside it)."""
     import cv2
 
@@ -328,10 +331,13 @@ def shows_ball(
     ys, xs = np.mgrid[y0:y1, x0:x1]
     disc = (xs - u) ** 2 + (ys - v) ** 2 <= radius_px * radius_px
     on = (hue > 0) & disc
-    if not disc.any() or on.sum() < MIN_SHARE * disc.sum():
+    share = on.sum() / disc.sum() if disc.any() else 0.0
+    if share < min(MIN_SHARE, MIN_SHARE_CENTRED) or not on.any():
         return False
     off = math.hypot(float(xs[on].mean()) - u, float(ys[on].mean()) - v)
-    return off <= max(3.0, MAX_OFF_RADII * radius_px)
+    if share >= MIN_SHARE and off <= max(3.0, MAX_OFF_RADII * radius_px):
+        return True
+    return share >= MIN_SHARE_CENTRED and off <= MAX_OFF_CENTRED_RADII * radius_px
 
 
 def disc_box(u: float, v: float, radius_px: float) -> tuple[int, int, int, int]:

@@ -668,6 +668,48 @@ JUDGE6: dict[str, Callable[..., Scenario]] = {
 }
 
 
+# A seventh judge (made after the model look's rule for a ball smeared along its motion, MIN_SHARE_CENTRED, which
+# judge 4's first swing led to): real pendulums, other amplitudes, codecs, bitrates and ball sizes
+JUDGE7: dict[str, Callable[..., Scenario]] = {
+    "h264_55k_pend75_j7": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=91,
+        bitrate_kbps=55.0,
+        amplitude_deg=75.0,
+        period_s=1.3,
+        damping_per_s=0.09,
+        name="judge 7: real pendulum from 75°, H.264 55 kbit/s",
+    ),
+    "hevc_50k_pend60_big_j7": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=92,
+        bitrate_kbps=50.0,
+        codec="hevc",
+        amplitude_deg=60.0,
+        period_s=1.0,
+        damping_per_s=0.15,
+        ball_scale=1.2,
+        name="judge 7: real pendulum from 60°, HEVC 50 kbit/s, ball 1.2×",
+    ),
+    "h264_80k_pend85_small_j7": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=93,
+        bitrate_kbps=80.0,
+        amplitude_deg=85.0,
+        period_s=1.1,
+        damping_per_s=0.05,
+        ball_scale=0.75,
+        name="judge 7: real pendulum from 85°, H.264 80 kbit/s, ball 0.75×",
+    ),
+}
+
+
 def ball_shown(sc: Scenario, min_share: float = 0.3, min_saturation: int = 60) -> np.ndarray:
     """(n,) bool: the decoded frame shows the ball where it is — at least min_share of its disc in its colour (hue
     band, saturation ≥ min_saturation). A low-bitrate encoder sometimes skips the blocks of a moving ball or

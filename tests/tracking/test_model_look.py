@@ -10,6 +10,8 @@ import numpy as np
 
 from tracking.color import color_spec
 from tracking.model_look import (
+    MIN_SHARE,
+    MIN_SHARE_CENTRED,
     MAX_GAP_S,
     MAX_SPREAD_OUT_PX,
     MODEL_LOOK,
@@ -124,6 +126,20 @@ def test_shows_ball_wants_the_colour_at_the_place():
     assert shows_ball(img, RED, 100.5, 99.5, 8.0)
     assert not shows_ball(img, RED, 110.0, 100.0, 8.0)  # 10 px off: not even half of the disc
     assert not shows_ball(img, RED, 50.0, 50.0, 8.0)
+
+
+def test_a_smeared_ball_shows_when_its_colour_is_centred_on_the_place():
+    """A fast ball smeared along its motion covers less than MIN_SHARE of its disc: it still shows where its colour
+    is centred on the place (a released ball's first swing), not 3 px across the smear."""
+    img = np.full((200, 200, 3), 90, np.uint8)
+    cv2.rectangle(img, (70, 98), (130, 102), (40, 40, 200), -1)  # a streak 5 px high through (100, 100)
+    ys, xs = np.mgrid[0:200, 0:200]
+    share = float(np.mean(img[(xs - 100) ** 2 + (ys - 100) ** 2 <= 64][:, 2] == 200))
+    assert MIN_SHARE_CENTRED <= share < MIN_SHARE  # the case: under the plain rule's share
+    assert shows_ball(img, RED, 100.0, 100.0, 8.0)
+    assert shows_ball(img, RED, 100.3, 99.8, 8.0)  # the fit's own error
+    assert not shows_ball(img, RED, 100.0, 103.0, 8.0)  # 3 px across the streak: its colour is off centre
+    assert not shows_ball(img, RED, 100.0, 106.0, 8.0)
 
 
 def test_pale_frames_are_reported_at_the_fitted_place_and_a_ghost_is_not(tmp_path):

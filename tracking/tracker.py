@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 from statistics import median
 
 import numpy as np
+import numpy.ma  # noqa: F401  # np.percentile imports it on its first call: a 15-35 ms stall in a live stream's first second
 
 from .ambiguity import choose_pendulum
 from .color import ColorSpec, with_min_saturation

@@ -3,7 +3,7 @@
  * The same arithmetic, in the same order, as model_look's pure-Python integrate() and trajectory() (which stay as
  * the fallback when this extension is not built): theta'' = -w2 sin(theta) - c theta', and for trajectory() its four
  * variational equations (the sensitivities by theta0, theta'0, w2, c). Built with -ffp-contract=off so that no
- * fused multiply-add changes a rounding: the results equal Python's to the last bit (tests/tracking/test_rk4.py).
+ * fused multiply-add changes a rounding: the results equal Python's to the last bit (tests/tracking/test_model_look.py).
  * Each function returns a bytearray of float64 values that the Python side views as a numpy array (no numpy headers
  * needed to build).
  */

@@ -5,7 +5,7 @@ At a low bitrate the encoder's first frames and a fast ball's frames are blocks:
 blob has the ball's shape, and a centroid of the blocks is off by 2–5 px. The motion around them is well measured.
 So, per run of frames not found (at most ``MAX_GAP_S`` long), a pendulum θ'' = −ω²·sin θ − c·θ' about the fixed pivot
 (string length the median of the fixes') is fitted to the trusted fixes in one of ``WINDOWS`` around the run (the first
-window that the pendulum fits within ``MAX_FIT_RMS_PX``, and the ``NEAR_FIXES`` fixes nearest the run within
+window that the pendulum fits within ``MAX_LOOK_FIT_RMS_PX``, and the ``NEAR_FIXES`` fixes nearest the run within
 ``MAX_NEAR_RMS_PX``: a push, a release or a catch inside a window makes it fail; and that places the frame to within
 ``MAX_SPREAD_PX``, one standard deviation from the fit's covariance). A frame is then reported at the fitted place, with
 confidence ``MODEL_LOOK``, only when the frame shows the ball there: at least ``MIN_SHARE`` of the ball's disc in its
@@ -38,7 +38,9 @@ MAX_GAP_S = 0.7  # [s] runs of frames not found longer than this are left alone 
 WINDOWS = ((1.2, 1.2), (0.6, 0.6), (0.3, 0.3), (0.0, 0.6), (0.6, 0.0), (0.0, 0.3), (0.3, 0.0))  # [s] (before, after)
 # a run: fit windows tried in this order, the longest first, then one side only (a push or a release on the other)
 MIN_FIXES = 12  # trusted fixes a fit needs at least
-MAX_FIT_RMS_PX = 1.2  # [px] the pendulum must fit the window's fixes within this (RMS) ...
+MAX_FIT_RMS_PX = 1.2  # [px] the pendulum check's bound on a window's fit (RMS; tracking.pendulum_check)
+MAX_LOOK_FIT_RMS_PX = 1.6  # [px] the look's: the pendulum must fit the window's fixes within this (RMS; the fixes of
+# a ball on low-bitrate HEVC scatter about 1.4 px about a pendulum that places the frames between them within 1 px) ...
 NEAR_FIXES = 6  # ... and the fixes nearest the run within
 MAX_NEAR_RMS_PX = 2.0  # ... this [px] (RMS)
 MAX_SPREAD_PX = (
@@ -296,7 +298,7 @@ def fit_around(
         if key not in cache:  # runs close together share windows
             cache[key] = fit_pendulum(sel, theta[sel], float(np.median(radius[sel])), fps)
         fit = cache[key]
-        if fit is None or fit.rms_px > MAX_FIT_RMS_PX:
+        if fit is None or fit.rms_px > MAX_LOOK_FIT_RMS_PX:
             continue
         near = sel[np.argsort(np.minimum(np.abs(sel - first), np.abs(sel - (end - 1))))[:NEAR_FIXES]]
         miss = fit.length_px * (angles(fit, near, fps) - theta[near])

@@ -710,6 +710,49 @@ JUDGE7: dict[str, Callable[..., Scenario]] = {
 }
 
 
+# An eighth judge (made before the A/B of the model look's fit-RMS bound for low-bitrate HEVC and never tuned on):
+# real pendulums on HEVC, VP9 and H.264 at low bitrates, other amplitudes and ball sizes
+JUDGE8: dict[str, Callable[..., Scenario]] = {
+    "hevc_55k_pend50_j8": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=101,
+        bitrate_kbps=55.0,
+        codec="hevc",
+        amplitude_deg=50.0,
+        period_s=1.2,
+        damping_per_s=0.1,
+        ball_scale=0.85,
+        name="judge 8: real pendulum from 50°, HEVC 55 kbit/s, ball 0.85×",
+    ),
+    "vp9_50k_pend65_j8": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=102,
+        bitrate_kbps=50.0,
+        codec="vp9",
+        amplitude_deg=65.0,
+        period_s=1.05,
+        damping_per_s=0.07,
+        name="judge 8: real pendulum from 65°, VP9 50 kbit/s",
+    ),
+    "h264_45k_pend70_big_j8": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=103,
+        bitrate_kbps=45.0,
+        amplitude_deg=70.0,
+        period_s=1.35,
+        damping_per_s=0.12,
+        ball_scale=1.1,
+        name="judge 8: real pendulum from 70°, H.264 45 kbit/s, ball 1.1×",
+    ),
+}
+
+
 def ball_shown(sc: Scenario, min_share: float = 0.3, min_saturation: int = 60) -> np.ndarray:
     """(n,) bool: the decoded frame shows the ball where it is — at least min_share of its disc in its colour (hue
     band, saturation ≥ min_saturation). A low-bitrate encoder sometimes skips the blocks of a moving ball or

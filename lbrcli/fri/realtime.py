@@ -6,8 +6,9 @@
   message arrives, however busy the PC is (needs root, CAP_SYS_NICE or an ``rtprio`` limit, ``ulimit -r``);
 - **CPU affinity** to one CPU (default: the last one the process may use — keep other work off it with ``taskset``
   or ``isolcpus`` for the best result): the loop's code and data stay in that CPU's caches;
-- **mlockall** (current and future pages, locked as they are touched): no page fault stalls a cycle (needs
-  CAP_IPC_LOCK or a ``memlock`` limit above the process size, ``ulimit -l``).
+- **mlockall** (current and future pages, locked as they are touched; needs CAP_IPC_LOCK or a ``memlock`` limit
+  above the process size, ``ulimit -l``): a page the loop has used is never paged out — its first touch is still a
+  minor fault, in the loop's first cycles.
 
 Anything the system refuses raises :class:`RealtimeRefused` (exit 2 at the CLI, one line naming the setting and
 what grants it) after undoing what was set; leaving the block restores the previous scheduling, affinity and

@@ -8,7 +8,12 @@ from planners.catch_plan import SWING_HORIZONS, _rank, swing_variants
 
 def test_both_release_kinds_are_tried_and_without_max_time_both_horizons():
     quick = swing_variants(3.0)
-    assert {v.cruise for v in quick} == {True, False} and {v.horizon for v in quick} == {4.0}
+    assert {v.cruise for v in quick} == {True, False}
+    rest, cruise = (next(v for v in quick if v.cruise == c) for c in (False, True))
+    assert (rest.horizon, rest.slack) == (4.0, 0.0)
+    # the cruising search with its release deadline a quarter second later (a plan that then enters the cup after
+    # max_time is not valid: _rank below)
+    assert (cruise.horizon, cruise.slack) == (4.25, 0.25)
     default = swing_variants(None)
     assert {v.cruise for v in default} == {True, False}
     assert {v.horizon for v in default if not v.cruise} == set(SWING_HORIZONS)  # the rest release as before, 6 s too

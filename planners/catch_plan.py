@@ -89,7 +89,7 @@ def swing_variants(max_time: float | None) -> tuple[SwingVariant, ...]:
     together) and the release from rest (slower, often more robust for long strings). With a max_time the rest
     release pumps up to max_time + 1 s; the cruising one up to max_time + 1.25 s with the search's release deadline
     a quarter second later than the time asked allows — its optimum depends on both, and what it finds mostly still
-    enters the cup in time (a plan that does not is not valid: ``_rank``). With --max-time 3 that lifted the band
+    enters the cup in time (a plan that does not is not valid: ``_rank``). With a max_time of 3 s that lifted the band
     caught from 90 to 99 % at 0.25 m and from 42 to 94 % at 0.3 m, entering at 1.9-2.2 s; 0.15 and 0.2 m kept their
     plans. Without a max_time: up to 4 s, and from rest also up to 6 s (cruising over 6 s found worse plans: 0.25 m
     caught 46 % of the band, 0.35 m none)."""

@@ -1,5 +1,6 @@
-"""The one compiled piece: tracking._rk4, the pendulum integration of tracking.model_look (pyproject.toml holds the
-rest). Optional: without a C compiler the install goes on and model_look runs its pure-Python integration."""
+"""The compiled pieces (pyproject.toml holds the rest): tracking._rk4, the pendulum integration of
+tracking.model_look, and planners._planar, the planar pendulum step of the swing-up search. Optional: without a C
+compiler the install goes on and both run their pure-Python code (equal to the last bit)."""
 
 from setuptools import Extension, setup
 
@@ -11,6 +12,9 @@ setup(
             optional=True,
             # no fused multiply-add: the results stay equal to the pure-Python fallback's to the last bit
             extra_compile_args=["-O2", "-ffp-contract=off"],
-        )
+        ),
+        Extension(
+            "planners._planar", ["planners/_planar.c"], optional=True, extra_compile_args=["-O2", "-ffp-contract=off"]
+        ),  # fmt: skip
     ]
 )

@@ -29,7 +29,7 @@ BRAKE_FRACTION = 0.6  # the brake after the catch uses this share of the acceler
 @dataclass(frozen=True)
 class CatchMove:
     """From t_start [s], reach pivot displacement (y, z) [m] from the start pose with velocity (vy, vz) [m/s] at
-    t_catch [s] (later if the bounds need longer), then brake to rest."""
+    t_catch [s] (later if the bounds need longer), keep that velocity for ``coast`` [s], then brake to rest."""
 
     t_start: float
     t_catch: float
@@ -37,6 +37,7 @@ class CatchMove:
     z: float
     vy: float
     vz: float
+    coast: float = 0.0  # [s] the band's balls come in over a while and bounce: the cup does not brake under them
 
 
 @dataclass(frozen=True)
@@ -83,7 +84,8 @@ def cup_path(
     settle: float = 0.5,
 ) -> tuple[np.ndarray, float]:
     """The pivot's displacements (n, 2) [m] along base y and z, every dt [s] from 0: the swing-up (y only) up to
-    t_start, the move, the brake, ``settle`` [s] at rest. Also the time [s] the move actually reaches its target."""
+    t_start, the move, its coast at the target velocity, the brake, ``settle`` [s] at rest. Also the time [s] the
+    move actually reaches its target."""
     from ruckig import ControlInterface, InputParameter, Result, Ruckig, Trajectory
 
     k = min(int(round(move.t_start / dt)), len(swing_x) - 1)
@@ -117,12 +119,18 @@ def cup_path(
     stop = Trajectory(2)
     if Ruckig(2).calculate(brake, stop) not in (Result.Working, Result.Finished):
         raise PlanningError("ruckig could not brake after the catch")
-    d_go, d_stop = go.duration, stop.duration
-    n = int(math.ceil((d_go + d_stop) / dt - 1e-9)) + int(round(settle / dt))
+    d_go, coast, d_stop = go.duration, max(0.0, move.coast), stop.duration
+    n = int(math.ceil((d_go + coast + d_stop) / dt - 1e-9)) + int(round(settle / dt))
     tail = np.empty((n, 2))
     for i in range(1, n + 1):
         tau = i * dt
-        tail[i - 1] = go.at_time(tau)[0] if tau <= d_go else stop.at_time(min(tau - d_go, d_stop))[0]
+        if tau <= d_go:
+            tail[i - 1] = go.at_time(tau)[0]
+        elif tau <= d_go + coast:  # at the target velocity, no acceleration (where the move ended)
+            tail[i - 1] = (p[0] + v[0] * (tau - d_go), p[1] + v[1] * (tau - d_go))
+        else:
+            q = stop.at_time(min(tau - d_go - coast, d_stop))[0]
+            tail[i - 1] = (q[0] + v[0] * coast, q[1] + v[1] * coast)
     head = np.column_stack([swing_x[: k + 1], np.zeros(k + 1)])
     return np.vstack([head, tail]), k * dt + d_go
 

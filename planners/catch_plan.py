@@ -10,9 +10,11 @@
    ball's free swing goes slack by itself; every length of the band is stepped to the moment all have been released
    (``catch_move.prepare_band``).
 3. Catch move (``catch_move``): a jerk-limited move in the base y–z plane to a position and velocity at a chosen
-   time, then a brake to rest; a grid (every variant) and a Nelder–Mead search (the REFINED variants the grid puts
-   first) maximise the share of the band caught (entry margin and relative entry speed as tie-breakers), the band
-   (5 lengths × the cup one period early, on time, late) stepped with ``string_stepper`` — each ball only until it
+   time, a coast at that velocity for a chosen while (the band's balls come down over some 30 ms and bounce in the
+   cup: a cup braking under them can throw them out), then a brake to rest; a grid (every variant) and a
+   Nelder–Mead search (the REFINED variants the grid puts first) maximise the share of the band caught (entry margin
+   and relative entry speed as tie-breakers), the band (5 lengths × the cup one period early, on time, late, the
+   ball's mass rotating over them: ``search_members``) stepped with ``string_stepper`` — each ball only until it
    passes outside the rim, where the search counts it as missed (most of the planning time is this search).
 4. The joint path (IK per sample, ``swingup_robot``), the limit check (jerk included), and the verdict from the
    nonlinear model driven by the TCP path the joints realise: the event-driven ``string_sim`` for the prediction,
@@ -22,6 +24,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -66,6 +69,8 @@ SPREAD_SHARE = 0.85  # the swing-up aims at landings of the band spread over at 
 LATERAL_SHARE = 0.5  # the band lands flying over the ground at most this share of the catch move's speed bound
 SWING_HORIZONS = (4.0, 6.0)  # [s] longest pumping without a max_time (with one: max_time + 1 s)
 GOAL_MISSED = 100.0  # a swing-up search cost from this on missed the release goal (``catch_swing.release_score``)
+MAX_COAST = 0.25  # [s] longest coast of the catch move at its target velocity before it brakes
+COAST_EXTRA = 0.05  # [s] the grid's coast: from the catch to the band's last landing, and this much more
 REFINED = 2  # swing-up variants whose catch move is refined and judged on the whole band (best catch grid first)
 
 
@@ -246,6 +251,7 @@ class CatchResult:
                 "z_m": self.move.z,
                 "vy_m_s": self.move.vy,
                 "vz_m_s": self.move.vz,
+                "coast_s": self.move.coast,
             },
             "max_travel_m": {"y": float(np.max(np.abs(self.path[:, 0]))), "z": float(np.max(np.abs(self.path[:, 1])))},
             "bounds": {
@@ -346,22 +352,33 @@ def band_landings(model: StringModel, pivot: PivotMotion, lengths) -> list[tuple
     return out
 
 
+def search_members(r: CatchRequest) -> tuple[BandMember, ...]:
+    """The band the catch search judges each candidate on: SEARCH_LENGTHS lengths across the band, each with the cup
+    one period early, on time and late, the ball's mass rotating over those timings — every length is judged with
+    every mass (the drag moves the landing by a few millimetres, which decides a ball grazing the rim) at no more
+    members."""
+    m = r.model
+    lengths = m.length * (1 + r.length_tol * np.linspace(-1.0, 1.0, SEARCH_LENGTHS)) if r.length_tol else [m.length]
+    shifts = (-r.dt, 0.0, r.dt) if r.timing else (0.0,)
+    masses = m.ball.mass * (1.0 + r.mass_tol * np.array([0.0, -1.0, 1.0]))
+    return tuple(
+        BandMember(float(ln), float(masses[(i + j) % 3]), s)
+        for i, ln in enumerate(lengths)
+        for j, s in enumerate(shifts)
+    )
+
+
 class CatchSearch:
-    """The catch move's search for one release: a grid over the move's time, position and velocity (``grid``), then
-    Nelder–Mead from its best point (``refine``); each candidate judged on the search band (SEARCH_LENGTHS lengths ×
-    the cup one period early, on time, late) stepped from the release on (``band_score``)."""
+    """The catch move's search for one release: a grid over the move's time, position, velocity and coast
+    (``grid``), then Nelder–Mead from its best point (``refine``); each candidate judged on the search band
+    (``search_members``) stepped from the release on (``band_score``)."""
 
     def __init__(
         self, r: CatchRequest, rel: Release, p0: np.ndarray, axis: np.ndarray, by: TaskBounds, bz: TaskBounds
     ) -> None:
         m = r.model
-        lengths = (
-            tuple(m.length * (1 + r.length_tol * np.linspace(-1.0, 1.0, SEARCH_LENGTHS)))
-            if r.length_tol
-            else (m.length,)
-        )
-        shifts = (-r.dt, 0.0, r.dt) if r.timing else (0.0,)
-        members = tuple(BandMember(float(ln), m.ball.mass, s) for ln in lengths for s in shifts)
+        members = search_members(r)
+        lengths = tuple(sorted({b.length for b in members}))
         self.r, self.rel, self.p0, self.axis, self.by, self.bz = r, rel, p0, axis, by, bz
         self.band = prepare_band(m, members, rel.pivot, rel.t_start)
         self.lands = band_landings(m, rel.pivot, lengths)
@@ -379,10 +396,12 @@ class CatchSearch:
             float(np.clip(x[2], -r.z_travel, r.z_travel)),
             float(x[3]),
             float(x[4]),
+            float(np.clip(x[5], 0.0, MAX_COAST)),
         )
 
     def score(self, x) -> float:
-        """band_score of the move at x = (t_catch, y, z, vy, vz) (memoised; −10 when ruckig cannot plan it)."""
+        """band_score of the move at x = (t_catch, y, z, vy, vz, coast) (memoised; −10 when ruckig cannot plan
+        it)."""
         key = tuple(np.round(x, 5))
         if key not in self.cache:
             r, rel = self.r, self.rel
@@ -399,16 +418,19 @@ class CatchSearch:
 
     def grid(self) -> float:
         """Score the grid around where the band lands (a little before, moving between the pivot's and the balls'
-        lateral speed, level or going down); the best score."""
+        lateral speed, level or going down, braking at once or coasting over the later landings); the best score."""
         lands = self.lands
         t_land = float(np.mean([x[0] for x in lands]))
+        t_last = max(x[0] for x in lands)
         y_land = 0.5 * (min(x[1] for x in lands) + max(x[1] for x in lands))
         vy_ball = float(np.mean([x[2] for x in lands]))
         for dtc in (-0.05, -0.025, 0.0):
             for kappa in (0.0, 0.5, 1.0):
-                for z, vz in ((0.0, 0.0), (-0.02, -0.5 * self.bz.v_max)):
+                # braking at once, or coasting until the band's last ball is in (the search refines it)
+                coasts = (0.0, float(np.clip(t_last - (t_land + dtc) + COAST_EXTRA, 0.0, MAX_COAST)))
+                for (z, vz), coast in itertools.product(((0.0, 0.0), (-0.02, -0.5 * self.bz.v_max)), coasts):
                     vy = kappa * vy_ball + (1.0 - kappa) * float(self.rel.v[-1])
-                    x = np.array([t_land + dtc, y_land + vy * dtc, z, vy, vz])
+                    x = np.array([t_land + dtc, y_land + vy * dtc, z, vy, vz, coast])
                     s = self.score(x)
                     if self.best is None or s > self.best[0]:
                         self.best = (s, x)
@@ -421,7 +443,7 @@ class CatchSearch:
         if self.best is None:
             self.grid()
         s0, x0 = self.best
-        simplex = [x0] + [x0 + d for d in np.diag([0.02, 0.01, 0.01, 0.2, 0.1])]
+        simplex = [x0] + [x0 + d for d in np.diag([0.02, 0.01, 0.01, 0.2, 0.1, 0.04])]
         res = minimize(
             lambda x: -self.score(x),
             x0,

@@ -24,6 +24,11 @@ from .pendulum import G, natural_period
 from .swingup_plan import PivotPlan, StopProfile, TaskBounds, first_reach
 from .tension import tension_margin
 
+try:  # the compiled step (setup.py builds it when a C compiler is present); else planar_rk4_py below
+    from . import _planar
+except ImportError:  # pragma: no cover - depends on the install
+    _planar = None
+
 
 @dataclass(frozen=True)
 class FastProblem:
@@ -120,7 +125,14 @@ def tension_window(
 
 def planar_rk4(th: float, om: float, a0: float, a1: float, h: float, length: float) -> tuple[float, float]:
     """One RK4 step h [s] of the planar pendulum (θ [rad], θ̇ [rad/s]) with the pivot acceleration going linearly
-    from a0 to a1 [m/s²] (``cartpole.theta_ddot``)."""
+    from a0 to a1 [m/s²] (``cartpole.theta_ddot``); compiled (``_planar``) when built, equal to the last bit."""
+    if _planar is not None:
+        return _planar.rk4(th, om, a0, a1, h, length, G)
+    return planar_rk4_py(th, om, a0, a1, h, length)
+
+
+def planar_rk4_py(th: float, om: float, a0: float, a1: float, h: float, length: float) -> tuple[float, float]:
+    """``planar_rk4`` in pure Python (the fallback without the compiled extension)."""
     il, gl = 1.0 / length, G / length
     am = 0.5 * (a0 + a1)
     k1t, k1o = om, -a0 * il * math.cos(th) - gl * math.sin(th)
@@ -211,13 +223,9 @@ def _target_velocity(
     target = -power_sign * pol.v_pump - pol.centring * x
     target = max(-pb.v_max, min(pb.v_max, target))
     # band governor: brake if a stop started now would leave the band
-    if abs(x) > problem.travel - (v * v / pb.a_max + abs(v) * pb.a_max / pb.j_max + 0.02):
-        if (
-            StopProfile(v, a, pb).distance + x > problem.travel
-            and v > 0
-            or StopProfile(v, a, pb).distance + x < -problem.travel
-            and v < 0
-        ):
+    if abs(x) > problem.travel - (v * v / pb.a_max + abs(v) * pb.a_max / pb.j_max + 0.02) and v != 0.0:
+        end = StopProfile(v, a, pb).distance + x  # [m] where a stop started now would rest
+        if end > problem.travel if v > 0 else end < -problem.travel:
             target = 0.0
     return target, power_sign
 
@@ -268,6 +276,7 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
     x = v = a = 0.0
     rec = ([0.0], [0.0], [0.0], [0.0], [th], [om])  # t, x, v, u, θ, θ̇
     phase, t, t_rest, t_stop, power_sign = "first", 0.0, None, None, 0.0
+    rk4 = None if _planar is None else _planar.rk4  # (planar_rk4 without its call: three per step of every candidate)
     for _ in range(int((problem.horizon + 3.0 * pol.t0) / h) + 2):
         new_phase = _next_phase(problem, pol, phase, t, th, om)
         if new_phase == "stop" and phase != "stop":
@@ -275,9 +284,12 @@ def simulate_fast(problem: FastProblem, params: FastParams) -> PivotPlan:
         phase = new_phase
         target, power_sign = _target_velocity(problem, pol, phase, om * math.cos(th), x, v, a, power_sign)
         x1, v1, a1, res = _pivot_step(problem, generator, phase, target, th, om, x, v, a)
-        th, om = planar_rk4(th, om, a, a1, h, l)
+        if rk4 is None:
+            th, om = planar_rk4_py(th, om, a, a1, h, l)
+        else:
+            th, om = rk4(th, om, a, a1, h, l, G)
         for i, lb in enumerate(band_l):  # the same pivot path on the other strings (open loop)
-            band_y[i] = planar_rk4(*band_y[i], a, a1, h, lb)
+            band_y[i] = planar_rk4_py(*band_y[i], a, a1, h, lb) if rk4 is None else rk4(*band_y[i], a, a1, h, lb, G)
             band_rec[i][0].append(band_y[i][0]), band_rec[i][1].append(band_y[i][1])
         x, v, a = x1, v1, a1
         t += h

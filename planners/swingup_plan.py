@@ -91,7 +91,7 @@ class StopProfile:
         if result not in (Result.Working, Result.Finished):
             raise PlanningError(f"ruckig could not stop the pivot from v = {v0:.3g} m/s, a = {a0:.3g} m/s²: {result}")
         self.duration = float(self._traj.duration)  # [s]
-        self.distance = self.at(np.array([self.duration]))[0][0]  # [m]
+        self.distance = float(self._traj.at_time(self.duration)[0][0])  # [m]
 
     def at(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         tau = np.atleast_1d(np.asarray(tau, dtype=float))

@@ -9,6 +9,7 @@ from scipy.integrate import solve_ivp
 from planners.cartpole import rhs
 from planners.pendulum import SampledAcceleration
 from planners.swingup import SwingUpRequest
+from planners import swingup_fast
 from planners.swingup_fast import FastParams, FastProblem, SearchSettings, optimise, simulate_fast
 from planners.swingup_plan import StopProfile, TaskBounds
 from trajectories.check import check_trajectory
@@ -123,3 +124,41 @@ def test_candidates_are_picklable():
     problem = FastProblem(length=0.25, theta_d=THETA_D, bounds=TaskBounds(0.8, 3.9, 25.0))
     again = pickle.loads(pickle.dumps((problem, FastParams())))
     assert again == (problem, FastParams())
+
+
+# -- the compiled pendulum step (planners._planar) against the pure-Python one: the same values to the last bit, and
+# the fallback taken when the extension is not built
+
+_compiled = pytest.mark.skipif(swingup_fast._planar is None, reason="planners._planar not built (no C compiler)")
+
+
+@_compiled
+def test_compiled_step_equals_python_to_the_last_bit() -> None:
+    rng = np.random.default_rng(11)
+    for _ in range(2000):  # beyond the swing-up's range: loops, hard pivot accelerations, steps either way
+        th, om = rng.uniform(-7.0, 7.0), rng.uniform(-30.0, 30.0)
+        a0, a1 = rng.uniform(-40.0, 40.0, 2)
+        h, length = float(rng.choice([0.005, 0.001, -0.002, 0.0125])), rng.uniform(0.05, 2.0)
+        assert swingup_fast.planar_rk4(np.float64(th), om, a0, a1, h, length) == swingup_fast.planar_rk4_py(
+            th, om, float(a0), float(a1), h, length
+        )
+    with pytest.raises(TypeError):
+        swingup_fast._planar.rk4(0.1, 0.0, 0.0, 0.0, 0.005, 0.3)
+    with pytest.raises(TypeError):
+        swingup_fast._planar.rk4("0.1", 0.0, 0.0, 0.0, 0.005, 0.3, 9.81)
+
+
+def test_search_without_the_extension_finds_the_same_swing_up(monkeypatch: pytest.MonkeyPatch) -> None:
+    bounds = TaskBounds(1.0, 6.0, 60.0)
+    problem = FastProblem(
+        length=0.3, theta_d=math.radians(100), bounds=bounds, travel=0.3, horizon=3.0, band=(0.97, 1.03)
+    )
+    params = FastParams(0.8, 0.6, 1.0, 0.0)
+    compiled = simulate_fast(problem, params)
+    monkeypatch.setattr(swingup_fast, "_planar", None)
+    pure = simulate_fast(problem, params)
+    assert np.array_equal(compiled.theta, pure.theta) and np.array_equal(compiled.x, pure.x)
+    assert np.array_equal(compiled.info["band"]["theta"], pure.info["band"]["theta"])  # the band's strings too
+    th, om = swingup_fast.planar_rk4(1e-3, 0.0, 0.0, 0.0, 0.001, 0.3)  # small swing at rest: θ₀ cos(ω t)
+    assert abs(th - 1e-3 * math.cos(math.sqrt(9.81 / 0.3) * 0.001)) < 1e-12 and om < 0.0
+    assert pure.max_theta > math.radians(30)  # it swings up (not a trivial run)

@@ -67,7 +67,8 @@ SEARCH_LENGTHS = 5  # string lengths across the band the catch-move search judge
 BAND_LENGTHS = 9  # string lengths across the band of the verdict (× 3 masses × 3 timings)
 SPREAD_SHARE = 0.85  # the swing-up aims at landings of the band spread over at most this share of the opening
 LATERAL_SHARE = 0.5  # the band lands flying over the ground at most this share of the catch move's speed bound
-SWING_HORIZONS = (4.0, 6.0)  # [s] longest pumping without a max_time (with one: max_time + 1 s)
+SWING_HORIZONS = (4.0, 6.0)  # [s] longest pumping from rest without a max_time (with one: max_time + 1 s)
+QUICK_TIME = 3.0  # [s] without a max_time, the cruising release is searched as for a plan within this
 GOAL_MISSED = 100.0  # a swing-up search cost from this on missed the release goal (``catch_swing.release_score``)
 MAX_COAST = 0.25  # [s] longest coast of the catch move at its target velocity before it brakes
 COAST_EXTRA = 0.05  # [s] the grid's coast: from the catch to the band's last landing, and this much more
@@ -83,10 +84,17 @@ class SwingVariant:
     cruise: bool
     horizon: float  # [s]
     slack: float = 0.0  # [s] the swing-up search's release deadline later by this (the plan must still be in time)
+    quick: float | None = None  # [s] without a max_time: search the swing-up as for a plan within this
 
     def describe(self) -> str:
         slack = f", release deadline {self.slack:g} s later" if self.slack else ""
-        return f"{'cruising' if self.cruise else 'rest'} release, pumping up to {self.horizon:g} s{slack}"
+        quick = f", searched as for {self.quick:g} s" if self.quick is not None else ""
+        return f"{'cruising' if self.cruise else 'rest'} release, pumping up to {self.horizon:g} s{slack}{quick}"
+
+    def deadline(self, max_time: float | None) -> float:
+        """The swing-up search's release deadline [s] (inf: none)."""
+        budget = max_time if max_time is not None else self.quick
+        return math.inf if budget is None else budget - FLIGHT_ALLOWANCE + self.slack
 
 
 def swing_variants(max_time: float | None) -> tuple[SwingVariant, ...]:
@@ -96,12 +104,17 @@ def swing_variants(max_time: float | None) -> tuple[SwingVariant, ...]:
     a quarter second later than the time asked allows — its optimum depends on both, and what it finds mostly still
     enters the cup in time (a plan that does not is not valid: ``_rank``). With a max_time of 3 s that lifted the band
     caught from 90 to 99 % at 0.25 m and from 42 to 94 % at 0.3 m, entering at 1.9-2.2 s; 0.15 and 0.2 m kept their
-    plans. Without a max_time: up to 4 s, and from rest also up to 6 s (cruising over 6 s found worse plans: 0.25 m
-    caught 46 % of the band, 0.35 m none)."""
+    plans. Without a max_time: from rest up to 4 s and up to 6 s, and the cruising release searched as for a plan
+    within QUICK_TIME (with no deadline, over 4 s, it had caught 85 % of the band at 0.3 m, as for 3 s 95 %;
+    cruising over 6 s found worse plans: 0.25 m caught 46 % of the band, 0.35 m none)."""
     if max_time is not None:
         return (SwingVariant(True, max_time + 1.25, 0.25), SwingVariant(False, max_time + 1.0))
     short, long = SWING_HORIZONS
-    return (SwingVariant(True, short), SwingVariant(False, short), SwingVariant(False, long))
+    return (
+        SwingVariant(True, QUICK_TIME + 1.25, 0.25, quick=QUICK_TIME),
+        SwingVariant(False, short),
+        SwingVariant(False, long),
+    )
 
 
 @dataclass(frozen=True)
@@ -242,6 +255,7 @@ class CatchResult:
             "swing_up": {
                 "release": None if self.variant is None else ("cruising" if self.variant.cruise else "rest"),
                 "horizon_s": None if self.variant is None else self.variant.horizon,
+                "release_deadline_s": None if self.variant is None else _finite(self.variant.deadline(r.max_time)),
                 "cruise_m_s": float(self.swing.v[-1]),
             },
             "catch_move": {
@@ -264,6 +278,10 @@ class CatchResult:
         }
 
 
+def _finite(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
 def cup_axis_at_start(robot: Robot, model: StringModel, q_start) -> np.ndarray:
     """The cup's opening direction in the base frame at q_start (unit)."""
     rot = robot.fk(np.asarray(q_start, dtype=float)).rotation
@@ -275,7 +293,7 @@ def _swing_up(r: CatchRequest, bounds: TaskBounds, move: TaskBounds, variant: Sw
     the search could not meet the release goal)."""
     m = r.model
     window = 2.0 * (m.cup.inner_radius - m.ball.radius)  # lateral width of the opening the ball centre fits through
-    deadline = math.inf if r.max_time is None else r.max_time - FLIGHT_ALLOWANCE + variant.slack
+    deadline = variant.deadline(r.max_time)
     goal = ReleaseGoal(
         height=m.cup.rim_height,
         reach=0.06,

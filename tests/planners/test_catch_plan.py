@@ -1,9 +1,10 @@
 """The choice among swing-up variants of the cup-and-ball plan (the plan itself: tests/lbrcli/commands/test_plan_catch.py
 and benchmarks/bench_catch.py)."""
 
+import math
 from types import SimpleNamespace
 
-from planners.catch_plan import SWING_HORIZONS, _rank, swing_variants
+from planners.catch_plan import FLIGHT_ALLOWANCE, QUICK_TIME, SWING_HORIZONS, _rank, swing_variants
 
 
 def test_both_release_kinds_are_tried_and_without_max_time_both_horizons():
@@ -17,6 +18,12 @@ def test_both_release_kinds_are_tried_and_without_max_time_both_horizons():
     default = swing_variants(None)
     assert {v.cruise for v in default} == {True, False}
     assert {v.horizon for v in default if not v.cruise} == set(SWING_HORIZONS)  # the rest release as before, 6 s too
+    assert all(v.deadline(None) == math.inf for v in default if not v.cruise)  # as soon as the band allows
+    # the cruising release searched as for a plan within QUICK_TIME, with the same slack as with --max-time
+    (quick,) = (v for v in default if v.cruise)
+    assert quick.deadline(None) == cruise.deadline(QUICK_TIME) == QUICK_TIME - FLIGHT_ALLOWANCE + 0.25
+    assert quick.horizon == cruise.horizon and "as for 3 s" in quick.describe()
+    assert rest.deadline(3.0) == 3.0 - FLIGHT_ALLOWANCE  # with --max-time: the time asked, less the flight
 
 
 def _result(caught, ok, success, t_entry, max_time=None):

@@ -59,6 +59,10 @@ def test_the_plan_catches_the_ball_within_the_limits(planned):
     rob = f["robustness"]
     assert rob["success_fraction"] >= 0.95 and rob["members"] == 9 and rob["length_tolerance"] == 0.01
     assert f["cup_spec"] in f["rehearse"] and plot.stat().st_size > 20_000
+    # without --max-time: the cruising release searched as for a 3 s plan, from rest as soon as the band allows
+    swing, move = f["swing_up"], f["catch_move"]
+    assert swing["release_deadline_s"] == (pytest.approx(2.95) if swing["release"] == "cruising" else None)
+    assert 0.0 <= move["coast_s"] <= 0.25 and move["t_catch_s"] < f["duration_s"]
     assert run_lbr("check", out, "--jerk").returncode == 0  # every limit, rest at both ends
 
 

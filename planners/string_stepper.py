@@ -239,8 +239,8 @@ class StringStepper:
         dt = h - tau
         b1, v1 = _rk4((b0, v0), deriv, tau, dt)
 
-        def state(u):
-            return _hermite(b0, v0, b1, v1, dt, u)
+        def state(u):  # (the Hermite curve's ends are exactly its end points: no arithmetic there)
+            return (b1, v1) if u == 1.0 else (b0, v0) if u == 0.0 else _hermite(b0, v0, b1, v1, dt, u)
 
         def string_gap(u):
             return norm(sub(state(u)[0], iv.at(tau + u * dt)[0])) - l
@@ -249,9 +249,12 @@ class StringStepper:
             return cup_gap(sub(state(u)[0], iv.at(tau + u * dt)[0]), self.axis, cup)[0] - r
 
         events = []
-        if string_gap(1.0) > 0.0:
+        rel1 = sub(b1, iv.at(tau + dt)[0])
+        if norm(rel1) > l:  # string_gap(1.0) > 0
             events.append((_root(string_gap), "string"))
-        if cup is not None and cup_gap_at(1.0) < 0.0:
+        # the cup's solid lies within ``extent`` of the anchor: a ball centre farther than that plus its radius
+        # cannot touch it (the exact gap is computed only near the cup)
+        if cup is not None and dot(rel1, rel1) <= (cup.extent + r + 1e-6) ** 2 and cup_gap_at(1.0) < 0.0:
             events.append((_root(lambda u: -cup_gap_at(u)), "contact"))
         u_end = min(events)[0] if events else 1.0
         if cup is not None:

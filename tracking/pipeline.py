@@ -189,6 +189,7 @@ class _Trackers:
         self.sure = self.ball.options.min_confidence
         self.columns = _Columns()
         self.recovered = 0  # frames found by the second look
+        self.reserve: list[tuple[int, Blob, tuple[float, float]]] = []  # its sharp fixes, for frames left unfound
         self.modelled = 0  # frames reported by the model look
         self.outliers = 0  # fixes their neighbours placed elsewhere (reported unsure)
         self.off_pendulum = 0  # fixes off the pendulum over their window (reported unsure)
@@ -238,11 +239,24 @@ class _Trackers:
     def second_look(self, path: str, fps: float | None) -> None:
         """The ball's frames recovered by a second look (:func:`tracking.second_look.recover`), counted."""
         cols = self.columns
-        got = recover(self.ball, path, fps, cols.blobs, cols.t, cols.piv, cols.conf, self.kept, self.frame_bytes)
+        got, self.reserve = recover(
+            self.ball, path, fps, cols.blobs, cols.t, cols.piv, cols.conf, self.kept, self.frame_bytes
+        )
         for k, blob, centre in got:
             cols.refined[k] = (blob, centre)
             cols.set_ball(k, blob, SECOND_LOOK)
         self.recovered = len(got)
+
+    def sharp_reserve(self) -> None:
+        """The second look's sharp fixes held in reserve, on the frames still without a trusted fix (after the model
+        look)."""
+        cols = self.columns
+        _, trusted = self.trusted()
+        for k, blob, centre in self.reserve:
+            if not trusted[k]:
+                cols.refined[k] = (blob, centre)
+                cols.set_ball(k, blob, SECOND_LOOK)
+                self.recovered += 1
 
     def trusted(self) -> tuple[np.ndarray, np.ndarray]:
         """The ball's centres [px] (n, 2) so far and which of them are trusted (confidence ≥ the tracker's minimum)."""
@@ -406,4 +420,5 @@ def track_video(
             trackers.check_pendulum(fps or info.fps)
         if second_look:
             trackers.model_look(str(path), fps or info.fps)
+            trackers.sharp_reserve()
         return _make_track(trackers, angle, calibration, info, (fps or info.fps) if smooth else None)

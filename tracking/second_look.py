@@ -7,6 +7,11 @@ ball — area, saturation, position and velocity — is followed backwards frame
 and gates as forwards (a blob inside the gate around the backward prediction, of the ball's area and saturation),
 never on a place found static in the ball's colour, an object excluded, or beyond the string's reach. The chain
 stops after ``max_coast_s`` without a fix. The live sensor never does this (a live result is final).
+
+The ball's area on the track is the median over its fixes — in a fast video mostly motion-blurred streaks, larger
+than the ball. A ball the chain finds nearly still (a string re-tensioning stops it within a frame) has the area of
+the sharp ball instead (:func:`sharp_area`): such a fix is held in reserve and reported only where no later stage
+(the model look) placed the ball.
 """
 
 from __future__ import annotations
@@ -78,11 +83,15 @@ def look_back(
     anchor_blobs: list[tuple[float, Blob]],
     frames: Iterable[tuple[int, float, np.ndarray, tuple[float, float] | None]],
     area_px: float,
+    sharp_px: float | None = None,
+    reserve: list[tuple[int, Blob]] | None = None,
 ) -> list[tuple[int, Blob]]:
     """Follow the confirmed ball backwards. anchor_blobs: (time [s], blob) of the confirmed stretch, first the
     anchor; frames: (index, time [s], BGR frame, pivot [px] or None) going back from the anchor; area_px: the ball's
     area [px²] on the confirmed track (a fix reported must have AREA_RANGE of it). Returns the
-    (index, blob) recovered, until the chain is lost for ``max_coast_s``."""
+    (index, blob) recovered, until the chain is lost for ``max_coast_s``. With ``sharp_px`` [px²] (:func:`sharp_area`)
+    the fixes that fail only on area but moved less than the sharp ball's radius from the next one and have
+    AREA_RANGE of ``sharp_px`` are appended to ``reserve``."""
     f = follower_from(tracker, [(-t, b) for t, b in reversed(anchor_blobs)])
     out: list[tuple[int, Blob]] = []
     misses = 0
@@ -106,10 +115,32 @@ def look_back(
         f.accept(blob, -t, pred)  # followed on, but reported only when as saturated as the ball has been and round
         # and of its area (a ball the codec updated only in part, smeared, or merged with its ghost, is centred off),
         # or hanging still below the pivot
-        whole = blob.aspect <= MAX_ASPECT and AREA_RANGE[0] * area_px <= blob.area_px <= AREA_RANGE[1] * area_px
+        round_ = blob.aspect <= MAX_ASPECT
+        whole = round_ and AREA_RANGE[0] * area_px <= blob.area_px <= AREA_RANGE[1] * area_px
         if (vivid and whole) or (still and _hangs(blob, pivot)):
             out.append((k, blob))
+        elif vivid and round_ and reserve is not None and sharp_px is not None and _sharp(blob, last, sharp_px):
+            reserve.append((k, blob))
     return out
+
+
+def _sharp(blob: Blob, last, sharp_px: float) -> bool:
+    """``blob`` moved less than the sharp ball's radius from ``last`` (the chain's next fix) and has AREA_RANGE of
+    ``sharp_px`` [px²]: the ball without motion blur."""
+    slow = math.hypot(blob.u - last.u, blob.v - last.v) <= math.sqrt(sharp_px / math.pi)
+    return slow and AREA_RANGE[0] * sharp_px <= blob.area_px <= AREA_RANGE[1] * sharp_px
+
+
+def sharp_area(blobs: list[Blob | None], confidence: np.ndarray) -> float | None:
+    """The ball's area without motion blur [px²]: the median over the confirmed fixes that moved less than half their
+    own radius since the confirmed fix before them (None when there are none)."""
+    areas, prev = [], None
+    for b, c in zip(blobs, confidence):
+        ok = b is not None and c >= CONFIRMED
+        if ok and prev is not None and math.hypot(b.u - prev.u, b.v - prev.v) < 0.5 * b.radius_px:  # type: ignore[union-attr]
+            areas.append(b.area_px)  # type: ignore[union-attr]
+        prev = b if ok else None
+    return float(np.median(areas)) if areas else None
 
 
 def _search(tracker: BallTracker, f, frame: np.ndarray, pred: Prediction, pivot) -> Blob | None:
@@ -128,12 +159,12 @@ def recover(
     confidence: list[float],
     kept: dict[int, np.ndarray] | None = None,
     frame_bytes: int = 0,
-) -> list[tuple[int, Blob, tuple[float, float]]]:
+) -> tuple[list[tuple[int, Blob, tuple[float, float]]], list[tuple[int, Blob, tuple[float, float]]]]:
     """The second look over a tracked video (``path``, ``fps`` as first; the frames ``kept`` since the first pass
     used, the rest decoded again): the (frame index, blob) recovered before each confirmed stretch that follows frames
     not found. blobs, times [s], pivots [px] (NaN when unknown) and confidence are the first pass's, per frame;
     frame_bytes the size of a frame. Each blob comes with its refined centre [px]
-    (:func:`tracking.subpixel.refine_centre`)."""
+    (:func:`tracking.subpixel.refine_centre`). Returns those and the sharp fixes held in reserve (:func:`look_back`)."""
     from .video import frames_at
 
     sure = tracker.options.min_confidence
@@ -141,16 +172,19 @@ def recover(
     found = np.array([b is not None for b in blobs], bool) & (conf >= sure)
     todo = gaps(found, conf, sure)
     if not todo:
-        return []
+        return [], []
     needed = frames_needed(todo, frame_bytes)
     frames = frames_at(path, fps, (j for ks in needed.values() for j in ks), kept)
     area = float(np.median([b.area_px for b, c in zip(blobs, conf) if b is not None and c >= CONFIRMED]))
+    sharp = sharp_area(blobs, conf)
     out: list[tuple[int, Blob, tuple[float, float]]] = []
+    held: list[tuple[int, Blob]] = []
     for anchor, ks in needed.items():
         stretch = [(times[anchor + i], blobs[anchor + i]) for i in range(3)]
         back = ((k, times[k], frames[k], _pivot(pivots[k])) for k in ks if k in frames)
-        out += [(k, b, refine_centre(frames[k], tracker.spec, b)) for k, b in look_back(tracker, stretch, back, area)]
-    return out
+        got = look_back(tracker, stretch, back, area, sharp, held)
+        out += [(k, b, refine_centre(frames[k], tracker.spec, b)) for k, b in got]
+    return out, [(k, b, refine_centre(frames[k], tracker.spec, b)) for k, b in held]
 
 
 def _hangs(blob: Blob, pivot: tuple[float, float] | None) -> bool:

@@ -4,7 +4,16 @@ and benchmarks/bench_catch.py)."""
 import math
 from types import SimpleNamespace
 
-from planners.catch_plan import FLIGHT_ALLOWANCE, QUICK_TIME, SWING_HORIZONS, _rank, swing_variants
+import planners.catch_plan as cp
+from planners.catch_plan import (
+    FALLBACK_HORIZON,
+    FLIGHT_ALLOWANCE,
+    QUICK_TIME,
+    SWING_HORIZONS,
+    _rank,
+    fallback_variants,
+    swing_variants,
+)
 
 
 def test_both_release_kinds_are_tried_and_without_max_time_both_horizons():
@@ -44,3 +53,46 @@ def test_the_plan_kept_is_valid_first_then_catches_more_of_the_band_then_sooner(
     assert _rank(valid_low) > max(_rank(invalid_high), _rank(over_limits), _rank(late))
     assert _rank(_result(True, True, 0.9, 5.0)) > _rank(valid_low)
     assert _rank(_result(True, True, 0.9, 2.0)) > _rank(_result(True, True, 0.9, 5.0))
+
+
+def _planned(success: float, min_success: float = 0.95):
+    res = _result(True, True, success, 5.0)
+    res.notes = ()
+    res.failure = lambda: None if success >= min_success else f"catches {100 * success:.0f} % of the band"
+    return res
+
+
+def _fake_planner(monkeypatch, success_by_horizon: dict) -> list:
+    """plan_catch with its swing-ups and verdicts replaced: each variant's plan catches success_by_horizon[horizon]
+    of the band. Returns the horizons planned, in order."""
+    planned: list = []
+
+    def candidates(r, arm, notes, variants):
+        return [SimpleNamespace(variant=v) for v in variants]
+
+    def plan_variant(r, arm, c, progress):
+        planned.append(c.variant.horizon)
+        return _planned(success_by_horizon[c.variant.horizon])
+
+    monkeypatch.setattr(cp, "_arm", lambda r, robot, limits: None)
+    monkeypatch.setattr(cp, "_candidates", candidates)
+    monkeypatch.setattr(cp, "_plan_variant", plan_variant)
+    monkeypatch.setattr(cp, "replace", lambda res, **kw: res)
+    return planned
+
+
+def test_the_fallback_swing_up_is_planned_only_when_no_other_plan_catches_enough(monkeypatch):
+    assert fallback_variants(3.0) == ()  # with a max_time: longer pumping is too late
+    (fb,) = fallback_variants(None)
+    assert not fb.cruise and fb.horizon == FALLBACK_HORIZON > max(SWING_HORIZONS)
+    short, long = SWING_HORIZONS
+    cruise = QUICK_TIME + 1.25
+    r = SimpleNamespace(max_time=None)
+    planned = _fake_planner(monkeypatch, {cruise: 0.9, short: 0.96, long: 0.8, FALLBACK_HORIZON: 1.0})
+    res = cp.plan_catch(r, None, None)
+    assert res.band.success == 0.96 and FALLBACK_HORIZON not in planned  # a plan without a failure: no fallback
+    planned = _fake_planner(monkeypatch, {cruise: 0.9, short: 0.75, long: 0.78, FALLBACK_HORIZON: 1.0})
+    res = cp.plan_catch(r, None, None)
+    assert planned[-1] == FALLBACK_HORIZON and res.band.success == 1.0  # none caught 95 %: the fallback's plan
+    planned = _fake_planner(monkeypatch, {cruise: 0.9, short: 0.75, long: 0.78, FALLBACK_HORIZON: 0.5})
+    assert cp.plan_catch(r, None, None).band.success == 0.9  # (the better one is kept either way)

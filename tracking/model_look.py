@@ -51,8 +51,8 @@ MAX_SPREAD_OUT_PX = 0.7  # [px] ... or this, in a run longer than SHORT_GAP_S wh
 # window's fixes (extrapolated far: the model's own error — damping, the codec's lag of a fast ball — grows there
 # faster than its covariance says)
 SHORT_GAP_S = 0.4  # [s]
-MAX_EDGE_GAP_S = 1.5  # [s] a run at the video's start or end may be this long (no push beyond it to fit across; its
-# frames are all extrapolated, each placed only within MAX_SPREAD_OUT_PX)
+MAX_EDGE_GAP_S = 1.5  # [s] of a run at the video's start or end, the frames this close to the fixes are looked at
+# (no push beyond it to fit across; its frames are all extrapolated, each placed only within MAX_SPREAD_OUT_PX)
 MIN_SHARE = 0.45  # share of the ball's disc at the fitted place that must be in its colour ...
 MIN_SATURATION = 60  # ... (its hue, at least this saturated)
 MAX_OFF_RADII = 0.4  # ... and the colour's centroid there within this many ball radii (at least 3 px) of it;
@@ -263,16 +263,21 @@ def _w2_guess(frames: np.ndarray, theta: np.ndarray, fps: float) -> float:
 
 
 def runs(trusted: np.ndarray, max_len: int, edge_len: int | None = None) -> list[tuple[int, int]]:
-    """(first, last + 1) of each run of frames not trusted, at most max_len long (edge_len, when given, for a run at
-    the video's start or end), with a trusted frame beside it."""
+    """(first, last + 1) of each run of frames not trusted, at most max_len long, with a trusted frame beside it; a
+    run at the video's start or end (edge_len, when given) is cut to its edge_len frames next to the trusted ones
+    (farther from them, no fit would place a frame anyway)."""
     n = len(trusted)
     edges = np.flatnonzero(np.diff(np.r_[False, ~np.asarray(trusted, bool), False].astype(np.int8)))
-    edge_len = max_len if edge_len is None else edge_len
-    return [
-        (int(a), int(b))
-        for a, b in zip(edges[::2], edges[1::2])
-        if b - a <= (edge_len if a == 0 or b == n else max_len) and (a > 0 or b < n)
-    ]
+    out = []
+    for a, b in zip(edges[::2], edges[1::2]):
+        if a == 0 and b == n:
+            continue
+        if edge_len is not None and (a == 0 or b == n):
+            a, b = (max(a, b - edge_len), b) if a == 0 else (a, min(b, a + edge_len))
+        elif b - a > max_len:
+            continue
+        out.append((int(a), int(b)))
+    return out
 
 
 def fit_around(

@@ -82,6 +82,10 @@ def test_runs_are_the_frames_not_trusted_beside_trusted_ones_and_not_too_long():
     late = np.array([0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0], bool)  # runs of five at the start, four inside
     assert runs(late, 3, 5) == [(0, 5), (12, 16)]  # and four at the end: the edges may be longer
     assert runs(late, 3) == []
+    # a run at an edge longer than edge_len: its edge_len frames next to the trusted ones (a ball tracked only late
+    # in the video is placed back from its first fixes as far as a fit reaches)
+    assert runs(late, 3, 2) == [(3, 5), (12, 14)]
+    assert runs(np.zeros(6, bool), 3, 5) == []  # nothing trusted: nothing beside a run
 
 
 def test_fixes_scattered_as_on_low_bitrate_hevc_still_place_the_frames_between():

@@ -1,6 +1,7 @@
 """The compiled pieces (pyproject.toml holds the rest): tracking._rk4, the pendulum integration of
-tracking.model_look, and planners._planar, the planar pendulum step of the swing-up search. Optional: without a C
-compiler the install goes on and both run their pure-Python code (equal to the last bit)."""
+tracking.model_look; planners._planar, the planar pendulum step of the swing-up search; trajectories._quick, the quick
+acceptance of a joint command in every FRI cycle (the envelope's and the guard's per-joint comparisons). Optional:
+without a C compiler the install goes on and each runs its pure-Python code (equal to the last bit)."""
 
 from setuptools import Extension, setup
 
@@ -15,6 +16,12 @@ setup(
         ),
         Extension(
             "planners._planar", ["planners/_planar.c"], optional=True, extra_compile_args=["-O2", "-ffp-contract=off"]
+        ),  # fmt: skip
+        Extension(
+            "trajectories._quick",
+            ["trajectories/_quick.c"],
+            optional=True,
+            extra_compile_args=["-O2", "-ffp-contract=off"],
         ),  # fmt: skip
     ]
 )

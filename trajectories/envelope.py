@@ -23,6 +23,7 @@ Pure Python on 7 floats for the per-cycle path; :func:`brakeable` checks whole f
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Sequence
@@ -31,8 +32,14 @@ import numpy as np
 
 from .limits import JointLimits
 
+try:  # the quick acceptance of a command, compiled (setup.py; without a compiler the Python loop alone decides)
+    from . import _quick
+except ImportError:  # pragma: no cover - a build without a C compiler
+    _quick = None
+
 REL_TOL = 1e-9  # relative slack on every limit (a command exactly at a limit passes)
 _NO_FLOOR = (0.0,) * 7
+_PACK7 = struct.Struct("7d").pack
 SHRINK = 1e-10  # relative: clamped commands aim this far inside the bounds (rounding of q → differences)
 STOP_SLACK_STEPS = 2.0  # [periods] at the current speed added to every stop distance (sampling of the stop)
 
@@ -186,10 +193,14 @@ class BrakingEnvelope:
             )
         dt = self.dt
         idt2 = 1.0 / (dt * dt)
+        k = (1.0 + REL_TOL) * dt
+        if _quick is not None:  # every joint inside every bound and far from its position limit: accepted as it is
+            packed = _PACK7(*jerk_floor) if jerk and jerk_floor is not None else None
+            if _quick.admit(q, q1, q2, q3, self._packed_bounds, packed, jerk, k, idt2, dt):
+                return Admission(tuple(q), 0.0, -1, None)
         out: list[float] | None = None
         worst, worst_j = 0.0, -1
         floor = jerk_floor if jerk and jerk_floor is not None else _NO_FLOOR
-        k = (1.0 + REL_TOL) * dt
         for j, x, p1, p2, p3, (A, JD, V, J2, free), jf in zip(range(7), q, q1, q2, q3, self._fast_bounds, floor):
             if jf * k > JD:
                 JD = jf * k
@@ -287,6 +298,11 @@ class BrakingEnvelope:
         k = 1.0 + REL_TOL
         return tuple((self.acceleration[j] * k, self.jerk[j] * self.dt * k, self.velocity[j] * k, 2.0 * self.jerk[j],
                       self.free[j]) for j in range(7))  # fmt: skip
+
+    @cached_property
+    def _packed_bounds(self) -> bytes:
+        """:attr:`_fast_bounds` as 35 float64 (for the compiled quick acceptance)."""
+        return struct.pack("35d", *(x for b in self._fast_bounds for x in b))
 
     def _position_bound(self, j: int, p1: float, v1: float, a: float, lo: float, hi: float,
                         strict: bool) -> float | None:  # fmt: skip

@@ -14,10 +14,17 @@ command exactly at a limit passes. Pure Python over 7 floats: cheaper per cycle 
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Sequence
 
 from trajectories.envelope import REL_TOL, BrakingEnvelope
+
+try:  # the quick acceptance, compiled (setup.py; without it the loop below alone decides)
+    from trajectories import _quick
+except ImportError:  # pragma: no cover - a build without a C compiler
+    _quick = None
 from trajectories.limits import JointLimits
 
 DEFAULT_MAX_FORCE = 20.0  # [N] per axis, WRENCH mode
@@ -69,9 +76,11 @@ class CommandGuard:
         ``room_to_stop``: the state it creates must also be brakeable (the braking envelope)."""
         if q is None or len(q) != 7:
             return f"the joint position command has {0 if q is None else len(q)} values, not 7"
+        env = self.envelope
+        if not room_to_stop and _quick is not None and _quick.steps(q, prev, prev2, self._packed):
+            return None  # (compiled: the chained comparisons below, every joint passing them)
         # most commands are far from every limit: one chained comparison per joint, the full check only near one
         j = 0
-        env = self.envelope
         for x, p1, p2, free, max_step, max_second in zip(q, prev, prev2, env.free, self.max_step, self.max_second):
             step = x - p1
             second = step - (p1 - p2)
@@ -85,6 +94,12 @@ class CommandGuard:
                 return self._envelope_problem(j, x, step, second)
             j += 1
         return None
+
+    @cached_property
+    def _packed(self) -> bytes:
+        """Per joint (free, max_step, max_second) as 21 float64, for the compiled quick acceptance."""
+        env = self.envelope
+        return struct.pack("21d", *(x for j in range(7) for x in (env.free[j], self.max_step[j], self.max_second[j])))
 
     def _joint_problem(self, j: int, x: float, step: float, second: float, room_to_stop: bool) -> str | None:
         """The full check of joint ``j`` (index) at ``x`` [rad] after ``step`` [rad] and ``second`` difference [rad]."""

@@ -273,11 +273,11 @@ class ExecutedMotion:
         would change it)."""
         env = self.envelope
         self.loss_refused = self.replan_due = end_coast = False
-        raw, floor = q, None
+        raw, hist = q, None
         if q is not None and len(q) == 7:
             if self._gap_path is not None and not self.braking and not self.coasting:
                 self._join_gap(q)
-            floor = path_jerk(q, self._c1, self._c2, self._c3, self.period_s) if self._c_run >= 3 else None
+            hist = (self._c1, self._c2, self._c3) if self._c_run >= 3 else None  # (the path's jerk: when needed)
             self._c1, self._c2, self._c3 = tuple(q), self._c1, self._c2
             self._c_run += 1
         if self.coasting and q is not None and len(q) == 7:  # the controller's confirmations lag: ours is the coast
@@ -301,8 +301,8 @@ class ExecutedMotion:
             q = tuple(x + e for x, e in zip(q, off))
         forced = not jerk and (self._jerk_left > 0 or not self.rejoin.done or self.coasting)
         # (jerk: at least the client's own; a limit path + offset cannot keep would bend it against the offset's plan)
-        adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk or forced,
-                        floor if forced and not self.coasting else None)  # fmt: skip
+        floor = path_jerk(raw, *hist, self.period_s) if hist is not None and forced and not self.coasting else None
+        adm = env.admit(q, self.prev, self.prev2, self.prev3, jerk or forced, floor)
         if adm.reason is not None and forced:  # (no command within the jerk limit is brakeable: the limits first)
             adm = env.admit(q, self.prev, self.prev2, self.prev3, False)
         if adm.reason is not None:

@@ -211,7 +211,9 @@ class Replier:
                     return found, False
                 motion.begin_braking()  # from the joints last sent, within the joint limits, as any stop
         try:
-            q, tau, wrench, refused = motion.next_command(_standing(mon), state, mode,
+            # (where the robot stands matters only before COMMANDING_ACTIVE: the command must start there)
+            measured = _standing(mon) if state != CMD_ACTIVE else ()
+            q, tau, wrench, refused = motion.next_command(measured, state, mode,
                                                           cmd.joint_position, cmd.torque, cmd.wrench,
                                                           client.exact_command, client.jerk_limited)  # fmt: skip
         except Refused as exc:

@@ -10,6 +10,11 @@ from operator import sub as _sub
 from typing import Any, Sequence
 
 from .constants import ConnectionQuality, DriveState, SafetyState, SessionState
+
+try:  # the per-joint checks compiled (setup.py; without a C compiler the Python below)
+    from trajectories import _quick
+except ImportError:  # pragma: no cover - a build without a C compiler
+    _quick = None
 from .outcome import EndReason, Outcome
 
 from .constants import STATE_COMMANDING_ACTIVE as CMD_ACTIVE
@@ -32,6 +37,10 @@ def within(values: Sequence[float], bound: Sequence[float]) -> bool:
     """7 joint values with |value| ≤ ``bound`` [rad] (:func:`joint_bound`); NaN and inf compare False."""
     # hot path, before every reply: C-level loops straight over the message's values
     return len(values) == 7 and all(map(_le, map(abs, values), bound))
+
+
+if _quick is not None:  # the same, compiled (a fifth of the cost: this runs twice before every reply)
+    within = _quick.within  # noqa: F811
 
 
 def joints_ok(values: Sequence[float], position_limit: Sequence[float]) -> bool:
@@ -212,23 +221,15 @@ class Supervisor:
         """The windows: faster than the period on either clock, or much slower on both."""
         n = self._n
         if n > 4:  # from the 5th message on
-            for what, now, ring, window, ratio in (("timestamps", ts, self._ring_ts, FAST_WINDOW, FAST_RATIO),
-                                                   ("messages", rx, self._ring_rx, RX_WINDOW, RX_RATIO)):  # fmt: skip
-                if now is None or (what == "timestamps" and (self._coarse or self._ts0 < 0 or self._frozen)):
-                    continue  # a timestamp standing still is judged as frozen, not as a fast clock
-                w = min(n - 1, window)
-                k = (n - 1 - w) % _RING
-                then = ring[k]
-                if then <= 0:
-                    continue
-                steps = (seq - self._ring_seq[k]) & 0xFFFFFFFF
-                elapsed = (now - then) * 1e-9
-                slack = steps * period * (1.0 - ratio) + FAST_ALLOWANCE_S
-                if elapsed < steps * period - slack and self._ahead_of_all(now, seq, ring, w, period, slack):
-                    self.measured_period_s = max(elapsed / steps, 1e-5)
-                    return (f"the controller's {what} advanced {elapsed * 1e3:.1f} ms over {steps} messages: it "
-                            f"sends every {elapsed / steps * 1e3:.2f} ms, not every {period * 1e3:g} ms as its "
-                            "period says")  # fmt: skip
+            # a timestamp standing still is judged as frozen, not as a fast clock
+            if not (self._coarse or self._ts0 < 0 or self._frozen):
+                problem = self._fast("timestamps", seq, ts, self._ring_ts, FAST_WINDOW, FAST_RATIO, period)
+                if problem is not None:
+                    return problem
+            if rx is not None:
+                problem = self._fast("messages", seq, rx, self._ring_rx, RX_WINDOW, RX_RATIO, period)
+                if problem is not None:
+                    return problem
         if n > SLOW_WINDOW and rx is not None and not self._coarse:
             k = (n - 1 - SLOW_WINDOW) % _RING
             then_ts, then_rx = self._ring_ts[k], self._ring_rx[k]
@@ -238,6 +239,25 @@ class Supervisor:
                 if (ts - then_ts) * 1e-9 > bound and (rx - then_rx) * 1e-9 > bound:
                     return (f"the controller sends every {(rx - then_rx) * 1e-6 / steps:.2f} ms over the last "
                             f"{steps} messages, not every {period * 1e3:g} ms as its period says")  # fmt: skip
+        return None
+
+    def _fast(self, what: str, seq: int, now: int, ring: list[int], window: int, ratio: float,
+              period: float) -> str | None:  # fmt: skip
+        """The clock ``ring`` (``what``) advanced faster than the period over the last ``window`` messages."""
+        n = self._n
+        w = min(n - 1, window)
+        k = (n - 1 - w) % _RING
+        then = ring[k]
+        if then <= 0:
+            return None
+        steps = (seq - self._ring_seq[k]) & 0xFFFFFFFF
+        elapsed = (now - then) * 1e-9
+        slack = steps * period * (1.0 - ratio) + FAST_ALLOWANCE_S
+        if elapsed < steps * period - slack and self._ahead_of_all(now, seq, ring, w, period, slack):
+            self.measured_period_s = max(elapsed / steps, 1e-5)
+            return (f"the controller's {what} advanced {elapsed * 1e3:.1f} ms over {steps} messages: it "
+                    f"sends every {elapsed / steps * 1e3:.2f} ms, not every {period * 1e3:g} ms as its "
+                    "period says")  # fmt: skip
         return None
 
     def _ahead_of_all(self, now: int, seq: int, ring: list[int], w: int, period: float, slack: float) -> bool:
@@ -289,6 +309,12 @@ class Supervisor:
 
     def tracking(self, measured: Sequence[float], command: Sequence[float]) -> str | None:
         """None while every joint's measured position [rad] is within the bound of the command in force."""
+        if _quick is not None:  # compiled: the largest error when every joint is within its bound
+            worst = _quick.worst(measured, command, self.max_tracking_error)
+            if worst >= 0.0:
+                if worst > self.largest_tracking_error:
+                    self.largest_tracking_error = worst
+                return None
         errors = tuple(map(abs, map(_sub, measured, command)))  # C-level: the hot path of every message
         worst = max(errors)
         if not all(map(_le, errors, self.max_tracking_error)):  # NaN too

@@ -171,3 +171,40 @@ def test_a_jerk_floor_widens_only_the_jerk_bound_to_the_paths_own_jerk() -> None
     over = tuple(1.2 * a * dt * dt for a in LIM.acceleration)  # (an unbounded floor: the acceleration limit holds)
     adm = env.admit(over, zero, zero, zero, jerk=True, jerk_floor=tuple(1e9 for _ in LIM.jerk))
     assert max(q / (a * dt * dt) for q, a in zip(adm.q, LIM.acceleration)) == pytest.approx(1.0, rel=1e-6)
+
+
+@pytest.mark.parametrize("jerk", [False, True])
+def test_the_compiled_quick_acceptance_decides_as_the_python_loop(jerk: bool, monkeypatch: pytest.MonkeyPatch) -> None:
+    """trajectories._quick (built by setup.py) accepts a command only where the Python loop accepts every joint as
+    it is, and the admission is then the same to the bit; on random commands around every bound, NaN and ints."""
+    from trajectories import envelope as mod
+
+    if mod._quick is None:
+        pytest.skip("trajectories._quick is not built (no C compiler)")
+    env = BrakingEnvelope.from_limits(LIM, 1e-3)
+    rng = np.random.default_rng(11)
+    pos, vel, acc = (np.asarray(x) for x in (LIM.position, LIM.velocity, LIM.acceleration))
+    dt = 1e-3
+    quick_yes = slow_yes = 0
+    for i in range(4000):
+        p3 = rng.uniform(-1.0, 1.0, 7) * pos
+        v = rng.uniform(-1.05, 1.05, 7) * vel * rng.choice([0.01, 0.5, 1.0])
+        a = rng.uniform(-1.1, 1.1, 7) * acc * rng.choice([0.001, 0.3, 1.0])
+        p2 = p3 + v * dt
+        p1 = p2 + (v + a * dt) * dt
+        q = p1 + (v + a * dt * rng.uniform(0.9, 1.1, 7)) * dt
+        args = [tuple(x.tolist()) for x in (q, p1, p2, p3)]
+        if i % 97 == 0:
+            args[0] = args[0][:3] + (float("nan"),) + args[0][4:]
+        if i % 89 == 0:
+            args[0] = list(args[0][:6]) + [0]  # an int and a list
+        floor = tuple(rng.uniform(0, 2, 7) * np.asarray(LIM.jerk)) if i % 2 else None
+        fast = env.admit(*args, jerk, floor)
+        monkeypatch.setattr(mod, "_quick", None)
+        slow = env.admit(*args, jerk, floor)
+        monkeypatch.undo()
+        assert (fast.q, fast.clamped, fast.joint, fast.reason) == (slow.q, slow.clamped, slow.joint, slow.reason)
+        quick_yes += mod._quick.admit(*args, env._packed_bounds, None if floor is None or not jerk else
+                                      np.asarray(floor, float).tobytes(), jerk, 1.000000001e-3, 1e6, dt)  # fmt: skip
+        slow_yes += slow.clamped == 0.0 and slow.reason is None
+    assert 100 < quick_yes <= slow_yes < 3900  # both answers were exercised

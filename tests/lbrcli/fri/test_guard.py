@@ -62,3 +62,31 @@ def test_nan_and_a_stop_past_the_limit_are_refused() -> None:
     assert guard.refuse_position(q, prev, prev2, False) is None  # the braking stop itself is exempt
     far = (0.0,) + (0.0,) * 6
     assert guard.refuse_position((far[0] + step,) + far[1:], far, (far[0] - step,) + far[1:]) is None
+
+
+def test_the_compiled_quick_acceptance_refuses_as_the_python_loop(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With and without trajectories._quick the guard gives the same answer, on commands around every bound."""
+    from lbrcli.fri import guard as mod
+
+    if mod._quick is None:
+        pytest.skip("trajectories._quick is not built (no C compiler)")
+    limits = default_limits()
+    guard = CommandGuard.from_limits(limits, 1e-3)
+    rng = np.random.default_rng(5)
+    upper, v, a = (np.asarray(x) for x in (limits.position, limits.velocity, limits.acceleration))
+    refused = 0
+    for i in range(4000):
+        p1 = rng.uniform(-1.02, 1.02, 7) * upper * rng.choice([0.5, 1.0])
+        step = rng.uniform(-1.1, 1.1, 7) * v * 1e-3
+        p2 = p1 - step + rng.uniform(-1.1, 1.1, 7) * a * 1e-6
+        q = p1 + step
+        args = [tuple(x.tolist()) for x in (q, p1, p2)]
+        if i % 101 == 0:
+            args[0] = (float("inf"),) + args[0][1:]
+        for room in (False, True):
+            fast = guard.refuse_position(*args, room)
+            monkeypatch.setattr(mod, "_quick", None)
+            assert guard.refuse_position(*args, room) == fast
+            monkeypatch.undo()
+            refused += fast is not None
+    assert 1000 < refused < 7000

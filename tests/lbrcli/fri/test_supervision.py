@@ -174,3 +174,41 @@ def test_receive_jitter_of_a_loaded_machine_never_trips():
     late = np.minimum(rng.exponential(0.1 * p, 5000), 0.5 * p).astype(int)
     rx = [5 * 10**9 + k * p + int(d) for k, d in enumerate(late)]
     assert _first_problem(sup(1e-3), [(k, 10**9 + k * p, r) for k, r in enumerate(rx)]) == (None, None)
+
+
+def test_the_compiled_joint_checks_answer_as_the_python_ones(monkeypatch: pytest.MonkeyPatch) -> None:
+    """supervision.within and Supervisor.tracking with trajectories._quick give what their Python gives: on values
+    around the bound, NaN, inf and the wrong count."""
+    import numpy as np
+
+    from lbrcli.fri import supervision as mod
+
+    if mod._quick is None:
+        pytest.skip("trajectories._quick is not built (no C compiler)")
+    rng = np.random.default_rng(3)
+    bound = tuple(rng.uniform(0.5, 3.0, 7).tolist())
+    assert mod.within is mod._quick.within
+    src = "def within(values, bound):\n    return len(values) == 7 and all(map(_le, map(abs, values), bound))\n"
+    ns: dict = {"_le": mod._le}
+    exec(src, ns)  # the Python definition, as the module has it without the extension
+    answers = set()
+    for i in range(3000):
+        v = (np.asarray(bound) * rng.uniform(-1.05, 1.05, 7)).tolist()
+        if i % 50 == 0:
+            v[i % 7] = float("nan") if i % 100 else float("inf")
+        if i % 77 == 0:
+            v = v[:6]
+        answers.add(mod.within(v, bound))
+        assert mod.within(v, bound) == ns["within"](v, bound)
+        sup_c, sup_py = mod.Supervisor(bound, 50, 1e-3), mod.Supervisor(bound, 50, 1e-3)
+        cmd = (np.asarray(v[:7] if len(v) == 7 else v + [0.0]) * rng.uniform(0.0, 2.0)).tolist()
+        a = sup_c.tracking(v if len(v) == 7 else v + [0.0], cmd)
+        monkeypatch.setattr(mod, "_quick", None)
+        b = sup_py.tracking(v if len(v) == 7 else v + [0.0], cmd)
+        monkeypatch.undo()
+        assert (
+            a == b
+            and sup_c.largest_tracking_error == sup_py.largest_tracking_error
+            or (math.isnan(sup_c.largest_tracking_error) and math.isnan(sup_py.largest_tracking_error))
+        )
+    assert answers == {True, False}

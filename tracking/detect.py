@@ -359,6 +359,14 @@ _TINY_MIN_SATURATION = 45  # a 3 px ball blurred by the lens and the codec keeps
 _TINY_MIN_CONTRAST = 35  # ... and stands out by this much from the saturation of its surroundings
 
 
+def _median(a: np.ndarray) -> float:
+    """np.median of a small array, equal to it (the mean of the two middle values of an even count), without its
+    overhead (≈ 15 µs a call, for every small region of a frame)."""
+    flat = np.sort(a, axis=None)
+    m = flat.size // 2
+    return float(flat[m]) if flat.size % 2 else (float(flat[m - 1]) + float(flat[m])) / 2.0
+
+
 def find_tiny(
     bgr: np.ndarray,
     spec: ColorSpec,
@@ -398,6 +406,11 @@ def find_tiny(
         total = float(patch.sum())
         if total <= 0:
             continue
+        # area of the equivalent sharp disc: the saturation mass over the peak (a blurred dot spreads, not grows)
+        peak = float(patch.max())
+        rx0, ry0, rx1, ry1 = max(bx - 5, 0), max(by - 5, 0), min(bx + bw + 5, w), min(by + bh + 5, h)
+        if peak - _median(sat_all[ry0:ry1, rx0:rx1]) < _TINY_MIN_CONTRAST:  # as saturated as its surroundings: a
+            continue  # coloured surface (judged first: in a dark, noisy frame most regions end here)
         ys, xs = np.mgrid[cy0:cy1, cx0:cx1]
         u = float((patch * xs).sum() / total) + x0
         v = float((patch * ys).sum() / total) + y0
@@ -407,11 +420,5 @@ def find_tiny(
             or (x0 + w < fw and bx + bw >= w)
             or (y0 + h < fh and by + bh >= h)
         )
-        # area of the equivalent sharp disc: the saturation mass over the peak (a blurred dot spreads, not grows)
-        peak = float(patch.max())
-        rx0, ry0, rx1, ry1 = max(bx - 5, 0), max(by - 5, 0), min(bx + bw + 5, w), min(by + bh + 5, h)
-        ring = sat_all[ry0:ry1, rx0:rx1]
-        if peak - float(np.median(ring)) < _TINY_MIN_CONTRAST:  # as saturated as its surroundings: a coloured surface
-            continue
         out.append(Blob(u, v, max(total / peak, float(area)), 1.0, 1.0, bool(clipped), peak))
     return out

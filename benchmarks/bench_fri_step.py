@@ -1,6 +1,7 @@
 """CPU per cycle of ``ClientApplication.step`` alone, in lock-step and without the network or the machine's timing.
 
-A session of ``lbr execute``'s client (a trajectory player with the figures and the execution log as observers) is
+A session of ``lbr execute``'s client (a trajectory player with the figures and the execution log as observers, the
+log's rows handed to its writer process as ``lbr execute`` does: :class:`~lbrcli.fri.logwriter.LogProcess`) is
 recorded against the scripted controller (``lbrcli.fri.testing``) over loopback; the monitoring datagrams it
 received are then replayed to a new application whose transport hands them over from memory and swallows the
 replies. Figures: the best of ``REPEATS`` timed replays [µs per step] (the best, as timeit: other work on a shared
@@ -23,12 +24,14 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import math
 
 import numpy as np
 
 from lbrcli.fri import ClientApplication, ExecutionLog, LBRClient, LogObserver, SessionFigures, TrajectoryPlayer
+from lbrcli.fri.logwriter import LogProcess
 from lbrcli.fri.testing import CA, CW, IDLE, MR, MW, Cycle, ScriptedController
 from trajectories.limits import default_limits
 
@@ -37,6 +40,8 @@ ROWS = 3000  # 3 s at 1 ms
 REPEATS = 7
 GAP_S = 9e-4  # [s] the sleep before each step in the replays "as in a session" (a 1 ms period less the step)
 LIM = default_limits()
+LOG_IN_PROCESS = False  # the player's log as lbr execute writes it (a child process); True: LogObserver in the loop
+_WRITERS: list[Any] = []
 
 
 def trajectory(n: int) -> np.ndarray:
@@ -56,6 +61,9 @@ class SineOverlay(LBRClient):
         self.base: tuple[float, ...] | None = None
 
     def command(self, state):
+        return self._next(state)
+
+    def _next(self, state):
         if self.base is None:
             self.base = tuple(state.ipo_joint_position)
         self.offset = self.offset * 0.99 + 0.04 * math.sin(self.phi) * 0.01
@@ -63,14 +71,40 @@ class SineOverlay(LBRClient):
         return [x + self.offset if j == 3 else x for j, x in enumerate(self.base)]
 
 
+class PreparedSineOverlay(SineOverlay):
+    """The same with its next command prepared after each reply, as examples/joint_sine_overlay.py does (the
+    application then sends the reply prepared for the message at once and confirms it with ``command``)."""
+
+    next_q: list[float] | None = None
+
+    def command(self, state):
+        q, self.next_q = self.next_q or self._next(state), None
+        return q
+
+    def prepare_command(self):
+        self.next_q = self._next(self.robot_state)
+        return self.next_q
+
+
 def _app(folder: Path, tag: str, prepare: bool = True, client: str = "player") -> ClientApplication:
-    if client == "overlay":
-        return ClientApplication(SineOverlay(), "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=LIM,
+    if client.startswith("overlay"):
+        user = PreparedSineOverlay() if client == "overlay prepared" else SineOverlay()
+        return ClientApplication(user, "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=LIM,
                                  paced_by_replies=True)  # fmt: skip
-    log = ExecutionLog(folder / f"{tag}.csv")
+    if LOG_IN_PROCESS:
+        log: Any = LogObserver(ExecutionLog(folder / f"{tag}.csv"))
+    else:  # as lbr execute: the rows formatted by a child process, the loop hands each message over
+        log = LogProcess(folder / f"{tag}.csv")
+        _WRITERS.append(log)
     player = TrajectoryPlayer(trajectory(ROWS), LIM, period_s=1e-3, settle_cycles=4)
     return ClientApplication(player, "127.0.0.1", 0, bind_host="127.0.0.1", version="1.15", limits=LIM,
-                             observers=[LogObserver(log), SessionFigures()], prepare=prepare, paced_by_replies=True)  # fmt: skip
+                             observers=[log, SessionFigures()], prepare=prepare, paced_by_replies=True)  # fmt: skip
+
+
+def close_writers() -> None:
+    """Wait for the log writer processes of the sessions so far."""
+    while _WRITERS:
+        _WRITERS.pop().close()
 
 
 def scripted_session(app: ClientApplication, version: str = "1.15") -> None:
@@ -86,7 +120,7 @@ def scripted_session(app: ClientApplication, version: str = "1.15") -> None:
 
 
 def record(folder: Path, client: str = "player") -> list[bytes]:
-    """The monitoring datagrams of one scripted session, as the client received them."""
+    """The monitoring datagrams of one scripted session, as the client received them (its log writer closed)."""
     app = _app(folder, "record", client=client).connect()
     got: list[bytes] = []
     receive = app.transport.receive  # type: ignore[union-attr]
@@ -99,6 +133,7 @@ def record(folder: Path, client: str = "player") -> list[bytes]:
 
     app.transport.receive = recording  # type: ignore[union-attr]
     scripted_session(app)
+    close_writers()
     return got
 
 
@@ -145,6 +180,7 @@ def replay(folder: Path, datagrams: list[bytes], prepare: bool, profile: cProfil
     if profile is not None:
         profile.disable()
     reason = app.result.reason.value if app.result is not None else "running"
+    close_writers()
     return cpu * 1e-3 / max(n, 1), n, reason
 
 
@@ -170,19 +206,20 @@ def run(quick: bool = False, profile: bool = False) -> list[tuple[str, float, st
                 prof = cProfile.Profile()
                 replay(folder, datagrams, prepare, prof)
                 pstats.Stats(prof).sort_stats("tottime").print_stats(12)
-        # a user's LBRClient (the sine overlay): its command built in step, no observers — the library's own cycle
-        datagrams = record(folder, "overlay")
-        for gap in (0.0, GAP_S):
-            us = [replay(folder, datagrams, False, gap_s=gap, client="overlay")[0] for _ in range(repeats)]
-            when = f", {GAP_S * 1e3:g} ms sleep before each" if gap else ""
-            rows.append((f"step, a user's LBRClient (sine overlay){when}: CPU per cycle, best of {repeats}",
-                         round(min(us), 2), "µs"))  # fmt: skip
-        prof = cProfile.Profile()
-        n = replay(folder, datagrams, False, prof, client="overlay")[1]
-        calls = sum(v[1] for v in pstats.Stats(prof).stats.values())  # the work, whatever the machine's speed
-        rows.append(
-            ("step, a user's LBRClient (sine overlay): Python function calls per cycle", round(calls / n, 1), "")
-        )
+        # a user's LBRClient (the sine overlay): its command built in step, no observers — the library's own cycle;
+        # then prepared a cycle ahead as the example does
+        for client, tag in (("overlay", "sine overlay"), ("overlay prepared", "sine overlay, prepared a cycle ahead")):
+            datagrams = record(folder, client)
+            for gap in (0.0, GAP_S):
+                us = [replay(folder, datagrams, False, gap_s=gap, client=client)[0]
+                      for _ in range(repeats)]  # fmt: skip
+                when = f", {GAP_S * 1e3:g} ms sleep before each" if gap else ""
+                rows.append((f"step, a user's LBRClient ({tag}){when}: CPU per cycle, best of {repeats}",
+                             round(min(us), 2), "µs"))  # fmt: skip
+            prof = cProfile.Profile()
+            n = replay(folder, datagrams, False, prof, client=client)[1]
+            calls = sum(v[1] for v in pstats.Stats(prof).stats.values())  # the work, whatever the machine's speed
+            rows.append((f"step, a user's LBRClient ({tag}): Python function calls per cycle", round(calls / n, 1), ""))
     return rows
 
 

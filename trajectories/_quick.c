@@ -14,9 +14,45 @@
 #include <math.h>
 #include <string.h>
 
+static int number(PyObject *v, double *out)
+{
+    if (PyFloat_CheckExact(v)) {
+        *out = PyFloat_AS_DOUBLE(v);
+        return 0;
+    }
+    if (!PyFloat_Check(v) && !PyLong_Check(v))
+        return -1;
+    *out = PyFloat_AsDouble(v);
+    if (*out == -1.0 && PyErr_Occurred()) {
+        PyErr_Clear();
+        return -1;
+    }
+    return 0;
+}
+
 /* 7 doubles from a sequence; -1 (no exception set) if it is not 7 numbers */
 static int seven(PyObject *seq, double out[7])
 {
+    if (!PyList_Check(seq) && !PyTuple_Check(seq)) {
+        /* e.g. a protobuf repeated field: its items one by one (no list built from an iteration) */
+        Py_ssize_t n = PySequence_Size(seq);
+        if (n != 7) {
+            PyErr_Clear();
+            return -1;
+        }
+        for (Py_ssize_t i = 0; i < 7; i++) {
+            PyObject *v = PySequence_GetItem(seq, i);
+            if (v == NULL) {
+                PyErr_Clear();
+                return -1;
+            }
+            int bad = number(v, &out[i]);
+            Py_DECREF(v);
+            if (bad)
+                return -1;
+        }
+        return 0;
+    }
     PyObject *fast = PySequence_Fast(seq, "");
     if (fast == NULL) {
         PyErr_Clear();
@@ -28,17 +64,7 @@ static int seven(PyObject *seq, double out[7])
     }
     PyObject **items = PySequence_Fast_ITEMS(fast);
     for (int i = 0; i < 7; i++) {
-        PyObject *v = items[i];
-        if (PyFloat_CheckExact(v)) {
-            out[i] = PyFloat_AS_DOUBLE(v);
-        } else if (PyFloat_Check(v) || PyLong_Check(v)) {
-            out[i] = PyFloat_AsDouble(v);
-            if (out[i] == -1.0 && PyErr_Occurred()) {
-                PyErr_Clear();
-                Py_DECREF(fast);
-                return -1;
-            }
-        } else {
+        if (number(items[i], &out[i])) {
             Py_DECREF(fast);
             return -1;
         }

@@ -121,6 +121,7 @@ SLOW_ALLOWANCE_S = 5e-3
 FROZEN_MESSAGES = 10  # a clock with sub-second resolution unchanged over this many messages is frozen
 JUMP_S = 0.1  # [s] a timestamp further ahead than the messages explain jumped
 _RING = 256
+_EPS = 1e-9  # [s] the inline pre-test of a fast clock errs by this toward the full test (rounding aside)
 
 
 class Supervisor:
@@ -221,15 +222,23 @@ class Supervisor:
         """The windows: faster than the period on either clock, or much slower on both."""
         n = self._n
         if n > 4:  # from the 5th message on
-            # a timestamp standing still is judged as frozen, not as a fast clock
+            # (inline, a test that errs toward the full one in :meth:`_fast`: it is rarely due, and this runs for
+            # every message) a timestamp standing still is judged as frozen, not as a fast clock
+            ring_seq = self._ring_seq
             if not (self._coarse or self._ts0 < 0 or self._frozen):
-                problem = self._fast("timestamps", seq, ts, self._ring_ts, FAST_WINDOW, FAST_RATIO, period)
-                if problem is not None:
-                    return problem
+                k = (n - 1 - min(n - 1, FAST_WINDOW)) % _RING
+                then = self._ring_ts[k]
+                if then > 0 and (ts - then) * 1e-9 < ((seq - ring_seq[k]) & 0xFFFFFFFF) * period * FAST_RATIO + _EPS:
+                    problem = self._fast("timestamps", seq, ts, self._ring_ts, FAST_WINDOW, FAST_RATIO, period)
+                    if problem is not None:
+                        return problem
             if rx is not None:
-                problem = self._fast("messages", seq, rx, self._ring_rx, RX_WINDOW, RX_RATIO, period)
-                if problem is not None:
-                    return problem
+                k = (n - 1 - min(n - 1, RX_WINDOW)) % _RING
+                then = self._ring_rx[k]
+                if then > 0 and (rx - then) * 1e-9 < ((seq - ring_seq[k]) & 0xFFFFFFFF) * period * RX_RATIO + _EPS:
+                    problem = self._fast("messages", seq, rx, self._ring_rx, RX_WINDOW, RX_RATIO, period)
+                    if problem is not None:
+                        return problem
         if n > SLOW_WINDOW and rx is not None and not self._coarse:
             k = (n - 1 - SLOW_WINDOW) % _RING
             then_ts, then_rx = self._ring_ts[k], self._ring_rx[k]

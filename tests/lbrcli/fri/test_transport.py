@@ -148,8 +148,11 @@ def test_warm_is_called_while_busy_waiting_and_never_while_sleeping() -> None:
         out.close()
         assert tr.polled >= len(waits) // 2 and sum(1 for w in waits if w) >= 20  # messages waited for while warming
         gaps = [b - a for a, b in zip(spin, spin[1:])]
-        assert 0.4 * 2 * busy / WARM_EVERY_S <= len(spin) <= 2 * busy / WARM_EVERY_S + 2
-        assert 0.9 * WARM_EVERY_S <= sorted(gaps)[len(gaps) // 2] < 2 * WARM_EVERY_S  # median
+        # (bounds that hold however slowly a busy machine runs the loop: no more often than every WARM_EVERY_S, and
+        # only within the window of the busy-wait)
+        assert 2 <= len(spin) <= 2 * busy / WARM_EVERY_S + 2
+        assert min(gaps) >= 0.9 * WARM_EVERY_S
+        assert spin[-1] - spin[0] <= 2 * busy + 0.05  # (+ one descheduling on a loaded machine)
         tr.expect_period(None)
         n = len(calls)
         assert tr.receive() is None  # sleeping in select: no warming

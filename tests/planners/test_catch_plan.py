@@ -72,7 +72,8 @@ def _fake_planner(monkeypatch, success_by_horizon: dict) -> list:
 
     def plan_variant(r, arm, c, progress):
         planned.append(c.variant.horizon)
-        return _planned(success_by_horizon[c.variant.horizon])
+        v = c.variant
+        return _planned(success_by_horizon[v] if v in success_by_horizon else success_by_horizon[v.horizon])
 
     monkeypatch.setattr(cp, "_arm", lambda r, robot, limits: None)
     monkeypatch.setattr(cp, "_candidates", candidates)
@@ -81,8 +82,20 @@ def _fake_planner(monkeypatch, success_by_horizon: dict) -> list:
     return planned
 
 
+def test_with_a_max_time_the_fallback_is_the_cruising_release_without_the_deadlines_slack(monkeypatch):
+    (fb,) = fallback_variants(3.0)  # with a max_time: longer pumping is too late
+    cruise, rest = swing_variants(3.0)
+    assert fb.cruise and cruise.cruise and fb.deadline(3.0) < cruise.deadline(3.0) and fb not in (cruise, rest)
+    r = SimpleNamespace(max_time=3.0)
+    planned = _fake_planner(monkeypatch, {cruise: 0.75, rest: 0.96, fb: 0.99})
+    assert cp.plan_catch(r, None, None).band.success == 0.96 and len(planned) == 2  # no failure: no fallback
+    planned = _fake_planner(monkeypatch, {cruise: 0.75, rest: 0.86, fb: 0.99})
+    assert cp.plan_catch(r, None, None).band.success == 0.99 and len(planned) == 3
+    _fake_planner(monkeypatch, {cruise: 0.75, rest: 0.86, fb: 0.4})
+    assert cp.plan_catch(r, None, None).band.success == 0.86  # (the better one is kept either way)
+
+
 def test_the_fallback_swing_up_is_planned_only_when_no_other_plan_catches_enough(monkeypatch):
-    assert fallback_variants(3.0) == ()  # with a max_time: longer pumping is too late
     (fb,) = fallback_variants(None)
     assert not fb.cruise and fb.horizon == FALLBACK_HORIZON > max(SWING_HORIZONS)
     short, long = SWING_HORIZONS

@@ -570,7 +570,11 @@ class BallTracker:
                     blob = f.choose(self._whole(frame, self.spec, min_radius_px=f.min_radius()), pred)
                 if blob is not None and not self._within_string(f, blob, pivot_uv):
                     blob = None
-                if blob is not None:
+                if blob is None and not f.confirmed and not f.named and f.round:
+                    # a tentative lock that lost its blob is not coasted on: it may have been a codec's speck whose
+                    # learned area would reject the ball wherever the growing gate meets it — search afresh
+                    blob = self._acquire(frame, t, pivot_uv, index)
+                elif blob is not None:
                     f.accept(blob, t, pred)
                     blob = self._judge(f, blob, t, pivot_uv, index)
                 if self._follower is f and blob is not None:

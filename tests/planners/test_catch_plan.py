@@ -6,7 +6,7 @@ from types import SimpleNamespace
 
 import planners.catch_plan as cp
 from planners.catch_plan import (
-    FALLBACK_HORIZON,
+    FALLBACK_HORIZONS,
     FLIGHT_ALLOWANCE,
     QUICK_TIME,
     SWING_HORIZONS,
@@ -95,17 +95,26 @@ def test_with_a_max_time_the_fallback_is_the_cruising_release_without_the_deadli
     assert cp.plan_catch(r, None, None).band.success == 0.86  # (the better one is kept either way)
 
 
-def test_the_fallback_swing_up_is_planned_only_when_no_other_plan_catches_enough(monkeypatch):
-    (fb,) = fallback_variants(None)
-    assert not fb.cruise and fb.horizon == FALLBACK_HORIZON > max(SWING_HORIZONS)
+def test_the_fallback_swing_ups_are_planned_one_at_a_time_only_while_no_plan_catches_enough(monkeypatch):
+    fbs = fallback_variants(None)
+    assert [fb.horizon for fb in fbs] == list(FALLBACK_HORIZONS) and not any(fb.cruise for fb in fbs)
+    assert len(FALLBACK_HORIZONS) >= 2 and set(FALLBACK_HORIZONS).isdisjoint(SWING_HORIZONS)  # other searches
+    first, second, last = FALLBACK_HORIZONS[0], FALLBACK_HORIZONS[1], FALLBACK_HORIZONS[-1]
     short, long = SWING_HORIZONS
     cruise = QUICK_TIME + 1.25
     r = SimpleNamespace(max_time=None)
-    planned = _fake_planner(monkeypatch, {cruise: 0.9, short: 0.96, long: 0.8, FALLBACK_HORIZON: 1.0})
-    res = cp.plan_catch(r, None, None)
-    assert res.band.success == 0.96 and FALLBACK_HORIZON not in planned  # a plan without a failure: no fallback
-    planned = _fake_planner(monkeypatch, {cruise: 0.9, short: 0.75, long: 0.78, FALLBACK_HORIZON: 1.0})
-    res = cp.plan_catch(r, None, None)
-    assert planned[-1] == FALLBACK_HORIZON and res.band.success == 1.0  # none caught 95 %: the fallback's plan
-    planned = _fake_planner(monkeypatch, {cruise: 0.9, short: 0.75, long: 0.78, FALLBACK_HORIZON: 0.5})
-    assert cp.plan_catch(r, None, None).band.success == 0.9  # (the better one is kept either way)
+
+    def plan(by_horizon: dict) -> tuple[float, list]:
+        planned = _fake_planner(monkeypatch, {cruise: 0.9, short: 0.75, long: 0.78} | by_horizon)
+        return cp.plan_catch(r, None, None).band.success, planned
+
+    success, planned = plan({short: 0.96} | dict.fromkeys(FALLBACK_HORIZONS, 1.0))
+    assert success == 0.96 and not set(FALLBACK_HORIZONS) & set(planned)  # a plan without a failure: no fallback
+    success, planned = plan(dict.fromkeys(FALLBACK_HORIZONS, 1.0))
+    assert planned[-1] == first and success == 1.0  # the first fallback sufficed: no other
+    success, planned = plan(dict.fromkeys(FALLBACK_HORIZONS, 0.5) | {first: 0.93, second: 0.97})
+    assert planned[-2:] == [first, second] and success == 0.97  # the first fell short: the next one
+    success, planned = plan(dict.fromkeys(FALLBACK_HORIZONS, 0.5) | {last: 0.99})
+    assert planned[-len(FALLBACK_HORIZONS) :] == list(FALLBACK_HORIZONS) and success == 0.99  # each in turn
+    success, planned = plan(dict.fromkeys(FALLBACK_HORIZONS, 0.5))
+    assert success == 0.9  # (the better one is kept either way)

@@ -73,6 +73,7 @@ def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repe
         **scenarios.JUDGE6,
         **scenarios.JUDGE7,
         **scenarios.JUDGE8,
+        **scenarios.JUDGE9,
     }[name]
     sc = make(folder / f"{name}_{size[0]}.mp4", size, duration_s)
     kw = dict(sc.track_kwargs)
@@ -118,6 +119,7 @@ def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repe
         "judge6": name in scenarios.JUDGE6,
         "judge7": name in scenarios.JUDGE7,
         "judge8": name in scenarios.JUDGE8,
+        "judge9": name in scenarios.JUDGE9,
         "track_over_decode": tracking / decode,
         "decode_fps": len(sc.truth.t) / decode,
         "track_over_decode_cpu": tracking_cpu / decode_cpu,
@@ -176,6 +178,7 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
             *scenarios.JUDGE6,
             *scenarios.JUDGE7,
             *scenarios.JUDGE8,
+            *scenarios.JUDGE9,
         ]:
             rows.append(_one(name, Path(tmp), size, duration, repeats, True))
         big = (1920, 1080) if quick else (3840, 2160)
@@ -200,7 +203,7 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         if math.isfinite(r["theta_rms_deg"]):
             figures.append((f"{label}: theta RMS", r["theta_rms_deg"], "deg"))
     goal = [r for r in rows if not r["adversarial"] and not r["held_out"]]
-    judged = ("judge2", "judge3", "judge4", "judge5", "judge6", "judge7", "judge8")
+    judged = ("judge2", "judge3", "judge4", "judge5", "judge6", "judge7", "judge8", "judge9")
     held = [r for r in rows if r["held_out"] and not any(r[k] for k in judged)]
     judge2 = [r for r in rows if r["judge2"]]
     judge3 = [r for r in rows if r["judge3"]]
@@ -209,6 +212,7 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
     judge6 = [r for r in rows if r["judge6"]]
     judge7 = [r for r in rows if r["judge7"]]
     judge8 = [r for r in rows if r["judge8"]]
+    judge9 = [r for r in rows if r["judge9"]]
     sets = (
         ("goal videos", goal),
         ("held-out videos", held),
@@ -219,6 +223,7 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
         ("judge 6 videos (a real pendulum, made after the rule for runs at the start and end)", judge6),
         ("judge 7 videos (a real pendulum, made after the rule for a smeared ball)", judge7),
         ("judge 8 videos (a real pendulum, made before the look's fit bound for HEVC)", judge8),
+        ("judge 9 videos (a real pendulum, made after the tentative lock's fresh search)", judge9),
     )
     for tag, sel in sets:
         figures += [

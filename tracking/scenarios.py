@@ -753,6 +753,108 @@ JUDGE8: dict[str, Callable[..., Scenario]] = {
 }
 
 
+# A ninth judge (made after the tentative lock's fresh search, never tuned on): real pendulums on H.264, HEVC and
+# VP9 at low bitrates, released wide; it found the recheck's candidates not cut to the followers (an IndexError)
+JUDGE9: dict[str, Callable[..., Scenario]] = {
+    "h264_65k_pend80_j9": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=201,
+        bitrate_kbps=65.0,
+        amplitude_deg=80.0,
+        period_s=1.15,
+        damping_per_s=0.06,
+        ball_scale=0.8,
+        name="judge 9: real pendulum from 80°, H.264 65 kbit/s, ball 0.8×",
+    ),
+    "h264_45k_pend55_j9": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=202,
+        bitrate_kbps=45.0,
+        amplitude_deg=55.0,
+        period_s=1.25,
+        damping_per_s=0.1,
+        name="judge 9: real pendulum from 55°, H.264 45 kbit/s",
+    ),
+    "hevc_45k_pend75_j9": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=203,
+        bitrate_kbps=45.0,
+        codec="hevc",
+        amplitude_deg=75.0,
+        period_s=1.1,
+        damping_per_s=0.08,
+        ball_scale=0.9,
+        name="judge 9: real pendulum from 75°, HEVC 45 kbit/s, ball 0.9×",
+    ),
+    "vp9_55k_pend80_small_j9": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=204,
+        bitrate_kbps=55.0,
+        codec="vp9",
+        amplitude_deg=80.0,
+        period_s=1.0,
+        damping_per_s=0.05,
+        ball_scale=0.7,
+        name="judge 9: real pendulum from 80°, VP9 55 kbit/s, ball 0.7×",
+    ),
+    "h264_90k_pend85_j9": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=205,
+        bitrate_kbps=90.0,
+        amplitude_deg=85.0,
+        period_s=1.2,
+        damping_per_s=0.04,
+        name="judge 9: real pendulum from 85°, H.264 90 kbit/s",
+    ),
+    "h264_55k_pend45_big_j9": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=206,
+        bitrate_kbps=55.0,
+        amplitude_deg=45.0,
+        period_s=1.3,
+        damping_per_s=0.12,
+        ball_scale=1.3,
+        name="judge 9: real pendulum from 45°, H.264 55 kbit/s, ball 1.3×",
+    ),
+    "h264_75k_pend70_small_j9": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=207,
+        bitrate_kbps=75.0,
+        amplitude_deg=70.0,
+        period_s=1.05,
+        damping_per_s=0.07,
+        ball_scale=0.75,
+        name="judge 9: real pendulum from 70°, H.264 75 kbit/s, ball 0.75×",
+    ),
+    "hevc_60k_pend85_j9": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=208,
+        bitrate_kbps=60.0,
+        codec="hevc",
+        amplitude_deg=85.0,
+        period_s=1.15,
+        damping_per_s=0.05,
+        name="judge 9: real pendulum from 85°, HEVC 60 kbit/s",
+    ),
+}
+
+
 def ball_shown(sc: Scenario, min_share: float = 0.3, min_saturation: int = 60) -> np.ndarray:
     """(n,) bool: the decoded frame shows the ball where it is — at least min_share of its disc in its colour (hue
     band, saturation ≥ min_saturation). A low-bitrate encoder sometimes skips the blocks of a moving ball or

@@ -696,8 +696,9 @@ class BallTracker:
         else:  # a tentative lock: whatever could be the ball instead
             others = self._find_candidates(frame, t, away)[0]
         if others:
+            others = others[: o.max_candidates - 1]  # (followers and their blobs alike: one list per follower)
             self._start_hypotheses(
-                [f] + [_Follower(self.spec, o, b, t) for b in others[: o.max_candidates - 1]],
+                [f] + [_Follower(self.spec, o, b, t) for b in others],
                 [blob] + others,
                 t,
                 index,
@@ -809,6 +810,8 @@ class BallTracker:
         return cands[0]
 
     def _start_hypotheses(self, followers: list[_Follower], blobs: list[Blob], t: float, index: int, pivot_uv) -> None:
+        if len(followers) != len(blobs):
+            raise ValueError(f"{len(followers)} followers for {len(blobs)} candidates")
         self._follower = None
         self._hyp = _Hypotheses(
             followers=followers,

@@ -140,3 +140,23 @@ def test_a_ball_hit_from_rest_loses_at_most_the_frames_at_the_kink():
     uv += np.random.default_rng(6).normal(0.0, 0.5, uv.shape)
     odd = np.flatnonzero(outliers(uv, np.ones(len(uv), bool), PIVOT, FPS))
     assert len(odd) <= 3 and all(abs(k - 18) <= 2 for k in odd), odd  # unsure there, never elsewhere
+
+
+def test_a_codec_scattering_the_centres_more_than_the_spread_bound_still_sees_a_circle():
+    """The distances from the pivot of a low-bitrate codec's centres scatter frame by frame (judge 9's HEVC at
+    45 kbit/s: 1.3 % of the string, 5th to 95th percentile) but not with the angle: still a circle, and the checks
+    are made. A camera 18° off square (an ellipse) or a pivot given 10 px aside vary with the angle: no circle."""
+    from tracking.smoothing import CIRCLE_SPREAD_PX, CIRCLE_SPREAD_SHARE, on_circle
+
+    truth = _swing()
+    found = np.ones(len(truth), bool)
+    noisy = truth + np.random.default_rng(7).normal(0.0, 2.5, truth.shape)
+    r = np.hypot(*(noisy - np.array(PIVOT)).T)
+    lo, mid, hi = np.percentile(r, [5, 50, 95])
+    assert hi - lo > max(CIRCLE_SPREAD_PX, CIRCLE_SPREAD_SHARE * mid)  # wider than the bound on the fitted part
+    assert on_circle(noisy, found, PIVOT)
+    ellipse = np.array(PIVOT) + (noisy - np.array(PIVOT)) * np.array([1.0, 0.95])
+    assert not on_circle(ellipse, found, PIVOT)
+    assert not on_circle(noisy, found, (PIVOT[0] + 10.0, PIVOT[1]))
+    slack = noisy + np.random.default_rng(8).normal(0.0, 15.0, truth.shape)  # a slack string: anywhere inside
+    assert not on_circle(slack, found, PIVOT)

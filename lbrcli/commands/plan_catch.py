@@ -236,7 +236,10 @@ def cup_and_ball(
             low=0.5,
             high=30.0,
             unit="s",
-            help="The ball must enter the cup within this time from rest \\[s] (default: as soon as the robustness band allows).",
+            help=(
+                "The ball must enter the cup within this time from rest \\[s] (default: within 3 s when a plan that "
+                "quick catches --min-success of the band, else as soon as the band allows)."
+            ),
         ),
     ] = None,
     length_tol: Annotated[

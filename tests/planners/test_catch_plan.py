@@ -8,9 +8,14 @@ import planners.catch_plan as cp
 from planners.catch_plan import (
     FALLBACK_HORIZONS,
     FLIGHT_ALLOWANCE,
+    QUICK_GRID,
     QUICK_TIME,
+    REFINED,
     SWING_HORIZONS,
+    QUICK_FALLBACK,
     _rank,
+    _refined,
+    stages,
     fallback_variants,
     swing_variants,
 )
@@ -39,7 +44,7 @@ def _result(caught, ok, success, t_entry, max_time=None):
     nominal = SimpleNamespace(caught=caught, t_entry=t_entry)
     return SimpleNamespace(
         nominal=nominal,
-        request=SimpleNamespace(max_time=max_time),
+        request=SimpleNamespace(max_time=max_time, min_success=0.95),
         check=SimpleNamespace(ok=ok),
         band=SimpleNamespace(success=success),
     )
@@ -55,8 +60,42 @@ def test_the_plan_kept_is_valid_first_then_catches_more_of_the_band_then_sooner(
     assert _rank(_result(True, True, 0.9, 2.0)) > _rank(_result(True, True, 0.9, 5.0))
 
 
-def _planned(success: float, min_success: float = 0.95):
-    res = _result(True, True, success, 5.0)
+def test_without_a_max_time_a_plan_that_meets_the_goals_comes_before_a_slower_one_that_catches_more():
+    quick = _result(True, True, 0.96, QUICK_TIME - 0.5)  # within QUICK_TIME and enough of the band
+    slow = _result(True, True, 1.0, QUICK_TIME + 1.5)
+    assert _rank(quick) > _rank(slow)
+    assert _rank(_result(True, True, 0.94, 1.5)) < _rank(slow)  # too little of the band: the share decides
+    assert _rank(_result(True, True, 0.99, 1.5)) > _rank(quick)  # among quick plans the share still decides
+    assert _rank(_result(False, True, 1.0, 1.5)) < _rank(slow)  # the nominal ball missed: not valid, not quick
+    # with a max_time the time asked is the deadline and the share decides, as before
+    assert _rank(_result(True, True, 0.96, 1.5, 3.0)) < _rank(_result(True, True, 1.0, 2.5, 3.0))
+
+
+def _cand(grid: float):
+    return SimpleNamespace(variant=None, grid=grid)
+
+
+def test_without_a_max_time_the_quick_variants_come_first_one_at_a_time_then_the_rest_release():
+    (first, k1), (second, k2), (main, k3), *fallbacks = stages(None)
+    assert (k1, k2, k3) == ("quick", "quick", "main") and all(k == "fallback" for _, k in fallbacks)
+    (a,), (b,) = first, second
+    assert a.cruise and b == QUICK_FALLBACK and a.quick == b.quick == QUICK_TIME and (a.slack, b.slack) == (0.25, 0.0)
+    assert not any(v.cruise for v in main) and {v.horizon for v in main} == set(SWING_HORIZONS)
+    assert [v.horizon for (v,), _ in fallbacks] == list(FALLBACK_HORIZONS)
+    # with a max_time: both release kinds together, then the fallback
+    (together, kind), *rest = stages(3.0)
+    assert kind == "main" and {v.cruise for v in together} == {True, False} and [k for _, k in rest] == ["fallback"]
+
+
+def test_a_quick_variant_is_refined_unless_its_grid_is_poor_the_others_the_best_by_grid():
+    good, poor = _cand(0.73), _cand(QUICK_GRID - 0.1)  # 0.3 m: a grid of 0.73 refined to 95 % of the band
+    assert _refined("quick", [good]) == [good] and _refined("quick", [poor]) == []
+    by_grid = [_cand(1.09), _cand(1.06), _cand(0.98)]
+    assert _refined("main", by_grid) == by_grid[:REFINED] == _refined("fallback", by_grid)
+
+
+def _planned(success: float, min_success: float = 0.95, t_entry: float = 5.0):
+    res = _result(True, True, success, t_entry)
     res.notes = ()
     res.failure = lambda: None if success >= min_success else f"catches {100 * success:.0f} % of the band"
     return res
@@ -68,12 +107,13 @@ def _fake_planner(monkeypatch, success_by_horizon: dict) -> list:
     planned: list = []
 
     def candidates(r, arm, notes, variants):
-        return [SimpleNamespace(variant=v) for v in variants]
+        return [SimpleNamespace(variant=v, grid=1.0) for v in variants]
 
     def plan_variant(r, arm, c, progress):
         planned.append(c.variant.horizon)
         v = c.variant
-        return _planned(success_by_horizon[v] if v in success_by_horizon else success_by_horizon[v.horizon])
+        got = success_by_horizon[v] if v in success_by_horizon else success_by_horizon[v.horizon]
+        return _planned(*got) if isinstance(got, tuple) else _planned(got)
 
     monkeypatch.setattr(cp, "_arm", lambda r, robot, limits: None)
     monkeypatch.setattr(cp, "_candidates", candidates)
@@ -118,3 +158,19 @@ def test_the_fallback_swing_ups_are_planned_one_at_a_time_only_while_no_plan_cat
     assert planned[-len(FALLBACK_HORIZONS) :] == list(FALLBACK_HORIZONS) and success == 0.99  # each in turn
     success, planned = plan(dict.fromkeys(FALLBACK_HORIZONS, 0.5))
     assert success == 0.9  # (the better one is kept either way)
+
+
+def test_without_a_max_time_a_quick_plan_that_meets_the_goals_ends_the_search(monkeypatch):
+    short, long = SWING_HORIZONS
+    cruise = QUICK_TIME + 1.25
+    quick, fb = stages(None)[0][0][0], stages(None)[1][0][0]  # the two quick stages' variants
+    r = SimpleNamespace(max_time=None, min_success=0.95)
+    planned = _fake_planner(monkeypatch, {quick: (0.97, 0.95, 1.5), fb: 1.0, short: 1.0, long: 1.0})
+    res = cp.plan_catch(r, None, None)
+    assert planned == [cruise] and res.band.success == 0.97  # the first quick plan met the goals: nothing else
+    planned = _fake_planner(monkeypatch, {quick: 0.9, fb: (1.0, 0.95, 1.6), short: 1.0, long: 1.0})
+    res = cp.plan_catch(r, None, None)
+    assert planned == [cruise, cruise] and res.band.success == 1.0  # the second one did
+    planned = _fake_planner(monkeypatch, {quick: (0.97, 0.95, QUICK_TIME + 0.2), fb: 0.5, short: 1.0, long: 1.0})
+    res = cp.plan_catch(r, None, None)
+    assert planned[:3] == [cruise, cruise, short] and res.band.success == 1.0  # too late for the goals: the rest

@@ -660,8 +660,8 @@ def stages(max_time: float | None) -> tuple[tuple[tuple[SwingVariant, ...], str]
 def _refined(kind: str, candidates: list) -> list:
     """The candidates of a stage (best catch grid first) whose catch move is refined: the REFINED best, those after
     the first only when their grid scores at least QUICK_GRID; in a quick stage the candidate only then. No grid
-    under it has refined to a plan that catches enough of the band (with --max-time 3: 0.37 to 44 % and 0.27 to none
-    at 0.35 m, 0.29 to 44 % at 0.25 m, -0.21 to none at 0.16 m; the most, 0.30 to 63 % at 0.27 m)."""
+    under it has refined to a plan that catches enough of the band (with a max_time of 3 s: 0.37 to 44 % and 0.27
+    to none at 0.35 m, 0.29 to 44 % at 0.25 m, -0.21 to none at 0.16 m; the most, 0.30 to 63 % at 0.27 m)."""
     if kind == "quick":
         return [c for c in candidates if c.grid >= QUICK_GRID]
     top = list(candidates[:REFINED])

@@ -159,7 +159,7 @@ def _free_swing(t_r: np.ndarray, y: np.ndarray, a: np.ndarray, dt: float, t0: fl
     if len(ext) < 2:
         raise IdentificationError(f"the rod stopped swinging within {len(ext)} half-periods of the push (swing "
                                   f"{math.degrees(swing):.1f}°): too much friction in its bearing, or a push too weak")  # fmt: skip
-    cross = _crossings(tf, yf, centre, ext[-1][0])
+    cross = _crossings(tf, yf, centre, ext[-1][0], floor)
     if len(cross) < 2:
         raise IdentificationError("the rod's free swing crossed its equilibrium less than twice: push too weak")
     period = float(np.mean(np.diff(cross[::2])) if len(cross) >= 3 else 2 * np.mean(np.diff(cross)))
@@ -260,9 +260,17 @@ def _scan(theta: np.ndarray, taus: np.ndarray, t_r: np.ndarray, y: np.ndarray, g
     return best
 
 
-def _crossings(t: np.ndarray, y: np.ndarray, centre: float, until: float) -> np.ndarray:
-    """Times [s] where the swing crosses ``centre`` (linear interpolation between readings) up to ``until``."""
+def _crossings(t: np.ndarray, y: np.ndarray, centre: float, until: float, floor: float) -> np.ndarray:
+    """Times [s] where the swing crosses ``centre`` up to ``until``, each crossing once: where the readings pass from
+    beyond ``floor`` [rad] on one side to beyond it on the other (the noise of a slow crossing flips the sign about
+    the centre several times: the midpoint of the first and last flip, each interpolated linearly)."""
     z = y - centre
-    i = np.flatnonzero((z[:-1] < 0) != (z[1:] < 0))
-    i = i[t[i] <= until]
-    return t[i] - z[i] * (t[i + 1] - t[i]) / (z[i + 1] - z[i])
+    far = np.flatnonzero(np.abs(z) > floor)
+    out = []
+    for f in np.flatnonzero((z[far[1:]] > 0) != (z[far[:-1]] > 0)):
+        i0 = far[f]
+        flips = i0 + np.flatnonzero((z[i0 : far[f + 1]] < 0) != (z[i0 + 1 : far[f + 1] + 1] < 0))
+        tc = t[flips] - z[flips] * (t[flips + 1] - t[flips]) / (z[flips + 1] - z[flips])
+        out.append(0.5 * (tc[0] + tc[-1]))
+    cross = np.array(out)
+    return cross[cross <= until]

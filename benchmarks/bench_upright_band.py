@@ -822,6 +822,7 @@ def main(quick: bool = False, parts: tuple[str, ...] = PARTS, processes: int = 2
         for part in (p for p in PARTS if p in parts):
             if part == "fast":
                 result.update(fast_part(pool, quick))
+                result.pop("fast_rerun", None)  # (a rerun of the grid kept beside an older full part: now replaced)
             elif part == "off":
                 if quick:
                     continue

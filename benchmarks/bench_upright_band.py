@@ -531,9 +531,12 @@ def _fast_section(result: dict, head: list[str]) -> list[str]:
         a, x = settled[k], travel[k]
         lines.append(f"| {float(k):.0%} | {'—' if a is None else f'{a[0]:.2f} / {a[1]:.2f}'} | "
                      f"{'—' if x is None else f'{x[0]:.3f} / {x[1]:.3f}'} |")  # fmt: skip
-    lines += ["", "Cases that did not count (a fall, no hold, or off the rail):", "",
-              "| rod × | tip [kg] | friction | delay [ms] | actuation [cycles] | seed | falls | verdict |",
-              "|---:|---:|---:|---:|---:|---:|---:|---|"]  # fmt: skip
+    if not result["fast_failures"]:
+        lines += ["", "Every case counted (none fell, missed its hold or left the rail)."]
+    else:
+        lines += ["", "Cases that did not count (a fall, no hold, or off the rail):", "",
+                  "| rod × | tip [kg] | friction | delay [ms] | actuation [cycles] | seed | falls | verdict |",
+                  "|---:|---:|---:|---:|---:|---:|---:|---|"]  # fmt: skip
     lines += [f"| {r['scale']:g} | {r['tip_kg']:g} | {r['friction']:.0%} | {r['delay_ms']:g} | {r['actuation_cycles']} | "
               f"{r['seed']} | {r['falls']} | {r['verdict']} |" for r in result["fast_failures"]]  # fmt: skip
     lines += ["", "The travel floor of a 10° knock: the least largest excursion [m] any controller within the rail's bounds "

@@ -27,7 +27,8 @@ own speed-dependent bounds: why the rail (``lbr control upright``'s default ``--
 longer than ±0.3 m.
 
 FRI simulator (``lbr control upright --sim-lockstep``, the real arm model, the module's serial lines on a pty): the
-nominal rod and the rod 20 % short and long with friction and noise, 60 s hold and the push.
+nominal rod and the rod 20 % short and long with friction and noise, 10 ms of delay, and those rods again 15 ms
+(+ 3 ms of jitter) and 5 ms (+ 8 ms) late; 60 s hold and the push.
 
 ``python benchmarks/bench_upright_band.py [--quick] [--parts fast,off,corner,fri,judge] [--processes N]`` writes
 benchmarks/results/upright_band.json and benchmarks/results/upright_band.md (the docs' page) after each part it runs
@@ -247,18 +248,20 @@ def corner_case(args: tuple) -> dict:
                 swing_up_s=s.swing_up_s, verdict=s.verdict or s.error)  # fmt: skip
 
 
-def fri_case(sim_scale: float, friction: float, noise: int) -> dict:
-    """``lbr control upright --sim-lockstep`` with the simulated rod ``sim_scale`` × the default."""
+def fri_case(sim_scale: float, friction: float, noise: int, delay_ms: float = 10.0, jitter_ms: float = 0.0) -> dict:
+    """``lbr control upright --sim-lockstep`` with the simulated rod ``sim_scale`` × the default, the module's lines
+    ``delay_ms`` + up to ``jitter_ms`` [ms] late."""
     with tempfile.TemporaryDirectory() as tmp:
         log = Path(tmp) / "up.csv"
         cmd = [sys.executable, "-m", "lbrcli", "control", "upright", "--sim-lockstep", "--hold", str(HOLD_S),
                "--sim-rod-length", f"{NOMINAL_ROD * sim_scale:g}", "--sim-friction", str(friction), "--sim-noise",
-               str(noise), "--sim-delay", "10", "--push", f"{PUSH_DEG:g}deg@40", "--log", str(log), "--json"]  # fmt: skip
+               str(noise), "--sim-delay", f"{delay_ms:g}", "--sim-jitter", f"{jitter_ms:g}", "--push", f"{PUSH_DEG:g}deg@40", "--log", str(log), "--json"]  # fmt: skip
         t0 = time.perf_counter()
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT)
         wall = time.perf_counter() - t0
         fig = json.loads(p.stdout) if p.stdout.strip().startswith("{") else {}
-        out = dict(sim_scale=sim_scale, friction=friction, noise=noise, exit_code=p.returncode, wall_s=round(wall, 1),
+        out = dict(sim_scale=sim_scale, friction=friction, noise=noise, delay_ms=delay_ms, jitter_ms=jitter_ms,
+                   exit_code=p.returncode, wall_s=round(wall, 1),
                    falls=fig.get("falls"), swing_up_s=fig.get("swing_up_s"),
                    longest_balance_s=fig.get("longest_balance_s"), verdict=fig.get("verdict"),
                    outcome=fig.get("outcome"), reason=fig.get("reason"), detail=fig.get("detail"),
@@ -658,11 +661,12 @@ def _judge_section(result: dict, head: list[str]) -> list[str]:
 
 
 def _fri_section(result: dict, head: list[str]) -> list[str]:
-    lines = ["## The FRI simulator (`lbr control upright --sim-lockstep`, 10 ms delay)", "", *head,
-              "| rod × | friction | noise [counts] | exit | falls | swing-up [s] | velocity / limit | acceleration / limit |",
-              "|---:|---:|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
+    lines = ["## The FRI simulator (`lbr control upright --sim-lockstep`)", "", *head,
+              "| rod × | friction | noise [counts] | delay + jitter [ms] | exit | falls | swing-up [s] | velocity / limit | "
+              "acceleration / limit |", "|---:|---:|---:|---|---:|---:|---:|---:|---:|"]  # fmt: skip
     for r in result["fri"]:
-        lines.append(f"| {r['sim_scale']:g} | {r['friction']:.0%} | {r['noise']} | {r['exit_code']} | {r['falls']} | "
+        lines.append(f"| {r['sim_scale']:g} | {r['friction']:.0%} | {r['noise']} | "
+                     f"{r.get('delay_ms', 10.0):g} + {r.get('jitter_ms', 0.0):g} | {r['exit_code']} | {r['falls']} | "
                      f"{r['swing_up_s'] if r['swing_up_s'] is None else round(r['swing_up_s'], 2)} | "
                      f"{r.get('max_velocity_share', math.nan):.2f} | {r.get('max_acceleration_share', math.nan):.2f} |")  # fmt: skip
     return lines
@@ -841,7 +845,9 @@ def main(quick: bool = False, parts: tuple[str, ...] = PARTS, processes: int = 2
             else:
                 if quick:
                     continue
-                result["fri"] = [fri_case(1.0, 0.0, 0), fri_case(0.8, 0.05, 2), fri_case(1.2, 0.05, 2)]
+                result["fri"] = [fri_case(1.0, 0.0, 0), fri_case(0.8, 0.05, 2), fri_case(1.2, 0.05, 2),
+                                 fri_case(0.8, 0.05, 2, 15.0, 3.0), fri_case(1.2, 0.05, 2, 15.0, 3.0),
+                                 fri_case(1.2, 0.05, 2, 5.0, 8.0)]  # fmt: skip
             result["measured"][part] = _stamp()
             result["date"] = time.strftime("%Y-%m-%d")
             if not quick:

@@ -23,13 +23,15 @@ from planners.rail import Rail
 from trajectories.limits import JointLimits
 
 from lbrcli.fri import LBRClient, LBRState, OnlineMove, Phase, StopSession
-from lbrcli.fri.moves import extrapolated
+from lbrcli.fri.moves import extrapolated, fade_factor
 from lbrcli.fri.outcome import cost_figures_us
 
 LOG_COLUMNS = ("mode", "est_phi", "est_omega", "cart_x", "cart_v", "cart_a")  # -, [rad], [rad/s], [m], [m/s], [m/s²]
 # the log's mode: −1 before the controller runs (waiting, identifying), then the controller's (0 swing-up,
 # 1 balance, 2 park, 3 lowering)
-_FADE = 0.98  # per cycle: how fast commands return onto the rail after the controller extrapolated them
+_FADE = 0.98  # per cycle: the fastest the commands return onto the rail after the controller extrapolated them …
+_FADE_JERK = 0.07  # … and the share of each joint's jerk limit that return may use (the rail's bounds keep the
+# cart's own commands within 0.9 of it)
 _PHASES = {"wait": Phase.WAIT, "identify": Phase.MOVE, "fit": Phase.WAIT, "swing": Phase.TRAJECTORY,
            "balance": Phase.TRAJECTORY, "lower": Phase.SETTLE, "park": Phase.SETTLE, "done": Phase.SETTLE}  # fmt: skip
 
@@ -52,6 +54,7 @@ class UprightClient(LBRClient):
         self._last2: Sequence[float] | None = None  # the command before _last
         self._off: list[float] | None = None  # [rad] commands − rail after an extrapolation (fading), and …
         self._off_prev: list[float] = []  # … one cycle earlier
+        self._fade = _FADE  # the fade's factor per cycle (jerk-limited: :func:`~lbrcli.fri.moves.fade_factor`)
         self._reading: Any = None
         self._period = 0.0
         self.cart: Cart | None = None
@@ -141,11 +144,13 @@ class UprightClient(LBRClient):
         before = self.rail.joints_list(cart.x - cart.v * dt)  # type: ignore[union-attr]
         self._off = [a - b for a, b in zip(q, on_rail)]
         self._off_prev = [a - b for a, b in zip(self._last2, before)]
+        jerk = [_FADE_JERK * j for j in self.limits.jerk]
+        self._fade = fade_factor(self._off, self._off_prev, jerk, dt, _FADE)
 
     def _offset(self, q: Sequence[float]) -> tuple[float, ...]:
-        """``q`` plus the off-rail offset of an extrapolation, decaying with a double pole at ``_FADE`` per cycle."""
-        off, prev = self._off, self._off_prev
-        nxt = [2.0 * _FADE * a - _FADE * _FADE * b for a, b in zip(off, prev)]  # type: ignore[arg-type]
+        """``q`` plus the off-rail offset of an extrapolation, decaying with a double pole at ``_fade`` per cycle."""
+        off, prev, f = self._off, self._off_prev, self._fade
+        nxt = [2.0 * f * a - f * f * b for a, b in zip(off, prev)]  # type: ignore[arg-type]
         self._off_prev, self._off = off, nxt  # type: ignore[assignment]
         if max(abs(v) for v in nxt) < 1e-15 and max(abs(v) for v in off) < 1e-15:  # type: ignore[arg-type]
             self._off = None

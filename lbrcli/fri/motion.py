@@ -89,15 +89,13 @@ class ExecutedMotion:
         self.rejoin_cycles = 0  # commands sent with a rejoin offset
         # the executed history minus the client's own commands, newest first (None: none), and the next one's
         self._d1: tuple | None = None
-        self._d2: tuple | None = None
-        self._d3: tuple | None = None
+        self._d2 = self._d3 = self._d1
         self._pend: tuple | None = None
         self._replan: bool | tuple = False  # a clamp to re-plan the offset from (a tuple: shift its plan by it)
         self._gap: tuple | None = None  # (our last two commands) before the gap just extrapolated
         self._jerk_left = 0  # commands left that are held to the jerk limit whatever the client asked
         self._c1: tuple | None = None  # the client's last three commands (before any offset), newest first
-        self._c2: tuple | None = None
-        self._c3: tuple | None = None
+        self._c2 = self._c3 = self._c1
         self._c_run = 0  # of those, how many are one period apart (none across a gap)
         self._gap_path: tuple | None = None  # (those two, the periods bridged) at a gap, until the client's next
 
@@ -299,6 +297,8 @@ class ExecutedMotion:
                 return None, (f"replies lost: the commands the controller bridged left the motion {far:.4f} rad off "
                               f"the client's path (more than {REJOIN_MAX:g} rad)")  # fmt: skip
             q = tuple(x + e for x, e in zip(q, off))
+            if self.rejoin.done:  # its last sample: held to the jerk limit, with the two after it
+                self._jerk_left = max(self._jerk_left, 3)
         forced = not jerk and (self._jerk_left > 0 or not self.rejoin.done or self.coasting)
         # (jerk: at least the client's own; a limit path + offset cannot keep would bend it against the offset's plan)
         floor = path_jerk(raw, *hist, self.period_s) if hist is not None and forced and not self.coasting else None

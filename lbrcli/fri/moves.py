@@ -215,6 +215,28 @@ def extrapolated(last: Sequence[float], before: Sequence[float], n: int, period_
     return q, tuple(a - v * period_s for a, v in zip(q, vel)), vel
 
 
+def fade_factor(off: Sequence[float], off_prev: Sequence[float], jerk: Sequence[float], period_s: float,
+                fastest: float) -> float:  # fmt: skip
+    """The per-period factor F (≥ ``fastest``) of a double-pole fade o[k+1] = 2F·o[k] − F²·o[k−1] from the offsets
+    ``off``, ``off_prev`` [rad] (this period, the one before) whose third difference stays within ``jerk`` [rad/s³]
+    per joint. The fade is (a + b·k)·Fᵏ with a = off, b = off − F·off_prev; with λ = −ln F its third difference is
+    at most λ³·|a| + (3 + 1/e)·λ²·|b| per period³ — each term is given half the budget."""
+    lam = -math.log(fastest)  # [1/period]
+    for _ in range(8):  # (b grows as λ shrinks: until no joint lowers λ further)
+        low = lam
+        for a, p, j in zip(off, off_prev, jerk):
+            c = 0.5 * j * period_s**3  # [rad] per period³: half the budget
+            if a != 0.0:
+                low = min(low, (c / abs(a)) ** (1.0 / 3.0))
+            b = abs(a - math.exp(-lam) * p)
+            if b > 0.0:
+                low = min(low, math.sqrt(c / (3.3679 * b)))
+        if low >= lam * (1.0 - 1e-9):
+            break
+        lam = low
+    return math.exp(-lam)
+
+
 def rejoin(
     limits: JointLimits,
     period_s: float,

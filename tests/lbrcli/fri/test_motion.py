@@ -250,3 +250,40 @@ def test_a_client_that_replans_from_the_executed_motion_gets_no_offset_of_the_co
     assert m.extrapolated_cycles == len(gaps) and m.rejoin_cycles == 0 and m.rejoin.done
     assert v <= 1 + 1e-9 and a <= 1 + 1e-9 and j <= 1 + 1e-6, (v, a, j)
     assert max(clamps) < 1e-9, max(clamps)
+
+
+@pytest.mark.parametrize("gap", [5, 30])
+def test_the_offset_back_onto_the_path_after_a_gap_ends_within_the_jerk_limit(gap):
+    """A client (not jerk-limited itself) whose path uses 0.9 of the jerk limit — a wave on every joint — loses
+    ``gap`` messages in a row; the controller extrapolates. The core joins its path through the gap and brings the
+    offset to zero: every step it sends, the offset's last ones and the first after it included, stays within the
+    velocity, acceleration and jerk limits of what the controller executed (the offset's end once left the jerk
+    check while the path's own jerk filled the limit: 1.48 × in the upright session)."""
+    lim, dt = default_limits(), 1e-3
+    m = ExecutedMotion(lim, dt, 1e9, 1e9, hold_cycles=1, q=(0.0,) * 7)
+    w = 2 * np.pi * 8.0  # [rad/s]
+    # (1 − cos wt)²/4 starts at rest; its jerk peaks at 1.5·w³, its acceleration at w² (per unit amplitude)
+    amp = 0.9 * lim.jerk / (1.5 * w**3) * np.array([1.0, -1.0, 1.0, -1.0, 1.0, -1.0, 1.0])  # [rad]
+    assert np.all(np.abs(amp) * w**2 < 0.5 * lim.acceleration)
+    path = lambda k: tuple(amp * (1 - np.cos(w * k * dt)) ** 2 / 4)  # noqa: E731
+    exe, ours, rejoined = [np.array(m.prev)] * 3, [True] * 3, 0
+    for k in range(1500):
+        if k == 400:  # the controller's messages are lost: it extrapolates our last commands
+            m.extrapolate(gap)
+            for _ in range(gap):
+                exe.append(2 * exe[-1] - exe[-2])
+                ours.append(False)
+            continue
+        if 400 <= k < 400 + gap:
+            continue
+        want = path(k)
+        cmd, _, _, why = m.next_command(want, ACTIVE, POSITION, want, None, None, False, False)
+        assert why is None, why
+        m.sent(tuple(cmd), ACTIVE)
+        rejoined = max(rejoined, m.rejoin_cycles)
+        exe.append(np.array(cmd))
+        ours.append(True)
+    v, a, j = _our_ratios(np.array(exe), np.array(ours), dt, lim)
+    assert rejoined > 0 and m.rejoin.done
+    assert v <= 1 + 1e-9 and a <= 1 + 1e-9 and j <= 1 + 1e-6, (v, a, j)
+    assert np.abs(exe[-1] - np.array(path(1499))).max() < 1e-12  # back on the client's path

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lbrcli.fri.moves import OnlineMove, ShapedMove
+from lbrcli.fri.moves import OnlineMove, ShapedMove, fade_factor
 from planners.pendulum import natural_period
 from planners.shapers import make_shaper
 from planners.sway_judge import judge_sway
@@ -84,3 +84,27 @@ def test_a_shaped_move_of_nothing_takes_no_time(robot):
     move = ShapedMove(LIM, DT, 0.2, shaper.amplitudes, shaper.times, robot=robot)
     assert move.start(HOME, HOME) == 0.0  # not the shaper's second: nothing swings
     assert move.next() == tuple(HOME) and move.done
+
+
+def test_a_fade_back_onto_the_rail_keeps_its_jerk_budget_and_is_as_fast_as_allowed_when_small():
+    """The double-pole fade of an offset the controller's extrapolation left (1 µrad to 10 mrad, with a step of up
+    to 1 mrad per period between its last two values): its third difference, run to the end, stays within the
+    budget on every joint; a tiny offset fades at the fastest rate."""
+    lim, dt = default_limits(), 1e-3
+    budget = 0.07 * lim.jerk  # [rad/s³]
+    rng = np.random.default_rng(3)
+    slow = 0
+    for _ in range(120):
+        off = rng.normal(0.0, 10 ** rng.uniform(-6, -2), 7)
+        prev = off - rng.normal(0.0, 10 ** rng.uniform(-7, -3), 7)
+        f = fade_factor(off, prev, budget, dt, 0.98)
+        assert 0.98 <= f < 1.0
+        slow += f > 0.98
+        o = [prev, off]
+        for _ in range(int(30 / (1 - f))):
+            o.append(2 * f * o[-1] - f * f * o[-2])
+        third = np.abs(np.diff(np.array(o), 3, axis=0)).max(axis=0) / dt**3
+        assert np.all(third <= budget), (third / budget).max()
+        assert np.abs(o[-1]).max() < 1e-3 * np.abs(o[:2]).max() + 1e-12  # it does fade
+    assert slow > 40  # (the budget is what sets the rate for the larger offsets)
+    assert fade_factor([1e-9] * 7, [1e-9] * 7, budget, dt, 0.98) == 0.98

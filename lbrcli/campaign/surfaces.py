@@ -45,12 +45,13 @@ class Surface:
     around: Callable[[Run], Any] | None = None
     log_extra: Callable[[LBRClient], tuple[tuple[str, ...], Callable | None]] | None = None
     own: list[Case] = field(default_factory=list)  # surface-specific cases
+    jerk_judged: bool = True  # (Case.jerk_judged)
 
 
 def _case(s: Surface, name: str, category: str, script: list[Cycle], ends: tuple, **kw: Any) -> Case:
     expect = tuple(e for e in ends if e != NORMAL) + (s.ends if NORMAL in ends else ())
     base = dict(client=s.client, expect=expect, surface=s.name, inputs=s.inputs, on_cycle=s.on_cycle,
-                around=s.around, log_extra=s.log_extra, q_start=Q0)  # fmt: skip
+                around=s.around, log_extra=s.log_extra, q_start=Q0, jerk_judged=s.jerk_judged)  # fmt: skip
     base.update(kw)
     return Case(f"{s.name}: {name}", category, script, **base)
 
@@ -528,7 +529,7 @@ class _Naive(LBRClient):
 
 def user_surface() -> Surface:
     ends = (EndReason.FINISHED,)
-    s = Surface("user", lambda: _Naive(0.2, 1.0, 1500), 2500, 600, ends)
+    s = Surface("user", lambda: _Naive(0.2, 1.0, 1500), 2500, 600, ends, jerk_judged=False)
     s.own = [
         _case(s, name, "user clients", preamble() + active(2500), e, client=make)
         for name, make, e in [

@@ -69,6 +69,8 @@ class Case:
     log: bool = True
     log_extra: Callable[[LBRClient], tuple[tuple[str, ...], Callable | None]] | None = None  # (names, values(state))
     version: str = "1.15"
+    jerk_judged: bool = True  # its commands must keep the jerk limit too (not a user's own client: the core holds
+    # what it asks for to the velocity and acceleration limits, not to the jerk limit)
 
 
 @dataclass(frozen=True)
@@ -90,10 +92,12 @@ class CaseResult:
     log_readable: bool
     log_rows: int
     expected: bool
+    jerk_judged: bool = True  # the case's jerk ratio counts (Case.jerk_judged)
 
     @property
     def within_limits(self) -> bool:
-        return self.velocity_ratio <= 1.0 + 1e-9 and self.acceleration_ratio <= 1.0 + 1e-9
+        return (self.velocity_ratio <= 1.0 + 1e-9 and self.acceleration_ratio <= 1.0 + 1e-9
+                and (not self.jerk_judged or self.jerk_ratio <= 1.0 + 1e-6))  # fmt: skip
 
     @property
     def ok(self) -> bool:
@@ -180,7 +184,7 @@ def run_case(case: Case, folder: Path | None = None) -> CaseResult:
     return CaseResult(case.name, case.category, case.surface, res.outcome.value if res else "traceback",
                       res.reason.value if res else "-", res.detail if res else "", v, a, j, end_v, non_braking,
                       effort_step, res.clamped_cycles if res else 0, error, readable, rows,
-                      res is not None and res.reason in case.expect)  # fmt: skip
+                      res is not None and res.reason in case.expect, case.jerk_judged)  # fmt: skip
 
 
 def summarize(results: Sequence[CaseResult]) -> dict[str, dict[str, Any]]:

@@ -1,5 +1,6 @@
 """The fault campaign (lbrcli.campaign): every CSV-player case and a sample of every other surface ends as expected,
-no command beyond the velocity or the acceleration limit relative to what the robot executed, every stop the client
+no command beyond the velocity, acceleration or jerk limit relative to what the robot executed (the jerk of a user's
+own client apart), every stop the client
 initiates a braking stop (efforts ramped out), no traceback, every log readable by the project's reader. The whole
 campaign (≥ 250 cases) is `benchmarks/bench_faults.py`."""
 
@@ -22,6 +23,7 @@ PICK = {
     "serve: 2 replies lost",
     "damp: sensor reads 0 (the ball hangs still for it)",
     "upright: encoder reversed sign",
+    "upright: loss 30",
     "torque: SIGTERM",
     "torque: torque beyond its bound",
     "wrench: loss 5",
@@ -49,5 +51,7 @@ def test_case(case, tmp_path):
     assert r.expected, f"{r.outcome} / {r.reason}: {r.detail}"
     assert r.velocity_ratio <= 1.0 + 1e-9, r
     assert r.acceleration_ratio <= 1.0 + 1e-9, r
+    assert r.jerk_ratio <= 1.0 + 1e-6 or not case.jerk_judged, r
+    assert r.within_limits, r
     assert not r.non_braking_stop, r
     assert r.log_readable, r

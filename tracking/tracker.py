@@ -108,6 +108,10 @@ class TrackerOptions:
     recheck_s: float = 0.5  # [s] ... look this often for other candidates and keep the one moving like a pendulum
     plumb_deg: float = 15.0  # a new lock at rest is confirmed only within this of the pivot's vertical (a hanging ball)
     rest_confirm_s: float = 0.25  # [s] ... once followed this long (a codec's ghost of the ball stays a few frames)
+    regain_missed_frames: int = 2  # a confirmed lock that finds a blob after missing this many frames or more ...
+    regain_radii: float = (
+        3.0  # ... this many radii off its prediction (and more, see below) is tentative until confirmed again
+    )
     static_time_constant_s: float = 1.0  # [s] of the map of static objects in the ball's colour (tracking.static_map)
 
 
@@ -391,6 +395,15 @@ class _Follower:
                 return b
         return None
 
+    def restart(self, blob: Blob, t: float) -> None:
+        """Tentative again from this fix (what it learned of the ball is kept): confirmed anew as a new lock is."""
+        self.fixes = [_Fix(t, blob.u, blob.v)]  # (no velocity across the gap: the jump would be taken for one)
+        self.confirmed = False
+        self.pending = []
+        self.hits = 1
+        self.origin, self.origin_t = (blob.u, blob.v), t
+        self.recent.clear()
+
     def accept(self, blob: Blob, t: float, pred: Prediction | None = None) -> None:
         """Take the blob as the ball at time t [s]; its area and saturation are learned only while it moves
         slowly (a motion-blurred streak is larger and paler than the ball)."""
@@ -575,7 +588,10 @@ class BallTracker:
                     # learned area would reject the ball wherever the growing gate meets it — search afresh
                     blob = self._acquire(frame, t, pivot_uv, index)
                 elif blob is not None:
+                    regained = self._regained_far(f, blob, t, pred, index)
                     f.accept(blob, t, pred)
+                    if regained:  # a codec's ghost of the ball's past place can lie where a runaway prediction points
+                        f.restart(blob, t)
                     blob = self._judge(f, blob, t, pivot_uv, index)
                 if self._follower is f and blob is not None:
                     blob = self._watch_rest(frame, f, blob, t, pivot_uv, index)
@@ -635,6 +651,19 @@ class BallTracker:
         if f.string_misses >= 3:
             self._follower = None
         return False
+
+    def _regained_far(self, f: _Follower, blob: Blob, t: float, pred: Prediction, index: int) -> bool:
+        """A confirmed lock (not named by the user) that missed ``regain_missed_frames`` or more frames and finds a blob
+        off its prediction by more than ``regain_radii`` radii (at least 3 px each) plus a quarter of the gate's
+        growth for acceleration: the blob must earn the confirmation again."""
+        o = self.options
+        if not f.confirmed or f.named:
+            return False
+        if f.recent and index - f.recent[-1][3] - 1 < o.regain_missed_frames:
+            return False
+        age = t - f.fixes[-1].t
+        reach = o.regain_radii * max(f.radius(), 3.0) + 0.125 * o.max_acceleration_px_s2 * age * age
+        return math.hypot(blob.u - pred.u, blob.v - pred.v) > reach
 
     def _judge(self, f: _Follower, blob: Blob, t: float, pivot_uv, index: int) -> Blob:
         """Set the confidence of a fix on the lock; confirm a tentative lock (revising its frames)."""

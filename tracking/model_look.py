@@ -195,12 +195,18 @@ def angles_jac(fit: PendulumFit, frames: np.ndarray, fps: float) -> np.ndarray:
 
 
 def fit_pendulum(
-    frames: np.ndarray, theta: np.ndarray, length_px: float, fps: float, guess: PendulumFit | None = None
+    frames: np.ndarray,
+    theta: np.ndarray,
+    length_px: float,
+    fps: float,
+    guess: PendulumFit | None = None,
+    robust_px: float | None = None,
 ) -> PendulumFit | None:
     """The pendulum that best fits θ [rad] at the frame indices (least squares in px along the string's arc,
     Levenberg–Marquardt with the variational equations' Jacobian), from the frame nearest their middle, with the
     covariance of its parameters (θ, θ', w2, c) in ``cov``; None when there are too few fixes. guess: a fit of
-    the same motion nearby (an overlapping window) to start from: fewer iterations."""
+    the same motion nearby (an overlapping window) to start from: fewer iterations. robust_px [px]: a Cauchy loss
+    of that scale instead (trust-region reflective), so that misses far beyond it barely pull the fit."""
     frames, theta = np.asarray(frames, int), np.asarray(theta, float)
     if len(frames) < MIN_FIXES:
         return None
@@ -226,7 +232,9 @@ def fit_pendulum(
             lambda p: length_px * (run(p)[:, 0] - theta),
             p0,
             jac=lambda p: length_px * run(p)[:, 1:],
-            method="lm",
+            method="lm" if robust_px is None else "trf",
+            loss="linear" if robust_px is None else "cauchy",
+            f_scale=1.0 if robust_px is None else robust_px,
             x_scale=[0.1, 1.0, 10.0, 0.1],
             max_nfev=60,
             ftol=1e-6,  # a fit's RMS to a thousandth of a pixel is enough: fewer iterations

@@ -10,7 +10,9 @@ fitted again without the fixes more than ``TRIM_PX`` off it (a few at most), and
 ``model_look.MAX_FIT_RMS_PX`` (a push, a release, a catch or a slack string inside the window: not used). Then a fix
 more than ``OFF_PX`` off it is reported unsure, and — only where the fixes scatter about it by at least
 ``MIN_NOISE_PX`` (the median's σ: a clean video's fixes are better than any model of them) — a fix is moved onto it: the fitted
-angle at the window's median string length. The live sensor never does this (it needs later frames).
+angle at the window's median string length. A window with more bad fixes than the trim leaves out (a codec's images
+of the ball frames ahead of it) gets a Cauchy-loss fit (:func:`_robust_window_fit`); off it, only fixes between fixes
+on it are reported unsure, and none is moved. The live sensor never does this (it needs later frames).
 """
 
 from __future__ import annotations
@@ -26,6 +28,9 @@ WINDOW_S = 1.0  # [s] the pendulum is fitted over windows this long
 TRIM_PX = 3.0  # [px] fixes farther than this from the first fit are left out of the second
 MAX_TRIMMED = 3  # ... at most this many of them ...
 MAX_TRIMMED_SHARE = 0.1  # ... or this share of the window's (else the window is not used)
+ROBUST_MIN_SHARE = 0.75  # a window with more bad fixes than that is fitted robustly: kept when this share lies on it
+ROBUST_BAND_PX = 6.0  # [px] ... within this of it
+ROBUST_MAX_RMS_PX = 2.0  # [px] ... and the fit to those alone is within this (RMS)
 OFF_PX = 4.0  # [px] a fix farther than this from the window's pendulum is reported unsure
 CLEAN_PX = 0.4  # [px] a window whose every fix lies within this of the parabola through its neighbours (±3 frames)
 # is clean: neither off nor noisy, left without a fit (a clean video costs no fits)
@@ -68,6 +73,26 @@ def _window_fit(
     return None
 
 
+def _robust_window_fit(
+    sel: np.ndarray, theta: np.ndarray, length_px: float, fps: float, guess: PendulumFit | None
+) -> PendulumFit | None:
+    """For a window with more bad fixes than the trimmed fit leaves out (a low-bitrate codec's images of the ball a
+    frame or more ahead of it, or behind): a Cauchy-loss fit of scale TRIM_PX, kept only when at least
+    ROBUST_MIN_SHARE of the fixes lie within TRIM_PX of it and the plain fit to those alone is within MAX_FIT_RMS_PX
+    (a push or a release leaves fewer on any one pendulum)."""
+    for start in (guess, None) if guess is not None else (None,):
+        fit = fit_pendulum(sel, theta[sel], length_px, fps, start, robust_px=TRIM_PX)
+        if fit is None:
+            return None
+        keep = np.abs(length_px * (angles(fit, sel, fps) - theta[sel])) <= ROBUST_BAND_PX
+        if keep.sum() < ROBUST_MIN_SHARE * len(sel):
+            continue
+        fit = fit_pendulum(sel[keep], theta[sel[keep]], length_px, fps, fit)
+        if fit is not None and fit.rms_px <= ROBUST_MAX_RMS_PX:
+            return fit
+    return None
+
+
 def _rough_px(arc_px: np.ndarray, trusted: np.ndarray) -> np.ndarray:
     """Per frame, how far [px] a trusted fix lies from the parabola through its neighbours' (±3 frames, itself left
     out); inf where that cannot be told (too few neighbours)."""
@@ -97,19 +122,26 @@ def check(uv: np.ndarray, trusted: np.ndarray, pivot_uv: tuple[float, float], fp
     length = np.hypot(d[:, 0], d[:, 1])
     half = max(3, round(0.5 * WINDOW_S * fps))
     rough = _rough_px(theta * np.median(length[trusted]) if trusted.any() else theta, trusted)
-    fit = None
+    guess = None
     for c in range(0, n + half // 2, half):  # (the last window's nearest frames reach the end)
         lo, hi = max(0, c - half), min(n, c + half + 1)
         sel = lo + np.flatnonzero(trusted[lo:hi])
         if np.all(rough[sel] <= CLEAN_PX):
             continue
         length_px = float(np.median(length[sel])) if len(sel) else 0.0
-        fit = _window_fit(sel, theta, length_px, fps, fit) if len(sel) else None
+        plain = _window_fit(sel, theta, length_px, fps, guess) if len(sel) else None
+        robust = plain is None and len(sel) > 0
+        guess = plain  # (a robust fit is not the next window's start)
+        fit = _robust_window_fit(sel, theta, length_px, fps, plain) if robust else plain
         if fit is None:
             continue
         inner = sel[(sel >= c - half // 2) & (sel < c - half // 2 + half)]  # the frames nearest to this centre
         th = angles(fit, inner, fps)
         miss = length_px * np.abs(th - theta[inner])
+        if robust:  # only misses between fixes on it (a push or a release leaves the window's end off it): none moved
+            on_it = sel[length_px * np.abs(angles(fit, sel, fps) - theta[sel]) <= OFF_PX]
+            off[inner[(miss > OFF_PX) & (inner > on_it.min()) & (inner < on_it.max())]] = True
+            continue
         off[inner[miss > OFF_PX]] = True
         if _noisy(sel, length_px * (angles(fit, sel, fps) - theta[sel])):
             on = inner[miss <= OFF_PX]

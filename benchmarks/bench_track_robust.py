@@ -16,7 +16,8 @@ long runs (real pendulums on H.264 60 and 90 kbit/s, HEVC 70 kbit/s, balls 0.7-0
 runs at the video's start and end); and a sixth made after that rule (H.264 50 kbit/s, VP9 60 kbit/s with a smaller ball); and a seventh made after the
 model look's rule for a ball smeared along its motion (real pendulums from 60-85° on H.264 55 and 80 kbit/s and HEVC
 50 kbit/s, balls 0.75-1.2x); and an eighth made before the model look's fit bound for low-bitrate HEVC was tried
-(real pendulums on HEVC 55, VP9 50 and H.264 45 kbit/s).
+(real pendulums on HEVC 55, VP9 50 and H.264 45 kbit/s); and a tenth made after the regained-lock rule and the
+pendulum check's robust fit (real pendulums on HEVC 50 and 40 kbit/s, VP9 60 and 45 kbit/s, H.264 50 and 65 kbit/s).
 
 Visible: the whole ball inside the frame, clear of objects of its colour (colour alone cannot separate them), and
 for low-bitrate codecs shown by the decoded frame (≥ 30 % of its disc in its colour: the encoder sometimes drops a
@@ -74,6 +75,7 @@ def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repe
         **scenarios.JUDGE7,
         **scenarios.JUDGE8,
         **scenarios.JUDGE9,
+        **scenarios.JUDGE10,
     }[name]
     sc = make(folder / f"{name}_{size[0]}.mp4", size, duration_s)
     kw = dict(sc.track_kwargs)
@@ -120,6 +122,7 @@ def _one(name: str, folder: Path, size: tuple[int, int], duration_s: float, repe
         "judge7": name in scenarios.JUDGE7,
         "judge8": name in scenarios.JUDGE8,
         "judge9": name in scenarios.JUDGE9,
+        "judge10": name in scenarios.JUDGE10,
         "track_over_decode": tracking / decode,
         "decode_fps": len(sc.truth.t) / decode,
         "track_over_decode_cpu": tracking_cpu / decode_cpu,
@@ -179,6 +182,7 @@ def run(quick: bool = False) -> list[tuple[str, float, str]]:
             *scenarios.JUDGE7,
             *scenarios.JUDGE8,
             *scenarios.JUDGE9,
+            *scenarios.JUDGE10,
         ]:
             rows.append(_one(name, Path(tmp), size, duration, repeats, True))
         big = (1920, 1080) if quick else (3840, 2160)

@@ -855,6 +855,85 @@ JUDGE9: dict[str, Callable[..., Scenario]] = {
 }
 
 
+# judge 10: made after the regained-lock rule and the pendulum check's robust fit, never tuned on
+JUDGE10: dict[str, Callable[..., Scenario]] = {
+    "hevc_50k_pend70_j10": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=301,
+        bitrate_kbps=50.0,
+        codec="hevc",
+        amplitude_deg=70.0,
+        period_s=1.2,
+        damping_per_s=0.07,
+        name="judge 10: real pendulum from 70°, HEVC 50 kbit/s",
+    ),
+    "hevc_40k_pend80_j10": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=302,
+        bitrate_kbps=40.0,
+        codec="hevc",
+        amplitude_deg=80.0,
+        period_s=1.05,
+        damping_per_s=0.05,
+        ball_scale=1.1,
+        name="judge 10: real pendulum from 80°, HEVC 40 kbit/s, ball 1.1×",
+    ),
+    "vp9_60k_pend75_small_j10": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=303,
+        bitrate_kbps=60.0,
+        codec="vp9",
+        amplitude_deg=75.0,
+        period_s=1.1,
+        damping_per_s=0.06,
+        ball_scale=0.75,
+        name="judge 10: real pendulum from 75°, VP9 60 kbit/s, ball 0.75×",
+    ),
+    "vp9_45k_pend60_j10": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=304,
+        bitrate_kbps=45.0,
+        codec="vp9",
+        amplitude_deg=60.0,
+        period_s=1.3,
+        damping_per_s=0.09,
+        name="judge 10: real pendulum from 60°, VP9 45 kbit/s",
+    ),
+    "h264_50k_pend85_j10": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=305,
+        bitrate_kbps=50.0,
+        amplitude_deg=85.0,
+        period_s=1.15,
+        damping_per_s=0.04,
+        ball_scale=0.85,
+        name="judge 10: real pendulum from 85°, H.264 50 kbit/s, ball 0.85×",
+    ),
+    "h264_65k_pend50_big_j10": lambda p, s, d: h264(
+        p,
+        s,
+        d,
+        seed=306,
+        bitrate_kbps=65.0,
+        amplitude_deg=50.0,
+        period_s=1.25,
+        damping_per_s=0.1,
+        ball_scale=1.25,
+        name="judge 10: real pendulum from 50°, H.264 65 kbit/s, ball 1.25×",
+    ),
+}
+
+
 def ball_shown(sc: Scenario, min_share: float = 0.3, min_saturation: int = 60) -> np.ndarray:
     """(n,) bool: the decoded frame shows the ball where it is — at least min_share of its disc in its colour (hue
     band, saturation ≥ min_saturation). A low-bitrate encoder sometimes skips the blocks of a moving ball or
